@@ -1,0 +1,34 @@
+"""simbridge: write a robot simulation once, run it on PyBullet or MuJoCo, and measure where the
+engines disagree.
+
+``import simbridge`` imports no engine: backends load on first use.
+"""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"
+
+from . import exceptions
+from .exceptions import SimbridgeError
+from .profiles import PROFILES, Profile, get_profile
+from .registry import available_backends, register
+from .sim import Sim
+from .types import BaseState, DynamicsInfo, JointInfo, JointStates, JointType, LinkState
+
+__all__ = [
+    "__version__",
+    "Sim",
+    "JointType",
+    "JointInfo",
+    "DynamicsInfo",
+    "LinkState",
+    "BaseState",
+    "JointStates",
+    "Profile",
+    "PROFILES",
+    "get_profile",
+    "available_backends",
+    "register",
+    "exceptions",
+    "SimbridgeError",
+]

@@ -1,0 +1,185 @@
+"""Every error simbridge raises.
+
+One base class, :class:`SimbridgeError`; each subclass builds its message from the context it was
+given (the file, element, argument, and the valid choices), so a message always says what was
+wrong and what would have been right. Subclasses also derive from the matching built-in
+(``ValueError``, ``KeyError``-like lookups derive from ``LookupError``) so generic handlers work.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+__all__ = [
+    "SimbridgeError",
+    "BackendError",
+    "UnknownBackendError",
+    "BackendNotInstalledError",
+    "BackendUnsupportedError",
+    "DisplayError",
+    "UrdfError",
+    "UrdfNotFoundError",
+    "UrdfParseError",
+    "UrdfStructureError",
+    "MeshNotFoundError",
+    "UnsupportedJointError",
+    "UnknownBodyError",
+    "UnknownJointError",
+    "UnknownLinkError",
+    "InvalidArgumentError",
+    "InvalidProfileError",
+    "SimulationDivergedError",
+    "SimClosedError",
+]
+
+
+def _choices(valid: Iterable[object], limit: int = 40) -> str:
+    items = [repr(v) for v in valid]
+    if len(items) > limit:
+        items = items[:limit] + [f"... ({len(items) - limit} more)"]
+    return "[" + ", ".join(items) + "]"
+
+
+class SimbridgeError(Exception):
+    """Base class of every simbridge error."""
+
+
+# ---------------------------------------------------------------- backends
+
+
+class BackendError(SimbridgeError):
+    """A backend could not be found, loaded or used."""
+
+
+class UnknownBackendError(BackendError, LookupError):
+    def __init__(self, name: str, available: Iterable[str]):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(
+            f"unknown backend {name!r}; available backends: {_choices(self.available)}"
+        )
+
+
+class BackendNotInstalledError(BackendError, ImportError):
+    def __init__(self, backend: str, module: str, pip_name: str, cause: BaseException):
+        self.backend = backend
+        super().__init__(
+            f"backend {backend!r} needs the Python package {module!r}, which is not importable "
+            f"({cause}); install it with: pip install {pip_name}"
+        )
+
+
+class BackendUnsupportedError(BackendError, NotImplementedError):
+    """The backend cannot do what was asked (never silently ignored)."""
+
+    def __init__(self, backend: str, what: str, hint: str = ""):
+        msg = f"backend {backend!r} does not support {what}"
+        super().__init__(msg + (f": {hint}" if hint else ""))
+
+
+class DisplayError(BackendError, RuntimeError):
+    def __init__(self, backend: str, detail: str):
+        super().__init__(
+            f"backend {backend!r} cannot open a window: {detail}. "
+            "Run with gui=False on a machine without a display, or set DISPLAY."
+        )
+
+
+# ---------------------------------------------------------------- URDF
+
+
+class UrdfError(SimbridgeError, ValueError):
+    """A URDF could not be found, read or understood."""
+
+
+class UrdfNotFoundError(UrdfError, FileNotFoundError):
+    def __init__(self, source: str, searched: Iterable[str]):
+        self.source = source
+        super().__init__(
+            f"URDF {source!r} is neither a file, a name on the search path, nor URDF text; "
+            f"searched: {_choices(searched)}"
+        )
+
+
+class UrdfParseError(UrdfError):
+    def __init__(self, file: str, detail: str):
+        self.file = file
+        super().__init__(f"{file}: malformed URDF XML: {detail}")
+
+
+class UrdfStructureError(UrdfError):
+    """Well-formed XML that is not a valid robot (no links, a cycle, a missing parent...)."""
+
+    def __init__(self, file: str, element: str, detail: str):
+        self.file = file
+        self.element = element
+        super().__init__(f"{file}: {element}: {detail}")
+
+
+class MeshNotFoundError(UrdfError, FileNotFoundError):
+    def __init__(self, file: str, element: str, filename: str, resolved: str):
+        self.file = file
+        self.filename = filename
+        super().__init__(
+            f"{file}: {element}: mesh file {filename!r} not found (resolved to {resolved!r})"
+        )
+
+
+class UnsupportedJointError(UrdfError):
+    def __init__(self, file: str, joint: str, joint_type: str, supported: Iterable[str]):
+        super().__init__(
+            f"{file}: joint {joint!r}: joint type {joint_type!r} is not supported; "
+            f"supported types: {_choices(supported)}"
+        )
+
+
+# ---------------------------------------------------------------- lookups and arguments
+
+
+class UnknownBodyError(SimbridgeError, LookupError):
+    def __init__(self, body: object, valid: Iterable[int]):
+        super().__init__(f"unknown body {body!r}; bodies in this Sim: {_choices(valid)}")
+
+
+class UnknownJointError(SimbridgeError, LookupError):
+    def __init__(self, body_name: str, joint: object, valid_names: Iterable[str]):
+        names = list(valid_names)
+        super().__init__(
+            f"body {body_name!r} has no joint {joint!r}; valid joints are indices "
+            f"0..{len(names) - 1} or names {_choices(names)}"
+        )
+
+
+class UnknownLinkError(SimbridgeError, LookupError):
+    def __init__(self, body_name: str, link: object, valid_names: Iterable[str]):
+        names = list(valid_names)
+        super().__init__(
+            f"body {body_name!r} has no link {link!r}; valid links are -1 (base), indices "
+            f"0..{len(names) - 1} or names {_choices(names)}"
+        )
+
+
+class InvalidArgumentError(SimbridgeError, ValueError):
+    def __init__(self, argument: str, detail: str):
+        self.argument = argument
+        super().__init__(f"argument {argument!r}: {detail}")
+
+
+class InvalidProfileError(SimbridgeError, ValueError):
+    def __init__(self, profile: object, valid: Iterable[str]):
+        super().__init__(f"unknown profile {profile!r}; valid profiles: {_choices(valid)}")
+
+
+# ---------------------------------------------------------------- running
+
+
+class SimulationDivergedError(SimbridgeError, FloatingPointError):
+    def __init__(self, backend: str, time: float, where: str):
+        super().__init__(
+            f"simulation on backend {backend!r} diverged at t={time:.6f} s: {where} is not finite"
+        )
+
+
+class SimClosedError(SimbridgeError, RuntimeError):
+    def __init__(self) -> None:
+        super().__init__("this Sim is closed; create a new one")

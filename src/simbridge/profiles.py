@@ -1,0 +1,128 @@
+"""Profiles: every default on which the engines differ, made explicit.
+
+A profile is a frozen manifest. Each backend reads it and configures its engine so that the
+same value means the same thing everywhere; where an engine cannot reproduce a value exactly
+the backend says so in :meth:`simbridge.Sim.manifest` (``departures``).
+
+``"pybullet"``
+    PyBullet's own defaults, reproduced on every backend: the default joint brake, link damping
+    0.04, the 100 rad/s speed clamp, inertia of the collision bounding box, friction 0.5 combined
+    as a product.
+``"urdf"``
+    What the file says and nothing hidden: the file's inertia, its ``<dynamics>`` damping and
+    friction, no brake beyond the file's friction, no link damping, no speed clamp.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Any, Literal
+
+from .exceptions import InvalidProfileError
+
+__all__ = ["Profile", "PROFILES", "get_profile"]
+
+
+@dataclass(frozen=True)
+class Profile:
+    """The manifest of engine defaults a Sim runs with.
+
+    Every field has one meaning on every backend; ``ENTRY_DOCS`` gives it in words.
+    """
+
+    name: str
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.8)
+    timestep: float = 1.0 / 240.0
+    integrator: str = "semi-implicit Euler"
+    solver_iterations: int = 50
+    joint_brake: Literal["pybullet", "urdf_friction"] = "pybullet"
+    inertia_source: Literal["collision_aabb", "file"] = "collision_aabb"
+    linear_damping: float = 0.04
+    angular_damping: float = 0.04
+    max_joint_velocity: float | None = 100.0
+    apply_joint_damping: bool = True
+    lateral_friction: float = 0.5
+    rolling_friction: float = 0.0
+    spinning_friction: float = 0.0
+    restitution: float = 0.0
+    friction_combine: Literal["product"] = "product"
+    restitution_combine: Literal["product"] = "product"
+    read_urdf_contact: bool = True
+    self_collision: bool = False
+    enforce_effort_limit: bool = False
+    enforce_velocity_limit: bool = False
+    contact_model: Literal["stiff"] = "stiff"
+
+    def with_(self, **changes: Any) -> Profile:
+        """A copy with some entries changed (``gravity``, ``timestep`` ...)."""
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    def __str__(self) -> str:
+        width = max(len(f.name) for f in fields(self))
+        lines = [f"profile {self.name!r}"]
+        for f in fields(self):
+            if f.name == "name":
+                continue
+            value = getattr(self, f.name)
+            lines.append(f"  {f.name:<{width}}  {value!s:<22} {ENTRY_DOCS.get(f.name, '')}")
+        return "\n".join(lines)
+
+
+ENTRY_DOCS: dict[str, str] = {
+    "gravity": "world gravity, m/s^2 (PyBullet native 0, MuJoCo native -9.81; always set)",
+    "timestep": "fixed step, s (PyBullet native 1/240, MuJoCo native 0.002; always set)",
+    "integrator": "velocity first, then position with the new velocity (PyBullet's scheme)",
+    "solver_iterations": "constraint solver iterations (PyBullet 50, MuJoCo native 100)",
+    "joint_brake": (
+        "force holding an uncommanded revolute/prismatic joint until a command replaces it: "
+        "'pybullet' = velocity motor, target 0, impulse 1 N·s per step (1/dt N·m); "
+        "'urdf_friction' = the file's <dynamics friction>"
+    ),
+    "inertia_source": (
+        "'collision_aabb' = URDF mass with the solid-box inertia of the collision bounding box "
+        "(PyBullet without URDF_USE_INERTIA_FROM_FILE); 'file' = the <inertia> element"
+    ),
+    "linear_damping": "per-link linear velocity damping, PyBullet's law (MuJoCo native none)",
+    "angular_damping": "per-link angular velocity damping, PyBullet's law (MuJoCo native none)",
+    "max_joint_velocity": "every joint speed clamped to this, rad/s or m/s (None = no clamp)",
+    "apply_joint_damping": "apply <dynamics damping> as -damping * velocity",
+    "lateral_friction": "sliding friction of a link without <contact> (MuJoCo native 1.0)",
+    "rolling_friction": "rolling friction of a link without <contact> (MuJoCo native 0.005)",
+    "spinning_friction": "spinning friction of a link without <contact> (MuJoCo native 1e-4)",
+    "restitution": "restitution of a link without <contact> (MuJoCo has none)",
+    "friction_combine": "pair value = product of the two links' (MuJoCo native: max)",
+    "restitution_combine": "pair value = product of the two links'",
+    "read_urdf_contact": "read <contact> lateral/rolling/spinning friction, restitution",
+    "self_collision": "links of one robot collide with each other (MuJoCo native: yes)",
+    "enforce_effort_limit": "<limit effort> clamps motor force (MuJoCo native: yes)",
+    "enforce_velocity_limit": "<limit velocity> clamps speed",
+    "contact_model": (
+        "'stiff' = each engine's contact made as rigid as it stays stable: PyBullet's "
+        "defaults; MuJoCo solref (2*dt, 1) (MuJoCo native (0.02, 1), soft)"
+    ),
+}
+
+PROFILES: dict[str, Profile] = {
+    "pybullet": Profile(name="pybullet"),
+    "urdf": Profile(
+        name="urdf",
+        joint_brake="urdf_friction",
+        inertia_source="file",
+        linear_damping=0.0,
+        angular_damping=0.0,
+        max_joint_velocity=None,
+    ),
+}
+
+
+def get_profile(profile: str | Profile) -> Profile:
+    """Return the named profile, or ``profile`` itself when it already is one."""
+    if isinstance(profile, Profile):
+        return profile
+    try:
+        return PROFILES[profile]
+    except (KeyError, TypeError):
+        raise InvalidProfileError(profile, PROFILES) from None

@@ -1,0 +1,103 @@
+"""The backend registry.
+
+Backends are registered by ``"module:Class"`` strings and imported on first use, so
+``import simbridge`` imports no engine. Third-party packages add backends through the
+``simbridge.backends`` entry-point group::
+
+    [project.entry-points."simbridge.backends"]
+    mybackend = "mypackage.backend:MyBackend"
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from importlib.metadata import entry_points
+from typing import TYPE_CHECKING
+
+from .exceptions import BackendError, BackendNotInstalledError, UnknownBackendError
+
+if TYPE_CHECKING:
+    from .backend import Backend
+
+__all__ = ["BackendSpec", "register", "available_backends", "load_backend", "ENTRY_POINT_GROUP"]
+
+ENTRY_POINT_GROUP = "simbridge.backends"
+
+
+@dataclass(frozen=True)
+class BackendSpec:
+    name: str
+    entry_point: str  # "module:Class"
+    requires: tuple[str, ...] = ()  # importable module names the backend needs
+    pip_name: str = ""  # what to pip install when one is missing
+
+
+_REGISTRY: dict[str, BackendSpec] = {}
+_LOADED: dict[str, type[Backend]] = {}
+_entry_points_read = False
+
+
+def register(
+    name: str, entry_point: str, *, requires: tuple[str, ...] = (), pip_name: str = ""
+) -> None:
+    """Register a backend under ``name``; ``entry_point`` is ``"module:Class"``."""
+    if ":" not in entry_point:
+        raise BackendError(f"backend {name!r}: entry point {entry_point!r} is not 'module:Class'")
+    _REGISTRY[name] = BackendSpec(name, entry_point, requires, pip_name or " ".join(requires))
+    _LOADED.pop(name, None)
+
+
+def _read_entry_points() -> None:
+    global _entry_points_read
+    if _entry_points_read:
+        return
+    _entry_points_read = True
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name not in _REGISTRY:
+            _REGISTRY[ep.name] = BackendSpec(ep.name, ep.value)
+
+
+def available_backends() -> list[str]:
+    """Names of every registered backend (installed or not), in registration order."""
+    _read_entry_points()
+    return list(_REGISTRY)
+
+
+def load_backend(name: str) -> type[Backend]:
+    """Import and return the backend class registered as ``name``."""
+    if name in _LOADED:
+        return _LOADED[name]
+    _read_entry_points()
+    if not isinstance(name, str) or name not in _REGISTRY:
+        raise UnknownBackendError(str(name), _REGISTRY)
+    spec = _REGISTRY[name]
+    for module in spec.requires:
+        try:
+            importlib.import_module(module)
+        except ImportError as exc:
+            raise BackendNotInstalledError(name, module, spec.pip_name, exc) from exc
+    module_name, _, attr = spec.entry_point.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+        cls = getattr(module, attr)
+    except (ImportError, AttributeError) as exc:
+        raise BackendError(
+            f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}"
+        ) from exc
+    _LOADED[name] = cls
+    return cls  # type: ignore[no-any-return]
+
+
+register(
+    "pybullet",
+    "simbridge.backends.pybullet_backend:PyBulletBackend",
+    requires=("pybullet",),
+    pip_name="pybullet",
+)
+register(
+    "mujoco",
+    "simbridge.backends.mujoco_backend:MujocoBackend",
+    requires=("mujoco",),
+    pip_name="'mujoco>=4'",
+)

@@ -1,0 +1,492 @@
+"""`Sim`: one robot-simulation interface, PyBullet's meaning, any engine.
+
+::
+
+    with simbridge.Sim("pybullet") as sim:          # or Sim("mujoco")
+        plane = sim.load_urdf("plane.urdf")
+        robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+        sim.set_joint_velocity(robot, [2, 3, 6, 7], [-10, -10, 10, 10], max_force=50)
+        sim.step(240)
+        print(sim.base_state(robot).position)
+
+Conventions (every backend): SI units; quaternions (x, y, z, w); joint i moves link i; the base
+is link -1; poses in the world frame. Commands: velocity and position commands persist until
+replaced; a torque command lasts one step.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time as _time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .backend import Backend
+from .exceptions import (
+    InvalidArgumentError,
+    SimClosedError,
+    UnknownBodyError,
+    UnknownJointError,
+    UnknownLinkError,
+)
+from .profiles import Profile, get_profile
+from .registry import available_backends, load_backend
+from .types import BaseState, DynamicsInfo, JointInfo, JointStates, JointType, LinkState
+from .urdf import parse_urdf, resolve_source
+
+__all__ = ["Sim"]
+
+JointsArg = int | str | Sequence[int | str] | np.ndarray
+LinkArg = int | str
+
+
+@dataclass
+class _Body:
+    name: str
+    joint_names: list[str]
+    link_names: list[str]
+    joint_types: list[JointType]
+    joint_index: dict[str, int]
+    link_index: dict[str, int]
+    cache: dict[Any, np.ndarray] = field(default_factory=dict)  # joints arg -> indices
+    movable_cache: dict[Any, np.ndarray] = field(default_factory=dict)
+
+
+class _Closed:
+    """Stands in for the backend after close(): any use raises SimClosedError."""
+
+    def __getattr__(self, name: str) -> Any:
+        raise SimClosedError()
+
+
+def _vec(value: Any, n: int, argument: str) -> tuple[float, ...]:
+    try:
+        out = tuple(float(v) for v in value)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(argument, f"expected {n} numbers, got {value!r}") from None
+    if len(out) != n:
+        raise InvalidArgumentError(argument, f"expected {n} numbers, got {len(out)}: {value!r}")
+    if not all(math.isfinite(v) for v in out):
+        raise InvalidArgumentError(argument, f"values must be finite, got {value!r}")
+    return out
+
+
+def _quat(value: Any, argument: str) -> tuple[float, float, float, float]:
+    q = _vec(value, 4, argument)
+    norm = math.sqrt(sum(c * c for c in q))
+    if abs(norm - 1.0) > 1e-3:
+        raise InvalidArgumentError(
+            argument, f"expected a unit quaternion (x, y, z, w), got {value!r} with norm {norm:.6g}"
+        )
+    return (q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm)
+
+
+class Sim:
+    """A simulated world on one backend.
+
+    Args:
+        backend: registered backend name: ``"pybullet"``, ``"mujoco"``, or a third-party one
+            (see :func:`simbridge.available_backends`).
+        gravity: world gravity (m/s²), set explicitly on every engine.
+        timestep: fixed step (s).
+        profile: ``"pybullet"`` (PyBullet's defaults on every engine), ``"urdf"`` (the file's
+            values, nothing hidden) or a :class:`~simbridge.Profile`.
+        gui: open the engine's viewer. Raises :class:`~simbridge.exceptions.DisplayError`
+            without a display.
+
+    Raises:
+        UnknownBackendError: ``backend`` is not registered (the message lists those that are).
+        BackendNotInstalledError: the engine is not installed (the message gives the pip line).
+        InvalidArgumentError, InvalidProfileError: on a bad gravity, time step or profile.
+    """
+
+    def __init__(
+        self,
+        backend: str = "pybullet",
+        *,
+        gravity: Sequence[float] = (0.0, 0.0, -9.8),
+        timestep: float = 1.0 / 240.0,
+        profile: str | Profile = "pybullet",
+        gui: bool = False,
+    ) -> None:
+        self._b: Backend = _Closed()  # type: ignore[assignment]
+        g = _vec(gravity, 3, "gravity")
+        if not isinstance(timestep, (int, float)) or not math.isfinite(timestep) or timestep <= 0:
+            raise InvalidArgumentError("timestep", f"must be a finite number > 0, got {timestep!r}")
+        prof = get_profile(profile).with_(gravity=g, timestep=float(timestep))
+        cls = load_backend(backend)
+        self.backend: str = backend
+        self._bodies: dict[int, _Body] = {}
+        self._b = cls(prof, bool(gui))
+        self._dt = float(timestep)
+        self._wall_start: float | None = None
+
+    # ---------------------------------------------------------------- lifecycle
+
+    def close(self) -> None:
+        """Release the engine. Safe to call twice; any later use raises SimClosedError."""
+        backend, self._b = self._b, _Closed()  # type: ignore[assignment]
+        if not isinstance(backend, _Closed):
+            backend.close()
+        self._bodies.clear()
+
+    def __enter__(self) -> Sim:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 - never raise from a finaliser
+            pass
+
+    def __repr__(self) -> str:
+        state = "closed" if isinstance(self._b, _Closed) else f"t={self.time:.4f}s"
+        return f"Sim({self.backend!r}, profile={self.profile.name!r}, {state})"
+
+    # ---------------------------------------------------------------- world
+
+    @property
+    def time(self) -> float:
+        """Simulated time (s) since creation or the last reset."""
+        return self._b.time
+
+    @property
+    def timestep(self) -> float:
+        return self._dt
+
+    @property
+    def gravity(self) -> tuple[float, float, float]:
+        return self._b.profile.gravity
+
+    @property
+    def profile(self) -> Profile:
+        """The profile manifest in use (with this Sim's gravity and time step)."""
+        return self._b.profile
+
+    @property
+    def closed(self) -> bool:
+        return isinstance(self._b, _Closed)
+
+    def manifest(self) -> dict[str, Any]:
+        """Everything needed to reproduce a run: backend, engine version, profile entries, and
+        what the backend could not reproduce exactly (``departures``)."""
+        from . import __version__
+
+        out = {"simbridge_version": __version__, "profile": self.profile.as_dict()}
+        out.update(self._b.manifest())
+        return out
+
+    def load_urdf(
+        self,
+        source: str | os.PathLike[str],
+        *,
+        base_position: Sequence[float] = (0.0, 0.0, 0.0),
+        base_orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
+        fixed_base: bool = False,
+    ) -> int:
+        """Load a robot and return its body id.
+
+        Args:
+            source: a file path; a name found on the search path (this package's robots, then
+                pybullet_data; ``".urdf"`` may be left off); or URDF XML text.
+                ``package://`` mesh URIs resolve against the URDF's own folder tree.
+            base_position: where the root's URDF link frame goes (m, world).
+            base_orientation: its orientation, (x, y, z, w).
+            fixed_base: weld the root to the world.
+
+        Raises:
+            UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
+            UnsupportedJointError: the message names the file and the element.
+        """
+        pos = _vec(base_position, 3, "base_position")
+        orn = _quat(base_orientation, "base_orientation")
+        model = parse_urdf(resolve_source(source))
+        body = self._b.load(model, pos, orn, bool(fixed_base))  # type: ignore[arg-type]
+        names = [j.name for j in model.joints]
+        links = [j.child for j in model.joints]
+        types = [self._b.joint_info(body, i).type for i in range(len(names))]
+        self._bodies[body] = _Body(
+            model.name,
+            names,
+            links,
+            types,
+            {n: i for i, n in enumerate(names)},
+            {n: i for i, n in enumerate(links)} | {model.base.name: -1},
+        )
+        return body
+
+    def remove(self, body: int) -> None:
+        """Remove a body from the world."""
+        self._body(body)
+        self._b.remove(body)
+        del self._bodies[body]
+
+    def reset(self) -> None:
+        """Remove every body and set time to 0 (``p.resetSimulation``)."""
+        self._b.reset()
+        self._bodies.clear()
+        self._wall_start = None
+
+    def bodies(self) -> list[int]:
+        """Ids of the bodies in the world, in load order."""
+        self._b.time  # noqa: B018 - raises SimClosedError after close()
+        return list(self._bodies)
+
+    def body_name(self, body: int) -> str:
+        """The ``<robot name>`` of a body."""
+        return self._body(body).name
+
+    def step(self, n: int = 1, *, realtime: bool = False) -> None:
+        """Advance ``n`` fixed steps.
+
+        Args:
+            n: number of steps (>= 0).
+            realtime: pace the steps to the wall clock (the tutorial's ``time.sleep(1/240)``),
+                keeping the pace across calls.
+
+        Raises:
+            SimulationDivergedError: the state became NaN or infinite.
+        """
+        if not isinstance(n, (int, np.integer)) or n < 0:
+            raise InvalidArgumentError("n", f"must be an integer >= 0, got {n!r}")
+        if not realtime:
+            self._b.step(int(n))
+            self._wall_start = None
+            return
+        if self._wall_start is None:
+            self._wall_start = _time.perf_counter() - self._b.time
+        for _ in range(int(n)):
+            self._b.step(1)
+            delay = self._wall_start + self._b.time - _time.perf_counter()
+            if delay > 0:
+                _time.sleep(delay)
+
+    # ---------------------------------------------------------------- lookups
+
+    def _body(self, body: int) -> _Body:
+        try:
+            return self._bodies[body]
+        except (KeyError, TypeError):
+            self._b.time  # noqa: B018 - raises SimClosedError after close()
+            raise UnknownBodyError(body, self._bodies) from None
+
+    def joint_index(self, body: int, joint: int | str) -> int:
+        """The index of a joint given by index or name."""
+        b = self._body(body)
+        if isinstance(joint, str):
+            try:
+                return b.joint_index[joint]
+            except KeyError:
+                raise UnknownJointError(b.name, joint, b.joint_names) from None
+        if isinstance(joint, (int, np.integer)) and not isinstance(joint, bool):
+            if 0 <= joint < len(b.joint_names):
+                return int(joint)
+        raise UnknownJointError(b.name, joint, b.joint_names)
+
+    def link_index(self, body: int, link: LinkArg) -> int:
+        """The index of a link given by index or name (-1 or the root's name = base)."""
+        b = self._body(body)
+        if isinstance(link, str):
+            try:
+                return b.link_index[link]
+            except KeyError:
+                raise UnknownLinkError(b.name, link, b.link_names) from None
+        if isinstance(link, (int, np.integer)) and not isinstance(link, bool):
+            if -1 <= link < len(b.link_names):
+                return int(link)
+        raise UnknownLinkError(b.name, link, b.link_names)
+
+    def _joints(self, body: int, joints: JointsArg | None, movable: bool) -> np.ndarray:
+        """Resolve a joints argument to an index array (cached per body and argument)."""
+        b = self._body(body)
+        if joints is None:
+            key: Any = None
+        elif isinstance(joints, (int, str, np.integer)):
+            key = joints
+        elif isinstance(joints, np.ndarray):
+            key = (joints.dtype.str, joints.tobytes())
+        else:
+            try:
+                key = tuple(joints)
+                hash(key)
+            except TypeError:
+                raise InvalidArgumentError(
+                    "joints", f"expected an index, a name or a sequence of them, got {joints!r}"
+                ) from None
+        cache = b.movable_cache if movable else b.cache
+        try:
+            return cache[key]
+        except KeyError:
+            pass
+        if joints is None:
+            idx = [i for i, t in enumerate(b.joint_types) if t != JointType.FIXED or not movable]
+        elif isinstance(joints, (int, str, np.integer)):
+            idx = [self.joint_index(body, joints)]  # type: ignore[arg-type]
+        else:
+            items = joints.tolist() if isinstance(joints, np.ndarray) else list(joints)
+            idx = [self.joint_index(body, j) for j in items]
+            if len(set(idx)) != len(idx):
+                raise InvalidArgumentError("joints", f"a joint is given twice in {joints!r}")
+        if movable:
+            for i in idx:
+                if b.joint_types[i] == JointType.FIXED:
+                    raise InvalidArgumentError(
+                        "joints",
+                        f"joint {b.joint_names[i]!r} (index {i}) of body {b.name!r} is fixed "
+                        "and takes no command",
+                    )
+        arr = np.asarray(idx, dtype=np.intp)
+        arr.setflags(write=False)
+        cache[key] = arr
+        return arr
+
+    @staticmethod
+    def _values(value: Any, n: int, argument: str, nonneg: bool = False) -> np.ndarray:
+        arr = np.asarray(value, dtype=np.float64)
+        if arr.shape != (n,):
+            if arr.ndim == 0:
+                arr = np.full(n, float(arr))
+            elif arr.shape == (1,) and n == 1:
+                pass
+            else:
+                raise InvalidArgumentError(
+                    argument,
+                    f"expected a number or shape ({n},) for {n} joint(s), got shape {arr.shape}",
+                )
+        if not np.isfinite(arr).all():
+            raise InvalidArgumentError(argument, f"values must be finite, got {value!r}")
+        if nonneg and (arr < 0).any():
+            raise InvalidArgumentError(argument, f"values must be >= 0, got {value!r}")
+        return arr
+
+    # ---------------------------------------------------------------- tables
+
+    def num_joints(self, body: int) -> int:
+        """Number of joints (fixed ones included) = number of non-base links."""
+        return len(self._body(body).joint_names)
+
+    def joint_info(self, body: int, joint: int | str) -> JointInfo:
+        """One row of the joint table (``p.getJointInfo``), by index or name."""
+        return self._b.joint_info(body, self.joint_index(body, joint))
+
+    def joints(self, body: int) -> list[JointInfo]:
+        """The whole joint table, in index order."""
+        return [self._b.joint_info(body, i) for i in range(self.num_joints(body))]
+
+    def dynamics_info(self, body: int, link: LinkArg = -1) -> DynamicsInfo:
+        """Mass, friction and inertia of a link as simulated (``p.getDynamicsInfo``)."""
+        return self._b.dynamics_info(body, self.link_index(body, link))
+
+    # ---------------------------------------------------------------- state
+
+    def link_state(self, body: int, link: LinkArg) -> LinkState:
+        """Pose and velocity of a link after the last step (base -1 allowed)."""
+        return self._b.link_state(body, self.link_index(body, link))
+
+    def base_state(self, body: int) -> BaseState:
+        """The base's centre-of-mass pose and velocity (``getBasePositionAndOrientation``,
+        ``getBaseVelocity``)."""
+        self._body(body)
+        return self._b.base_state(body)
+
+    def joint_states(self, body: int, joints: JointsArg | None = None) -> JointStates:
+        """Positions, velocities and motor forces of ``joints`` (default all), each (n,)."""
+        return self._b.joint_states(body, self._joints(body, joints, False))
+
+    def reset_joint_state(
+        self,
+        body: int,
+        joints: JointsArg,
+        positions: Any,
+        velocities: Any = 0.0,
+    ) -> None:
+        """Teleport movable joints to ``positions`` with ``velocities`` (``resetJointState``)."""
+        idx = self._joints(body, joints, True)
+        n = len(idx)
+        self._b.reset_joint_state(
+            body,
+            idx,
+            self._values(positions, n, "positions"),
+            self._values(velocities, n, "velocities"),
+        )
+
+    def reset_base_state(
+        self,
+        body: int,
+        position: Sequence[float] | None = None,
+        orientation: Sequence[float] | None = None,
+        linear_velocity: Sequence[float] | None = None,
+        angular_velocity: Sequence[float] | None = None,
+    ) -> None:
+        """Teleport the base (centre-of-mass frame, as ``resetBasePositionAndOrientation``)."""
+        self._body(body)
+        self._b.reset_base_state(
+            body,
+            None if position is None else _vec(position, 3, "position"),  # type: ignore[arg-type]
+            None if orientation is None else _quat(orientation, "orientation"),
+            None
+            if linear_velocity is None
+            else _vec(linear_velocity, 3, "linear_velocity"),  # type: ignore[arg-type]
+            None
+            if angular_velocity is None
+            else _vec(angular_velocity, 3, "angular_velocity"),  # type: ignore[arg-type]
+        )
+
+    # ---------------------------------------------------------------- control
+
+    def set_joint_velocity(
+        self, body: int, joints: JointsArg, target: Any, *, max_force: Any
+    ) -> None:
+        """VELOCITY_CONTROL: drive ``joints`` towards ``target`` (rad/s or m/s) with at most
+        ``max_force`` (N·m or N). Persists until replaced; ``max_force=0`` releases the joint
+        (and removes the default brake)."""
+        idx = self._joints(body, joints, True)
+        n = len(idx)
+        self._b.set_joint_velocity(
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+        )
+
+    def set_joint_position(
+        self,
+        body: int,
+        joints: JointsArg,
+        target: Any,
+        *,
+        max_force: Any,
+        kp: Any = 0.1,
+        kd: Any = 1.0,
+    ) -> None:
+        """POSITION_CONTROL with PyBullet's law: each step the motor asks for the velocity
+        change ``kp * (target - q) / dt - kd * v`` (so it depends on dt), its force clamped to
+        ``max_force``. Persists until replaced."""
+        idx = self._joints(body, joints, True)
+        n = len(idx)
+        self._b.set_joint_position(
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+            self._values(kp, n, "kp", nonneg=True),
+            self._values(kd, n, "kd", nonneg=True),
+        )
+
+    def set_joint_torque(self, body: int, joints: JointsArg, torque: Any) -> None:
+        """TORQUE_CONTROL: add ``torque`` (N·m or N) during the next step only. The joint's motor
+        stays; release the default brake first with ``set_joint_velocity(..., max_force=0)``."""
+        idx = self._joints(body, joints, True)
+        self._b.set_joint_torque(body, idx, self._values(torque, len(idx), "torque"))
+
+
+def backends() -> list[str]:
+    """Registered backend names."""
+    return available_backends()
