@@ -82,9 +82,7 @@ def load_backend(name: str) -> type[Backend]:
         module = importlib.import_module(module_name)
         cls = getattr(module, attr)
     except (ImportError, AttributeError) as exc:
-        raise BackendError(
-            f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}"
-        ) from exc
+        raise BackendError(f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}") from exc
     _LOADED[name] = cls
     return cls  # type: ignore[no-any-return]
 

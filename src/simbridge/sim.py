@@ -431,12 +431,8 @@ class Sim:
             body,
             None if position is None else _vec(position, 3, "position"),  # type: ignore[arg-type]
             None if orientation is None else _quat(orientation, "orientation"),
-            None
-            if linear_velocity is None
-            else _vec(linear_velocity, 3, "linear_velocity"),  # type: ignore[arg-type]
-            None
-            if angular_velocity is None
-            else _vec(angular_velocity, 3, "angular_velocity"),  # type: ignore[arg-type]
+            None if linear_velocity is None else _vec(linear_velocity, 3, "linear_velocity"),  # type: ignore[arg-type]
+            None if angular_velocity is None else _vec(angular_velocity, 3, "angular_velocity"),  # type: ignore[arg-type]
         )
 
     # ---------------------------------------------------------------- control

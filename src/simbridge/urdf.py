@@ -301,7 +301,14 @@ def _geometry(elem: ET.Element, where: str, src: UrdfSource, is_visual: bool) ->
         if not path.is_file():
             raise MeshNotFoundError(file, where, uri, str(tried[0]))
         return Geometry(
-            "mesh", xyz, rpy, scale, mesh_path=path, mesh_uri=uri, rgba=rgba, name=name  # type: ignore[arg-type]
+            "mesh",
+            xyz,
+            rpy,
+            scale,
+            mesh_path=path,
+            mesh_uri=uri,
+            rgba=rgba,
+            name=name,  # type: ignore[arg-type]
         )
     raise UrdfStructureError(
         file, where, f"unknown geometry <{tag}>; valid: box, cylinder, sphere, capsule, mesh"

@@ -1,0 +1,406 @@
+"""The PyBullet backend: the reference semantics, one physics client per `Sim`.
+
+Under the "pybullet" profile this backend adds nothing: each call maps onto the PyBullet call a
+tutorial user would write (``loadURDF``, ``getJointInfo``, ``setJointMotorControlArray``,
+``stepSimulation``...), so a drive written against `Sim` is bit for bit the raw drive. The
+"urdf" profile is reached with PyBullet's own switches (``URDF_USE_INERTIA_FROM_FILE``,
+``changeDynamics``, the default motor's force set to the file's friction).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+from importlib.metadata import PackageNotFoundError, version
+from typing import Any
+
+import numpy as np
+import pybullet as p
+
+from simbridge.backend import Backend
+from simbridge.exceptions import (
+    DisplayError,
+    SimulationDivergedError,
+    UrdfStructureError,
+)
+from simbridge.profiles import Profile
+from simbridge.types import (
+    BaseState,
+    DynamicsInfo,
+    JointInfo,
+    JointStates,
+    JointType,
+    LinkState,
+    Quat,
+    Vec3,
+)
+from simbridge.urdf import UrdfModel, resolve_mesh
+
+__all__ = ["PyBulletBackend"]
+
+_PYBULLET_DEFAULT_LINK_DAMPING = 0.04
+_PYBULLET_DEFAULT_MAX_JOINT_VELOCITY = 100.0
+_NO_CLAMP = 1e30  # "no speed clamp": PyBullet takes a number; this one is never reached
+_PYBULLET_DEFAULT_FRICTION = 0.5
+
+
+class _Body:
+    __slots__ = ("table", "movable", "probe_joint", "free", "base_inertial", "n")
+
+    def __init__(self, table: list[JointInfo], free: bool, base_inertial: Any) -> None:
+        self.table = table
+        self.n = len(table)
+        self.movable = [i for i, j in enumerate(table) if j.type != JointType.FIXED]
+        self.free = free
+        self.probe_joint = self.movable[-1] if self.movable else -1
+        self.base_inertial = base_inertial  # (pos, orn) of the COM in the base link frame
+
+
+class PyBulletBackend(Backend):
+    """`Sim` on PyBullet (DIRECT, or GUI when asked)."""
+
+    name = "pybullet"
+
+    NATIVE_DEFAULTS = {
+        "gravity": (0.0, 0.0, 0.0),
+        "timestep": 1.0 / 240.0,
+        "solver_iterations": 50,
+        "joint_brake": "velocity motor, target 0, max impulse 1 N·s per step",
+        "inertia_source": "collision_aabb",
+        "linear_damping": 0.04,
+        "angular_damping": 0.04,
+        "max_joint_velocity": 100.0,
+        "lateral_friction": 0.5,
+        "friction_combine": "product",
+        "self_collision": False,
+    }
+
+    def __init__(self, profile: Profile, gui: bool = False) -> None:
+        super().__init__(profile, gui)
+        self._c = -1
+        if gui:
+            if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+                raise DisplayError(self.name, "DISPLAY is not set")
+            self._c = p.connect(p.GUI)
+            if self._c < 0:
+                raise DisplayError(
+                    self.name, "p.connect(p.GUI) failed (PyBullet allows one GUI per process)"
+                )
+        else:
+            self._c = p.connect(p.DIRECT)
+        self._dt = profile.timestep
+        self._steps = 0
+        self._bodies: dict[int, _Body] = {}
+        self._configure()
+
+    def _configure(self) -> None:
+        c = self._c
+        p.setGravity(*self.profile.gravity, physicsClientId=c)
+        p.setTimeStep(self._dt, physicsClientId=c)
+        p.setPhysicsEngineParameter(
+            numSolverIterations=self.profile.solver_iterations, physicsClientId=c
+        )
+
+    # ---------------------------------------------------------------- world
+
+    @property
+    def time(self) -> float:
+        return self._steps * self._dt
+
+    def load(
+        self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
+    ) -> int:
+        prof = self.profile
+        flags = 0
+        if prof.inertia_source == "file":
+            flags |= p.URDF_USE_INERTIA_FROM_FILE
+        if prof.self_collision:
+            flags |= p.URDF_USE_SELF_COLLISION
+        src = model.source
+        needs_rewrite = src.path is None or any(
+            g.mesh_uri.startswith(("package://", "file://"))
+            for link in model.links
+            for g in (*link.visuals, *link.collisions)
+        )
+        if not needs_rewrite:
+            body = self._load_file(
+                str(src.path), src.display_name, base_position, base_orientation, fixed_base, flags
+            )
+        else:
+            body = self._load_text(model, base_position, base_orientation, fixed_base, flags)
+        self._apply_profile(body, model)
+        table = [
+            self._read_joint_info(body, i)
+            for i in range(p.getNumJoints(body, physicsClientId=self._c))
+        ]
+        dyn = p.getDynamicsInfo(body, -1, physicsClientId=self._c)
+        base_mass = dyn[0]
+        free = not fixed_base and base_mass > 0
+        self._bodies[body] = _Body(table, free, (dyn[3], dyn[4]))
+        return body
+
+    def _load_file(
+        self, path: str, display: str, pos: Vec3, orn: Quat, fixed: bool, flags: int
+    ) -> int:
+        try:
+            return int(
+                p.loadURDF(
+                    path,
+                    basePosition=pos,
+                    baseOrientation=orn,
+                    useFixedBase=fixed,
+                    flags=flags,
+                    physicsClientId=self._c,
+                )
+            )
+        except p.error as exc:
+            raise UrdfStructureError(
+                display, "<robot>", f"PyBullet cannot load it: {exc}"
+            ) from None
+
+    def _load_text(self, model: UrdfModel, pos: Vec3, orn: Quat, fixed: bool, flags: int) -> int:
+        """Load through a uniquely named temporary file that is always removed (PyBullet reads
+        files only, and caches their contents by name). Mesh paths are made absolute."""
+        root = ET.fromstring(model.source.text)
+        for mesh in root.iter("mesh"):
+            uri = mesh.get("filename")
+            if uri:
+                mesh.set("filename", str(resolve_mesh(uri, model.source.base_dir)[0]))
+        fd, path = tempfile.mkstemp(prefix="simbridge_", suffix=".urdf")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(ET.tostring(root, encoding="utf-8"))
+            return self._load_file(path, model.source.display_name, pos, orn, fixed, flags)
+        finally:
+            os.unlink(path)
+
+    def _apply_profile(self, body: int, model: UrdfModel) -> None:
+        prof, c = self.profile, self._c
+        changes: dict[str, float] = {}
+        if prof.linear_damping != _PYBULLET_DEFAULT_LINK_DAMPING:
+            changes["linearDamping"] = prof.linear_damping
+        if prof.angular_damping != _PYBULLET_DEFAULT_LINK_DAMPING:
+            changes["angularDamping"] = prof.angular_damping
+        max_vel = prof.max_joint_velocity
+        if max_vel != _PYBULLET_DEFAULT_MAX_JOINT_VELOCITY:
+            changes["maxJointVelocity"] = _NO_CLAMP if max_vel is None else max_vel
+        if changes:
+            p.changeDynamics(body, -1, physicsClientId=c, **changes)
+        for link in model.links:
+            ct = link.contact
+            dyn: dict[str, float] = {}
+            if ct.lateral_friction is None or not prof.read_urdf_contact:
+                if prof.lateral_friction != _PYBULLET_DEFAULT_FRICTION:
+                    dyn["lateralFriction"] = prof.lateral_friction
+            if ct.rolling_friction is None or not prof.read_urdf_contact:
+                if prof.rolling_friction != 0.0:
+                    dyn["rollingFriction"] = prof.rolling_friction
+            if ct.spinning_friction is None or not prof.read_urdf_contact:
+                if prof.spinning_friction != 0.0:
+                    dyn["spinningFriction"] = prof.spinning_friction
+            if ct.restitution is None or not prof.read_urdf_contact:
+                if prof.restitution != 0.0:
+                    dyn["restitution"] = prof.restitution
+            if dyn:
+                p.changeDynamics(body, link.index, physicsClientId=c, **dyn)
+        if prof.joint_brake == "urdf_friction":
+            movable = [j for j in model.joints if j.type != "fixed"]
+            if movable:
+                p.setJointMotorControlArray(
+                    body,
+                    [j.index for j in movable],
+                    p.VELOCITY_CONTROL,
+                    targetVelocities=[0.0] * len(movable),
+                    forces=[j.friction for j in movable],
+                    physicsClientId=c,
+                )
+
+    def remove(self, body: int) -> None:
+        p.removeBody(body, physicsClientId=self._c)
+        del self._bodies[body]
+
+    def reset(self) -> None:
+        p.resetSimulation(physicsClientId=self._c)
+        self._configure()
+        self._bodies.clear()
+        self._steps = 0
+
+    def step(self, n: int) -> None:
+        c = self._c
+        for _ in range(n):
+            p.stepSimulation(physicsClientId=c)
+        self._steps += n
+        # One cheap probe per body and call: NaN spreads through a body within a step.
+        for body, info in self._bodies.items():
+            if info.free:
+                x = p.getBasePositionAndOrientation(body, physicsClientId=c)[0][0]
+            elif info.probe_joint >= 0:
+                x = p.getJointState(body, info.probe_joint, physicsClientId=c)[1]
+            else:
+                continue
+            if x != x or x in (np.inf, -np.inf):
+                where = "base position" if info.free else f"joint {info.probe_joint} velocity"
+                raise SimulationDivergedError(self.name, self.time, f"body {body} {where}")
+
+    def close(self) -> None:
+        if self._c >= 0:
+            try:
+                p.disconnect(physicsClientId=self._c)
+            except p.error:  # already disconnected (e.g. the GUI window was closed)
+                pass
+            self._c = -1
+
+    # ---------------------------------------------------------------- tables
+
+    def _read_joint_info(self, body: int, joint: int) -> JointInfo:
+        r = p.getJointInfo(body, joint, physicsClientId=self._c)
+        return JointInfo(
+            r[0],
+            r[1].decode("utf-8"),
+            JointType(r[2]),
+            r[3],
+            r[4],
+            r[5],
+            r[6],
+            r[7],
+            r[8],
+            r[9],
+            r[10],
+            r[11],
+            r[12].decode("utf-8"),
+            r[13],
+            r[14],
+            r[15],
+            r[16],
+        )
+
+    def joint_info(self, body: int, joint: int) -> JointInfo:
+        return self._bodies[body].table[joint]
+
+    def num_joints(self, body: int) -> int:
+        return self._bodies[body].n
+
+    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        r = p.getDynamicsInfo(body, link, physicsClientId=self._c)
+        return DynamicsInfo(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7])
+
+    # ---------------------------------------------------------------- state
+
+    def link_state(self, body: int, link: int) -> LinkState:
+        c = self._c
+        if link >= 0:
+            r = p.getLinkState(
+                body, link, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
+            )
+            return LinkState(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7])
+        pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+        lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+        lp, lo = self._bodies[body].base_inertial
+        inv_pos, inv_orn = p.invertTransform(lp, lo)
+        fpos, forn = p.multiplyTransforms(pos, orn, inv_pos, inv_orn)
+        return LinkState(pos, orn, lp, lo, fpos, forn, lin, ang)
+
+    def base_state(self, body: int) -> BaseState:
+        c = self._c
+        pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+        lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+        return BaseState(pos, orn, lin, ang)
+
+    def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        rows = p.getJointStates(body, joints.tolist(), physicsClientId=self._c)
+        n = len(rows)
+        out = np.empty((3, n))
+        for k, r in enumerate(rows):
+            out[0, k] = r[0]
+            out[1, k] = r[1]
+            out[2, k] = r[3]
+        return JointStates(out[0], out[1], out[2])
+
+    def reset_joint_state(
+        self, body: int, joints: np.ndarray, positions: np.ndarray, velocities: np.ndarray
+    ) -> None:
+        c = self._c
+        for j, q, v in zip(joints.tolist(), positions.tolist(), velocities.tolist(), strict=True):
+            p.resetJointState(body, j, q, v, physicsClientId=c)
+
+    def reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        c = self._c
+        if position is not None or orientation is not None:
+            cur_pos, cur_orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+            p.resetBasePositionAndOrientation(
+                body,
+                cur_pos if position is None else position,
+                cur_orn if orientation is None else orientation,
+                physicsClientId=c,
+            )
+        if linear_velocity is not None or angular_velocity is not None:
+            cur_lin, cur_ang = p.getBaseVelocity(body, physicsClientId=c)
+            p.resetBaseVelocity(
+                body,
+                cur_lin if linear_velocity is None else linear_velocity,
+                cur_ang if angular_velocity is None else angular_velocity,
+                physicsClientId=c,
+            )
+
+    # ---------------------------------------------------------------- control
+
+    def set_joint_velocity(
+        self, body: int, joints: np.ndarray, target: np.ndarray, max_force: np.ndarray
+    ) -> None:
+        p.setJointMotorControlArray(
+            body,
+            joints.tolist(),
+            p.VELOCITY_CONTROL,
+            targetVelocities=target.tolist(),
+            forces=max_force.tolist(),
+            physicsClientId=self._c,
+        )
+
+    def set_joint_position(
+        self,
+        body: int,
+        joints: np.ndarray,
+        target: np.ndarray,
+        max_force: np.ndarray,
+        kp: np.ndarray,
+        kd: np.ndarray,
+    ) -> None:
+        p.setJointMotorControlArray(
+            body,
+            joints.tolist(),
+            p.POSITION_CONTROL,
+            targetPositions=target.tolist(),
+            forces=max_force.tolist(),
+            positionGains=kp.tolist(),
+            velocityGains=kd.tolist(),
+            physicsClientId=self._c,
+        )
+
+    def set_joint_torque(self, body: int, joints: np.ndarray, torque: np.ndarray) -> None:
+        p.setJointMotorControlArray(
+            body, joints.tolist(), p.TORQUE_CONTROL, forces=torque.tolist(), physicsClientId=self._c
+        )
+
+    # ---------------------------------------------------------------- description
+
+    def manifest(self) -> dict[str, Any]:
+        try:
+            engine_version = version("pybullet")
+        except PackageNotFoundError:  # pragma: no cover
+            engine_version = f"api {p.getAPIVersion()}"
+        return {
+            "backend": self.name,
+            "engine": "PyBullet (Bullet Physics, Featherstone multibody, sequential impulse)",
+            "engine_version": engine_version,
+            "native_defaults": self.NATIVE_DEFAULTS,
+            "departures": {},
+        }
