@@ -1,0 +1,71 @@
+"""The core without an engine: lazy imports, the registry, profiles."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+import simbridge
+from simbridge import exceptions as exc
+from simbridge.registry import register
+
+
+def test_import_loads_no_engine_and_no_yourdfpy():
+    code = (
+        "import sys, simbridge; "
+        "print(','.join(m for m in ('pybullet', 'mujoco', 'yourdfpy', 'trimesh', 'matplotlib')"
+        " if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
+
+
+def test_unknown_backend_lists_the_available_ones():
+    with pytest.raises(
+        exc.UnknownBackendError, match=r"unknown backend 'bullet'.*'mujoco'.*'pybullet'"
+    ):
+        simbridge.Sim("bullet")
+
+
+def test_missing_engine_names_the_pip_command():
+    register(
+        "ghost",
+        "simbridge_ghost.backend:Ghost",
+        requires=("simbridge_ghost_engine",),
+        pip_name="simbridge-ghost-engine",
+    )
+    with pytest.raises(exc.BackendNotInstalledError, match="pip install simbridge-ghost-engine"):
+        simbridge.Sim("ghost")
+
+
+def test_profiles_are_explicit_and_printable():
+    assert set(simbridge.PROFILES) == {"pybullet", "urdf"}
+    pb, urdf = simbridge.PROFILES["pybullet"], simbridge.PROFILES["urdf"]
+    assert pb.joint_brake == "pybullet" and urdf.joint_brake == "urdf_friction"
+    assert pb.linear_damping == 0.04 and urdf.linear_damping == 0.0
+    assert pb.max_joint_velocity == 100.0 and urdf.max_joint_velocity is None
+    assert pb.inertia_source == "collision_aabb" and urdf.inertia_source == "file"
+    text = str(urdf)
+    for entry in ("joint_brake", "inertia_source", "max_joint_velocity", "friction_combine"):
+        assert entry in text
+    with pytest.raises(
+        exc.InvalidProfileError,
+        match=r"unknown profile 'bullet'; valid profiles: \['pybullet', 'urdf'\]",
+    ):
+        simbridge.Sim("pybullet", profile="bullet")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"timestep": 0}, "argument 'timestep': must be a finite number > 0"),
+        ({"timestep": float("nan")}, "argument 'timestep'"),
+        ({"gravity": (0, 0)}, "argument 'gravity': expected 3 numbers, got 2"),
+        ({"gravity": (0, 0, float("inf"))}, "argument 'gravity': values must be finite"),
+    ],
+)
+def test_bad_sim_arguments(kwargs, message):
+    with pytest.raises(exc.InvalidArgumentError, match=message):
+        simbridge.Sim("pybullet", **kwargs)

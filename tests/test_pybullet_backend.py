@@ -1,0 +1,157 @@
+"""PyBullet-backend specifics: the layer adds nothing to raw PyBullet under the "pybullet" profile.
+
+These tests import pybullet directly because they compare against raw PyBullet code.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+import numpy as np
+import pybullet as p
+import pybullet_data
+import pytest
+
+import simbridge
+from simbridge.exceptions import DisplayError
+
+WHEELS_RIGHT, WHEELS_LEFT = (2, 3), (6, 7)
+
+
+def _raw_drive() -> tuple[list, list]:
+    """The tutorial drive in raw PyBullet, the way the tutorial writes it."""
+    c = p.connect(p.DIRECT)
+    try:
+        p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=c)
+        p.setGravity(0, 0, -9.8, physicsClientId=c)
+        p.loadURDF("plane.urdf", physicsClientId=c)
+        r = p.loadURDF("r2d2.urdf", [0, 0, 0.1], physicsClientId=c)
+        base, joints = [], []
+
+        def record() -> None:
+            base.append(p.getBasePositionAndOrientation(r, physicsClientId=c))
+            joints.append([s[:2] for s in p.getJointStates(r, range(15), physicsClientId=c)])
+
+        for _ in range(240):
+            p.stepSimulation(physicsClientId=c)
+            record()
+        for _ in range(240):
+            for j in WHEELS_RIGHT:
+                p.setJointMotorControl2(
+                    r, j, p.VELOCITY_CONTROL, targetVelocity=-100, force=50, physicsClientId=c
+                )
+            for j in WHEELS_LEFT:
+                p.setJointMotorControl2(
+                    r, j, p.VELOCITY_CONTROL, targetVelocity=100, force=50, physicsClientId=c
+                )
+            p.stepSimulation(physicsClientId=c)
+            record()
+        for _ in range(500):
+            for j in WHEELS_RIGHT + WHEELS_LEFT:
+                p.setJointMotorControl2(
+                    r, j, p.VELOCITY_CONTROL, targetVelocity=-100, force=10, physicsClientId=c
+                )
+            p.stepSimulation(physicsClientId=c)
+            record()
+        return base, joints
+    finally:
+        p.disconnect(c)
+
+
+def _layer_drive() -> tuple[list, list]:
+    with simbridge.Sim("pybullet") as sim:
+        sim.load_urdf("plane.urdf")
+        r = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.1))
+        base, joints = [], []
+
+        def record() -> None:
+            s = sim.base_state(r)
+            base.append((s.position, s.orientation))
+            js = sim.joint_states(r)
+            joints.append(list(zip(js.positions.tolist(), js.velocities.tolist(), strict=True)))
+
+        for _ in range(240):
+            sim.step()
+            record()
+        for _ in range(240):
+            sim.set_joint_velocity(r, [2, 3, 6, 7], [-100, -100, 100, 100], max_force=50)
+            sim.step()
+            record()
+        wheels = np.array([2, 3, 6, 7])
+        for _ in range(500):
+            sim.set_joint_velocity(r, wheels, np.full(4, -100.0), max_force=10)
+            sim.step()
+            record()
+        return base, joints
+
+
+def test_r2d2_drive_is_bitwise_the_raw_drive():
+    raw_base, raw_joints = _raw_drive()
+    base, joints = _layer_drive()
+    assert len(base) == 980
+    for k in range(980):
+        assert base[k] == raw_base[k], f"base pose differs at step {k}"
+        assert joints[k] == raw_joints[k], f"joint states differ at step {k}"
+    # The tutorial drive moves the robot: the comparison is not between two resting robots.
+    assert np.linalg.norm(np.subtract(base[-1][0][:2], base[239][0][:2])) > 0.5
+
+
+def _temp_leftovers() -> set[str]:
+    return {f for f in os.listdir(tempfile.gettempdir()) if f.startswith("simbridge_")}
+
+
+CUBE = """<robot name="cube"><link name="box">
+  <inertial><mass value="{mass}"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
+  <collision><geometry><box size="0.5 0.5 0.5"/></geometry></collision>
+</link></robot>"""
+
+
+def test_urdf_text_goes_through_a_unique_temp_file_that_is_removed():
+    before = _temp_leftovers()
+    with simbridge.Sim("pybullet") as sim:
+        a = sim.load_urdf(CUBE.format(mass=1.0), base_position=(0, 0, 1))
+        b = sim.load_urdf(CUBE.format(mass=3.0), base_position=(2, 0, 1))
+        # No stale model from PyBullet's file-name cache: each text gives its own mass.
+        assert sim.dynamics_info(a).mass == 1.0
+        assert sim.dynamics_info(b).mass == 3.0
+        sim.reset()
+        c = sim.load_urdf(CUBE.format(mass=7.0))
+        assert sim.dynamics_info(c).mass == 7.0
+    assert _temp_leftovers() == before
+
+
+def test_failed_text_load_leaves_no_temp_file_and_sim_stays_usable():
+    before = _temp_leftovers()
+    with simbridge.Sim("pybullet") as sim:
+        with pytest.raises(simbridge.exceptions.UrdfParseError, match="<urdf text>: malformed"):
+            sim.load_urdf("<robot name='x'><link name='a'></robot>")
+        assert sim.load_urdf(CUBE.format(mass=2.0)) >= 0
+    assert _temp_leftovers() == before
+
+
+def test_each_sim_owns_and_releases_its_client():
+    sim = simbridge.Sim("pybullet")
+    client = sim._b._c  # the backend's physics client id
+    assert p.getConnectionInfo(client)["isConnected"] == 1
+    sim.close()
+    assert p.getConnectionInfo(client)["isConnected"] == 0
+    sim.close()  # twice is fine
+    with pytest.raises(simbridge.exceptions.SimClosedError, match="closed"):
+        sim.step()
+
+
+def test_gui_without_display_is_a_clear_error(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    with pytest.raises(DisplayError, match="backend 'pybullet' cannot open a window: DISPLAY"):
+        simbridge.Sim("pybullet", gui=True)
+
+
+def test_urdf_profile_uses_file_inertia_and_no_brake():
+    with simbridge.Sim("pybullet", profile="urdf") as sim:
+        r = sim.load_urdf("r2d2.urdf", fixed_base=True)
+        # r2d2's links declare ixx = iyy = izz = 1 in the file.
+        assert sim.dynamics_info(r, 2).local_inertia_diagonal == (1.0, 1.0, 1.0)
+    with simbridge.Sim("pybullet", profile="pybullet") as sim:
+        r = sim.load_urdf("r2d2.urdf", fixed_base=True)
+        assert sim.dynamics_info(r, 2).local_inertia_diagonal != (1.0, 1.0, 1.0)
