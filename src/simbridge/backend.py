@@ -20,13 +20,15 @@ backend, so a backend receives only checked values: body ids it returned, joint 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from .profiles import Profile
 from .types import BaseState, DynamicsInfo, JointInfo, JointStates, LinkState, Quat, Vec3
-from .urdf import UrdfModel
+
+if TYPE_CHECKING:
+    from .urdf import UrdfModel
 
 __all__ = ["Backend"]
 

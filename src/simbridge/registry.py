@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass
-from importlib.metadata import entry_points
 from typing import TYPE_CHECKING
 
 from .exceptions import BackendError, BackendNotInstalledError, UnknownBackendError
@@ -53,6 +52,8 @@ def _read_entry_points() -> None:
     if _entry_points_read:
         return
     _entry_points_read = True
+    from importlib.metadata import entry_points  # costs ~20 ms: only when a lookup needs it
+
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         if ep.name not in _REGISTRY:
             _REGISTRY[ep.name] = BackendSpec(ep.name, ep.value)
@@ -68,7 +69,8 @@ def load_backend(name: str) -> type[Backend]:
     """Import and return the backend class registered as ``name``."""
     if name in _LOADED:
         return _LOADED[name]
-    _read_entry_points()
+    if name not in _REGISTRY:
+        _read_entry_points()
     if not isinstance(name, str) or name not in _REGISTRY:
         raise UnknownBackendError(str(name), _REGISTRY)
     spec = _REGISTRY[name]

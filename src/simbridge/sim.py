@@ -36,7 +36,6 @@ from .exceptions import (
 from .profiles import Profile, get_profile
 from .registry import available_backends, load_backend
 from .types import BaseState, DynamicsInfo, JointInfo, JointStates, JointType, LinkState
-from .urdf import parse_urdf, resolve_source
 
 __all__ = ["Sim"]
 
@@ -207,6 +206,8 @@ class Sim:
         """
         pos = _vec(base_position, 3, "base_position")
         orn = _quat(base_orientation, "base_orientation")
+        from .urdf import parse_urdf, resolve_source  # xml parsing loads on first use
+
         model = parse_urdf(resolve_source(source))
         body = self._b.load(model, pos, orn, bool(fixed_base))  # type: ignore[arg-type]
         names = [j.name for j in model.joints]
