@@ -1,0 +1,76 @@
+"""A built wheel carries the whole package: core, backends, compare and the robots."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("wheel")
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out), str(ROOT)],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
+    (path,) = out.glob("simbridge-*.whl")
+    return path
+
+
+def test_wheel_contains_every_package_and_the_robots(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for required in (
+        "simbridge/__init__.py",
+        "simbridge/sim.py",
+        "simbridge/py.typed",
+        "simbridge/backends/pybullet_backend.py",
+        "simbridge/compare/__init__.py",
+        "simbridge/robots/r2d2.urdf",
+        "simbridge/robots/plane.urdf",
+        "simbridge/robots/l_finger.stl",
+    ):
+        assert required in names, f"{required} missing from {wheel.name}"
+
+
+def test_installed_wheel_imports_and_finds_the_robots(wheel, tmp_path):
+    target = tmp_path / "site"
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--no-deps",
+            "-q",
+            "--target",
+            str(target),
+            str(wheel),
+        ],
+        check=True,
+    )
+    code = (
+        "import simbridge, simbridge.urdf as u; "
+        "s = u.resolve_source('r2d2'); print(s.path); "
+        "m = u.parse_urdf(s); print(len(m.joints))"
+    )
+    # Run from an empty folder with only the wheel's copy on the path (dependencies come from
+    # this environment's site-packages, which stays on sys.path after the target).
+    proc = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={"PYTHONPATH": str(target), "PATH": ""},
+    )
+    assert proc.returncode == 0, proc.stderr
+    path, joints = proc.stdout.split()
+    assert path.startswith(str(target)) and path.endswith("simbridge/robots/r2d2.urdf")
+    assert joints == "15"
