@@ -1,0 +1,331 @@
+"""The raw and layer code of every benchmark row. Each callable returns the seconds of its timed
+part (set-up is excluded: loading the robot is not what a per-step figure measures)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from importlib.metadata import version
+
+import numpy as np
+
+import simbridge
+
+BACKENDS = [b for b in ("pybullet", "mujoco") if b in simbridge.available_backends()]
+WHEELS = [2, 3, 6, 7]
+TURN = np.array([-100.0, -100.0, 100.0, 100.0])
+FORWARD = np.array([-100.0, -100.0, -100.0, -100.0])
+
+
+@dataclass
+class Case:
+    name: str
+    raw: Callable[[], float]
+    layer: Callable[[], float]
+    target: float | None
+    note: str = ""
+
+
+def engine_versions() -> str:
+    return f"pybullet {version('pybullet')}, mujoco {version('mujoco')}, simbridge {simbridge.__version__}"
+
+
+# ---------------------------------------------------------------- the layer's drive
+
+
+def _layer_sim(backend: str) -> tuple[simbridge.Sim, int]:
+    sim = simbridge.Sim(backend)
+    sim.load_urdf("plane.urdf")
+    robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.1))
+    return sim, robot
+
+
+def layer_drive(backend: str, record: bool) -> Callable[[], float]:
+    wheels = np.array(WHEELS)
+
+    def run() -> float:
+        sim, robot = _layer_sim(backend)
+        try:
+            base = np.empty((980, 7))
+            wheel_state = np.empty((980, 8))
+            t0 = time.perf_counter()
+            for k in range(980):
+                if k >= 240:
+                    if k < 480:
+                        sim.set_joint_velocity(robot, wheels, TURN, max_force=50.0)
+                    else:
+                        sim.set_joint_velocity(robot, wheels, FORWARD, max_force=10.0)
+                sim.step()
+                if record:
+                    s = sim.link_state(robot, -1)
+                    base[k, :3] = s.link_frame_position
+                    base[k, 3:] = s.link_frame_orientation
+                    js = sim.joint_states(robot, wheels)
+                    wheel_state[k, :4] = js.positions
+                    wheel_state[k, 4:] = js.velocities
+            return time.perf_counter() - t0
+        finally:
+            sim.close()
+
+    return run
+
+
+# ---------------------------------------------------------------- raw PyBullet
+
+
+def pybullet_raw_drive(record: bool) -> Callable[[], float]:
+    import pybullet as p
+    import pybullet_data
+
+    def run() -> float:
+        c = p.connect(p.DIRECT)
+        try:
+            p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=c)
+            p.setGravity(0, 0, -9.8, physicsClientId=c)
+            p.loadURDF("plane.urdf", physicsClientId=c)
+            r = p.loadURDF("r2d2.urdf", [0, 0, 0.1], physicsClientId=c)
+            base = np.empty((980, 7))
+            wheel_state = np.empty((980, 8))
+            turn, fwd = TURN.tolist(), FORWARD.tolist()
+            t0 = time.perf_counter()
+            for k in range(980):
+                if k >= 240:
+                    if k < 480:
+                        p.setJointMotorControlArray(
+                            r,
+                            WHEELS,
+                            p.VELOCITY_CONTROL,
+                            targetVelocities=turn,
+                            forces=[50.0] * 4,
+                            physicsClientId=c,
+                        )
+                    else:
+                        p.setJointMotorControlArray(
+                            r,
+                            WHEELS,
+                            p.VELOCITY_CONTROL,
+                            targetVelocities=fwd,
+                            forces=[10.0] * 4,
+                            physicsClientId=c,
+                        )
+                p.stepSimulation(physicsClientId=c)
+                if record:
+                    pos, orn = p.getBasePositionAndOrientation(r, physicsClientId=c)
+                    base[k, :3] = pos
+                    base[k, 3:] = orn
+                    for i, s in enumerate(p.getJointStates(r, WHEELS, physicsClientId=c)):
+                        wheel_state[k, i] = s[0]
+                        wheel_state[k, 4 + i] = s[1]
+            return time.perf_counter() - t0
+        finally:
+            p.disconnect(c)
+
+    return run
+
+
+# ---------------------------------------------------------------- raw MuJoCo
+
+
+def mujoco_raw_drive(record: bool) -> Callable[[], float]:
+    """Raw MuJoCo on the very model the layer compiled: ``d.ctrl``-style writes of the wheel
+    torque (``qfrc_applied``) and ``mj_step``, which is the floor any layer over this model has."""
+    import mujoco
+
+    def run() -> float:
+        sim, robot = _layer_sim("mujoco")
+        try:
+            m, d = sim._b.model, sim._b.data  # noqa: SLF001 - the raw floor on the same model
+            dofs = np.array([sim._b.dof_of(robot, j) for j in WHEELS])  # noqa: SLF001
+            base_body = sim._b.mj_body_of(robot, -1)  # noqa: SLF001
+            base = np.empty((980, 7))
+            wheel_state = np.empty((980, 8))
+            qadr = m.jnt_qposadr[m.dof_jntid[dofs]]
+            t0 = time.perf_counter()
+            for k in range(980):
+                if k >= 240:
+                    d.qfrc_applied[dofs] = TURN if k < 480 else FORWARD
+                mujoco.mj_step(m, d)
+                if record:
+                    mujoco.mj_kinematics(m, d)
+                    base[k, :3] = d.xpos[base_body]
+                    base[k, 3:] = d.xquat[base_body]
+                    wheel_state[k, :4] = d.qpos[qadr]
+                    wheel_state[k, 4:] = d.qvel[dofs]
+            return time.perf_counter() - t0
+        finally:
+            sim.close()
+
+    return run
+
+
+DRIVES: dict[str, Case] = {}
+RECORDED_DRIVES: dict[str, Case] = {}
+for _b, _raw, _t, _tr in (
+    ("pybullet", pybullet_raw_drive, 1.03, 1.10),
+    ("mujoco", mujoco_raw_drive, 1.15, 1.20),
+):
+    if _b in BACKENDS:
+        DRIVES[_b] = Case("drive", _raw(False), layer_drive(_b, False), _t)
+        RECORDED_DRIVES[_b] = Case("drive+record", _raw(True), layer_drive(_b, True), _tr)
+
+
+# ---------------------------------------------------------------- single calls
+
+
+def single_calls(backend: str, n: int) -> list[Case]:
+    sim, robot = _layer_sim(backend)
+    sim.step(10)
+    wheels = np.array(WHEELS)
+    out: list[Case] = []
+
+    def per_call(fn: Callable[[], object]) -> Callable[[], float]:
+        def run() -> float:
+            t0 = time.perf_counter()
+            for _ in range(n):
+                fn()
+            return (time.perf_counter() - t0) / n
+
+        return run
+
+    if backend == "pybullet":
+        import pybullet as p
+
+        c = sim._b._c  # noqa: SLF001 - the same client, called raw
+        raw_link = lambda: p.getLinkState(
+            robot,
+            2,
+            computeLinkVelocity=1,
+            computeForwardKinematics=1,  # noqa: E731
+            physicsClientId=c,
+        )
+        raw_js = lambda: p.getJointStates(robot, WHEELS, physicsClientId=c)  # noqa: E731
+        raw_set = lambda: p.setJointMotorControlArray(
+            robot,
+            WHEELS,
+            p.VELOCITY_CONTROL,  # noqa: E731
+            targetVelocities=TURN.tolist(),
+            forces=[50.0] * 4,
+            physicsClientId=c,
+        )
+    else:
+        import mujoco
+
+        m, d = sim._b.model, sim._b.data  # noqa: SLF001
+        dofs = np.array([sim._b.dof_of(robot, j) for j in WHEELS])  # noqa: SLF001
+        body = sim._b.mj_body_of(robot, 2)  # noqa: SLF001
+        qadr = m.jnt_qposadr[m.dof_jntid[dofs]]
+
+        def raw_link() -> object:
+            return d.xipos[body].copy(), d.xquat[body].copy(), d.cvel[body].copy()
+
+        def raw_js() -> object:
+            return d.qpos[qadr].copy(), d.qvel[dofs].copy()
+
+        def raw_set() -> None:
+            d.qfrc_applied[dofs] = TURN
+
+        _ = mujoco
+    out.append(
+        Case(
+            "single call: link_state(link 2)",
+            per_call(raw_link),
+            per_call(lambda: sim.link_state(robot, 2)),
+            None,
+            "velocity + fresh pose",
+        )
+    )
+    out.append(
+        Case(
+            "single call: joint_states(4 wheels)",
+            per_call(raw_js),
+            per_call(lambda: sim.joint_states(robot, wheels)),
+            None,
+        )
+    )
+    out.append(
+        Case(
+            "single call: set_joint_velocity(4 wheels)",
+            per_call(raw_set),
+            per_call(lambda: sim.set_joint_velocity(robot, wheels, TURN, max_force=50.0)),
+            None,
+        )
+    )
+    return out
+
+
+# ---------------------------------------------------------------- compare end to end
+
+
+def compare_end_to_end() -> Case | None:
+    """``simbridge.compare`` on r2d2 against a plain script doing the same two runs and a diff."""
+    if len(BACKENDS) < 2:
+        return None
+    try:
+        from simbridge import compare
+    except ImportError:
+        return None
+    if not hasattr(compare, "run") or not hasattr(compare, "diff"):
+        return None
+
+    def plain() -> float:
+        t0 = time.perf_counter()
+        a = pybullet_raw_positions()
+        b = layer_positions("mujoco")
+        np.linalg.norm(a - b, axis=1).max()
+        return time.perf_counter() - t0
+
+    def layer() -> float:
+        t0 = time.perf_counter()
+        ta = compare.run("r2d2", "pybullet")
+        tb = compare.run("r2d2", "mujoco")
+        compare.diff(ta, tb)
+        return time.perf_counter() - t0
+
+    return Case("compare", plain, layer, None, "runs + diff, no report files")
+
+
+def pybullet_raw_positions() -> np.ndarray:
+    import pybullet as p
+    import pybullet_data
+
+    c = p.connect(p.DIRECT)
+    try:
+        p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=c)
+        p.setGravity(0, 0, -9.8, physicsClientId=c)
+        p.loadURDF("plane.urdf", physicsClientId=c)
+        r = p.loadURDF("r2d2.urdf", [0, 0, 0.1], physicsClientId=c)
+        out = np.empty((980, 3))
+        for k in range(980):
+            if k >= 240:
+                tv = TURN if k < 480 else FORWARD
+                p.setJointMotorControlArray(
+                    r,
+                    WHEELS,
+                    p.VELOCITY_CONTROL,
+                    targetVelocities=tv.tolist(),
+                    forces=[50.0 if k < 480 else 10.0] * 4,
+                    physicsClientId=c,
+                )
+            p.stepSimulation(physicsClientId=c)
+            out[k] = p.getBasePositionAndOrientation(r, physicsClientId=c)[0]
+        return out
+    finally:
+        p.disconnect(c)
+
+
+def layer_positions(backend: str) -> np.ndarray:
+    sim, robot = _layer_sim(backend)
+    try:
+        out = np.empty((980, 3))
+        wheels = np.array(WHEELS)
+        for k in range(980):
+            if k >= 240:
+                sim.set_joint_velocity(
+                    robot, wheels, TURN if k < 480 else FORWARD, max_force=50.0 if k < 480 else 10.0
+                )
+            sim.step()
+            out[k] = sim.base_state(robot).position
+        return out
+    finally:
+        sim.close()

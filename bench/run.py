@@ -1,0 +1,176 @@
+"""What the layer costs: raw engine code against simbridge, side by side in one process.
+
+    python bench/run.py                 # full run (about a minute)
+    python bench/run.py --repeats 1 --quick   # smoke run
+
+Each row times the raw code and the layer's code interleaved (raw, layer, raw, layer ...) in
+this one process, ``--repeats`` times, and prints the medians, their spread (min..max) and the
+ratio layer/raw against the target from ../shared/PERFORMANCE.md. Raw code is written the fast,
+idiomatic way (``setJointMotorControlArray``; ``d.ctrl[:] = array``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import cases  # noqa: E402  (bench/cases.py: the raw and layer code of every row)
+
+
+@dataclass
+class Row:
+    name: str
+    unit: str
+    raw: list[float]
+    layer: list[float]
+    target: float | None
+    note: str = ""
+
+    @property
+    def ratio(self) -> float:
+        return statistics.median(self.layer) / statistics.median(self.raw)
+
+    def verdict(self) -> str:
+        if self.target is None:
+            return ""
+        return "ok" if self.ratio <= self.target else "MISSED"
+
+
+def interleave(
+    raw: Callable[[], float], layer: Callable[[], float], repeats: int
+) -> tuple[list[float], list[float]]:
+    """Run raw and layer alternately; each callable returns the seconds of its timed part."""
+    raw()  # warm both up (imports, caches, first compile)
+    layer()
+    r, lay = [], []
+    for _ in range(repeats):
+        r.append(raw())
+        lay.append(layer())
+    return r, lay
+
+
+def import_times(repeats: int) -> tuple[list[float], list[float]]:
+    """Seconds to import numpy alone, and numpy then simbridge, in fresh interpreters."""
+    code = (
+        "import time; t0 = time.perf_counter(); import numpy; t1 = time.perf_counter(); "
+        "{extra}; t2 = time.perf_counter(); print(t1 - t0, t2 - t0)"
+    )
+    base, full = [], []
+    for _ in range(repeats):
+        out = subprocess.run(
+            [sys.executable, "-c", code.format(extra="import simbridge")],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.split()
+        base.append(float(out[0]))
+        full.append(float(out[1]))
+    return base, full
+
+
+def fmt(values: list[float], unit: str) -> str:
+    scale = {"µs/step": 1e6, "µs": 1e6, "ms": 1e3, "s": 1.0}[unit]
+    med = statistics.median(values) * scale
+    return f"{med:9.2f} ({min(values) * scale:.1f}..{max(values) * scale:.1f})"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--repeats", type=int, default=7, help="timed repeats per row (default 7)")
+    parser.add_argument("--quick", action="store_true", help="fewer steps and calls (smoke run)")
+    parser.add_argument("--backends", nargs="+", default=cases.BACKENDS, choices=cases.BACKENDS)
+    args = parser.parse_args(argv)
+    reps = max(1, args.repeats)
+    scale = 0.1 if args.quick else 1.0
+
+    rows: list[Row] = []
+    for backend in args.backends:
+        drive = cases.DRIVES[backend]
+        raw, lay = interleave(drive.raw, drive.layer, reps)
+        rows.append(
+            Row(
+                f"{backend}: r2d2 drive, 980 steps, velocity commands",
+                "µs/step",
+                [t / 980 for t in raw],
+                [t / 980 for t in lay],
+                drive.target,
+            )
+        )
+        rec = cases.RECORDED_DRIVES[backend]
+        raw, lay = interleave(rec.raw, rec.layer, reps)
+        rows.append(
+            Row(
+                f"{backend}: same drive, recording base pose + wheel states",
+                "µs/step",
+                [t / 980 for t in raw],
+                [t / 980 for t in lay],
+                rec.target,
+            )
+        )
+        for call in cases.single_calls(backend, int(2000 * scale) or 200):
+            raw, lay = interleave(call.raw, call.layer, reps)
+            rows.append(Row(f"{backend}: {call.name}", "µs", raw, lay, call.target, call.note))
+
+    base, full = import_times(max(3, reps))
+    extra = [f - b for b, f in zip(base, full, strict=True)]
+    rows.append(
+        Row(
+            "import simbridge after numpy (extra seconds)",
+            "ms",
+            base,
+            full,
+            None,
+            f"extra {statistics.median(extra) * 1e3:.1f} ms (target <= 50 ms)",
+        )
+    )
+
+    comp = cases.compare_end_to_end() if len(args.backends) > 1 else None
+    if comp is not None:
+        raw, lay = interleave(comp.raw, comp.layer, max(1, reps // 2))
+        rows.append(
+            Row(
+                "compare r2d2 (two engines, record, diff) vs plain script",
+                "s",
+                raw,
+                lay,
+                comp.target,
+                comp.note,
+            )
+        )
+
+    print(
+        f"# simbridge benchmark: {platform.node()} | {platform.processor() or platform.machine()}"
+        f" | Python {platform.python_version()} | {cases.engine_versions()} | repeats {reps}"
+    )
+    print()
+    print(
+        f"| {'case':<62} | unit | raw median (min..max) | simbridge median (min..max) | ratio | target | |"
+    )
+    print(f"|{'-' * 64}|------|------|------|------|------|--|")
+    for row in rows:
+        target = f"{row.target:.2f}x" if row.target else "-"
+        note = row.note or row.verdict()
+        print(
+            f"| {row.name:<62} | {row.unit} | {fmt(row.raw, row.unit)} | {fmt(row.layer, row.unit)} "
+            f"| {row.ratio:5.3f} | {target} | {note} |"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    np.set_printoptions(precision=4)
+    sys.exit(main())
