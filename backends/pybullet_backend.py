@@ -337,10 +337,10 @@ class PyBulletBackend(Backend):
         return JointStates(out[0], out[1], out[2])
 
     def reset_joint_state(
-        self, body: int, joints: np.ndarray, positions: np.ndarray, velocities: np.ndarray
+        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
         c = self._c
-        for j, q, v in zip(joints.tolist(), positions.tolist(), velocities.tolist(), strict=True):
+        for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
             p.resetJointState(body, j, q, v, physicsClientId=c)
 
     def reset_base_state(
@@ -372,14 +372,14 @@ class PyBulletBackend(Backend):
     # ---------------------------------------------------------------- control
 
     def set_joint_velocity(
-        self, body: int, joints: np.ndarray, target: np.ndarray, max_force: np.ndarray
+        self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
         p.setJointMotorControlArray(
             body,
             joints.tolist(),
             p.VELOCITY_CONTROL,
-            targetVelocities=target.tolist(),
-            forces=max_force.tolist(),
+            targetVelocities=target,
+            forces=max_force,
             physicsClientId=self._c,
         )
 
@@ -387,25 +387,25 @@ class PyBulletBackend(Backend):
         self,
         body: int,
         joints: np.ndarray,
-        target: np.ndarray,
-        max_force: np.ndarray,
-        kp: np.ndarray,
-        kd: np.ndarray,
+        target: list[float],
+        max_force: list[float],
+        kp: list[float],
+        kd: list[float],
     ) -> None:
         p.setJointMotorControlArray(
             body,
             joints.tolist(),
             p.POSITION_CONTROL,
-            targetPositions=target.tolist(),
-            forces=max_force.tolist(),
-            positionGains=kp.tolist(),
-            velocityGains=kd.tolist(),
+            targetPositions=target,
+            forces=max_force,
+            positionGains=kp,
+            velocityGains=kd,
             physicsClientId=self._c,
         )
 
-    def set_joint_torque(self, body: int, joints: np.ndarray, torque: np.ndarray) -> None:
+    def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         p.setJointMotorControlArray(
-            body, joints.tolist(), p.TORQUE_CONTROL, forces=torque.tolist(), physicsClientId=self._c
+            body, joints.tolist(), p.TORQUE_CONTROL, forces=torque, physicsClientId=self._c
         )
 
     # ---------------------------------------------------------------- description

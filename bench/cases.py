@@ -47,8 +47,8 @@ def layer_drive(backend: str, record: bool) -> Callable[[], float]:
     def run() -> float:
         sim, robot = _layer_sim(backend)
         try:
-            base = np.empty((980, 7))
-            wheel_state = np.empty((980, 8))
+            base = np.empty((980, 13))
+            wheel_state = np.empty((980, 12))
             t0 = time.perf_counter()
             for k in range(980):
                 if k >= 240:
@@ -58,12 +58,15 @@ def layer_drive(backend: str, record: bool) -> Callable[[], float]:
                         sim.set_joint_velocity(robot, wheels, FORWARD, max_force=10.0)
                 sim.step()
                 if record:
-                    s = sim.link_state(robot, -1)
-                    base[k, :3] = s.link_frame_position
-                    base[k, 3:] = s.link_frame_orientation
+                    s = sim.base_state(robot)
+                    base[k, :3] = s.position
+                    base[k, 3:7] = s.orientation
+                    base[k, 7:10] = s.linear_velocity
+                    base[k, 10:] = s.angular_velocity
                     js = sim.joint_states(robot, wheels)
                     wheel_state[k, :4] = js.positions
-                    wheel_state[k, 4:] = js.velocities
+                    wheel_state[k, 4:8] = js.velocities
+                    wheel_state[k, 8:] = js.applied_torques
             return time.perf_counter() - t0
         finally:
             sim.close()
@@ -85,8 +88,8 @@ def pybullet_raw_drive(record: bool) -> Callable[[], float]:
             p.setGravity(0, 0, -9.8, physicsClientId=c)
             p.loadURDF("plane.urdf", physicsClientId=c)
             r = p.loadURDF("r2d2.urdf", [0, 0, 0.1], physicsClientId=c)
-            base = np.empty((980, 7))
-            wheel_state = np.empty((980, 8))
+            base = np.empty((980, 13))
+            wheel_state = np.empty((980, 12))
             turn, fwd = TURN.tolist(), FORWARD.tolist()
             t0 = time.perf_counter()
             for k in range(980):
@@ -110,13 +113,17 @@ def pybullet_raw_drive(record: bool) -> Callable[[], float]:
                             physicsClientId=c,
                         )
                 p.stepSimulation(physicsClientId=c)
-                if record:
+                if record:  # the same quantities the layer returns
                     pos, orn = p.getBasePositionAndOrientation(r, physicsClientId=c)
+                    lin, ang = p.getBaseVelocity(r, physicsClientId=c)
                     base[k, :3] = pos
-                    base[k, 3:] = orn
+                    base[k, 3:7] = orn
+                    base[k, 7:10] = lin
+                    base[k, 10:] = ang
                     for i, s in enumerate(p.getJointStates(r, WHEELS, physicsClientId=c)):
                         wheel_state[k, i] = s[0]
                         wheel_state[k, 4 + i] = s[1]
+                        wheel_state[k, 8 + i] = s[3]
             return time.perf_counter() - t0
         finally:
             p.disconnect(c)
@@ -138,8 +145,8 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
             m, d = sim._b.model, sim._b.data  # noqa: SLF001 - the raw floor on the same model
             dofs = np.array([sim._b.dof_of(robot, j) for j in WHEELS])  # noqa: SLF001
             base_body = sim._b.mj_body_of(robot, -1)  # noqa: SLF001
-            base = np.empty((980, 7))
-            wheel_state = np.empty((980, 8))
+            base = np.empty((980, 13))
+            wheel_state = np.empty((980, 12))
             qadr = m.jnt_qposadr[m.dof_jntid[dofs]]
             t0 = time.perf_counter()
             for k in range(980):
@@ -147,11 +154,13 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
                     d.qfrc_applied[dofs] = TURN if k < 480 else FORWARD
                 mujoco.mj_step(m, d)
                 if record:
-                    mujoco.mj_kinematics(m, d)
-                    base[k, :3] = d.xpos[base_body]
-                    base[k, 3:] = d.xquat[base_body]
+                    mujoco.mj_kinematics(m, d)  # poses after the step, not before it
+                    base[k, :3] = d.xipos[base_body]
+                    base[k, 3:7] = d.xquat[base_body]
+                    base[k, 7:13] = d.qvel[:6]
                     wheel_state[k, :4] = d.qpos[qadr]
-                    wheel_state[k, 4:] = d.qvel[dofs]
+                    wheel_state[k, 4:8] = d.qvel[dofs]
+                    wheel_state[k, 8:] = d.qfrc_applied[dofs]
             return time.perf_counter() - t0
         finally:
             sim.close()

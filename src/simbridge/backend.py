@@ -2,8 +2,11 @@
 
 :class:`simbridge.Sim` validates every argument and resolves every name before it calls a
 backend, so a backend receives only checked values: body ids it returned, joint indices as
-``np.intp`` arrays of movable joints (for commands) or of any joints (for reads), links as ints
-(-1 = base), commands as finite ``float64`` arrays of the same length. A backend must:
+``np.intp`` arrays of movable joints (for commands) or of any joints (for reads; read-only,
+cached by the caller: the same array object comes back for the same joints argument, so a
+backend may key its own per-joint-set caches on ``id()``), links as ints (-1 = base), and
+commands as lists of finite Python floats of the same length (the cheapest form to check and
+to hand to an engine; copy them into your own buffers). A backend must:
 
 * keep PyBullet's indices: joint i moves link i, the base is -1, links in the order of
   :func:`simbridge.urdf.parse_urdf`;
@@ -107,7 +110,7 @@ class Backend(ABC):
 
     @abstractmethod
     def reset_joint_state(
-        self, body: int, joints: np.ndarray, positions: np.ndarray, velocities: np.ndarray
+        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
         """Teleport movable joints (``p.resetJointState``); commands are kept."""
 
@@ -127,7 +130,7 @@ class Backend(ABC):
 
     @abstractmethod
     def set_joint_velocity(
-        self, body: int, joints: np.ndarray, target: np.ndarray, max_force: np.ndarray
+        self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
         """VELOCITY_CONTROL: a motor that reaches ``target`` within one step if a force of at
         most ``max_force`` can; persists until replaced."""
@@ -137,16 +140,16 @@ class Backend(ABC):
         self,
         body: int,
         joints: np.ndarray,
-        target: np.ndarray,
-        max_force: np.ndarray,
-        kp: np.ndarray,
-        kd: np.ndarray,
+        target: list[float],
+        max_force: list[float],
+        kp: list[float],
+        kd: list[float],
     ) -> None:
         """POSITION_CONTROL: PyBullet's law, target velocity ``kp (q* - q) / dt`` with velocity
         gain ``kd``, force clamped to ``max_force``; persists until replaced."""
 
     @abstractmethod
-    def set_joint_torque(self, body: int, joints: np.ndarray, torque: np.ndarray) -> None:
+    def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         """TORQUE_CONTROL: added during the next step only. As in PyBullet it does not remove
         the joint's motor: under the "pybullet" profile the default brake cancels small torques
         until ``set_joint_velocity(..., max_force=0)`` releases it."""

@@ -349,37 +349,41 @@ class Sim:
         return arr
 
     @staticmethod
-    def _values(value: Any, n: int, argument: str, nonneg: bool = False) -> np.ndarray:
+    def _values(value: Any, n: int, argument: str, nonneg: bool = False) -> list[float]:
         """Check a command argument: a number (broadcast) or n numbers, finite, maybe >= 0.
+        Returns n Python floats.
 
-        On the hot path: small-array checks in plain Python beat numpy reductions (0.3 µs
-        against 1.7 µs for 4 values)."""
+        This is the hot path of every control loop: checks on a small list in plain Python
+        beat numpy reductions (0.3 µs against 1.7 µs for 4 values) and keep the caches warm."""
         if type(value) is float or type(value) is int:
             if not math.isfinite(value):
                 raise InvalidArgumentError(argument, f"values must be finite, got {value!r}")
             if nonneg and value < 0:
                 raise InvalidArgumentError(argument, f"values must be >= 0, got {value!r}")
-            return np.array([float(value)] * n)
-        try:
-            arr = np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InvalidArgumentError(
-                argument, f"expected a number or {n} numbers, got {value!r}"
-            ) from None
-        if arr.shape != (n,):
+            return [float(value)] * n
+        if type(value) is np.ndarray and value.shape == (n,) and value.dtype == np.float64:
+            values = value.tolist()
+        else:
+            try:
+                arr = np.asarray(value, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise InvalidArgumentError(
+                    argument, f"expected a number or {n} numbers, got {value!r}"
+                ) from None
             if arr.ndim == 0:
-                arr = np.full(n, float(arr))
+                values = [float(arr)] * n
+            elif arr.shape == (n,):
+                values = arr.tolist()
             else:
                 raise InvalidArgumentError(
                     argument,
                     f"expected a number or shape ({n},) for {n} joint(s), got shape {arr.shape}",
                 )
-        values = arr.tolist()
         if not all(map(math.isfinite, values)):
             raise InvalidArgumentError(argument, f"values must be finite, got {value!r}")
         if nonneg and min(values) < 0:
             raise InvalidArgumentError(argument, f"values must be >= 0, got {value!r}")
-        return arr
+        return values
 
     # ---------------------------------------------------------------- tables
 
