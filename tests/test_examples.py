@@ -10,7 +10,15 @@ import pytest
 import simbridge
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-BACKENDS = simbridge.available_backends()[:2]  # the shipped backends
+BACKENDS = ["pybullet", "mujoco"]  # the shipped backends
+
+
+@pytest.fixture(autouse=True)
+def _backend_present(request):
+    """A shipped backend whose module is not in this checkout yet is skipped, with the reason."""
+    backend = request.node.callspec.params.get("backend")
+    if backend and importlib.util.find_spec(f"simbridge.backends.{backend}_backend") is None:
+        pytest.skip(f"simbridge.backends.{backend}_backend is not in this checkout")
 
 
 def _example(name: str):
