@@ -119,7 +119,7 @@ class UrdfStructureError(UrdfError):
 class MeshNotFoundError(UrdfError, FileNotFoundError):
     def __init__(self, file: str, element: str, filename: str, resolved: str):
         self.file = file
-        self.filename = filename
+        self.mesh_uri = filename
         super().__init__(
             f"{file}: {element}: mesh file {filename!r} not found (resolved to {resolved!r})"
         )

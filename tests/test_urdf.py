@@ -1,0 +1,114 @@
+"""The core's URDF reader: sources, the search path, package:// and PyBullet's link order."""
+
+from __future__ import annotations
+
+import pytest
+
+import simbridge
+from simbridge import exceptions as exc
+from simbridge.urdf import parse_urdf, resolve_source
+
+LINK = '<link name="{n}"><inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>'  # noqa: E501
+
+
+def _joint(name: str, parent: str, child: str, jtype: str = "revolute") -> str:
+    limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>' if jtype != "fixed" else ""
+    return (
+        f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>'
+        f'<origin xyz="0 0.2 0"/><axis xyz="0 0 1"/>{limit}</joint>'
+    )
+
+
+# A tree whose joint file order is not its depth-first order: a -> (c -> e), a -> (b -> d).
+SHUFFLED = (
+    '<robot name="shuffled">'
+    + "".join(LINK.format(n=n) for n in "abcde")
+    + _joint("j_ac", "a", "c")
+    + _joint("j_ab", "a", "b", "prismatic")
+    + _joint("j_ce", "c", "e", "continuous")
+    + _joint("j_bd", "b", "d", "fixed")
+    + "</robot>"
+)
+
+
+def test_link_order_is_pybullets_depth_first_preorder():
+    model = parse_urdf(resolve_source(SHUFFLED))
+    assert [j.name for j in model.joints] == ["j_ac", "j_ce", "j_ab", "j_bd"]
+    assert [link.name for link in model.links] == ["a", "c", "e", "b", "d"]
+    # ... and that is the order PyBullet itself gives the same file.
+    with simbridge.Sim("pybullet") as sim:
+        body = sim.load_urdf(SHUFFLED)
+        assert [j.name for j in sim.joints(body)] == ["j_ac", "j_ce", "j_ab", "j_bd"]
+        assert [j.parent_index for j in sim.joints(body)] == [-1, 0, -1, 2]
+
+
+def test_names_resolve_on_the_search_path_with_or_without_suffix():
+    a = resolve_source("r2d2.urdf")
+    b = resolve_source("r2d2")
+    assert a.path == b.path and a.path.parent.name == "robots"
+    # Not shipped in robots/, found in pybullet_data:
+    assert resolve_source("kuka_iiwa/model.urdf").path.parts[-3] == "pybullet_data"
+
+
+def test_unknown_source_lists_where_it_looked():
+    with pytest.raises(
+        exc.UrdfNotFoundError, match=r"URDF 'no_such_robot.urdf' is neither.*robots"
+    ):
+        resolve_source("no_such_robot.urdf")
+
+
+def test_package_uri_resolves_against_the_urdfs_own_tree(tmp_path):
+    pkg = tmp_path / "my_robot_description"
+    (pkg / "urdf").mkdir(parents=True)
+    (pkg / "meshes").mkdir()
+    (pkg / "meshes" / "body.stl").write_bytes(
+        (simbridge.urdf._robots_dir() / "l_finger_tip.stl").read_bytes()
+    )
+    urdf = pkg / "urdf" / "robot.urdf"
+    urdf.write_text(
+        '<robot name="r"><link name="base"><inertial><mass value="1"/>'
+        '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+        '<visual><geometry><mesh filename="package://my_robot_description/meshes/body.stl"/>'
+        "</geometry></visual></link></robot>"
+    )
+    model = parse_urdf(resolve_source(str(urdf)))
+    assert model.base.visuals[0].mesh_path == pkg / "meshes" / "body.stl"
+    with simbridge.Sim("pybullet") as sim:
+        assert sim.load_urdf(str(urdf)) >= 0
+
+
+def test_missing_mesh_names_file_link_and_uri(tmp_path):
+    urdf = tmp_path / "broken.urdf"
+    urdf.write_text(
+        '<robot name="r"><link name="base"><visual><geometry>'
+        '<mesh filename="package://pkg/meshes/gone.stl"/></geometry></visual></link></robot>'
+    )
+    with pytest.raises(
+        exc.MeshNotFoundError,
+        match=r"broken\.urdf: link 'base' <visual> #0: mesh file 'package://pkg/meshes/gone.stl' not found",
+    ):
+        parse_urdf(resolve_source(str(urdf)))
+
+
+@pytest.mark.parametrize(
+    ("jtype", "limit", "expected"),
+    [
+        ("continuous", '<limit effort="1" velocity="1"/>', (0.0, -1.0)),
+        ("revolute", '<limit lower="-1" effort="1" velocity="1"/>', (-1.0, -1.0)),
+        ("revolute", '<limit lower="-1" upper="2" effort="1" velocity="1"/>', (-1.0, 2.0)),
+        ("prismatic", '<limit effort="1" velocity="1"/>', (0.0, -1.0)),
+    ],
+)
+def test_limits_follow_pybullets_reporting(jtype, limit, expected):
+    text = (
+        '<robot name="r">'
+        + LINK.format(n="a")
+        + LINK.format(n="b")
+        + f'<joint name="j" type="{jtype}"><parent link="a"/><child link="b"/>{limit}</joint>'
+        + "</robot>"
+    )
+    model = parse_urdf(resolve_source(text))
+    assert (model.joints[0].lower, model.joints[0].upper) == expected
+    with simbridge.Sim("pybullet") as sim:
+        info = sim.joint_info(sim.load_urdf(text), 0)
+        assert (info.lower_limit, info.upper_limit) == expected
