@@ -449,11 +449,10 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
         has_range = limit is not None and (
             limit.get("lower") is not None or limit.get("upper") is not None
         )
-        if jtype == "fixed":
-            lower, upper = 0.0, -1.0
-        else:  # PyBullet's defaults: lower 0, upper -1 ("no range"); attributes override
-            lower = _float(limit, "lower", 0.0, f"{where} <limit>", file)
-            upper = _float(limit, "upper", -1.0, f"{where} <limit>", file)
+        # PyBullet's defaults: lower 0, upper -1 ("no range"); attributes override. Fixed joints
+        # report their <limit> too (PyBullet 3.2.7, e.g. microtaur.urdf's plate joints).
+        lower = _float(limit, "lower", 0.0, f"{where} <limit>", file)
+        upper = _float(limit, "upper", -1.0, f"{where} <limit>", file)
         joint = Joint(
             name=name,
             type=jtype,

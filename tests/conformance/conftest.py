@@ -1,0 +1,93 @@
+"""The conformance suite's fixtures: every registered backend, both profiles, shared robots.
+
+Every test that takes the ``backend`` fixture runs once per name in
+:func:`simbridge.available_backends` (built-in and entry-point backends alike), so a new backend
+needs no new test code. A backend whose module is not there at all (not yet written, or its
+engine not installed) is skipped with the reason, unless ``SIMBRIDGE_REQUIRE_ALL_BACKENDS=1`` (CI)
+turns that into a failure; a backend that is there but breaks on import always fails.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+import simbridge
+from simbridge.exceptions import BackendError, BackendNotInstalledError
+from simbridge.registry import load_backend
+
+BACKENDS = simbridge.available_backends()
+PROFILES = ["pybullet", "urdf"]
+
+ROBOTS_DIR = Path(__file__).resolve().parents[2] / "robots"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers",
+        "exhaustive: every URDF of pybullet_data (about 1100 files); runs by default, "
+        'deselect with -m "not exhaustive" for a quick pass',
+    )
+
+
+def _unavailable_reason(name: str) -> str | None:
+    """Why backend ``name`` cannot run here, or None when it can."""
+    try:
+        load_backend(name)
+    except BackendNotInstalledError as exc:
+        return str(exc)
+    except BackendError as exc:
+        cause = exc.__cause__
+        spec_module = ""
+        if isinstance(cause, ModuleNotFoundError):
+            spec_module = cause.name or ""
+        if spec_module.startswith("simbridge.backends."):
+            return f"backend module {spec_module!r} does not exist in this checkout"
+        raise
+    return None
+
+
+@pytest.fixture(params=BACKENDS)
+def backend(request: pytest.FixtureRequest) -> str:
+    name: str = request.param
+    reason = _unavailable_reason(name)
+    if reason is not None:
+        if os.environ.get("SIMBRIDGE_REQUIRE_ALL_BACKENDS") == "1":
+            pytest.fail(f"backend {name!r} is registered but unavailable: {reason}")
+        pytest.skip(f"backend {name!r} unavailable here: {reason}")
+    return name
+
+
+@pytest.fixture(params=PROFILES)
+def profile(request: pytest.FixtureRequest) -> str:
+    return request.param  # type: ignore[no-any-return]
+
+
+@pytest.fixture
+def make_sim(backend: str) -> Iterator[Callable[..., simbridge.Sim]]:
+    """A factory of Sims on the current backend; every Sim is closed after the test."""
+    sims: list[simbridge.Sim] = []
+
+    def make(**kwargs: object) -> simbridge.Sim:
+        sim = simbridge.Sim(backend, **kwargs)  # type: ignore[arg-type]
+        sims.append(sim)
+        return sim
+
+    yield make
+    for sim in sims:
+        sim.close()
+
+
+@pytest.fixture
+def private_tmp(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A private temporary directory that every ``tempfile`` call of this process uses, so a test
+    can check that a backend left nothing behind (the shared /tmp sees other processes' files)."""
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setenv("TMPDIR", str(folder))
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    return folder

@@ -1,0 +1,305 @@
+"""The joint table (``getJointInfo``'s 17 fields) and the inertial frames, against yourdfpy's
+reading of the same file plus PyBullet's documented rules (``_reference.py``).
+
+Covers this package's robots, r2d2, and every URDF of pybullet_data that simbridge loads; the
+files it refuses are listed in ``REFUSED`` with the reason, and a test checks that each one still
+fails with the documented exception (so the list cannot go stale).
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+from pathlib import Path
+
+import _reference as ref
+import numpy as np
+import pybullet_data  # data files only: this imports no engine
+import pytest
+
+import simbridge
+from simbridge import exceptions as exc
+
+DATA = Path(pybullet_data.getDataPath())
+SHIPPED = [
+    "r2d2.urdf",
+    "plane.urdf",
+    "pendulum.urdf",
+    "double_pendulum.urdf",
+    "wheel.urdf",
+    "slider.urdf",
+    "free_box.urdf",
+]
+
+# pybullet_data files simbridge refuses on purpose, with the exception and message it raises.
+# PyBullet's own parser (TinyXML plus lenient number parsing) loads several of them; yourdfpy
+# refuses the same ones except those marked (*).
+REFUSED: dict[str, tuple[type[Exception], str, str]] = {
+    "bicycle/bike.urdf": (
+        exc.UrdfStructureError,
+        r"<origin xyz>: expected 3 numbers, got '0\.07, 0, -0\.69'",
+        "comma-separated numbers (PyBullet reads '0.07,' as 0.07)",
+    ),
+    "biped/biped2d_pybullet.urdf": (
+        exc.UrdfParseError,
+        r"malformed URDF XML: XML or text declaration not at start of entity",
+        "a comment before the <?xml?> declaration is not XML",
+    ),
+    "differential/diff_ring.urdf": (
+        exc.UrdfParseError,
+        r"malformed URDF XML: XML or text declaration not at start of entity",
+        "a blank line before the <?xml?> declaration is not XML (*)",
+    ),
+    "humanoid/humanoid.urdf": (
+        exc.UrdfParseError,
+        r"malformed URDF XML: not well-formed \(invalid token\): line 288",
+        "stray characters after the root element",
+    ),
+    "husky/husky.urdf": (
+        exc.UrdfStructureError,
+        r"joint 'imu_joint' <origin xyz>: expected 3 numbers, got '\$\(optenv",
+        "unexpanded xacro $(optenv ...) arguments",
+    ),
+    "kuka_iiwa/model_for_sdf.urdf": (
+        exc.MeshNotFoundError,
+        r"meshes/coarse/link_0\.stl",
+        "its meshes live beside the SDF, not beside this file; PyBullet drops the shape (*)",
+    ),
+    "plane_implicit.urdf": (
+        exc.UrdfStructureError,
+        r"unknown geometry <plane>; valid: box, cylinder, sphere, capsule, mesh",
+        "Bullet's <plane> geometry extension",
+    ),
+    "quadruped/microtaur/microtaur.urdf": (
+        exc.UrdfStructureError,
+        r"<origin rpy>: expected 3 numbers, got '-3\.14159 1\.57079 0 0'",
+        "four numbers in an rpy (PyBullet reads the first three) (*)",
+    ),
+    "racecar/racecar_differential.urdf": (
+        exc.UrdfStructureError,
+        r"<mesh scale>: expected 3 numbers, got '1 1 1 1'",
+        "four numbers in a mesh scale (*)",
+    ),
+    "spherical_joint_limit.urdf": (
+        exc.UnsupportedJointError,
+        r"joint 'neck': joint type 'spherical' is not supported; supported types: "
+        r"\['revolute', 'continuous', 'prismatic', 'fixed'\]",
+        "spherical joints are outside simbridge's joint set",
+    ),
+    "torus_deform.urdf": (
+        exc.UrdfStructureError,
+        r"robot 'torus': has no <link>",
+        "a deformable (<deformable>), not a robot (*)",
+    ),
+    "toys/concave_box.urdf": (
+        exc.UrdfStructureError,
+        r"unknown geometry <cdf>",
+        "Bullet's signed-distance-field geometry extension (*)",
+    ),
+}
+
+ALL_DATA = sorted(
+    os.path.relpath(f, DATA) for f in glob.glob(str(DATA / "**" / "*.urdf"), recursive=True)
+)
+LOADABLE = [f for f in ALL_DATA if f not in REFUSED]
+RANDOM = [f for f in LOADABLE if f.startswith("random_urdfs/")]
+FAST_DATA = [f for f in LOADABLE if not f.startswith("random_urdfs/")] + RANDOM[::50]
+RANDOM_CHUNKS = [RANDOM[i : i + 100] for i in range(0, len(RANDOM), 100)]
+
+# Tolerances. Frames: PyBullet computes them in double precision from the same numbers; measured
+# worst 2e-16 over all of pybullet_data. 1e-9 leaves room for an engine that stores float32-exact
+# values nowhere but composes transforms differently.
+TOL = 1e-9
+
+
+def _inertial_rotation(sim: simbridge.Sim, body: int, link_index: int, link: object) -> np.ndarray:
+    """The inertial frame's rotation (in the link frame) that the table must be expressed in.
+
+    The file's ``<inertial><origin rpy>`` when the profile takes the collision AABB's inertia or
+    the file's inertia is diagonal. With the file's non-diagonal inertia PyBullet diagonalises it
+    and turns the inertial frame onto the principal axes: then the reported frame is checked to
+    be a principal frame of the file's tensor with the reported moments, and used."""
+    written = ref.inertial_frame(link)[:3, :3]
+    info = sim.dynamics_info(body, link_index)
+    reported = ref.quat_to_matrix(info.local_inertial_orientation)
+    if sim.profile.inertia_source == "collision_aabb" or ref.inertia_is_diagonal(link):
+        np.testing.assert_allclose(reported, written, atol=TOL, err_msg="inertial orientation")
+        return written
+    tensor = np.asarray(link.inertial.inertia, dtype=float)  # type: ignore[attr-defined]
+    physical = ref.inertia_is_physical(link)
+    if physical is False:  # PyBullet: "Bad inertia tensor properties, setting inertia to zero"
+        assert tuple(info.local_inertia_diagonal) == (0.0, 0.0, 0.0)
+        return reported
+    if physical is None:  # on the triangle boundary: either answer is PyBullet's
+        return reported
+    principal = written.T @ reported
+    np.testing.assert_allclose(principal.T @ principal, np.eye(3), atol=1e-9)
+    # Bullet's Jacobi diagonalisation stops at a relative off-diagonal of about 1e-9 (measured
+    # 3e-10 on pybullet_data's tensors): the moments match to that.
+    scale = float(np.abs(tensor).max())
+    np.testing.assert_allclose(
+        principal.T @ tensor @ principal,
+        np.diag(info.local_inertia_diagonal),
+        atol=1e-8 * scale,
+        err_msg="reported inertial frame is not a principal frame of the file's inertia",
+    )
+    return reported
+
+
+def check_joint_table(sim: simbridge.Sim, path: str, fixed_base: bool = False) -> None:
+    """Load ``path`` and compare the whole joint table and the inertial frames with yourdfpy."""
+    robot = ref.load(path).robot
+    body = sim.load_urdf(path, fixed_base=fixed_base)
+    rows = ref.joint_table(robot, fixed_base)
+    links = ref.link_by_name(robot)
+    names = ref.link_names_in_order(robot)
+    assert sim.num_joints(body) == len(rows)
+    table = sim.joints(body)
+    assert len(table) == len(rows)
+
+    rotations = {}
+    for index, name in enumerate(names, start=-1):
+        link = links[name]
+        info = sim.dynamics_info(body, index)
+        np.testing.assert_allclose(
+            info.local_inertial_position, ref.inertial_frame(link)[:3, 3], atol=TOL
+        )
+        if not (index == -1 and fixed_base):  # PyBullet reports a fixed base's mass as 0
+            assert info.mass == pytest.approx(ref.link_mass(link), rel=1e-12), name
+        rotations[name] = _inertial_rotation(sim, body, index, link)
+
+    for row, got in zip(rows, table, strict=True):
+        where = f"{path} joint {row.index} {row.name!r}"
+        assert tuple(got[:13]) == (
+            row.index,
+            row.name,
+            row.type,
+            row.q_index,
+            row.u_index,
+            row.flags,
+            row.damping,
+            row.friction,
+            row.lower,
+            row.upper,
+            row.max_force,
+            row.max_velocity,
+            row.link_name,
+        ), where
+        assert got.parent_index == row.parent_index, where
+        assert isinstance(got.type, simbridge.JointType) and isinstance(got.index, int)
+        parent_com = ref.inertial_frame(links[row.parent_link])
+        rp, rc, rj = rotations[row.parent_link], rotations[row.link_name], row.joint_origin[:3, :3]
+        # axis in the child's inertial frame, not normalised (r2d2's are unit; the double
+        # pendulum's elbow is written (0 2 0) and must come back with length 2)
+        np.testing.assert_allclose(got.axis, rc.T @ row.axis, atol=TOL, err_msg=where)
+        np.testing.assert_allclose(
+            got.parent_frame_position,
+            rp.T @ (row.joint_origin[:3, 3] - parent_com[:3, 3]),
+            atol=TOL,
+            err_msg=where,
+        )
+        np.testing.assert_allclose(
+            ref.quat_to_matrix(got.parent_frame_orientation),
+            rc.T @ rj.T @ rp,
+            atol=TOL,
+            err_msg=where,
+        )
+        assert abs(np.linalg.norm(got.parent_frame_orientation) - 1.0) < 1e-12, where
+
+
+@pytest.mark.parametrize("fixed_base", [False, True], ids=["free", "fixed"])
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_robots_joint_table(make_sim, profile, name, fixed_base):
+    check_joint_table(make_sim(profile=profile), ref.robot_path(name), fixed_base)
+
+
+def test_r2d2_table_facts_from_the_tutorial(make_sim):
+    """The tutorial's own statements, written out by hand (TUTORIAL.md step 4)."""
+    sim = make_sim()
+    body = sim.load_urdf("r2d2.urdf")
+    table = sim.joints(body)
+    assert len(table) == 15
+    assert table[0].name == "base_to_right_leg" and table[0].type == simbridge.JointType.FIXED
+    for i in (2, 3, 6, 7):
+        assert table[i].type == simbridge.JointType.REVOLUTE
+        assert (table[i].lower_limit, table[i].upper_limit) == (0.0, -1.0)
+        assert table[i].name.endswith("wheel_joint")
+    # right leg: 10 kg, tilted 90 degrees about y (rpy 0 1.57075 0), PyBullet's info[12] works
+    assert table[0][12] == "right_leg"
+    assert sim.dynamics_info(body, 0).mass == 10.0
+
+
+@pytest.mark.parametrize("name", FAST_DATA)
+def test_pybullet_data_joint_table(make_sim, name):
+    check_joint_table(make_sim(), str(DATA / name))
+
+
+@pytest.mark.parametrize("name", FAST_DATA[:: max(1, len(FAST_DATA) // 12)])
+def test_pybullet_data_joint_table_file_inertia(make_sim, name):
+    """A spread of the same files under the "urdf" profile (file inertia, principal frames)."""
+    check_joint_table(make_sim(profile="urdf"), str(DATA / name))
+
+
+@pytest.mark.exhaustive
+@pytest.mark.parametrize("chunk", range(len(RANDOM_CHUNKS)))
+def test_pybullet_data_random_urdfs_joint_table(make_sim, chunk):
+    """Every one of pybullet_data's random_urdfs, 100 per Sim (reset between files)."""
+    sim = make_sim()
+    failures = []
+    for name in RANDOM_CHUNKS[chunk]:
+        try:
+            check_joint_table(sim, str(DATA / name))
+        except AssertionError as e:  # collect all, report all
+            failures.append(f"{name}: {str(e)[:300]}")
+        sim.reset()
+    assert not failures, "\n".join(failures)
+
+
+@pytest.mark.parametrize("name", sorted(REFUSED))
+def test_refused_pybullet_data_files_fail_as_documented(make_sim, name):
+    error, message, _reason = REFUSED[name]
+    sim = make_sim()
+    with pytest.raises(error, match=message):
+        sim.load_urdf(DATA / name)
+    assert sim.bodies() == []
+    sim.close()
+
+
+def test_refused_list_names_real_files():
+    assert set(REFUSED) <= set(ALL_DATA), set(REFUSED) - set(ALL_DATA)
+    assert len(ALL_DATA) > 1000  # pybullet_data 3.2.7 ships 1095 URDFs
+
+
+FRAMES_PROBE = """<?xml version="1.0"?>
+<robot name="frames_probe">
+  <link name="a">
+    <inertial><origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 0.1"/><mass value="2"/>
+      <inertia ixx="1" ixy="0.1" ixz="0" iyy="2" iyz="0" izz="3"/></inertial>
+    <collision><geometry><box size="0.2 0.4 0.6"/></geometry></collision>
+  </link>
+  <link name="b">
+    <inertial><origin xyz="0 0.5 0" rpy="0.5 0 0"/><mass value="1"/>
+      <inertia ixx="1" ixy="0" ixz="0" iyy="2" iyz="0" izz="3"/></inertial>
+    <collision><geometry><box size="0.2 0.4 0.6"/></geometry></collision>
+  </link>
+  <link name="c"/>
+  <link name="d"/>
+  <joint name="j1" type="revolute"><parent link="a"/><child link="b"/>
+    <origin xyz="1 2 3" rpy="0.1 0.2 0.3"/><axis xyz="0 2 0"/>
+    <limit effort="5" velocity="6" upper="1"/></joint>
+  <joint name="j2" type="fixed"><parent link="b"/><child link="c"/>
+    <origin xyz="1 0 0"/><limit lower="-1" upper="2" effort="3" velocity="4"/>
+    <dynamics damping="0.5" friction="0.25"/></joint>
+  <joint name="j3" type="continuous"><parent link="a"/><child link="d"/>
+    <origin xyz="0 0 -1" rpy="0 1.5 0"/><limit lower="-1" effort="3" velocity="4"/></joint>
+</robot>
+"""
+
+
+def test_frames_limits_and_inertial_rotations_probe(make_sim, profile, tmp_path):
+    """Rotated inertial frames on both sides of a joint, an unnormalised axis, a half-written
+    range, a fixed joint with a <limit> and <dynamics> (PyBullet reports both), a link without
+    <inertial>, and a non-diagonal file inertia (principal frames under the "urdf" profile)."""
+    path = tmp_path / "frames_probe.urdf"
+    path.write_text(FRAMES_PROBE)
+    check_joint_table(make_sim(profile=profile), str(path))
