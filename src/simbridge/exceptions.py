@@ -30,6 +30,7 @@ __all__ = [
     "InvalidProfileError",
     "SimulationDivergedError",
     "SimClosedError",
+    "ScenarioError",
 ]
 
 
@@ -183,3 +184,22 @@ class SimulationDivergedError(SimbridgeError, FloatingPointError):
 class SimClosedError(SimbridgeError, RuntimeError):
     def __init__(self) -> None:
         super().__init__("this Sim is closed; create a new one")
+
+
+# ---------------------------------------------------------------- comparison scenarios
+
+
+class ScenarioError(SimbridgeError, ValueError):
+    """A comparison scenario file is missing, malformed, or says something invalid.
+
+    ``file`` names the file (or ``<scenario>``), ``key`` the dotted key path
+    (``phases[1].commands[0].mode``), ``line`` the 1-based line in the file where it was found
+    (``None`` when it cannot be located)."""
+
+    def __init__(self, file: str, key: str | None, detail: str, line: int | None = None):
+        self.file = file
+        self.key = key
+        self.line = line
+        where = file if line is None else f"{file}:{line}"
+        what = f"key {key!r}: " if key else ""
+        super().__init__(f"{where}: {what}{detail}")

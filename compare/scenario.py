@@ -1,0 +1,633 @@
+"""Scenarios as data: robots, where they spawn, and a timeline of held joint commands.
+
+A scenario is a TOML file (read with the standard library's ``tomllib``)::
+
+    name = "r2d2"
+    description = "The classic PyBullet tutorial drive"   # one line, shown by `simbridge scenarios`
+    profile = "pybullet"          # simbridge profile name (default "pybullet")
+    timestep = "1/240"            # seconds: a number, or a fraction written as a string
+    gravity = [0, 0, -9.8]        # m/s^2 (default)
+    subject = "r2d2"              # the robot the report follows (default: the last robot)
+
+    [[robots]]
+    name = "r2d2"                 # label used by commands and in the report
+    urdf = "r2d2.urdf"            # a shipped name, a path (relative to this file), or a name on
+                                  # simbridge's search path
+    position = [0, 0, 0.1]        # where the URDF link frame of the root goes (m, world)
+    orientation = [0, 0, 0, 1]    # (x, y, z, w); or rpy = [roll, pitch, yaw] (rad)
+    fixed_base = false
+    joint_positions = { hinge = 0.5 }   # optional initial joint positions (by name or index)
+
+    [[phases]]
+    name = "turn"
+    steps = 240                   # number of time steps the phase lasts
+    [[phases.commands]]
+    robot = "r2d2"                # default: the subject
+    joints = [2, 3, 6, 7]         # indices or names (one or a list)
+    mode = "velocity"             # "velocity" (rad/s, m/s), "position" (rad, m) or "torque"
+    target = [-100, -100, 100, 100]   # one number for all the joints, or one per joint
+    max_force = 50                # N·m or N; required for velocity and position, not for torque
+    # kp = 0.1, kd = 1.0          # position mode only (PyBullet's gains)
+
+Semantics, as in the tutorial: every command of a phase is re-issued before every step of that
+phase. A phase without a command for a joint leaves whatever the engine holds (the profile's
+default brake, or the last velocity/position command, which persist). A torque command first
+releases the joint's velocity motor (``max_force=0``) at the start of its phase, as PyBullet
+requires for torque control; torque lasts one step, so it is re-applied every step.
+
+A scenario rerun at another time step keeps each phase's duration (see
+:meth:`Scenario.with_timestep`).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from simbridge.exceptions import ScenarioError
+
+__all__ = [
+    "Command",
+    "Phase",
+    "RobotSpec",
+    "Scenario",
+    "SCENARIOS_DIR",
+    "MODES",
+    "list_scenarios",
+    "load_scenario",
+    "loads_scenario",
+    "dumps_scenario",
+    "save_scenario",
+    "find_key_line",
+]
+
+SCENARIOS_DIR = Path(__file__).resolve().parent / "scenarios"
+MODES = ("velocity", "position", "torque")
+
+JointRef = int | str
+
+
+@dataclass(frozen=True)
+class Command:
+    """A joint command held during a phase (re-issued before every step)."""
+
+    robot: str
+    joints: tuple[JointRef, ...]
+    mode: str  # "velocity" | "position" | "torque"
+    target: tuple[float, ...]
+    """One value per joint: rad/s or m/s (velocity), rad or m (position), N·m or N (torque)."""
+    max_force: tuple[float, ...] | None = None
+    """One value per joint (N·m or N); None for torque commands."""
+    kp: float | None = None
+    kd: float | None = None
+
+
+@dataclass(frozen=True)
+class Phase:
+    name: str
+    steps: int
+    commands: tuple[Command, ...] = ()
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    name: str
+    urdf: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)  # x, y, z, w
+    fixed_base: bool = False
+    joint_positions: tuple[tuple[JointRef, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A comparison scenario. Compare two with ``==`` (the source file is not compared)."""
+
+    name: str
+    robots: tuple[RobotSpec, ...]
+    phases: tuple[Phase, ...]
+    timestep: float = 1.0 / 240.0
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.8)
+    profile: str = "pybullet"
+    description: str = ""
+    subject: str = ""
+    """Name of the robot the report follows (set to the last robot when the file leaves it out)."""
+    source: Path | None = field(default=None, compare=False)
+    """The file this scenario was read from (URDF paths are relative to its folder)."""
+
+    @property
+    def steps(self) -> int:
+        """Total number of steps."""
+        return sum(p.steps for p in self.phases)
+
+    @property
+    def duration(self) -> float:
+        """Simulated time (s)."""
+        return self.steps * self.timestep
+
+    def robot(self, name: str) -> RobotSpec:
+        for r in self.robots:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+    def with_timestep(self, timestep: float) -> Scenario:
+        """The same scenario at another time step: each phase keeps its duration, so its step
+        count is scaled (``1/480`` doubles every phase). Raises :class:`ScenarioError` when a
+        phase does not last a whole number of the new steps."""
+        if not (isinstance(timestep, (int, float)) and math.isfinite(timestep) and timestep > 0):
+            raise ScenarioError(self._where(), "timestep", f"must be > 0, got {timestep!r}")
+        ratio = self.timestep / timestep
+        phases = []
+        for i, p in enumerate(self.phases):
+            steps = p.steps * ratio
+            if abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
+                raise ScenarioError(
+                    self._where(),
+                    f"phases[{i}].steps",
+                    f"phase {p.name!r} lasts {p.steps * self.timestep:.6g} s, which is not a whole "
+                    f"number of {format_timestep(timestep)} s steps ({steps:.6g})",
+                )
+            phases.append(replace(p, steps=int(round(steps))))
+        return replace(self, timestep=float(timestep), phases=tuple(phases))
+
+    def truncated(self, duration: float) -> Scenario:
+        """The first ``duration`` seconds of the scenario (phases cut or dropped)."""
+        left = int(round(duration / self.timestep))
+        phases = []
+        for p in self.phases:
+            if left <= 0:
+                break
+            phases.append(replace(p, steps=min(p.steps, left)))
+            left -= p.steps
+        return replace(self, phases=tuple(phases))
+
+    def resolve_urdf(self, robot: RobotSpec) -> str:
+        """The URDF argument for ``Sim.load_urdf``: a path next to the scenario file when one
+        exists there, else the name as written (searched on simbridge's path)."""
+        if self.source is not None:
+            candidate = self.source.parent / robot.urdf
+            if candidate.is_file():
+                return str(candidate)
+        return robot.urdf
+
+    def _where(self) -> str:
+        return str(self.source) if self.source else f"<scenario {self.name}>"
+
+
+# ---------------------------------------------------------------- time steps
+
+
+def parse_timestep(value: Any) -> float:
+    """A time step from a number or a string such as ``"1/240"`` or ``"0.002"``."""
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number of seconds or a fraction like '1/240', got {value!r}")
+    if isinstance(value, (int, float)):
+        out = float(value)
+    elif isinstance(value, str):
+        try:
+            out = float(Fraction(value.strip()))
+        except (ValueError, ZeroDivisionError):
+            raise ValueError(
+                f"expected a number of seconds or a fraction like '1/240', got {value!r}"
+            ) from None
+    else:
+        raise ValueError(f"expected a number of seconds or a fraction like '1/240', got {value!r}")
+    if not math.isfinite(out) or out <= 0:
+        raise ValueError(f"must be > 0, got {value!r}")
+    return out
+
+
+def format_timestep(dt: float) -> str:
+    """``1/240`` for a time step that is the float of a simple fraction, else ``repr``."""
+    frac = Fraction(dt).limit_denominator(1_000_000)
+    if float(frac) == dt and frac.numerator == 1:
+        return f"1/{frac.denominator}"
+    return repr(dt)
+
+
+# ---------------------------------------------------------------- finding a key's line
+
+
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+_KEYLINE = re.compile(r"^\s*([A-Za-z0-9_\-\"'. ]+?)\s*=")
+
+
+def _split_key(key: str) -> list[str]:
+    return [part.strip().strip("\"'") for part in key.split(".")]
+
+
+def find_key_line(text: str, path: Sequence[str | int]) -> int | None:
+    """The 1-based line of the key ``path`` (``["phases", 1, "commands", 0, "mode"]``) in TOML
+    ``text``, or of its closest enclosing key or table found; None when nothing matches.
+
+    Understands ``[table]``, ``[[array.of.tables]]`` (counting entries) and ``key = value`` lines;
+    inside inline tables and arrays it falls back to the line of the enclosing key."""
+    target = list(path)
+    best_line: int | None = None
+    best_len = 0
+    header: list[str | int] = []
+    counts: dict[tuple[str | int, ...], int] = {}
+    depth = 0  # open brackets of a multi-line value
+    for lineno, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0] if '"' not in raw and "'" not in raw else raw
+        if depth == 0:
+            m = _HEADER.match(line)
+            if m:
+                names = _split_key(m.group(2))
+                resolved: list[str | int] = []
+                for i, name in enumerate(names):
+                    resolved.append(name)
+                    is_last = i == len(names) - 1
+                    if m.group(1) == "[[" and is_last:
+                        key = tuple(resolved)
+                        counts[key] = counts.get(key, -1) + 1
+                        resolved.append(counts[key])
+                    elif tuple(resolved) in counts:  # parent array of tables: its last entry
+                        resolved.append(counts[tuple(resolved)])
+                header = resolved
+                candidate: list[str | int] = list(header)
+            else:
+                k = _KEYLINE.match(line)
+                if not k:
+                    depth += line.count("[") - line.count("]")
+                    continue
+                candidate = header + _split_key(k.group(1))
+                depth += line.count("[") - line.count("]")
+                depth += line.count("{") - line.count("}")
+            n = 0
+            while n < min(len(candidate), len(target)) and candidate[n] == target[n]:
+                n += 1
+            if n == len(candidate) and n > best_len:
+                best_len, best_line = n, lineno
+                if n == len(target):
+                    return lineno
+        else:
+            depth += line.count("[") - line.count("]")
+            depth += line.count("{") - line.count("}")
+            depth = max(depth, 0)
+    return best_line
+
+
+# ---------------------------------------------------------------- reading
+
+
+def _keystr(path: Sequence[str | int]) -> str:
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
+    return out
+
+
+class _Reader:
+    """Validates the parsed TOML, raising ScenarioError with the key's line."""
+
+    def __init__(self, text: str, file: str):
+        self.text = text
+        self.file = file
+
+    def error(self, path: Sequence[str | int], detail: str) -> ScenarioError:
+        return ScenarioError(self.file, _keystr(path), detail, find_key_line(self.text, path))
+
+    def keys(self, table: dict[str, Any], path: list[str | int], allowed: Sequence[str]) -> None:
+        for key in table:
+            if key not in allowed:
+                raise self.error(
+                    [*path, key], f"unknown key; valid keys here: {', '.join(allowed)}"
+                )
+
+    def require(self, table: dict[str, Any], path: list[str | int], key: str) -> Any:
+        if key not in table:
+            where = _keystr(path) or "the top level"
+            raise self.error([*path, key], f"missing (required in {where})")
+        return table[key]
+
+    def string(self, value: Any, path: list[str | int]) -> str:
+        if not isinstance(value, str) or not value:
+            raise self.error(path, f"expected a non-empty string, got {value!r}")
+        return value
+
+    def number(self, value: Any, path: list[str | int], *, nonneg: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(path, f"expected a number, got {value!r}")
+        if not math.isfinite(value):
+            raise self.error(path, f"expected a finite number, got {value!r}")
+        if nonneg and value < 0:
+            raise self.error(path, f"must be >= 0, got {value!r}")
+        return float(value)
+
+    def vector(self, value: Any, path: list[str | int], n: int) -> tuple[float, ...]:
+        if not isinstance(value, list) or len(value) != n:
+            raise self.error(path, f"expected a list of {n} numbers, got {value!r}")
+        return tuple(self.number(v, [*path, i]) for i, v in enumerate(value))
+
+    def per_joint(
+        self, value: Any, path: list[str | int], n: int, *, nonneg: bool = False
+    ) -> tuple[float, ...]:
+        if isinstance(value, list):
+            if len(value) != n:
+                raise self.error(
+                    path, f"expected one number or {n} (one per joint), got {len(value)}"
+                )
+            return tuple(self.number(v, [*path, i], nonneg=nonneg) for i, v in enumerate(value))
+        return (self.number(value, path, nonneg=nonneg),) * n
+
+    def joint_ref(self, value: Any, path: list[str | int]) -> JointRef:
+        if isinstance(value, bool) or not isinstance(value, (int, str)):
+            raise self.error(path, f"expected a joint index or name, got {value!r}")
+        if isinstance(value, int) and value < 0:
+            raise self.error(path, f"joint indices are >= 0, got {value}")
+        return value
+
+    def robot(self, t: Any, path: list[str | int]) -> RobotSpec:
+        if not isinstance(t, dict):
+            raise self.error(path, "expected a table ([[robots]])")
+        self.keys(
+            t,
+            path,
+            ("name", "urdf", "position", "orientation", "rpy", "fixed_base", "joint_positions"),
+        )
+        urdf = self.string(self.require(t, path, "urdf"), [*path, "urdf"])
+        name = self.string(t.get("name", Path(urdf).stem), [*path, "name"])
+        position = self.vector(t.get("position", [0, 0, 0]), [*path, "position"], 3)
+        if "orientation" in t and "rpy" in t:
+            raise self.error([*path, "rpy"], "give either orientation or rpy, not both")
+        if "rpy" in t:
+            orientation = _quat_from_rpy(*self.vector(t["rpy"], [*path, "rpy"], 3))
+        else:
+            orientation = self.vector(t.get("orientation", [0, 0, 0, 1]), [*path, "orientation"], 4)
+            norm = math.sqrt(sum(c * c for c in orientation))
+            if abs(norm - 1) > 1e-3:
+                raise self.error(
+                    [*path, "orientation"],
+                    f"expected a unit quaternion (x, y, z, w), norm is {norm:.6g}",
+                )
+        fixed = t.get("fixed_base", False)
+        if not isinstance(fixed, bool):
+            raise self.error([*path, "fixed_base"], f"expected true or false, got {fixed!r}")
+        jp = t.get("joint_positions", {})
+        if not isinstance(jp, dict):
+            raise self.error(
+                [*path, "joint_positions"],
+                "expected a table of joint name (or index) = position, e.g. { hinge = 0.5 }",
+            )
+        joints: list[tuple[JointRef, float]] = []
+        for k, v in jp.items():
+            ref: JointRef = int(k) if k.isdigit() else k
+            joints.append((ref, self.number(v, [*path, "joint_positions", k])))
+        return RobotSpec(name, urdf, position, orientation, fixed, tuple(joints))  # type: ignore[arg-type]
+
+    def command(
+        self, t: Any, path: list[str | int], robots: dict[str, RobotSpec], subject: str
+    ) -> Command:
+        if not isinstance(t, dict):
+            raise self.error(path, "expected a table ([[phases.commands]])")
+        self.keys(t, path, ("robot", "joints", "mode", "target", "max_force", "kp", "kd"))
+        robot = self.string(t.get("robot", subject), [*path, "robot"])
+        if robot not in robots:
+            raise self.error([*path, "robot"], f"no robot {robot!r}; robots: {sorted(robots)}")
+        raw = self.require(t, path, "joints")
+        refs = raw if isinstance(raw, list) else [raw]
+        if not refs:
+            raise self.error([*path, "joints"], "expected at least one joint")
+        joints = tuple(self.joint_ref(j, [*path, "joints"]) for j in refs)
+        if len(set(joints)) != len(joints):
+            raise self.error([*path, "joints"], f"a joint is given twice in {raw!r}")
+        mode = self.require(t, path, "mode")
+        if mode not in MODES:
+            raise self.error([*path, "mode"], f"expected one of {', '.join(MODES)}, got {mode!r}")
+        n = len(joints)
+        target = self.per_joint(self.require(t, path, "target"), [*path, "target"], n)
+        max_force = None
+        if mode == "torque":
+            for k in ("max_force", "kp", "kd"):
+                if k in t:
+                    raise self.error([*path, k], "not used by torque commands")
+        else:
+            max_force = self.per_joint(
+                self.require(t, path, "max_force"), [*path, "max_force"], n, nonneg=True
+            )
+        kp = kd = None
+        if mode != "position":
+            for k in ("kp", "kd"):
+                if k in t:
+                    raise self.error([*path, k], "only position commands take gains")
+        else:
+            if "kp" in t:
+                kp = self.number(t["kp"], [*path, "kp"], nonneg=True)
+            if "kd" in t:
+                kd = self.number(t["kd"], [*path, "kd"], nonneg=True)
+        return Command(robot, joints, mode, target, max_force, kp, kd)
+
+    def scenario(self, data: dict[str, Any], default_name: str, source: Path | None) -> Scenario:
+        self.keys(
+            data,
+            [],
+            (
+                "name",
+                "description",
+                "profile",
+                "timestep",
+                "gravity",
+                "subject",
+                "robots",
+                "phases",
+            ),
+        )
+        name = self.string(data.get("name", default_name), ["name"])
+        description = data.get("description", "")
+        if not isinstance(description, str):
+            raise self.error(["description"], f"expected a string, got {description!r}")
+        profile = self.string(data.get("profile", "pybullet"), ["profile"])
+        try:
+            timestep = parse_timestep(data.get("timestep", 1.0 / 240.0))
+        except ValueError as exc:
+            raise self.error(["timestep"], str(exc)) from None
+        gravity = self.vector(data.get("gravity", [0.0, 0.0, -9.8]), ["gravity"], 3)
+        raw_robots = self.require(data, [], "robots")
+        if not isinstance(raw_robots, list) or not raw_robots:
+            raise self.error(["robots"], "expected at least one [[robots]] table")
+        robots = [self.robot(t, ["robots", i]) for i, t in enumerate(raw_robots)]
+        by_name: dict[str, RobotSpec] = {}
+        for i, r in enumerate(robots):
+            if r.name in by_name:
+                raise self.error(["robots", i, "name"], f"robot name {r.name!r} is used twice")
+            by_name[r.name] = r
+        subject = self.string(data.get("subject", robots[-1].name), ["subject"])
+        if subject not in by_name:
+            raise self.error(["subject"], f"no robot {subject!r}; robots: {sorted(by_name)}")
+        raw_phases = self.require(data, [], "phases")
+        if not isinstance(raw_phases, list) or not raw_phases:
+            raise self.error(["phases"], "expected at least one [[phases]] table")
+        phases = []
+        for i, t in enumerate(raw_phases):
+            path: list[str | int] = ["phases", i]
+            if not isinstance(t, dict):
+                raise self.error(path, "expected a table ([[phases]])")
+            self.keys(t, path, ("name", "steps", "commands"))
+            steps = self.require(t, path, "steps")
+            if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+                raise self.error([*path, "steps"], f"expected an integer >= 1, got {steps!r}")
+            pname = self.string(t.get("name", f"phase {i + 1}"), [*path, "name"])
+            raw_cmds = t.get("commands", [])
+            if not isinstance(raw_cmds, list):
+                raise self.error([*path, "commands"], "expected [[phases.commands]] tables")
+            cmds = tuple(
+                self.command(c, [*path, "commands", j], by_name, subject)
+                for j, c in enumerate(raw_cmds)
+            )
+            phases.append(Phase(pname, steps, cmds))
+        return Scenario(
+            name=name,
+            robots=tuple(robots),
+            phases=tuple(phases),
+            timestep=timestep,
+            gravity=gravity,  # type: ignore[arg-type]
+            profile=profile,
+            description=description,
+            subject=subject,
+            source=source,
+        )
+
+
+def _quat_from_rpy(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
+    """(x, y, z, w) of R = Rz(yaw) Ry(pitch) Rx(roll), the URDF convention."""
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    return (
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+        cr * cp * cy + sr * sp * sy,
+    )
+
+
+def loads_scenario(text: str, *, file: str = "<scenario>", source: Path | None = None) -> Scenario:
+    """Parse scenario TOML text. Raises :class:`ScenarioError` naming ``file``, key and line."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        line = getattr(exc, "lineno", None)
+        if line is None:
+            m = re.search(r"line (\d+)", str(exc))
+            line = int(m.group(1)) if m else None
+        detail = str(exc)  # "Invalid value (at line 3, column 10)"
+        raise ScenarioError(file, None, f"TOML syntax error: {detail}", line) from None
+    default = source.stem if source is not None else "scenario"
+    return _Reader(text, file).scenario(data, default, source)
+
+
+def _shipped() -> dict[str, Path]:
+    return {p.stem: p for p in sorted(SCENARIOS_DIR.glob("*.toml"))}
+
+
+def load_scenario(scenario: str | Path | Scenario) -> Scenario:
+    """A shipped scenario by name (``"r2d2"``), a path to a TOML file, or a Scenario (returned
+    as is). Raises :class:`ScenarioError` when the name is unknown or the file is invalid."""
+    if isinstance(scenario, Scenario):
+        return scenario
+    text_path = Path(scenario)
+    shipped = _shipped()
+    if isinstance(scenario, str) and scenario in shipped and not text_path.is_file():
+        path = shipped[scenario]
+    elif text_path.is_file():
+        path = text_path
+    else:
+        raise ScenarioError(
+            str(scenario),
+            None,
+            "no such scenario file, and not a shipped scenario; shipped scenarios: "
+            + ", ".join(shipped),
+        )
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(str(path), None, f"cannot read the file: {exc}") from None
+    return loads_scenario(text, file=str(path), source=path.resolve())
+
+
+def list_scenarios() -> list[Scenario]:
+    """The shipped scenarios, sorted by name."""
+    return [load_scenario(p) for p in _shipped().values()]
+
+
+# ---------------------------------------------------------------- writing
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if v == int(v) and abs(v) < 1e15:
+            return f"{v:.1f}"
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} as TOML")
+
+
+def _toml_key(k: str) -> str:
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else _toml_value(k)
+
+
+def _lines(s: Scenario) -> Iterator[str]:
+    yield f"name = {_toml_value(s.name)}"
+    if s.description:
+        yield f"description = {_toml_value(s.description)}"
+    yield f"profile = {_toml_value(s.profile)}"
+    dt = format_timestep(s.timestep)
+    yield f"timestep = {_toml_value(dt if '/' in dt else s.timestep)}"
+    yield f"gravity = {_toml_value(s.gravity)}"
+    yield f"subject = {_toml_value(s.subject)}"
+    for r in s.robots:
+        yield ""
+        yield "[[robots]]"
+        yield f"name = {_toml_value(r.name)}"
+        yield f"urdf = {_toml_value(r.urdf)}"
+        yield f"position = {_toml_value(r.position)}"
+        yield f"orientation = {_toml_value(r.orientation)}"
+        yield f"fixed_base = {_toml_value(r.fixed_base)}"
+        if r.joint_positions:
+            items = ", ".join(
+                f"{_toml_key(str(k))} = {_toml_value(v)}" for k, v in r.joint_positions
+            )
+            yield f"joint_positions = {{ {items} }}"
+    for p in s.phases:
+        yield ""
+        yield "[[phases]]"
+        yield f"name = {_toml_value(p.name)}"
+        yield f"steps = {p.steps}"
+        for c in p.commands:
+            yield "[[phases.commands]]"
+            yield f"robot = {_toml_value(c.robot)}"
+            yield f"joints = {_toml_value(c.joints)}"
+            yield f"mode = {_toml_value(c.mode)}"
+            yield f"target = {_toml_value(c.target)}"
+            if c.max_force is not None:
+                yield f"max_force = {_toml_value(c.max_force)}"
+            if c.kp is not None:
+                yield f"kp = {_toml_value(c.kp)}"
+            if c.kd is not None:
+                yield f"kd = {_toml_value(c.kd)}"
+
+
+def dumps_scenario(scenario: Scenario) -> str:
+    """TOML text that :func:`loads_scenario` reads back to an equal Scenario."""
+    return "\n".join(_lines(scenario)) + "\n"
+
+
+def save_scenario(scenario: Scenario, path: str | Path) -> Path:
+    path = Path(path)
+    path.write_text(dumps_scenario(scenario), encoding="utf-8")
+    return path
