@@ -250,14 +250,28 @@ def has_mimic(robot: Any) -> bool:
     return any(j.mimic is not None for j in robot.joints)
 
 
+def with_mimic(robot: Any, positions: dict[str, float]) -> dict[str, float]:
+    """Complete ``positions`` with URDF ``<mimic>`` joints (q = multiplier * q_master + offset).
+
+    PyBullet ignores ``<mimic>``: a test sets mimic joints explicitly to these values so that the
+    engine and yourdfpy describe the same configuration."""
+    out = dict(positions)
+    for joint in robot.joints:
+        if joint.mimic is not None:
+            m = joint.mimic
+            multiplier = 1.0 if m.multiplier is None else float(m.multiplier)
+            offset = 0.0 if m.offset is None else float(m.offset)
+            out[joint.name] = multiplier * out.get(m.joint, 0.0) + offset
+    return out
+
+
 def forward_kinematics(
     path: str, base: np.ndarray, positions: dict[str, float]
 ) -> dict[str, np.ndarray]:
-    """World pose (4x4) of every link frame from yourdfpy's scene graph: ``base`` places the
-    root's link frame; ``positions`` gives every movable joint (no mimic joints allowed)."""
+    """World pose (4x4) of every link frame from yourdfpy's scene graph. ``base`` places the
+    root's link frame; ``positions`` gives the joints yourdfpy actuates (mimic joints follow)."""
     urdf = load(path, scene=True)
-    assert not has_mimic(urdf.robot), "PyBullet ignores <mimic>: compare without them"
-    urdf.update_cfg(positions)
+    urdf.update_cfg({name: positions.get(name, 0.0) for name in urdf.actuated_joint_names})
     root = root_link(urdf.robot)
     return {
         name: base @ np.asarray(urdf.get_transform(frame_to=name, frame_from=root), dtype=float)
