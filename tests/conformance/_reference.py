@@ -271,7 +271,7 @@ def forward_kinematics(
     """World pose (4x4) of every link frame from yourdfpy's scene graph. ``base`` places the
     root's link frame; ``positions`` gives the joints yourdfpy actuates (mimic joints follow)."""
     urdf = load(path, scene=True)
-    urdf.update_cfg({name: positions.get(name, 0.0) for name in urdf.actuated_joint_names})
+    urdf.update_cfg({n: float(positions.get(n, 0.0)) for n in urdf.actuated_joint_names})
     root = root_link(urdf.robot)
     return {
         name: base @ np.asarray(urdf.get_transform(frame_to=name, frame_from=root), dtype=float)

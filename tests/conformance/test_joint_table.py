@@ -189,8 +189,8 @@ def check_joint_table(sim: simbridge.Sim, path: str, fixed_base: bool = False) -
         assert isinstance(got.type, simbridge.JointType) and isinstance(got.index, int)
         parent_com = ref.inertial_frame(links[row.parent_link])
         rp, rc, rj = rotations[row.parent_link], rotations[row.link_name], row.joint_origin[:3, :3]
-        # axis in the child's inertial frame, not normalised (r2d2's are unit; the double
-        # pendulum's elbow is written (0 2 0) and must come back with length 2)
+        # axis in the child's inertial frame, not normalised (FRAMES_PROBE's j1 is written
+        # (0 2 0) and must come back with length 2)
         np.testing.assert_allclose(got.axis, rc.T @ row.axis, atol=TOL, err_msg=where)
         np.testing.assert_allclose(
             got.parent_frame_position,
