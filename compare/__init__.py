@@ -1,0 +1,58 @@
+"""simbridge.compare: run one scenario on two engines and report where and when they part.
+
+::
+
+    from simbridge import compare
+
+    a = compare.run("r2d2", "pybullet")            # Trajectory: every step recorded
+    b = compare.run("r2d2", "mujoco")
+    d = compare.diff(a, b)                         # Divergence: quantities over time
+    print(d.final["base_distance"], d.first_crossing("base_distance", 0.01))
+
+    c = compare.compare("r2d2", ["pybullet", "mujoco"], timesteps=["1/240", "1/480"])
+    compare.report(c, "reports/r2d2")              # report.md, summary.json, figures
+
+Only the :class:`simbridge.Sim` interface is used: no engine is imported here.
+"""
+
+from __future__ import annotations
+
+from .diff import QUANTITIES, Divergence, PhaseRow, Quantity, diff
+from .pipeline import Comparison, compare
+from .report import headline, report
+from .run import BodyTrajectory, Trajectory, run
+from .scenario import (
+    Command,
+    Phase,
+    RobotSpec,
+    Scenario,
+    dumps_scenario,
+    list_scenarios,
+    load_scenario,
+    loads_scenario,
+    save_scenario,
+)
+
+__all__ = [
+    "run",
+    "diff",
+    "compare",
+    "report",
+    "headline",
+    "Trajectory",
+    "BodyTrajectory",
+    "Divergence",
+    "PhaseRow",
+    "Quantity",
+    "QUANTITIES",
+    "Comparison",
+    "Scenario",
+    "RobotSpec",
+    "Phase",
+    "Command",
+    "load_scenario",
+    "loads_scenario",
+    "dumps_scenario",
+    "save_scenario",
+    "list_scenarios",
+]

@@ -1,0 +1,426 @@
+"""Running a scenario on one backend and recording every step: :func:`run` and
+:class:`Trajectory`.
+
+Only the :class:`simbridge.Sim` interface is used: the same code runs on every backend.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import sys
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import simbridge
+from simbridge.exceptions import ScenarioError
+from simbridge.types import JointType
+
+from .scenario import Scenario, load_scenario, parse_timestep
+
+__all__ = ["BodyTrajectory", "Trajectory", "run", "urdf_sha256"]
+
+Progress = Callable[[int, int], None]
+"""progress(steps_done, steps_total), called every few steps."""
+
+_BODY_ARRAYS = (
+    "base_position",
+    "base_orientation",
+    "base_linear_velocity",
+    "base_angular_velocity",
+    "joint_positions",
+    "joint_velocities",
+    "joint_forces",
+    "joint_targets",
+    "link_positions",
+)
+
+
+@dataclass
+class BodyTrajectory:
+    """One robot's recorded state, one row per recorded instant (T rows: the initial state, then
+    the state after every step).
+
+    Base quantities are those of the URDF root link frame (``Sim.link_state(body, -1)``); the
+    angular velocity is world-frame; the linear velocity is that of the base's centre of mass.
+    Joints are the movable ones (fixed joints carry no state), in index order.
+    """
+
+    name: str
+    fixed_base: bool
+    joint_indices: np.ndarray  # (J,) int
+    joint_names: list[str]  # (J,)
+    link_names: list[str]  # (L,) "base" then link 0, 1, ...
+    base_position: np.ndarray  # (T, 3) m, world
+    base_orientation: np.ndarray  # (T, 4) x, y, z, w
+    base_linear_velocity: np.ndarray  # (T, 3) m/s, world
+    base_angular_velocity: np.ndarray  # (T, 3) rad/s, world
+    joint_positions: np.ndarray  # (T, J) rad or m
+    joint_velocities: np.ndarray  # (T, J) rad/s or m/s
+    joint_forces: np.ndarray  # (T, J) N·m or N, the motor force of the step that ended there
+    joint_targets: np.ndarray  # (T, J) the command's target held during that step; NaN = none
+    joint_modes: np.ndarray  # (T, J) int: 0 none, 1 velocity, 2 position, 3 torque
+    link_positions: np.ndarray  # (T, L, 3) m, world position of every link frame (base first)
+
+
+@dataclass
+class Trajectory:
+    """A recorded run: ``time`` (T,) and, per robot, a :class:`BodyTrajectory`.
+
+    ``phases`` lists ``(name, first_row, last_row)``: the rows recorded at the phase's start and
+    end (``time[first_row]`` is the start time). Save with :meth:`save` (``.npz``) or
+    :meth:`save_csv`; read back with :meth:`load`."""
+
+    scenario: str
+    backend: str
+    profile: str
+    timestep: float
+    time: np.ndarray  # (T,) s
+    bodies: dict[str, BodyTrajectory]
+    subject: str
+    phases: list[tuple[str, int, int]]
+    wall_time: float = 0.0
+    """Seconds spent issuing commands and stepping (recording excluded)."""
+    wall_total: float = 0.0
+    """Seconds of the whole run: loading, stepping and recording."""
+    manifest: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def body(self) -> BodyTrajectory:
+        """The subject robot's trajectory (the one the report follows)."""
+        return self.bodies[self.subject]
+
+    @property
+    def duration(self) -> float:
+        return float(self.time[-1] - self.time[0])
+
+    @property
+    def steps(self) -> int:
+        return len(self.time) - 1
+
+    @property
+    def label(self) -> str:
+        from .scenario import format_timestep
+
+        return f"{self.backend} @ {format_timestep(self.timestep)} s"
+
+    def wall_per_sim_second(self) -> float:
+        """Wall-clock seconds per simulated second, commands and steps only."""
+        return self.wall_time / self.duration if self.duration > 0 else float("nan")
+
+    # ------------------------------------------------------------ files
+
+    def save(self, path: str | Path) -> Path:
+        """Write a ``.npz`` (numpy arrays plus a JSON header); :meth:`load` reads it back."""
+        path = Path(path)
+        arrays: dict[str, np.ndarray] = {"time": self.time}
+        meta: dict[str, Any] = {
+            "format": "simbridge.compare.Trajectory/1",
+            "scenario": self.scenario,
+            "backend": self.backend,
+            "profile": self.profile,
+            "timestep": self.timestep,
+            "subject": self.subject,
+            "phases": self.phases,
+            "wall_time": self.wall_time,
+            "wall_total": self.wall_total,
+            "manifest": self.manifest,
+            "bodies": {},
+        }
+        for name, b in self.bodies.items():
+            meta["bodies"][name] = {
+                "fixed_base": b.fixed_base,
+                "joint_names": b.joint_names,
+                "link_names": b.link_names,
+            }
+            arrays[f"{name}/joint_indices"] = b.joint_indices
+            arrays[f"{name}/joint_modes"] = b.joint_modes
+            for key in _BODY_ARRAYS:
+                arrays[f"{name}/{key}"] = getattr(b, key)
+        arrays["meta"] = np.array(json.dumps(meta, default=_json_default))
+        with path.open("wb") as f:
+            np.savez_compressed(f, **arrays)  # type: ignore[arg-type]
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> Trajectory:
+        with np.load(Path(path), allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            bodies = {}
+            for name, m in meta["bodies"].items():
+                bodies[name] = BodyTrajectory(
+                    name=name,
+                    fixed_base=m["fixed_base"],
+                    joint_indices=data[f"{name}/joint_indices"],
+                    joint_names=list(m["joint_names"]),
+                    link_names=list(m["link_names"]),
+                    joint_modes=data[f"{name}/joint_modes"],
+                    **{key: data[f"{name}/{key}"] for key in _BODY_ARRAYS},
+                )
+            return cls(
+                scenario=meta["scenario"],
+                backend=meta["backend"],
+                profile=meta["profile"],
+                timestep=meta["timestep"],
+                time=data["time"],
+                bodies=bodies,
+                subject=meta["subject"],
+                phases=[(str(n), int(a), int(b)) for n, a, b in meta["phases"]],
+                wall_time=meta["wall_time"],
+                wall_total=meta["wall_total"],
+                manifest=meta["manifest"],
+            )
+
+    def columns(self) -> tuple[list[str], np.ndarray]:
+        """Flat column names and a (T, C) table of every recorded number (for CSV)."""
+        names = ["time"]
+        cols = [self.time[:, None]]
+        for bname, b in self.bodies.items():
+            for key, axes in (
+                ("base_position", "xyz"),
+                ("base_orientation", "xyzw"),
+                ("base_linear_velocity", "xyz"),
+                ("base_angular_velocity", "xyz"),
+            ):
+                names += [f"{bname}.{key}.{a}" for a in axes]
+                cols.append(getattr(b, key))
+            for key in ("joint_positions", "joint_velocities", "joint_forces", "joint_targets"):
+                names += [f"{bname}.{key}.{j}" for j in b.joint_names]
+                cols.append(getattr(b, key))
+            for i, link in enumerate(b.link_names):
+                names += [f"{bname}.link_positions.{link}.{a}" for a in "xyz"]
+                cols.append(b.link_positions[:, i, :])
+        return names, np.hstack(cols)
+
+    def save_csv(self, path: str | Path) -> Path:
+        """One row per recorded instant, one column per number (``r2d2.base_position.x`` ...)."""
+        path = Path(path)
+        names, table = self.columns()
+        with path.open("w", newline="", encoding="utf-8") as f:
+            writer = csv.writer(f)
+            writer.writerow(names)
+            for row in table:
+                writer.writerow([repr(float(v)) for v in row])
+        return path
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.integer, np.floating)):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    return str(obj)
+
+
+def urdf_sha256(source: str) -> tuple[str, str]:
+    """``(resolved file, sha256 of its text)`` of a URDF as ``Sim.load_urdf`` would read it."""
+    from simbridge.urdf import resolve_source
+
+    src = resolve_source(source)
+    return src.display_name, hashlib.sha256(src.text.encode("utf-8")).hexdigest()
+
+
+_MODE_CODE = {"velocity": 1, "position": 2, "torque": 3}
+
+
+def run(
+    scenario: str | Path | Scenario,
+    backend: str,
+    *,
+    timestep: float | str | None = None,
+    profile: str | None = None,
+    gravity: tuple[float, float, float] | None = None,
+    duration: float | None = None,
+    progress: Progress | None = None,
+) -> Trajectory:
+    """Run ``scenario`` on ``backend`` and record every step.
+
+    Args:
+        scenario: a shipped scenario name, a TOML path, or a :class:`Scenario`.
+        backend: a registered backend name.
+        timestep: run at this step instead (s, or ``"1/480"``); each phase keeps its duration,
+            so the step counts scale.
+        profile: a simbridge profile name instead of the scenario's.
+        gravity: instead of the scenario's (m/s²).
+        duration: only the first ``duration`` seconds.
+        progress: called as ``progress(steps_done, steps_total)`` every few steps.
+
+    Returns:
+        The :class:`Trajectory`: T = steps + 1 rows (the state at t = 0, then after each step).
+
+    Raises:
+        ScenarioError, SimbridgeError: a bad scenario, an unknown joint, a failed backend.
+    """
+    t_start = _time.perf_counter()
+    sc = load_scenario(scenario)
+    if timestep is not None:
+        try:
+            dt = parse_timestep(timestep)
+        except ValueError as exc:
+            raise ScenarioError(sc._where(), "timestep", str(exc)) from None
+        sc = sc.with_timestep(dt)
+    if duration is not None:
+        sc = sc.truncated(duration)
+    prof = profile or sc.profile
+    grav = gravity if gravity is not None else sc.gravity
+
+    with simbridge.Sim(backend, gravity=grav, timestep=sc.timestep, profile=prof) as sim:
+        ids: dict[str, int] = {}
+        hashes: dict[str, dict[str, str]] = {}
+        for r in sc.robots:
+            source = sc.resolve_urdf(r)
+            file, digest = urdf_sha256(source)
+            hashes[r.name] = {"urdf": r.urdf, "file": file, "sha256": digest}
+            body = sim.load_urdf(
+                source,
+                base_position=r.position,
+                base_orientation=r.orientation,
+                fixed_base=r.fixed_base,
+            )
+            ids[r.name] = body
+            for joint, q in r.joint_positions:
+                sim.reset_joint_state(body, joint, q)
+
+        recorders = {
+            r.name: _Recorder(sim, ids[r.name], r.fixed_base, sc.steps + 1) for r in sc.robots
+        }
+        # Resolve every command once: (body, joint indices, command, recorder, its columns)
+        plan = []
+        for p in sc.phases:
+            cmds = []
+            for c in p.commands:
+                body, rec = ids[c.robot], recorders[c.robot]
+                idx = [sim.joint_index(body, j) for j in c.joints]
+                cmds.append((body, idx, c, rec, rec.columns(idx)))
+            plan.append((p, cmds))
+
+        total = sc.steps
+        row = 0
+        for rec in recorders.values():
+            rec.record(row)
+        phases: list[tuple[str, int, int]] = []
+        wall = 0.0
+        every = max(1, total // 200)
+        for p, cmds in plan:
+            first = row
+            for body, idx, c, _, _ in cmds:
+                if c.mode == "torque":  # release the velocity motor (the profile's brake)
+                    sim.set_joint_velocity(body, idx, 0.0, max_force=0.0)
+            for _ in range(p.steps):
+                t0 = _time.perf_counter()
+                for body, idx, c, _, _ in cmds:
+                    if c.mode == "velocity":
+                        sim.set_joint_velocity(body, idx, c.target, max_force=c.max_force)
+                    elif c.mode == "position":
+                        kw = {k: v for k, v in (("kp", c.kp), ("kd", c.kd)) if v is not None}
+                        sim.set_joint_position(body, idx, c.target, max_force=c.max_force, **kw)
+                    else:
+                        sim.set_joint_torque(body, idx, c.target)
+                sim.step()
+                wall += _time.perf_counter() - t0
+                row += 1
+                for rec in recorders.values():
+                    rec.record(row)
+                for _, _, c, rec, cols in cmds:
+                    rec.targets[row, cols] = c.target
+                    rec.modes[row, cols] = _MODE_CODE[c.mode]
+                if progress is not None and (row % every == 0 or row == total):
+                    progress(row, total)
+            phases.append((p.name, first, row))
+        manifest = sim.manifest()
+        manifest["urdf"] = hashes
+        manifest["scenario"] = {
+            "name": sc.name,
+            "file": str(sc.source) if sc.source else None,
+            "timestep": sc.timestep,
+            "steps": sc.steps,
+        }
+        if sys.argv:
+            manifest["command_line"] = list(sys.argv)
+        time = np.arange(total + 1, dtype=np.float64) * sc.timestep
+        bodies = {name: rec.finish(name) for name, rec in recorders.items()}
+    return Trajectory(
+        scenario=sc.name,
+        backend=backend,
+        profile=prof,
+        timestep=sc.timestep,
+        time=time,
+        bodies=bodies,
+        subject=sc.subject,
+        phases=phases,
+        wall_time=wall,
+        wall_total=_time.perf_counter() - t_start,
+        manifest=manifest,
+    )
+
+
+class _Recorder:
+    """Preallocated arrays for one body, filled row by row through the Sim interface."""
+
+    def __init__(self, sim: simbridge.Sim, body: int, fixed_base: bool, rows: int):
+        self.sim = sim
+        self.body = body
+        self.fixed_base = fixed_base
+        table = sim.joints(body)
+        movable = [j for j in table if j.type != JointType.FIXED]
+        self.joint_indices = np.array([j.index for j in movable], dtype=np.intp)
+        self.joint_names = [j.name for j in movable]
+        self.link_names = ["base"] + [j.link_name for j in table]
+        self.links = list(range(-1, len(table)))
+        n_j, n_l = len(movable), len(self.links)
+        self.base = np.empty((rows, 13))
+        self.q = np.empty((rows, n_j))
+        self.v = np.empty((rows, n_j))
+        self.f = np.empty((rows, n_j))
+        self.targets = np.full((rows, n_j), np.nan)
+        self.modes = np.zeros((rows, n_j), dtype=np.int8)
+        self.links_xyz = np.empty((rows, n_l, 3))
+        self._col = {int(j): i for i, j in enumerate(self.joint_indices)}
+
+    def columns(self, idx: list[int]) -> list[int]:
+        """Columns of the joint arrays for joint indices ``idx`` (all movable)."""
+        return [self._col[i] for i in idx]
+
+    def record(self, row: int) -> None:
+        sim, body = self.sim, self.body
+        base = sim.link_state(body, -1)
+        out = self.base[row]
+        out[0:3] = base.link_frame_position
+        out[3:7] = base.link_frame_orientation
+        out[7:10] = base.linear_velocity
+        out[10:13] = base.angular_velocity
+        self.links_xyz[row, 0] = base.link_frame_position
+        for k in range(1, len(self.links)):
+            self.links_xyz[row, k] = sim.link_state(body, self.links[k]).link_frame_position
+        if len(self.joint_indices):
+            js = sim.joint_states(body, self.joint_indices)
+            self.q[row] = js.positions
+            self.v[row] = js.velocities
+            self.f[row] = js.applied_torques
+
+    def finish(self, name: str) -> BodyTrajectory:
+        return BodyTrajectory(
+            name=name,
+            fixed_base=self.fixed_base,
+            joint_indices=self.joint_indices,
+            joint_names=self.joint_names,
+            link_names=self.link_names,
+            base_position=self.base[:, 0:3],
+            base_orientation=self.base[:, 3:7],
+            base_linear_velocity=self.base[:, 7:10],
+            base_angular_velocity=self.base[:, 10:13],
+            joint_positions=self.q,
+            joint_velocities=self.v,
+            joint_forces=self.f,
+            joint_targets=self.targets,
+            joint_modes=self.modes,
+            link_positions=self.links_xyz,
+        )
