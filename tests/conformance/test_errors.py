@@ -1,0 +1,257 @@
+"""Errors through the public API, every backend: the exception class and its message are pinned;
+after each, no temporary file is left behind and the Sim still closes cleanly (and, where the
+error came before any simulation, still works)."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import simbridge
+from simbridge import exceptions as exc
+
+GOOD = """<robot name="ok"><link name="a"><inertial><mass value="1"/>
+<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>"""
+
+
+def _robot(joints: str, links: str = '<link name="a"/><link name="b"/>') -> str:
+    return f'<robot name="bad">{links}{joints}</robot>'
+
+
+LOAD_ERRORS = {
+    "malformed XML": (
+        '<robot name="bad"><link name="a"></robot>',
+        exc.UrdfParseError,
+        r"<urdf text>: malformed URDF XML: mismatched tag: line 1",
+    ),
+    "no links": ('<robot name="empty"></robot>', exc.UrdfStructureError, r"has no <link>"),
+    "a cycle": (
+        _robot(
+            '<joint name="ab" type="fixed"><parent link="a"/><child link="b"/></joint>'
+            '<joint name="ba" type="fixed"><parent link="b"/><child link="a"/></joint>'
+        ),
+        exc.UrdfStructureError,
+        r"robot 'bad': every link has a parent: the joints form a cycle",
+    ),
+    "a cycle below the root": (
+        _robot(
+            '<joint name="bc" type="fixed"><parent link="b"/><child link="c"/></joint>'
+            '<joint name="cb" type="fixed"><parent link="c"/><child link="b"/></joint>',
+            '<link name="a"/><link name="b"/><link name="c"/>',
+        ),
+        exc.UrdfStructureError,
+        r"links \['b', 'c'\] form a cycle detached from the root",
+    ),
+    "a missing mesh": (
+        '<robot name="bad"><link name="a"><collision><geometry>'
+        '<mesh filename="no_such_mesh.stl"/></geometry></collision></link></robot>',
+        exc.MeshNotFoundError,
+        r"<urdf text>: link 'a' <collision> #0: mesh file 'no_such_mesh\.stl' not found",
+    ),
+    "a floating joint": (
+        _robot('<joint name="float" type="floating"><parent link="a"/><child link="b"/></joint>'),
+        exc.UnsupportedJointError,
+        r"joint 'float': joint type 'floating' is not supported; supported types: "
+        r"\['revolute', 'continuous', 'prismatic', 'fixed'\]",
+    ),
+    "a planar joint": (
+        _robot('<joint name="plane" type="planar"><parent link="a"/><child link="b"/></joint>'),
+        exc.UnsupportedJointError,
+        r"joint 'plane': joint type 'planar' is not supported",
+    ),
+    "a missing file": (
+        "no_such_robot.urdf",
+        exc.UrdfNotFoundError,
+        r"URDF 'no_such_robot\.urdf' is neither a file, a name on the search path, nor URDF text",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(LOAD_ERRORS))
+def test_bad_urdf(make_sim, private_tmp, case):
+    text, error, message = LOAD_ERRORS[case]
+    sim = make_sim()
+    with pytest.raises(error, match=message):
+        sim.load_urdf(text)
+    assert list(private_tmp.iterdir()) == []
+    assert sim.bodies() == []
+    body = sim.load_urdf(GOOD)  # the Sim still works
+    sim.step()
+    assert sim.bodies() == [body]
+    assert list(private_tmp.iterdir()) == []
+    sim.close()
+    assert sim.closed
+
+
+def test_unknown_backend_lists_the_registered_ones(private_tmp):
+    names = simbridge.available_backends()
+    listed = ", ".join(re.escape(repr(n)) for n in sorted(names))
+    with pytest.raises(
+        exc.UnknownBackendError,
+        match=rf"unknown backend 'bullet'; available backends: \[{listed}\]",
+    ):
+        simbridge.Sim("bullet")
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_unknown_names_list_the_valid_ones(make_sim, private_tmp):
+    sim = make_sim()
+    body = sim.load_urdf("pendulum.urdf", fixed_base=True)
+    with pytest.raises(
+        exc.UnknownJointError,
+        match=r"body 'pendulum' has no joint 'elbow'; valid joints are indices 0\.\.0 or "
+        r"names \['hinge'\]",
+    ):
+        sim.joint_info(body, "elbow")
+    with pytest.raises(exc.UnknownJointError, match=r"has no joint 1;"):
+        sim.set_joint_velocity(body, 1, 0.0, max_force=1.0)
+    with pytest.raises(
+        exc.UnknownLinkError,
+        match=r"body 'pendulum' has no link 'arm'; valid links are -1 \(base\), indices "
+        r"0\.\.0 or names \['bob'\]",
+    ):
+        sim.link_state(body, "arm")
+    with pytest.raises(exc.UnknownLinkError, match=r"has no link -2"):
+        sim.dynamics_info(body, -2)
+    with pytest.raises(
+        exc.UnknownBodyError, match=rf"unknown body 99; bodies in this Sim: \[{body}\]"
+    ):
+        sim.base_state(99)
+    assert sim.link_state(body, "pivot") == sim.link_state(body, -1)  # the root's name is -1
+    sim.step()
+    sim.close()
+    assert list(private_tmp.iterdir()) == []
+
+
+BAD_ARGUMENTS = {
+    "target shape": (
+        lambda s, b: s.set_joint_velocity(b, ["shoulder", "elbow"], [1, 2, 3], max_force=1),
+        r"argument 'target': expected a number or shape \(2,\) for 2 joint\(s\), got shape \(3,\)",
+    ),
+    "target NaN": (
+        lambda s, b: s.set_joint_velocity(b, "shoulder", float("nan"), max_force=1),
+        r"argument 'target': values must be finite, got nan",
+    ),
+    "max_force inf": (
+        lambda s, b: s.set_joint_velocity(b, "shoulder", 0.0, max_force=float("inf")),
+        r"argument 'max_force': values must be finite",
+    ),
+    "max_force negative": (
+        lambda s, b: s.set_joint_velocity(b, "shoulder", 0.0, max_force=-1.0),
+        r"argument 'max_force': values must be >= 0, got -1\.0",
+    ),
+    "torque inf in an array": (
+        lambda s, b: s.set_joint_torque(b, ["shoulder", "elbow"], [1.0, float("-inf")]),
+        r"argument 'torque': values must be finite",
+    ),
+    "position target 2-d": (
+        lambda s, b: s.set_joint_position(b, ["shoulder"], [[1.0]], max_force=1.0),
+        r"argument 'target': expected a number or shape \(1,\) for 1 joint\(s\), got shape "
+        r"\(1, 1\)",
+    ),
+    "reset NaN": (
+        lambda s, b: s.reset_joint_state(b, "elbow", float("nan")),
+        r"argument 'positions': values must be finite",
+    ),
+    "base position shape": (
+        lambda s, b: s.reset_base_state(b, position=(1.0, 2.0)),
+        r"argument 'position': expected 3 numbers, got 2",
+    ),
+    "base orientation not unit": (
+        lambda s, b: s.reset_base_state(b, orientation=(0, 0, 0, 2)),
+        r"argument 'orientation': expected a unit quaternion \(x, y, z, w\)",
+    ),
+    "load position inf": (
+        lambda s, b: s.load_urdf("pendulum.urdf", base_position=(0, 0, float("inf"))),
+        r"argument 'base_position': values must be finite",
+    ),
+    "a joint given twice": (
+        lambda s, b: s.set_joint_torque(b, ["elbow", 1], [1.0, 2.0]),
+        r"argument 'joints': a joint is given twice",
+    ),
+    "negative step count": (
+        lambda s, b: s.step(-1),
+        r"argument 'n': must be an integer >= 0, got -1",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_ARGUMENTS))
+def test_bad_arguments(make_sim, private_tmp, case):
+    call, message = BAD_ARGUMENTS[case]
+    sim = make_sim()
+    body = sim.load_urdf("double_pendulum.urdf", fixed_base=True)
+    before = sim.joint_states(body)
+    with pytest.raises(exc.InvalidArgumentError, match=message):
+        call(sim, body)
+    after = sim.joint_states(body)  # nothing was half applied
+    assert before.positions.tobytes() == after.positions.tobytes()
+    assert sim.bodies() == [body]
+    sim.step()
+    sim.close()
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_fixed_joint_takes_no_command(make_sim):
+    sim = make_sim()
+    body = sim.load_urdf("r2d2.urdf")
+    with pytest.raises(
+        exc.InvalidArgumentError,
+        match=r"joint 'base_to_right_leg' \(index 0\) of body 'physics' is fixed and takes no "
+        r"command",
+    ):
+        sim.set_joint_velocity(body, 0, 1.0, max_force=1.0)
+
+
+def test_closed_sim_refuses_everything(make_sim, private_tmp):
+    sim = make_sim()
+    body = sim.load_urdf("free_box.urdf")
+    sim.close()
+    sim.close()  # twice is fine
+    for call in (sim.step, lambda: sim.base_state(body), sim.bodies, lambda: sim.time):
+        with pytest.raises(exc.SimClosedError, match=r"this Sim is closed; create a new one"):
+            call()
+    assert list(private_tmp.iterdir()) == []
+
+
+# A state turned NaN or infinite. The trigger must work on every engine; an absurd time step is
+# engine-neutral: free fall reaches g dt^2 ~ 1e401 m, past float64, within one step. Backends
+# probe for divergence periodically (PyBullet backend: every 16 steps), so 32 steps are taken.
+# A backend that needs another trigger adds it here by name, with the reason.
+DIVERGENCE_TRIGGERS: dict[str, dict[str, float]] = {}
+DEFAULT_TRIGGER = {"timestep": 1e200}
+
+
+def test_diverged_simulation_is_reported(backend, make_sim, profile, private_tmp):
+    trigger = DIVERGENCE_TRIGGERS.get(backend, DEFAULT_TRIGGER)
+    sim = make_sim(profile=profile, **trigger)
+    sim.load_urdf("free_box.urdf", base_position=(0, 0, 1))
+    with pytest.raises(
+        exc.SimulationDivergedError,
+        match=rf"simulation on backend '{backend}' diverged at t=.* s: .* is not finite",
+    ):
+        for _ in range(32):
+            sim.step()
+    sim.close()
+    assert sim.closed
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_huge_torque_is_either_finite_or_reported(make_sim, private_tmp):
+    """The largest finite torque on a free-spinning wheel ("urdf": no clamp, no damping): the
+    backend either keeps a finite state or raises SimulationDivergedError, never returns NaN."""
+    sim = make_sim(profile="urdf")
+    body = sim.load_urdf("wheel.urdf", fixed_base=True)
+    try:
+        for _ in range(64):
+            sim.set_joint_torque(body, "axle", 1.7e308)
+            sim.step()
+    except exc.SimulationDivergedError:
+        pass
+    else:
+        state = sim.joint_states(body, "axle")
+        assert np.isfinite(state.velocities).all() and np.isfinite(state.positions).all()
+    sim.close()
+    assert list(private_tmp.iterdir()) == []
