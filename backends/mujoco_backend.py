@@ -1,0 +1,693 @@
+"""`Sim` on MuJoCo 4: PyBullet's joint table, frames and command semantics on MuJoCo physics.
+
+One ``MjSpec`` holds the world; every ``load``/``remove`` edits it and recompiles with
+``MjSpec.recompile``, which carries ``qpos``/``qvel``/time of the bodies already there across;
+this backend carries its own state (motor settings, pending torques) by joint. Each step is
+``mj_step1`` (positions, velocities, constraint rows), the layer's additions (motor offsets,
+link damping, joint damping, torques: see mujoco_motors.py and mujoco_damping.py), then
+``mj_step2``; when a motor has a velocity gain other than 1 or the speed clamp is near, the
+step is split further (``mj_fwdActuation``, ``mj_fwdAcceleration``, adjust,
+``mj_fwdConstraint``, ``mj_Euler``).
+Poses and velocities are recomputed lazily on the first read after a step (``mj_kinematics``,
+``mj_comPos``, ``mj_comVel``), so the stepping loop pays nothing for them.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from dataclasses import dataclass, field
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from simbridge import kinematics as K
+from simbridge.backend import Backend
+from simbridge.exceptions import (
+    BackendUnsupportedError,
+    DisplayError,
+    SimulationDivergedError,
+    UrdfStructureError,
+)
+from simbridge.profiles import Profile
+from simbridge.types import (
+    BaseState,
+    DynamicsInfo,
+    JointInfo,
+    JointStates,
+    JointType,
+    LinkState,
+    Quat,
+    Vec3,
+)
+from simbridge.urdf import UrdfModel
+
+from . import mujoco_build as build
+from .mujoco_damping import LinkDamping, clamp_smooth
+from .mujoco_motors import MOTOR_DMAX, MotorTable
+
+__all__ = ["MujocoBackend"]
+
+# Contact margin (m) of every pair: PyBullet's shapes from a URDF carry a 1 mm collision margin
+# and rest that far apart; MuJoCo's pair margin makes its soft contact balance about as far
+# out (measured: r2d2 rests with its base at z 0.4710 on PyBullet; see docs/mujoco_backend.md).
+CONTACT_MARGIN = 0.001
+_CLAMP_WATCH = 0.5  # the split step clamps once a body speed exceeds this share of the limit
+_BAD = (
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC,
+)
+
+
+@dataclass
+class _Robot:
+    id: int
+    model: UrdfModel
+    spec: build.RobotSpec
+    table: list[JointInfo]
+    fixed: bool
+    movable: list[int]  # joint indices
+    # motor settings by movable joint (kept across recompiles); columns as MotorTable
+    motor_state: dict[str, np.ndarray] = field(default_factory=dict)
+    # compiled indices (refreshed after every compile)
+    body_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    qadr: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # per joint
+    dofadr: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # per joint
+    motor_index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    free_qadr: int = -1
+    free_dofadr: int = -1
+    cache: dict[int, tuple[np.ndarray, ...]] = field(default_factory=dict)
+
+
+_MOTOR_FIELDS = ("target_velocity", "target_position", "kp", "kd", "max_force", "effort")
+
+
+class MujocoBackend(Backend):
+    """`Sim` on MuJoCo 4 (see the module docstring and docs/mujoco_backend.md)."""
+
+    name = "mujoco"
+
+    NATIVE_DEFAULTS = {
+        "gravity": (0.0, 0.0, -9.81),
+        "timestep": 0.002,
+        "integrator": "Euler (semi-implicit)",
+        "solver": "Newton, 100 iterations",
+        "joint_brake": "none",
+        "inertia_source": "file (MuJoCo's URDF importer)",
+        "linear_damping": 0.0,
+        "angular_damping": 0.0,
+        "max_joint_velocity": None,
+        "lateral_friction": 1.0,
+        "rolling_friction": 0.005,
+        "spinning_friction": 0.0001,
+        "friction_combine": "max",
+        "self_collision": True,
+        "contact": "soft, solref (0.02, 1), solimp (0.9, 0.95, 0.001, 0.5, 2), margin 0",
+    }
+
+    def __init__(self, profile: Profile, gui: bool = False) -> None:
+        super().__init__(profile, gui)
+        self._check_profile(profile)
+        self._viewer: Any = None
+        if gui:
+            if sys.platform.startswith("linux") and not (
+                os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+            ):
+                raise DisplayError(self.name, "neither DISPLAY nor WAYLAND_DISPLAY is set")
+        self._dt = profile.timestep
+        self._inv_dt = 1.0 / profile.timestep
+        self._robots: dict[int, _Robot] = {}
+        self._next_id = 0
+        self._steps = 0
+        self._closed = False
+        self._new_world()
+
+    # ---------------------------------------------------------------- set-up
+
+    def _check_profile(self, p: Profile) -> None:
+        if p.integrator != "semi-implicit Euler":
+            raise BackendUnsupportedError(
+                self.name, f"integrator {p.integrator!r}", "valid: ['semi-implicit Euler']"
+            )
+        if p.contact_model != "stiff":
+            raise BackendUnsupportedError(
+                self.name, f"contact_model {p.contact_model!r}", "valid: ['stiff']"
+            )
+        if p.friction_combine != "product" or p.restitution_combine != "product":
+            raise BackendUnsupportedError(
+                self.name, "friction/restitution combine rules other than 'product'"
+            )
+        if p.enforce_velocity_limit:
+            raise BackendUnsupportedError(
+                self.name,
+                "enforce_velocity_limit=True",
+                "PyBullet never clamps to <limit velocity> either; use max_joint_velocity",
+            )
+
+    def _new_world(self) -> None:
+        self._spec = build.new_world_spec(self.profile)
+        self._meshes = build.MeshLibrary(self._spec)
+        self._m = self._spec.compile()
+        self._d = mujoco.MjData(self._m)
+        self._after_compile()
+
+    @property
+    def time(self) -> float:
+        return self._steps * self._dt
+
+    # ---------------------------------------------------------------- world
+
+    def load(
+        self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
+    ) -> int:
+        body = self._next_id
+        prefix = f"b{body}/"
+        spec = self._spec
+        try:
+            rspec = build.add_robot(
+                spec,
+                self._meshes,
+                model,
+                prefix,
+                base_position,
+                base_orientation,
+                fixed_base,
+                self.profile,
+            )
+            skip = build.adjacent_links(model) if self.profile.self_collision else None
+            build.add_pairs(
+                spec,
+                rspec,
+                [r.spec for r in self._robots.values()],
+                self.profile,
+                CONTACT_MARGIN,
+                skip,
+            )
+            fixed = K.is_fixed_base(model, fixed_base)
+            table = K.joint_table(model, fixed_base, rspec.inertials)
+            robot = _Robot(
+                body,
+                model,
+                rspec,
+                table,
+                fixed,
+                [j.index for j in table if j.type != JointType.FIXED],
+            )
+            robot.motor_state = self._default_motors(model, robot.movable)
+            self._robots[body] = robot
+            self._recompile(model.source.display_name)
+        except BaseException:
+            self._robots.pop(body, None)
+            self._drop_from_spec(prefix)
+            self._recompile_quietly()
+            raise
+        self._next_id += 1
+        return body
+
+    def _default_motors(self, model: UrdfModel, movable: list[int]) -> dict[str, np.ndarray]:
+        """The motor every movable joint starts with: PyBullet's brake (velocity 0, impulse
+        1 N·s per step) or, under joint_brake "urdf_friction", the file's friction."""
+        joints = [model.joints[j] for j in movable]
+        n = len(joints)
+        if self.profile.joint_brake == "pybullet":
+            brake = np.full(n, 1.0 / self._dt)
+        else:
+            brake = np.array([j.friction for j in joints], dtype=float)
+        effort = np.full(n, np.inf)
+        if self.profile.enforce_effort_limit:
+            effort = np.array([j.effort if j.effort > 0 else np.inf for j in joints], float)
+        return {
+            "target_velocity": np.zeros(n),
+            "target_position": np.zeros(n),
+            "kp": np.zeros(n),
+            "kd": np.ones(n),
+            "max_force": brake,
+            "effort": effort,
+        }
+
+    def _drop_from_spec(self, prefix: str) -> None:
+        spec = self._spec
+        for pair in list(spec.pairs):
+            if pair.name.startswith(prefix) or f"|{prefix}" in pair.name:
+                spec.delete(pair)
+        for b in list(spec.worldbody.bodies):
+            if b.name.startswith(prefix):
+                spec.delete(b)
+
+    def _recompile_quietly(self) -> None:
+        try:
+            self._recompile("<restore>")
+        except Exception:  # noqa: BLE001 - the original error is the one to report
+            self._new_world_keep_state_lost()
+
+    def _new_world_keep_state_lost(self) -> None:  # pragma: no cover - last resort
+        self._robots.clear()
+        self._new_world()
+
+    def remove(self, body: int) -> None:
+        robot = self._robots.pop(body)
+        self._save_motor_state()
+        self._drop_from_spec(robot.spec.prefix)
+        self._recompile("<remove>")
+
+    def reset(self) -> None:
+        self._close_viewer()
+        self._robots.clear()
+        self._steps = 0
+        self._new_world()
+
+    def _recompile(self, file: str) -> None:
+        """Compile the spec (keeping the state of bodies already there) and refresh indices."""
+        self._save_motor_state()
+        spec = self._spec
+        for sensor in list(spec.sensors):
+            spec.delete(sensor)
+        damping = (
+            self.profile.linear_damping != 0.0 or self.profile.angular_damping != 0.0
+        ) and bool(self._robots)
+        if damping:
+            for robot in self._robots.values():
+                for name in robot.spec.body_names:
+                    spec.add_sensor(
+                        type=mujoco.mjtSensor.mjSENS_FRAMELINVEL,
+                        objtype=mujoco.mjtObj.mjOBJ_BODY,
+                        objname=name,
+                    )
+                    spec.add_sensor(
+                        type=mujoco.mjtSensor.mjSENS_FRAMEANGVEL,
+                        objtype=mujoco.mjtObj.mjOBJ_BODY,
+                        objname=name,
+                    )
+        try:
+            m, d = spec.recompile(self._m, self._d)
+        except ValueError as exc:
+            raise UrdfStructureError(file, "<robot>", f"MuJoCo cannot compile it: {exc}") from None
+        self._m, self._d = m, d
+        self._after_compile()
+        self._steps_since_check = 0
+        if self._viewer is not None:
+            self._close_viewer()
+            self._open_viewer()
+
+    def _save_motor_state(self) -> None:
+        table = getattr(self, "_motors", None)
+        if table is None:
+            return
+        for robot in self._robots.values():
+            idx = robot.motor_index
+            if len(idx) != len(robot.movable):
+                continue  # compiled before this robot existed
+            for key in _MOTOR_FIELDS:
+                robot.motor_state[key] = getattr(table, key)[idx].copy()
+
+    def _after_compile(self) -> None:
+        m, d = self._m, self._d
+        dofs: list[int] = []
+        qadrs: list[int] = []
+        owners: list[tuple[_Robot, int]] = []
+        for robot in self._robots.values():
+            names = robot.spec.body_names
+            robot.body_ids = np.array(
+                [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n) for n in names], np.intp
+            )
+            qadr = np.full(len(robot.table), -1, np.intp)
+            dofadr = np.full(len(robot.table), -1, np.intp)
+            for j, jname in enumerate(robot.spec.joint_names):
+                if jname is None:
+                    continue
+                jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jname)
+                qadr[j] = m.jnt_qposadr[jid]
+                dofadr[j] = m.jnt_dofadr[jid]
+            robot.qadr, robot.dofadr = qadr, dofadr
+            if robot.spec.free_joint is not None:
+                jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, robot.spec.free_joint)
+                robot.free_qadr = int(m.jnt_qposadr[jid])
+                robot.free_dofadr = int(m.jnt_dofadr[jid])
+            for k, j in enumerate(robot.movable):
+                dofs.append(int(dofadr[j]))
+                qadrs.append(int(qadr[j]))
+                owners.append((robot, k))
+            robot.cache.clear()
+        # motors in dof order = the order of MuJoCo's friction rows
+        order = np.argsort(np.asarray(dofs, dtype=np.intp), kind="stable")
+        table = MotorTable(len(dofs))
+        table.dof = np.asarray(dofs, np.intp)[order]
+        table.qadr = np.asarray(qadrs, np.intp)[order]
+        position_of = np.empty(len(order), np.intp)
+        position_of[order] = np.arange(len(order))
+        for robot in self._robots.values():
+            robot.motor_index = np.zeros(len(robot.movable), np.intp)
+        for w, (robot, k) in enumerate(owners):
+            slot = position_of[w]
+            robot.motor_index[k] = slot
+            for key in _MOTOR_FIELDS:
+                getattr(table, key)[slot] = robot.motor_state[key][k]
+        self._motors = table
+        # joint damping applied explicitly, as PyBullet's server does each step
+        damp = np.zeros(len(dofs))
+        if self.profile.apply_joint_damping:
+            for w, (robot, k) in enumerate(owners):
+                damp[position_of[w]] = robot.model.joints[robot.movable[k]].damping
+        self._damp_dof = table.dof[damp != 0.0]
+        self._damp_coef = -damp[damp != 0.0]
+        self._pending_torque = False
+        self._damping = None
+        if m.nsensordata and m.nbody > 1:
+            self._damping = LinkDamping(
+                1,
+                m.body_mass[1:].copy(),
+                m.body_inertia[1:].copy(),
+                self.profile.linear_damping,
+                self.profile.angular_damping,
+                0,
+            )
+        self._clamp = self.profile.max_joint_velocity
+        self._clamp_watch = _CLAMP_WATCH * self._clamp if self._clamp is not None else math.inf
+        self._clamp_armed = False
+        self._torque = np.zeros(table.n)
+        self._motor_rows_valid = False
+        self._refresh_motors()
+        self._warnings = [d.warning[w].number for w in _BAD]
+        self._stale = True
+        self._motor_force_valid = False
+
+    def _refresh_motors(self) -> None:
+        """Push the motor table into the model (frictionloss, solref) after a command."""
+        t, m = self._motors, self._m
+        force = np.minimum(t.max_force, t.effort)
+        m.dof_frictionloss[t.dof] = force
+        m.dof_solref[t.dof, 0] = 0.0
+        m.dof_solref[t.dof, 1] = -t.kd * MOTOR_DMAX * self._inv_dt
+        before = t.active
+        t.refresh(self._dt, force)
+        self._split = len(t.kd_rows) > 0
+        if len(before) != len(t.active) or (before != t.active).any():
+            self._motor_rows_valid = False  # the last solve's rows belong to the old set
+
+    # ---------------------------------------------------------------- stepping
+
+    def step(self, n: int) -> None:
+        m, d = self._m, self._d
+        t = self._motors
+        damping = self._damping
+        step1, step2 = mujoco.mj_step1, mujoco.mj_step2
+        for _ in range(n):
+            step1(m, d)
+            if t.has_offset:  # friction rows come first (no equality constraints)
+                d.efc_aref[: t.n_rows] += t.aref_offset(d.qpos)
+            if damping is not None:
+                top = damping.apply(d)
+                self._clamp_armed = top > self._clamp_watch
+            if len(self._damp_dof):
+                d.qfrc_applied[self._damp_dof] = self._damp_coef * d.qvel[self._damp_dof]
+            if self._pending_torque:
+                d.qfrc_applied[t.dof] += self._torque
+            if self._split or self._clamp_armed:
+                self._step2_split(m, d)
+            else:
+                step2(m, d)
+            if self._pending_torque:
+                self._pending_torque = False
+                d.qfrc_applied[t.dof] = 0.0
+                self._torque[:] = 0.0
+            if self.gui and self._viewer is not None:
+                self._sync_viewer()
+        self._steps += n
+        self._stale = True
+        if n > 0:
+            self._motor_force_valid = self._motor_rows_valid = True
+        w = d.warning
+        for k, code in enumerate(_BAD):
+            if w[code].number != self._warnings[k]:
+                self._warnings = [w[c].number for c in _BAD]
+                what = ("positions", "velocities", "accelerations")[k]
+                raise SimulationDivergedError(self.name, self.time, f"joint {what} (qpos/qvel)")
+
+    def _step2_split(self, m: Any, d: Any) -> None:
+        """mj_step2 in pieces, to adjust what depends on the smooth acceleration."""
+        mujoco.mj_fwdActuation(m, d)
+        mujoco.mj_fwdAcceleration(m, d)
+        if self._clamp_armed and self._clamp is not None:
+            clamp_smooth(d, self._dt, self._clamp)
+        t = self._motors
+        if len(t.kd_rows):
+            d.efc_aref[t.kd_rows] += t.kd_factor * d.qacc_smooth[t.kd_dof]
+        mujoco.mj_fwdConstraint(m, d)
+        mujoco.mj_sensorAcc(m, d)
+        mujoco.mj_checkAcc(m, d)
+        mujoco.mj_Euler(m, d)
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self._close_viewer()
+        self._robots.clear()
+        self._m = self._d = None  # type: ignore[assignment]
+
+    # ---------------------------------------------------------------- viewer
+
+    def _open_viewer(self) -> None:
+        try:
+            import mujoco.viewer
+
+            self._viewer = mujoco.viewer.launch_passive(self._m, self._d)
+        except Exception as exc:  # noqa: BLE001 - any failure to open a window
+            self._viewer = None
+            raise DisplayError(self.name, f"mujoco.viewer.launch_passive failed: {exc}") from None
+
+    def _sync_viewer(self) -> None:
+        v = self._viewer
+        if v.is_running():
+            v.sync()
+
+    def _close_viewer(self) -> None:
+        if self._viewer is not None:
+            try:
+                self._viewer.close()
+            finally:
+                self._viewer = None
+
+    # ---------------------------------------------------------------- tables
+
+    def joint_info(self, body: int, joint: int) -> JointInfo:
+        return self._robots[body].table[joint]
+
+    def num_joints(self, body: int) -> int:
+        return len(self._robots[body].table)
+
+    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        robot = self._robots[body]
+        ine = robot.spec.inertials[link + 1]
+        lateral, rolling, spinning, restitution = build._contact_values(
+            robot.model.link(link), self.profile
+        )
+        return DynamicsInfo(
+            ine.mass,
+            lateral,
+            ine.diagonal,
+            ine.position,
+            ine.orientation,
+            restitution,
+            rolling,
+            spinning,
+        )
+
+    # ---------------------------------------------------------------- state
+
+    def _fresh(self) -> None:
+        if self._stale:
+            m, d = self._m, self._d
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_comVel(m, d)
+            self._stale = False
+
+    def _com_pose_velocity(self, bid: int) -> tuple[Vec3, Quat, Vec3, Vec3]:
+        d = self._d
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, d.ximat[bid])
+        vel = np.empty(6)
+        mujoco.mj_objectVelocity(self._m, d, mujoco.mjtObj.mjOBJ_BODY, bid, vel, 0)
+        pos = d.xipos[bid]
+        return (
+            (float(pos[0]), float(pos[1]), float(pos[2])),
+            (float(quat[1]), float(quat[2]), float(quat[3]), float(quat[0])),
+            (float(vel[3]), float(vel[4]), float(vel[5])),
+            (float(vel[0]), float(vel[1]), float(vel[2])),
+        )
+
+    def link_state(self, body: int, link: int) -> LinkState:
+        self._fresh()
+        robot = self._robots[body]
+        bid = int(robot.body_ids[link + 1])
+        d = self._d
+        self._check_finite(d.xipos[bid], body)
+        com_pos, com_orn, lin, ang = self._com_pose_velocity(bid)
+        ine = robot.spec.inertials[link + 1]
+        fp = d.xpos[bid]
+        fq = d.xquat[bid]
+        return LinkState(
+            com_pos,
+            com_orn,
+            ine.position,
+            ine.orientation,
+            (float(fp[0]), float(fp[1]), float(fp[2])),
+            (float(fq[1]), float(fq[2]), float(fq[3]), float(fq[0])),
+            lin,
+            ang,
+        )
+
+    def base_state(self, body: int) -> BaseState:
+        self._fresh()
+        bid = int(self._robots[body].body_ids[0])
+        self._check_finite(self._d.xipos[bid], body)
+        pos, orn, lin, ang = self._com_pose_velocity(bid)
+        return BaseState(pos, orn, lin, ang)
+
+    def _check_finite(self, values: np.ndarray, body: int) -> None:
+        if not np.isfinite(values).all():
+            raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
+
+    def _joint_cache(self, robot: _Robot, joints: np.ndarray) -> tuple[np.ndarray, ...]:
+        key = id(joints)
+        hit = robot.cache.get(key)
+        if hit is not None and hit[0] is joints:
+            return hit
+        movable = robot.qadr[joints] >= 0
+        qadr = robot.qadr[joints][movable]
+        dof = robot.dofadr[joints][movable]
+        pos_of = np.full(len(robot.table), -1, np.intp)
+        pos_of[robot.movable] = robot.motor_index
+        motor = pos_of[joints][movable]
+        entry = (joints, movable, qadr, dof, motor, bool(movable.all()))
+        robot.cache[key] = entry
+        return entry
+
+    def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        robot = self._robots[body]
+        _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
+        d = self._d
+        n = len(joints)
+        torque = np.zeros(n)
+        if self._motor_force_valid and self._motor_rows_valid:
+            rows = self._motors.row_of[motor]
+            on = rows >= 0
+            torque[np.flatnonzero(movable)[on]] = d.efc_force[rows[on]]
+        if all_movable:
+            return JointStates(d.qpos[qadr], d.qvel[dof], torque)
+        pos = np.zeros(n)
+        vel = np.zeros(n)
+        pos[movable] = d.qpos[qadr]
+        vel[movable] = d.qvel[dof]
+        return JointStates(pos, vel, torque)
+
+    def reset_joint_state(
+        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
+    ) -> None:
+        robot = self._robots[body]
+        _, _, qadr, dof, _, _ = self._joint_cache(robot, joints)
+        self._d.qpos[qadr] = positions
+        self._d.qvel[dof] = velocities
+        self._stale = True
+        self._motor_force_valid = False
+
+    def reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        robot = self._robots[body]
+        cur = self.base_state(body)
+        pos = cur.position if position is None else position
+        orn = cur.orientation if orientation is None else orientation
+        lin = cur.linear_velocity if linear_velocity is None else linear_velocity
+        ang = cur.angular_velocity if angular_velocity is None else angular_velocity
+        ine = robot.spec.inertials[0]
+        # link frame = COM frame * inverse(inertial frame)
+        fpos, forn = K.transform_multiply(
+            (pos, orn), K.transform_inverse((ine.position, ine.orientation))
+        )
+        d, m = self._d, self._m
+        if robot.free_qadr >= 0:
+            a = robot.free_qadr
+            d.qpos[a : a + 3] = fpos
+            d.qpos[a + 3 : a + 7] = K.xyzw_to_wxyz(forn)
+            # MuJoCo: linear velocity of the frame origin (world), angular in the body frame
+            com_offset = np.subtract(fpos, pos)
+            v_origin = np.asarray(lin) + np.cross(ang, com_offset)
+            w_local = K.quat_rotate(K.quat_conjugate(forn), ang)
+            v = robot.free_dofadr
+            d.qvel[v : v + 3] = v_origin
+            d.qvel[v + 3 : v + 6] = w_local
+        else:
+            bid = int(robot.body_ids[0])
+            m.body_pos[bid] = fpos
+            m.body_quat[bid] = K.xyzw_to_wxyz(forn)
+            robot.spec.root.pos = list(fpos)
+            robot.spec.root.quat = list(K.xyzw_to_wxyz(forn))
+        self._stale = True
+
+    # ---------------------------------------------------------------- control
+
+    def _motor_slots(self, body: int, joints: np.ndarray) -> np.ndarray:
+        return self._joint_cache(self._robots[body], joints)[4]
+
+    def set_joint_velocity(
+        self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
+    ) -> None:
+        idx = self._motor_slots(body, joints)
+        t = self._motors
+        t.target_velocity[idx] = target
+        t.max_force[idx] = max_force
+        t.kp[idx] = 0.0
+        t.kd[idx] = 1.0
+        self._refresh_motors()
+
+    def set_joint_position(
+        self,
+        body: int,
+        joints: np.ndarray,
+        target: list[float],
+        max_force: list[float],
+        kp: list[float],
+        kd: list[float],
+    ) -> None:
+        idx = self._motor_slots(body, joints)
+        t = self._motors
+        t.target_velocity[idx] = 0.0
+        t.target_position[idx] = target
+        t.max_force[idx] = max_force
+        t.kp[idx] = kp
+        t.kd[idx] = kd
+        self._refresh_motors()
+
+    def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
+        idx = self._motor_slots(body, joints)
+        t = self._motors
+        if self.profile.enforce_effort_limit:
+            self._torque[idx] = np.clip(torque, -t.effort[idx], t.effort[idx])
+        else:
+            self._torque[idx] = torque
+        self._pending_torque = True
+
+    # ---------------------------------------------------------------- description
+
+    def manifest(self) -> dict[str, Any]:
+        departures: dict[str, str] = {}
+        bounded = [r for r in self._robots.values() if r.spec.bounded_links]
+        for r in bounded:
+            departures[f"body {r.id} mass bound"] = build.mass_bound_note(r.spec)
+        return {
+            "backend": self.name,
+            "engine": "MuJoCo (generalized coordinates, soft convex contact, Newton solver)",
+            "engine_version": mujoco.__version__,
+            "native_defaults": self.NATIVE_DEFAULTS,
+            "departures": departures,
+        }

@@ -1,0 +1,366 @@
+"""URDF to MjSpec: one MuJoCo body per URDF link, built from the :class:`UrdfModel`.
+
+MuJoCo's own URDF importer welds the root to the world, merges fixed-joint links, drops
+visuals, reads neither .dae nor ``package://`` and turns ``<limit effort>`` into a force clamp,
+so the bodies, joints, geoms and inertias are added here one by one:
+
+* body ``<prefix><link name>`` per link, in PyBullet's order, its frame the URDF link frame;
+  a free joint on the root unless the base is fixed (``fixed_base`` or a root of mass 0);
+* hinge/slide joints at the body origin, axis normalised (MuJoCo requires it), range only for
+  revolute/prismatic joints with lower <= upper (PyBullet's rule); no damping, friction or
+  force range in the model: the backend applies them per step with PyBullet's laws;
+* explicit inertia from :func:`simbridge.kinematics.model_inertials` (PyBullet's numbers for
+  the profile), mass and inertia bounded below for moving bodies (MuJoCo refuses zero);
+* visual geoms (``contype = conaffinity = 0``, group 1) and collision geoms (group 3), also
+  ``contype = conaffinity = 0``: every contact comes from an explicit ``<pair>`` (see
+  :func:`add_pairs`), which carries PyBullet's product friction;
+* a huge static box (both horizontal sides >= 100 m, as pybullet_data's ``plane.urdf``,
+  200 x 200 x 10 m) becomes an infinite plane at its top face.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from simbridge import kinematics as K
+from simbridge.exceptions import UrdfStructureError
+from simbridge.profiles import Profile
+from simbridge.urdf import Geometry, Link, UrdfModel
+
+__all__ = ["RobotSpec", "GeomContact", "add_robot", "add_pairs", "new_world_spec"]
+
+VISUAL_GROUP = 1
+COLLISION_GROUP = 3
+PLANE_MIN_SIDE = 100.0  # m: a static box at least this wide in x and y is a ground plane
+MIN_MASS = 1e-6  # kg, for a moving body whose URDF mass is 0 (MuJoCo refuses zero)
+MIN_INERTIA = 1e-10  # kg m^2, likewise
+# Friction rows of the joint motors: as close to a hard constraint as MuJoCo allows, so the
+# motor reaches the velocity it asks for within a step (see mujoco_motors.py).
+MOTOR_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+DEFAULT_RGBA = (1.0, 1.0, 1.0, 1.0)
+
+
+@dataclass(frozen=True)
+class GeomContact:
+    """A collision geom and the contact values of its link (PyBullet's meaning)."""
+
+    name: str
+    link: int  # PyBullet link index, -1 = base
+    static: bool  # welded to the world
+    lateral: float
+    rolling: float
+    spinning: float
+    restitution: float
+    is_plane: bool = False
+
+
+@dataclass
+class RobotSpec:
+    """What :func:`add_robot` put into the spec, by name (ids change on every compile)."""
+
+    prefix: str
+    root: mujoco.MjsBody
+    body_names: list[str]  # index link + 1 (base first)
+    joint_names: list[str | None]  # per URDF joint; None for fixed joints
+    free_joint: str | None
+    geoms: list[GeomContact]
+    inertials: list[K.LinkInertial]
+    bounded_links: list[str] = field(default_factory=list)  # mass/inertia raised for MuJoCo
+    planes: list[str] = field(default_factory=list)
+    pair_names: list[str] = field(default_factory=list)
+
+
+def new_world_spec(profile: Profile) -> mujoco.MjSpec:
+    """An empty world with the profile's options."""
+    spec = mujoco.MjSpec()
+    spec.modelname = "simbridge"
+    spec.compiler.fusestatic = False
+    spec.compiler.discardvisual = False
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    spec.compiler.autolimits = False
+    spec.compiler.degree = False  # joint ranges in radians
+    opt = spec.option
+    opt.timestep = profile.timestep
+    opt.gravity = list(profile.gravity)
+    opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
+    opt.iterations = profile.solver_iterations
+    opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
+    spec.visual.global_.offwidth = 640
+    return spec
+
+
+def _wxyz(q: K.Quat) -> list[float]:
+    return [q[3], q[0], q[1], q[2]]
+
+
+def _contact_values(link: Link, profile: Profile) -> tuple[float, float, float, float]:
+    ct = link.contact
+    read = profile.read_urdf_contact
+
+    def pick(value: float | None, default: float) -> float:
+        return float(value) if read and value is not None else default
+
+    return (
+        pick(ct.lateral_friction, profile.lateral_friction),
+        pick(ct.rolling_friction, profile.rolling_friction),
+        pick(ct.spinning_friction, profile.spinning_friction),
+        pick(ct.restitution, profile.restitution),
+    )
+
+
+class MeshLibrary:
+    """Mesh assets of one world spec, one per (file, scale); .dae converted with trimesh."""
+
+    def __init__(self, spec: mujoco.MjSpec) -> None:
+        self.spec = spec
+        self.names: dict[tuple[str, tuple[float, ...]], str] = {}
+
+    def get(self, g: Geometry, file: str, where: str) -> str:
+        assert g.mesh_path is not None
+        key = (str(g.mesh_path), tuple(g.size))
+        name = self.names.get(key)
+        if name is not None:
+            return name
+        name = f"mesh{len(self.names)}"
+        mesh = self.spec.add_mesh(name=name)
+        mesh.scale = list(g.size)
+        mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL  # robust to flat meshes
+        suffix = g.mesh_path.suffix.lower()
+        verts = K.mesh_vertices(g.mesh_path)
+        if len(verts) and not np.isfinite(verts).all():
+            raise UrdfStructureError(file, where, f"mesh {g.mesh_uri!r} has non-finite vertices")
+        if suffix in (".obj", ".stl"):
+            mesh.file = str(g.mesh_path)
+        else:
+            verts, faces = _trimesh_arrays(g.mesh_path)
+            if len(verts) < 4 or len(faces) == 0:
+                raise UrdfStructureError(file, where, f"mesh {g.mesh_uri!r} has no triangles")
+            mesh.uservert = verts.astype(np.float32).ravel().tolist()
+            mesh.userface = faces.astype(np.int32).ravel().tolist()
+        self.names[key] = name
+        return name
+
+
+def _trimesh_arrays(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh  # ~1 s to import: only for formats MuJoCo cannot read (.dae)
+
+    loaded = trimesh.load(str(path), force="mesh", process=False)
+    return np.asarray(loaded.vertices, dtype=float), np.asarray(loaded.faces, dtype=np.int64)
+
+
+def _is_ground_box(g: Geometry) -> bool:
+    return (
+        g.kind == "box"
+        and g.size[0] >= PLANE_MIN_SIDE
+        and g.size[1] >= PLANE_MIN_SIDE
+        and not any(g.origin_rpy)
+    )
+
+
+def add_robot(
+    spec: mujoco.MjSpec,
+    meshes: MeshLibrary,
+    model: UrdfModel,
+    prefix: str,
+    base_position: K.Vec3,
+    base_orientation: K.Quat,
+    fixed_base: bool,
+    profile: Profile,
+) -> RobotSpec:
+    """Add ``model`` to ``spec`` as bodies named ``prefix + link name``."""
+    file = model.source.display_name
+    fixed = K.is_fixed_base(model, fixed_base)
+    inertials = K.model_inertials(model, fixed_base, profile.inertia_source)
+    body_names = [prefix + link.name for link in model.links]
+    bodies: list[mujoco.MjsBody] = []
+    static = [False] * len(model.links)
+    joint_names: list[str | None] = []
+    bounded: list[str] = []
+    geoms: list[GeomContact] = []
+    planes: list[str] = []
+    free_joint = None
+    # A base whose z axis is the world's keeps a huge box's top face horizontal.
+    base_z = K.quat_rotate(base_orientation, (0.0, 0.0, 1.0))
+    upright = base_z[2] > 1.0 - 1e-9
+
+    for link in model.links:
+        i = link.index
+        if i == -1:
+            body = spec.worldbody.add_body(name=body_names[0])
+            body.pos = list(base_position)
+            body.quat = _wxyz(base_orientation)
+            if not fixed:
+                free_joint = prefix + "$free"
+                body.add_freejoint(name=free_joint)
+            static[0] = fixed
+        else:
+            joint = model.joints[i]
+            parent = model.parent_index(joint)
+            body = bodies[parent + 1].add_body(name=body_names[i + 1])
+            body.pos = list(joint.origin_xyz)
+            body.quat = _wxyz(K.quat_from_rpy(joint.origin_rpy))
+            static[i + 1] = static[parent + 1] and joint.type == "fixed"
+            if joint.type == "fixed":
+                joint_names.append(None)
+            else:
+                axis = np.asarray(joint.axis, dtype=float)
+                name = prefix + joint.name
+                jnt = body.add_joint(name=name)
+                jnt.type = (
+                    mujoco.mjtJoint.mjJNT_SLIDE
+                    if joint.type == "prismatic"
+                    else mujoco.mjtJoint.mjJNT_HINGE
+                )
+                jnt.axis = (axis / np.linalg.norm(axis)).tolist()
+                jnt.frictionloss = 0.0
+                jnt.armature = 0.0
+                jnt.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE
+                jnt.solimp_friction = list(MOTOR_SOLIMP)
+                if joint.has_limit:
+                    jnt.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+                    jnt.range = [joint.lower, joint.upper]
+                    jnt.solref_limit = [2.0 * profile.timestep, 1.0]
+                else:
+                    jnt.limited = mujoco.mjtLimited.mjLIMITED_FALSE
+                joint_names.append(name)
+        bodies.append(body)
+
+        ine = inertials[i + 1]
+        mass, diag = ine.mass, list(ine.diagonal)
+        moving = not static[i + 1]
+        if moving and (mass < MIN_MASS or min(diag) < MIN_INERTIA):
+            bounded.append(link.name)
+            mass = max(mass, MIN_MASS)
+            diag = [max(v, MIN_INERTIA) for v in diag]
+        body.explicitinertial = True
+        body.mass = mass
+        body.inertia = diag
+        body.ipos = list(ine.position)
+        body.iquat = _wxyz(ine.orientation)
+
+        where = f"link {link.name!r}"
+        for k, g in enumerate(link.visuals):
+            vg = body.add_geom(name=f"{body_names[i + 1]}$v{k}")
+            _set_shape(vg, g, meshes, file, f"{where} <visual> #{k}")
+            vg.contype = vg.conaffinity = 0
+            vg.group = VISUAL_GROUP
+            vg.rgba = list(g.rgba or DEFAULT_RGBA)
+            vg.mass = 0.0
+        lateral, rolling, spinning, restitution = _contact_values(link, profile)
+        for k, g in enumerate(link.collisions):
+            name = f"{body_names[i + 1]}$c{k}"
+            cg = body.add_geom(name=name)
+            is_plane = static[i + 1] and upright and _is_ground_box(g)
+            if is_plane:
+                cg.type = mujoco.mjtGeom.mjGEOM_PLANE
+                cg.size = [0.5 * g.size[0], 0.5 * g.size[1], 1.0]
+                cg.pos = [g.origin_xyz[0], g.origin_xyz[1], g.origin_xyz[2] + 0.5 * g.size[2]]
+                planes.append(name)
+            else:
+                _set_shape(cg, g, meshes, file, f"{where} <collision> #{k}")
+            cg.contype = cg.conaffinity = 0
+            cg.group = COLLISION_GROUP
+            cg.rgba = [0.5, 0.5, 0.5, 0.5]
+            cg.mass = 0.0
+            geoms.append(
+                GeomContact(
+                    name, i, static[i + 1], lateral, rolling, spinning, restitution, is_plane
+                )
+            )
+    return RobotSpec(
+        prefix, bodies[0], body_names, joint_names, free_joint, geoms, inertials, bounded, planes
+    )
+
+
+def _set_shape(geom: mujoco.MjsGeom, g: Geometry, meshes: MeshLibrary, file: str, where: str):
+    geom.pos = list(g.origin_xyz)
+    geom.quat = _wxyz(K.quat_from_rpy(g.origin_rpy))
+    if g.kind == "box":
+        geom.type = mujoco.mjtGeom.mjGEOM_BOX
+        geom.size = [0.5 * v for v in g.size]
+    elif g.kind == "sphere":
+        geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        geom.size = [g.size[0], 0.0, 0.0]
+    elif g.kind == "cylinder":
+        geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+        geom.size = [g.size[0], 0.5 * g.size[1], 0.0]
+    elif g.kind == "capsule":
+        geom.type = mujoco.mjtGeom.mjGEOM_CAPSULE
+        geom.size = [g.size[0], 0.5 * g.size[1], 0.0]
+    else:
+        geom.type = mujoco.mjtGeom.mjGEOM_MESH
+        geom.meshname = meshes.get(g, file, where)
+    if g.kind != "mesh" and min(geom.size[: {"box": 3, "sphere": 1}.get(g.kind, 2)]) <= 0:
+        raise UrdfStructureError(file, where, f"{g.kind} size must be > 0, got {g.size}")
+
+
+def pair_friction(a: GeomContact, b: GeomContact) -> tuple[list[float], int]:
+    """Bullet's combination rules: sliding = product; rolling and spinning
+    ``x_a mu_b + x_b mu_a`` clamped to 10. Returns MuJoCo's 5 friction values and condim."""
+    mu = a.lateral * b.lateral
+    roll = min(10.0, a.rolling * b.lateral + b.rolling * a.lateral)
+    spin = min(10.0, a.spinning * b.lateral + b.spinning * a.lateral)
+    condim = 6 if roll > 0 else (4 if spin > 0 else 3)
+    return [mu, mu, spin, roll, roll], condim
+
+
+def add_pairs(
+    spec: mujoco.MjSpec,
+    new: RobotSpec,
+    others: list[RobotSpec],
+    profile: Profile,
+    margin: float,
+    self_collision_skip: set[tuple[int, int]] | None,
+) -> None:
+    """Explicit contact pairs between ``new`` and every robot in ``others`` (and inside
+    ``new`` when ``self_collision_skip`` is given: the link pairs it holds are left out)."""
+    solref = [2.0 * profile.timestep, 1.0]
+
+    def add(a: GeomContact, b: GeomContact) -> None:
+        if a.static and b.static:
+            return
+        friction, condim = pair_friction(a, b)
+        name = f"{a.name}|{b.name}"
+        pair = spec.add_pair(name=name, geomname1=a.name, geomname2=b.name)
+        pair.friction = friction
+        pair.condim = condim
+        pair.solref = solref
+        pair.margin = margin
+        new.pair_names.append(name)
+
+    for other in others:
+        for a in new.geoms:
+            for b in other.geoms:
+                if a.is_plane and b.is_plane:
+                    continue
+                # MuJoCo's plane collisions need the plane first
+                add(b, a) if a.is_plane is False and b.is_plane else add(a, b)
+    if self_collision_skip is not None:
+        for k, a in enumerate(new.geoms):
+            for b in new.geoms[k + 1 :]:
+                if a.link == b.link or (min(a.link, b.link), max(a.link, b.link)) in (
+                    self_collision_skip
+                ):
+                    continue
+                add(a, b)
+
+
+def adjacent_links(model: UrdfModel) -> set[tuple[int, int]]:
+    """Parent-child link pairs (PyBullet never collides them, even with self-collision)."""
+    out = set()
+    for joint in model.joints:
+        parent = model.parent_index(joint)
+        out.add((min(parent, joint.index), max(parent, joint.index)))
+    return out
+
+
+def mass_bound_note(robot: RobotSpec) -> str:
+    return (
+        f"links {robot.bounded_links} move but have zero mass or inertia: raised to "
+        f"{MIN_MASS} kg / {MIN_INERTIA} kg m^2 (MuJoCo refuses zero)"
+    )

@@ -1,0 +1,93 @@
+"""PyBullet's joint motors as MuJoCo friction-loss rows, solved with everything else.
+
+PyBullet's VELOCITY_CONTROL and POSITION_CONTROL (and its default brake) are one constraint row
+per joint, solved together with contacts and limits: it asks for the joint velocity
+
+    v_new = v_free + kd (v* - v_free) + kp (q* - q) / dt,      |impulse| <= max_force dt
+
+(``btMultiBodyJointMotor::createConstraintRows``; v_free is the velocity after the smooth
+forces, q the position at the start of the step). MuJoCo's ``frictionloss`` row of a dof is a
+box-limited velocity row of the same shape: its force is clamped to ``dof_frictionloss`` and its
+reference acceleration is ``aref = -B v``. So each motor is that row with
+
+* ``dof_frictionloss = max_force`` (0 removes the row: a released joint);
+* ``dof_solref = (0, -kd dmax / dt)`` ("direct" format), which makes ``B = kd / dt``, i.e. MuJoCo
+  itself asks for ``-kd v / dt``, and ``dof_solimp = 0.9999``, which makes the row as hard as
+  MuJoCo allows (its regulariser is 1e-4 of the row's inverse inertia);
+* an offset added to ``efc_aref`` between ``mj_step1`` and ``mj_step2``:
+  ``(kd v* + kp (q* - q) / dt) / dt``, plus ``(1 - kd) a_smooth`` when kd != 1, which needs
+  ``qacc_smooth`` first (the split path below).
+
+The offset is the only per-step Python work of a velocity motor, and it is skipped when every
+target is 0 (the brake). Coupled motors on one body are solved exactly like PyBullet's rows: in
+one solve with the body's mass matrix (see docs/mujoco_backend.md for the measurements).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["MotorTable", "MOTOR_DMAX"]
+
+MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2])
+
+
+class MotorTable:
+    """Motor settings of every movable joint of the world, in dof order (the order of MuJoCo's
+    friction rows). Arrays are float64 of shape (n,)."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.dof = np.zeros(n, dtype=np.intp)
+        self.qadr = np.zeros(n, dtype=np.intp)
+        self.target_velocity = np.zeros(n)
+        self.target_position = np.zeros(n)
+        self.kp = np.zeros(n)
+        self.kd = np.ones(n)
+        self.max_force = np.zeros(n)
+        self.effort = np.full(n, np.inf)  # clamp on max_force when the profile enforces it
+        # derived, refreshed by refresh()
+        self.active = np.zeros(0, dtype=np.intp)  # motors with max_force > 0, in row order
+        self.row_of = np.full(n, -1, dtype=np.intp)
+        self.all_active = False
+        self.offset_rows = np.zeros(0)  # constant part of the aref offset, per active row
+        self.has_offset = False
+        self.position_rows = np.zeros(0, dtype=np.intp)  # rows (into active) in position mode
+        self.position_qadr = np.zeros(0, dtype=np.intp)
+        self.position_gain = np.zeros(0)  # kp / dt^2 per position row
+        self.position_target = np.zeros(0)
+        self.kd_rows = np.zeros(0, dtype=np.intp)  # rows with kd != 1 (need qacc_smooth)
+        self.kd_dof = np.zeros(0, dtype=np.intp)
+        self.kd_factor = np.zeros(0)  # 1 - kd
+        self.n_rows = 0
+
+    def refresh(self, dt: float, force: np.ndarray) -> None:
+        """Recompute the per-row arrays after a command; ``force`` is the force limit in use
+        (max_force, clamped to the effort limit when the profile enforces it)."""
+        active = np.flatnonzero(force > 0.0)
+        self.active = active
+        self.row_of = np.full(self.n, -1, np.intp)  # friction row of each motor, -1 = none
+        self.row_of[active] = np.arange(len(active))
+        self.n_rows = len(active)
+        self.all_active = self.n_rows == self.n
+        kd = self.kd[active]
+        self.offset_rows = kd * self.target_velocity[active] / dt
+        pos = np.flatnonzero(self.kp[active] != 0.0)
+        self.position_rows = pos
+        self.position_qadr = self.qadr[active[pos]]
+        self.position_gain = self.kp[active[pos]] / (dt * dt)
+        self.position_target = self.target_position[active[pos]]
+        self.offset_rows[pos] += self.position_gain * self.position_target
+        self.has_offset = bool(np.any(self.offset_rows != 0.0)) or len(pos) > 0
+        kdr = np.flatnonzero(kd != 1.0)
+        self.kd_rows = kdr
+        self.kd_dof = self.dof[active[kdr]]
+        self.kd_factor = 1.0 - kd[kdr]
+
+    def aref_offset(self, qpos: np.ndarray) -> np.ndarray:
+        """The per-row offset of this step (without the kd != 1 term)."""
+        if len(self.position_rows) == 0:
+            return self.offset_rows
+        out = self.offset_rows.copy()
+        out[self.position_rows] -= self.position_gain * qpos[self.position_qadr]
+        return out
