@@ -4,7 +4,8 @@ Quantities, computed on the subject robot at every common instant:
 
 ==================== ====== ===============================================================
 ``base_distance``    m      distance between the two base link-frame positions
-``link_distance``    m      the largest distance between the same link's positions (base incl.)
+``link_distance``    m      the largest distance between the same link's centres of mass (base
+                            included)
 ``heading``          rad    |yaw_a - yaw_b| wrapped to [0, pi] (yaw of the base about world z)
 ``orientation``      rad    angle of the rotation taking one base orientation to the other
 ``joint_position_rms`` rad  RMS over movable joints of q_a - q_b (rad or m; unwrapped angles)
@@ -52,7 +53,7 @@ QUANTITIES: dict[str, Quantity] = {
     q.key: q
     for q in (
         Quantity("base_distance", "base position distance", "m", (0.01, 0.1, 1.0)),
-        Quantity("link_distance", "largest link position distance", "m", (0.01, 0.1, 1.0)),
+        Quantity("link_distance", "largest link distance", "m", (0.01, 0.1, 1.0)),
         Quantity("heading", "heading (yaw) difference", "rad", (1 * DEG, 10 * DEG)),
         Quantity("orientation", "base orientation angle", "rad", (1 * DEG, 10 * DEG)),
         Quantity("joint_position_rms", "joint position RMS", "rad", (1 * DEG, 10 * DEG)),

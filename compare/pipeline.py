@@ -12,7 +12,7 @@ from typing import Any
 
 from simbridge.exceptions import InvalidArgumentError, ScenarioError
 
-from .diff import Divergence, diff
+from .diff import QUANTITIES, Divergence, diff
 from .run import Trajectory, run
 from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
 
@@ -58,7 +58,10 @@ class Comparison:
 
     @property
     def headline_quantity(self) -> str:
-        """``base_distance`` for a free-moving subject, ``link_distance`` for a fixed base."""
+        """The scenario's ``headline``, else ``base_distance`` for a free-moving subject and
+        ``link_distance`` for a fixed base."""
+        if self.scenario.headline:
+            return self.scenario.headline
         fixed = self.scenario.robot(self.scenario.subject).fixed_base
         return "link_distance" if fixed else "base_distance"
 
@@ -114,11 +117,15 @@ class Comparison:
             "duration": float(cross.time[-1]),
             "headline_quantity": q,
             "headline": {
-                "final_distance": gap,
-                "max_distance": cross.maximum[q],
-                "part_1cm": cross.first_crossing(q, 0.01),
-                "part_10cm": cross.first_crossing(q, 0.1),
-                "part_1m": cross.first_crossing(q, 1.0),
+                "quantity": q,
+                "title": QUANTITIES[q].title,
+                "unit": QUANTITIES[q].unit,
+                "final": gap,
+                "max": cross.maximum[q],
+                "crossings": [
+                    {"threshold": thr, "time": cross.first_crossing(q, thr)}
+                    for thr in QUANTITIES[q].thresholds
+                ],
                 "first_to_diverge": (
                     None
                     if first is None

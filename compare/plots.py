@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .diff import DEG, QUANTITIES, yaw
+from .fmt import fmt_threshold
 from .scenario import format_timestep
 
 if TYPE_CHECKING:
@@ -85,8 +86,9 @@ def paths(c: Comparison, path: Path) -> Path:
 
 
 def distance(c: Comparison, path: Path) -> Path:
-    """The headline distance over time, log scale, with the 1 cm / 10 cm / 1 m thresholds and
-    each engine's own time-step error (the same quantity, dt against dt/2)."""
+    """The headline quantity (a distance, unless the scenario names another) over time, log
+    scale, with its thresholds (1 cm / 10 cm / 1 m) and each engine's own time-step error (the
+    same quantity, dt against dt/2)."""
     plt = _plt()
     q = c.headline_quantity
     dt = c.timestep
@@ -113,7 +115,7 @@ def distance(c: Comparison, path: Path) -> Path:
     for thr in QUANTITIES[q].thresholds:
         ax.axhline(thr, color="tab:red", lw=0.7, alpha=0.6)
         ax.annotate(
-            _metres(thr),
+            fmt_threshold(thr, QUANTITIES[q].unit),
             (d.time[-1], thr),
             xytext=(-2, 2),
             textcoords="offset points",
@@ -122,11 +124,11 @@ def distance(c: Comparison, path: Path) -> Path:
             color="tab:red",
         )
     highest = max(float(np.max(x.series[q])) for x in [d] + [c.own[(k, dt)] for k in (0, 1)])
-    top = max(1.5, highest * 2)
+    top = max(QUANTITIES[q].thresholds[-1] * 1.5, highest * 2)
     ax.set_ylim(1e-7, top)
     _phase_lines(ax, c)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel(f"{QUANTITIES[q].title} (m)")
+    ax.set_ylabel(f"{QUANTITIES[q].title} ({QUANTITIES[q].unit})")
     ax.set_title(f"{c.scenario.name}: how far apart, at dt = {format_timestep(dt)} s")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, loc="lower center")
@@ -213,7 +215,7 @@ def sweep(c: Comparison, path: Path) -> Path | None:
                 format_timestep(t), (s, e), xytext=(4, 4), textcoords="offset points", fontsize=8
             )
     ax.set_xlabel("wall time per simulated second (s)")
-    ax.set_ylabel("own error: final distance, dt vs dt/2 (m)")
+    ax.set_ylabel(f"own error: final {QUANTITIES[q].title}, dt vs dt/2 ({QUANTITIES[q].unit})")
     ax.set_title("speed against self-consistency")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
@@ -222,7 +224,7 @@ def sweep(c: Comparison, path: Path) -> Path | None:
     ax2.loglog(c.timesteps, gap, "o-", color="k", label="final")
     ax2.loglog(c.timesteps, gmax, "s--", color="0.5", label="largest")
     ax2.set_xlabel("time step (s)")
-    ax2.set_ylabel(f"{c.labels[0]} vs {c.labels[1]} (m)")
+    ax2.set_ylabel(f"{c.labels[0]} vs {c.labels[1]} ({QUANTITIES[q].unit})")
     ax2.set_title("cross-engine gap against the time step")
     ax2.grid(alpha=0.3, which="both")
     ax2.legend(fontsize=8)
@@ -239,7 +241,3 @@ def all_plots(c: Comparison, out: Path) -> dict[str, Path]:
         "sweep": sweep(c, out / "sweep.png"),
     }
     return {k: v for k, v in made.items() if v is not None}
-
-
-def _metres(x: float) -> str:
-    return f"{x * 100:g} cm" if x < 1 else f"{x:g} m"

@@ -9,98 +9,64 @@ engine changes by itself when its time step is halved.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
 from .diff import DEG, QUANTITIES
+from .fmt import fmt_distance, fmt_threshold, fmt_time, fmt_value
 from .pipeline import Comparison
 from .scenario import format_timestep
 
 __all__ = ["report", "headline", "fmt_distance", "fmt_time", "fmt_value"]
 
 
-# ---------------------------------------------------------------- numbers in words
+NOISE_FLOOR = {"m": 1e-6, "rad": 1e-6, "rad/s": 1e-6}
+"""Below these, a difference is floating-point noise: 1 µm, 1 µrad, 1 µrad/s."""
 
 
-def fmt_distance(x: float | None) -> str:
-    """Metres for people: ``3.27 m``, ``4.2 cm``, ``0.83 mm``, ``2.1e-06 m``."""
-    if x is None:
-        return "n/a"
-    if not math.isfinite(x):
-        return str(x)
-    a = abs(x)
-    if a >= 1:
-        return f"{x:.2f} m"
-    if a >= 0.01:
-        return f"{x * 100:.1f} cm"
-    if a >= 1e-4:
-        return f"{x * 1000:.2f} mm"
-    if a == 0:
-        return "0 m"
-    return f"{x:.1e} m"
-
-
-def fmt_time(t: float | None) -> str:
-    return "never" if t is None else f"{t:.3f} s"
-
-
-def fmt_value(x: float, unit: str) -> str:
-    """A quantity in its report unit: distances as :func:`fmt_distance`, angles in degrees."""
-    if unit == "m":
-        return fmt_distance(x)
-    if unit == "rad":
-        return f"{x / DEG:.3g}°" if abs(x) < 2 * math.pi else f"{x:.3g} rad"
-    return f"{x:.3g} {unit}"
-
-
-def fmt_threshold(x: float, unit: str) -> str:
-    if unit == "m":
-        return f"{x * 100:g} cm" if x < 1 else f"{x:g} m"
-    if unit == "rad":
-        return f"{x / DEG:g}°"
-    return f"{x:g} {unit}"
-
-
-def _ratio_words(ratio: float | None, gap: float) -> str:
-    if ratio is None:
-        return "and both are zero" if gap == 0 else "the engine's own error being zero"
-    return f"{ratio:.3g} times that"
-
-
-# ---------------------------------------------------------------- headline
+def _ratio_words(ratio: float | None) -> str:
+    return "" if ratio is None else f" (the gap is {ratio:.3g} times that)"
 
 
 def headline(summary: dict[str, Any]) -> list[str]:
     """The report's opening sentences, from ``summary.json``'s figures alone."""
     h = summary["headline"]
     a, b = summary["labels"]
-    q = summary["headline_quantity"]
-    what = (
-        f"{summary['subject']}'s base position"
-        if q == "base_distance"
-        else f"{summary['subject']}'s links (the farthest pair)"
-    )
-    dur = summary["duration"]
-    lines = [
-        f"**{a} and {b} end {fmt_distance(h['final_distance'])} apart** ({what}, after "
-        f"{dur:.3g} s of simulated time at dt = {summary['timestep_text']} s; the largest gap "
-        f"on the way was {fmt_distance(h['max_distance'])})."
-    ]
-    if h["part_1cm"] is None:
-        lines.append(
-            f"They never come 1 cm apart: the engines agree on this scenario to "
-            f"{fmt_distance(h['max_distance'])}."
-        )
-    elif h["part_10cm"] is None:
-        lines.append(
-            f"They part at t = {fmt_time(h['part_1cm'])} (first 1 cm apart) and never reach 10 cm."
+    unit = h["unit"]
+    subject = summary["subject"]
+    if h["quantity"] == "base_distance":
+        apart = f"{fmt_value(h['final'], unit)} apart** ({subject}'s base position"
+    elif h["quantity"] == "link_distance":
+        apart = (
+            f"{fmt_value(h['final'], unit)} apart** ({subject}'s links' centres of mass, the "
+            "farthest pair"
         )
     else:
+        apart = f"{fmt_value(h['final'], unit)} apart** (the {h['title']} of {subject}"
+    lines = [
+        f"**{a} and {b} end {apart}, after {summary['duration']:.3g} s of simulated time at "
+        f"dt = {summary['timestep_text']} s; the largest gap on the way was "
+        f"{fmt_value(h['max'], unit)})."
+    ]
+    crossings = [(c["threshold"], c["time"]) for c in h["crossings"]]
+    (t1, c1), (t2, c2) = crossings[0], crossings[1]
+    if c1 is None:
         lines.append(
-            f"They part at t = {fmt_time(h['part_1cm'])} (first 1 cm apart) and are 10 cm apart "
-            f"from t = {fmt_time(h['part_10cm'])}"
-            + (f", 1 m from t = {fmt_time(h['part_1m'])}." if h["part_1m"] is not None else ".")
+            f"They never come {fmt_threshold(t1, unit)} apart: the engines agree on this "
+            f"scenario to {fmt_value(h['max'], unit)}."
+        )
+    elif c2 is None:
+        lines.append(
+            f"They part at t = {fmt_time(c1)} (first {fmt_threshold(t1, unit)} apart) and never "
+            f"reach {fmt_threshold(t2, unit)}."
+        )
+    else:
+        more = ""
+        if len(crossings) > 2 and crossings[2][1] is not None:
+            more = f", {fmt_threshold(crossings[2][0], unit)} from t = {fmt_time(crossings[2][1])}"
+        lines.append(
+            f"They part at t = {fmt_time(c1)} (first {fmt_threshold(t1, unit)} apart) and are "
+            f"{fmt_threshold(t2, unit)} apart from t = {fmt_time(c2)}{more}."
         )
     first = h["first_to_diverge"]
     if first is None:
@@ -112,14 +78,19 @@ def headline(summary: dict[str, Any]) -> list[str]:
             f"{fmt_threshold(first['threshold'], qq.unit)} at t = {fmt_time(first['time'])}."
         )
     own = h["own_error"]
-    parts = []
-    for label, e in own.items():
-        parts.append(
-            f"halving the time step moves {label}'s end by {fmt_distance(e['final'])} "
-            f"(the gap is {_ratio_words(e['gap_ratio'], h['final_distance'])})"
-        )
+    parts = [
+        f"halving the time step moves {label}'s end by {fmt_value(e['final'], unit)}"
+        + _ratio_words(e["gap_ratio"])
+        for label, e in own.items()
+    ]
     exceeds = [e["gap_exceeds"] for e in own.values()]
-    if all(exceeds):
+    if h["max"] < NOISE_FLOOR[unit]:
+        verdict = (
+            "The engines agree to floating-point noise (under "
+            f"{fmt_value(NOISE_FLOOR[unit], unit)} all along), so there is no gap to weigh "
+            "against their own time-step errors"
+        )
+    elif all(exceeds):
         verdict = "The gap between the engines is larger than each engine's own time-step error"
     elif not any(exceeds):
         verdict = (
@@ -127,10 +98,10 @@ def headline(summary: dict[str, Any]) -> list[str]:
             "error, so at this time step it does not tell the engines apart"
         )
     else:
-        bigger = [label for label, e in own.items() if not e["gap_exceeds"]]
+        within = [label for label, e in own.items() if not e["gap_exceeds"]]
         verdict = (
             "The gap between the engines is larger than one engine's own time-step error but "
-            f"not {' and '.join(bigger)}'s"
+            f"not {' and '.join(within)}'s"
         )
     lines.append(verdict + ": " + "; ".join(parts) + ".")
     return lines
@@ -248,6 +219,7 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
     lines += [""]
     # -- own error
     q = s["headline_quantity"]
+    unit = QUANTITIES[q].unit
     lines += [
         "## Each engine against itself at half the time step",
         "",
@@ -261,8 +233,8 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         rows.append(
             [
                 label,
-                fmt_distance(e["final"]),
-                fmt_distance(e["max"]),
+                fmt_value(e["final"], unit),
+                fmt_value(e["max"], unit),
                 "n/a" if e["gap_ratio"] is None else f"{e['gap_ratio']:.3g}",
                 "yes" if e["gap_exceeds"] else "**no**",
             ]
@@ -270,8 +242,8 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
     rows.append(
         [
             f"{a} vs {b}",
-            fmt_distance(s["headline"]["final_distance"]),
-            fmt_distance(s["headline"]["max_distance"]),
+            fmt_value(s["headline"]["final"], unit),
+            fmt_value(s["headline"]["max"], unit),
             "",
             "",
         ]
@@ -295,9 +267,9 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
                 e = r["engines"][label]
                 cells += [
                     f"{e['wall_per_sim_second'] * 1000:.1f} ms",
-                    fmt_distance(e["own_error_final"]),
+                    fmt_value(e["own_error_final"], unit),
                 ]
-            cells += [fmt_distance(r["gap_final"]), fmt_distance(r["gap_max"])]
+            cells += [fmt_value(r["gap_final"], unit), fmt_value(r["gap_max"], unit)]
             rows.append(cells)
         lines += _table(header, rows)
         lines += [

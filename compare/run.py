@@ -66,7 +66,9 @@ class BodyTrajectory:
     joint_forces: np.ndarray  # (T, J) N·m or N, the motor force of the step that ended there
     joint_targets: np.ndarray  # (T, J) the command's target held during that step; NaN = none
     joint_modes: np.ndarray  # (T, J) int: 0 none, 1 velocity, 2 position, 3 torque
-    link_positions: np.ndarray  # (T, L, 3) m, world position of every link frame (base first)
+    link_positions: np.ndarray
+    """(T, L, 3) m: world position of every link's centre of mass, base first (PyBullet's
+    ``linkWorldPosition``, ``Sim.link_state(...).com_position``)."""
 
 
 @dataclass
@@ -397,9 +399,9 @@ class _Recorder:
         out[3:7] = base.link_frame_orientation
         out[7:10] = base.linear_velocity
         out[10:13] = base.angular_velocity
-        self.links_xyz[row, 0] = base.link_frame_position
+        self.links_xyz[row, 0] = base.com_position
         for k in range(1, len(self.links)):
-            self.links_xyz[row, k] = sim.link_state(body, self.links[k]).link_frame_position
+            self.links_xyz[row, k] = sim.link_state(body, self.links[k]).com_position
         if len(self.joint_indices):
             js = sim.joint_states(body, self.joint_indices)
             self.q[row] = js.positions

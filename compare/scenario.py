@@ -8,6 +8,8 @@ A scenario is a TOML file (read with the standard library's ``tomllib``)::
     timestep = "1/240"            # seconds: a number, or a fraction written as a string
     gravity = [0, 0, -9.8]        # m/s^2 (default)
     subject = "r2d2"              # the robot the report follows (default: the last robot)
+    headline = "base_distance"    # the report's headline quantity (default: base_distance for a
+                                  # free base, link_distance for a fixed one)
 
     [[robots]]
     name = "r2d2"                 # label used by commands and in the report
@@ -59,6 +61,7 @@ __all__ = [
     "Scenario",
     "SCENARIOS_DIR",
     "MODES",
+    "HEADLINE_QUANTITIES",
     "list_scenarios",
     "load_scenario",
     "loads_scenario",
@@ -69,6 +72,15 @@ __all__ = [
 
 SCENARIOS_DIR = Path(__file__).resolve().parent / "scenarios"
 MODES = ("velocity", "position", "torque")
+HEADLINE_QUANTITIES = (
+    "base_distance",
+    "link_distance",
+    "heading",
+    "orientation",
+    "joint_position_rms",
+    "joint_velocity_rms",
+)
+"""The quantities of :data:`simbridge.compare.QUANTITIES` a scenario may name as its headline."""
 
 JointRef = int | str
 
@@ -118,6 +130,9 @@ class Scenario:
     description: str = ""
     subject: str = ""
     """Name of the robot the report follows (set to the last robot when the file leaves it out)."""
+    headline: str = ""
+    """The report's headline quantity; "" = ``base_distance`` for a free base, else
+    ``link_distance``."""
     source: Path | None = field(default=None, compare=False)
     """The file this scenario was read from (URDF paths are relative to its folder)."""
 
@@ -436,6 +451,7 @@ class _Reader:
                 "timestep",
                 "gravity",
                 "subject",
+                "headline",
                 "robots",
                 "phases",
             ),
@@ -462,6 +478,11 @@ class _Reader:
         subject = self.string(data.get("subject", robots[-1].name), ["subject"])
         if subject not in by_name:
             raise self.error(["subject"], f"no robot {subject!r}; robots: {sorted(by_name)}")
+        headline = data.get("headline", "")
+        if headline != "" and headline not in HEADLINE_QUANTITIES:
+            raise self.error(
+                ["headline"], f"expected one of {', '.join(HEADLINE_QUANTITIES)}, got {headline!r}"
+            )
         raw_phases = self.require(data, [], "phases")
         if not isinstance(raw_phases, list) or not raw_phases:
             raise self.error(["phases"], "expected at least one [[phases]] table")
@@ -492,6 +513,7 @@ class _Reader:
             profile=profile,
             description=description,
             subject=subject,
+            headline=headline,
             source=source,
         )
 
@@ -590,6 +612,8 @@ def _lines(s: Scenario) -> Iterator[str]:
     yield f"timestep = {_toml_value(dt if '/' in dt else s.timestep)}"
     yield f"gravity = {_toml_value(s.gravity)}"
     yield f"subject = {_toml_value(s.subject)}"
+    if s.headline:
+        yield f"headline = {_toml_value(s.headline)}"
     for r in s.robots:
         yield ""
         yield "[[robots]]"
