@@ -98,6 +98,23 @@ REFUSED: dict[str, tuple[type[Exception], str, str]] = {
     ),
 }
 
+# Files one backend cannot load although simbridge's parser accepts them (an engine limit): backend
+# -> file -> (exception, message, reason). Such a file must fail exactly so on that backend (the
+# test checks it, so the entry cannot go stale) and load everywhere else. Empty so far.
+BACKEND_REFUSED: dict[str, dict[str, tuple[type[Exception], str, str]]] = {}
+
+
+def _load_or_documented_refusal(sim, name: str) -> bool:
+    """True when ``name`` is a documented refusal of this backend (and it did fail as written)."""
+    entry = BACKEND_REFUSED.get(sim.backend, {}).get(name)
+    if entry is None:
+        return False
+    error, message, _reason = entry
+    with pytest.raises(error, match=message):
+        sim.load_urdf(DATA / name)
+    return True
+
+
 ALL_DATA = sorted(
     os.path.relpath(f, DATA) for f in glob.glob(str(DATA / "**" / "*.urdf"), recursive=True)
 )
@@ -231,13 +248,17 @@ def test_r2d2_table_facts_from_the_tutorial(make_sim):
 
 @pytest.mark.parametrize("name", FAST_DATA)
 def test_pybullet_data_joint_table(make_sim, name):
-    check_joint_table(make_sim(), str(DATA / name))
+    sim = make_sim()
+    if not _load_or_documented_refusal(sim, name):
+        check_joint_table(sim, str(DATA / name))
 
 
 @pytest.mark.parametrize("name", FAST_DATA[:: max(1, len(FAST_DATA) // 12)])
 def test_pybullet_data_joint_table_file_inertia(make_sim, name):
     """A spread of the same files under the "urdf" profile (file inertia, principal frames)."""
-    check_joint_table(make_sim(profile="urdf"), str(DATA / name))
+    sim = make_sim(profile="urdf")
+    if not _load_or_documented_refusal(sim, name):
+        check_joint_table(sim, str(DATA / name))
 
 
 @pytest.mark.exhaustive
@@ -248,8 +269,9 @@ def test_pybullet_data_random_urdfs_joint_table(make_sim, chunk):
     failures = []
     for name in RANDOM_CHUNKS[chunk]:
         try:
-            check_joint_table(sim, str(DATA / name))
-        except AssertionError as e:  # collect all, report all
+            if not _load_or_documented_refusal(sim, name):
+                check_joint_table(sim, str(DATA / name))
+        except (AssertionError, simbridge.SimbridgeError) as e:  # collect all, report all
             failures.append(f"{name}: {str(e)[:300]}")
         sim.reset()
     assert not failures, "\n".join(failures)
