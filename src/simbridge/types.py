@@ -44,9 +44,9 @@ class JointInfo(NamedTuple):
     type: JointType
     q_index: int
     """Index of this joint's first position in the body's state vector (-1 for fixed joints).
-    PyBullet's layout: 7 base coordinates when the base is free, 0 when fixed."""
+    PyBullet's layout: the 7 base coordinates come first, with a fixed base too."""
     u_index: int
-    """Index of this joint's first velocity (6 base velocities when the base is free)."""
+    """Index of this joint's first velocity (after the 6 base velocities, -1 for fixed)."""
     flags: int
     damping: float
     """URDF ``<dynamics damping>`` (N·m·s/rad or N·s/m)."""
@@ -68,7 +68,8 @@ class JointInfo(NamedTuple):
     parent_frame_position: Vec3
     """Joint frame position in the parent's inertial (centre-of-mass) frame."""
     parent_frame_orientation: Quat
-    """Joint frame orientation in the parent's inertial frame, (x, y, z, w)."""
+    """PyBullet's value: the rotation from the parent's inertial frame into the child's
+    inertial frame at zero joint position, (x, y, z, w) (Rc^T·Rj^T·Rp, measured on 3.2.7)."""
     parent_index: int
     """Index of the parent link, -1 for the base."""
 
