@@ -45,8 +45,8 @@ from simbridge.types import (
 from simbridge.urdf import UrdfModel
 
 from . import mujoco_build as build
-from .mujoco_damping import LinkDamping, clamp_smooth
-from .mujoco_motors import MOTOR_DMAX, MotorTable
+from .mujoco_damping import LinkDamping, clamp_acceleration
+from .mujoco_motors import MOTOR_DMAX, MOTOR_R_SCALE, MotorTable
 
 __all__ = ["MujocoBackend"]
 
@@ -382,8 +382,7 @@ class MujocoBackend(Backend):
         m.dof_solref[t.dof, 0] = 0.0
         m.dof_solref[t.dof, 1] = -t.kd * MOTOR_DMAX * self._inv_dt
         before = t.active
-        t.refresh(self._dt, force)
-        self._split = len(t.kd_rows) > 0
+        t.refresh(self._dt, force, m.nv)
         if len(before) != len(t.active) or (before != t.active).any():
             self._motor_rows_valid = False  # the last solve's rows belong to the old set
 
@@ -394,51 +393,83 @@ class MujocoBackend(Backend):
         t = self._motors
         damping = self._damping
         step1, step2 = mujoco.mj_step1, mujoco.mj_step2
+        k = t.n_rows
         for _ in range(n):
             step1(m, d)
-            if t.has_offset:  # friction rows come first (no equality constraints)
-                d.efc_aref[: t.n_rows] += t.aref_offset(d.qpos)
+            if k:  # friction rows come first (no equality constraints)
+                if t.has_offset:
+                    d.efc_aref[:k] += t.aref_offset(d.qpos)
+                d.efc_R[:k] *= MOTOR_R_SCALE  # harden the motor rows (mujoco_motors.py)
+                d.efc_D[:k] *= 1.0 / MOTOR_R_SCALE
             if damping is not None:
-                top = damping.apply(d)
-                self._clamp_armed = top > self._clamp_watch
+                self._clamp_armed = damping.apply(d) > self._clamp_watch
             if len(self._damp_dof):
                 d.qfrc_applied[self._damp_dof] = self._damp_coef * d.qvel[self._damp_dof]
             if self._pending_torque:
                 d.qfrc_applied[t.dof] += self._torque
-            if self._split or self._clamp_armed:
-                self._step2_split(m, d)
+            if k or self._clamp_armed:
+                self._step2_split(m, d, k)
             else:
                 step2(m, d)
             if self._pending_torque:
                 self._pending_torque = False
                 d.qfrc_applied[t.dof] = 0.0
                 self._torque[:] = 0.0
-            if self.gui and self._viewer is not None:
+            if self._viewer is not None:
                 self._sync_viewer()
-        self._steps += n
-        self._stale = True
         if n > 0:
+            self._steps += n
+            self._stale = True
             self._motor_force_valid = self._motor_rows_valid = True
         w = d.warning
-        for k, code in enumerate(_BAD):
-            if w[code].number != self._warnings[k]:
+        for i, code in enumerate(_BAD):
+            if w[code].number != self._warnings[i]:
                 self._warnings = [w[c].number for c in _BAD]
-                what = ("positions", "velocities", "accelerations")[k]
+                what = ("positions", "velocities", "accelerations")[i]
                 raise SimulationDivergedError(self.name, self.time, f"joint {what} (qpos/qvel)")
 
-    def _step2_split(self, m: Any, d: Any) -> None:
-        """mj_step2 in pieces, to adjust what depends on the smooth acceleration."""
+    def _step2_split(self, m: Any, d: Any, k: int) -> None:
+        """``mj_step2`` in pieces: the kd != 1 term needs ``qacc_smooth``; after the solve the
+        motor rows are made exact (``_polish``) and the speeds clamped."""
         mujoco.mj_fwdActuation(m, d)
         mujoco.mj_fwdAcceleration(m, d)
-        if self._clamp_armed and self._clamp is not None:
-            clamp_smooth(d, self._dt, self._clamp)
         t = self._motors
         if len(t.kd_rows):
             d.efc_aref[t.kd_rows] += t.kd_factor * d.qacc_smooth[t.kd_dof]
         mujoco.mj_fwdConstraint(m, d)
-        mujoco.mj_sensorAcc(m, d)
+        if k:
+            self._polish(m, d, k)
+        if self._clamp_armed:
+            clamp_acceleration(d, self._dt, self._clamp)  # type: ignore[arg-type]
         mujoco.mj_checkAcc(m, d)
         mujoco.mj_Euler(m, d)
+
+    def _polish(self, m: Any, d: Any, k: int) -> None:
+        """Make every motor row that is not at its force limit reach exactly the acceleration
+        it asks for (``efc_aref``): MuJoCo's rows keep a regulariser R > 0, so its solution
+        falls short by R/(A+R) of the change. One diagonal (Jacobi) correction through M^-1,
+        exact for a single row and to the product of two small numbers for coupled rows."""
+        t = self._motors
+        force = d.efc_force[:k]
+        free = np.abs(force) < t.force_rows_slack
+        if not free.all():
+            if not free.any():
+                return
+            rows = np.flatnonzero(free)
+            dofs = t.dof_rows[rows]
+            unit = t.unit_rows[rows]
+        else:
+            rows = slice(None)
+            dofs = t.dof_rows
+            unit = t.unit_rows
+        y = np.empty(unit.shape)
+        mujoco.mj_solveM(m, d, y, unit)  # rows of M^-1 for the motor dofs
+        target = d.efc_aref[:k][rows]
+        qacc = d.qacc
+        delta = (target - qacc[dofs]) / y[np.arange(len(dofs)), dofs]
+        qacc += delta @ y
+        qacc[dofs] = target
+        force[rows] += delta
 
     def close(self) -> None:
         if self._closed:

@@ -20,7 +20,7 @@ so the bodies, joints, geoms and inertias are added here one by one:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import mujoco
@@ -38,6 +38,7 @@ COLLISION_GROUP = 3
 PLANE_MIN_SIDE = 100.0  # m: a static box at least this wide in x and y is a ground plane
 MIN_MASS = 1e-6  # kg, for a moving body whose URDF mass is 0 (MuJoCo refuses zero)
 MIN_INERTIA = 1e-10  # kg m^2, likewise
+MIN_SIZE = 1e-6  # m, for a collision shape of size 0
 # Friction rows of the joint motors: as close to a hard constraint as MuJoCo allows, so the
 # motor reaches the velocity it asks for within a step (see mujoco_motors.py).
 MOTOR_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
@@ -90,6 +91,8 @@ def new_world_spec(profile: Profile) -> mujoco.MjSpec:
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
     opt.iterations = profile.solver_iterations
     opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
+    # islands copy efc_R/efc_D before the backend hardens the motor rows (mujoco_motors.py)
+    opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     spec.visual.global_.offwidth = 640
     return spec
 
@@ -134,16 +137,44 @@ class MeshLibrary:
         verts = K.mesh_vertices(g.mesh_path)
         if len(verts) and not np.isfinite(verts).all():
             raise UrdfStructureError(file, where, f"mesh {g.mesh_uri!r} has non-finite vertices")
-        if suffix in (".obj", ".stl"):
+        if suffix == ".stl":
             mesh.file = str(g.mesh_path)
         else:
-            verts, faces = _trimesh_arrays(g.mesh_path)
+            # MuJoCo's OBJ decoder refuses files PyBullet reads (e.g. table_square's face normal
+            # indices): .obj is read here (positions and faces only), other formats by trimesh
+            verts, faces = (
+                _obj_arrays(g.mesh_path) if suffix == ".obj" else _trimesh_arrays(g.mesh_path)
+            )
             if len(verts) < 4 or len(faces) == 0:
                 raise UrdfStructureError(file, where, f"mesh {g.mesh_uri!r} has no triangles")
             mesh.uservert = verts.astype(np.float32).ravel().tolist()
             mesh.userface = faces.astype(np.int32).ravel().tolist()
         self.names[key] = name
         return name
+
+
+def _obj_arrays(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex positions and triangles (fans of every polygon) of a Wavefront .obj file."""
+    verts = K.mesh_vertices(path)
+    n = len(verts)
+    tris: list[tuple[int, int, int]] = []
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            if not line.startswith("f "):
+                continue
+            idx = []
+            for token in line.split()[1:]:
+                head = token.split("/", 1)[0]
+                if not head:
+                    continue
+                i = int(head)
+                idx.append(i - 1 if i > 0 else n + i)
+            for a in range(1, len(idx) - 1):
+                tris.append((idx[0], idx[a], idx[a + 1]))
+    faces = np.array(tris, dtype=np.int64).reshape(-1, 3)
+    if len(faces) and (faces.min() < 0 or faces.max() >= n):
+        faces = faces[(faces >= 0).all(axis=1) & (faces < n).all(axis=1)]
+    return np.asarray(verts, dtype=float), faces
 
 
 def _trimesh_arrays(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -245,6 +276,8 @@ def add_robot(
 
         where = f"link {link.name!r}"
         for k, g in enumerate(link.visuals):
+            if _degenerate(g):
+                continue  # nothing to draw (e.g. laikago_toes' radius-0 spheres)
             vg = body.add_geom(name=f"{body_names[i + 1]}$v{k}")
             _set_shape(vg, g, meshes, file, f"{where} <visual> #{k}")
             vg.contype = vg.conaffinity = 0
@@ -262,6 +295,8 @@ def add_robot(
                 cg.pos = [g.origin_xyz[0], g.origin_xyz[1], g.origin_xyz[2] + 0.5 * g.size[2]]
                 planes.append(name)
             else:
+                if _degenerate(g):  # MuJoCo refuses size 0: a point-like shape instead
+                    g = replace(g, size=tuple(max(v, MIN_SIZE) for v in g.size))
                 _set_shape(cg, g, meshes, file, f"{where} <collision> #{k}")
             cg.contype = cg.conaffinity = 0
             cg.group = COLLISION_GROUP
@@ -295,8 +330,10 @@ def _set_shape(geom: mujoco.MjsGeom, g: Geometry, meshes: MeshLibrary, file: str
     else:
         geom.type = mujoco.mjtGeom.mjGEOM_MESH
         geom.meshname = meshes.get(g, file, where)
-    if g.kind != "mesh" and min(geom.size[: {"box": 3, "sphere": 1}.get(g.kind, 2)]) <= 0:
-        raise UrdfStructureError(file, where, f"{g.kind} size must be > 0, got {g.size}")
+
+
+def _degenerate(g: Geometry) -> bool:
+    return g.kind != "mesh" and min(g.size) <= 0.0
 
 
 def pair_friction(a: GeomContact, b: GeomContact) -> tuple[list[float], int]:

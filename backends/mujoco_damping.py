@@ -13,10 +13,10 @@ velocities come from two MuJoCo sensors per body (``framelinvel`` and ``frameang
 inertial frame, world axes), computed in C by ``mj_step1``; the torque is formed in the
 principal axes (``ximat``) and turned back to the world.
 
-``btMultiBody::applyDeltaVeeMultiDof`` then clamps every coordinate of the velocity after the
-smooth forces (the 6 base coordinates and every joint) to +-maxJointVelocity (100), before the
-constraint solve. :func:`clamp_smooth` does the same to MuJoCo's ``qvel + dt qacc_smooth`` by
-limiting ``qacc_smooth`` between ``mj_fwdAcceleration`` and ``mj_fwdConstraint``. MuJoCo's
+``btMultiBody::applyDeltaVeeMultiDof`` clamps every velocity coordinate (the 6 base coordinates
+and every joint) to +-maxJointVelocity (100); measured on PyBullet, the velocity after the whole
+step obeys it (a motor asking for 150 rad/s ends at 100). :func:`clamp_acceleration` limits
+MuJoCo's ``qacc`` after the constraint solve so that ``qvel + dt qacc`` obeys it. MuJoCo's
 free-joint coordinates are the origin's linear velocity and the body-frame angular velocity,
 PyBullet's the centre of mass's and the world-frame one: the base clamp differs when the base
 spins (a departure listed in the manifest).
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LinkDamping", "clamp_smooth"]
+__all__ = ["LinkDamping", "clamp_acceleration"]
 
 
 class LinkDamping:
@@ -68,10 +68,8 @@ class LinkDamping:
         return top
 
 
-def clamp_smooth(d, dt: float, limit: float) -> None:  # type: ignore[no-untyped-def]
-    """Limit ``qacc_smooth`` so that ``|qvel + dt qacc_smooth| <= limit`` in every coordinate."""
+def clamp_acceleration(d, dt: float, limit: float) -> None:  # type: ignore[no-untyped-def]
+    """Limit ``qacc`` so that the velocity after the step, ``qvel + dt qacc``, is within
+    +-limit in every coordinate (and the positions integrate with the clamped velocity)."""
     qvel = d.qvel
-    acc = d.qacc_smooth
-    lo = (-limit - qvel) / dt
-    hi = (limit - qvel) / dt
-    np.clip(acc, lo, hi, out=acc)
+    np.clip(d.qacc, (-limit - qvel) / dt, (limit - qvel) / dt, out=d.qacc)

@@ -27,9 +27,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["MotorTable", "MOTOR_DMAX"]
+__all__ = ["MotorTable", "MOTOR_DMAX", "MOTOR_R_SCALE"]
 
-MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2])
+MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2]), MuJoCo's largest
+# MuJoCo's hardest row still has a regulariser R = 1e-4 of its (approximate) inverse inertia, so
+# a motor would reach only 1 - 1e-4 of the velocity change it asks for. Between mj_step1 and
+# mj_step2 the backend scales the rows' R (and D = 1/R) by this factor: 1e-8, which the Newton
+# solver takes without trouble (islands are disabled so the solver reads efc_R/efc_D directly).
+MOTOR_R_SCALE = 1e-2
 
 
 class MotorTable:
@@ -61,11 +66,15 @@ class MotorTable:
         self.kd_factor = np.zeros(0)  # 1 - kd
         self.n_rows = 0
 
-    def refresh(self, dt: float, force: np.ndarray) -> None:
+    def refresh(self, dt: float, force: np.ndarray, nv: int) -> None:
         """Recompute the per-row arrays after a command; ``force`` is the force limit in use
         (max_force, clamped to the effort limit when the profile enforces it)."""
         active = np.flatnonzero(force > 0.0)
         self.active = active
+        self.dof_rows = self.dof[active]
+        self.force_rows_slack = force[active] * (1.0 - 1e-9)  # below this a row is not at its limit
+        self.unit_rows = np.zeros((len(active), nv))
+        self.unit_rows[np.arange(len(active)), self.dof_rows] = 1.0
         self.row_of = np.full(self.n, -1, np.intp)  # friction row of each motor, -1 = none
         self.row_of[active] = np.arange(len(active))
         self.n_rows = len(active)
