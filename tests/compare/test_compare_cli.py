@@ -1,0 +1,147 @@
+"""The command line: exit codes 0 (done), 1 (failed, one line on stderr), 2 (bad usage)."""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+
+import pytest
+
+from simbridge.cli import main
+
+
+def test_scenarios_lists_one_line_each(capsys):
+    assert main(["scenarios"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == [
+        "double-pendulum",
+        "pendulum",
+        "r2d2",
+        "r2d2-gentle",
+        "spinning-wheel",
+    ]
+    assert "tutorial" in lines[2]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        [],
+        ["compare"],
+        ["frobnicate"],
+        ["compare", "r2d2", "--backends", "pybullet"],
+        ["compare", "r2d2", "--backends", "pybullet", "bullet3"],
+        ["compare", "r2d2", "--timestep", "fast"],
+        ["compare", "r2d2", "--timestep", "-1"],
+        ["compare", "r2d2", "--profile", "soft"],
+        ["compare", "r2d2", "--profile", "urdf", "urdf", "urdf"],
+        ["compare", "r2d2", "--duration", "0"],
+        ["joints"],
+    ],
+)
+def test_bad_usage_exits_2(argv, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "usage: simbridge" in err and "error:" in err
+
+
+def test_help_exits_0(capsys):
+    assert main(["compare", "--help"]) == 0
+    assert "--timestep" in capsys.readouterr().out
+
+
+def test_unknown_scenario_fails_with_one_line(capsys):
+    assert main(["compare", "no-such-scenario"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith("simbridge: error: no-such-scenario: no such scenario file")
+
+
+def test_bad_scenario_file_fails_naming_key_and_line(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text('[[robots]]\nurdf = "r2d2.urdf"\n\n[[phases]]\nsteps = "many"\n')
+    assert main(["compare", str(path), "--backends", "pybullet", "pybullet"]) == 1
+    err = capsys.readouterr().err
+    assert err == (
+        f"simbridge: error: {path}:5: key 'phases[0].steps': expected an integer >= 1, got 'many'\n"
+    )
+
+
+def test_a_step_that_does_not_divide_the_phases_fails(capsys):
+    assert main(["compare", "r2d2", "--backends", "pybullet", "pybullet", "--timestep", "1/7"]) == 1
+    assert "not a whole number of 1/7 s steps" in capsys.readouterr().err
+
+
+def test_compare_writes_the_report(tmp_path, capsys):
+    out = tmp_path / "rep"
+    argv = [
+        "compare",
+        "pendulum",
+        "--backends",
+        "pybullet",
+        "pybullet",
+        "--profile",
+        "pybullet",
+        "urdf",
+        "--duration",
+        "0.25",
+        "--out",
+        str(out),
+        "--no-plots",
+    ]
+    assert main(argv) == 0
+    stdout = capsys.readouterr().out
+    assert stdout.splitlines()[-1] == f"report: {out / 'report.md'}"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["profiles"] == ["pybullet", "urdf"]
+    assert summary["manifest"]["command_line"] == ["simbridge", *argv]
+    assert summary["headline"]["text"][0].replace("**", "") == stdout.splitlines()[0]
+
+
+def test_default_out_dir_is_reports_scenario(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = [
+        "compare",
+        "pendulum",
+        "--backends",
+        "pybullet",
+        "pybullet",
+        "--duration",
+        "0.05",
+        "--no-plots",
+    ]
+    assert main(argv) == 0
+    assert (tmp_path / "reports" / "pendulum" / "report.md").is_file()
+
+
+def test_joints_prints_the_17_fields_per_joint(capsys):
+    assert main(["joints", "r2d2.urdf"]) == 0
+    rows = [ast.literal_eval(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(rows) == 15
+    assert all(len(r) == 17 for r in rows)
+    assert rows[0]["name"] == "base_to_right_leg" and rows[0]["type"] == 4
+    assert rows[2]["type"] == 0 and rows[2]["axis"] == (0.0, 0.0, 1.0)
+
+
+def test_joints_of_a_missing_urdf_fails(capsys):
+    assert main(["joints", "no_such_robot.urdf"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("simbridge: error: URDF 'no_such_robot.urdf'") and err.count("\n") == 1
+
+
+def _module(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "simbridge", *args], capture_output=True, text=True, timeout=120
+    )
+
+
+def test_python_dash_m_simbridge():
+    ok = _module("scenarios")
+    assert ok.returncode == 0 and "r2d2-gentle" in ok.stdout
+    bad = _module("compare", "no-such-scenario")
+    assert bad.returncode == 1 and "Traceback" not in bad.stderr
+    assert bad.stderr.strip().splitlines()[-1].startswith("simbridge: error:")
+    usage = _module("compare")
+    assert usage.returncode == 2
