@@ -368,6 +368,7 @@ class MujocoBackend(Backend):
         self._clamp_watch = _CLAMP_WATCH * self._clamp if self._clamp is not None else math.inf
         self._clamp_armed = False
         self._torque = np.zeros(table.n)
+        self._fast: dict[int, tuple[Any, ...]] = {}  # set_joint_velocity's hot-path cache
         self._motor_rows_valid = False
         self._refresh_motors()
         self._warnings = [d.warning[w].number for w in _BAD]
@@ -450,26 +451,17 @@ class MujocoBackend(Backend):
         falls short by R/(A+R) of the change. One diagonal (Jacobi) correction through M^-1,
         exact for a single row and to the product of two small numbers for coupled rows."""
         t = self._motors
+        y = t.minv_rows
+        mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
         force = d.efc_force[:k]
-        free = np.abs(force) < t.force_rows_slack
-        if not free.all():
-            if not free.any():
-                return
-            rows = np.flatnonzero(free)
-            dofs = t.dof_rows[rows]
-            unit = t.unit_rows[rows]
-        else:
-            rows = slice(None)
-            dofs = t.dof_rows
-            unit = t.unit_rows
-        y = np.empty(unit.shape)
-        mujoco.mj_solveM(m, d, y, unit)  # rows of M^-1 for the motor dofs
-        target = d.efc_aref[:k][rows]
+        target = d.efc_aref[:k]
         qacc = d.qacc
-        delta = (target - qacc[dofs]) / y[np.arange(len(dofs)), dofs]
+        dofs = t.dof_rows
+        delta = target - qacc[dofs]
+        delta /= y[t.row_range, dofs]
+        delta *= np.abs(force) < t.force_rows_slack  # rows at their limit stay there
         qacc += delta @ y
-        qacc[dofs] = target
-        force[rows] += delta
+        force += delta
 
     def close(self) -> None:
         if self._closed:
@@ -673,13 +665,42 @@ class MujocoBackend(Backend):
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
-        idx = self._motor_slots(body, joints)
         t = self._motors
+        fast = self._fast.get(id(joints))
+        if fast is not None and fast[0] is joints and fast[1] == t.epoch and fast[2] == body:
+            # Hot path: the same joints, still velocity motors with kd 1, all rows present.
+            if target == fast[6] and max_force == fast[7]:
+                return  # the command in force already
+            if min(max_force) > 0.0:
+                rows = fast[4]
+                t.target_velocity[fast[3]] = target
+                t.max_force[fast[3]] = max_force
+                self._m.dof_frictionloss[fast[5]] = max_force
+                t.offset_rows[rows] = target
+                t.offset_rows[rows] *= self._inv_dt
+                t.force_rows_slack[rows] = max_force
+                t.force_rows_slack[rows] *= 1.0 - 1e-9
+                t.has_offset = True
+                self._fast[id(joints)] = (*fast[:6], target, max_force)
+                return
+        idx = self._motor_slots(body, joints)
         t.target_velocity[idx] = target
         t.max_force[idx] = max_force
         t.kp[idx] = 0.0
         t.kd[idx] = 1.0
         self._refresh_motors()
+        rows = t.row_of[idx]
+        if t.n_special == 0 and not self.profile.enforce_effort_limit and (rows >= 0).all():
+            self._fast[id(joints)] = (
+                joints,
+                t.epoch,
+                body,
+                idx,
+                rows,
+                t.dof[idx],
+                list(target),
+                list(max_force),
+            )
 
     def set_joint_position(
         self,
@@ -715,6 +736,11 @@ class MujocoBackend(Backend):
         bounded = [r for r in self._robots.values() if r.spec.bounded_links]
         for r in bounded:
             departures[f"body {r.id} mass bound"] = build.mass_bound_note(r.spec)
+        for r in self._robots.values():
+            if r.spec.skipped_shapes:
+                departures[f"body {r.id} shapes left out"] = (
+                    f"{r.spec.skipped_shapes}: meshes without a finite vertex"
+                )
         return {
             "backend": self.name,
             "engine": "MuJoCo (generalized coordinates, soft convex contact, Newton solver)",

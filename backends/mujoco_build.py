@@ -73,6 +73,7 @@ class RobotSpec:
     bounded_links: list[str] = field(default_factory=list)  # mass/inertia raised for MuJoCo
     planes: list[str] = field(default_factory=list)
     pair_names: list[str] = field(default_factory=list)
+    skipped_shapes: list[str] = field(default_factory=list)  # meshes without finite vertices
 
 
 def new_world_spec(profile: Profile) -> mujoco.MjSpec:
@@ -123,6 +124,13 @@ class MeshLibrary:
         self.spec = spec
         self.names: dict[tuple[str, tuple[float, ...]], str] = {}
 
+    def usable(self, g: Geometry) -> bool:
+        """False for a mesh without any finite vertex (pybullet_data's random_urdfs/168 is all
+        NaN): such a shape is left out (MuJoCo cannot compile it)."""
+        assert g.mesh_path is not None
+        verts = K.mesh_vertices(g.mesh_path)
+        return len(verts) > 0 and bool(np.isfinite(verts).all())
+
     def get(self, g: Geometry, file: str, where: str) -> str:
         assert g.mesh_path is not None
         key = (str(g.mesh_path), tuple(g.size))
@@ -134,9 +142,6 @@ class MeshLibrary:
         mesh.scale = list(g.size)
         mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL  # robust to flat meshes
         suffix = g.mesh_path.suffix.lower()
-        verts = K.mesh_vertices(g.mesh_path)
-        if len(verts) and not np.isfinite(verts).all():
-            raise UrdfStructureError(file, where, f"mesh {g.mesh_uri!r} has non-finite vertices")
         if suffix == ".stl":
             mesh.file = str(g.mesh_path)
         else:
@@ -215,6 +220,7 @@ def add_robot(
     geoms: list[GeomContact] = []
     planes: list[str] = []
     free_joint = None
+    skipped: list[str] = []
     # A base whose z axis is the world's keeps a huge box's top face horizontal.
     base_z = K.quat_rotate(base_orientation, (0.0, 0.0, 1.0))
     upright = base_z[2] > 1.0 - 1e-9
@@ -276,7 +282,8 @@ def add_robot(
 
         where = f"link {link.name!r}"
         for k, g in enumerate(link.visuals):
-            if _degenerate(g):
+            if _degenerate(g) or (g.kind == "mesh" and not meshes.usable(g)):
+                skipped.append(f"{where} <visual> #{k}")
                 continue  # nothing to draw (e.g. laikago_toes' radius-0 spheres)
             vg = body.add_geom(name=f"{body_names[i + 1]}$v{k}")
             _set_shape(vg, g, meshes, file, f"{where} <visual> #{k}")
@@ -286,6 +293,9 @@ def add_robot(
             vg.mass = 0.0
         lateral, rolling, spinning, restitution = _contact_values(link, profile)
         for k, g in enumerate(link.collisions):
+            if g.kind == "mesh" and not meshes.usable(g):
+                skipped.append(f"{where} <collision> #{k}")
+                continue
             name = f"{body_names[i + 1]}$c{k}"
             cg = body.add_geom(name=name)
             is_plane = static[i + 1] and upright and _is_ground_box(g)
@@ -308,7 +318,16 @@ def add_robot(
                 )
             )
     return RobotSpec(
-        prefix, bodies[0], body_names, joint_names, free_joint, geoms, inertials, bounded, planes
+        prefix,
+        bodies[0],
+        body_names,
+        joint_names,
+        free_joint,
+        geoms,
+        inertials,
+        bounded,
+        planes,
+        skipped_shapes=skipped,
     )
 
 

@@ -65,6 +65,8 @@ class MotorTable:
         self.kd_dof = np.zeros(0, dtype=np.intp)
         self.kd_factor = np.zeros(0)  # 1 - kd
         self.n_rows = 0
+        self.n_special = 0  # motors with kp != 0 or kd != 1 (position mode, velocity gain)
+        self.epoch = 0  # bumped by every refresh: caches of row numbers check it
 
     def refresh(self, dt: float, force: np.ndarray, nv: int) -> None:
         """Recompute the per-row arrays after a command; ``force`` is the force limit in use
@@ -74,7 +76,11 @@ class MotorTable:
         self.dof_rows = self.dof[active]
         self.force_rows_slack = force[active] * (1.0 - 1e-9)  # below this a row is not at its limit
         self.unit_rows = np.zeros((len(active), nv))
-        self.unit_rows[np.arange(len(active)), self.dof_rows] = 1.0
+        self.row_range = np.arange(len(active))
+        self.unit_rows[self.row_range, self.dof_rows] = 1.0
+        self.minv_rows = np.empty((len(active), nv))
+        self.n_special = int(np.count_nonzero((self.kp != 0.0) | (self.kd != 1.0)))
+        self.epoch += 1
         self.row_of = np.full(self.n, -1, np.intp)  # friction row of each motor, -1 = none
         self.row_of[active] = np.arange(len(active))
         self.n_rows = len(active)
