@@ -447,21 +447,31 @@ class MujocoBackend(Backend):
 
     def _polish(self, m: Any, d: Any, k: int) -> None:
         """Make every motor row that is not at its force limit reach exactly the acceleration
-        it asks for (``efc_aref``): MuJoCo's rows keep a regulariser R > 0, so its solution
-        falls short by R/(A+R) of the change. One diagonal (Jacobi) correction through M^-1,
-        exact for a single row and to the product of two small numbers for coupled rows."""
+        it asks for (``efc_aref``), as PyBullet's motor row does: MuJoCo's rows keep a
+        regulariser R > 0, so its solution falls short by about R/(A+R) of the change. The
+        shortfall r of the free rows is removed with the forces A^-1 r through M^-1 (A the
+        rows' inverse inertia); rows at their force limit stay there. The contacts do not
+        see this last correction (it is 1e-6 of the motor force)."""
         t = self._motors
         y = t.minv_rows
         mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
         force = d.efc_force[:k]
-        target = d.efc_aref[:k]
         qacc = d.qacc
         dofs = t.dof_rows
-        delta = target - qacc[dofs]
-        delta /= y[t.row_range, dofs]
-        delta *= np.abs(force) < t.force_rows_slack  # rows at their limit stay there
-        qacc += delta @ y
-        force += delta
+        short = d.efc_aref[:k] - qacc[dofs]
+        free = np.abs(force) < t.force_rows_slack
+        if free.all():
+            delta = np.linalg.solve(y[:, dofs], short)
+            qacc += delta @ y
+            qacc[dofs] = d.efc_aref[:k]  # the rows' own accelerations, without round-off
+            force += delta
+        elif free.any():
+            rows = np.flatnonzero(free)
+            sub = y[rows]
+            delta = np.linalg.solve(sub[:, dofs[rows]], short[rows])
+            qacc += delta @ sub
+            qacc[dofs[rows]] = d.efc_aref[:k][rows]
+            force[rows] += delta
 
     def close(self) -> None:
         if self._closed:
