@@ -273,7 +273,7 @@ def find_key_line(text: str, path: Sequence[str | int]) -> int | None:
                 if not k:
                     depth += line.count("[") - line.count("]")
                     continue
-                candidate = header + _split_key(k.group(1))
+                candidate = [*header, *_split_key(k.group(1))]
                 depth += line.count("[") - line.count("]")
                 depth += line.count("{") - line.count("}")
             n = 0
@@ -373,6 +373,7 @@ class _Reader:
         position = self.vector(t.get("position", [0, 0, 0]), [*path, "position"], 3)
         if "orientation" in t and "rpy" in t:
             raise self.error([*path, "rpy"], "give either orientation or rpy, not both")
+        orientation: tuple[float, ...]
         if "rpy" in t:
             orientation = _quat_from_rpy(*self.vector(t["rpy"], [*path, "rpy"], 3))
         else:
@@ -547,7 +548,7 @@ def loads_scenario(text: str, *, file: str = "<scenario>", source: Path | None =
 
 
 def _shipped() -> dict[str, Path]:
-    return {p.stem: p for p in sorted(SCENARIOS_DIR.glob("*.toml"))}
+    return {p.stem: p for p in sorted(SCENARIOS_DIR.glob("*.toml"), key=lambda p: p.stem)}
 
 
 def load_scenario(scenario: str | Path | Scenario) -> Scenario:

@@ -241,3 +241,16 @@ def test_shipped_files_are_package_data():
     from simbridge.compare.scenario import SCENARIOS_DIR
 
     assert sorted(p.stem for p in Path(SCENARIOS_DIR).glob("*.toml")) == SHIPPED
+
+
+def test_rpy_is_read_as_a_quaternion():
+    import math
+
+    s = loads_scenario(
+        '[[robots]]\nurdf = "r2d2.urdf"\nrpy = [0, 0, 1.5707963267948966]\n[[phases]]\nsteps = 1\n'
+    )
+    x, y, z, w = s.robots[0].orientation
+    assert (x, y) == (0.0, 0.0)
+    assert z == pytest.approx(math.sqrt(0.5), rel=1e-15)
+    assert w == pytest.approx(math.sqrt(0.5), rel=1e-15)
+    assert loads_scenario(dumps_scenario(s)) == s
