@@ -270,10 +270,10 @@ def add_robot(
         ine = inertials[i + 1]
         mass, diag = ine.mass, list(ine.diagonal)
         moving = not static[i + 1]
-        if moving and (mass < MIN_MASS or min(diag) < MIN_INERTIA):
+        if moving and not (mass >= MIN_MASS and min(diag) >= MIN_INERTIA):  # NaN too
             bounded.append(link.name)
             mass = max(mass, MIN_MASS)
-            diag = [max(v, MIN_INERTIA) for v in diag]
+            diag = [v if v >= MIN_INERTIA else MIN_INERTIA for v in diag]
         body.explicitinertial = True
         body.mass = mass
         body.inertia = diag

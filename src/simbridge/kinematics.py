@@ -289,6 +289,7 @@ def _shape_local_box(
     # An .obj becomes a compound of one hull per object (+1 mm for that compound's margin).
     grow = twice + (URDF_COLLISION_MARGIN if _is_obj(g) else 0.0)
     v = vertices(g.mesh_path) * np.asarray(g.size, dtype=float)
+    v = v[np.isfinite(v).all(axis=1)]  # (pybullet_data's random_urdfs/168 is all NaN)
     if len(v) == 0:
         return np.zeros(3), np.full(3, grow)
     lo, hi = v.min(axis=0), v.max(axis=0)
