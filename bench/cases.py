@@ -134,6 +134,13 @@ def pybullet_raw_drive(record: bool) -> Callable[[], float]:
 # ---------------------------------------------------------------- raw MuJoCo
 
 
+def _mujoco_handles(sim: simbridge.Sim, robot: int) -> tuple:
+    """The compiled model, data, wheel dof addresses and base body id behind a mujoco Sim."""
+    b = sim._b  # noqa: SLF001 - the raw floor is measured on the very model the layer built
+    r = b._robots[robot]  # noqa: SLF001
+    return b._m, b._d, r.dofadr[WHEELS].copy(), int(r.body_ids[0])  # noqa: SLF001
+
+
 def mujoco_raw_drive(record: bool) -> Callable[[], float]:
     """Raw MuJoCo on the very model the layer compiled: ``d.ctrl``-style writes of the wheel
     torque (``qfrc_applied``) and ``mj_step``, which is the floor any layer over this model has."""
@@ -142,9 +149,7 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
     def run() -> float:
         sim, robot = _layer_sim("mujoco")
         try:
-            m, d = sim._b.model, sim._b.data  # noqa: SLF001 - the raw floor on the same model
-            dofs = np.array([sim._b.dof_of(robot, j) for j in WHEELS])  # noqa: SLF001
-            base_body = sim._b.mj_body_of(robot, -1)  # noqa: SLF001
+            m, d, dofs, base_body = _mujoco_handles(sim, robot)
             base = np.empty((980, 13))
             wheel_state = np.empty((980, 12))
             qadr = m.jnt_qposadr[m.dof_jntid[dofs]]
@@ -220,9 +225,8 @@ def single_calls(backend: str, n: int) -> list[Case]:
     else:
         import mujoco
 
-        m, d = sim._b.model, sim._b.data  # noqa: SLF001
-        dofs = np.array([sim._b.dof_of(robot, j) for j in WHEELS])  # noqa: SLF001
-        body = sim._b.mj_body_of(robot, 2)  # noqa: SLF001
+        m, d, dofs, _ = _mujoco_handles(sim, robot)
+        body = int(sim._b._robots[robot].body_ids[3])  # noqa: SLF001 - link 2
         qadr = m.jnt_qposadr[m.dof_jntid[dofs]]
 
         def raw_link() -> object:
@@ -278,9 +282,11 @@ def compare_end_to_end() -> Case | None:
         return None
 
     def plain() -> float:
+        # Timed whole, set-up included, like the layer's side: raw PyBullet, raw MuJoCo stepping
+        # (on the model the layer compiles, whose build is timed too), numpy diff.
         t0 = time.perf_counter()
         a = pybullet_raw_positions()
-        b = layer_positions("mujoco")
+        b = mujoco_raw_positions()
         np.linalg.norm(a - b, axis=1).max()
         return time.perf_counter() - t0
 
@@ -321,6 +327,24 @@ def pybullet_raw_positions() -> np.ndarray:
         return out
     finally:
         p.disconnect(c)
+
+
+def mujoco_raw_positions() -> np.ndarray:
+    import mujoco
+
+    sim, robot = _layer_sim("mujoco")
+    try:
+        m, d, dofs, base_body = _mujoco_handles(sim, robot)
+        out = np.empty((980, 3))
+        for k in range(980):
+            if k >= 240:
+                d.qfrc_applied[dofs] = TURN if k < 480 else FORWARD
+            mujoco.mj_step(m, d)
+            mujoco.mj_kinematics(m, d)
+            out[k] = d.xipos[base_body]
+        return out
+    finally:
+        sim.close()
 
 
 def layer_positions(backend: str) -> np.ndarray:

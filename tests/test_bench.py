@@ -1,0 +1,36 @@
+"""Smoke test of the benchmark: it runs and prints its table. Speed itself is never asserted
+here (timings belong to bench/run.py, not to pass/fail)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_bench_runs_with_a_tiny_repeat_count():
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "bench" / "run.py"), "--repeats", "1", "--quick"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    out = proc.stdout
+    for row in (
+        "pybullet: r2d2 drive, 980 steps",
+        "mujoco: r2d2 drive, 980 steps",
+        "recording base pose + wheel states",
+        "single call: link_state",
+        "single call: joint_states",
+        "single call: set_joint_velocity",
+        "import simbridge after numpy",
+    ):
+        assert row in out, f"row {row!r} missing from the table:\n{out}"
+    # Every row carries a raw figure, a layer figure and their ratio.
+    table = [line for line in out.splitlines() if line.startswith("| ") and "case" not in line]
+    for line in table:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert float(cells[4]) > 0, line
