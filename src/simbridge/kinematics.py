@@ -540,6 +540,10 @@ def joint_table(
         # Bullet's rotParentToThis: child inertial frame relative to the joint frame seen
         # from the parent's inertial frame, inverted (what getJointInfo reports).
         forn = quat_conjugate(quat_multiply(jorn, cin.orientation))
+        if abs(forn[3]) < 1e-6 and max(forn[:3], key=abs) < 0:
+            # w ~ 0: Bullet's sign is round-off; measured (kuka_iiwa, minitaur): its largest
+            # component comes out positive
+            forn = (-forn[0], -forn[1], -forn[2], -forn[3])
         if jtype == JointType.FIXED:
             axis: Vec3 = (0.0, 0.0, 0.0)
             qi = ui = -1
