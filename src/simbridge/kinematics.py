@@ -18,9 +18,9 @@ Collision-box inertia (PyBullet without ``URDF_USE_INERTIA_FROM_FILE``), a link 
   ``(2r, 2r, 2r + length)``; cylinders and meshes are convex hulls, see next point;
 * otherwise: the box inertia of the bounding box, in the inertial frame, of every collision
   shape, grown by 1 mm on every side (the compound's collision margin). Each shape contributes
-  its own local box turned into the inertial frame (the box around the turned box): a box its
-  size, a sphere ``2r``, a capsule ``(2r, 2r, 2r + length)``, a cylinder (a 32-gon hull) and an
-  .stl/.dae mesh (the hull of its vertices) their vertex bounds grown by 2 mm on every side
+  its own local box turned into the inertial frame (the box around the turned box; a sphere's
+  does not turn): a box its size, a sphere ``2r``, a capsule ``(2r, 2r, 2r + length)``, a
+  cylinder (a 32-gon hull) and an .stl/.dae mesh (the hull of its vertices) their vertex bounds grown by 2 mm on every side
   (the hull's margin counted twice), an .obj mesh (a compound of one hull per object) by 3 mm;
   a lone .obj in the inertial frame gets its own box (+3 mm a side) without the outer 1 mm;
 * no collision shape: the 2 mm box of the margins alone (``m/12 · 2 · 0.002²``);
@@ -345,7 +345,9 @@ def collision_aabb_inertia(
         centre, half = _shape_local_box(g, vertices)
         rot = quat_to_matrix(orn)
         c = rot @ centre + np.asarray(pos)
-        h = np.abs(rot) @ half
+        # a sphere's box does not grow when turned; every other shape's box is the box around
+        # its turned local box
+        h = half if g.kind == "sphere" else np.abs(rot) @ half
         lo = c - h if k == 0 else np.minimum(lo, c - h)
         hi = c + h if k == 0 else np.maximum(hi, c + h)
     return _box_inertia(mass, hi - lo + 2.0 * URDF_COLLISION_MARGIN)
