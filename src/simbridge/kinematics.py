@@ -20,9 +20,10 @@ Collision-box inertia (PyBullet without ``URDF_USE_INERTIA_FROM_FILE``), a link 
   shape, grown by 1 mm on every side (the compound's collision margin). Each shape contributes
   its own local box turned into the inertial frame (the box around the turned box; a sphere's
   does not turn): a box its size, a sphere ``2r``, a capsule ``(2r, 2r, 2r + length)``, a
-  cylinder (a 32-gon hull) and an .stl/.dae mesh (the hull of its vertices) their vertex bounds grown by 2 mm on every side
-  (the hull's margin counted twice), an .obj mesh (a compound of one hull per object) by 3 mm;
-  a lone .obj in the inertial frame gets its own box (+3 mm a side) without the outer 1 mm;
+  cylinder (a 32-gon hull) and an .stl/.dae mesh (the hull of its vertices) their vertex
+  bounds grown by 2 mm on every side (the hull's margin counted twice), an .obj mesh (a
+  compound of one hull per object) by 3 mm; a lone .obj in the inertial frame gets its own
+  box (+3 mm a side) without the outer 1 mm;
 * no collision shape: the 2 mm box of the margins alone (``m/12 · 2 · 0.002²``);
 * no ``<inertial>`` element: mass 1 (and the rules above); mass 0: zero inertia;
 * ``<contact><inertia_scaling>`` multiplies the moments (both inertia sources).
