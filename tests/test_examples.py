@@ -13,14 +13,6 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 BACKENDS = ["pybullet", "mujoco"]  # the shipped backends
 
 
-@pytest.fixture(autouse=True)
-def _backend_present(request):
-    """A shipped backend whose module is not in this checkout yet is skipped, with the reason."""
-    backend = request.node.callspec.params.get("backend")
-    if backend and importlib.util.find_spec(f"simbridge.backends.{backend}_backend") is None:
-        pytest.skip(f"simbridge.backends.{backend}_backend is not in this checkout")
-
-
 def _example(name: str):
     spec = importlib.util.spec_from_file_location(f"example_{name}", EXAMPLES / f"{name}.py")
     module = importlib.util.module_from_spec(spec)

@@ -3,7 +3,8 @@
 Every test that takes the ``backend`` fixture runs once per name in
 :func:`simbridge.available_backends` (built-in and entry-point backends alike), so a new backend
 needs no new test code. A backend whose module or class is not there at all (not yet written,
-or its engine not installed) is skipped with the reason, unless
+or its engine not installed) fails if it is one this project ships (pybullet, mujoco) and is
+skipped with the reason if it is a third-party one, unless
 ``SIMBRIDGE_REQUIRE_ALL_BACKENDS=1`` (CI) turns that into a failure; a backend that is there but
 breaks on import always fails.
 """
@@ -23,6 +24,8 @@ from simbridge.registry import load_backend
 
 BACKENDS = simbridge.available_backends()
 PROFILES = ["pybullet", "urdf"]
+# The backends this project ships must always run: only a third-party backend may be skipped.
+SHIPPED_BACKENDS = ("pybullet", "mujoco")
 
 ROBOTS_DIR = Path(__file__).resolve().parents[2] / "robots"
 
@@ -76,7 +79,7 @@ def backend(request: pytest.FixtureRequest) -> str:
     name: str = request.param
     reason = _unavailable_reason(name)
     if reason is not None:
-        if os.environ.get("SIMBRIDGE_REQUIRE_ALL_BACKENDS") == "1":
+        if name in SHIPPED_BACKENDS or os.environ.get("SIMBRIDGE_REQUIRE_ALL_BACKENDS") == "1":
             pytest.fail(f"backend {name!r} is registered but unavailable: {reason}")
         pytest.skip(f"backend {name!r} unavailable here: {reason}")
     return name
