@@ -74,19 +74,19 @@ def load_backend(name: str) -> type[Backend]:
     if not isinstance(name, str) or name not in _REGISTRY:
         raise UnknownBackendError(str(name), _REGISTRY)
     spec = _REGISTRY[name]
-    for module in spec.requires:
+    for required in spec.requires:
         try:
-            importlib.import_module(module)
+            importlib.import_module(required)
         except ImportError as exc:
-            raise BackendNotInstalledError(name, module, spec.pip_name, exc) from exc
+            raise BackendNotInstalledError(name, required, spec.pip_name, exc) from exc
     module_name, _, attr = spec.entry_point.partition(":")
     try:
         module = importlib.import_module(module_name)
-        cls = getattr(module, attr)
+        cls: type[Backend] = getattr(module, attr)
     except (ImportError, AttributeError) as exc:
         raise BackendError(f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}") from exc
     _LOADED[name] = cls
-    return cls  # type: ignore[no-any-return]
+    return cls
 
 
 register(

@@ -329,7 +329,7 @@ class Sim:
         if joints is None:
             idx = [i for i, t in enumerate(b.joint_types) if t != JointType.FIXED or not movable]
         elif isinstance(joints, (int, str, np.integer)):
-            idx = [self.joint_index(body, joints)]  # type: ignore[arg-type]
+            idx = [self.joint_index(body, joints)]
         else:
             items = joints.tolist() if isinstance(joints, np.ndarray) else list(joints)
             idx = [self.joint_index(body, j) for j in items]

@@ -38,7 +38,7 @@ class JointType(IntEnum):
 class JointInfo(NamedTuple):
     """One row of the joint table: the 17 fields of ``p.getJointInfo``, in its order."""
 
-    index: int
+    index: int  # type: ignore[assignment]  # PyBullet's field name; shadows tuple.index
     """Joint index; joint i moves link i."""
     name: str
     type: JointType

@@ -307,8 +307,8 @@ def _geometry(elem: ET.Element, where: str, src: UrdfSource, is_visual: bool) ->
             scale,
             mesh_path=path,
             mesh_uri=uri,
-            rgba=rgba,
-            name=name,  # type: ignore[arg-type]
+            rgba=rgba,  # type: ignore[arg-type]
+            name=name,
         )
     raise UrdfStructureError(
         file, where, f"unknown geometry <{tag}>; valid: box, cylinder, sphere, capsule, mesh"
