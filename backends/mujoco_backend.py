@@ -741,8 +741,41 @@ class MujocoBackend(Backend):
 
     # ---------------------------------------------------------------- description
 
+    DEPARTURES = {
+        "contact": (
+            "soft contact (pair solref (2 dt, 1), 1 mm margin standing in for PyBullet's 1 mm "
+            "collision margin) instead of PyBullet's sequential-impulse contact: r2d2 rests at "
+            "z 0.47100 (PyBullet 0.47099); turning in place on 4 skidding wheels it hops up to "
+            "4 mm (PyBullet 0.3 mm; raw MuJoCo also hops)"
+        ),
+        "cylinder": (
+            "collision cylinders are true cylinders; PyBullet collides with a 32-gon prism "
+            "(its radius varies by 0.5 %)"
+        ),
+        "restitution": "MuJoCo has no restitution: <contact restitution> is reported, not applied",
+        "rolling/spinning friction": (
+            "MuJoCo's rolling and torsional friction (condim 6/4) with Bullet's combination "
+            "rule; the models differ (all 0 under both profiles unless <contact> says so)"
+        ),
+        "joint limits": "soft limit rows, solref (2 dt, 1), against PyBullet's limit rows",
+        "motors": (
+            "motor rows solved exactly (MuJoCo row hardened, then its shortfall removed); "
+            "PyBullet's 50 solver iterations leave coupled motor rows up to 7e-4 rad/s short "
+            "(double pendulum, measured)"
+        ),
+        "speed clamp": (
+            "applied to the velocity after the solve, only once a body moves faster than half "
+            "the limit; free-base coordinates are MuJoCo's (origin velocity, body-frame "
+            "angular velocity), PyBullet's are the centre of mass's and world-frame"
+        ),
+        "joint axis": (
+            "MuJoCo normalises a non-unit <axis>; PyBullet moves |axis| rad per unit of q "
+            "(none of pybullet_data's joints that load has one of length != 1 by more than 1e-6)"
+        ),
+    }
+
     def manifest(self) -> dict[str, Any]:
-        departures: dict[str, str] = {}
+        departures: dict[str, str] = dict(self.DEPARTURES)
         bounded = [r for r in self._robots.values() if r.spec.bounded_links]
         for r in bounded:
             departures[f"body {r.id} mass bound"] = build.mass_bound_note(r.spec)

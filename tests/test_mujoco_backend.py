@@ -1,0 +1,173 @@
+"""MuJoCo-backend specifics: the model it builds, the world edits, and the behaviours only this
+backend has to construct (PyBullet's motor, brake, damping and contact rules on MuJoCo).
+
+These tests look inside the backend (``sim._b``) and import mujoco/pybullet on purpose.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+
+import mujoco
+import numpy as np
+import pybullet_data
+import pytest
+
+import simbridge
+from simbridge.exceptions import DisplayError, SimulationDivergedError
+
+WHEELS = [2, 3, 6, 7]
+
+
+@pytest.fixture
+def sim():
+    s = simbridge.Sim("mujoco")
+    yield s
+    s.close()
+
+
+def _names(m: mujoco.MjModel, obj: mujoco.mjtObj, n: int) -> list[str]:
+    return [mujoco.mj_id2name(m, obj, i) for i in range(n)]
+
+
+def test_one_body_per_link_visuals_kept_and_plane_is_a_plane(sim):
+    plane = sim.load_urdf("plane.urdf")
+    r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+    m = sim._b._m
+    bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
+    links = ["base_link"] + [sim.joint_info(r2d2, i).link_name for i in range(15)]
+    assert bodies == ["world", "b0/planeLink"] + [f"b1/{n}" for n in links]  # fixed links too
+    assert m.njnt == 1 + 8  # a free joint and the 8 movable joints
+    visual = m.geom_group == 1
+    assert visual.sum() == 17  # r2d2's 16 visuals and the plane's mesh, none of them colliding
+    assert (m.geom_contype[visual] == 0).all() and (m.geom_conaffinity[visual] == 0).all()
+    planes = np.flatnonzero(m.geom_type == mujoco.mjtGeom.mjGEOM_PLANE)
+    assert len(planes) == 1 and m.geom_pos[planes[0]][2] == 0.0  # the box's top face
+    # contacts only through pairs, each with PyBullet's product friction (0.5 x 1.0)
+    assert m.npair == 16 and np.allclose(m.pair_friction[:, :2], 0.5)
+    assert sim.body_name(plane) == "plane"
+
+
+def test_r2d2_rests_where_pybullet_rests(sim):
+    sim.load_urdf("plane.urdf")
+    r = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+    sim.step(240)
+    # PyBullet: 0.47099 (1 mm collision margin); measured here 0.47100 with the pairs' 1 mm
+    # margin and solref (2 dt, 1)
+    assert sim.base_state(r).position[2] == pytest.approx(0.4710, abs=3e-4)
+
+
+def test_loading_a_second_robot_keeps_the_first_ones_state_and_commands(sim):
+    a = sim.load_urdf("wheel.urdf", fixed_base=True)
+    sim.set_joint_velocity(a, "axle", 5.0, max_force=2.0)
+    sim.step(120)
+    before = sim.joint_states(a)
+    t = sim.time
+    b = sim.load_urdf("pendulum.urdf", fixed_base=True, base_position=(2, 0, 1))
+    after = sim.joint_states(a)
+    assert sim.time == t
+    assert after.positions.tolist() == before.positions.tolist()
+    assert after.velocities.tolist() == before.velocities.tolist()
+    sim.step(120)
+    assert sim.joint_states(a).velocities[0] == pytest.approx(5.0, abs=1e-9)  # command kept
+    assert sim.joint_states(b).velocities[0] == 0.0  # the new pendulum has its brake
+    sim.remove(b)
+    assert sim.bodies() == [a]
+    sim.step(10)
+    assert sim.joint_states(a).velocities[0] == pytest.approx(5.0, abs=1e-9)
+
+
+def test_torque_lasts_one_step_and_leaves_the_brake(sim):
+    body = sim.load_urdf("wheel.urdf", fixed_base=True)
+    sim.set_joint_torque(body, "axle", 100.0)  # below the 240 N m brake: held
+    sim.step()
+    assert sim.joint_states(body).velocities[0] == 0.0
+    applied = sim.joint_states(body).applied_torques[0]
+    assert applied == pytest.approx(-100.0, rel=1e-9)  # the brake's force, not the command
+    sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)
+    sim.set_joint_torque(body, "axle", 1.0)
+    sim.step()
+    w1 = sim.joint_states(body).velocities[0]
+    sim.step()
+    assert sim.joint_states(body).velocities[0] < w1  # gone after one step (damping only)
+    assert sim.joint_states(body).applied_torques[0] == 0.0
+
+
+def test_link_state_is_current_after_a_step(sim):
+    body = sim.load_urdf("double_pendulum.urdf", fixed_base=True)
+    sim.set_joint_velocity(body, [0, 1], 0.0, max_force=0.0)
+    sim.reset_joint_state(body, [0, 1], [0.7, -0.4])
+    sim.step(37)
+    got = sim.link_state(body, 1)
+    m, d = sim._b._m, sim._b._d
+    fresh = mujoco.MjData(m)
+    fresh.qpos[:], fresh.qvel[:] = d.qpos, d.qvel
+    mujoco.mj_forward(m, fresh)
+    bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "b0/lower")
+    assert got.com_position == pytest.approx(fresh.xipos[bid], abs=1e-15)
+    assert got.link_frame_position == pytest.approx(fresh.xpos[bid], abs=1e-15)
+
+
+def test_reset_base_state_takes_the_centre_of_mass_frame(sim):
+    body = sim.load_urdf("free_box.urdf")
+    pose = ((0.3, -0.2, 1.5), (0.0, 0.0, np.sin(0.4), np.cos(0.4)))
+    sim.reset_base_state(body, *pose, linear_velocity=(1, 2, 3), angular_velocity=(0.1, 0.2, 0.3))
+    s = sim.base_state(body)
+    assert s.position == pytest.approx(pose[0], abs=1e-12)
+    assert s.orientation == pytest.approx(pose[1], abs=1e-12)
+    assert s.linear_velocity == pytest.approx((1, 2, 3), abs=1e-12)
+    assert s.angular_velocity == pytest.approx((0.1, 0.2, 0.3), abs=1e-12)
+
+
+def test_divergence_is_reported(sim):
+    body = sim.load_urdf("wheel.urdf", fixed_base=True)
+    sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)
+    sim.set_joint_torque(body, "axle", 1e300)
+    with pytest.raises(SimulationDivergedError, match="mujoco"):
+        sim.step(3)
+
+
+def test_gui_without_display_raises(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(DisplayError, match="mujoco"):
+        simbridge.Sim("mujoco", gui=True)
+
+
+def test_manifest_names_engine_and_departures(sim):
+    sim.load_urdf("r2d2.urdf")
+    man = sim.manifest()
+    assert man["backend"] == "mujoco" and man["engine_version"] == mujoco.__version__
+    assert man["native_defaults"]["friction_combine"] == "max"
+    assert isinstance(man["departures"], dict) and man["departures"]
+    sim.close()
+    sim.close()  # twice is fine
+
+
+def test_dae_meshes_are_converted():
+    daes = sorted(
+        glob.glob(os.path.join(pybullet_data.getDataPath(), "**", "*.dae"), recursive=True)
+    )
+    if not daes:
+        pytest.skip("no .dae mesh in this pybullet_data")
+    urdf = f"""<robot name="dae"><link name="a">
+      <inertial><mass value="1"/>
+        <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>
+      <visual><geometry><mesh filename="{daes[0]}"/></geometry></visual></link></robot>"""
+    with simbridge.Sim("mujoco") as s:
+        s.load_urdf(urdf)
+        assert s._b._m.nmesh == 1
+
+
+def test_brake_threshold_is_one_newton_second_per_step(sim):
+    """PyBullet's default motor: impulse 1 N s per step (240 N m at 1/240 s): 228 N m held,
+    252 N m slips by (252/240 - 1) / I in one step."""
+    body = sim.load_urdf("wheel.urdf", fixed_base=True)
+    inertia = sim.dynamics_info(body, "wheel").local_inertia_diagonal[2]
+    sim.set_joint_torque(body, "axle", 228.0)
+    sim.step()
+    assert sim.joint_states(body).velocities[0] == 0.0
+    sim.set_joint_torque(body, "axle", 252.0)
+    sim.step()
+    assert sim.joint_states(body).velocities[0] == pytest.approx((252 / 240 - 1) / inertia)
