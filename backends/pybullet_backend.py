@@ -96,7 +96,7 @@ class PyBulletBackend(Backend):
             self._c = p.connect(p.DIRECT)
         self._dt = profile.timestep
         self._steps = 0
-        self._unchecked = 0
+        self._next_check = _CHECK_EVERY
         self._bodies: dict[int, _Body] = {}
         self._configure()
 
@@ -231,15 +231,18 @@ class PyBulletBackend(Backend):
         self._configure()
         self._bodies.clear()
         self._steps = 0
+        self._next_check = _CHECK_EVERY
 
     def step(self, n: int) -> None:
-        c = self._c
-        for _ in range(n):
-            p.stepSimulation(physicsClientId=c)
+        if n == 1:
+            p.stepSimulation(physicsClientId=self._c)
+        else:
+            c = self._c
+            for _ in range(n):
+                p.stepSimulation(physicsClientId=c)
         self._steps += n
-        self._unchecked += n
-        if self._unchecked >= _CHECK_EVERY:
-            self._unchecked = 0
+        if self._steps >= self._next_check:
+            self._next_check = self._steps + _CHECK_EVERY
             self._check_finite()
 
     def _check_finite(self) -> None:

@@ -255,7 +255,11 @@ class Sim:
         Raises:
             SimulationDivergedError: the state became NaN or infinite.
         """
-        if not isinstance(n, (int, np.integer)) or n < 0:
+        if type(n) is int and n >= 0 and not realtime:  # the hot path: one check, one call
+            self._b.step(n)
+            self._wall_start = None
+            return
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
             raise InvalidArgumentError("n", f"must be an integer >= 0, got {n!r}")
         if not realtime:
             self._b.step(int(n))
