@@ -14,6 +14,7 @@ Poses and velocities are recomputed lazily on the first read after a step (``mj_
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import sys
@@ -49,6 +50,18 @@ from .mujoco_damping import LinkDamping, clamp_acceleration
 from .mujoco_motors import MOTOR_DMAX, MOTOR_R_SCALE, MotorTable
 
 __all__ = ["MujocoBackend"]
+
+_log = logging.getLogger("simbridge.mujoco")
+
+
+def _mujoco_warning(message: str) -> None:
+    """MuJoCo's warnings go to Python logging, not to MUJOCO_LOG.TXT in the working folder.
+    A divergence still raises SimulationDivergedError from ``step``."""
+    _log.warning("MuJoCo: %s", message.strip())
+
+
+if mujoco.get_mju_user_warning() is None:  # leave a handler the user installed alone
+    mujoco.set_mju_user_warning(_mujoco_warning)
 
 # Contact margin (m) of every pair: PyBullet's shapes from a URDF carry a 1 mm collision margin
 # and rest that far apart; MuJoCo's pair margin makes its soft contact balance about as far
