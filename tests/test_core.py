@@ -29,7 +29,14 @@ def test_unknown_backend_lists_the_available_ones():
         simbridge.Sim("bullet")
 
 
-def test_missing_engine_names_the_pip_command():
+@pytest.fixture
+def scratch_registry(monkeypatch):
+    """Backends registered by a test vanish after it."""
+    monkeypatch.setattr(simbridge.registry, "_REGISTRY", dict(simbridge.registry._REGISTRY))
+    monkeypatch.setattr(simbridge.registry, "_LOADED", dict(simbridge.registry._LOADED))
+
+
+def test_missing_engine_names_the_pip_command(scratch_registry):
     register(
         "ghost",
         "simbridge_ghost.backend:Ghost",
@@ -69,3 +76,14 @@ def test_profiles_are_explicit_and_printable():
 def test_bad_sim_arguments(kwargs, message):
     with pytest.raises(exc.InvalidArgumentError, match=message):
         simbridge.Sim("pybullet", **kwargs)
+
+
+def test_unavailable_reason_names_what_is_missing(scratch_registry):
+    assert simbridge.registry.unavailable_reason("pybullet") is None
+    register("ghost2", "simbridge_ghost2.backend:Ghost")  # module absent, no engine declared
+    assert simbridge.registry.unavailable_reason("ghost2") == (
+        "backend module 'simbridge_ghost2' is not installed"
+    )
+    register("broken", "simbridge.sim:NoSuchClass")  # module present, class missing: a bug
+    with pytest.raises(exc.BackendError, match="cannot load 'simbridge.sim:NoSuchClass'"):
+        simbridge.registry.unavailable_reason("broken")

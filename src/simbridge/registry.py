@@ -19,7 +19,14 @@ from .exceptions import BackendError, BackendNotInstalledError, UnknownBackendEr
 if TYPE_CHECKING:
     from .backend import Backend
 
-__all__ = ["BackendSpec", "register", "available_backends", "load_backend", "ENTRY_POINT_GROUP"]
+__all__ = [
+    "BackendSpec",
+    "register",
+    "available_backends",
+    "load_backend",
+    "unavailable_reason",
+    "ENTRY_POINT_GROUP",
+]
 
 ENTRY_POINT_GROUP = "simbridge.backends"
 
@@ -87,6 +94,24 @@ def load_backend(name: str) -> type[Backend]:
         raise BackendError(f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}") from exc
     _LOADED[name] = cls
     return cls
+
+
+def unavailable_reason(name: str) -> str | None:
+    """Why backend ``name`` cannot be used here (its engine or its module is missing), or None
+    when it loads. A backend whose module is present but broken still raises."""
+    try:
+        load_backend(name)
+    except BackendNotInstalledError as exc:
+        return str(exc)
+    except BackendError as exc:
+        cause = exc.__cause__
+        missing_module = isinstance(cause, ModuleNotFoundError) and cause.name is not None
+        if missing_module and name in _REGISTRY:
+            module = _REGISTRY[name].entry_point.partition(":")[0]
+            if module == cause.name or module.startswith(f"{cause.name}."):  # type: ignore[union-attr]
+                return f"backend module {cause.name!r} is not installed"  # type: ignore[union-attr]
+        raise
+    return None
 
 
 register(

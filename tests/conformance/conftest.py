@@ -19,8 +19,7 @@ from pathlib import Path
 import pytest
 
 import simbridge
-from simbridge.exceptions import BackendError, BackendNotInstalledError
-from simbridge.registry import load_backend
+from simbridge.registry import unavailable_reason
 
 BACKENDS = simbridge.available_backends()
 PROFILES = ["pybullet", "urdf"]
@@ -56,28 +55,10 @@ def pytest_configure(config: pytest.Config) -> None:
     )
 
 
-def _unavailable_reason(name: str) -> str | None:
-    """Why backend ``name`` cannot run here, or None when it can."""
-    try:
-        load_backend(name)
-    except BackendNotInstalledError as exc:
-        return str(exc)
-    except BackendError as exc:
-        cause = exc.__cause__
-        if isinstance(cause, ModuleNotFoundError) and (cause.name or "").startswith(
-            "simbridge.backends."
-        ):
-            return f"backend module {cause.name!r} does not exist in this checkout"
-        if isinstance(cause, AttributeError) and "simbridge.backends." in str(cause):
-            return f"backend class not defined yet ({cause})"
-        raise
-    return None
-
-
 @pytest.fixture(params=BACKENDS)
 def backend(request: pytest.FixtureRequest) -> str:
     name: str = request.param
-    reason = _unavailable_reason(name)
+    reason = unavailable_reason(name)
     if reason is not None:
         if name in SHIPPED_BACKENDS or os.environ.get("SIMBRIDGE_REQUIRE_ALL_BACKENDS") == "1":
             pytest.fail(f"backend {name!r} is registered but unavailable: {reason}")
