@@ -46,6 +46,7 @@ from simbridge.types import (
 from simbridge.urdf import UrdfModel
 
 from . import mujoco_build as build
+from . import mujoco_kernel
 from .mujoco_damping import LinkDamping, clamp_acceleration
 from .mujoco_motors import MOTOR_DMAX, MOTOR_R_SCALE, MotorTable
 
@@ -383,6 +384,7 @@ class MujocoBackend(Backend):
         self._torque = np.zeros(table.n)
         self._fast: dict[int, tuple[Any, ...]] = {}  # set_joint_velocity's hot-path cache
         self._motor_rows_valid = False
+        self._kernel = self._new_kernel()
         self._refresh_motors()
         self._warnings = [d.warning[w].number for w in _BAD]
         self._stale = True
@@ -397,12 +399,98 @@ class MujocoBackend(Backend):
         m.dof_solref[t.dof, 1] = -t.kd * MOTOR_DMAX * self._inv_dt
         before = t.active
         t.refresh(self._dt, force, m.nv)
+        if self._kernel is not None:
+            self._kernel.bind_motors(
+                t.offset_rows,
+                t.position_rows,
+                t.position_qadr,
+                t.position_gain,
+                t.kd_rows,
+                t.kd_dof,
+                t.kd_factor,
+                t.dof_rows,
+                t.force_rows_slack,
+            )
         if len(before) != len(t.active) or (before != t.active).any():
             self._motor_rows_valid = False  # the last solve's rows belong to the old set
+
+    def _new_kernel(self) -> Any:
+        """The compiled step loop bound to this compile's model and arrays (None: step in
+        Python; mujoco_kernel.reason() says why)."""
+        cls = mujoco_kernel.kernel_class()
+        if cls is None:
+            return None
+        m, d = self._m, self._d
+        kernel = cls(m, d, m._address, d._address, mujoco_kernel.functions(), self._dt)
+        damping = self._damping
+        empty = np.zeros(0)
+        kernel.bind_world(
+            damping.first if damping is not None else 0,
+            damping.lin_gain if damping is not None else empty,
+            np.ascontiguousarray(damping.ang_gain) if damping is not None else empty,
+            damping.sensor.start if damping is not None else 0,
+            self._damp_dof,
+            self._damp_coef,
+            self._motors.dof,
+            self._torque,
+            self._clamp,
+            self._clamp_watch,
+            MOTOR_R_SCALE,
+        )
+        return kernel
 
     # ---------------------------------------------------------------- stepping
 
     def step(self, n: int) -> None:
+        kernel = self._kernel
+        if kernel is not None and self._viewer is None and not self._pending_torque:
+            # the hot path: one call into the compiled loop; it reports a divergence warning
+            status = kernel.step(n, False)
+            if n > 0:
+                self._steps += n
+                self._stale = self._motor_force_valid = self._motor_rows_valid = True
+            if status:
+                self._kernel_status(status)
+            return
+        if kernel is None:
+            self._step_python(n)
+        else:
+            status = 0
+            for _ in range(n if self._viewer is not None else min(n, 1)):
+                status = status or kernel.step(1, self._pending_torque)
+                self._pending_torque = False
+                if self._viewer is not None:
+                    self._sync_viewer()
+            if self._viewer is None and n > 1:
+                status = status or kernel.step(n - 1, False)
+            if status > 1:
+                self._kernel_status(status)
+        if n > 0:
+            self._steps += n
+            self._stale = self._motor_force_valid = self._motor_rows_valid = True
+        self._check_warnings()
+
+    def _kernel_status(self, status: int) -> None:
+        if status == 1:
+            self._check_warnings()
+            return
+        what = (
+            "motor rows (not MuJoCo's first friction rows)"
+            if status == 2
+            else ("motor rows (singular solve)")
+        )
+        raise SimulationDivergedError(self.name, self.time, what)
+
+    def _check_warnings(self) -> None:
+        w = self._d.warning
+        for i, code in enumerate(_BAD):
+            if w[code].number != self._warnings[i]:
+                self._warnings = [w[c].number for c in _BAD]
+                what = ("positions", "velocities", "accelerations")[i]
+                raise SimulationDivergedError(self.name, self.time, f"joint {what} (qpos/qvel)")
+
+    def _step_python(self, n: int) -> None:
+        """The step loop in Python: the reference the compiled loop (_mjkernel.c) follows."""
         m, d = self._m, self._d
         t = self._motors
         damping = self._damping
@@ -431,16 +519,6 @@ class MujocoBackend(Backend):
                 self._torque[:] = 0.0
             if self._viewer is not None:
                 self._sync_viewer()
-        if n > 0:
-            self._steps += n
-            self._stale = True
-            self._motor_force_valid = self._motor_rows_valid = True
-        w = d.warning
-        for i, code in enumerate(_BAD):
-            if w[code].number != self._warnings[i]:
-                self._warnings = [w[c].number for c in _BAD]
-                what = ("positions", "velocities", "accelerations")[i]
-                raise SimulationDivergedError(self.name, self.time, f"joint {what} (qpos/qvel)")
 
     def _step2_split(self, m: Any, d: Any, k: int) -> None:
         """``mj_step2`` in pieces: the kd != 1 term needs ``qacc_smooth``; after the solve the
@@ -802,5 +880,10 @@ class MujocoBackend(Backend):
             "engine": "MuJoCo (generalized coordinates, soft convex contact, Newton solver)",
             "engine_version": mujoco.__version__,
             "native_defaults": self.NATIVE_DEFAULTS,
+            "step_loop": (
+                "compiled (backends/_mjkernel.c)"
+                if self._kernel is not None
+                else f"Python ({mujoco_kernel.reason()})"
+            ),
             "departures": departures,
         }

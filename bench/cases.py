@@ -28,7 +28,8 @@ class Case:
 
 
 def engine_versions() -> str:
-    return f"pybullet {version('pybullet')}, mujoco {version('mujoco')}, simbridge {simbridge.__version__}"
+    engines = f"pybullet {version('pybullet')}, mujoco {version('mujoco')}"
+    return f"{engines}, simbridge {simbridge.__version__}"
 
 
 # ---------------------------------------------------------------- the layer's drive
@@ -206,22 +207,24 @@ def single_calls(backend: str, n: int) -> list[Case]:
         import pybullet as p
 
         c = sim._b._c  # noqa: SLF001 - the same client, called raw
-        raw_link = lambda: p.getLinkState(
-            robot,
-            2,
-            computeLinkVelocity=1,
-            computeForwardKinematics=1,  # noqa: E731
-            physicsClientId=c,
-        )
-        raw_js = lambda: p.getJointStates(robot, WHEELS, physicsClientId=c)  # noqa: E731
-        raw_set = lambda: p.setJointMotorControlArray(
-            robot,
-            WHEELS,
-            p.VELOCITY_CONTROL,  # noqa: E731
-            targetVelocities=TURN.tolist(),
-            forces=[50.0] * 4,
-            physicsClientId=c,
-        )
+
+        def raw_link() -> object:
+            return p.getLinkState(
+                robot, 2, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
+            )
+
+        def raw_js() -> object:
+            return p.getJointStates(robot, WHEELS, physicsClientId=c)
+
+        def raw_set() -> None:
+            p.setJointMotorControlArray(
+                robot,
+                WHEELS,
+                p.VELOCITY_CONTROL,
+                targetVelocities=TURN.tolist(),
+                forces=[50.0] * 4,
+                physicsClientId=c,
+            )
     else:
         import mujoco
 

@@ -156,16 +156,15 @@ def main(argv: list[str] | None = None) -> int:
         f" | Python {platform.python_version()} | {cases.engine_versions()} | repeats {reps}"
     )
     print()
-    print(
-        f"| {'case':<62} | unit | raw median (min..max) | simbridge median (min..max) | ratio | target | |"
-    )
+    head = "| unit | raw median (min..max) | simbridge median (min..max) | ratio | target | |"
+    print(f"| {'case':<62} {head}")
     print(f"|{'-' * 64}|------|------|------|------|------|--|")
     for row in rows:
         target = f"{row.target:.2f}x" if row.target else "-"
         note = row.note or row.verdict()
         print(
-            f"| {row.name:<62} | {row.unit} | {fmt(row.raw, row.unit)} | {fmt(row.layer, row.unit)} "
-            f"| {row.ratio:5.3f} | {target} | {note} |"
+            f"| {row.name:<62} | {row.unit} | {fmt(row.raw, row.unit)} "
+            f"| {fmt(row.layer, row.unit)} | {row.ratio:5.3f} | {target} | {note} |"
         )
     return 0
 

@@ -36,9 +36,8 @@ def main(argv=None):
             sim.step(realtime=args.gui)
 
         state = sim.base_state(robot)
-        print(
-            f"[{args.backend}] t = {sim.time:.3f} s  base at {tuple(round(v, 4) for v in state.position)}"
-        )
+        where = tuple(round(v, 4) for v in state.position)
+        print(f"[{args.backend}] t = {sim.time:.3f} s  base at {where}")
         return state
 
 

@@ -40,6 +40,17 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         assert required in names, f"{required} missing from {wheel.name}"
 
 
+def test_wheel_carries_the_compiled_step_loop_where_a_compiler_exists(wheel):
+    import shutil
+    import sysconfig
+
+    cc = (sysconfig.get_config_var("CC") or "cc").split()[0]
+    if not (shutil.which(cc) or shutil.which("gcc")):  # pragma: no cover
+        pytest.skip("no C compiler: the wheel is built without backends/_mjkernel.c")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert any(n.startswith("simbridge/backends/_mjkernel") and n.endswith(".so") for n in names)
+
+
 def test_installed_wheel_imports_and_finds_the_robots(wheel, tmp_path):
     target = tmp_path / "site"
     subprocess.run(

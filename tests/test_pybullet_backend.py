@@ -102,7 +102,8 @@ def _temp_leftovers() -> set[str]:
 
 
 CUBE = """<robot name="cube"><link name="box">
-  <inertial><mass value="{mass}"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
+  <inertial><mass value="{mass}"/>
+    <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
   <collision><geometry><box size="0.5 0.5 0.5"/></geometry></collision>
 </link></robot>"""
 

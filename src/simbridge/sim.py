@@ -311,8 +311,10 @@ class Sim:
     def _joints(self, body: int, joints: JointsArg | None, movable: bool) -> np.ndarray:
         """Resolve a joints argument to an index array (cached per body and argument)."""
         b = self._body(body)
-        if joints is None:
-            key: Any = None
+        if type(joints) is np.ndarray:  # the hot path first
+            key: Any = (joints.dtype.char, joints.tobytes())
+        elif joints is None:
+            key = None
         elif isinstance(joints, (int, str, np.integer)):
             key = joints
         elif isinstance(joints, np.ndarray):
@@ -365,9 +367,15 @@ class Sim:
             if nonneg and value < 0:
                 raise InvalidArgumentError(argument, f"values must be >= 0, got {value!r}")
             return [float(value)] * n
+        values: list[float] | None = None
         if type(value) is np.ndarray and value.shape == (n,) and value.dtype == np.float64:
             values = value.tolist()
-        else:
+        elif type(value) is list and len(value) == n and n:
+            try:
+                values = list(map(float, value))
+            except (TypeError, ValueError):
+                pass  # the general path below says what is wrong
+        if values is None:
             try:
                 arr = np.asarray(value, dtype=np.float64)
             except (TypeError, ValueError):
@@ -383,7 +391,9 @@ class Sim:
                     argument,
                     f"expected a number or shape ({n},) for {n} joint(s), got shape {arr.shape}",
                 )
-        if not all(map(math.isfinite, values)):
+        # a sum of floats is finite only if every one is (an inf or a nan survives the sum);
+        # the exact test runs only when the sum is not finite (it may also overflow)
+        if not math.isfinite(sum(values)) and not all(map(math.isfinite, values)):
             raise InvalidArgumentError(argument, f"values must be finite, got {value!r}")
         if nonneg and min(values) < 0:
             raise InvalidArgumentError(argument, f"values must be >= 0, got {value!r}")

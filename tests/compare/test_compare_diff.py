@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 from _synthetic import quat_x, quat_z, trajectory
+
 from simbridge.compare import QUANTITIES, diff
 from simbridge.compare.scenario import HEADLINE_QUANTITIES
-
 from simbridge.exceptions import SimbridgeError
 
 DEG = math.pi / 180

@@ -13,6 +13,7 @@ import json
 
 import numpy as np
 import pytest
+
 from simbridge.compare import QUANTITIES, Trajectory, compare, diff, report
 from simbridge.compare.fmt import fmt_value
 

@@ -9,6 +9,7 @@ import json
 
 import numpy as np
 import pytest
+
 from simbridge.compare import QUANTITIES, Trajectory, compare, diff, report
 from simbridge.compare.fmt import fmt_threshold, fmt_time, fmt_value
 from simbridge.compare.progress import ProgressBar

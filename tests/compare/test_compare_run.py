@@ -6,9 +6,9 @@ import csv
 
 import numpy as np
 import pytest
-from simbridge.compare import Trajectory, loads_scenario, run
 
 import simbridge
+from simbridge.compare import Trajectory, loads_scenario, run
 from simbridge.exceptions import ScenarioError, UnknownJointError
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+
 from simbridge.compare import (
     dumps_scenario,
     list_scenarios,
@@ -13,7 +14,6 @@ from simbridge.compare import (
     save_scenario,
 )
 from simbridge.compare.scenario import find_key_line
-
 from simbridge.exceptions import ScenarioError
 
 SHIPPED = ["double-pendulum", "pendulum", "r2d2", "r2d2-gentle", "spinning-wheel"]

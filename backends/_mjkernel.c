@@ -1,0 +1,492 @@
+/* The MuJoCo backend's step loop in C.
+ *
+ * backends/mujoco_backend.py steps in Python: mj_step1, the layer's additions (motor offsets on
+ * the friction rows, PyBullet's link damping, joint damping, one-step torques), then mj_step2 or
+ * a split mj_step2 that makes the motor rows exact (the "polish") and clamps the speeds. That
+ * Python is the reference; this file does the same arithmetic, in the same order, once per
+ * step without leaving C, so a step costs what MuJoCo costs plus a few hundred nanoseconds.
+ *
+ * The module holds no MuJoCo symbol of its own: the caller passes the addresses of the MuJoCo
+ * functions (taken from the libmujoco the Python bindings loaded) and of mjModel/mjData
+ * (MjModel._address, MjData._address). The headers give the struct layouts; HEADER_VERSION lets
+ * the caller refuse a kernel built against another MuJoCo.
+ *
+ * Arrays are borrowed from the caller (numpy, via the buffer protocol): the kernel keeps a
+ * reference to each, and reads them at every step, so the caller's in-place command updates
+ * are seen without a call here.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <string.h>
+
+#include <mujoco/mujoco.h>
+
+typedef void (*mjfn)(const mjModel*, mjData*);
+typedef void (*solvefn)(const mjModel*, mjData*, mjtNum*, const mjtNum*, int);
+
+enum { F_STEP1, F_STEP2, F_ACT, F_ACC, F_CON, F_CHECKACC, F_EULER, N_FN };
+
+typedef struct {
+  Py_buffer buf;
+  int held;
+} Arr;
+
+typedef struct {
+  PyObject_HEAD
+  PyObject* owners;  /* (MjModel, MjData): kept alive while the kernel lives */
+  const mjModel* m;
+  mjData* d;
+  mjfn fn[N_FN];
+  solvefn solveM;
+  double dt, clamp_limit, clamp_watch, r_scale;
+  int has_clamp;
+  /* world arrays (bound once per compile) */
+  Arr lin_gain, ang_gain;   /* (n,), (n,3) */
+  int damp_first, damp_n, damp_sensor;
+  Arr jd_dof, jd_coef;      /* joint damping: dof (intp), -damping */
+  Arr tq_dof, tq;           /* one-step torques: motor dof (intp), torque */
+  /* motor arrays (bound after every refresh) */
+  int k;
+  Arr offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows, slack;
+  double *Y, *U, *A, *b;    /* k x nv, k x nv, k x k, k */
+  int *free_rows, *piv;
+  int clamp_armed;
+} Kernel;
+
+static void arr_release(Arr* a) {
+  if (a->held) {
+    PyBuffer_Release(&a->buf);
+    a->held = 0;
+  }
+}
+
+/* Borrow a C-contiguous 1-D or 2-D buffer of float64 ('d') or intp ('n'/'l'/'q'). */
+static int arr_take(Arr* a, PyObject* obj, char kind, Py_ssize_t n, const char* what) {
+  arr_release(a);
+  if (PyObject_GetBuffer(obj, &a->buf, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return -1;
+  a->held = 1;
+  const char* f = a->buf.format ? a->buf.format : "B";
+  if (*f == '<' || *f == '=' || *f == '@') f++;
+  int ok;
+  if (kind == 'd') {
+    ok = strcmp(f, "d") == 0 && a->buf.itemsize == (Py_ssize_t)sizeof(double);
+  } else {
+    ok = (strcmp(f, "l") == 0 || strcmp(f, "q") == 0 || strcmp(f, "n") == 0) &&
+         a->buf.itemsize == (Py_ssize_t)sizeof(Py_ssize_t);
+  }
+  if (!ok) {
+    PyErr_Format(PyExc_TypeError, "%s: expected a contiguous %s array, got format '%s'", what,
+                 kind == 'd' ? "float64" : "intp", a->buf.format ? a->buf.format : "?");
+    arr_release(a);
+    return -1;
+  }
+  if (n >= 0 && a->buf.len / a->buf.itemsize != n) {
+    PyErr_Format(PyExc_ValueError, "%s: expected %zd elements, got %zd", what, n,
+                 a->buf.len / a->buf.itemsize);
+    arr_release(a);
+    return -1;
+  }
+  return 0;
+}
+
+static Py_ssize_t arr_len(const Arr* a) { return a->held ? a->buf.len / a->buf.itemsize : 0; }
+#define DP(a) ((double*)(a).buf.buf)
+#define IP(a) ((const Py_ssize_t*)(a).buf.buf)
+
+static void free_motor_scratch(Kernel* self) {
+  PyMem_Free(self->Y);
+  PyMem_Free(self->U);
+  PyMem_Free(self->A);
+  PyMem_Free(self->b);
+  PyMem_Free(self->free_rows);
+  PyMem_Free(self->piv);
+  self->Y = self->U = self->A = self->b = NULL;
+  self->free_rows = self->piv = NULL;
+}
+
+static void release_all(Kernel* self) {
+  Arr* all[] = {&self->lin_gain, &self->ang_gain, &self->jd_dof,   &self->jd_coef,
+                &self->tq_dof,   &self->tq,       &self->offset,   &self->pos_rows,
+                &self->pos_qadr, &self->pos_gain, &self->kd_rows,  &self->kd_dof,
+                &self->kd_factor, &self->dof_rows, &self->slack};
+  for (size_t i = 0; i < sizeof(all) / sizeof(all[0]); i++) arr_release(all[i]);
+  free_motor_scratch(self);
+  self->k = 0;
+}
+
+static void Kernel_dealloc(Kernel* self) {
+  release_all(self);
+  Py_XDECREF(self->owners);
+  Py_TYPE(self)->tp_free((PyObject*)self);
+}
+
+/* Kernel(model, data, model_address, data_address, functions, dt)
+ * functions: addresses of mj_step1, mj_step2, mj_fwdActuation, mj_fwdAcceleration,
+ * mj_fwdConstraint, mj_checkAcc, mj_Euler, mj_solveM (in that order). */
+static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
+  PyObject *model, *data, *fns;
+  unsigned long long maddr, daddr;
+  double dt;
+  if (!PyArg_ParseTuple(args, "OOKKOd", &model, &data, &maddr, &daddr, &fns, &dt)) return -1;
+  if (!PyTuple_Check(fns) || PyTuple_GET_SIZE(fns) != N_FN + 1) {
+    PyErr_SetString(PyExc_ValueError, "functions: a tuple of 8 addresses");
+    return -1;
+  }
+  if (!maddr || !daddr || !(dt > 0)) {
+    PyErr_SetString(PyExc_ValueError, "null model/data address or dt <= 0");
+    return -1;
+  }
+  void* f[N_FN + 1];
+  for (int i = 0; i <= N_FN; i++) {
+    f[i] = PyLong_AsVoidPtr(PyTuple_GET_ITEM(fns, i));
+    if (!f[i]) {
+      if (!PyErr_Occurred()) PyErr_Format(PyExc_ValueError, "function %d: null address", i);
+      return -1;
+    }
+  }
+  release_all(self);
+  Py_XDECREF(self->owners);
+  self->owners = PyTuple_Pack(2, model, data);
+  if (!self->owners) return -1;
+  self->m = (const mjModel*)(uintptr_t)maddr;
+  self->d = (mjData*)(uintptr_t)daddr;
+  for (int i = 0; i < N_FN; i++) self->fn[i] = (mjfn)f[i];
+  self->solveM = (solvefn)f[N_FN];
+  self->dt = dt;
+  self->has_clamp = 0;
+  self->clamp_limit = self->clamp_watch = INFINITY;
+  self->r_scale = 1.0;
+  self->damp_n = 0;
+  self->clamp_armed = 0;
+  return 0;
+}
+
+/* bind_world(first, lin_gain, ang_gain, sensor_adr, jd_dof, jd_coef, tq_dof, tq,
+ *            clamp_limit_or_None, clamp_watch, r_scale) */
+static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
+  int first, sensor;
+  PyObject *lg, *ag, *jdd, *jdc, *tqd, *tq, *limit;
+  double watch, r_scale;
+  if (!PyArg_ParseTuple(args, "iOOiOOOOOdd", &first, &lg, &ag, &sensor, &jdd, &jdc, &tqd, &tq,
+                        &limit, &watch, &r_scale))
+    return NULL;
+  const mjModel* m = self->m;
+  if (arr_take(&self->lin_gain, lg, 'd', -1, "lin_gain") < 0) return NULL;
+  Py_ssize_t n = arr_len(&self->lin_gain);
+  if (arr_take(&self->ang_gain, ag, 'd', 3 * n, "ang_gain") < 0) return NULL;
+  if (n && (first < 0 || first + n > m->nbody || sensor < 0 || sensor + 6 * n > m->nsensordata)) {
+    PyErr_SetString(PyExc_ValueError, "damping bodies or sensors out of the model's range");
+    return NULL;
+  }
+  if (arr_take(&self->jd_dof, jdd, 'n', -1, "joint damping dofs") < 0) return NULL;
+  if (arr_take(&self->jd_coef, jdc, 'd', arr_len(&self->jd_dof), "joint damping") < 0)
+    return NULL;
+  if (arr_take(&self->tq_dof, tqd, 'n', -1, "torque dofs") < 0) return NULL;
+  if (arr_take(&self->tq, tq, 'd', arr_len(&self->tq_dof), "torques") < 0) return NULL;
+  for (Py_ssize_t i = 0; i < arr_len(&self->jd_dof); i++)
+    if (IP(self->jd_dof)[i] < 0 || IP(self->jd_dof)[i] >= m->nv) goto bad_dof;
+  for (Py_ssize_t i = 0; i < arr_len(&self->tq_dof); i++)
+    if (IP(self->tq_dof)[i] < 0 || IP(self->tq_dof)[i] >= m->nv) goto bad_dof;
+  self->damp_first = first;
+  self->damp_n = (int)n;
+  self->damp_sensor = sensor;
+  self->has_clamp = limit != Py_None;
+  self->clamp_limit = self->has_clamp ? PyFloat_AsDouble(limit) : INFINITY;
+  if (PyErr_Occurred()) return NULL;
+  self->clamp_watch = watch;
+  self->r_scale = r_scale;
+  self->clamp_armed = 0;
+  Py_RETURN_NONE;
+bad_dof:
+  PyErr_SetString(PyExc_ValueError, "a dof index out of the model's range");
+  return NULL;
+}
+
+/* bind_motors(offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows,
+ *             slack): the motor rows after a refresh (k = len(dof_rows)) */
+static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
+  PyObject *o[9];
+  if (!PyArg_ParseTuple(args, "OOOOOOOOO", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
+                        &o[7], &o[8]))
+    return NULL;
+  const mjModel* m = self->m;
+  free_motor_scratch(self);
+  self->k = 0;
+  if (arr_take(&self->dof_rows, o[7], 'n', -1, "dof_rows") < 0) return NULL;
+  Py_ssize_t k = arr_len(&self->dof_rows);
+  if (arr_take(&self->offset, o[0], 'd', k, "offset_rows") < 0 ||
+      arr_take(&self->pos_rows, o[1], 'n', -1, "position_rows") < 0 ||
+      arr_take(&self->pos_qadr, o[2], 'n', arr_len(&self->pos_rows), "position_qadr") < 0 ||
+      arr_take(&self->pos_gain, o[3], 'd', arr_len(&self->pos_rows), "position_gain") < 0 ||
+      arr_take(&self->kd_rows, o[4], 'n', -1, "kd_rows") < 0 ||
+      arr_take(&self->kd_dof, o[5], 'n', arr_len(&self->kd_rows), "kd_dof") < 0 ||
+      arr_take(&self->kd_factor, o[6], 'd', arr_len(&self->kd_rows), "kd_factor") < 0 ||
+      arr_take(&self->slack, o[8], 'd', k, "force_rows_slack") < 0)
+    return NULL;
+  for (Py_ssize_t i = 0; i < k; i++)
+    if (IP(self->dof_rows)[i] < 0 || IP(self->dof_rows)[i] >= m->nv) goto bad;
+  for (Py_ssize_t i = 0; i < arr_len(&self->pos_rows); i++)
+    if (IP(self->pos_rows)[i] < 0 || IP(self->pos_rows)[i] >= k ||
+        IP(self->pos_qadr)[i] < 0 || IP(self->pos_qadr)[i] >= m->nq)
+      goto bad;
+  for (Py_ssize_t i = 0; i < arr_len(&self->kd_rows); i++)
+    if (IP(self->kd_rows)[i] < 0 || IP(self->kd_rows)[i] >= k || IP(self->kd_dof)[i] < 0 ||
+        IP(self->kd_dof)[i] >= m->nv)
+      goto bad;
+  if (k) {
+    int nv = m->nv;
+    self->Y = PyMem_Calloc((size_t)k * nv, sizeof(double));
+    self->U = PyMem_Calloc((size_t)k * nv, sizeof(double));
+    self->A = PyMem_Calloc((size_t)k * k, sizeof(double));
+    self->b = PyMem_Calloc((size_t)k, sizeof(double));
+    self->free_rows = PyMem_Calloc((size_t)k, sizeof(int));
+    self->piv = PyMem_Calloc((size_t)k, sizeof(int));
+    if (!self->Y || !self->U || !self->A || !self->b || !self->free_rows || !self->piv) {
+      free_motor_scratch(self);
+      return PyErr_NoMemory();
+    }
+    for (Py_ssize_t r = 0; r < k; r++) self->U[r * nv + IP(self->dof_rows)[r]] = 1.0;
+  }
+  self->k = (int)k;
+  Py_RETURN_NONE;
+bad:
+  PyErr_SetString(PyExc_ValueError, "a motor row, dof or qpos index out of range");
+  return NULL;
+}
+
+/* PyBullet's link damping into xfrc_applied; returns the largest body speed seen
+ * (mujoco_damping.LinkDamping.apply, same operations in the same order). */
+static double link_damping(Kernel* self) {
+  mjData* d = self->d;
+  const double* lin = DP(self->lin_gain);
+  const double* ang = DP(self->ang_gain);
+  double top = 0.0;
+  for (int i = 0; i < self->damp_n; i++) {
+    const double* v = d->sensordata + self->damp_sensor + 6 * i;
+    const double* w = v + 3;
+    double sv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    double sw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    if (sv > top) top = sv;
+    if (sw > top) top = sw;
+    sv += 1.0;
+    sw += 1.0;
+    int b = self->damp_first + i;
+    double* xf = d->xfrc_applied + 6 * b;
+    double g = lin[i] * sv;
+    xf[0] = v[0] * g;
+    xf[1] = v[1] * g;
+    xf[2] = v[2] * g;
+    const double* R = d->ximat + 9 * b; /* world = R local */
+    double tl[3];
+    for (int c = 0; c < 3; c++) {
+      tl[c] = R[c] * w[0] + R[3 + c] * w[1] + R[6 + c] * w[2];
+      tl[c] *= ang[3 * i + c];
+      tl[c] *= sw;
+    }
+    for (int r = 0; r < 3; r++) xf[3 + r] = R[3 * r] * tl[0] + R[3 * r + 1] * tl[1] + R[3 * r + 2] * tl[2];
+  }
+  return top;
+}
+
+/* Solve A x = b (n x n, row-major, overwritten) by LU with partial pivoting; x in b.
+ * Returns 0, or -1 for a singular matrix. */
+static int lu_solve(double* A, double* b, int* piv, int n) {
+  for (int c = 0; c < n; c++) {
+    int p = c;
+    double best = fabs(A[c * n + c]);
+    for (int r = c + 1; r < n; r++)
+      if (fabs(A[r * n + c]) > best) best = fabs(A[r * n + c]), p = r;
+    if (!(best > 0.0)) return -1;
+    piv[c] = p;
+    if (p != c) {
+      for (int j = 0; j < n; j++) {
+        double t = A[c * n + j];
+        A[c * n + j] = A[p * n + j];
+        A[p * n + j] = t;
+      }
+      double t = b[c];
+      b[c] = b[p];
+      b[p] = t;
+    }
+    for (int r = c + 1; r < n; r++) {
+      double f = A[r * n + c] / A[c * n + c];
+      if (f == 0.0) continue;
+      for (int j = c + 1; j < n; j++) A[r * n + j] -= f * A[c * n + j];
+      b[r] -= f * b[c];
+    }
+  }
+  for (int r = n - 1; r >= 0; r--) {
+    double s = b[r];
+    for (int j = r + 1; j < n; j++) s -= A[r * n + j] * b[j];
+    b[r] = s / A[r * n + r];
+  }
+  return 0;
+}
+
+/* Make the free motor rows exact (MujocoBackend._polish). */
+static int polish(Kernel* self) {
+  const mjModel* m = self->m;
+  mjData* d = self->d;
+  int k = self->k, nv = m->nv;
+  const Py_ssize_t* dofs = IP(self->dof_rows);
+  const double* slack = DP(self->slack);
+  double* force = d->efc_force;
+  double* qacc = d->qacc;
+  const double* aref = d->efc_aref;
+  int nf = 0;
+  for (int r = 0; r < k; r++)
+    if (fabs(force[r]) < slack[r]) self->free_rows[nf++] = r;
+  if (!nf) return 0;
+  self->solveM(m, d, self->Y, self->U, k);
+  double* A = self->A;
+  double* b = self->b;
+  for (int i = 0; i < nf; i++) {
+    int r = self->free_rows[i];
+    b[i] = aref[r] - qacc[dofs[r]];
+    for (int j = 0; j < nf; j++) A[i * nf + j] = self->Y[r * nv + dofs[self->free_rows[j]]];
+  }
+  if (lu_solve(A, b, self->piv, nf) < 0) return -1;
+  for (int c = 0; c < nv; c++) {
+    double s = 0.0;
+    for (int i = 0; i < nf; i++) s += b[i] * self->Y[self->free_rows[i] * nv + c];
+    qacc[c] += s;
+  }
+  for (int i = 0; i < nf; i++) {
+    int r = self->free_rows[i];
+    qacc[dofs[r]] = aref[r];
+    force[r] += b[i];
+  }
+  return 0;
+}
+
+static int warning_count(const mjData* d) {
+  return d->warning[mjWARN_BADQPOS].number + d->warning[mjWARN_BADQVEL].number +
+         d->warning[mjWARN_BADQACC].number;
+}
+
+/* step(n, pending_torque) -> 0 ok, 1 a divergence warning was raised (the caller finds which),
+ * 2 the friction rows are not the motor rows, 3 a singular motor solve */
+static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (nargs != 2) {
+    PyErr_SetString(PyExc_TypeError, "step(n, pending_torque)");
+    return NULL;
+  }
+  long n = PyLong_AsLong(args[0]);
+  int pending = PyObject_IsTrue(args[1]);
+  if ((n == -1 && PyErr_Occurred()) || pending < 0) return NULL;
+  const mjModel* m = self->m;
+  mjData* d = self->d;
+  const int k = self->k;
+  const int nt = (int)arr_len(&self->tq_dof), njd = (int)arr_len(&self->jd_dof);
+  const int before = warning_count(d);
+  int status = 0;
+  for (long s = 0; s < n && !status; s++) {
+    self->fn[F_STEP1](m, d);
+    if (k) {
+      if (d->nf < k) {
+        status = 2;
+        break;
+      }
+      const double* off = DP(self->offset);
+      double* aref = d->efc_aref;
+      Py_ssize_t np_ = arr_len(&self->pos_rows);
+      if (np_) {
+        /* aref += offset - gain q on position rows (aref_offset) */
+        for (int r = 0; r < k; r++) self->b[r] = off[r];
+        for (Py_ssize_t i = 0; i < np_; i++)
+          self->b[IP(self->pos_rows)[i]] -= DP(self->pos_gain)[i] * d->qpos[IP(self->pos_qadr)[i]];
+        for (int r = 0; r < k; r++) aref[r] += self->b[r];
+      } else {
+        for (int r = 0; r < k; r++) aref[r] += off[r];
+      }
+      const double inv = 1.0 / self->r_scale;
+      for (int r = 0; r < k; r++) {
+        d->efc_R[r] *= self->r_scale;
+        d->efc_D[r] *= inv;
+      }
+    }
+    if (self->damp_n) self->clamp_armed = link_damping(self) > self->clamp_watch;
+    for (int i = 0; i < njd; i++)
+      d->qfrc_applied[IP(self->jd_dof)[i]] = DP(self->jd_coef)[i] * d->qvel[IP(self->jd_dof)[i]];
+    if (pending)
+      for (int i = 0; i < nt; i++) d->qfrc_applied[IP(self->tq_dof)[i]] += DP(self->tq)[i];
+    if (k || self->clamp_armed) {
+      self->fn[F_ACT](m, d);
+      self->fn[F_ACC](m, d);
+      for (Py_ssize_t i = 0; i < arr_len(&self->kd_rows); i++)
+        d->efc_aref[IP(self->kd_rows)[i]] += DP(self->kd_factor)[i] * d->qacc_smooth[IP(self->kd_dof)[i]];
+      self->fn[F_CON](m, d);
+      if (k && polish(self) < 0) status = 3;
+      if (self->clamp_armed) {
+        double L = self->clamp_limit, dt = self->dt;
+        for (int i = 0; i < m->nv; i++) {
+          double lo = (-L - d->qvel[i]) / dt, hi = (L - d->qvel[i]) / dt;
+          double a = d->qacc[i];
+          d->qacc[i] = a < lo ? lo : (a > hi ? hi : a);
+        }
+      }
+      self->fn[F_CHECKACC](m, d);
+      self->fn[F_EULER](m, d);
+    } else {
+      self->fn[F_STEP2](m, d);
+    }
+    if (pending) {
+      pending = 0;
+      double* tq = DP(self->tq);
+      for (int i = 0; i < nt; i++) {
+        d->qfrc_applied[IP(self->tq_dof)[i]] = 0.0;
+        tq[i] = 0.0;
+      }
+    }
+  }
+  if (!status && warning_count(d) != before) status = 1;
+  return PyLong_FromLong(status);
+}
+
+static PyObject* Kernel_clamp_armed(Kernel* self, void* closure) {
+  return PyBool_FromLong(self->clamp_armed);
+}
+
+static PyMethodDef Kernel_methods[] = {
+    {"bind_world", (PyCFunction)Kernel_bind_world, METH_VARARGS, "Bind the world's arrays."},
+    {"bind_motors", (PyCFunction)Kernel_bind_motors, METH_VARARGS, "Bind the motor rows."},
+    {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL, "step(n, pending_torque)"},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyGetSetDef Kernel_getset[] = {
+    {"clamp_armed", (getter)Kernel_clamp_armed, NULL, "speed clamp armed by the last step", NULL},
+    {NULL, NULL, NULL, NULL, NULL},
+};
+
+static PyTypeObject KernelType = {
+    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "simbridge.backends._mjkernel.Kernel",
+    .tp_basicsize = sizeof(Kernel),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "The MuJoCo backend's step loop (see backends/_mjkernel.c).",
+    .tp_new = PyType_GenericNew,
+    .tp_init = (initproc)Kernel_init,
+    .tp_dealloc = (destructor)Kernel_dealloc,
+    .tp_methods = Kernel_methods,
+    .tp_getset = Kernel_getset,
+};
+
+static struct PyModuleDef module = {
+    PyModuleDef_HEAD_INIT, "_mjkernel", "The MuJoCo backend's step loop in C.", -1, NULL,
+};
+
+PyMODINIT_FUNC PyInit__mjkernel(void) {
+  if (PyType_Ready(&KernelType) < 0) return NULL;
+  PyObject* mod = PyModule_Create(&module);
+  if (!mod) return NULL;
+  Py_INCREF(&KernelType);
+  if (PyModule_AddObject(mod, "Kernel", (PyObject*)&KernelType) < 0 ||
+      PyModule_AddIntConstant(mod, "HEADER_VERSION", mjVERSION_HEADER) < 0 ||
+      PyModule_AddIntConstant(mod, "SIZEOF_MJDATA", (long)sizeof(mjData)) < 0 ||
+      PyModule_AddIntConstant(mod, "SIZEOF_MJMODEL", (long)sizeof(mjModel)) < 0) {
+    Py_DECREF(mod);
+    return NULL;
+  }
+  return mod;
+}

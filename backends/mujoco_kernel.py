@@ -1,0 +1,92 @@
+"""Loads the MuJoCo backend's compiled step loop (``_mjkernel``, backends/_mjkernel.c).
+
+The kernel is used only when it was built against the very MuJoCo that runs (its header version
+equals ``mujoco.mj_version()``), the MuJoCo library file can be found next to the bindings, and
+``SIMBRIDGE_MUJOCO_STEP`` is not ``python``. Otherwise the backend steps in Python (same
+arithmetic, same results, about 10x slower per step) and :func:`reason` says why.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+from typing import Any
+
+import mujoco
+
+__all__ = ["ENV", "kernel_class", "functions", "reason"]
+
+ENV = "SIMBRIDGE_MUJOCO_STEP"  # "python" forces the Python step loop
+_FUNCTIONS = (
+    "mj_step1",
+    "mj_step2",
+    "mj_fwdActuation",
+    "mj_fwdAcceleration",
+    "mj_fwdConstraint",
+    "mj_checkAcc",
+    "mj_Euler",
+    "mj_solveM",
+)
+_state: dict[str, Any] = {}
+
+
+def _load() -> None:
+    if _state:
+        return
+    _state["class"] = None
+    _state["functions"] = ()
+    try:
+        from . import _mjkernel  # type: ignore[attr-defined]
+    except ImportError as exc:
+        _state["reason"] = f"the compiled step loop is not installed ({exc})"
+        return
+    if mujoco.mj_version() != _mjkernel.HEADER_VERSION:
+        _state["reason"] = (
+            f"the compiled step loop was built for MuJoCo header {_mjkernel.HEADER_VERSION}, "
+            f"running MuJoCo {mujoco.mj_version()}: reinstall simbridge"
+        )
+        return
+    folder = os.path.dirname(mujoco.__file__)
+    files = sorted(
+        glob.glob(os.path.join(folder, "libmujoco.so*"))
+        + glob.glob(os.path.join(folder, "libmujoco*.dylib"))
+        + glob.glob(os.path.join(folder, "mujoco.dll"))
+    )
+    if not files:
+        _state["reason"] = f"no MuJoCo library file in {folder}"
+        return
+    try:
+        lib = ctypes.CDLL(files[0])
+        lib.mj_version.restype = ctypes.c_int
+        if lib.mj_version() != mujoco.mj_version():
+            _state["reason"] = f"{files[0]} is not the MuJoCo the bindings run"
+            return
+        addresses = tuple(ctypes.cast(getattr(lib, f), ctypes.c_void_p).value for f in _FUNCTIONS)
+    except (OSError, AttributeError) as exc:
+        _state["reason"] = f"cannot read MuJoCo's functions from {files[0]}: {exc}"
+        return
+    _state["class"] = _mjkernel.Kernel
+    _state["functions"] = addresses
+    _state["reason"] = ""
+
+
+def kernel_class() -> Any:
+    """The ``Kernel`` type, or None when the Python step loop must be used."""
+    if os.environ.get(ENV, "").strip().lower() == "python":
+        return None
+    _load()
+    return _state["class"]
+
+
+def functions() -> tuple[int, ...]:
+    _load()
+    return _state["functions"]  # type: ignore[no-any-return]
+
+
+def reason() -> str:
+    """Why the kernel is not used ("" when it is)."""
+    if os.environ.get(ENV, "").strip().lower() == "python":
+        return f"{ENV}=python"
+    _load()
+    return _state["reason"]  # type: ignore[no-any-return]
