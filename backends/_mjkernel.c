@@ -24,8 +24,13 @@
 
 typedef void (*mjfn)(const mjModel*, mjData*);
 typedef void (*solvefn)(const mjModel*, mjData*, mjtNum*, const mjtNum*, int);
+typedef void (*mat2quatfn)(mjtNum*, const mjtNum*);
+typedef void (*objvelfn)(const mjModel*, const mjData*, int, int, mjtNum*, int);
 
-enum { F_STEP1, F_STEP2, F_ACT, F_ACC, F_CON, F_CHECKACC, F_EULER, N_FN };
+/* the functions taken by address, in the order of mujoco_kernel._FUNCTIONS */
+enum { F_STEP1, F_STEP2, F_ACT, F_ACC, F_CON, F_CHECKACC, F_EULER, F_KIN, F_COMPOS, F_COMVEL,
+       N_FN };
+#define N_ADDRESSES (N_FN + 3) /* + mj_solveM, mju_mat2Quat, mj_objectVelocity */
 
 typedef struct {
   Py_buffer buf;
@@ -39,6 +44,8 @@ typedef struct {
   mjData* d;
   mjfn fn[N_FN];
   solvefn solveM;
+  mat2quatfn mat2quat;
+  objvelfn objvel;
   double dt, clamp_limit, clamp_watch, r_scale;
   int has_clamp;
   /* world arrays (bound once per compile) */
@@ -123,22 +130,23 @@ static void Kernel_dealloc(Kernel* self) {
 
 /* Kernel(model, data, model_address, data_address, functions, dt)
  * functions: addresses of mj_step1, mj_step2, mj_fwdActuation, mj_fwdAcceleration,
- * mj_fwdConstraint, mj_checkAcc, mj_Euler, mj_solveM (in that order). */
+ * mj_fwdConstraint, mj_checkAcc, mj_Euler, mj_kinematics, mj_comPos, mj_comVel, mj_solveM,
+ * mju_mat2Quat, mj_objectVelocity (in that order). */
 static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   PyObject *model, *data, *fns;
   unsigned long long maddr, daddr;
   double dt;
   if (!PyArg_ParseTuple(args, "OOKKOd", &model, &data, &maddr, &daddr, &fns, &dt)) return -1;
-  if (!PyTuple_Check(fns) || PyTuple_GET_SIZE(fns) != N_FN + 1) {
-    PyErr_SetString(PyExc_ValueError, "functions: a tuple of 8 addresses");
+  if (!PyTuple_Check(fns) || PyTuple_GET_SIZE(fns) != N_ADDRESSES) {
+    PyErr_Format(PyExc_ValueError, "functions: a tuple of %d addresses", N_ADDRESSES);
     return -1;
   }
   if (!maddr || !daddr || !(dt > 0)) {
     PyErr_SetString(PyExc_ValueError, "null model/data address or dt <= 0");
     return -1;
   }
-  void* f[N_FN + 1];
-  for (int i = 0; i <= N_FN; i++) {
+  void* f[N_ADDRESSES];
+  for (int i = 0; i < N_ADDRESSES; i++) {
     f[i] = PyLong_AsVoidPtr(PyTuple_GET_ITEM(fns, i));
     if (!f[i]) {
       if (!PyErr_Occurred()) PyErr_Format(PyExc_ValueError, "function %d: null address", i);
@@ -153,6 +161,8 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   self->d = (mjData*)(uintptr_t)daddr;
   for (int i = 0; i < N_FN; i++) self->fn[i] = (mjfn)f[i];
   self->solveM = (solvefn)f[N_FN];
+  self->mat2quat = (mat2quatfn)f[N_FN + 1];
+  self->objvel = (objvelfn)f[N_FN + 2];
   self->dt = dt;
   self->has_clamp = 0;
   self->clamp_limit = self->clamp_watch = INFINITY;
@@ -444,6 +454,54 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
   return PyLong_FromLong(status);
 }
 
+/* body_state(body_id, fresh, out): out[0:20] = centre-of-mass position, orientation (x, y, z,
+ * w), world linear and angular velocity, link-frame position and orientation (x, y, z, w);
+ * with fresh, first mj_kinematics, mj_comPos, mj_comVel (the lazy refresh after a step).
+ * Returns False when the pose is not finite. */
+static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (nargs != 3) {
+    PyErr_SetString(PyExc_TypeError, "body_state(body_id, fresh, out)");
+    return NULL;
+  }
+  long bid = PyLong_AsLong(args[0]);
+  int fresh = PyObject_IsTrue(args[1]);
+  if ((bid == -1 && PyErr_Occurred()) || fresh < 0) return NULL;
+  const mjModel* m = self->m;
+  mjData* d = self->d;
+  if (bid < 0 || bid >= m->nbody) {
+    PyErr_Format(PyExc_ValueError, "body id %ld outside 0..%d", bid, (int)m->nbody - 1);
+    return NULL;
+  }
+  Py_buffer out;
+  if (PyObject_GetBuffer(args[2], &out, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) return NULL;
+  if (out.len != 20 * (Py_ssize_t)sizeof(double) || out.itemsize != sizeof(double)) {
+    PyBuffer_Release(&out);
+    PyErr_SetString(PyExc_ValueError, "out: a float64 array of 20");
+    return NULL;
+  }
+  if (fresh) {
+    self->fn[F_KIN](m, d);
+    self->fn[F_COMPOS](m, d);
+    self->fn[F_COMVEL](m, d);
+  }
+  double* o = (double*)out.buf;
+  double q[4], v[6];
+  self->mat2quat(q, d->ximat + 9 * bid);
+  self->objvel(m, d, mjOBJ_BODY, (int)bid, v, 0);
+  const double* p = d->xipos + 3 * bid;
+  const double* fp = d->xpos + 3 * bid;
+  const double* fq = d->xquat + 4 * bid;
+  double r[20] = {p[0], p[1], p[2], q[1], q[2], q[3], q[0], v[3], v[4], v[5], v[0], v[1], v[2],
+                  fp[0], fp[1], fp[2], fq[1], fq[2], fq[3], fq[0]};
+  int finite = 1;
+  for (int i = 0; i < 20; i++) {
+    o[i] = r[i];
+    if (i < 3 && !isfinite(r[i])) finite = 0;
+  }
+  PyBuffer_Release(&out);
+  return PyBool_FromLong(finite);
+}
+
 static PyObject* Kernel_clamp_armed(Kernel* self, void* closure) {
   return PyBool_FromLong(self->clamp_armed);
 }
@@ -452,6 +510,8 @@ static PyMethodDef Kernel_methods[] = {
     {"bind_world", (PyCFunction)Kernel_bind_world, METH_VARARGS, "Bind the world's arrays."},
     {"bind_motors", (PyCFunction)Kernel_bind_motors, METH_VARARGS, "Bind the motor rows."},
     {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL, "step(n, pending_torque)"},
+    {"body_state", (PyCFunction)(void (*)(void))Kernel_body_state, METH_FASTCALL,
+     "body_state(body_id, fresh, out) -> pose is finite"},
     {NULL, NULL, 0, NULL},
 };
 

@@ -385,6 +385,8 @@ class MujocoBackend(Backend):
         self._fast: dict[int, tuple[Any, ...]] = {}  # set_joint_velocity's hot-path cache
         self._motor_rows_valid = False
         self._kernel = self._new_kernel()
+        self._state_out = np.empty(20)
+        self._torque_map: dict[int, tuple[Any, ...]] = {}  # joint_states' motor-row cache
         self._refresh_motors()
         self._warnings = [d.warning[w].number for w in _BAD]
         self._stale = True
@@ -644,33 +646,56 @@ class MujocoBackend(Backend):
             (float(vel[0]), float(vel[1]), float(vel[2])),
         )
 
-    def link_state(self, body: int, link: int) -> LinkState:
+    def _state_of(self, bid: int, body: int) -> list[float]:
+        """Centre-of-mass pose and velocity, then link-frame pose, of MuJoCo body ``bid``
+        (20 floats, quaternions x, y, z, w), after the lazy refresh."""
+        kernel = self._kernel
+        if kernel is not None:
+            finite = kernel.body_state(bid, self._stale, self._state_out)
+            self._stale = False
+            if not finite:
+                raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
+            return self._state_out.tolist()  # type: ignore[no-any-return]
         self._fresh()
-        robot = self._robots[body]
-        bid = int(robot.body_ids[link + 1])
         d = self._d
         self._check_finite(d.xipos[bid], body)
         com_pos, com_orn, lin, ang = self._com_pose_velocity(bid)
-        ine = robot.spec.inertials[link + 1]
         fp = d.xpos[bid]
         fq = d.xquat[bid]
+        return [
+            *com_pos,
+            *com_orn,
+            *lin,
+            *ang,
+            float(fp[0]),
+            float(fp[1]),
+            float(fp[2]),
+            float(fq[1]),
+            float(fq[2]),
+            float(fq[3]),
+            float(fq[0]),
+        ]
+
+    def link_state(self, body: int, link: int) -> LinkState:
+        robot = self._robots[body]
+        v = self._state_of(int(robot.body_ids[link + 1]), body)
+        ine = robot.spec.inertials[link + 1]
         return LinkState(
-            com_pos,
-            com_orn,
+            (v[0], v[1], v[2]),
+            (v[3], v[4], v[5], v[6]),
             ine.position,
             ine.orientation,
-            (float(fp[0]), float(fp[1]), float(fp[2])),
-            (float(fq[1]), float(fq[2]), float(fq[3]), float(fq[0])),
-            lin,
-            ang,
+            (v[13], v[14], v[15]),
+            (v[16], v[17], v[18], v[19]),
+            (v[7], v[8], v[9]),
+            (v[10], v[11], v[12]),
         )
 
     def base_state(self, body: int) -> BaseState:
-        self._fresh()
-        bid = int(self._robots[body].body_ids[0])
-        self._check_finite(self._d.xipos[bid], body)
-        pos, orn, lin, ang = self._com_pose_velocity(bid)
-        return BaseState(pos, orn, lin, ang)
+        v = self._state_of(int(self._robots[body].body_ids[0]), body)
+        return BaseState(
+            (v[0], v[1], v[2]), (v[3], v[4], v[5], v[6]), (v[7], v[8], v[9]), (v[10], v[11], v[12])
+        )
 
     def _check_finite(self, values: np.ndarray, body: int) -> None:
         if not np.isfinite(values).all():
@@ -691,16 +716,33 @@ class MujocoBackend(Backend):
         robot.cache[key] = entry
         return entry
 
+    def _torque_rows(self, joints: np.ndarray, movable: np.ndarray, motor: np.ndarray) -> tuple:
+        """Motor rows of ``joints`` under the current motor set (cached per motor epoch):
+        (rows, positions in the answer, every joint has a row)."""
+        t = self._motors
+        hit = self._torque_map.get(id(joints))
+        if hit is not None and hit[0] is joints and hit[1] == t.epoch:
+            return hit[2:]  # type: ignore[no-any-return]
+        rows = t.row_of[motor]
+        on = rows >= 0
+        rows = rows[on]
+        entry = (joints, t.epoch, rows, np.flatnonzero(movable)[on], len(rows) == len(joints))
+        self._torque_map[id(joints)] = entry
+        return entry[2:]
+
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
         robot = self._robots[body]
         _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
         d = self._d
         n = len(joints)
-        torque = np.zeros(n)
-        if self._motor_force_valid and self._motor_rows_valid:
-            rows = self._motors.row_of[motor]
-            on = rows >= 0
-            torque[np.flatnonzero(movable)[on]] = d.efc_force[rows[on]]
+        valid = self._motor_force_valid and self._motor_rows_valid
+        if valid:
+            rows, where, full = self._torque_rows(joints, movable, motor)
+            torque = d.efc_force[rows] if full else np.zeros(n)
+            if not full:
+                torque[where] = d.efc_force[rows]
+        else:
+            torque = np.zeros(n)
         if all_movable:
             return JointStates(d.qpos[qadr], d.qvel[dof], torque)
         pos = np.zeros(n)

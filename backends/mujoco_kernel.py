@@ -26,7 +26,12 @@ _FUNCTIONS = (
     "mj_fwdConstraint",
     "mj_checkAcc",
     "mj_Euler",
+    "mj_kinematics",
+    "mj_comPos",
+    "mj_comVel",
     "mj_solveM",
+    "mju_mat2Quat",
+    "mj_objectVelocity",
 )
 _state: dict[str, Any] = {}
 

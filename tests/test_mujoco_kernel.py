@@ -199,7 +199,7 @@ def test_bad_bindings_raise_instead_of_crashing():
             k.bind_motors(nonef, none, none, nonef, none, none, nonef, ints, floats)
         with pytest.raises(ValueError, match="out of the model's range"):
             k.bind_world(0, nonef, nonef, 0, ints + 50, floats, none, nonef, None, 1.0, 1.0)
-        with pytest.raises(ValueError, match="8 addresses"):
+        with pytest.raises(ValueError, match="13 addresses"):
             type(k)(None, None, 1, 1, (), 0.01)
         with pytest.raises(ValueError, match="null"):
-            type(k)(None, None, 0, 0, (1,) * 8, 0.01)
+            type(k)(None, None, 0, 0, (1,) * 13, 0.01)
