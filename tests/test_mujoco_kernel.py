@@ -203,3 +203,51 @@ def test_bad_bindings_raise_instead_of_crashing():
             type(k)(None, None, 1, 1, (), 0.01)
         with pytest.raises(ValueError, match="null"):
             type(k)(None, None, 0, 0, (1,) * 13, 0.01)
+
+
+def _link_states(monkeypatch, loop: str) -> list:
+    if loop == "python":
+        monkeypatch.setenv(mujoco_kernel.ENV, "python")
+    else:
+        monkeypatch.delenv(mujoco_kernel.ENV, raising=False)
+    with simbridge.Sim("mujoco") as sim:
+        sim.load_urdf("plane.urdf")
+        r = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+        sim.set_joint_velocity(r, WHEELS, [-5, -5, 5, 5], max_force=20)
+        out = []
+        for _ in range(5):
+            sim.step(7)
+            out.append(sim.base_state(r))
+            out.extend(sim.link_state(r, j) for j in range(-1, sim.num_joints(r)))
+        return out
+
+
+def test_link_and_base_state_read_through_the_kernel_as_in_python(monkeypatch):
+    if mujoco_kernel.reason():
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    a = _link_states(monkeypatch, "kernel")
+    b = _link_states(monkeypatch, "python")
+    assert len(a) == len(b) == 5 * (1 + 16)  # base_state, then links -1 .. 15
+    for x, y in zip(a, b, strict=True):
+        assert type(x) is type(y)
+        np.testing.assert_allclose(
+            np.concatenate([np.ravel(f) for f in x]),
+            np.concatenate([np.ravel(f) for f in y]),
+            rtol=0,
+            atol=1e-12,
+        )
+
+
+def test_body_state_checks_its_arguments():
+    if mujoco_kernel.reason():
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    with simbridge.Sim("mujoco") as sim:
+        sim.load_urdf("wheel.urdf", fixed_base=True)
+        k = sim._b._kernel
+        with pytest.raises(ValueError, match="float64 array of 20"):
+            k.body_state(1, True, np.zeros(13))
+        with pytest.raises(ValueError, match="body id 99"):
+            k.body_state(99, True, np.zeros(20))
+        out = np.zeros(20)
+        assert k.body_state(1, True, out) is True
+        assert np.linalg.norm(out[3:7]) == pytest.approx(1.0)
