@@ -20,6 +20,23 @@
 #include <math.h>
 #include <string.h>
 
+/* Phase timers for bench/kernel_phases.py, compiled in only with -DSIMBRIDGE_KERNEL_TIMERS. */
+#ifdef SIMBRIDGE_KERNEL_TIMERS
+#include <time.h>
+#define N_TIMERS 7
+static double timers[N_TIMERS];
+static double now_ns(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return t.tv_sec * 1e9 + t.tv_nsec;
+}
+#define TIC(i) (timers[i] -= now_ns())
+#define TOC(i) (timers[i] += now_ns())
+#else
+#define TIC(i) ((void)0)
+#define TOC(i) ((void)0)
+#endif
+
 #include <mujoco/mujoco.h>
 
 typedef void (*mjfn)(const mjModel*, mjData*);
@@ -173,7 +190,8 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
 }
 
 /* bind_world(first, lin_gain, ang_gain, sensor_adr, jd_dof, jd_coef, tq_dof, tq,
- *            clamp_limit_or_None, clamp_watch, r_scale) */
+ *            clamp_limit_or_None, clamp_watch, r_scale)
+ * sensor_adr < 0: the link damping reads the body velocities from cvel (no sensors needed). */
 static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   int first, sensor;
   PyObject *lg, *ag, *jdd, *jdc, *tqd, *tq, *limit;
@@ -185,7 +203,7 @@ static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   if (arr_take(&self->lin_gain, lg, 'd', -1, "lin_gain") < 0) return NULL;
   Py_ssize_t n = arr_len(&self->lin_gain);
   if (arr_take(&self->ang_gain, ag, 'd', 3 * n, "ang_gain") < 0) return NULL;
-  if (n && (first < 0 || first + n > m->nbody || sensor < 0 || sensor + 6 * n > m->nsensordata)) {
+  if (n && (first < 0 || first + n > m->nbody || (sensor >= 0 && sensor + 6 * n > m->nsensordata))) {
     PyErr_SetString(PyExc_ValueError, "damping bodies or sensors out of the model's range");
     return NULL;
   }
@@ -256,7 +274,6 @@ static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
       free_motor_scratch(self);
       return PyErr_NoMemory();
     }
-    for (Py_ssize_t r = 0; r < k; r++) self->U[r * nv + IP(self->dof_rows)[r]] = 1.0;
   }
   self->k = (int)k;
   Py_RETURN_NONE;
@@ -268,20 +285,35 @@ bad:
 /* PyBullet's link damping into xfrc_applied; returns the largest body speed seen
  * (mujoco_damping.LinkDamping.apply, same operations in the same order). */
 static double link_damping(Kernel* self) {
+  const mjModel* m = self->m;
   mjData* d = self->d;
   const double* lin = DP(self->lin_gain);
   const double* ang = DP(self->ang_gain);
   double top = 0.0;
   for (int i = 0; i < self->damp_n; i++) {
-    const double* v = d->sensordata + self->damp_sensor + 6 * i;
-    const double* w = v + 3;
+    int b = self->damp_first + i;
+    const double *v, *w;
+    double vc[3];
+    if (self->damp_sensor >= 0) { /* the sensors the Python loop reads */
+      v = d->sensordata + self->damp_sensor + 6 * i;
+      w = v + 3;
+    } else { /* the same velocities from cvel (mj_objectVelocity's transform, world axes) */
+      const double* cv = d->cvel + 6 * b;
+      const double* c = d->subtree_com + 3 * m->body_rootid[b];
+      const double* p = d->xipos + 3 * b;
+      double r[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+      w = cv;
+      vc[0] = cv[3] - (r[1] * cv[2] - r[2] * cv[1]);
+      vc[1] = cv[4] - (r[2] * cv[0] - r[0] * cv[2]);
+      vc[2] = cv[5] - (r[0] * cv[1] - r[1] * cv[0]);
+      v = vc;
+    }
     double sv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     double sw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
     if (sv > top) top = sv;
     if (sw > top) top = sw;
     sv += 1.0;
     sw += 1.0;
-    int b = self->damp_first + i;
     double* xf = d->xfrc_applied + 6 * b;
     double g = lin[i] * sv;
     xf[0] = v[0] * g;
@@ -348,18 +380,21 @@ static int polish(Kernel* self) {
   for (int r = 0; r < k; r++)
     if (fabs(force[r]) < slack[r]) self->free_rows[nf++] = r;
   if (!nf) return 0;
-  self->solveM(m, d, self->Y, self->U, k);
+  /* rows of M^-1 for the free rows' dofs only (U: their unit rows, zeroed after use) */
+  for (int i = 0; i < nf; i++) self->U[i * nv + dofs[self->free_rows[i]]] = 1.0;
+  self->solveM(m, d, self->Y, self->U, nf);
+  for (int i = 0; i < nf; i++) self->U[i * nv + dofs[self->free_rows[i]]] = 0.0;
   double* A = self->A;
   double* b = self->b;
   for (int i = 0; i < nf; i++) {
     int r = self->free_rows[i];
     b[i] = aref[r] - qacc[dofs[r]];
-    for (int j = 0; j < nf; j++) A[i * nf + j] = self->Y[r * nv + dofs[self->free_rows[j]]];
+    for (int j = 0; j < nf; j++) A[i * nf + j] = self->Y[i * nv + dofs[self->free_rows[j]]];
   }
   if (lu_solve(A, b, self->piv, nf) < 0) return -1;
   for (int c = 0; c < nv; c++) {
     double s = 0.0;
-    for (int i = 0; i < nf; i++) s += b[i] * self->Y[self->free_rows[i] * nv + c];
+    for (int i = 0; i < nf; i++) s += b[i] * self->Y[i * nv + c];
     qacc[c] += s;
   }
   for (int i = 0; i < nf; i++) {
@@ -392,7 +427,10 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
   const int before = warning_count(d);
   int status = 0;
   for (long s = 0; s < n && !status; s++) {
+    TIC(0);
     self->fn[F_STEP1](m, d);
+    TOC(0);
+    TIC(1);
     if (k) {
       if (d->nf < k) {
         status = 2;
@@ -416,18 +454,27 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
         d->efc_D[r] *= inv;
       }
     }
+    TOC(1);
+    TIC(2);
     if (self->damp_n) self->clamp_armed = link_damping(self) > self->clamp_watch;
     for (int i = 0; i < njd; i++)
       d->qfrc_applied[IP(self->jd_dof)[i]] = DP(self->jd_coef)[i] * d->qvel[IP(self->jd_dof)[i]];
     if (pending)
       for (int i = 0; i < nt; i++) d->qfrc_applied[IP(self->tq_dof)[i]] += DP(self->tq)[i];
+    TOC(2);
     if (k || self->clamp_armed) {
+      TIC(3);
       self->fn[F_ACT](m, d);
       self->fn[F_ACC](m, d);
+      TOC(3);
       for (Py_ssize_t i = 0; i < arr_len(&self->kd_rows); i++)
         d->efc_aref[IP(self->kd_rows)[i]] += DP(self->kd_factor)[i] * d->qacc_smooth[IP(self->kd_dof)[i]];
+      TIC(4);
       self->fn[F_CON](m, d);
+      TOC(4);
+      TIC(5);
       if (k && polish(self) < 0) status = 3;
+      TOC(5);
       if (self->clamp_armed) {
         double L = self->clamp_limit, dt = self->dt;
         for (int i = 0; i < m->nv; i++) {
@@ -436,8 +483,10 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
           d->qacc[i] = a < lo ? lo : (a > hi ? hi : a);
         }
       }
+      TIC(6);
       self->fn[F_CHECKACC](m, d);
       self->fn[F_EULER](m, d);
+      TOC(6);
     } else {
       self->fn[F_STEP2](m, d);
     }
@@ -502,11 +551,27 @@ static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize
   return PyBool_FromLong(finite);
 }
 
+#ifdef SIMBRIDGE_KERNEL_TIMERS
+/* timers() -> nanoseconds spent in each phase since the last call (and reset them) */
+static PyObject* Kernel_timers(Kernel* self, PyObject* unused) {
+  PyObject* out = PyList_New(N_TIMERS);
+  if (!out) return NULL;
+  for (int i = 0; i < N_TIMERS; i++) {
+    PyList_SET_ITEM(out, i, PyFloat_FromDouble(timers[i]));
+    timers[i] = 0.0;
+  }
+  return out;
+}
+#endif
+
 static PyObject* Kernel_clamp_armed(Kernel* self, void* closure) {
   return PyBool_FromLong(self->clamp_armed);
 }
 
 static PyMethodDef Kernel_methods[] = {
+#ifdef SIMBRIDGE_KERNEL_TIMERS
+    {"timers", (PyCFunction)Kernel_timers, METH_NOARGS, "phase times in ns, then reset"},
+#endif
     {"bind_world", (PyCFunction)Kernel_bind_world, METH_VARARGS, "Bind the world's arrays."},
     {"bind_motors", (PyCFunction)Kernel_bind_motors, METH_VARARGS, "Bind the motor rows."},
     {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL, "step(n, pending_torque)"},

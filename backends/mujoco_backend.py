@@ -282,7 +282,9 @@ class MujocoBackend(Backend):
         damping = (
             self.profile.linear_damping != 0.0 or self.profile.angular_damping != 0.0
         ) and bool(self._robots)
-        if damping:
+        # the Python loop reads body velocities from two sensors per body; the compiled loop
+        # computes them from cvel and needs none
+        if damping and mujoco_kernel.kernel_class() is None:
             for robot in self._robots.values():
                 for name in robot.spec.body_names:
                     spec.add_sensor(
@@ -369,7 +371,8 @@ class MujocoBackend(Backend):
         self._damp_coef = -damp[damp != 0.0]
         self._pending_torque = False
         self._damping = None
-        if m.nsensordata and m.nbody > 1:
+        damped = self.profile.linear_damping != 0.0 or self.profile.angular_damping != 0.0
+        if damped and m.nbody > 1 and (m.nsensordata or mujoco_kernel.kernel_class()):
             self._damping = LinkDamping(
                 1,
                 m.body_mass[1:].copy(),
@@ -430,7 +433,7 @@ class MujocoBackend(Backend):
             damping.first if damping is not None else 0,
             damping.lin_gain if damping is not None else empty,
             np.ascontiguousarray(damping.ang_gain) if damping is not None else empty,
-            damping.sensor.start if damping is not None else 0,
+            damping.sensor.start if damping is not None and self._m.nsensordata else -1,
             self._damp_dof,
             self._damp_coef,
             self._motors.dof,
