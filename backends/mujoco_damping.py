@@ -11,7 +11,9 @@ quadratic drag, applied explicitly with the smooth forces. Here they go into ``x
 (world force and torque at the centre of mass) between ``mj_step1`` and ``mj_step2``; the
 velocities come from two MuJoCo sensors per body (``framelinvel`` and ``frameangvel`` of the
 inertial frame, world axes), computed in C by ``mj_step1``; the torque is formed in the
-principal axes (``ximat``) and turned back to the world.
+principal axes (``ximat``) and turned back to the world. The compiled step loop
+(``_mjkernel.c``) does the same from ``cvel`` (the transform those sensors use) and needs no
+sensors.
 
 ``btMultiBody::applyDeltaVeeMultiDof`` clamps every velocity coordinate (the 6 base coordinates
 and every joint) to +-maxJointVelocity (100); measured on PyBullet, the velocity after the whole
