@@ -460,16 +460,17 @@ class MujocoBackend(Backend):
         if kernel is None:
             self._step_python(n)
         else:
-            status = 0
+            # a pending torque (first step only) or a viewer to keep in step
+            statuses = []
             for _ in range(n if self._viewer is not None else min(n, 1)):
-                status = status or kernel.step(1, self._pending_torque)
+                statuses.append(kernel.step(1, self._pending_torque))
                 self._pending_torque = False
                 if self._viewer is not None:
                     self._sync_viewer()
             if self._viewer is None and n > 1:
-                status = status or kernel.step(n - 1, False)
-            if status > 1:
-                self._kernel_status(status)
+                statuses.append(kernel.step(n - 1, False))
+            if max(statuses, default=0) > 1:
+                self._kernel_status(max(statuses))
         if n > 0:
             self._steps += n
             self._stale = self._motor_force_valid = self._motor_rows_valid = True
@@ -479,12 +480,11 @@ class MujocoBackend(Backend):
         if status == 1:
             self._check_warnings()
             return
-        what = (
-            "motor rows (not MuJoCo's first friction rows)"
-            if status == 2
-            else ("motor rows (singular solve)")
-        )
-        raise SimulationDivergedError(self.name, self.time, what)
+        if status == 2:
+            raise SimulationDivergedError(
+                self.name, self.time, "motor rows (not MuJoCo's first friction rows)"
+            )
+        raise SimulationDivergedError(self.name, self.time, "motor rows (singular solve)")
 
     def _check_warnings(self) -> None:
         w = self._d.warning
