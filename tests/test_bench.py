@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -34,3 +36,24 @@ def test_bench_runs_with_a_tiny_repeat_count():
     for line in table:
         cells = [c.strip() for c in line.strip("|").split("|")]
         assert float(cells[4]) > 0, line
+
+
+def test_kernel_phases_runs_and_accounts_for_the_step():
+    """bench/kernel_phases.py builds the timed kernel in a temporary folder and its phases add
+    up to the timed step (they are timed inside it), which is all a smoke run can check."""
+    from simbridge.backends import mujoco_kernel
+
+    if mujoco_kernel.reason():  # pragma: no cover - machines without the compiled loop
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "bench" / "kernel_phases.py"), "--repeats", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = dict(
+        (line[:42].strip(), float(line[42:])) for line in proc.stdout.splitlines()[1:] if line
+    )
+    assert rows["sum of phases"] > 0 and rows["raw mj_step, velocity actuators"] > 0
+    assert rows["sum of phases"] <= rows["Sim.step(980), timed build"] * 1.001
