@@ -169,6 +169,10 @@ class MujocoBackend(Backend):
         self._after_compile()
 
     @property
+    def _link_damped(self) -> bool:
+        return self.profile.linear_damping != 0.0 or self.profile.angular_damping != 0.0
+
+    @property
     def time(self) -> float:
         return self._steps * self._dt
 
@@ -279,9 +283,7 @@ class MujocoBackend(Backend):
         spec = self._spec
         for sensor in list(spec.sensors):
             spec.delete(sensor)
-        damping = (
-            self.profile.linear_damping != 0.0 or self.profile.angular_damping != 0.0
-        ) and bool(self._robots)
+        damping = self._link_damped and bool(self._robots)
         # the Python loop reads body velocities from two sensors per body; the compiled loop
         # computes them from cvel and needs none
         if damping and mujoco_kernel.kernel_class() is None:
@@ -371,8 +373,7 @@ class MujocoBackend(Backend):
         self._damp_coef = -damp[damp != 0.0]
         self._pending_torque = False
         self._damping = None
-        damped = self.profile.linear_damping != 0.0 or self.profile.angular_damping != 0.0
-        if damped and m.nbody > 1 and (m.nsensordata or mujoco_kernel.kernel_class()):
+        if self._link_damped and m.nbody > 1 and (m.nsensordata or mujoco_kernel.kernel_class()):
             self._damping = LinkDamping(
                 1,
                 m.body_mass[1:].copy(),
@@ -449,18 +450,11 @@ class MujocoBackend(Backend):
     def step(self, n: int) -> None:
         kernel = self._kernel
         if kernel is not None and self._viewer is None and not self._pending_torque:
-            # the hot path: one call into the compiled loop; it reports a divergence warning
-            status = kernel.step(n, False)
-            if n > 0:
-                self._steps += n
-                self._stale = self._motor_force_valid = self._motor_rows_valid = True
-            if status:
-                self._kernel_status(status)
-            return
-        if kernel is None:
+            status = kernel.step(n, False)  # the hot path: one call into the compiled loop
+        elif kernel is None:
             self._step_python(n)
-        else:
-            # a pending torque (first step only) or a viewer to keep in step
+            status = 1  # the Python loop does not count warnings: look at them
+        else:  # a pending torque (first step only) or a viewer to keep in step
             statuses = []
             for _ in range(n if self._viewer is not None else min(n, 1)):
                 statuses.append(kernel.step(1, self._pending_torque))
@@ -469,14 +463,15 @@ class MujocoBackend(Backend):
                     self._sync_viewer()
             if self._viewer is None and n > 1:
                 statuses.append(kernel.step(n - 1, False))
-            if max(statuses, default=0) > 1:
-                self._kernel_status(max(statuses))
+            status = max(statuses, default=0)
         if n > 0:
             self._steps += n
             self._stale = self._motor_force_valid = self._motor_rows_valid = True
-        self._check_warnings()
+        if status:
+            self._kernel_status(status)
 
     def _kernel_status(self, status: int) -> None:
+        """1: a divergence warning may have been raised; 2, 3: the compiled loop's own errors."""
         if status == 1:
             self._check_warnings()
             return
@@ -738,8 +733,7 @@ class MujocoBackend(Backend):
         _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
         d = self._d
         n = len(joints)
-        valid = self._motor_force_valid and self._motor_rows_valid
-        if valid:
+        if self._motor_force_valid and self._motor_rows_valid:
             rows, where, full = self._torque_rows(joints, movable, motor)
             torque = d.efc_force[rows] if full else np.zeros(n)
             if not full:

@@ -47,11 +47,15 @@ def test_environment_variable_selects_the_python_loop(monkeypatch):
         assert sim._b.manifest()["step_loop"] == f"Python ({mujoco_kernel.ENV}=python)"
 
 
-def _trajectory(monkeypatch, loop: str, scenario, profile: str = "pybullet") -> list[np.ndarray]:
+def _select_loop(monkeypatch, loop: str) -> None:
     if loop == "python":
         monkeypatch.setenv(mujoco_kernel.ENV, "python")
     else:
         monkeypatch.delenv(mujoco_kernel.ENV, raising=False)
+
+
+def _trajectory(monkeypatch, loop: str, scenario, profile: str = "pybullet") -> list[np.ndarray]:
+    _select_loop(monkeypatch, loop)
     states: list[np.ndarray] = []
     with simbridge.Sim("mujoco", profile=profile) as sim:
         assert (sim._b._kernel is None) == (loop == "python")
@@ -206,10 +210,7 @@ def test_bad_bindings_raise_instead_of_crashing():
 
 
 def _link_states(monkeypatch, loop: str) -> list:
-    if loop == "python":
-        monkeypatch.setenv(mujoco_kernel.ENV, "python")
-    else:
-        monkeypatch.delenv(mujoco_kernel.ENV, raising=False)
+    _select_loop(monkeypatch, loop)
     with simbridge.Sim("mujoco") as sim:
         sim.load_urdf("plane.urdf")
         r = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
