@@ -67,7 +67,8 @@ typedef struct {
   int has_clamp;
   /* world arrays (bound once per compile) */
   Arr lin_gain, ang_gain;   /* (n,), (n,3) */
-  int damp_first, damp_n, damp_sensor;
+  int damp_first, damp_n;
+  double* cfrc;             /* nbody x 6: link damping as spatial forces */
   Arr jd_dof, jd_coef;      /* joint damping: dof (intp), -damping */
   Arr tq_dof, tq;           /* one-step torques: motor dof (intp), torque */
   /* motor arrays (bound after every refresh) */
@@ -137,6 +138,9 @@ static void release_all(Kernel* self) {
   for (size_t i = 0; i < sizeof(all) / sizeof(all[0]); i++) arr_release(all[i]);
   free_motor_scratch(self);
   self->k = 0;
+  PyMem_Free(self->cfrc);
+  self->cfrc = NULL;
+  self->damp_n = 0;
 }
 
 static void Kernel_dealloc(Kernel* self) {
@@ -189,22 +193,22 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   return 0;
 }
 
-/* bind_world(first, lin_gain, ang_gain, sensor_adr, jd_dof, jd_coef, tq_dof, tq,
- *            clamp_limit_or_None, clamp_watch, r_scale)
- * sensor_adr < 0: the link damping reads the body velocities from cvel (no sensors needed). */
+/* bind_world(first, lin_gain, ang_gain, jd_dof, jd_coef, tq_dof, tq, clamp_limit_or_None,
+ *            clamp_watch, r_scale): link damping of the bodies first .. first + len(lin_gain) - 1,
+ * joint damping, one-step torques, the speed clamp, the motor rows' hardening */
 static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
-  int first, sensor;
+  int first;
   PyObject *lg, *ag, *jdd, *jdc, *tqd, *tq, *limit;
   double watch, r_scale;
-  if (!PyArg_ParseTuple(args, "iOOiOOOOOdd", &first, &lg, &ag, &sensor, &jdd, &jdc, &tqd, &tq,
-                        &limit, &watch, &r_scale))
+  if (!PyArg_ParseTuple(args, "iOOOOOOOdd", &first, &lg, &ag, &jdd, &jdc, &tqd, &tq, &limit,
+                        &watch, &r_scale))
     return NULL;
   const mjModel* m = self->m;
   if (arr_take(&self->lin_gain, lg, 'd', -1, "lin_gain") < 0) return NULL;
   Py_ssize_t n = arr_len(&self->lin_gain);
   if (arr_take(&self->ang_gain, ag, 'd', 3 * n, "ang_gain") < 0) return NULL;
-  if (n && (first < 0 || first + n > m->nbody || (sensor >= 0 && sensor + 6 * n > m->nsensordata))) {
-    PyErr_SetString(PyExc_ValueError, "damping bodies or sensors out of the model's range");
+  if (n && (first < 1 || first + n > m->nbody)) {
+    PyErr_SetString(PyExc_ValueError, "damping bodies out of the model's range");
     return NULL;
   }
   if (arr_take(&self->jd_dof, jdd, 'n', -1, "joint damping dofs") < 0) return NULL;
@@ -216,9 +220,15 @@ static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
     if (IP(self->jd_dof)[i] < 0 || IP(self->jd_dof)[i] >= m->nv) goto bad_dof;
   for (Py_ssize_t i = 0; i < arr_len(&self->tq_dof); i++)
     if (IP(self->tq_dof)[i] < 0 || IP(self->tq_dof)[i] >= m->nv) goto bad_dof;
+  PyMem_Free(self->cfrc);
+  self->cfrc = NULL;
+  self->damp_n = 0;
+  if (n) {
+    self->cfrc = PyMem_Calloc(6 * (size_t)m->nbody, sizeof(double));
+    if (!self->cfrc) return PyErr_NoMemory();
+  }
   self->damp_first = first;
   self->damp_n = (int)n;
-  self->damp_sensor = sensor;
   self->has_clamp = limit != Py_None;
   self->clamp_limit = self->has_clamp ? PyFloat_AsDouble(limit) : INFINITY;
   if (PyErr_Occurred()) return NULL;
@@ -282,51 +292,57 @@ bad:
   return NULL;
 }
 
-/* PyBullet's link damping into xfrc_applied; returns the largest body speed seen
- * (mujoco_damping.LinkDamping.apply, same operations in the same order). */
+/* PyBullet's link damping, added to qfrc_passive as generalised forces; returns the largest
+ * body speed seen (mujoco_damping.LinkDamping.apply, the same arithmetic). Each body's force
+ * and torque become a spatial force about its tree's centre of mass (the point cvel and cdof
+ * refer to), summed up the tree, and projected on every dof through cdof. */
 static double link_damping(Kernel* self) {
   const mjModel* m = self->m;
   mjData* d = self->d;
   const double* lin = DP(self->lin_gain);
   const double* ang = DP(self->ang_gain);
+  double* cf = self->cfrc;
   double top = 0.0;
+  memset(cf, 0, sizeof(double) * 6 * (size_t)m->nbody);
   for (int i = 0; i < self->damp_n; i++) {
     int b = self->damp_first + i;
-    const double *v, *w;
-    double vc[3];
-    if (self->damp_sensor >= 0) { /* the sensors the Python loop reads */
-      v = d->sensordata + self->damp_sensor + 6 * i;
-      w = v + 3;
-    } else { /* the same velocities from cvel (mj_objectVelocity's transform, world axes) */
-      const double* cv = d->cvel + 6 * b;
-      const double* c = d->subtree_com + 3 * m->body_rootid[b];
-      const double* p = d->xipos + 3 * b;
-      double r[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
-      w = cv;
-      vc[0] = cv[3] - (r[1] * cv[2] - r[2] * cv[1]);
-      vc[1] = cv[4] - (r[2] * cv[0] - r[0] * cv[2]);
-      vc[2] = cv[5] - (r[0] * cv[1] - r[1] * cv[0]);
-      v = vc;
-    }
+    const double* w = d->cvel + 6 * b;
+    const double* c = d->subtree_com + 3 * m->body_rootid[b];
+    const double* p = d->xipos + 3 * b;
+    double r[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+    double v[3]; /* velocity of the centre of mass: cvel's linear part moved to xipos */
+    v[0] = w[3] - (r[1] * w[2] - r[2] * w[1]);
+    v[1] = w[4] - (r[2] * w[0] - r[0] * w[2]);
+    v[2] = w[5] - (r[0] * w[1] - r[1] * w[0]);
     double sv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     double sw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
     if (sv > top) top = sv;
     if (sw > top) top = sw;
-    sv += 1.0;
-    sw += 1.0;
-    double* xf = d->xfrc_applied + 6 * b;
-    double g = lin[i] * sv;
-    xf[0] = v[0] * g;
-    xf[1] = v[1] * g;
-    xf[2] = v[2] * g;
+    double g = lin[i] * (sv + 1.0);
+    double f[3] = {v[0] * g, v[1] * g, v[2] * g};
     const double* R = d->ximat + 9 * b; /* world = R local */
-    double tl[3];
-    for (int c = 0; c < 3; c++) {
-      tl[c] = R[c] * w[0] + R[3 + c] * w[1] + R[6 + c] * w[2];
-      tl[c] *= ang[3 * i + c];
-      tl[c] *= sw;
-    }
-    for (int r = 0; r < 3; r++) xf[3 + r] = R[3 * r] * tl[0] + R[3 * r + 1] * tl[1] + R[3 * r + 2] * tl[2];
+    double tl[3], t[3];
+    for (int k = 0; k < 3; k++)
+      tl[k] = (R[k] * w[0] + R[3 + k] * w[1] + R[6 + k] * w[2]) * ang[3 * i + k] * (sw + 1.0);
+    for (int k = 0; k < 3; k++) t[k] = R[3 * k] * tl[0] + R[3 * k + 1] * tl[1] + R[3 * k + 2] * tl[2];
+    double* s = cf + 6 * b;
+    s[0] = t[0] + r[1] * f[2] - r[2] * f[1];
+    s[1] = t[1] + r[2] * f[0] - r[0] * f[2];
+    s[2] = t[2] + r[0] * f[1] - r[1] * f[0];
+    s[3] = f[0];
+    s[4] = f[1];
+    s[5] = f[2];
+  }
+  for (int b = m->nbody - 1; b > 0; b--) {
+    int parent = m->body_parentid[b];
+    if (parent > 0)
+      for (int k = 0; k < 6; k++) cf[6 * parent + k] += cf[6 * b + k];
+  }
+  for (int j = 0; j < m->nv; j++) {
+    const double* s = cf + 6 * m->dof_bodyid[j];
+    const double* cd = d->cdof + 6 * j;
+    d->qfrc_passive[j] += cd[0] * s[0] + cd[1] * s[1] + cd[2] * s[2] + cd[3] * s[3] +
+                          cd[4] * s[4] + cd[5] * s[5];
   }
   return top;
 }

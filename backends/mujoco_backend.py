@@ -281,24 +281,6 @@ class MujocoBackend(Backend):
         """Compile the spec (keeping the state of bodies already there) and refresh indices."""
         self._save_motor_state()
         spec = self._spec
-        for sensor in list(spec.sensors):
-            spec.delete(sensor)
-        damping = self._link_damped and bool(self._robots)
-        # the Python loop reads body velocities from two sensors per body; the compiled loop
-        # computes them from cvel and needs none
-        if damping and mujoco_kernel.kernel_class() is None:
-            for robot in self._robots.values():
-                for name in robot.spec.body_names:
-                    spec.add_sensor(
-                        type=mujoco.mjtSensor.mjSENS_FRAMELINVEL,
-                        objtype=mujoco.mjtObj.mjOBJ_BODY,
-                        objname=name,
-                    )
-                    spec.add_sensor(
-                        type=mujoco.mjtSensor.mjSENS_FRAMEANGVEL,
-                        objtype=mujoco.mjtObj.mjOBJ_BODY,
-                        objname=name,
-                    )
         try:
             m, d = spec.recompile(self._m, self._d)
         except ValueError as exc:
@@ -373,14 +355,9 @@ class MujocoBackend(Backend):
         self._damp_coef = -damp[damp != 0.0]
         self._pending_torque = False
         self._damping = None
-        if self._link_damped and m.nbody > 1 and (m.nsensordata or mujoco_kernel.kernel_class()):
+        if self._link_damped and self._robots and m.nbody > 1:
             self._damping = LinkDamping(
-                1,
-                m.body_mass[1:].copy(),
-                m.body_inertia[1:].copy(),
-                self.profile.linear_damping,
-                self.profile.angular_damping,
-                0,
+                m, 1, self.profile.linear_damping, self.profile.angular_damping
             )
         self._clamp = self.profile.max_joint_velocity
         self._clamp_watch = _CLAMP_WATCH * self._clamp if self._clamp is not None else math.inf
@@ -433,8 +410,7 @@ class MujocoBackend(Backend):
         kernel.bind_world(
             damping.first if damping is not None else 0,
             damping.lin_gain if damping is not None else empty,
-            np.ascontiguousarray(damping.ang_gain) if damping is not None else empty,
-            damping.sensor.start if damping is not None and self._m.nsensordata else -1,
+            damping.ang_gain if damping is not None else empty,
             self._damp_dof,
             self._damp_coef,
             self._motors.dof,

@@ -7,13 +7,15 @@ every link, in its centre-of-mass frame (principal axes), the forces
     t = -I . k_ang (1 + |w|) w          (I: principal moments, element-wise)
 
 with k_lin = linearDamping, k_ang = angularDamping (0.04 each by default): a linear plus a
-quadratic drag, applied explicitly with the smooth forces. Here they go into ``xfrc_applied``
-(world force and torque at the centre of mass) between ``mj_step1`` and ``mj_step2``; the
-velocities come from two MuJoCo sensors per body (``framelinvel`` and ``frameangvel`` of the
-inertial frame, world axes), computed in C by ``mj_step1``; the torque is formed in the
-principal axes (``ximat``) and turned back to the world. The compiled step loop
-(``_mjkernel.c``) does the same from ``cvel`` (the transform those sensors use) and needs no
-sensors.
+quadratic drag, applied explicitly with the smooth forces. Here they are added to
+``qfrc_passive`` between ``mj_step1`` and ``mj_step2`` (``mj_step1`` computes it afresh and
+``mj_fwdAcceleration`` sums it into the smooth forces): the velocities come from ``cvel`` (world
+axes, about the tree's centre of mass, as ``mj_step1`` leaves it), the torque is formed in the
+principal axes (``ximat``) and turned back to the world, and each body's force and torque
+become generalised forces J^T f through ``cdof``, summed over the subtree of each dof's body
+(as MuJoCo's own recursive Newton-Euler pass does). Writing them into ``xfrc_applied`` instead
+gives the same forces but costs ``mj_fwdAcceleration`` a Jacobian per body (1.5 us per r2d2
+step, measured). The compiled step loop (``_mjkernel.c``) does the same in C.
 
 ``btMultiBody::applyDeltaVeeMultiDof`` clamps every velocity coordinate (the 6 base coordinates
 and every joint) to +-maxJointVelocity (100); measured on PyBullet, the velocity after the whole
@@ -36,37 +38,48 @@ class LinkDamping:
 
     def __init__(
         self,
+        m,  # type: ignore[no-untyped-def]
         first: int,
-        mass: np.ndarray,  # (n,)
-        inertia: np.ndarray,  # (n, 3) principal moments
         k_lin: float,
         k_ang: float,
-        sensor_adr: int,
     ) -> None:
         self.first = first
-        self.n = n = len(mass)
-        self.sensor = slice(sensor_adr, sensor_adr + 6 * n)
-        self.lin_gain = -k_lin * mass  # (n,)
-        self.ang_gain = -k_ang * inertia  # (n, 3)
-        self._sq = np.empty((n, 2))
-        self._tl = np.empty((n, 3))
-        self._out = np.empty((n, 6))
+        self.n = n = m.nbody - first
+        self.rows = slice(first, first + n)
+        self.lin_gain = -k_lin * m.body_mass[self.rows].copy()  # (n,)
+        self.ang_gain = np.ascontiguousarray(-k_ang * m.body_inertia[self.rows])  # (n, 3)
+        self.root = m.body_rootid[self.rows].copy()
+        # subtree[j, i]: body first + i lies in the subtree of dof j's body (dof j moves it)
+        parent = m.body_parentid
+        inside = np.zeros((m.nbody, n), bool)
+        for i in range(n):
+            b = first + i
+            while b > 0:
+                inside[b, i] = True
+                b = parent[b]
+        self.subtree = inside[m.dof_bodyid].astype(float)  # (nv, n)
 
-    def apply(self, d, out: np.ndarray | None = None) -> float:  # type: ignore[no-untyped-def]
-        """Write the damping forces into ``d.xfrc_applied`` (bodies of this range); return the
-        largest body speed seen (m/s or rad/s), for the speed-clamp test."""
-        s = d.sensordata[self.sensor].reshape(self.n, 2, 3)  # [v, w], world axes
-        sq = np.einsum("ijk,ijk->ij", s, s, out=self._sq)
-        np.sqrt(sq, out=sq)
-        top = float(sq.max()) if self.n else 0.0
-        sq += 1.0
-        xf = d.xfrc_applied[self.first : self.first + self.n]
-        np.multiply(s[:, 0, :], (self.lin_gain * sq[:, 0])[:, None], out=xf[:, :3])
-        rot = d.ximat[self.first : self.first + self.n].reshape(self.n, 3, 3)
-        tl = np.einsum("bji,bj->bi", rot, s[:, 1, :], out=self._tl)  # w in the inertial frame
+    def apply(self, d) -> float:  # type: ignore[no-untyped-def]
+        """Add the damping forces to ``d.qfrc_passive`` as generalised forces (after
+        ``mj_step1``, which computes both); return the largest body speed seen (m/s or rad/s),
+        for the speed-clamp test."""
+        rows = self.rows
+        cvel = d.cvel[rows]  # [w, v at the tree's centre of mass], world axes
+        w = cvel[:, :3]
+        r = d.xipos[rows] - d.subtree_com[self.root]
+        v = cvel[:, 3:] - np.cross(r, w)  # velocity of each body's centre of mass
+        sv = np.sqrt(np.einsum("ij,ij->i", v, v))
+        sw = np.sqrt(np.einsum("ij,ij->i", w, w))
+        top = float(max(sv.max(), sw.max())) if self.n else 0.0
+        force = v * (self.lin_gain * (sv + 1.0))[:, None]
+        rot = d.ximat[rows].reshape(self.n, 3, 3)
+        tl = np.einsum("bji,bj->bi", rot, w)  # w in the principal axes
         tl *= self.ang_gain
-        tl *= sq[:, 1:2]
-        np.einsum("bij,bj->bi", rot, tl, out=xf[:, 3:])
+        tl *= (sw + 1.0)[:, None]
+        torque = np.einsum("bij,bj->bi", rot, tl)
+        # the spatial force about the tree's centre of mass, summed over each dof's subtree
+        spatial = np.concatenate([torque + np.cross(r, force), force], axis=1)
+        d.qfrc_passive += np.einsum("jk,jk->j", d.cdof, self.subtree @ spatial)
         return top
 
 

@@ -202,7 +202,7 @@ def test_bad_bindings_raise_instead_of_crashing():
         with pytest.raises(ValueError, match="expected 1 elements"):
             k.bind_motors(nonef, none, none, nonef, none, none, nonef, ints, floats)
         with pytest.raises(ValueError, match="out of the model's range"):
-            k.bind_world(0, nonef, nonef, 0, ints + 50, floats, none, nonef, None, 1.0, 1.0)
+            k.bind_world(0, nonef, nonef, ints + 50, floats, none, nonef, None, 1.0, 1.0)
         with pytest.raises(ValueError, match="13 addresses"):
             type(k)(None, None, 1, 1, (), 0.01)
         with pytest.raises(ValueError, match="null"):
