@@ -32,8 +32,9 @@ __all__ = ["MotorTable", "MOTOR_DMAX", "MOTOR_R_SCALE"]
 MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2]), MuJoCo's largest
 # MuJoCo's hardest row still has a regulariser R = 1e-4 of its (approximate) inverse inertia, so
 # a motor would reach only 1 - 1e-4 of the velocity change it asks for. Between mj_step1 and
-# mj_step2 the backend scales the rows' R (and D = 1/R) by this factor: 1e-8, which the Newton
-# solver takes without trouble (islands are disabled so the solver reads efc_R/efc_D directly).
+# mj_step2 the backend scales the rows' R (and D = 1/R) by this factor, to 1e-6 of the inverse
+# inertia, which the Newton solver takes without trouble (islands are disabled so the solver
+# reads efc_R/efc_D directly); the polish then removes the last 1e-6 (mujoco_backend._polish).
 MOTOR_R_SCALE = 1e-2
 
 

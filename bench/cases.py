@@ -148,16 +148,14 @@ def _mujoco_handles(sim: simbridge.Sim, robot: int) -> tuple:
 
 
 def _mujoco_raw_model(sim: simbridge.Sim, robot: int) -> tuple:
-    """What a user of raw MuJoCo drives: the layer's world (the same bodies, geoms, contact
-    pairs and joint brakes) without the layer's additions (its link-damping sensors), plus one
-    velocity actuator per wheel (``kv`` 5, force range +-50 N·m), driven by ``d.ctrl``."""
+    """What a user of raw MuJoCo drives: the layer's world (the same bodies, geoms and contact
+    pairs) without the layer's motors, brakes and damping, plus one velocity actuator per wheel
+    (``kv`` 5, force range +-50 N·m), driven by ``d.ctrl``."""
     import mujoco
 
     b = sim._b  # noqa: SLF001 - the raw floor is measured on the model the layer built
     r = b._robots[robot]  # noqa: SLF001
     spec = b._spec.copy()  # noqa: SLF001
-    for sensor in list(spec.sensors):
-        spec.delete(sensor)
     for j in WHEELS:
         act = spec.add_actuator(
             name=f"raw/{j}", target=r.spec.joint_names[j], trntype=mujoco.mjtTrn.mjTRN_JOINT
