@@ -28,7 +28,7 @@ setup(
             "simbridge.backends._mjkernel",
             sources=["backends/_mjkernel.c"],
             include_dirs=_include,
-            extra_compile_args=["-O2", "-std=c99"],
+            extra_compile_args=["-O2", "-std=c11"],
             optional=True,
         )
     ]

@@ -18,6 +18,8 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
+#include <setjmp.h>
+#include <stdio.h>
 #include <string.h>
 
 /* Phase timers for bench/kernel_phases.py, compiled in only with -DSIMBRIDGE_KERNEL_TIMERS. */
@@ -43,11 +45,36 @@ typedef void (*mjfn)(const mjModel*, mjData*);
 typedef void (*solvefn)(const mjModel*, mjData*, mjtNum*, const mjtNum*, int);
 typedef void (*mat2quatfn)(mjtNum*, const mjtNum*);
 typedef void (*objvelfn)(const mjModel*, const mjData*, int, int, mjtNum*, int);
+typedef mjfLogHandler (*settlsfn)(mjfLogHandler);
+typedef mjfLogHandler (*getglobalfn)(void);
 
 /* the functions taken by address, in the order of mujoco_kernel._FUNCTIONS */
 enum { F_STEP1, F_STEP2, F_ACT, F_ACC, F_CON, F_CHECKACC, F_EULER, F_KIN, F_COMPOS, F_COMVEL,
        N_FN };
-#define N_ADDRESSES (N_FN + 3) /* + mj_solveM, mju_mat2Quat, mj_objectVelocity */
+/* + mj_solveM, mju_mat2Quat, mj_objectVelocity, _mjPRIVATE_setTlsLogHandler,
+ *   _mjPRIVATE_getGlobalLogHandler */
+#define N_ADDRESSES (N_FN + 5)
+
+/* MuJoCo errors (mju_error: an arena or stack overflow, say). MuJoCo's default handler prints and
+ * calls exit(); its Python bindings install a thread-local handler that jumps back to the caller.
+ * The kernel does the same around its own calls: the handler keeps the message and longjmps to
+ * the guarded call, which returns an error status; warnings go on to the handler that was active
+ * before. Thread-local, so kernels stepping in several threads keep their errors apart. */
+static settlsfn set_tls_handler;
+static getglobalfn get_global_handler;
+static _Thread_local jmp_buf error_jump;
+static _Thread_local char error_text[2048];
+static _Thread_local mjfLogHandler forward_handler;
+
+static void error_handler(const mjLogMessage* msg) {
+  if (msg->level != mjLOG_ERROR) {
+    if (forward_handler) forward_handler(msg);
+    return;
+  }
+  snprintf(error_text, sizeof(error_text), "%s%s%s", msg->func ? msg->func : "",
+           msg->func ? ": " : "", msg->subject);
+  longjmp(error_jump, 1);
+}
 
 typedef struct {
   Py_buffer buf;
@@ -77,7 +104,37 @@ typedef struct {
   double *Y, *U, *A, *b;    /* k x nv, k x nv, k x k, k */
   int *free_rows, *piv;
   int clamp_armed;
+  int busy; /* step() runs without the GIL: no other call may touch the kernel meanwhile */
+  long done; /* steps completed by the last step() call (fewer than asked after an error) */
 } Kernel;
+
+/* step() releases the GIL while it runs, so another thread may call in meanwhile: refuse, with
+ * the exception class set by set_busy_error (simbridge's SimBusyError; RuntimeError before). */
+static PyObject* busy_error = NULL;
+
+static int refuse_if_busy(const Kernel* self) {
+  if (!self->busy) return 0;
+  PyErr_SetString(busy_error ? busy_error : PyExc_RuntimeError,
+                  "this Sim is stepping in another thread; a Sim takes one call at a time "
+                  "(give each thread its own Sim)");
+  return -1;
+}
+
+static PyObject* set_busy_error(PyObject* mod, PyObject* cls) {
+  (void)mod;
+  if (!PyExceptionClass_Check(cls)) {
+    PyErr_SetString(PyExc_TypeError, "set_busy_error: an exception class");
+    return NULL;
+  }
+  Py_INCREF(cls);
+  Py_XSETREF(busy_error, cls);
+  Py_RETURN_NONE;
+}
+
+static PyMethodDef module_methods[] = {
+    {"set_busy_error", set_busy_error, METH_O, "the exception raised by a call on a busy kernel"},
+    {NULL, NULL, 0, NULL},
+};
 
 static void arr_release(Arr* a) {
   if (a->held) {
@@ -152,7 +209,8 @@ static void Kernel_dealloc(Kernel* self) {
 /* Kernel(model, data, model_address, data_address, functions, dt)
  * functions: addresses of mj_step1, mj_step2, mj_fwdActuation, mj_fwdAcceleration,
  * mj_fwdConstraint, mj_checkAcc, mj_Euler, mj_kinematics, mj_comPos, mj_comVel, mj_solveM,
- * mju_mat2Quat, mj_objectVelocity (in that order). */
+ * mju_mat2Quat, mj_objectVelocity, _mjPRIVATE_setTlsLogHandler, _mjPRIVATE_getGlobalLogHandler
+ * (in that order). */
 static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   PyObject *model, *data, *fns;
   unsigned long long maddr, daddr;
@@ -184,6 +242,8 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   self->solveM = (solvefn)f[N_FN];
   self->mat2quat = (mat2quatfn)f[N_FN + 1];
   self->objvel = (objvelfn)f[N_FN + 2];
+  set_tls_handler = (settlsfn)f[N_FN + 3];
+  get_global_handler = (getglobalfn)f[N_FN + 4];
   self->dt = dt;
   self->has_clamp = 0;
   self->clamp_limit = self->clamp_watch = INFINITY;
@@ -197,6 +257,7 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
  *            clamp_watch, r_scale): link damping of the bodies first .. first + len(lin_gain) - 1,
  * joint damping, one-step torques, the speed clamp, the motor rows' hardening */
 static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
+  if (refuse_if_busy(self) < 0) return NULL;
   int first;
   PyObject *lg, *ag, *jdd, *jdc, *tqd, *tq, *limit;
   double watch, r_scale;
@@ -244,6 +305,7 @@ bad_dof:
 /* bind_motors(offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows,
  *             slack): the motor rows after a refresh (k = len(dof_rows)) */
 static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
+  if (refuse_if_busy(self) < 0) return NULL;
   PyObject *o[9];
   if (!PyArg_ParseTuple(args, "OOOOOOOOO", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
                         &o[7], &o[8]))
@@ -426,23 +488,18 @@ static int warning_count(const mjData* d) {
          d->warning[mjWARN_BADQACC].number;
 }
 
-/* step(n, pending_torque) -> 0 ok, 1 a divergence warning was raised (the caller finds which),
- * 2 the friction rows are not the motor rows, 3 a singular motor solve */
-static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
-  if (nargs != 2) {
-    PyErr_SetString(PyExc_TypeError, "step(n, pending_torque)");
-    return NULL;
-  }
-  long n = PyLong_AsLong(args[0]);
-  int pending = PyObject_IsTrue(args[1]);
-  if ((n == -1 && PyErr_Occurred()) || pending < 0) return NULL;
+/* n steps of the loop; 0 ok, 1 a divergence warning was raised, 2 the friction rows are not the
+ * motor rows, 3 a singular motor solve */
+static int run_steps(Kernel* self, long n, int pending) {
   const mjModel* m = self->m;
   mjData* d = self->d;
   const int k = self->k;
   const int nt = (int)arr_len(&self->tq_dof), njd = (int)arr_len(&self->jd_dof);
   const int before = warning_count(d);
   int status = 0;
-  for (long s = 0; s < n && !status; s++) {
+  long s;
+  for (s = 0; s < n && !status; s++) {
+    self->done = s; /* kept through a jump out of a failed step */
     TIC(0);
     self->fn[F_STEP1](m, d);
     TOC(0);
@@ -515,15 +572,69 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
       }
     }
   }
+  self->done = s;
   if (!status && warning_count(d) != before) status = 1;
+  return status;
+}
+
+/* run_steps (job 0) or the lazy kinematics (job 1) under the error handler: 4 when MuJoCo
+ * raised an error (its text in error_text, for last_error()). */
+static int guarded(Kernel* self, int job, long n, int pending) {
+  mjfLogHandler prev = set_tls_handler(error_handler);
+  mjfLogHandler saved = forward_handler;
+  forward_handler = prev ? prev : get_global_handler();
+  int status;
+  if (setjmp(error_jump) == 0) {
+    if (job == 0) {
+      status = run_steps(self, n, pending);
+    } else {
+      self->fn[F_KIN](self->m, self->d);
+      self->fn[F_COMPOS](self->m, self->d);
+      self->fn[F_COMVEL](self->m, self->d);
+      status = 0;
+    }
+  } else {
+    status = 4;
+  }
+  forward_handler = saved;
+  set_tls_handler(prev);
+  return status;
+}
+
+/* step(n, pending_torque) -> status: run_steps's, or 4 for a MuJoCo error (last_error() says
+ * which). The GIL is released meanwhile: Sims in other threads step in parallel. */
+static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  if (nargs != 2) {
+    PyErr_SetString(PyExc_TypeError, "step(n, pending_torque)");
+    return NULL;
+  }
+  long n = PyLong_AsLong(args[0]);
+  int pending = PyObject_IsTrue(args[1]);
+  if ((n == -1 && PyErr_Occurred()) || pending < 0) return NULL;
+  int status;
+  self->busy = 1;
+  Py_BEGIN_ALLOW_THREADS
+  status = guarded(self, 0, n, pending);
+  Py_END_ALLOW_THREADS
+  self->busy = 0;
   return PyLong_FromLong(status);
+}
+
+/* last_error() -> the text of the last MuJoCo error seen by this thread's kernel calls */
+static PyObject* Kernel_last_error(Kernel* self, PyObject* unused) {
+  (void)self;
+  (void)unused;
+  return PyUnicode_DecodeUTF8(error_text, (Py_ssize_t)strnlen(error_text, sizeof(error_text)),
+                              "replace");
 }
 
 /* body_state(body_id, fresh, out): out[0:20] = centre-of-mass position, orientation (x, y, z,
  * w), world linear and angular velocity, link-frame position and orientation (x, y, z, w);
  * with fresh, first mj_kinematics, mj_comPos, mj_comVel (the lazy refresh after a step).
- * Returns False when the pose is not finite. */
+ * Returns False when the pose is not finite, None when MuJoCo raised an error (last_error()). */
 static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (refuse_if_busy(self) < 0) return NULL;
   if (nargs != 3) {
     PyErr_SetString(PyExc_TypeError, "body_state(body_id, fresh, out)");
     return NULL;
@@ -544,10 +655,9 @@ static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize
     PyErr_SetString(PyExc_ValueError, "out: a float64 array of 20");
     return NULL;
   }
-  if (fresh) {
-    self->fn[F_KIN](m, d);
-    self->fn[F_COMPOS](m, d);
-    self->fn[F_COMVEL](m, d);
+  if (fresh && guarded(self, 1, 0, 0) == 4) {
+    PyBuffer_Release(&out);
+    Py_RETURN_NONE; /* a MuJoCo error: last_error() says which */
   }
   double* o = (double*)out.buf;
   double q[4], v[6];
@@ -591,12 +701,19 @@ static PyMethodDef Kernel_methods[] = {
     {"bind_world", (PyCFunction)Kernel_bind_world, METH_VARARGS, "Bind the world's arrays."},
     {"bind_motors", (PyCFunction)Kernel_bind_motors, METH_VARARGS, "Bind the motor rows."},
     {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL, "step(n, pending_torque)"},
+    {"last_error", (PyCFunction)Kernel_last_error, METH_NOARGS, "the last MuJoCo error's text"},
     {"body_state", (PyCFunction)(void (*)(void))Kernel_body_state, METH_FASTCALL,
      "body_state(body_id, fresh, out) -> pose is finite"},
     {NULL, NULL, 0, NULL},
 };
 
+static PyObject* Kernel_done(Kernel* self, void* closure) {
+  (void)closure;
+  return PyLong_FromLong(self->done);
+}
+
 static PyGetSetDef Kernel_getset[] = {
+    {"steps_done", (getter)Kernel_done, NULL, "steps completed by the last step() call", NULL},
     {"clamp_armed", (getter)Kernel_clamp_armed, NULL, "speed clamp armed by the last step", NULL},
     {NULL, NULL, NULL, NULL, NULL},
 };
@@ -614,7 +731,8 @@ static PyTypeObject KernelType = {
 };
 
 static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "_mjkernel", "The MuJoCo backend's step loop in C.", -1, NULL,
+    PyModuleDef_HEAD_INIT, "_mjkernel", "The MuJoCo backend's step loop in C.", -1,
+    module_methods,
 };
 
 PyMODINIT_FUNC PyInit__mjkernel(void) {

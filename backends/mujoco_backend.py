@@ -29,6 +29,7 @@ from simbridge.backend import Backend
 from simbridge.exceptions import (
     BackendUnsupportedError,
     DisplayError,
+    EngineError,
     SimulationDivergedError,
     UrdfStructureError,
 )
@@ -162,6 +163,7 @@ class MujocoBackend(Backend):
             )
 
     def _new_world(self) -> None:
+        self._engine_error: str | None = None  # MuJoCo's error text once it raised one
         self._spec = build.new_world_spec(self.profile)
         self._meshes = build.MeshLibrary(self._spec)
         self._m = self._spec.compile()
@@ -401,7 +403,7 @@ class MujocoBackend(Backend):
         """The compiled step loop bound to this compile's model and arrays (None: step in
         Python; mujoco_kernel.reason() says why)."""
         cls = mujoco_kernel.kernel_class()
-        if cls is None:
+        if cls is None or self._engine_error is not None:
             return None
         m, d = self._m, self._d
         kernel = cls(m, d, m._address, d._address, mujoco_kernel.functions(), self._dt)
@@ -425,32 +427,56 @@ class MujocoBackend(Backend):
 
     def step(self, n: int) -> None:
         kernel = self._kernel
+        ran = None  # steps completed, where a call may have stopped early
         if kernel is not None and self._viewer is None and not self._pending_torque:
             status = kernel.step(n, False)  # the hot path: one call into the compiled loop
         elif kernel is None:
-            self._step_python(n)
+            if self._engine_error is not None:
+                raise EngineError(self.name, self.time, self._engine_error)
+            start = self._d.time
+            try:
+                self._step_python(n)
+            except mujoco.FatalError as exc:
+                self._steps += round((self._d.time - start) * self._inv_dt)  # those completed
+                self._engine_failed(str(exc))
             status = 1  # the Python loop does not count warnings: look at them
         else:  # a pending torque (first step only) or a viewer to keep in step
-            statuses = []
+            status = ran = 0
             for _ in range(n if self._viewer is not None else min(n, 1)):
-                statuses.append(kernel.step(1, self._pending_torque))
+                status = max(status, kernel.step(1, self._pending_torque))
+                ran += kernel.steps_done
                 self._pending_torque = False
+                if status >= 2:  # an error, not a warning: the world stops here
+                    break
                 if self._viewer is not None:
                     self._sync_viewer()
-            if self._viewer is None and n > 1:
-                statuses.append(kernel.step(n - 1, False))
-            status = max(statuses, default=0)
+            if self._viewer is None and n > 1 and status < 2:
+                status = max(status, kernel.step(n - 1, False))
+                ran += kernel.steps_done
         if n > 0:
             self._steps += n
             self._stale = self._motor_force_valid = self._motor_rows_valid = True
         if status:
+            if status >= 2:  # a call stopped early: count only the steps that ran
+                self._steps += (kernel.steps_done if ran is None else ran) - n
             self._kernel_status(status)
 
+    def _engine_failed(self, detail: str) -> None:
+        """MuJoCo raised an error inside a step: its data is left half-computed (its stack
+        marks unwound by a jump), so this world steps no more until reset()."""
+        self._engine_error = detail
+        self._kernel = None
+        self._stale = True
+        raise EngineError(self.name, self.time, detail)
+
     def _kernel_status(self, status: int) -> None:
-        """1: a divergence warning may have been raised; 2, 3: the compiled loop's own errors."""
+        """1: a divergence warning may have been raised; 2, 3: the compiled loop's own errors;
+        4: MuJoCo raised an error."""
         if status == 1:
             self._check_warnings()
             return
+        if status == 4:
+            self._engine_failed(self._kernel.last_error())
         if status == 2:
             raise SimulationDivergedError(
                 self.name, self.time, "motor rows (not MuJoCo's first friction rows)"
@@ -626,6 +652,8 @@ class MujocoBackend(Backend):
         kernel = self._kernel
         if kernel is not None:
             finite = kernel.body_state(bid, self._stale, self._state_out)
+            if finite is None:
+                self._engine_failed(kernel.last_error())
             self._stale = False
             if not finite:
                 raise SimulationDivergedError(self.name, self.time, f"body {body} pose")

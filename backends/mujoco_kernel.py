@@ -15,6 +15,8 @@ from typing import Any
 
 import mujoco
 
+from simbridge.exceptions import SimBusyError
+
 __all__ = ["ENV", "kernel_class", "functions", "reason"]
 
 ENV = "SIMBRIDGE_MUJOCO_STEP"  # "python" forces the Python step loop
@@ -32,6 +34,10 @@ _FUNCTIONS = (
     "mj_solveM",
     "mju_mat2Quat",
     "mj_objectVelocity",
+    # MuJoCo's thread-local log handler, as its own Python bindings use it: an engine error
+    # inside the compiled loop becomes a Python exception instead of exit() (_mjkernel.c)
+    "_mjPRIVATE_setTlsLogHandler",
+    "_mjPRIVATE_getGlobalLogHandler",
 )
 _state: dict[str, Any] = {}
 
@@ -71,6 +77,7 @@ def _load() -> None:
     except (OSError, AttributeError) as exc:
         _state["reason"] = f"cannot read MuJoCo's functions from {files[0]}: {exc}"
         return
+    _mjkernel.set_busy_error(SimBusyError)
     _state["class"] = _mjkernel.Kernel
     _state["functions"] = addresses
     _state["reason"] = ""

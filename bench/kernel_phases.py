@@ -50,7 +50,7 @@ def build(folder: str):  # type: ignore[no-untyped-def]
     cmd = [
         cc,
         "-O2",
-        "-std=c99",
+        "-std=c11",
         "-shared",
         "-fPIC",
         "-DSIMBRIDGE_KERNEL_TIMERS",

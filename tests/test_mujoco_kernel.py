@@ -203,10 +203,10 @@ def test_bad_bindings_raise_instead_of_crashing():
             k.bind_motors(nonef, none, none, nonef, none, none, nonef, ints, floats)
         with pytest.raises(ValueError, match="out of the model's range"):
             k.bind_world(0, nonef, nonef, ints + 50, floats, none, nonef, None, 1.0, 1.0)
-        with pytest.raises(ValueError, match="13 addresses"):
+        with pytest.raises(ValueError, match="15 addresses"):
             type(k)(None, None, 1, 1, (), 0.01)
         with pytest.raises(ValueError, match="null"):
-            type(k)(None, None, 0, 0, (1,) * 13, 0.01)
+            type(k)(None, None, 0, 0, (1,) * 15, 0.01)
 
 
 def _link_states(monkeypatch, loop: str) -> list:
@@ -252,3 +252,131 @@ def test_body_state_checks_its_arguments():
         out = np.zeros(20)
         assert k.body_state(1, True, out) is True
         assert np.linalg.norm(out[3:7]) == pytest.approx(1.0)
+
+
+# ---------------------------------------------------------------- engine errors, threads
+
+_ENGINE_ERROR_SCRIPT = """
+import simbridge
+from simbridge.exceptions import EngineError
+sim = simbridge.Sim("mujoco")
+sim.load_urdf("plane.urdf")
+sim._b._spec.memory = 60_000  # a world too large for its memory: MuJoCo's stack overflows
+for i in range(30):
+    sim.load_urdf("cube_small.urdf", base_position=(0, 0, 0.05 + 0.03 * i))
+print(sim._b.manifest()["step_loop"])
+try:
+    sim.step(1000)
+except EngineError as exc:
+    print("first", exc)
+try:
+    sim.step(1)
+except EngineError:
+    print("refused")
+sim.reset()
+sim.load_urdf("plane.urdf")
+sim.step(10)
+print("after reset", sim.time)
+sim.close()
+"""
+
+
+@pytest.mark.parametrize("loop", ["kernel", "python"])
+def test_an_engine_error_raises_instead_of_ending_the_process(tmp_path, loop):
+    """MuJoCo's own error handler prints and calls exit(); inside the compiled loop a MuJoCo
+    error (here a stack overflow) must come back as EngineError, on both loops alike, the
+    world must refuse to go on until reset(), and no MUJOCO_LOG.TXT may be left behind. Run in
+    a child process: a regression would end the process, not fail a test."""
+    import os
+    import subprocess
+    import sys
+
+    if loop == "kernel" and mujoco_kernel.reason():
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    env = dict(os.environ)
+    env.pop(mujoco_kernel.ENV, None)
+    if loop == "python":
+        env[mujoco_kernel.ENV] = "python"
+    run = subprocess.run(
+        [sys.executable, "-c", _ENGINE_ERROR_SCRIPT],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    out = run.stdout
+    assert out.startswith("compiled" if loop == "kernel" else "Python")
+    # the same step fails on both loops (17 steps ran: t = 17/240 s), with MuJoCo's message
+    first = out[out.index("first ") : out.index("refused")]
+    assert first.startswith("first backend 'mujoco' stopped with an engine error at t=0.070833")
+    assert "mj_stackAlloc: out of memory" in first and "reset() or close" in first
+    assert out.endswith(f"refused\nafter reset {10 / 240}\n")
+    assert os.listdir(tmp_path) == []
+
+
+def _drive_in_thread(sims, n: int = 300) -> None:
+    for sim, robot in sims:
+        sim.set_joint_velocity(robot, WHEELS, [-5, -5, 5, 5], max_force=20)
+        sim.step(n)
+
+
+def _r2d2() -> tuple:
+    sim = simbridge.Sim("mujoco")
+    sim.load_urdf("plane.urdf")
+    return sim, sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+
+
+def test_sims_in_threads_step_as_they_do_alone():
+    """The compiled loop runs without the GIL: Sims in two threads step at once and end in
+    exactly the state they reach one after the other."""
+    import threading
+
+    if mujoco_kernel.reason():
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    alone = [_r2d2() for _ in range(2)]
+    together = [_r2d2() for _ in range(2)]
+    try:
+        _drive_in_thread(alone)
+        threads = [threading.Thread(target=_drive_in_thread, args=([w],)) for w in together]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        for (a, _), (b, _) in zip(alone, together, strict=True):
+            assert a.time == b.time
+            assert np.array_equal(a._b._d.qpos, b._b._d.qpos)
+            assert np.array_equal(a._b._d.qvel, b._b._d.qvel)
+    finally:
+        for sim, _ in alone + together:
+            sim.close()
+
+
+def test_a_sim_stepping_in_another_thread_refuses_calls():
+    """While one thread steps a Sim (without the GIL), a call that needs its compiled loop
+    from another thread raises SimBusyError instead of racing it."""
+    import threading
+
+    from simbridge.exceptions import SimBusyError
+
+    if mujoco_kernel.reason():
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    sim, robot = _r2d2()
+    try:
+        sim.step(1)
+        worker = threading.Thread(target=sim.step, args=(20000,))
+        refused = 0
+        worker.start()
+        while worker.is_alive() and not refused:
+            try:
+                sim.link_state(robot, 2)
+            except SimBusyError as exc:
+                assert "another thread" in str(exc)
+                refused += 1
+        worker.join()
+        assert refused == 1
+        assert sim.time == pytest.approx(20001 / 240)
+        sim.link_state(robot, 2)  # free again
+    finally:
+        sim.close()

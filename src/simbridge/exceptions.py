@@ -29,6 +29,8 @@ __all__ = [
     "InvalidArgumentError",
     "InvalidProfileError",
     "SimulationDivergedError",
+    "EngineError",
+    "SimBusyError",
     "SimClosedError",
     "ScenarioError",
 ]
@@ -179,6 +181,25 @@ class SimulationDivergedError(SimbridgeError, FloatingPointError):
         super().__init__(
             f"simulation on backend {backend!r} diverged at t={time:.6f} s: {where} is not finite"
         )
+
+
+class EngineError(BackendError, RuntimeError):
+    """The engine itself stopped with an error (MuJoCo's ``mju_error``: a world too large for
+    its memory, say). The world's state is then undefined: the Sim refuses to step further
+    until ``reset()``."""
+
+    def __init__(self, backend: str, time: float, detail: str):
+        self.detail = detail
+        super().__init__(
+            f"backend {backend!r} stopped with an engine error at t={time:.6f} s: {detail}; "
+            "the world's state is undefined: reset() or close this Sim"
+        )
+
+
+class SimBusyError(SimbridgeError, RuntimeError):
+    """A call reached a Sim while it was stepping in another thread. A Sim takes one call at
+    a time; Sims in different threads step in parallel (MuJoCo's compiled loop releases the
+    GIL)."""
 
 
 class SimClosedError(SimbridgeError, RuntimeError):
