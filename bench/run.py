@@ -6,7 +6,10 @@
 Each row times the raw code and the layer's code interleaved (raw, layer, raw, layer ...) in
 this one process, ``--repeats`` times, and prints the medians, their spread (min..max) and the
 ratio layer/raw against the target from ../shared/PERFORMANCE.md. Raw code is written the fast,
-idiomatic way (``setJointMotorControlArray``; ``d.ctrl[:] = array``).
+idiomatic way (``setJointMotorControlArray``; ``d.ctrl[:] = array``). The N-environment rows
+(bench/parallel.py) run 8 worlds on two threads or two processes, raw and layer alike, and
+give the wall-clock time per env-step (the target 1.11x is PERFORMANCE.md's "at least 0.9x the
+raw throughput").
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import cases  # noqa: E402  (bench/cases.py: the raw and layer code of every row)
+import parallel  # noqa: E402  (bench/parallel.py: N environments on the cores)
 
 
 @dataclass
@@ -80,7 +84,7 @@ def import_times(repeats: int) -> tuple[list[float], list[float]]:
 
 
 def fmt(values: list[float], unit: str) -> str:
-    scale = {"µs/step": 1e6, "µs": 1e6, "ms": 1e3, "s": 1.0}[unit]
+    scale = {"µs/step": 1e6, "µs/env-step": 1e6, "µs": 1e6, "ms": 1e3, "s": 1.0}[unit]
     med = statistics.median(values) * scale
     return f"{med:9.2f} ({min(values) * scale:.1f}..{max(values) * scale:.1f})"
 
@@ -123,6 +127,21 @@ def main(argv: list[str] | None = None) -> int:
         for call in cases.single_calls(backend, int(2000 * scale) or 200):
             raw, lay = interleave(call.raw, call.layer, reps)
             rows.append(Row(f"{backend}: {call.name}", "µs", raw, lay, call.target, call.note))
+
+    steps = int(980 * scale)
+    for case in parallel.cases_for(args.backends, steps):
+        raw, lay = interleave(case.raw, case.layer, max(1, reps // 2))
+        per = parallel.WORLDS * steps
+        rows.append(
+            Row(
+                case.name,
+                "µs/env-step",
+                [t / per for t in raw],
+                [t / per for t in lay],
+                case.target,
+                case.note,
+            )
+        )
 
     base, full = import_times(max(3, reps))
     extra = [f - b for b, f in zip(base, full, strict=True)]

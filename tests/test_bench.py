@@ -28,6 +28,9 @@ def test_bench_runs_with_a_tiny_repeat_count():
         "single call: link_state",
         "single call: joint_states",
         "single call: set_joint_velocity",
+        "mujoco: 8 worlds, 2 threads, open loop (rollout)",
+        "mujoco: 8 worlds, 2 processes, command every step",
+        "pybullet: 8 worlds, 2 processes, command every step",
         "import simbridge after numpy",
     ):
         assert row in out, f"row {row!r} missing from the table:\n{out}"
