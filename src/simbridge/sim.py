@@ -37,6 +37,8 @@ from .profiles import Profile, get_profile
 from .registry import available_backends, load_backend
 from .types import BaseState, DynamicsInfo, JointInfo, JointStates, JointType, LinkState
 
+_F64 = np.dtype(np.float64)  # native float64: ``arr.dtype is _F64`` is the hot path's test
+
 __all__ = ["Sim"]
 
 JointsArg = int | str | Sequence[int | str] | np.ndarray
@@ -368,9 +370,10 @@ class Sim:
                 raise InvalidArgumentError(argument, f"values must be >= 0, got {value!r}")
             return [float(value)] * n
         values: list[float] | None = None
-        if type(value) is np.ndarray and value.shape == (n,) and value.dtype == np.float64:
+        vtype = type(value)
+        if vtype is np.ndarray and value.dtype is _F64 and value.ndim == 1 and len(value) == n:
             values = value.tolist()
-        elif type(value) is list and len(value) == n and n:
+        elif vtype is list and len(value) == n and n:
             try:
                 values = list(map(float, value))
             except (TypeError, ValueError):
