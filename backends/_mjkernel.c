@@ -101,6 +101,8 @@ typedef struct {
   /* motor arrays (bound after every refresh) */
   int k;
   Arr offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows, slack;
+  /* the motor table's commands (bound once per compile, for set_velocity) */
+  Arr cmd_target, cmd_force;
   double *Y, *U, *A, *b;    /* k x nv, k x nv, k x k, k */
   int *free_rows, *piv;
   int clamp_armed;
@@ -191,7 +193,8 @@ static void release_all(Kernel* self) {
   Arr* all[] = {&self->lin_gain, &self->ang_gain, &self->jd_dof,   &self->jd_coef,
                 &self->tq_dof,   &self->tq,       &self->offset,   &self->pos_rows,
                 &self->pos_qadr, &self->pos_gain, &self->kd_rows,  &self->kd_dof,
-                &self->kd_factor, &self->dof_rows, &self->slack};
+                &self->kd_factor, &self->dof_rows, &self->slack, &self->cmd_target,
+                &self->cmd_force};
   for (size_t i = 0; i < sizeof(all) / sizeof(all[0]); i++) arr_release(all[i]);
   free_motor_scratch(self);
   self->k = 0;
@@ -677,6 +680,72 @@ static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize
   return PyBool_FromLong(finite);
 }
 
+/* bind_commands(target_velocity, max_force): the motor table's command arrays (one entry per
+ * motor), which set_velocity updates with the rows. */
+static PyObject* Kernel_bind_commands(Kernel* self, PyObject* args) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  PyObject *tv, *mf;
+  if (!PyArg_ParseTuple(args, "OO", &tv, &mf)) return NULL;
+  if (arr_take(&self->cmd_target, tv, 'd', -1, "target_velocity") < 0) return NULL;
+  if (arr_take(&self->cmd_force, mf, 'd', arr_len(&self->cmd_target), "max_force") < 0)
+    return NULL;
+  Py_RETURN_NONE;
+}
+
+/* set_velocity(index, target, max_force): a velocity command on motors whose rows are present
+ * (MujocoBackend.set_joint_velocity's hot path, the same arithmetic): index is an intp array
+ * [motor slots, their friction rows, their dofs] (3 x n), target and max_force lists of n
+ * floats (max_force > 0). Writes the table's target and force, dof_frictionloss, the rows'
+ * offset (target / dt) and slack (force (1 - 1e-9)). Everything is checked before the first
+ * write. */
+static PyObject* Kernel_set_velocity(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  if (nargs != 3) {
+    PyErr_SetString(PyExc_TypeError, "set_velocity(index, target, max_force)");
+    return NULL;
+  }
+  Arr ix = {.held = 0};
+  if (arr_take(&ix, args[0], 'n', -1, "index") < 0) return NULL;
+  Py_ssize_t n = arr_len(&ix) / 3;
+  PyObject *tl = args[1], *fl = args[2];
+  const Py_ssize_t* slot = IP(ix);
+  const Py_ssize_t* row = slot + n;
+  const Py_ssize_t* dof = row + n;
+  if (arr_len(&ix) != 3 * n || !PyList_Check(tl) || !PyList_Check(fl) ||
+      PyList_GET_SIZE(tl) != n || PyList_GET_SIZE(fl) != n) {
+    arr_release(&ix);
+    PyErr_SetString(PyExc_ValueError, "set_velocity: a 3 x n index and two lists of n floats");
+    return NULL;
+  }
+  for (Py_ssize_t i = 0; i < n; i++) {
+    if (slot[i] < 0 || slot[i] >= arr_len(&self->cmd_target) || row[i] < 0 ||
+        row[i] >= self->k || dof[i] < 0 || dof[i] >= self->m->nv) {
+      arr_release(&ix);
+      PyErr_SetString(PyExc_ValueError, "set_velocity: a slot, row or dof index out of range");
+      return NULL;
+    }
+    PyFloat_AsDouble(PyList_GET_ITEM(tl, i));
+    PyFloat_AsDouble(PyList_GET_ITEM(fl, i));
+    if (PyErr_Occurred()) {
+      arr_release(&ix);
+      return NULL;
+    }
+  }
+  const double inv_dt = 1.0 / self->dt;
+  double* frictionloss = ((mjModel*)self->m)->dof_frictionloss;
+  for (Py_ssize_t i = 0; i < n; i++) {
+    double v = PyFloat_AsDouble(PyList_GET_ITEM(tl, i));
+    double f = PyFloat_AsDouble(PyList_GET_ITEM(fl, i));
+    DP(self->cmd_target)[slot[i]] = v;
+    DP(self->cmd_force)[slot[i]] = f;
+    frictionloss[dof[i]] = f;
+    DP(self->offset)[row[i]] = v * inv_dt;
+    DP(self->slack)[row[i]] = f * (1.0 - 1e-9);
+  }
+  arr_release(&ix);
+  Py_RETURN_NONE;
+}
+
 #ifdef SIMBRIDGE_KERNEL_TIMERS
 /* timers() -> nanoseconds spent in each phase since the last call (and reset them) */
 static PyObject* Kernel_timers(Kernel* self, PyObject* unused) {
@@ -702,6 +771,10 @@ static PyMethodDef Kernel_methods[] = {
     {"bind_motors", (PyCFunction)Kernel_bind_motors, METH_VARARGS, "Bind the motor rows."},
     {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL, "step(n, pending_torque)"},
     {"last_error", (PyCFunction)Kernel_last_error, METH_NOARGS, "the last MuJoCo error's text"},
+    {"bind_commands", (PyCFunction)Kernel_bind_commands, METH_VARARGS,
+     "Bind the motor table's command arrays."},
+    {"set_velocity", (PyCFunction)(void (*)(void))Kernel_set_velocity, METH_FASTCALL,
+     "set_velocity(index, target, max_force): a velocity command on present rows"},
     {"body_state", (PyCFunction)(void (*)(void))Kernel_body_state, METH_FASTCALL,
      "body_state(body_id, fresh, out) -> pose is finite"},
     {NULL, NULL, 0, NULL},

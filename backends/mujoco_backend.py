@@ -407,6 +407,7 @@ class MujocoBackend(Backend):
             return None
         m, d = self._m, self._d
         kernel = cls(m, d, m._address, d._address, mujoco_kernel.functions(), self._dt)
+        kernel.bind_commands(self._motors.target_velocity, self._motors.max_force)
         damping = self._damping
         empty = np.zeros(0)
         kernel.bind_world(
@@ -816,16 +817,18 @@ class MujocoBackend(Backend):
             if target == fast[6] and max_force == fast[7]:
                 return  # the command in force already
             if min(max_force) > 0.0:
-                rows = fast[4]
-                t.target_velocity[fast[3]] = target
-                t.max_force[fast[3]] = max_force
-                self._m.dof_frictionloss[fast[5]] = max_force
-                t.offset_rows[rows] = target
-                t.offset_rows[rows] *= self._inv_dt
-                t.force_rows_slack[rows] = max_force
-                t.force_rows_slack[rows] *= 1.0 - 1e-9
+                kernel = self._kernel
+                if kernel is not None:  # the same writes in C (_mjkernel.c set_velocity)
+                    kernel.set_velocity(fast[8], target, max_force)
+                else:
+                    rows, inv_dt = fast[4], self._inv_dt
+                    t.target_velocity[fast[3]] = target
+                    t.max_force[fast[3]] = max_force
+                    self._m.dof_frictionloss[fast[5]] = max_force
+                    t.offset_rows[rows] = [v * inv_dt for v in target]
+                    t.force_rows_slack[rows] = [f * (1.0 - 1e-9) for f in max_force]
                 t.has_offset = True
-                self._fast[id(joints)] = (*fast[:6], target, max_force)
+                self._fast[id(joints)] = (*fast[:6], target, max_force, fast[8])
                 return
         idx = self._motor_slots(body, joints)
         t.target_velocity[idx] = target
@@ -835,15 +838,17 @@ class MujocoBackend(Backend):
         self._refresh_motors()
         rows = t.row_of[idx]
         if t.n_special == 0 and not self.profile.enforce_effort_limit and (rows >= 0).all():
+            dofs = t.dof[idx]
             self._fast[id(joints)] = (
                 joints,
                 t.epoch,
                 body,
                 idx,
                 rows,
-                t.dof[idx],
+                dofs,
                 list(target),
                 list(max_force),
+                np.ascontiguousarray(np.stack([idx, rows, dofs]), dtype=np.intp),
             )
 
     def set_joint_position(

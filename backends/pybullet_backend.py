@@ -98,6 +98,11 @@ class PyBulletBackend(Backend):
         self._steps = 0
         self._next_check = _CHECK_EVERY
         self._bodies: dict[int, _Body] = {}
+        # the last velocity command sent: (joints, body, target, max_force). PyBullet's motor
+        # keeps a command until another replaces it, so the same command again is not re-sent
+        # (a control loop repeating it every step pays 1.4 us less); any other motor command,
+        # load, remove or reset forgets it.
+        self._last_velocity: tuple[Any, ...] | None = None
         self._configure()
 
     def _configure(self) -> None:
@@ -117,6 +122,7 @@ class PyBulletBackend(Backend):
     def load(
         self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
     ) -> int:
+        self._last_velocity = None
         prof = self.profile
         flags = 0
         if prof.inertia_source == "file":
@@ -223,10 +229,12 @@ class PyBulletBackend(Backend):
                 )
 
     def remove(self, body: int) -> None:
+        self._last_velocity = None
         p.removeBody(body, physicsClientId=self._c)
         del self._bodies[body]
 
     def reset(self) -> None:
+        self._last_velocity = None
         p.resetSimulation(physicsClientId=self._c)
         self._configure()
         self._bodies.clear()
@@ -377,6 +385,16 @@ class PyBulletBackend(Backend):
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
+        last = self._last_velocity
+        # joints: Sim's cached read-only index array, so the same object means the same joints
+        if (
+            last is not None
+            and last[0] is joints
+            and last[1] == body
+            and last[2] == target
+            and last[3] == max_force
+        ):
+            return  # the command in force already
         p.setJointMotorControlArray(
             body,
             joints.tolist(),
@@ -385,6 +403,7 @@ class PyBulletBackend(Backend):
             forces=max_force,
             physicsClientId=self._c,
         )
+        self._last_velocity = (joints, body, target, max_force)
 
     def set_joint_position(
         self,
@@ -395,6 +414,7 @@ class PyBulletBackend(Backend):
         kp: list[float],
         kd: list[float],
     ) -> None:
+        self._last_velocity = None
         p.setJointMotorControlArray(
             body,
             joints.tolist(),
@@ -407,6 +427,7 @@ class PyBulletBackend(Backend):
         )
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
+        self._last_velocity = None
         p.setJointMotorControlArray(
             body, joints.tolist(), p.TORQUE_CONTROL, forces=torque, physicsClientId=self._c
         )

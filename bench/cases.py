@@ -3,6 +3,7 @@ part (set-up is excluded: loading the robot is not what a per-step figure measur
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -21,6 +22,7 @@ FORWARD = np.array([-100.0, -100.0, -100.0, -100.0])
 # raw model and the layer's would spend different shares of the 980 steps in free flight,
 # where a step costs a fraction of one with contacts. A per-step cost needs the same work.
 START_Z = 0.5
+TURN_FROM, FORWARD_FROM = 240, 480  # the tutorial's schedule: settle, turn, forward (to 980)
 
 
 @dataclass
@@ -57,8 +59,8 @@ def layer_drive(backend: str, record: bool) -> Callable[[], float]:
             wheel_state = np.empty((980, 12))
             t0 = time.perf_counter()
             for k in range(980):
-                if k >= 240:
-                    if k < 480:
+                if k >= TURN_FROM:
+                    if k < FORWARD_FROM:
                         sim.set_joint_velocity(robot, wheels, TURN, max_force=50.0)
                     else:
                         sim.set_joint_velocity(robot, wheels, FORWARD, max_force=10.0)
@@ -99,8 +101,8 @@ def pybullet_raw_drive(record: bool) -> Callable[[], float]:
             turn, fwd = TURN.tolist(), FORWARD.tolist()
             t0 = time.perf_counter()
             for k in range(980):
-                if k >= 240:
-                    if k < 480:
+                if k >= TURN_FROM:
+                    if k < FORWARD_FROM:
                         p.setJointMotorControlArray(
                             r,
                             WHEELS,
@@ -190,10 +192,10 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
             qadr = m.jnt_qposadr[m.dof_jntid[dofs]]
             t0 = time.perf_counter()
             for k in range(980):
-                if k == 480:
+                if k == FORWARD_FROM:
                     m.actuator_forcerange[:] = [-10.0, 10.0]
-                if k >= 240:
-                    d.ctrl[:] = TURN if k < 480 else FORWARD
+                if k >= TURN_FROM:
+                    d.ctrl[:] = TURN if k < FORWARD_FROM else FORWARD
                 mujoco.mj_step(m, d)
                 if record:
                     mujoco.mj_kinematics(m, d)  # poses after the step, not before it
@@ -229,6 +231,10 @@ def single_calls(backend: str, n: int) -> list[Case]:
     sim.step(10)
     wheels = np.array(WHEELS)
     out: list[Case] = []
+    # set_joint_velocity alternates two targets, raw and layer alike: each call is a new
+    # command (a repeated one is cheaper on both backends; the drive rows repeat theirs)
+    raw_targets = itertools.cycle([TURN.tolist(), FORWARD.tolist()]).__next__
+    layer_targets = itertools.cycle([TURN, FORWARD]).__next__
 
     def per_call(fn: Callable[[], object]) -> Callable[[], float]:
         def run() -> float:
@@ -257,7 +263,7 @@ def single_calls(backend: str, n: int) -> list[Case]:
                 robot,
                 WHEELS,
                 p.VELOCITY_CONTROL,
-                targetVelocities=TURN.tolist(),
+                targetVelocities=raw_targets(),
                 forces=[50.0] * 4,
                 physicsClientId=c,
             )
@@ -275,7 +281,7 @@ def single_calls(backend: str, n: int) -> list[Case]:
             return d.qpos[qadr].copy(), d.qvel[dofs].copy()
 
         def raw_set() -> None:
-            d.qfrc_applied[dofs] = TURN
+            d.qfrc_applied[dofs] = raw_targets()
 
         _ = mujoco
     out.append(
@@ -299,8 +305,11 @@ def single_calls(backend: str, n: int) -> list[Case]:
         Case(
             "single call: set_joint_velocity(4 wheels)",
             per_call(raw_set),
-            per_call(lambda: sim.set_joint_velocity(robot, wheels, TURN, max_force=50.0)),
+            per_call(
+                lambda: sim.set_joint_velocity(robot, wheels, layer_targets(), max_force=50.0)
+            ),
             None,
+            "a new target each call",
         )
     )
     return out
@@ -351,14 +360,14 @@ def pybullet_raw_positions() -> np.ndarray:
         r = p.loadURDF("r2d2.urdf", [0, 0, START_Z], physicsClientId=c)
         out = np.empty((980, 3))
         for k in range(980):
-            if k >= 240:
-                tv = TURN if k < 480 else FORWARD
+            if k >= TURN_FROM:
+                tv = TURN if k < FORWARD_FROM else FORWARD
                 p.setJointMotorControlArray(
                     r,
                     WHEELS,
                     p.VELOCITY_CONTROL,
                     targetVelocities=tv.tolist(),
-                    forces=[50.0 if k < 480 else 10.0] * 4,
+                    forces=[50.0 if k < FORWARD_FROM else 10.0] * 4,
                     physicsClientId=c,
                 )
             p.stepSimulation(physicsClientId=c)
@@ -376,10 +385,10 @@ def mujoco_raw_positions() -> np.ndarray:
         m, d, _, base_body = _mujoco_raw_model(sim, robot)
         out = np.empty((980, 3))
         for k in range(980):
-            if k == 480:
+            if k == FORWARD_FROM:
                 m.actuator_forcerange[:] = [-10.0, 10.0]
-            if k >= 240:
-                d.ctrl[:] = TURN if k < 480 else FORWARD
+            if k >= TURN_FROM:
+                d.ctrl[:] = TURN if k < FORWARD_FROM else FORWARD
             mujoco.mj_step(m, d)
             mujoco.mj_kinematics(m, d)
             out[k] = d.xipos[base_body]
@@ -394,9 +403,12 @@ def layer_positions(backend: str) -> np.ndarray:
         out = np.empty((980, 3))
         wheels = np.array(WHEELS)
         for k in range(980):
-            if k >= 240:
+            if k >= TURN_FROM:
                 sim.set_joint_velocity(
-                    robot, wheels, TURN if k < 480 else FORWARD, max_force=50.0 if k < 480 else 10.0
+                    robot,
+                    wheels,
+                    TURN if k < FORWARD_FROM else FORWARD,
+                    max_force=50.0 if k < FORWARD_FROM else 10.0,
                 )
             sim.step()
             out[k] = sim.base_state(robot).position

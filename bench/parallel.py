@@ -2,18 +2,20 @@
 
 ../shared/PERFORMANCE.md's targets: MuJoCo at least 0.9x ``mujoco.rollout``/``mujoco.batch`` on
 the same model, PyBullet at least 0.9x two plain processes. Each case runs ``WORLDS`` r2d2
-worlds (the drive's forward phase: wheels at -100 rad/s, 10 N·m, from the resting start) for
-``steps`` steps each and returns the wall-clock seconds of the stepping alone (worlds are built
-before the clock starts; in the process cases every worker builds its worlds, waits at a
-barrier, and the time runs from the first worker's start to the last one's end, on the
-machine-wide monotonic clock).
+worlds from the resting start (bench/cases.py) for ``steps`` steps each and returns the
+wall-clock seconds of the stepping alone (worlds are built before the clock starts; in the
+process cases every worker builds its worlds, waits at a barrier, and the time runs from the
+first worker's start to the last one's end, on the machine-wide monotonic clock).
 
-* MuJoCo, open loop, 2 threads: raw ``mujoco.rollout`` (constant ``ctrl``, one ``MjData`` per
-  thread) against the layer's Sims stepped by ``Sim.step(steps)`` in two threads (the compiled
-  loop releases the GIL; the command persists, as a constant ctrl does).
-* MuJoCo and PyBullet, a command every step, 2 processes: each process drives half the worlds,
-  ``d.ctrl[:] = a; mj_step`` or ``setJointMotorControlArray; stepSimulation`` against
-  ``set_joint_velocity; step``. Python threads do not help here: every step hands the GIL over.
+* MuJoCo, open loop, 2 threads: raw ``mujoco.rollout`` (a constant ``ctrl``: the wheels at
+  -100 rad/s, 10 N·m, one ``MjData`` per thread) against the layer's Sims stepped by
+  ``Sim.step(steps)`` in two threads (the compiled loop releases the GIL; the command
+  persists, as a constant ctrl does).
+* MuJoCo and PyBullet, a command every step, 2 processes: each process drives its share of the
+  worlds through the tutorial's schedule (bench/cases.py's drive: settle, turn at 50 N·m,
+  forward at 10 N·m), ``d.ctrl[:] = a; mj_step`` or ``setJointMotorControlArray;
+  stepSimulation`` against ``set_joint_velocity; step``. Python threads do not help here:
+  every step hands the GIL over.
 """
 
 from __future__ import annotations
@@ -83,19 +85,31 @@ def _raw_mujoco_worker(n: int, steps: int) -> Callable[[], None]:
     pairs = []
     for sim, robot in sims:
         m, d, _, _ = cases._mujoco_raw_model(sim, robot)  # noqa: SLF001
-        m.actuator_forcerange[:] = [-10.0, 10.0]
         pairs.append((m, d))
         sim.close()
     step = mujoco.mj_step
-    forward = cases.FORWARD
 
     def run() -> None:
-        for _ in range(steps):
+        for k in range(steps):
+            command = _command(k)
+            if k == cases.FORWARD_FROM:
+                for m, _ in pairs:
+                    m.actuator_forcerange[:] = [-10.0, 10.0]
             for m, d in pairs:
-                d.ctrl[:] = forward
+                if command is not None:
+                    d.ctrl[:] = command[0]
                 step(m, d)
 
     return run
+
+
+def _command(k: int) -> tuple | None:
+    """Step k of the drive: (targets, force), or None while the robot settles."""
+    if k < cases.TURN_FROM:
+        return None
+    if k < cases.FORWARD_FROM:
+        return cases.TURN, 50.0
+    return cases.FORWARD, 10.0
 
 
 def _raw_pybullet_worker(n: int, steps: int) -> Callable[[], None]:
@@ -106,23 +120,25 @@ def _raw_pybullet_worker(n: int, steps: int) -> Callable[[], None]:
     for _ in range(n):
         c = p.connect(p.DIRECT)
         p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=c)
-        p.setGravity(0, 0, -10, physicsClientId=c)
+        p.setGravity(0, 0, -9.8, physicsClientId=c)  # the layer's default, as in cases.py
         p.loadURDF("plane.urdf", physicsClientId=c)
         robot = p.loadURDF("r2d2.urdf", [0, 0, cases.START_Z], physicsClientId=c)
         worlds.append((c, robot))
-    forward = cases.FORWARD.tolist()
+    schedule = [_command(k) for k in range(steps)]
+    schedule = [(c[0].tolist(), [c[1]] * 4) if c else None for c in schedule]
 
     def run() -> None:
-        for _ in range(steps):
+        for command in schedule:
             for c, robot in worlds:
-                p.setJointMotorControlArray(
-                    robot,
-                    cases.WHEELS,
-                    p.VELOCITY_CONTROL,
-                    targetVelocities=forward,
-                    forces=[10.0] * 4,
-                    physicsClientId=c,
-                )
+                if command is not None:
+                    p.setJointMotorControlArray(
+                        robot,
+                        cases.WHEELS,
+                        p.VELOCITY_CONTROL,
+                        targetVelocities=command[0],
+                        forces=command[1],
+                        physicsClientId=c,
+                    )
                 p.stepSimulation(physicsClientId=c)
 
     return run
@@ -131,12 +147,13 @@ def _raw_pybullet_worker(n: int, steps: int) -> Callable[[], None]:
 def _layer_worker(backend: str, n: int, steps: int) -> Callable[[], None]:
     worlds = [cases._layer_sim(backend) for _ in range(n)]  # noqa: SLF001
     wheels = np.array(cases.WHEELS)
-    forward = cases.FORWARD
+    schedule = [_command(k) for k in range(steps)]
 
     def run() -> None:
-        for _ in range(steps):
+        for command in schedule:
             for sim, robot in worlds:
-                sim.set_joint_velocity(robot, wheels, forward, max_force=10.0)
+                if command is not None:
+                    sim.set_joint_velocity(robot, wheels, command[0], max_force=command[1])
                 sim.step()
 
     return run

@@ -100,6 +100,25 @@ def test_r2d2_drive(monkeypatch, profile):
     _agree(monkeypatch, _r2d2_drive, profile)
 
 
+def _new_target_every_step(sim, record) -> None:
+    # a policy's loop: a new velocity target and force on the wheels at every step (the
+    # command's hot path, in C on the compiled loop and in numpy on the Python one)
+    sim.load_urdf("plane.urdf")
+    r = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+    wheels = np.array(WHEELS)
+    for k in range(400):
+        phase = 0.05 * k
+        target = np.array([np.sin(phase), np.cos(phase), -np.sin(phase), 0.5]) * 20.0
+        sim.set_joint_velocity(r, wheels, target, max_force=[5.0 + k % 7, 5.0, 8.0, 3.0])
+        sim.step()
+        record()
+    assert sim._b._fast  # the hot path was the one taken
+
+
+def test_new_target_every_step(monkeypatch):
+    _agree(monkeypatch, _new_target_every_step)
+
+
 def _kuka_position_torque_damping(sim, record) -> None:
     # position motors with kd != 1 (the split step's qacc_smooth term), joint damping from the
     # file, one-step torques, link damping on a fixed base
@@ -201,6 +220,16 @@ def test_bad_bindings_raise_instead_of_crashing():
             k.bind_motors(floats, none, none, nonef, none, none, nonef, ints + 99, floats)
         with pytest.raises(ValueError, match="expected 1 elements"):
             k.bind_motors(nonef, none, none, nonef, none, none, nonef, ints, floats)
+        k.bind_motors(floats, none, none, nonef, none, none, nonef, ints, floats)
+        index = np.zeros(3, np.intp)  # motor slot 0, row 0, dof 0
+        with pytest.raises(ValueError, match="out of range"):
+            k.set_velocity(index + 5, [1.0], [1.0])
+        with pytest.raises(ValueError, match="lists of n floats"):
+            k.set_velocity(index, (1.0,), [1.0])
+        with pytest.raises(TypeError):
+            k.set_velocity(index, ["fast"], [1.0])
+        k.set_velocity(index, [2.0], [3.0])
+        assert sim._b._motors.max_force[0] == 3.0 and sim._b._m.dof_frictionloss[0] == 3.0
         with pytest.raises(ValueError, match="out of the model's range"):
             k.bind_world(0, nonef, nonef, ints + 50, floats, none, nonef, None, 1.0, 1.0)
         with pytest.raises(ValueError, match="15 addresses"):

@@ -281,3 +281,38 @@ def test_joint_speed_clamp(make_sim, profile):
     w = sim.joint_states(body, "axle").velocities[0]
     limit = sim.profile.max_joint_velocity
     assert w == pytest.approx(150.0 if limit is None else limit, abs=1e-9)
+
+
+def test_a_repeated_velocity_command_takes_over_again_after_other_modes(make_sim, profile):
+    """The same velocity command sent again (the same joints, target and force) is the command
+    in force, whatever came between: a position command, a one-step torque, a reset. A backend
+    that skips repeated commands must forget the last one when another mode replaces it."""
+    sim = make_sim(profile=profile)
+    body = sim.load_urdf("wheel.urdf", fixed_base=True)
+    axle = np.array([0])  # the same array object every call, as a control loop passes it
+
+    def speed() -> float:
+        return sim.joint_states(body, axle).velocities[0]
+
+    def drive() -> None:
+        sim.set_joint_velocity(body, axle, 5.0, max_force=50.0)
+        sim.set_joint_velocity(body, axle, 5.0, max_force=50.0)  # repeated: still in force
+        sim.step(10)
+
+    drive()
+    assert speed() == pytest.approx(5.0, abs=1e-6)
+    sim.set_joint_position(body, axle, sim.joint_states(body, axle).positions[0], max_force=50.0)
+    sim.step(30)
+    assert abs(speed()) < 0.5  # the position motor holds the wheel
+    drive()
+    assert speed() == pytest.approx(5.0, abs=1e-6)
+    sim.set_joint_velocity(body, axle, 0.0, max_force=0.0)  # released
+    sim.set_joint_torque(body, axle, -2.0)
+    sim.step()
+    assert speed() < 5.0
+    drive()
+    assert speed() == pytest.approx(5.0, abs=1e-6)
+    sim.reset()
+    body = sim.load_urdf("wheel.urdf", fixed_base=True)
+    drive()
+    assert speed() == pytest.approx(5.0, abs=1e-6)
