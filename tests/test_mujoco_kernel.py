@@ -4,10 +4,13 @@ Both loops do the same arithmetic in the same order; they may differ only in rou
 kernel sums the 3x3 rotations and solves the motor rows' small linear system in its own order;
 numpy uses einsum and LAPACK). Each scenario runs on both and compares every coordinate of the
 state (qpos, qvel, motor impulses) at every step. Measured (2026-11-23, `pytest -s` prints it):
-0.0 in four scenarios, 4e-14 and 7e-15 in two, and 4e-11 for r2d2's drive on the plane, where
+0.0 in four scenarios, 6e-15 to 9e-12 in three, and 1.3e-10 for r2d2's tutorial drive, where
 contact amplifies round-off over 980 steps. The tolerance, 1e-9, is far above round-off and far
 below what a wrong term does (a damping sign, a missed offset, a torque kept for two steps moves
-the state by 1e-4 or more within 10 steps).
+the state by 1e-4 or more within 10 steps). The tutorial drive (r2d2 thrown up from 0.37 m into
+the ground, then hopping) amplifies round-off the most, and by an amount that follows the
+summation order: 4e-11 and 1.3e-10 for two orders of the damping sum, measured; it gets 1e-7,
+still three orders below a wrong term.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from simbridge.exceptions import SimulationDivergedError
 
 WHEELS = [2, 3, 6, 7]
 TOL = 1e-9
+TOL_CHAOTIC = 1e-7  # the tutorial drive: see the module docstring
 
 
 def _compiler() -> str | None:
@@ -69,7 +73,7 @@ def _trajectory(monkeypatch, loop: str, scenario, profile: str = "pybullet") -> 
     return states
 
 
-def _agree(monkeypatch, scenario, profile: str = "pybullet") -> float:
+def _agree(monkeypatch, scenario, profile: str = "pybullet", tol: float = TOL) -> float:
     if mujoco_kernel.reason():
         pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
     a = _trajectory(monkeypatch, "kernel", scenario, profile)
@@ -78,7 +82,7 @@ def _agree(monkeypatch, scenario, profile: str = "pybullet") -> float:
     assert [x.shape for x in a] == [x.shape for x in b]
     gap = max(float(np.abs(x - y).max()) for x, y in zip(a, b, strict=True))
     print(f"kernel against Python loop: largest gap {gap:.3g}")
-    assert gap <= TOL, gap
+    assert gap <= tol, gap
     return gap
 
 
@@ -97,7 +101,7 @@ def _r2d2_drive(sim, record) -> None:
 
 @pytest.mark.parametrize("profile", ["pybullet", "urdf"])
 def test_r2d2_drive(monkeypatch, profile):
-    _agree(monkeypatch, _r2d2_drive, profile)
+    _agree(monkeypatch, _r2d2_drive, profile, TOL_CHAOTIC)
 
 
 def _new_target_every_step(sim, record) -> None:
