@@ -624,6 +624,13 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
   return PyLong_FromLong(status);
 }
 
+/* check_idle(): raises the busy error while another thread steps this kernel */
+static PyObject* Kernel_check_idle(Kernel* self, PyObject* unused) {
+  (void)unused;
+  if (refuse_if_busy(self) < 0) return NULL;
+  Py_RETURN_NONE;
+}
+
 /* last_error() -> the text of the last MuJoCo error seen by this thread's kernel calls */
 static PyObject* Kernel_last_error(Kernel* self, PyObject* unused) {
   (void)self;
@@ -771,6 +778,8 @@ static PyMethodDef Kernel_methods[] = {
     {"bind_motors", (PyCFunction)Kernel_bind_motors, METH_VARARGS, "Bind the motor rows."},
     {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL, "step(n, pending_torque)"},
     {"last_error", (PyCFunction)Kernel_last_error, METH_NOARGS, "the last MuJoCo error's text"},
+    {"check_idle", (PyCFunction)Kernel_check_idle, METH_NOARGS,
+     "raise the busy error while another thread steps this kernel"},
     {"bind_commands", (PyCFunction)Kernel_bind_commands, METH_VARARGS,
      "Bind the motor table's command arrays."},
     {"set_velocity", (PyCFunction)(void (*)(void))Kernel_set_velocity, METH_FASTCALL,

@@ -180,9 +180,16 @@ class MujocoBackend(Backend):
 
     # ---------------------------------------------------------------- world
 
+    def _check_idle(self) -> None:
+        """Changing the world while another thread steps it would race the compiled loop."""
+        kernel = getattr(self, "_kernel", None)
+        if kernel is not None:
+            kernel.check_idle()  # SimBusyError while it steps
+
     def load(
         self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
     ) -> int:
+        self._check_idle()
         body = self._next_id
         prefix = f"b{body}/"
         spec = self._spec
@@ -268,12 +275,14 @@ class MujocoBackend(Backend):
         self._new_world()
 
     def remove(self, body: int) -> None:
+        self._check_idle()
         robot = self._robots.pop(body)
         self._save_motor_state()
         self._drop_from_spec(robot.spec.prefix)
         self._recompile("<remove>")
 
     def reset(self) -> None:
+        self._check_idle()
         self._close_viewer()
         self._robots.clear()
         self._steps = 0
@@ -570,6 +579,7 @@ class MujocoBackend(Backend):
     def close(self) -> None:
         if self._closed:
             return
+        self._check_idle()
         self._closed = True
         self._close_viewer()
         self._robots.clear()

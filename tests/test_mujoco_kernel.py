@@ -411,5 +411,30 @@ def test_a_sim_stepping_in_another_thread_refuses_calls():
         assert refused == 1
         assert sim.time == pytest.approx(20001 / 240)
         sim.link_state(robot, 2)  # free again
+        # changing the world (load, remove, reset, close) is refused while it steps too
+        kernel = sim._b._kernel
+
+        def stepping() -> bool:
+            try:
+                kernel.check_idle()
+            except SimBusyError:
+                return True
+            return False
+
+        for change in (
+            lambda: sim.load_urdf("cube_small.urdf"),
+            lambda: sim.remove(robot),
+            sim.reset,
+            sim.close,
+        ):
+            worker = threading.Thread(target=sim.step, args=(20000,))
+            worker.start()
+            while worker.is_alive() and not stepping():  # 20000 steps take about 0.25 s
+                pass
+            assert worker.is_alive()
+            with pytest.raises(SimBusyError):
+                change()
+            worker.join()
+        assert sim.num_joints(robot) == 15  # r2d2 is still there, the world unchanged
     finally:
         sim.close()
