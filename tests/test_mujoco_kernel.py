@@ -15,6 +15,7 @@ still three orders below a wrong term.
 
 from __future__ import annotations
 
+import os
 import shutil
 import sysconfig
 
@@ -26,6 +27,9 @@ from simbridge.backends import mujoco_kernel
 from simbridge.exceptions import SimulationDivergedError
 
 WHEELS = [2, 3, 6, 7]
+requires_kernel = pytest.mark.skipif(
+    mujoco_kernel.reason() != "", reason=f"no compiled loop: {mujoco_kernel.reason()}"
+)
 TOL = 1e-9
 TOL_CHAOTIC = 1e-7  # the tutorial drive: see the module docstring
 
@@ -38,6 +42,8 @@ def _compiler() -> str | None:
 def test_kernel_is_built_and_used_where_a_compiler_exists():
     if _compiler() is None:  # pragma: no cover - machines without a C compiler
         pytest.skip("no C compiler: the package installs with the Python step loop")
+    if os.environ.get(mujoco_kernel.ENV) == "python":
+        pytest.skip(f"{mujoco_kernel.ENV}=python chooses the Python loop for this run")
     assert mujoco_kernel.reason() == "", mujoco_kernel.reason()
     with simbridge.Sim("mujoco") as sim:
         assert sim._b._kernel is not None
@@ -208,9 +214,8 @@ def test_divergence_is_reported_by_the_compiled_loop():
             sim.step(3)
 
 
+@requires_kernel
 def test_bad_bindings_raise_instead_of_crashing():
-    if mujoco_kernel.reason():
-        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
     with simbridge.Sim("mujoco") as sim:
         sim.load_urdf("wheel.urdf", fixed_base=True)
         k = sim._b._kernel
@@ -256,9 +261,8 @@ def _link_states(monkeypatch, loop: str) -> list:
         return out
 
 
+@requires_kernel
 def test_link_and_base_state_read_through_the_kernel_as_in_python(monkeypatch):
-    if mujoco_kernel.reason():
-        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
     a = _link_states(monkeypatch, "kernel")
     b = _link_states(monkeypatch, "python")
     assert len(a) == len(b) == 5 * (1 + 16)  # base_state, then links -1 .. 15
@@ -272,9 +276,8 @@ def test_link_and_base_state_read_through_the_kernel_as_in_python(monkeypatch):
         )
 
 
+@requires_kernel
 def test_body_state_checks_its_arguments():
-    if mujoco_kernel.reason():
-        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
     with simbridge.Sim("mujoco") as sim:
         sim.load_urdf("wheel.urdf", fixed_base=True)
         k = sim._b._kernel
@@ -320,7 +323,6 @@ def test_an_engine_error_raises_instead_of_ending_the_process(tmp_path, loop):
     error (here a stack overflow) must come back as EngineError, on both loops alike, the
     world must refuse to go on until reset(), and no MUJOCO_LOG.TXT may be left behind. Run in
     a child process: a regression would end the process, not fail a test."""
-    import os
     import subprocess
     import sys
 
@@ -361,13 +363,12 @@ def _r2d2() -> tuple:
     return sim, sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
 
 
+@requires_kernel
 def test_sims_in_threads_step_as_they_do_alone():
     """The compiled loop runs without the GIL: Sims in two threads step at once and end in
     exactly the state they reach one after the other."""
     import threading
 
-    if mujoco_kernel.reason():
-        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
     alone = [_r2d2() for _ in range(2)]
     together = [_r2d2() for _ in range(2)]
     try:
@@ -386,6 +387,7 @@ def test_sims_in_threads_step_as_they_do_alone():
             sim.close()
 
 
+@requires_kernel
 def test_a_sim_stepping_in_another_thread_refuses_calls():
     """While one thread steps a Sim (without the GIL), a call that needs its compiled loop
     from another thread raises SimBusyError instead of racing it."""
@@ -393,8 +395,6 @@ def test_a_sim_stepping_in_another_thread_refuses_calls():
 
     from simbridge.exceptions import SimBusyError
 
-    if mujoco_kernel.reason():
-        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
     sim, robot = _r2d2()
     try:
         sim.step(1)
