@@ -731,18 +731,19 @@ static PyObject* Kernel_set_velocity(Kernel* self, PyObject* const* args, Py_ssi
       PyErr_SetString(PyExc_ValueError, "set_velocity: a slot, row or dof index out of range");
       return NULL;
     }
-    PyFloat_AsDouble(PyList_GET_ITEM(tl, i));
-    PyFloat_AsDouble(PyList_GET_ITEM(fl, i));
-    if (PyErr_Occurred()) {
+    /* exact floats (what Sim's checks produce): reading them runs no Python code, so the
+     * lists cannot change between this check and the writes below */
+    if (!PyFloat_CheckExact(PyList_GET_ITEM(tl, i)) || !PyFloat_CheckExact(PyList_GET_ITEM(fl, i))) {
       arr_release(&ix);
+      PyErr_SetString(PyExc_TypeError, "set_velocity: target and max_force hold Python floats");
       return NULL;
     }
   }
   const double inv_dt = 1.0 / self->dt;
   double* frictionloss = ((mjModel*)self->m)->dof_frictionloss;
   for (Py_ssize_t i = 0; i < n; i++) {
-    double v = PyFloat_AsDouble(PyList_GET_ITEM(tl, i));
-    double f = PyFloat_AsDouble(PyList_GET_ITEM(fl, i));
+    double v = PyFloat_AS_DOUBLE(PyList_GET_ITEM(tl, i));
+    double f = PyFloat_AS_DOUBLE(PyList_GET_ITEM(fl, i));
     DP(self->cmd_target)[slot[i]] = v;
     DP(self->cmd_force)[slot[i]] = f;
     frictionloss[dof[i]] = f;
