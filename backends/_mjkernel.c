@@ -105,6 +105,8 @@ typedef struct {
   Arr cmd_target, cmd_force;
   double *Y, *U, *A, *b;    /* k x nv, k x nv, k x k, k */
   int *free_rows, *piv;
+  double *AM, *x;           /* exact_motors: k x k block of M^-1, k forces */
+  int* side;                /* exact_motors: 0 free, +1 / -1 at the upper / lower limit */
   int clamp_armed;
   int busy; /* step() runs without the GIL: no other call may touch the kernel meanwhile */
   long done; /* steps completed by the last step() call (fewer than asked after an error) */
@@ -185,8 +187,11 @@ static void free_motor_scratch(Kernel* self) {
   PyMem_Free(self->b);
   PyMem_Free(self->free_rows);
   PyMem_Free(self->piv);
-  self->Y = self->U = self->A = self->b = NULL;
-  self->free_rows = self->piv = NULL;
+  PyMem_Free(self->AM);
+  PyMem_Free(self->x);
+  PyMem_Free(self->side);
+  self->Y = self->U = self->A = self->b = self->AM = self->x = NULL;
+  self->free_rows = self->piv = self->side = NULL;
 }
 
 static void release_all(Kernel* self) {
@@ -345,7 +350,11 @@ static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
     self->b = PyMem_Calloc((size_t)k, sizeof(double));
     self->free_rows = PyMem_Calloc((size_t)k, sizeof(int));
     self->piv = PyMem_Calloc((size_t)k, sizeof(int));
-    if (!self->Y || !self->U || !self->A || !self->b || !self->free_rows || !self->piv) {
+    self->AM = PyMem_Calloc((size_t)k * k, sizeof(double));
+    self->x = PyMem_Calloc((size_t)k, sizeof(double));
+    self->side = PyMem_Calloc((size_t)k, sizeof(int));
+    if (!self->Y || !self->U || !self->A || !self->b || !self->free_rows || !self->piv ||
+        !self->AM || !self->x || !self->side) {
       free_motor_scratch(self);
       return PyErr_NoMemory();
     }
@@ -486,6 +495,93 @@ static int polish(Kernel* self) {
   return 0;
 }
 
+/* When the motor rows are the only constraint rows (no contact, no limit), solve them exactly
+ * instead of calling mj_fwdConstraint and polishing (MujocoBackend._exact_motors, the same
+ * steps in the same order): the box-constrained problem of PyBullet's motor rows,
+ *     A x = b on the free rows, x = +-limit on the others,
+ * A the rows' block of M^-1, b = aref - qacc_smooth at the rows' dofs, found by an active set
+ * (the free row furthest over its limit goes to it; a row at its limit whose acceleration
+ * overshoots its aref is freed). Writes efc_force, qfrc_constraint and qacc. Returns 0, or -1
+ * (singular, or no convergence) and the caller falls back to MuJoCo's solver. */
+static int exact_motors(Kernel* self) {
+  const mjModel* m = self->m;
+  mjData* d = self->d;
+  const int k = self->k, nv = m->nv;
+  const Py_ssize_t* dofs = IP(self->dof_rows);
+  const double* aref = d->efc_aref;
+  const double* limit = d->efc_frictionloss;
+  double *AM = self->AM, *x = self->x, *b = self->b, *A = self->A;
+  int *side = self->side, *fr = self->free_rows;
+  for (int r = 0; r < k; r++) self->U[r * nv + dofs[r]] = 1.0;
+  self->solveM(m, d, self->Y, self->U, k); /* rows of M^-1 for the motor dofs */
+  for (int r = 0; r < k; r++) {
+    self->U[r * nv + dofs[r]] = 0.0;
+    for (int c = 0; c < k; c++) AM[r * k + c] = self->Y[r * nv + dofs[c]];
+    side[r] = 0;
+  }
+  int done = 0;
+  for (int it = 0; it < 4 * k + 4 && !done; it++) {
+    int nf = 0;
+    for (int r = 0; r < k; r++) {
+      if (side[r]) {
+        x[r] = side[r] * limit[r];
+      } else {
+        fr[nf++] = r;
+      }
+    }
+    for (int i = 0; i < nf; i++) { /* A_FF x_F = b_F - A_FC x_C */
+      int r = fr[i];
+      double rhs = aref[r] - d->qacc_smooth[dofs[r]];
+      for (int c = 0; c < k; c++)
+        if (side[c]) rhs -= AM[r * k + c] * x[c];
+      b[i] = rhs;
+      for (int j = 0; j < nf; j++) A[i * nf + j] = AM[r * k + fr[j]];
+    }
+    if (nf && lu_solve(A, b, self->piv, nf) < 0) return -1;
+    for (int i = 0; i < nf; i++) x[fr[i]] = b[i];
+    int worst = -1;
+    double over = 0.0;
+    for (int i = 0; i < nf; i++) { /* the free row furthest over its limit */
+      int r = fr[i];
+      double v = (fabs(x[r]) - limit[r]) / limit[r];
+      if (v > 1e-12 && v > over) over = v, worst = r;
+    }
+    if (worst >= 0) {
+      side[worst] = x[worst] > 0.0 ? 1 : -1;
+      continue;
+    }
+    int freed = -1;
+    double most = 0.0;
+    for (int r = 0; r < k; r++) { /* a limited row whose acceleration overshoots its aref */
+      if (!side[r]) continue;
+      double acc = d->qacc_smooth[dofs[r]], scale = fabs(aref[r] - acc);
+      for (int c = 0; c < k; c++) acc += AM[r * k + c] * x[c];
+      double v = side[r] * (acc - aref[r]);
+      scale += fabs(AM[r * k + r]) * limit[r];
+      if (v > 1e-12 * scale && v > most) most = v, freed = r;
+    }
+    if (freed >= 0) {
+      side[freed] = 0;
+      continue;
+    }
+    done = 1;
+  }
+  if (!done) return -1;
+  double* qacc = d->qacc;
+  for (int c = 0; c < nv; c++) {
+    double s = d->qacc_smooth[c];
+    for (int r = 0; r < k; r++) s += x[r] * self->Y[r * nv + c];
+    qacc[c] = s;
+    d->qfrc_constraint[c] = 0.0;
+  }
+  for (int r = 0; r < k; r++) {
+    if (!side[r]) qacc[dofs[r]] = aref[r]; /* the free rows' own accelerations, exactly */
+    d->efc_force[r] = x[r];
+    d->qfrc_constraint[dofs[r]] = x[r];
+  }
+  return 0;
+}
+
 static int warning_count(const mjData* d) {
   return d->warning[mjWARN_BADQPOS].number + d->warning[mjWARN_BADQVEL].number +
          d->warning[mjWARN_BADQACC].number;
@@ -546,10 +642,11 @@ static int run_steps(Kernel* self, long n, int pending) {
       for (Py_ssize_t i = 0; i < arr_len(&self->kd_rows); i++)
         d->efc_aref[IP(self->kd_rows)[i]] += DP(self->kd_factor)[i] * d->qacc_smooth[IP(self->kd_dof)[i]];
       TIC(4);
-      self->fn[F_CON](m, d);
+      int exact = k && d->nefc == k && exact_motors(self) == 0;
+      if (!exact) self->fn[F_CON](m, d);
       TOC(4);
       TIC(5);
-      if (k && polish(self) < 0) status = 3;
+      if (k && !exact && polish(self) < 0) status = 3;
       TOC(5);
       if (self->clamp_armed) {
         double L = self->clamp_limit, dt = self->dt;

@@ -540,13 +540,67 @@ class MujocoBackend(Backend):
         t = self._motors
         if len(t.kd_rows):
             d.efc_aref[t.kd_rows] += t.kd_factor * d.qacc_smooth[t.kd_dof]
-        mujoco.mj_fwdConstraint(m, d)
-        if k:
-            self._polish(m, d, k)
+        if not (k and d.nefc == k and self._exact_motors(m, d, k)):
+            mujoco.mj_fwdConstraint(m, d)
+            if k:
+                self._polish(m, d, k)
         if self._clamp_armed:
             clamp_acceleration(d, self._dt, self._clamp)  # type: ignore[arg-type]
         mujoco.mj_checkAcc(m, d)
         mujoco.mj_Euler(m, d)
+
+    def _exact_motors(self, m: Any, d: Any, k: int) -> bool:
+        """When the motor rows are the only constraint rows (no contact, no limit), solve them
+        exactly instead of running MuJoCo's solver and polishing: PyBullet's motor rows are the
+        box-constrained problem ``A x = b`` on the free rows, ``x = +-limit`` on the others (A
+        the rows' block of M^-1, b = aref - qacc_smooth at their dofs), found by an active set:
+        the free row furthest over its limit goes to it; a row at its limit whose acceleration
+        overshoots its aref is freed. Writes efc_force, qfrc_constraint and qacc; False (no
+        convergence, a singular block) leaves the step to MuJoCo's solver. The compiled loop
+        does the same (_mjkernel.c exact_motors)."""
+        t = self._motors
+        y = t.minv_rows
+        mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
+        dofs = t.dof_rows
+        am = y[:, dofs]
+        aref = d.efc_aref[:k]
+        limit = d.efc_frictionloss[:k]
+        b = aref - d.qacc_smooth[dofs]
+        side = np.zeros(k)
+        x = np.zeros(k)
+        for _ in range(4 * k + 4):
+            free = side == 0
+            x = side * limit
+            if free.any():
+                rhs = b[free] - am[np.ix_(free, ~free)] @ x[~free]
+                try:
+                    x[free] = np.linalg.solve(am[np.ix_(free, free)], rhs)
+                except np.linalg.LinAlgError:
+                    return False
+            over = np.where(free, (np.abs(x) - limit) / limit, 0.0)
+            worst = int(np.argmax(over))
+            if over[worst] > 1e-12:
+                side[worst] = 1.0 if x[worst] > 0.0 else -1.0
+                continue
+            acc = d.qacc_smooth[dofs] + am @ x
+            scale = np.abs(aref - d.qacc_smooth[dofs]) + np.abs(np.diag(am)) * limit
+            over_aref = side * (acc - aref)  # > 0: a limited row overshoots its aref
+            overshoot = np.where(~free & (over_aref > 1e-12 * scale), over_aref, 0.0)
+            freed = int(np.argmax(overshoot))
+            if overshoot[freed] > 0.0:
+                side[freed] = 0.0
+                continue
+            break
+        else:
+            return False
+        qacc = d.qacc
+        qacc[:] = d.qacc_smooth + x @ y
+        free = side == 0
+        qacc[dofs[free]] = aref[free]  # the free rows' own accelerations, exactly
+        d.efc_force[:k] = x
+        d.qfrc_constraint[:] = 0.0
+        d.qfrc_constraint[dofs] = x
+        return True
 
     def _polish(self, m: Any, d: Any, k: int) -> None:
         """Make every motor row that is not at its force limit reach exactly the acceleration
