@@ -20,7 +20,9 @@ reference acceleration is ``aref = -B v``. So each motor is that row with
 
 The offset is the only per-step Python work of a velocity motor, and it is skipped when every
 target is 0 (the brake). Coupled motors on one body are solved exactly like PyBullet's rows: in
-one solve with the body's mass matrix (see docs/mujoco_backend.md for the measurements).
+one solve with the body's mass matrix, by MuJoCo's solver (with the contacts) and a polish, or,
+when the motor rows are the only rows, by the backend's own active-set solve
+(``MujocoBackend._exact_motors``; see docs/mujoco_backend.md for the measurements).
 """
 
 from __future__ import annotations
