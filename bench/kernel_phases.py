@@ -36,7 +36,7 @@ PHASES = [
     "motor offsets, row hardening",
     "link damping",
     "mj_fwdActuation + mj_fwdAcceleration",
-    "mj_fwdConstraint (the solver)",
+    "constraint solve (or exact motors)",
     "motor polish (exact rows)",
     "mj_checkAcc + mj_Euler",
 ]
