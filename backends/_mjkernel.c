@@ -701,17 +701,28 @@ static int guarded(Kernel* self, int job, long n, int pending) {
   return status;
 }
 
+/* The fast-call methods' common head: nargs arguments, the first an integer, the second a
+ * truth value. */
+static int parse_int_flag(PyObject* const* args, Py_ssize_t nargs, Py_ssize_t want,
+                          const char* usage, long* number, int* flag) {
+  if (nargs != want) {
+    PyErr_SetString(PyExc_TypeError, usage);
+    return -1;
+  }
+  *number = PyLong_AsLong(args[0]);
+  *flag = PyObject_IsTrue(args[1]);
+  if ((*number == -1 && PyErr_Occurred()) || *flag < 0) return -1;
+  return 0;
+}
+
 /* step(n, pending_torque) -> status: run_steps's, or 4 for a MuJoCo error (last_error() says
  * which). The GIL is released meanwhile: Sims in other threads step in parallel. */
 static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
-  if (refuse_if_busy(self) < 0) return NULL;
-  if (nargs != 2) {
-    PyErr_SetString(PyExc_TypeError, "step(n, pending_torque)");
+  long n;
+  int pending;
+  if (refuse_if_busy(self) < 0 || parse_int_flag(args, nargs, 2, "step(n, pending_torque)", &n,
+                                                 &pending) < 0)
     return NULL;
-  }
-  long n = PyLong_AsLong(args[0]);
-  int pending = PyObject_IsTrue(args[1]);
-  if ((n == -1 && PyErr_Occurred()) || pending < 0) return NULL;
   int status;
   self->busy = 1;
   Py_BEGIN_ALLOW_THREADS
@@ -741,14 +752,11 @@ static PyObject* Kernel_last_error(Kernel* self, PyObject* unused) {
  * with fresh, first mj_kinematics, mj_comPos, mj_comVel (the lazy refresh after a step).
  * Returns False when the pose is not finite, None when MuJoCo raised an error (last_error()). */
 static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
-  if (refuse_if_busy(self) < 0) return NULL;
-  if (nargs != 3) {
-    PyErr_SetString(PyExc_TypeError, "body_state(body_id, fresh, out)");
+  long bid;
+  int fresh;
+  if (refuse_if_busy(self) < 0 ||
+      parse_int_flag(args, nargs, 3, "body_state(body_id, fresh, out)", &bid, &fresh) < 0)
     return NULL;
-  }
-  long bid = PyLong_AsLong(args[0]);
-  int fresh = PyObject_IsTrue(args[1]);
-  if ((bid == -1 && PyErr_Occurred()) || fresh < 0) return NULL;
   const mjModel* m = self->m;
   mjData* d = self->d;
   if (bid < 0 || bid >= m->nbody) {
