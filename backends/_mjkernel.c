@@ -110,6 +110,7 @@ typedef struct {
   int clamp_armed;
   int busy; /* step() runs without the GIL: no other call may touch the kernel meanwhile */
   long done; /* steps completed by the last step() call (fewer than asked after an error) */
+  int interrupted; /* the last step() raised a Python callback's exception mid-step */
 } Kernel;
 
 /* step() releases the GIL while it runs, so another thread may call in meanwhile: refuse, with
@@ -119,8 +120,8 @@ static PyObject* busy_error = NULL;
 static int refuse_if_busy(const Kernel* self) {
   if (!self->busy) return 0;
   PyErr_SetString(busy_error ? busy_error : PyExc_RuntimeError,
-                  "this Sim is stepping in another thread; a Sim takes one call at a time "
-                  "(give each thread its own Sim)");
+                  "this Sim is stepping in another thread (or in a MuJoCo callback of its own "
+                  "step); a Sim takes one call at a time (give each thread its own Sim)");
   return -1;
 }
 
@@ -680,9 +681,14 @@ static int run_steps(Kernel* self, long n, int pending) {
 /* run_steps (job 0) or the lazy kinematics (job 1) under the error handler: 4 when MuJoCo
  * raised an error (its text in error_text, for last_error()). */
 static int guarded(Kernel* self, int job, long n, int pending) {
+  /* a kernel call may nest in another on this thread (a MuJoCo callback in Python stepping
+   * another Sim): keep the outer call's jump target and forwarding, and never forward to
+   * ourselves */
+  jmp_buf outer;
+  memcpy(outer, error_jump, sizeof(jmp_buf));
   mjfLogHandler prev = set_tls_handler(error_handler);
   mjfLogHandler saved = forward_handler;
-  forward_handler = prev ? prev : get_global_handler();
+  if (prev != error_handler) forward_handler = prev ? prev : get_global_handler();
   int status;
   if (setjmp(error_jump) == 0) {
     if (job == 0) {
@@ -698,6 +704,7 @@ static int guarded(Kernel* self, int job, long n, int pending) {
   }
   forward_handler = saved;
   set_tls_handler(prev);
+  memcpy(error_jump, outer, sizeof(jmp_buf));
   return status;
 }
 
@@ -725,10 +732,17 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
     return NULL;
   int status;
   self->busy = 1;
+  self->interrupted = 0;
   Py_BEGIN_ALLOW_THREADS
   status = guarded(self, 0, n, pending);
   Py_END_ALLOW_THREADS
   self->busy = 0;
+  /* a Python callback of MuJoCo's (mjcb_*) that raised: MuJoCo's bindings turn it into an
+   * mju_error, which jumped back here; the callback's exception is the one to raise */
+  if (PyErr_Occurred()) {
+    self->interrupted = 1;
+    return NULL;
+  }
   return PyLong_FromLong(status);
 }
 
@@ -772,6 +786,7 @@ static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize
   }
   if (fresh && guarded(self, 1, 0, 0) == 4) {
     PyBuffer_Release(&out);
+    if (PyErr_Occurred()) return NULL; /* a Python callback's exception, as in step() */
     Py_RETURN_NONE; /* a MuJoCo error: last_error() says which */
   }
   double* o = (double*)out.buf;
@@ -900,7 +915,14 @@ static PyObject* Kernel_done(Kernel* self, void* closure) {
   return PyLong_FromLong(self->done);
 }
 
+static PyObject* Kernel_interrupted(Kernel* self, void* closure) {
+  (void)closure;
+  return PyBool_FromLong(self->interrupted);
+}
+
 static PyGetSetDef Kernel_getset[] = {
+    {"interrupted", (getter)Kernel_interrupted, NULL,
+     "the last step() stopped mid-step on a Python callback's exception", NULL},
     {"steps_done", (getter)Kernel_done, NULL, "steps completed by the last step() call", NULL},
     {"clamp_armed", (getter)Kernel_clamp_armed, NULL, "speed clamp armed by the last step", NULL},
     {NULL, NULL, NULL, NULL, NULL},

@@ -438,31 +438,41 @@ class MujocoBackend(Backend):
     def step(self, n: int) -> None:
         kernel = self._kernel
         ran = None  # steps completed, where a call may have stopped early
-        if kernel is not None and self._viewer is None and not self._pending_torque:
-            status = kernel.step(n, False)  # the hot path: one call into the compiled loop
-        elif kernel is None:
-            if self._engine_error is not None:
-                raise EngineError(self.name, self.time, self._engine_error)
-            start = self._d.time
-            try:
-                self._step_python(n)
-            except mujoco.FatalError as exc:
-                self._steps += round((self._d.time - start) * self._inv_dt)  # those completed
-                self._engine_failed(str(exc))
-            status = 1  # the Python loop does not count warnings: look at them
-        else:  # a pending torque (first step only) or a viewer to keep in step
-            status = ran = 0
-            for _ in range(n if self._viewer is not None else min(n, 1)):
-                status = max(status, kernel.step(1, self._pending_torque))
-                ran += kernel.steps_done
-                self._pending_torque = False
-                if status >= 2:  # an error, not a warning: the world stops here
-                    break
-                if self._viewer is not None:
-                    self._sync_viewer()
-            if self._viewer is None and n > 1 and status < 2:
-                status = max(status, kernel.step(n - 1, False))
-                ran += kernel.steps_done
+        try:
+            if kernel is not None and self._viewer is None and not self._pending_torque:
+                status = kernel.step(n, False)  # the hot path: one call into the compiled loop
+            elif kernel is None:
+                if self._engine_error is not None:
+                    raise EngineError(self.name, self.time, self._engine_error)
+                start = self._d.time
+                try:
+                    self._step_python(n)
+                except mujoco.FatalError as exc:
+                    self._steps += round((self._d.time - start) * self._inv_dt)  # completed
+                    self._engine_failed(str(exc))
+                except Exception as exc:  # a MuJoCo callback raised mid-step, as below
+                    self._steps += round((self._d.time - start) * self._inv_dt)
+                    self._callback_failed(exc)
+                    raise
+                status = 1  # the Python loop does not count warnings: look at them
+            else:  # a pending torque (first step only) or a viewer to keep in step
+                status = ran = 0
+                for _ in range(n if self._viewer is not None else min(n, 1)):
+                    status = max(status, kernel.step(1, self._pending_torque))
+                    ran += kernel.steps_done
+                    self._pending_torque = False
+                    if status >= 2:  # an error, not a warning: the world stops here
+                        break
+                    if self._viewer is not None:
+                        self._sync_viewer()
+                if self._viewer is None and n > 1 and status < 2:
+                    status = max(status, kernel.step(n - 1, False))
+                    ran += kernel.steps_done
+        except BaseException as exc:
+            if kernel is not None and kernel.interrupted:
+                self._steps += (ran or 0) + kernel.steps_done
+                self._callback_failed(exc)
+            raise
         if n > 0:
             self._steps += n
             self._stale = self._motor_force_valid = self._motor_rows_valid = True
@@ -470,6 +480,14 @@ class MujocoBackend(Backend):
             if status >= 2:  # a call stopped early: count only the steps that ran
                 self._steps += (kernel.steps_done if ran is None else ran) - n
             self._kernel_status(status)
+
+    def _callback_failed(self, exc: BaseException) -> None:
+        """A MuJoCo callback (``mjcb_*``, set by the user) raised mid-step: MuJoCo's data is
+        half-computed, as after an engine error, so the world steps no more until reset();
+        the callback's exception goes on to the caller."""
+        self._engine_error = f"a MuJoCo callback raised {type(exc).__name__}: {exc}"
+        self._kernel = None
+        self._stale = True
 
     def _engine_failed(self, detail: str) -> None:
         """MuJoCo raised an error inside a step: its data is left half-computed (its stack

@@ -466,3 +466,43 @@ def test_a_sim_stepping_in_another_thread_refuses_calls():
         assert sim.num_joints(robot) == 15  # r2d2 is still there, the world unchanged
     finally:
         sim.close()
+
+
+@pytest.mark.parametrize("loop", ["kernel", "python"])
+def test_a_raising_mujoco_callback_reaches_the_caller_and_stops_the_world(monkeypatch, loop):
+    """A user's MuJoCo callback (here mjcb_control) that raises mid-step: its exception reaches
+    the caller of Sim.step on both loops (not a SystemError), the steps before it count, and
+    the half-computed world refuses to step until reset()."""
+    import mujoco
+
+    from simbridge.exceptions import EngineError
+
+    if loop == "kernel" and mujoco_kernel.reason():
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    _select_loop(monkeypatch, loop)
+    sim, robot = _r2d2()
+    calls = [0]
+
+    def control(m, d) -> None:  # type: ignore[no-untyped-def]
+        calls[0] += 1
+        if calls[0] == 5:
+            raise ValueError("policy failed")
+
+    try:
+        sim.step(3)
+        mujoco.set_mjcb_control(control)
+        try:
+            with pytest.raises(ValueError, match="policy failed"):
+                sim.step(10)
+        finally:
+            mujoco.set_mjcb_control(None)
+        assert calls[0] == 5
+        assert sim.time == pytest.approx(7 / 240)  # 3 + the 4 steps before the failing one
+        with pytest.raises(EngineError, match="a MuJoCo callback raised ValueError"):
+            sim.step()
+        sim.reset()
+        sim.load_urdf("plane.urdf")
+        sim.step(5)
+        assert sim.time == pytest.approx(5 / 240)
+    finally:
+        sim.close()
