@@ -339,13 +339,10 @@ class PyBulletBackend(Backend):
 
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
         rows = p.getJointStates(body, joints.tolist(), physicsClientId=self._c)
-        n = len(rows)
-        out = np.empty((3, n))
-        for k, r in enumerate(rows):
-            out[0, k] = r[0]
-            out[1, k] = r[1]
-            out[2, k] = r[3]
-        return JointStates(out[0], out[1], out[2])
+        if not rows:
+            return JointStates(np.zeros(0), np.zeros(0), np.zeros(0))
+        pos, vel, _, torque = zip(*rows, strict=True)  # position, velocity, reaction, torque
+        return JointStates(np.array(pos), np.array(vel), np.array(torque))
 
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
