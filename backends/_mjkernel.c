@@ -457,6 +457,16 @@ static int lu_solve(double* A, double* b, int* piv, int n) {
   return 0;
 }
 
+/* Y[i] = the row of M^-1 for the dof of motor row rows[i] (rows NULL: row i), i < n; U holds
+ * their unit rows during the solve and is left zero. */
+static void minv_rows(Kernel* self, const int* rows, int n) {
+  const int nv = self->m->nv;
+  const Py_ssize_t* dofs = IP(self->dof_rows);
+  for (int i = 0; i < n; i++) self->U[i * nv + dofs[rows ? rows[i] : i]] = 1.0;
+  self->solveM(self->m, self->d, self->Y, self->U, n);
+  for (int i = 0; i < n; i++) self->U[i * nv + dofs[rows ? rows[i] : i]] = 0.0;
+}
+
 /* Make the free motor rows exact (MujocoBackend._polish). */
 static int polish(Kernel* self) {
   const mjModel* m = self->m;
@@ -471,10 +481,7 @@ static int polish(Kernel* self) {
   for (int r = 0; r < k; r++)
     if (fabs(force[r]) < slack[r]) self->free_rows[nf++] = r;
   if (!nf) return 0;
-  /* rows of M^-1 for the free rows' dofs only (U: their unit rows, zeroed after use) */
-  for (int i = 0; i < nf; i++) self->U[i * nv + dofs[self->free_rows[i]]] = 1.0;
-  self->solveM(m, d, self->Y, self->U, nf);
-  for (int i = 0; i < nf; i++) self->U[i * nv + dofs[self->free_rows[i]]] = 0.0;
+  minv_rows(self, self->free_rows, nf);
   double* A = self->A;
   double* b = self->b;
   for (int i = 0; i < nf; i++) {
@@ -513,10 +520,8 @@ static int exact_motors(Kernel* self) {
   const double* limit = d->efc_frictionloss;
   double *AM = self->AM, *x = self->x, *b = self->b, *A = self->A;
   int *side = self->side, *fr = self->free_rows;
-  for (int r = 0; r < k; r++) self->U[r * nv + dofs[r]] = 1.0;
-  self->solveM(m, d, self->Y, self->U, k); /* rows of M^-1 for the motor dofs */
+  minv_rows(self, NULL, k);
   for (int r = 0; r < k; r++) {
-    self->U[r * nv + dofs[r]] = 0.0;
     for (int c = 0; c < k; c++) AM[r * k + c] = self->Y[r * nv + dofs[c]];
     side[r] = 0;
   }

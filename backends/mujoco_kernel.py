@@ -3,7 +3,7 @@
 The kernel is used only when it was built against the very MuJoCo that runs (its header version
 equals ``mujoco.mj_version()``), the MuJoCo library file can be found next to the bindings, and
 ``SIMBRIDGE_MUJOCO_STEP`` is not ``python``. Otherwise the backend steps in Python (same
-arithmetic, same results, about 10x slower per step) and :func:`reason` says why.
+arithmetic, same results, about 12x slower per step) and :func:`reason` says why.
 """
 
 from __future__ import annotations

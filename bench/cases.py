@@ -25,6 +25,16 @@ START_Z = 0.5
 TURN_FROM, FORWARD_FROM = 240, 480  # the tutorial's schedule: settle, turn, forward (to 980)
 
 
+def drive_command(k: int) -> tuple[np.ndarray, float] | None:
+    """Step k of the tutorial's drive: (wheel targets, force), or None while the robot settles
+    (the timed loops below write the same schedule inline)."""
+    if k < TURN_FROM:
+        return None
+    if k < FORWARD_FROM:
+        return TURN, 50.0
+    return FORWARD, 10.0
+
+
 @dataclass
 class Case:
     name: str

@@ -91,7 +91,7 @@ def _raw_mujoco_worker(n: int, steps: int) -> Callable[[], None]:
 
     def run() -> None:
         for k in range(steps):
-            command = _command(k)
+            command = cases.drive_command(k)
             if k == cases.FORWARD_FROM:
                 for m, _ in pairs:
                     m.actuator_forcerange[:] = [-10.0, 10.0]
@@ -101,15 +101,6 @@ def _raw_mujoco_worker(n: int, steps: int) -> Callable[[], None]:
                 step(m, d)
 
     return run
-
-
-def _command(k: int) -> tuple | None:
-    """Step k of the drive: (targets, force), or None while the robot settles."""
-    if k < cases.TURN_FROM:
-        return None
-    if k < cases.FORWARD_FROM:
-        return cases.TURN, 50.0
-    return cases.FORWARD, 10.0
 
 
 def _raw_pybullet_worker(n: int, steps: int) -> Callable[[], None]:
@@ -124,7 +115,7 @@ def _raw_pybullet_worker(n: int, steps: int) -> Callable[[], None]:
         p.loadURDF("plane.urdf", physicsClientId=c)
         robot = p.loadURDF("r2d2.urdf", [0, 0, cases.START_Z], physicsClientId=c)
         worlds.append((c, robot))
-    schedule = [_command(k) for k in range(steps)]
+    schedule = [cases.drive_command(k) for k in range(steps)]
     schedule = [(c[0].tolist(), [c[1]] * 4) if c else None for c in schedule]
 
     def run() -> None:
@@ -147,7 +138,7 @@ def _raw_pybullet_worker(n: int, steps: int) -> Callable[[], None]:
 def _layer_worker(backend: str, n: int, steps: int) -> Callable[[], None]:
     worlds = [cases._layer_sim(backend) for _ in range(n)]  # noqa: SLF001
     wheels = np.array(cases.WHEELS)
-    schedule = [_command(k) for k in range(steps)]
+    schedule = [cases.drive_command(k) for k in range(steps)]
 
     def run() -> None:
         for command in schedule:
