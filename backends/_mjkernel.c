@@ -90,7 +90,7 @@ typedef struct {
   solvefn solveM;
   mat2quatfn mat2quat;
   objvelfn objvel;
-  double dt, clamp_limit, clamp_watch, r_scale;
+  double dt, clamp_limit, r_scale;
   int has_clamp;
   /* world arrays (bound once per compile) */
   Arr lin_gain, ang_gain;   /* (n,), (n,3) */
@@ -107,7 +107,6 @@ typedef struct {
   int *free_rows, *piv;
   double *AM, *x;           /* exact_motors: k x k block of M^-1, k forces */
   int* side;                /* exact_motors: 0 free, +1 / -1 at the upper / lower limit */
-  int clamp_armed;
   int busy; /* step() runs without the GIL: no other call may touch the kernel meanwhile */
   long done; /* steps completed by the last step() call (fewer than asked after an error) */
   int interrupted; /* the last step() raised a Python callback's exception mid-step */
@@ -255,23 +254,22 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   get_global_handler = (getglobalfn)f[N_FN + 4];
   self->dt = dt;
   self->has_clamp = 0;
-  self->clamp_limit = self->clamp_watch = INFINITY;
+  self->clamp_limit = INFINITY;
   self->r_scale = 1.0;
   self->damp_n = 0;
-  self->clamp_armed = 0;
   return 0;
 }
 
 /* bind_world(first, lin_gain, ang_gain, jd_dof, jd_coef, tq_dof, tq, clamp_limit_or_None,
- *            clamp_watch, r_scale): link damping of the bodies first .. first + len(lin_gain) - 1,
+ *            r_scale): link damping of the bodies first .. first + len(lin_gain) - 1,
  * joint damping, one-step torques, the speed clamp, the motor rows' hardening */
 static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   if (refuse_if_busy(self) < 0) return NULL;
   int first;
   PyObject *lg, *ag, *jdd, *jdc, *tqd, *tq, *limit;
-  double watch, r_scale;
-  if (!PyArg_ParseTuple(args, "iOOOOOOOdd", &first, &lg, &ag, &jdd, &jdc, &tqd, &tq, &limit,
-                        &watch, &r_scale))
+  double r_scale;
+  if (!PyArg_ParseTuple(args, "iOOOOOOOd", &first, &lg, &ag, &jdd, &jdc, &tqd, &tq, &limit,
+                        &r_scale))
     return NULL;
   const mjModel* m = self->m;
   if (arr_take(&self->lin_gain, lg, 'd', -1, "lin_gain") < 0) return NULL;
@@ -302,9 +300,7 @@ static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   self->has_clamp = limit != Py_None;
   self->clamp_limit = self->has_clamp ? PyFloat_AsDouble(limit) : INFINITY;
   if (PyErr_Occurred()) return NULL;
-  self->clamp_watch = watch;
   self->r_scale = r_scale;
-  self->clamp_armed = 0;
   Py_RETURN_NONE;
 bad_dof:
   PyErr_SetString(PyExc_ValueError, "a dof index out of the model's range");
@@ -367,17 +363,16 @@ bad:
   return NULL;
 }
 
-/* PyBullet's link damping, added to qfrc_passive as generalised forces; returns the largest
- * body speed seen (mujoco_damping.LinkDamping.apply, the same arithmetic). Each body's force
+/* PyBullet's link damping, added to qfrc_passive as generalised forces
+ * (mujoco_damping.LinkDamping.apply, the same arithmetic). Each body's force
  * and torque become a spatial force about its tree's centre of mass (the point cvel and cdof
  * refer to), summed up the tree, and projected on every dof through cdof. */
-static double link_damping(Kernel* self) {
+static void link_damping(Kernel* self) {
   const mjModel* m = self->m;
   mjData* d = self->d;
   const double* lin = DP(self->lin_gain);
   const double* ang = DP(self->ang_gain);
   double* cf = self->cfrc;
-  double top = 0.0;
   memset(cf, 0, sizeof(double) * 6 * (size_t)m->nbody);
   for (int i = 0; i < self->damp_n; i++) {
     int b = self->damp_first + i;
@@ -391,8 +386,6 @@ static double link_damping(Kernel* self) {
     v[2] = w[5] - (r[0] * w[1] - r[1] * w[0]);
     double sv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     double sw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    if (sv > top) top = sv;
-    if (sw > top) top = sw;
     double g = lin[i] * (sv + 1.0);
     double f[3] = {v[0] * g, v[1] * g, v[2] * g};
     const double* R = d->ximat + 9 * b; /* world = R local */
@@ -419,7 +412,6 @@ static double link_damping(Kernel* self) {
     d->qfrc_passive[j] += cd[0] * s[0] + cd[1] * s[1] + cd[2] * s[2] + cd[3] * s[3] +
                           cd[4] * s[4] + cd[5] * s[5];
   }
-  return top;
 }
 
 /* Solve A x = b (n x n, row-major, overwritten) by LU with partial pivoting; x in b.
@@ -634,13 +626,13 @@ static int run_steps(Kernel* self, long n, int pending) {
     }
     TOC(1);
     TIC(2);
-    if (self->damp_n) self->clamp_armed = link_damping(self) > self->clamp_watch;
+    if (self->damp_n) link_damping(self);
     for (int i = 0; i < njd; i++)
       d->qfrc_applied[IP(self->jd_dof)[i]] = DP(self->jd_coef)[i] * d->qvel[IP(self->jd_dof)[i]];
     if (pending)
       for (int i = 0; i < nt; i++) d->qfrc_applied[IP(self->tq_dof)[i]] += DP(self->tq)[i];
     TOC(2);
-    if (k || self->clamp_armed) {
+    if (k || self->has_clamp) {
       TIC(3);
       self->fn[F_ACT](m, d);
       self->fn[F_ACC](m, d);
@@ -654,7 +646,7 @@ static int run_steps(Kernel* self, long n, int pending) {
       TIC(5);
       if (k && !exact && polish(self) < 0) status = 3;
       TOC(5);
-      if (self->clamp_armed) {
+      if (self->has_clamp) { /* PyBullet clamps every dof's speed at every step */
         double L = self->clamp_limit, dt = self->dt;
         for (int i = 0; i < m->nv; i++) {
           double lo = (-L - d->qvel[i]) / dt, hi = (L - d->qvel[i]) / dt;
@@ -892,10 +884,6 @@ static PyObject* Kernel_timers(Kernel* self, PyObject* unused) {
 }
 #endif
 
-static PyObject* Kernel_clamp_armed(Kernel* self, void* closure) {
-  return PyBool_FromLong(self->clamp_armed);
-}
-
 static PyMethodDef Kernel_methods[] = {
 #ifdef SIMBRIDGE_KERNEL_TIMERS
     {"timers", (PyCFunction)Kernel_timers, METH_NOARGS, "phase times in ns, then reset"},
@@ -929,7 +917,6 @@ static PyGetSetDef Kernel_getset[] = {
     {"interrupted", (getter)Kernel_interrupted, NULL,
      "the last step() stopped mid-step on a Python callback's exception", NULL},
     {"steps_done", (getter)Kernel_done, NULL, "steps completed by the last step() call", NULL},
-    {"clamp_armed", (getter)Kernel_clamp_armed, NULL, "speed clamp armed by the last step", NULL},
     {NULL, NULL, NULL, NULL, NULL},
 };
 

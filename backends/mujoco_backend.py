@@ -5,7 +5,7 @@ One ``MjSpec`` holds the world; every ``load``/``remove`` edits it and recompile
 this backend carries its own state (motor settings, pending torques) by joint. Each step is
 ``mj_step1`` (positions, velocities, constraint rows), the layer's additions (motor offsets,
 link damping, joint damping, torques: see mujoco_motors.py and mujoco_damping.py), then
-``mj_step2``; when a motor has a velocity gain other than 1 or the speed clamp is near, the
+``mj_step2``; when there are motors or a speed clamp, the
 step is split further (``mj_fwdActuation``, ``mj_fwdAcceleration``, adjust,
 ``mj_fwdConstraint``, ``mj_Euler``).
 Poses and velocities are recomputed lazily on the first read after a step (``mj_kinematics``,
@@ -69,7 +69,6 @@ if mujoco.get_mju_user_warning() is None:  # leave a handler the user installed 
 # and rest that far apart; MuJoCo's pair margin makes its soft contact balance about as far
 # out (measured: r2d2 rests with its base at z 0.4710 on PyBullet; see docs/mujoco_backend.md).
 CONTACT_MARGIN = 0.001
-_CLAMP_WATCH = 0.5  # the split step clamps once a body speed exceeds this share of the limit
 _BAD = (
     mujoco.mjtWarning.mjWARN_BADQPOS,
     mujoco.mjtWarning.mjWARN_BADQVEL,
@@ -371,8 +370,6 @@ class MujocoBackend(Backend):
                 m, 1, self.profile.linear_damping, self.profile.angular_damping
             )
         self._clamp = self.profile.max_joint_velocity
-        self._clamp_watch = _CLAMP_WATCH * self._clamp if self._clamp is not None else math.inf
-        self._clamp_armed = False
         self._torque = np.zeros(table.n)
         self._fast: dict[int, tuple[Any, ...]] = {}  # set_joint_velocity's hot-path cache
         self._motor_rows_valid = False
@@ -428,7 +425,6 @@ class MujocoBackend(Backend):
             self._motors.dof,
             self._torque,
             self._clamp,
-            self._clamp_watch,
             MOTOR_R_SCALE,
         )
         return kernel
@@ -534,12 +530,12 @@ class MujocoBackend(Backend):
                 d.efc_R[:k] *= MOTOR_R_SCALE  # harden the motor rows (mujoco_motors.py)
                 d.efc_D[:k] *= 1.0 / MOTOR_R_SCALE
             if damping is not None:
-                self._clamp_armed = damping.apply(d) > self._clamp_watch
+                damping.apply(d)
             if len(self._damp_dof):
                 d.qfrc_applied[self._damp_dof] = self._damp_coef * d.qvel[self._damp_dof]
             if self._pending_torque:
                 d.qfrc_applied[t.dof] += self._torque
-            if k or self._clamp_armed:
+            if k or self._clamp is not None:
                 self._step2_split(m, d, k)
             else:
                 step2(m, d)
@@ -562,7 +558,7 @@ class MujocoBackend(Backend):
             mujoco.mj_fwdConstraint(m, d)
             if k:
                 self._polish(m, d, k)
-        if self._clamp_armed:
+        if self._clamp is not None:  # PyBullet clamps every dof's speed at every step
             clamp_acceleration(d, self._dt, self._clamp)  # type: ignore[arg-type]
         mujoco.mj_checkAcc(m, d)
         mujoco.mj_Euler(m, d)
@@ -985,8 +981,8 @@ class MujocoBackend(Backend):
             "(double pendulum, measured)"
         ),
         "speed clamp": (
-            "applied to the velocity after the solve, only once a body moves faster than half "
-            "the limit; free-base coordinates are MuJoCo's (origin velocity, body-frame "
+            "applied to the velocity after the solve, at every step, as PyBullet does; "
+            "free-base coordinates are MuJoCo's (origin velocity, body-frame "
             "angular velocity), PyBullet's are the centre of mass's and world-frame"
         ),
         "joint axis": (

@@ -59,10 +59,9 @@ class LinkDamping:
                 b = parent[b]
         self.subtree = inside[m.dof_bodyid].astype(float)  # (nv, n)
 
-    def apply(self, d) -> float:  # type: ignore[no-untyped-def]
+    def apply(self, d) -> None:  # type: ignore[no-untyped-def]
         """Add the damping forces to ``d.qfrc_passive`` as generalised forces (after
-        ``mj_step1``, which computes both); return the largest body speed seen (m/s or rad/s),
-        for the speed-clamp test."""
+        ``mj_step1``, which computes both)."""
         rows = self.rows
         cvel = d.cvel[rows]  # [w, v at the tree's centre of mass], world axes
         w = cvel[:, :3]
@@ -70,7 +69,6 @@ class LinkDamping:
         v = cvel[:, 3:] - np.cross(r, w)  # velocity of each body's centre of mass
         sv = np.sqrt(np.einsum("ij,ij->i", v, v))
         sw = np.sqrt(np.einsum("ij,ij->i", w, w))
-        top = float(max(sv.max(), sw.max())) if self.n else 0.0
         force = v * (self.lin_gain * (sv + 1.0))[:, None]
         rot = d.ximat[rows].reshape(self.n, 3, 3)
         tl = np.einsum("bji,bj->bi", rot, w)  # w in the principal axes
@@ -80,7 +78,6 @@ class LinkDamping:
         # the spatial force about the tree's centre of mass, summed over each dof's subtree
         spatial = np.concatenate([torque + np.cross(r, force), force], axis=1)
         d.qfrc_passive += np.einsum("jk,jk->j", d.cdof, self.subtree @ spatial)
-        return top
 
 
 def clamp_acceleration(d, dt: float, limit: float) -> None:  # type: ignore[no-untyped-def]

@@ -120,13 +120,15 @@ def test_reset_base_state_takes_the_centre_of_mass_frame(sim):
     assert s.angular_velocity == pytest.approx((0.1, 0.2, 0.3), abs=1e-12)
 
 
-def test_divergence_is_reported_and_leaves_no_log_file(sim, tmp_path, monkeypatch, caplog):
+def test_divergence_is_reported_and_leaves_no_log_file(tmp_path, monkeypatch, caplog):
     monkeypatch.chdir(tmp_path)  # MuJoCo's default handler writes MUJOCO_LOG.TXT here
+    sim = simbridge.Sim("mujoco", profile="urdf")  # no speed clamp to hold the wheel back
     body = sim.load_urdf("wheel.urdf", fixed_base=True)
     sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)
     sim.set_joint_torque(body, "axle", 1e300)
     with pytest.raises(SimulationDivergedError, match="mujoco"):
         sim.step(3)
+    sim.close()
     assert list(tmp_path.iterdir()) == []
     assert any("MuJoCo: Nan, Inf or huge value" in r.getMessage() for r in caplog.records)
 
