@@ -360,6 +360,7 @@ class PyBulletBackend(Backend):
         angular_velocity: Vec3 | None,
     ) -> None:
         c = self._c
+        cur_lin, cur_ang = p.getBaseVelocity(body, physicsClientId=c)
         if position is not None or orientation is not None:
             cur_pos, cur_orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
             p.resetBasePositionAndOrientation(
@@ -368,8 +369,12 @@ class PyBulletBackend(Backend):
                 cur_orn if orientation is None else orientation,
                 physicsClientId=c,
             )
+            # PyBullet's pose reset also zeroes the base velocity; the contract keeps it
+            if linear_velocity is None:
+                linear_velocity = cur_lin
+            if angular_velocity is None:
+                angular_velocity = cur_ang
         if linear_velocity is not None or angular_velocity is not None:
-            cur_lin, cur_ang = p.getBaseVelocity(body, physicsClientId=c)
             p.resetBaseVelocity(
                 body,
                 cur_lin if linear_velocity is None else linear_velocity,

@@ -461,7 +461,9 @@ class Sim:
         linear_velocity: Sequence[float] | None = None,
         angular_velocity: Sequence[float] | None = None,
     ) -> None:
-        """Teleport the base (centre-of-mass frame, as ``resetBasePositionAndOrientation``)."""
+        """Teleport the base (centre-of-mass frame, as ``resetBasePositionAndOrientation``).
+        An argument left None keeps its current value: a pose alone keeps the base's velocity
+        (``p.resetBasePositionAndOrientation`` zeroes it; pass zeros for that)."""
         self._body(body)
         self._b.reset_base_state(
             body,

@@ -147,3 +147,30 @@ def test_link_frames_after_a_step_are_current(make_sim, profile_name):
         tol = gap(sim.backend, "link_state_float32") or TOL
         np.testing.assert_allclose(state.link_frame_position, want[:3, 3], atol=tol, rtol=0)
     assert q != 1.0  # it did swing
+
+
+def test_reset_base_state_sets_what_it_is_given_and_keeps_the_rest(make_sim):
+    """Each argument of reset_base_state sets its own quantity; one left None keeps its value.
+    (PyBullet's resetBasePositionAndOrientation also zeroes the base velocity: the PyBullet
+    backend puts it back, so a pose-only reset means the same on every backend.)"""
+    sim = make_sim(gravity=(0.0, 0.0, 0.0))
+    body = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 1))
+    lin, ang = (1.0, -0.5, 0.25), (0.0, 0.3, 2.0)
+    sim.reset_base_state(body, linear_velocity=lin, angular_velocity=ang)
+    orn = (0.0, 0.0, np.sin(0.3), np.cos(0.3))
+    for kwargs in ({"position": (0.5, 0.0, 2.0)}, {"orientation": orn}):
+        before = sim.base_state(body)
+        sim.reset_base_state(body, **kwargs)
+        s = sim.base_state(body)
+        np.testing.assert_allclose(s.linear_velocity, lin, atol=1e-12)
+        np.testing.assert_allclose(s.angular_velocity, ang, atol=1e-12)
+        if "position" in kwargs:
+            np.testing.assert_allclose(s.position, kwargs["position"], atol=1e-12)
+            np.testing.assert_allclose(s.orientation, before.orientation, atol=1e-7)
+        else:
+            np.testing.assert_allclose(s.position, before.position, atol=1e-12)
+            np.testing.assert_allclose(s.orientation, orn, atol=1e-7)
+    sim.reset_base_state(body, linear_velocity=(0, 0, 0))
+    s = sim.base_state(body)
+    np.testing.assert_allclose(s.linear_velocity, 0.0, atol=1e-12)
+    np.testing.assert_allclose(s.angular_velocity, ang, atol=1e-12)
