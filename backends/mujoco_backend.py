@@ -252,6 +252,7 @@ class MujocoBackend(Backend):
             "kd": np.ones(n),
             "max_force": brake,
             "effort": effort,
+            "torque": np.zeros(n),
         }
 
     def _drop_from_spec(self, prefix: str) -> None:
@@ -312,6 +313,7 @@ class MujocoBackend(Backend):
                 continue  # compiled before this robot existed
             for key in _MOTOR_FIELDS:
                 robot.motor_state[key] = getattr(table, key)[idx].copy()
+            robot.motor_state["torque"] = self._torque[idx].copy()  # pending for the next step
 
     def _after_compile(self) -> None:
         m, d = self._m, self._d
@@ -371,6 +373,9 @@ class MujocoBackend(Backend):
             )
         self._clamp = self.profile.max_joint_velocity
         self._torque = np.zeros(table.n)
+        for robot in self._robots.values():  # torques set before a load or remove still apply
+            self._torque[robot.motor_index] = robot.motor_state["torque"]
+        self._pending_torque = bool(self._torque.any())
         self._fast: dict[int, tuple[Any, ...]] = {}  # set_joint_velocity's hot-path cache
         self._motor_rows_valid = False
         self._kernel = self._new_kernel()
@@ -951,9 +956,9 @@ class MujocoBackend(Backend):
         idx = self._motor_slots(body, joints)
         t = self._motors
         if self.profile.enforce_effort_limit:
-            self._torque[idx] = np.clip(torque, -t.effort[idx], t.effort[idx])
+            self._torque[idx] = np.clip(self._torque[idx] + torque, -t.effort[idx], t.effort[idx])
         else:
-            self._torque[idx] = torque
+            self._torque[idx] += torque  # commands before one step add up, as in PyBullet
         self._pending_torque = True
 
     # ---------------------------------------------------------------- description

@@ -125,6 +125,34 @@ def test_torque_gives_tau_over_inertia_for_one_step(make_sim, profile):
     assert w2 == pytest.approx(_damped(w1, k, dt), rel=1e-9)  # measured 4e-12 relative
 
 
+def test_torques_before_one_step_add_up_and_survive_a_load(make_sim, profile):
+    """Two torque commands before one step act as their sum (PyBullet adds each command to the
+    joint's applied torque until the step); a robot loaded (or removed) between the command and
+    the step does not drop it."""
+
+    def spin(*setup) -> float:
+        sim = make_sim(profile=profile)
+        body = sim.load_urdf("wheel.urdf", fixed_base=True)
+        sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)  # release the default brake
+        for action in setup:
+            action(sim, body)
+        sim.step()
+        return sim.joint_states(body, "axle").velocities[0]
+
+    def torque(tau):
+        return lambda sim, body: sim.set_joint_torque(body, "axle", tau)
+
+    def load(sim, body):
+        sim.remove(sim.load_urdf("cube.urdf", base_position=(3, 0, 0.5)))
+        sim.load_urdf("cube.urdf", base_position=(3, 0, 0.5))
+
+    once = spin(torque(0.08))
+    assert once > 0.0
+    assert spin(torque(0.05), torque(0.03)) == pytest.approx(once, rel=1e-12)
+    assert spin(torque(0.08), load) == pytest.approx(once, rel=1e-12)
+    assert spin(torque(0.05), load, torque(0.03)) == pytest.approx(once, rel=1e-12)
+
+
 def _mass_matrix(sim, body, path, positions):
     """M(q) of a fixed-base chain of revolute joints from first principles: sum over links of
     m Jv^T Jv + Jw^T I_world Jw, with the kinematics from yourdfpy and each link's mass,
