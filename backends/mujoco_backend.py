@@ -15,7 +15,6 @@ Poses and velocities are recomputed lazily on the first read after a step (``mj_
 from __future__ import annotations
 
 import logging
-import math
 import os
 import sys
 from dataclasses import dataclass, field
@@ -956,7 +955,7 @@ class MujocoBackend(Backend):
         idx = self._motor_slots(body, joints)
         t = self._motors
         if self.profile.enforce_effort_limit:
-            self._torque[idx] = np.clip(self._torque[idx] + torque, -t.effort[idx], t.effort[idx])
+            self._torque[idx] += np.clip(torque, -t.effort[idx], t.effort[idx])  # each command
         else:
             self._torque[idx] += torque  # commands before one step add up, as in PyBullet
         self._pending_torque = True

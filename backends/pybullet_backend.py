@@ -22,6 +22,7 @@ import pybullet as p
 
 from simbridge.backend import Backend
 from simbridge.exceptions import (
+    BackendUnsupportedError,
     DisplayError,
     SimulationDivergedError,
     UrdfStructureError,
@@ -51,7 +52,7 @@ _CHECK_EVERY = 16
 
 
 class _Body:
-    __slots__ = ("table", "movable", "probe_joint", "free", "base_inertial", "n")
+    __slots__ = ("table", "movable", "probe_joint", "free", "base_inertial", "n", "effort")
 
     def __init__(self, table: list[JointInfo], free: bool, base_inertial: Any) -> None:
         self.table = table
@@ -60,6 +61,9 @@ class _Body:
         self.free = free
         self.probe_joint = self.movable[-1] if self.movable else -1
         self.base_inertial = base_inertial  # (pos, orn) of the COM in the base link frame
+        # <limit effort> per joint, the clamp on motor force and torque when the profile
+        # enforces it (None: not enforced)
+        self.effort: list[float] | None = None
 
 
 class PyBulletBackend(Backend):
@@ -84,6 +88,7 @@ class PyBulletBackend(Backend):
     def __init__(self, profile: Profile, gui: bool = False) -> None:
         super().__init__(profile, gui)
         self._c = -1
+        self._check_profile(profile)
         if gui:
             if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
                 raise DisplayError(self.name, "DISPLAY is not set")
@@ -104,6 +109,27 @@ class PyBulletBackend(Backend):
         # load, remove or reset forgets it.
         self._last_velocity: tuple[Any, ...] | None = None
         self._configure()
+
+    def _check_profile(self, prof: Profile) -> None:
+        """Entries PyBullet has no switch for (before any connection is opened)."""
+        if prof.integrator != "semi-implicit Euler":
+            raise BackendUnsupportedError(
+                self.name, f"integrator {prof.integrator!r}", "valid: ['semi-implicit Euler']"
+            )
+        if prof.contact_model != "stiff":
+            raise BackendUnsupportedError(
+                self.name, f"contact_model {prof.contact_model!r}", "valid: ['stiff']"
+            )
+        if prof.friction_combine != "product" or prof.restitution_combine != "product":
+            raise BackendUnsupportedError(
+                self.name, "friction/restitution combine rules other than 'product'"
+            )
+        if prof.enforce_velocity_limit:
+            raise BackendUnsupportedError(
+                self.name,
+                "enforce_velocity_limit=True",
+                "PyBullet never clamps to <limit velocity>; use max_joint_velocity",
+            )
 
     def _configure(self) -> None:
         c = self._c
@@ -149,8 +175,35 @@ class PyBulletBackend(Backend):
         dyn = p.getDynamicsInfo(body, -1, physicsClientId=self._c)
         base_mass = dyn[0]
         free = not fixed_base and base_mass > 0
-        self._bodies[body] = _Body(table, free, (dyn[3], dyn[4]))
+        info = self._bodies[body] = _Body(table, free, (dyn[3], dyn[4]))
+        if prof.enforce_effort_limit:
+            info.effort = [j.max_force if j.max_force > 0 else math.inf for j in table]
+            self._clamp_brake(body, info, model)
         return body
+
+    def _clamp_brake(self, body: int, info: _Body, model: UrdfModel) -> None:
+        """Under enforce_effort_limit, the default brake too stays within <limit effort>."""
+        assert info.effort is not None
+        if self.profile.joint_brake == "pybullet":
+            brake = {i: 1.0 / self._dt for i in info.movable}
+        else:
+            brake = {j.index: j.friction for j in model.joints if j.type != "fixed"}
+        weak = [i for i in info.movable if info.effort[i] < brake[i]]
+        if weak:
+            p.setJointMotorControlArray(
+                body,
+                weak,
+                p.VELOCITY_CONTROL,
+                targetVelocities=[0.0] * len(weak),
+                forces=[info.effort[i] for i in weak],
+                physicsClientId=self._c,
+            )
+
+    def _within_effort(self, body: int, joints: np.ndarray, force: list[float]) -> list[float]:
+        effort = self._bodies[body].effort
+        if effort is None:
+            return force
+        return [min(f, effort[i]) for f, i in zip(force, joints.tolist(), strict=True)]
 
     def _load_file(
         self, path: str, display: str, pos: Vec3, orn: Quat, fixed: bool, flags: int
@@ -216,6 +269,10 @@ class PyBulletBackend(Backend):
                     dyn["restitution"] = prof.restitution
             if dyn:
                 p.changeDynamics(body, link.index, physicsClientId=c, **dyn)
+        if not prof.apply_joint_damping:  # PyBullet applies <dynamics damping> unless told
+            for j in model.joints:
+                if j.damping != 0.0:
+                    p.changeDynamics(body, j.index, jointDamping=0.0, physicsClientId=c)
         if prof.joint_brake == "urdf_friction":
             movable = [j for j in model.joints if j.type != "fixed"]
             if movable:
@@ -402,7 +459,7 @@ class PyBulletBackend(Backend):
             joints.tolist(),
             p.VELOCITY_CONTROL,
             targetVelocities=target,
-            forces=max_force,
+            forces=self._within_effort(body, joints, max_force),
             physicsClientId=self._c,
         )
         self._last_velocity = (joints, body, target, max_force)
@@ -422,7 +479,7 @@ class PyBulletBackend(Backend):
             joints.tolist(),
             p.POSITION_CONTROL,
             targetPositions=target,
-            forces=max_force,
+            forces=self._within_effort(body, joints, max_force),
             positionGains=kp,
             velocityGains=kd,
             physicsClientId=self._c,
@@ -430,6 +487,12 @@ class PyBulletBackend(Backend):
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         self._last_velocity = None
+        effort = self._bodies[body].effort
+        if effort is not None:  # each command within the effort, as on MuJoCo
+            torque = [
+                max(-effort[i], min(t, effort[i]))
+                for t, i in zip(torque, joints.tolist(), strict=True)
+            ]
         p.setJointMotorControlArray(
             body, joints.tolist(), p.TORQUE_CONTROL, forces=torque, physicsClientId=self._c
         )

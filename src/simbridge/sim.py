@@ -516,7 +516,8 @@ class Sim:
 
     def set_joint_torque(self, body: int, joints: JointsArg, torque: Any) -> None:
         """TORQUE_CONTROL: add ``torque`` (N·m or N) during the next step only (commands before
-        one step add up, as in PyBullet). The joint's motor stays; release the default brake first with ``set_joint_velocity(..., max_force=0)``."""
+        one step add up, as in PyBullet). The joint's motor stays; release the default brake
+        first with ``set_joint_velocity(..., max_force=0)``."""
         idx = self._joints(body, joints, True)
         self._b.set_joint_torque(body, idx, self._values(torque, len(idx), "torque"))
 

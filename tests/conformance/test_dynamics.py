@@ -376,3 +376,57 @@ def test_a_repeated_velocity_command_takes_over_again_after_other_modes(make_sim
     body = sim.load_urdf("wheel.urdf", fixed_base=True)
     drive()
     assert speed() == pytest.approx(5.0, abs=1e-6)
+
+
+# ---------------------------------------------------------------- profile switches
+
+
+def _kuka(make_sim, **changes):
+    from simbridge import Profile
+
+    prof = Profile(name="switch", linear_damping=0.0, angular_damping=0.0, **changes)
+    sim = make_sim(profile=prof, gravity=(0.0, 0.0, 0.0))
+    return sim, sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True)
+
+
+@pytest.mark.parametrize("apply", [True, False])
+def test_apply_joint_damping_switch(make_sim, apply):
+    """kuka_iiwa's joints have <dynamics damping 0.5>. Released at 2 rad/s with no gravity and
+    no link damping, joint 0 keeps its speed when the profile does not apply joint damping
+    (the other joints are braked, so nothing else acts on it) and slows when it does."""
+    sim, body = _kuka(make_sim, apply_joint_damping=apply)
+    assert sim.joint_info(body, 0).damping == 0.5
+    sim.set_joint_velocity(body, 0, 0.0, max_force=0.0)
+    sim.reset_joint_state(body, 0, 0.0, 2.0)
+    sim.step(240)
+    v = sim.joint_states(body, 0).velocities[0]
+    if apply:
+        assert v < 1.95  # measured 1.80 on both backends
+    else:
+        assert v == pytest.approx(2.0, abs=1e-5)  # measured 1.4e-6: the braked joints give
+
+
+@pytest.mark.parametrize("enforce", [True, False])
+def test_enforce_effort_limit_switch(make_sim, enforce):
+    """kuka_iiwa's joint 0 has <limit effort 300>. A motor asking more than it can give within
+    a step applies max_force, or 300 N m under enforce_effort_limit; a torque command is held
+    to the effort the same way."""
+    sim, body = _kuka(make_sim, enforce_effort_limit=enforce)
+    assert sim.joint_info(body, 0).max_force == 300.0
+    sim.set_joint_velocity(body, 0, 100.0, max_force=1000.0)  # needs about 2200 N m
+    sim.step()
+    applied = sim.joint_states(body, 0).applied_torques[0]
+    assert applied == pytest.approx(300.0 if enforce else 1000.0, rel=1e-6)
+
+    def kick(torque: float) -> float:  # one step from rest, joint 0 released
+        sim, body = _kuka(make_sim, enforce_effort_limit=enforce)
+        sim.set_joint_velocity(body, 0, 0.0, max_force=0.0)
+        sim.set_joint_torque(body, 0, torque)
+        sim.step()
+        return sim.joint_states(body, 0).velocities[0]
+
+    ratio = kick(1000.0) / kick(300.0)
+    if enforce:
+        assert ratio == pytest.approx(1.0, rel=1e-9)
+    else:  # not 10/3: past 300 N m the other joints' brakes give way (measured 4.5)
+        assert ratio > 2.0

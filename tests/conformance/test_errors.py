@@ -255,3 +255,23 @@ def test_huge_torque_is_either_finite_or_reported(make_sim, private_tmp):
         assert np.isfinite(state.velocities).all() and np.isfinite(state.positions).all()
     sim.close()
     assert list(private_tmp.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "entry",
+    [
+        {"integrator": "no such integrator"},
+        {"contact_model": "no such contact model"},
+        {"friction_combine": "no such rule"},
+    ],
+    ids=lambda e: next(iter(e)),
+)
+def test_a_profile_entry_the_backend_cannot_honour_is_refused(make_sim, private_tmp, entry):
+    """A profile value the engine has no switch for raises BackendUnsupportedError naming the
+    entry before any world exists, instead of being silently ignored."""
+    from simbridge import Profile
+
+    name, value = next(iter(entry.items()))
+    with pytest.raises(exc.BackendUnsupportedError, match=name.split("_")[0]) as info:
+        make_sim(profile=Profile(name="odd", **entry))
+    assert value in str(info.value) or "other than" in str(info.value)
