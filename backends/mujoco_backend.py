@@ -134,6 +134,7 @@ class MujocoBackend(Backend):
         self._inv_dt = 1.0 / profile.timestep
         self._robots: dict[int, _Robot] = {}
         self._next_id = 0
+        self._free_ids: list[int] = []  # removed ids, reused last-freed first (as PyBullet)
         self._steps = 0
         self._closed = False
         self._new_world()
@@ -188,7 +189,7 @@ class MujocoBackend(Backend):
         self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
     ) -> int:
         self._check_idle()
-        body = self._next_id
+        body = self._free_ids[-1] if self._free_ids else self._next_id
         prefix = f"b{body}/"
         spec = self._spec
         try:
@@ -229,7 +230,10 @@ class MujocoBackend(Backend):
             self._drop_from_spec(prefix)
             self._recompile_quietly()
             raise
-        self._next_id += 1
+        if self._free_ids:
+            self._free_ids.pop()
+        else:
+            self._next_id += 1
         return body
 
     def _default_motors(self, model: UrdfModel, movable: list[int]) -> dict[str, np.ndarray]:
@@ -278,12 +282,15 @@ class MujocoBackend(Backend):
         robot = self._robots.pop(body)
         self._save_motor_state()
         self._drop_from_spec(robot.spec.prefix)
+        self._free_ids.append(body)
         self._recompile("<remove>")
 
     def reset(self) -> None:
         self._check_idle()
         self._close_viewer()
         self._robots.clear()
+        self._next_id = 0
+        self._free_ids.clear()
         self._steps = 0
         self._new_world()
 
