@@ -22,7 +22,7 @@ def test_body_ids_follow_pybullets_pool(make_sim):
         sim.remove(body)
     assert load(4) == [2, 4, 0, 6]
     assert sim.bodies() == [3, 1, 5, 2, 4, 0, 6]  # load order
-    assert [sim.body_name(b) for b in (1, 3, 5)] == ["r2d2"] * 3
+    assert [sim.body_name(b) for b in (1, 3, 5)] == ["physics"] * 3  # r2d2.urdf's <robot name>
     sim.step(5)
     sim.reset()
     assert sim.bodies() == []
