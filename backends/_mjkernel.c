@@ -90,7 +90,7 @@ typedef struct {
   solvefn solveM;
   mat2quatfn mat2quat;
   objvelfn objvel;
-  double dt, clamp_limit, r_scale;
+  double dt, clamp_limit, r_scale, limit_k, limit_deep;
   int has_clamp;
   /* world arrays (bound once per compile) */
   Arr lin_gain, ang_gain;   /* (n,), (n,3) */
@@ -256,20 +256,23 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   self->has_clamp = 0;
   self->clamp_limit = INFINITY;
   self->r_scale = 1.0;
+  self->limit_k = 0.0;
+  self->limit_deep = INFINITY;
   self->damp_n = 0;
   return 0;
 }
 
 /* bind_world(first, lin_gain, ang_gain, jd_dof, jd_coef, tq_dof, tq, clamp_limit_or_None,
- *            r_scale): link damping of the bodies first .. first + len(lin_gain) - 1,
- * joint damping, one-step torques, the speed clamp, the motor rows' hardening */
+ *            r_scale, limit_k, limit_deep): link damping of the bodies first .. first +
+ * len(lin_gain) - 1, joint damping, one-step torques, the speed clamp, the motor and limit rows'
+ * hardening, the limit rows' position gain and the depth past which it is dropped */
 static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   if (refuse_if_busy(self) < 0) return NULL;
   int first;
   PyObject *lg, *ag, *jdd, *jdc, *tqd, *tq, *limit;
-  double r_scale;
-  if (!PyArg_ParseTuple(args, "iOOOOOOOd", &first, &lg, &ag, &jdd, &jdc, &tqd, &tq, &limit,
-                        &r_scale))
+  double r_scale, limit_k, limit_deep;
+  if (!PyArg_ParseTuple(args, "iOOOOOOOddd", &first, &lg, &ag, &jdd, &jdc, &tqd, &tq, &limit,
+                        &r_scale, &limit_k, &limit_deep))
     return NULL;
   const mjModel* m = self->m;
   if (arr_take(&self->lin_gain, lg, 'd', -1, "lin_gain") < 0) return NULL;
@@ -301,6 +304,8 @@ static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   self->clamp_limit = self->has_clamp ? PyFloat_AsDouble(limit) : INFINITY;
   if (PyErr_Occurred()) return NULL;
   self->r_scale = r_scale;
+  self->limit_k = limit_k;
+  self->limit_deep = limit_deep;
   Py_RETURN_NONE;
 bad_dof:
   PyErr_SetString(PyExc_ValueError, "a dof index out of the model's range");
@@ -622,6 +627,15 @@ static int run_steps(Kernel* self, long n, int pending) {
       for (int r = 0; r < k; r++) {
         d->efc_R[r] *= self->r_scale;
         d->efc_D[r] *= inv;
+      }
+    }
+    if (d->nl) { /* PyBullet's limit rows (mujoco_motors.py), after the friction rows */
+      const double inv = 1.0 / self->r_scale;
+      for (int r = d->nf; r < d->nf + d->nl; r++) {
+        d->efc_R[r] *= self->r_scale;
+        d->efc_D[r] *= inv;
+        double pos = d->efc_pos[r] - d->efc_margin[r];
+        if (pos <= -self->limit_deep) d->efc_aref[r] += self->limit_k * pos; /* stop only */
       }
     }
     TOC(1);

@@ -7,7 +7,8 @@ so the bodies, joints, geoms and inertias are added here one by one:
 * body ``<prefix><link name>`` per link, in PyBullet's order, its frame the URDF link frame;
   a free joint on the root unless the base is fixed (``fixed_base`` or a root of mass 0);
 * hinge/slide joints at the body origin, axis normalised (MuJoCo requires it), range only for
-  revolute/prismatic joints with lower <= upper (PyBullet's rule); no damping, friction or
+  revolute/prismatic joints with lower <= upper (PyBullet's rule; lower == upper locks the joint,
+  a range one ulp wide here); no damping, friction or
   force range in the model: the backend applies them per step with PyBullet's laws;
 * explicit inertia from :func:`simbridge.kinematics.model_inertials` (PyBullet's numbers for
   the profile), mass and inertia bounded below for moving bodies (MuJoCo refuses zero);
@@ -30,6 +31,8 @@ from simbridge import kinematics as K
 from simbridge.exceptions import UrdfStructureError
 from simbridge.profiles import Profile
 from simbridge.urdf import Geometry, Link, UrdfModel
+
+from .mujoco_motors import LIMIT_ERP, LIMIT_MARGIN, MOTOR_DMAX
 
 __all__ = ["RobotSpec", "GeomContact", "add_robot", "add_pairs", "new_world_spec"]
 
@@ -260,8 +263,17 @@ def add_robot(
                 jnt.solimp_friction = list(MOTOR_SOLIMP)
                 if joint.has_limit:
                     jnt.limited = mujoco.mjtLimited.mjLIMITED_TRUE
-                    jnt.range = [joint.lower, joint.upper]
-                    jnt.solref_limit = [2.0 * profile.timestep, 1.0]
+                    # lower == upper locks the joint in PyBullet; MuJoCo wants a range of
+                    # positive width: one ulp of it
+                    upper = joint.upper
+                    if upper == joint.lower:
+                        upper = float(np.nextafter(upper, np.inf))
+                    jnt.range = [joint.lower, upper]
+                    # PyBullet's limit row (mujoco_motors.py): aref = -v/dt - erp pos/dt^2
+                    dt = profile.timestep
+                    jnt.solref_limit = [-LIMIT_ERP / dt / dt * MOTOR_DMAX, -MOTOR_DMAX / dt]
+                    jnt.solimp_limit = list(MOTOR_SOLIMP)
+                    jnt.margin = LIMIT_MARGIN
                 else:
                     jnt.limited = mujoco.mjtLimited.mjLIMITED_FALSE
                 joint_names.append(name)

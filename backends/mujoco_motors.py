@@ -29,7 +29,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["MotorTable", "MOTOR_DMAX", "MOTOR_R_SCALE"]
+__all__ = [
+    "MotorTable",
+    "MOTOR_DMAX",
+    "MOTOR_R_SCALE",
+    "LIMIT_ERP",
+    "LIMIT_DEEP",
+    "LIMIT_MARGIN",
+]
 
 MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2]), MuJoCo's largest
 # MuJoCo's hardest row still has a regulariser R = 1e-4 of its (approximate) inverse inertia, so
@@ -38,6 +45,20 @@ MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2]), MuJoCo's l
 # inertia, which the Newton solver takes without trouble (islands are disabled so the solver
 # reads efc_R/efc_D directly); the polish then removes the last 1e-6 (mujoco_backend._polish).
 MOTOR_R_SCALE = 1e-2
+
+# PyBullet's joint-limit row (btMultiBodyJointLimitConstraint::createConstraintRows), measured
+# on raw PyBullet 3.2.7 (a hinge reset past its limit, nothing else acting): the row exists once
+# the joint is at or past its limit, only pushes the joint back in (unilateral), asks for zero
+# speed along it plus, while the penetration is under 0.04 (split impulse's threshold), a
+# push-back at LIMIT_ERP * penetration / dt (0.01 rad past: -0.48 rad/s at 1/240 s); deeper
+# than that the row only stops outward motion (0.05 or 0.3 rad past: the joint stays there).
+# The MuJoCo limit row is given that law: solref "direct" (-LIMIT_ERP / dt^2, -1 / dt) times
+# the impedance, a margin of LIMIT_MARGIN so that a joint exactly at its limit is held, the
+# rows hardened like the motor rows, and the position term removed between mj_step1 and
+# mj_step2 for the rows deeper than LIMIT_DEEP.
+LIMIT_ERP = 0.2
+LIMIT_DEEP = 0.04
+LIMIT_MARGIN = 1e-12
 
 
 class MotorTable:

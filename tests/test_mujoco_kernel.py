@@ -268,7 +268,7 @@ def test_bad_bindings_raise_instead_of_crashing():
         k.set_velocity(index, [2.0], [3.0])
         assert sim._b._motors.max_force[0] == 3.0 and sim._b._m.dof_frictionloss[0] == 3.0
         with pytest.raises(ValueError, match="out of the model's range"):
-            k.bind_world(0, nonef, nonef, ints + 50, floats, none, nonef, None, 1.0)
+            k.bind_world(0, nonef, nonef, ints + 50, floats, none, nonef, None, 1.0, 0.0, 1.0)
         with pytest.raises(ValueError, match="15 addresses"):
             type(k)(None, None, 1, 1, (), 0.01)
         with pytest.raises(ValueError, match="null"):
