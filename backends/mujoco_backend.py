@@ -169,6 +169,9 @@ class MujocoBackend(Backend):
         self._m = self._spec.compile()
         self._d = mujoco.MjData(self._m)
         self._after_compile()
+        if self.gui:  # a new world: a new window on it
+            self._close_viewer()
+            self._open_viewer()
 
     @property
     def _link_damped(self) -> bool:
@@ -306,7 +309,7 @@ class MujocoBackend(Backend):
         self._m, self._d = m, d
         self._after_compile()
         self._steps_since_check = 0
-        if self._viewer is not None:
+        if self.gui:  # the viewer holds the old model: reopen it on the new one
             self._close_viewer()
             self._open_viewer()
 

@@ -140,6 +140,48 @@ def test_gui_without_display_raises(monkeypatch):
         simbridge.Sim("mujoco", gui=True)
 
 
+class _Window:
+    """Stands in for mujoco.viewer's passive window (no display on the test machines): records
+    what the backend asks of it."""
+
+    log: list[str] = []
+
+    def __init__(self, m, d) -> None:
+        self.m, self.d = m, d
+        _Window.log.append(f"open nbody={m.nbody}")
+
+    def is_running(self) -> bool:
+        return True
+
+    def sync(self) -> None:
+        _Window.log.append(f"sync t={self.d.time:.4f}")
+
+    def close(self) -> None:
+        _Window.log.append("close")
+
+
+def test_gui_opens_the_viewer_and_keeps_it_on_the_current_world(monkeypatch):
+    """gui=True opens MuJoCo's passive viewer at once, syncs it every step, reopens it on the
+    model of every load, remove and reset, and closes it with the Sim."""
+    import mujoco.viewer
+
+    monkeypatch.setenv("DISPLAY", ":0")
+    monkeypatch.setattr(mujoco.viewer, "launch_passive", _Window, raising=False)
+    _Window.log = []
+    with simbridge.Sim("mujoco", gui=True) as sim:
+        assert _Window.log == ["open nbody=1"]
+        body = sim.load_urdf("r2d2.urdf")
+        assert _Window.log[-2:] == ["close", f"open nbody={1 + 15 + 1}"]
+        sim.step(2)
+        assert _Window.log[-2:] == ["sync t=0.0042", "sync t=0.0083"]
+        sim.remove(body)
+        assert _Window.log[-1] == "open nbody=1"
+        sim.load_urdf("cube.urdf")
+        sim.reset()
+        assert _Window.log[-2:] == ["close", "open nbody=1"]
+    assert _Window.log[-1] == "close"
+
+
 def test_manifest_names_engine_and_departures(sim):
     sim.load_urdf("r2d2.urdf")
     man = sim.manifest()
