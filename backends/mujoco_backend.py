@@ -196,6 +196,7 @@ class MujocoBackend(Backend):
         body = self._free_ids[-1] if self._free_ids else self._next_id
         prefix = f"b{body}/"
         spec = self._spec
+        meshes = self._meshes.mark()
         try:
             rspec = build.add_robot(
                 spec,
@@ -232,6 +233,7 @@ class MujocoBackend(Backend):
         except BaseException:
             self._robots.pop(body, None)
             self._drop_from_spec(prefix)
+            self._meshes.rollback(meshes)
             self._recompile_quietly()
             raise
         if self._free_ids:
@@ -1028,7 +1030,8 @@ class MujocoBackend(Backend):
         for r in self._robots.values():
             if r.spec.skipped_shapes:
                 departures[f"body {r.id} shapes left out"] = (
-                    f"{r.spec.skipped_shapes}: meshes without a finite vertex"
+                    f"{r.spec.skipped_shapes}: meshes without a finite vertex or a readable "
+                    "triangle (PyBullet loads them without a shape too)"
                 )
         return {
             "backend": self.name,

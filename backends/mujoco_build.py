@@ -128,11 +128,31 @@ class MeshLibrary:
         self.names: dict[tuple[str, tuple[float, ...]], str] = {}
 
     def usable(self, g: Geometry) -> bool:
-        """False for a mesh without any finite vertex (pybullet_data's random_urdfs/168 is all
-        NaN): such a shape is left out (MuJoCo cannot compile it)."""
+        """False for a mesh PyBullet gets nothing from: no finite vertex (pybullet_data's
+        random_urdfs/168 is all NaN) or an .obj without a readable triangle (PyBullet warns
+        "cannot extract anything useful from mesh" and loads the link without it). Such a
+        shape is left out here too (MuJoCo cannot compile it) and listed in the manifest."""
         assert g.mesh_path is not None
-        verts = K.mesh_vertices(g.mesh_path)
+        try:
+            verts = K.mesh_vertices(g.mesh_path)
+            if g.mesh_path.suffix.lower() == ".obj" and len(_obj_arrays(g.mesh_path)[1]) == 0:
+                return False
+        except (OSError, ValueError, IndexError):
+            return False
         return len(verts) > 0 and bool(np.isfinite(verts).all())
+
+    def mark(self) -> int:
+        """A point to roll back to (the number of meshes so far)."""
+        return len(self.names)
+
+    def rollback(self, mark: int) -> None:
+        """Delete the meshes added since ``mark`` (a load that failed leaves none behind: a
+        mesh MuJoCo cannot compile would break every later compile of the world)."""
+        for key, name in list(self.names.items())[mark:]:
+            mesh = self.spec.mesh(name)
+            if mesh is not None:
+                self.spec.delete(mesh)
+            del self.names[key]
 
     def get(self, g: Geometry, file: str, where: str) -> str:
         assert g.mesh_path is not None
@@ -142,6 +162,7 @@ class MeshLibrary:
             return name
         name = f"mesh{len(self.names)}"
         mesh = self.spec.add_mesh(name=name)
+        self.names[key] = name  # before any error: rollback() finds it
         mesh.scale = list(g.size)
         mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL  # robust to flat meshes
         suffix = g.mesh_path.suffix.lower()
@@ -157,7 +178,6 @@ class MeshLibrary:
                 raise UrdfStructureError(file, where, f"mesh {g.mesh_uri!r} has no triangles")
             mesh.uservert = verts.astype(np.float32).ravel().tolist()
             mesh.userface = faces.astype(np.int32).ravel().tolist()
-        self.names[key] = name
         return name
 
 
@@ -175,7 +195,11 @@ def _obj_arrays(path: Path) -> tuple[np.ndarray, np.ndarray]:
                 head = token.split("/", 1)[0]
                 if not head:
                     continue
-                i = int(head)
+                try:
+                    i = int(head)
+                except ValueError:  # not an index: the face is unusable, as for PyBullet
+                    idx = []
+                    break
                 idx.append(i - 1 if i > 0 else n + i)
             for a in range(1, len(idx) - 1):
                 tris.append((idx[0], idx[a], idx[a + 1]))

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import glob
 import os
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -15,7 +16,7 @@ import pybullet_data
 import pytest
 
 import simbridge
-from simbridge.exceptions import DisplayError, SimulationDivergedError
+from simbridge.exceptions import DisplayError, SimulationDivergedError, UrdfStructureError
 
 WHEELS = [2, 3, 6, 7]
 
@@ -286,3 +287,26 @@ def test_exact_motor_solve_matches_the_solver_and_polish(monkeypatch, profile, s
     gap, taken = _exact_against_solver(monkeypatch, profile, scenario)
     assert taken > 200  # the exact solve was the one in use
     assert gap < 1e-9, gap
+
+
+def test_a_load_that_fails_to_compile_leaves_the_world_as_it_was(tmp_path):
+    """A mesh MuJoCo cannot compile (scale 0: no surface) fails the load with the file named;
+    the mesh asset it added is rolled back with the robot's bodies, so the robots already there
+    stay (the world used to be rebuilt empty, their ids left dangling)."""
+    mesh = Path(pybullet_data.getDataPath()) / "cube.obj"
+    urdf = tmp_path / "flat.urdf"
+    urdf.write_text(
+        f'<robot name="flat"><link name="a"><collision><geometry><mesh filename="{mesh}" '
+        'scale="0 0 0"/></geometry></collision></link></robot>'
+    )
+    with simbridge.Sim("mujoco") as sim:
+        r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+        sim.step(10)
+        before = sim.base_state(r2d2).position
+        with pytest.raises(UrdfStructureError, match=r"flat\.urdf: <robot>: MuJoCo cannot compile"):
+            sim.load_urdf(urdf)
+        assert sim.bodies() == [r2d2]
+        assert sim.base_state(r2d2).position == before
+        cube = sim.load_urdf("cube.urdf", base_position=(3, 0, 1))
+        sim.step(10)
+        assert sim.bodies() == [r2d2, cube]

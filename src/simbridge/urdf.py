@@ -12,6 +12,7 @@ import importlib.util
 import math
 import os
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -230,6 +231,13 @@ def _float(elem: ET.Element | None, attr: str, default: float, where: str, file:
     return _floats(elem.get(attr), 1, (default,), f"{where} attribute {attr!r}", file)[0]
 
 
+def _nonneg(elem: ET.Element | None, attr: str, where: str, file: str) -> float:
+    value = _float(elem, attr, 0.0, where, file)
+    if value < 0:
+        raise UrdfStructureError(file, where, f"{attr} must be >= 0, got {value}")
+    return value
+
+
 def _origin(
     elem: ET.Element, where: str, file: str
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -283,14 +291,19 @@ def _geometry(elem: ET.Element, where: str, src: UrdfSource, is_visual: bool) ->
     name = elem.get("name", "")
     tag = shape.tag
     if tag == "box":
+        if shape.get("size") is None:  # PyBullet: "box requires a size attribute"
+            raise UrdfStructureError(file, f"{where} <box>", "has no size attribute")
         size = _floats(shape.get("size"), 3, (1.0, 1.0, 1.0), f"{where} <box size>", file)
+        _sizes(size, f"{where} <box size>", file)
         return Geometry("box", xyz, rpy, size, rgba=rgba, name=name)  # type: ignore[arg-type]
     if tag in ("cylinder", "capsule"):
         radius = _float(shape, "radius", 1.0, f"{where} <{tag}>", file)
         length = _float(shape, "length", 1.0, f"{where} <{tag}>", file)
+        _sizes((radius, length), f"{where} <{tag} radius, length>", file)
         return Geometry(tag, xyz, rpy, (radius, length), rgba=rgba, name=name)  # type: ignore[arg-type]
     if tag == "sphere":
         radius = _float(shape, "radius", 1.0, f"{where} <sphere>", file)
+        _sizes((radius,), f"{where} <sphere radius>", file)
         return Geometry("sphere", xyz, rpy, (radius,), rgba=rgba, name=name)  # type: ignore[arg-type]
     if tag == "mesh":
         uri = shape.get("filename")
@@ -300,6 +313,14 @@ def _geometry(elem: ET.Element, where: str, src: UrdfSource, is_visual: bool) ->
         path, tried = resolve_mesh(uri, src.base_dir)
         if not path.is_file():
             raise MeshNotFoundError(file, where, uri, str(tried[0]))
+        if path.suffix.lower() not in MESH_FORMATS:
+            raise UrdfStructureError(
+                file,
+                f"{where} <mesh>",
+                f"{uri!r}: unsupported mesh format; valid: {', '.join(MESH_FORMATS)}",
+            )
+        if path.suffix.lower() == ".dae":
+            _check_collada(path, uri, f"{where} <mesh>", file)
         return Geometry(
             "mesh",
             xyz,
@@ -315,6 +336,29 @@ def _geometry(elem: ET.Element, where: str, src: UrdfSource, is_visual: bool) ->
     )
 
 
+MESH_FORMATS = (".obj", ".stl", ".dae")  # what PyBullet's URDF importer reads
+
+
+def _sizes(values: Sequence[float], where: str, file: str) -> None:
+    if any(v < 0 for v in values):
+        raise UrdfStructureError(file, where, f"sizes must be >= 0, got {tuple(values)}")
+
+
+def _check_collada(path: Path, uri: str, where: str, file: str) -> None:
+    """Read a .dae before any engine does: PyBullet's COLLADA reader ends the process on some
+    malformed files (an empty <scene>), and MuJoCo's backend converts .dae through trimesh."""
+    from .kinematics import mesh_vertices  # trimesh loads only for a .dae
+
+    try:
+        vertices = mesh_vertices(path)
+    except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
+        raise UrdfStructureError(
+            file, where, f"{uri!r} cannot be read as COLLADA ({type(exc).__name__}: {exc})"
+        ) from None
+    if len(vertices) < 3:
+        raise UrdfStructureError(file, where, f"{uri!r} holds no geometry (no vertices)")
+
+
 def _inertial(elem: ET.Element | None, where: str, file: str) -> Inertial:
     if elem is None:
         return Inertial()
@@ -327,6 +371,12 @@ def _inertial(elem: ET.Element | None, where: str, file: str) -> Inertial:
         _float(ie, key, 0.0, f"{where} <inertia>", file)
         for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
     )
+    if min(inertia[0], inertia[3], inertia[5]) < 0:
+        raise UrdfStructureError(
+            file,
+            f"{where} <inertia>",
+            f"ixx, iyy and izz must be >= 0, got {inertia[0]}, {inertia[3]}, {inertia[5]}",
+        )
     return Inertial(xyz, rpy, mass, inertia, True)  # type: ignore[arg-type]
 
 
@@ -363,7 +413,9 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
         raise UrdfParseError(file, str(exc)) from None
     if root.tag != "robot":
         raise UrdfStructureError(file, f"<{root.tag}>", "the root element must be <robot>")
-    robot_name = root.get("name", "robot")
+    robot_name = root.get("name")
+    if not robot_name:  # PyBullet: "Expected a name for robot"
+        raise UrdfStructureError(file, "<robot>", "has no name attribute")
 
     links: dict[str, Link] = {}
     for elem in root.findall("link"):
@@ -465,8 +517,8 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
             upper=upper,
             effort=_float(limit, "effort", 0.0, f"{where} <limit>", file),
             velocity=_float(limit, "velocity", 0.0, f"{where} <limit>", file),
-            damping=_float(dynamics, "damping", 0.0, f"{where} <dynamics>", file),
-            friction=_float(dynamics, "friction", 0.0, f"{where} <dynamics>", file),
+            damping=_nonneg(dynamics, "damping", f"{where} <dynamics>", file),
+            friction=_nonneg(dynamics, "friction", f"{where} <dynamics>", file),
             has_limit=jtype in ("revolute", "prismatic") and has_range and lower <= upper,
         )
         joints.append(joint)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 
 import numpy as np
+import pybullet_data
 import pytest
 
 import simbridge
@@ -60,6 +61,44 @@ LOAD_ERRORS = {
         _robot('<joint name="plane" type="planar"><parent link="a"/><child link="b"/></joint>'),
         exc.UnsupportedJointError,
         r"joint 'plane': joint type 'planar' is not supported",
+    ),
+    "a robot without a name": (
+        '<robot><link name="a"/></robot>',
+        exc.UrdfStructureError,
+        r"<urdf text>: <robot>: has no name attribute",
+    ),
+    "a box without a size": (
+        '<robot name="bad"><link name="a"><collision><geometry><box/></geometry></collision>'
+        "</link></robot>",
+        exc.UrdfStructureError,
+        r"link 'a' <collision> #0 <box>: has no size attribute",
+    ),
+    "a negative box size": (
+        '<robot name="bad"><link name="a"><visual><geometry><box size="-1 0.1 0.1"/>'
+        "</geometry></visual></link></robot>",
+        exc.UrdfStructureError,
+        r"link 'a' <visual> #0 <box size>: sizes must be >= 0, got \(-1\.0, 0\.1, 0\.1\)",
+    ),
+    "a negative moment of inertia": (
+        '<robot name="bad"><link name="a"><inertial><mass value="1"/>'
+        '<inertia ixx="-1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>',
+        exc.UrdfStructureError,
+        r"link 'a' <inertia>: ixx, iyy and izz must be >= 0, got -1\.0, 1\.0, 1\.0",
+    ),
+    "a negative joint damping": (
+        _robot(
+            '<joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
+            '<dynamics damping="-2"/></joint>'
+        ),
+        exc.UrdfStructureError,
+        r"joint 'j' <dynamics>: damping must be >= 0, got -2\.0",
+    ),
+    "a mesh in a format no engine reads": (
+        '<robot name="bad"><link name="a"><visual><geometry>'
+        f'<mesh filename="{pybullet_data.getDataPath()}/plane.urdf"/></geometry></visual>'
+        "</link></robot>",
+        exc.UrdfStructureError,
+        r"plane\.urdf': unsupported mesh format; valid: \.obj, \.stl, \.dae",
     ),
     "a missing file": (
         "no_such_robot.urdf",
@@ -275,3 +314,29 @@ def test_a_profile_entry_the_backend_cannot_honour_is_refused(make_sim, private_
     with pytest.raises(exc.BackendUnsupportedError, match=name.split("_")[0]) as info:
         make_sim(profile=Profile(name="odd", **entry))
     assert value in str(info.value) or "other than" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        '<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" '
+        'version="1.4.1"><scene/></COLLADA>',
+        "not xml at all",
+        "",
+    ],
+    ids=["empty scene", "garbage", "empty file"],
+)
+def test_a_bad_collada_mesh_is_an_error_not_a_crash(make_sim, tmp_path, content):
+    """PyBullet's COLLADA reader ends the process on a .dae with an empty <scene> (measured:
+    SIGSEGV); every .dae is read before an engine sees it, and a bad one is a UrdfStructureError
+    naming the file, link and element."""
+    (tmp_path / "bad.dae").write_text(content)
+    urdf = tmp_path / "bad.urdf"
+    urdf.write_text(
+        '<robot name="bad"><link name="a"><visual><geometry><mesh filename="bad.dae"/>'
+        "</geometry></visual></link></robot>"
+    )
+    sim = make_sim()
+    with pytest.raises(exc.UrdfStructureError, match=r"bad\.urdf: link 'a' <visual> #0 <mesh>"):
+        sim.load_urdf(urdf)
+    assert sim.bodies() == []
