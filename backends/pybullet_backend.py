@@ -13,6 +13,7 @@ import math
 import os
 import sys
 import tempfile
+import threading
 import xml.etree.ElementTree as ET
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
@@ -24,6 +25,7 @@ from simbridge.backend import Backend
 from simbridge.exceptions import (
     BackendUnsupportedError,
     DisplayError,
+    SimBusyError,
     SimulationDivergedError,
     UrdfStructureError,
 )
@@ -49,6 +51,10 @@ _PYBULLET_DEFAULT_FRICTION = 0.5
 # The state is probed for NaN every this many steps (and on every base/link read), which keeps
 # the probe's ~1 µs per body off the per-step cost: a divergence is reported at most 1/15 s late.
 _CHECK_EVERY = 16
+_BUSY = (
+    "this Sim is stepping in another thread; a Sim takes one call at a time (give each "
+    "thread its own Sim)"
+)
 
 
 class _Body:
@@ -88,6 +94,7 @@ class PyBulletBackend(Backend):
     def __init__(self, profile: Profile, gui: bool = False) -> None:
         super().__init__(profile, gui)
         self._c = -1
+        self._stepping = threading.Lock()  # held while step() runs
         self._check_profile(profile)
         if gui:
             if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
@@ -148,6 +155,7 @@ class PyBulletBackend(Backend):
     def load(
         self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
     ) -> int:
+        self._check_idle()
         self._last_velocity = None
         prof = self.profile
         flags = 0
@@ -285,12 +293,20 @@ class PyBulletBackend(Backend):
                     physicsClientId=c,
                 )
 
+    def _check_idle(self) -> None:
+        """Changing the world while another thread steps it would end that thread's loop with
+        a raw pybullet.error (measured: close() from another thread mid-step)."""
+        if self._stepping.locked():
+            raise SimBusyError(_BUSY)
+
     def remove(self, body: int) -> None:
+        self._check_idle()
         self._last_velocity = None
         p.removeBody(body, physicsClientId=self._c)
         del self._bodies[body]
 
     def reset(self) -> None:
+        self._check_idle()
         self._last_velocity = None
         p.resetSimulation(physicsClientId=self._c)
         self._configure()
@@ -299,13 +315,23 @@ class PyBulletBackend(Backend):
         self._next_check = _CHECK_EVERY
 
     def step(self, n: int) -> None:
-        if n == 1:
-            p.stepSimulation(physicsClientId=self._c)
-        else:
-            c = self._c
-            for _ in range(n):
-                p.stepSimulation(physicsClientId=c)
-        self._steps += n
+        if not self._stepping.acquire(blocking=False):
+            raise SimBusyError(_BUSY)
+        try:
+            if n == 1:
+                p.stepSimulation(physicsClientId=self._c)
+                self._steps += 1
+            else:
+                c = self._c
+                done = 0
+                try:
+                    for _ in range(n):
+                        p.stepSimulation(physicsClientId=c)
+                        done += 1
+                finally:  # Ctrl-C between two steps: the time counts the steps done
+                    self._steps += done
+        finally:
+            self._stepping.release()
         if self._steps >= self._next_check:
             self._next_check = self._steps + _CHECK_EVERY
             self._check_finite()
@@ -325,6 +351,7 @@ class PyBulletBackend(Backend):
                 raise SimulationDivergedError(self.name, self.time, f"body {body} {where}")
 
     def close(self) -> None:
+        self._check_idle()
         if self._c >= 0:
             try:
                 p.disconnect(physicsClientId=self._c)

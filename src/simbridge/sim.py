@@ -28,6 +28,7 @@ import numpy as np
 from .backend import Backend
 from .exceptions import (
     InvalidArgumentError,
+    SimBusyError,
     SimClosedError,
     UnknownBodyError,
     UnknownJointError,
@@ -129,10 +130,20 @@ class Sim:
     # ---------------------------------------------------------------- lifecycle
 
     def close(self) -> None:
-        """Release the engine. Safe to call twice; any later use raises SimClosedError."""
-        backend, self._b = self._b, _Closed()  # type: ignore[assignment]
-        if not isinstance(backend, _Closed):
+        """Release the engine. Safe to call twice; any later use raises SimClosedError.
+        While another thread steps the Sim it raises SimBusyError and the Sim stays open."""
+        backend = self._b
+        if isinstance(backend, _Closed):
+            return
+        try:
             backend.close()
+        except SimBusyError:
+            raise  # refused: nothing was released, the Sim stays usable
+        except BaseException:
+            self._b = _Closed()  # type: ignore[assignment]
+            self._bodies.clear()
+            raise
+        self._b = _Closed()  # type: ignore[assignment]
         self._bodies.clear()
 
     def __enter__(self) -> Sim:

@@ -7,6 +7,8 @@ sequence below: [0..4], [3, 1, 5], [2, 4, 0, 6], [0, 1, 2])."""
 
 from __future__ import annotations
 
+import pytest
+
 
 def test_body_ids_follow_pybullets_pool(make_sim):
     sim = make_sim()
@@ -40,3 +42,62 @@ def test_a_reused_id_is_a_new_robot(make_sim):
     assert sim.num_joints(cube) == 0 and sim.body_name(cube) == "cube"
     sim.step(10)
     assert sim.base_state(cube).position[2] < 1.0  # it falls: a live body
+
+
+def test_ctrl_c_stops_a_long_step_and_the_time_counts_the_steps_done(make_sim):
+    """A KeyboardInterrupt (Ctrl-C) during step(n) stops it within a moment (MuJoCo's compiled
+    loop runs in chunks of 1000 steps for this), sim.time counts exactly the steps that ran,
+    and the Sim goes on stepping afterwards."""
+    import os
+    import signal
+    import threading
+    import time
+
+    sim = make_sim()
+    body = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+    timer = threading.Timer(0.2, lambda: os.kill(os.getpid(), signal.SIGINT))
+    t0 = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sim.step(10**9)  # hours of stepping
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - t0 < 5.0
+    steps = sim.time * 240
+    assert steps > 0 and steps == pytest.approx(round(steps), abs=1e-6)
+    before = sim.time
+    sim.step(10)
+    assert sim.time == pytest.approx(before + 10 / 240)
+    assert sim.num_joints(body) == 15
+
+
+def test_changing_the_world_while_another_thread_steps_it_is_refused(make_sim):
+    """load, remove, reset and close from another thread while step(n) runs raise SimBusyError
+    (the stepping thread would otherwise die mid-loop or race the engine); the world is left
+    as it was and the stepping call completes."""
+    import threading
+    import time
+
+    from simbridge.exceptions import SimBusyError
+
+    sim = make_sim()
+    robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+    sim.load_urdf("plane.urdf")
+    n = 3000 if sim.manifest()["backend"] == "pybullet" else 40000  # about 0.3 s each
+    for change in (
+        lambda: sim.load_urdf("cube_small.urdf"),
+        lambda: sim.remove(robot),
+        sim.reset,
+        sim.close,
+    ):
+        start = sim.time
+        worker = threading.Thread(target=sim.step, args=(n,))
+        worker.start()
+        time.sleep(0.05)  # well inside the 0.3 s of stepping
+        assert worker.is_alive()
+        with pytest.raises(SimBusyError, match="another thread"):
+            change()
+        worker.join()
+        assert sim.time == pytest.approx(start + n / 240)
+    assert sim.bodies() == [robot, 1] and sim.num_joints(robot) == 15
