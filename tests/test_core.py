@@ -69,6 +69,9 @@ def test_profiles_are_explicit_and_printable():
     [
         ({"timestep": 0}, "argument 'timestep': must be a finite number > 0"),
         ({"timestep": float("nan")}, "argument 'timestep'"),
+        ({"timestep": 10**400}, "argument 'timestep': must be a finite number > 0"),
+        ({"timestep": True}, "argument 'timestep': must be a finite number > 0, got True"),
+        ({"timestep": "0.01"}, "argument 'timestep'"),
         ({"gravity": (0, 0)}, "argument 'gravity': expected 3 numbers, got 2"),
         ({"gravity": (0, 0, float("inf"))}, "argument 'gravity': values must be finite"),
     ],
@@ -87,3 +90,33 @@ def test_unavailable_reason_names_what_is_missing(scratch_registry):
     register("broken", "simbridge.sim:NoSuchClass")  # module present, class missing: a bug
     with pytest.raises(exc.BackendError, match="cannot load 'simbridge.sim:NoSuchClass'"):
         simbridge.registry.unavailable_reason("broken")
+
+
+@pytest.mark.parametrize(
+    ("entry", "value", "message"),
+    [
+        ("solver_iterations", 2.5, "must be an integer >= 1, got 2.5"),
+        ("solver_iterations", 0, "must be an integer >= 1"),
+        ("lateral_friction", "x", "must be a finite number >= 0, got 'x'"),
+        ("linear_damping", float("nan"), "must be a finite number >= 0"),
+        ("restitution", -0.1, "must be a finite number >= 0"),
+        ("joint_brake", "bogus", r"must be one of \['pybullet', 'urdf_friction'\]"),
+        ("inertia_source", "mesh", r"must be one of \['collision_aabb', 'file'\]"),
+        ("max_joint_velocity", -1, "must be None \\(no clamp\\) or a finite number > 0"),
+        ("self_collision", "no", "must be True or False"),
+        ("gravity", (0, 0), "must be three finite numbers"),
+        ("timestep", 0.0, "must be a finite number > 0"),
+    ],
+)
+def test_a_bad_profile_entry_is_refused_when_the_profile_is_made(entry, value, message):
+    """Profile entries are checked on creation (before any engine starts: a bad type used to
+    raise from inside PyBullet after its connection was opened, and leak it)."""
+    with pytest.raises(exc.InvalidArgumentError, match=f"argument 'profile.{entry}': {message}"):
+        simbridge.PROFILES["pybullet"].with_(**{entry: value})
+    with pytest.raises(exc.InvalidArgumentError):
+        simbridge.Profile(name="mine", **{entry: value})
+
+
+def test_a_backend_name_that_is_not_a_string_is_an_unknown_backend():
+    with pytest.raises(exc.UnknownBackendError, match=r"unknown backend \"\['pybullet'\]\""):
+        simbridge.Sim(["pybullet"])  # type: ignore[arg-type]

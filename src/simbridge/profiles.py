@@ -15,10 +15,12 @@ the backend says so in :meth:`simbridge.Sim.manifest` (``departures``).
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, Literal
 
-from .exceptions import InvalidProfileError
+from .exceptions import InvalidArgumentError, InvalidProfileError
 
 __all__ = ["Profile", "PROFILES", "get_profile"]
 
@@ -52,6 +54,13 @@ class Profile:
     enforce_effort_limit: bool = False
     enforce_velocity_limit: bool = False
     contact_model: Literal["stiff"] = "stiff"
+
+    def __post_init__(self) -> None:
+        """Every entry checked when the profile is made: a bad value is an InvalidArgumentError
+        naming it, before any engine starts (a wrong type used to surface from inside an
+        engine, after a connection was opened)."""
+        for f in fields(self):
+            _check_entry(f.name, getattr(self, f.name))
 
     def with_(self, **changes: Any) -> Profile:
         """A copy with some entries changed (``gravity``, ``timestep`` ...)."""
@@ -104,6 +113,75 @@ ENTRY_DOCS: dict[str, str] = {
         "defaults; MuJoCo solref (2*dt, 1) (MuJoCo native (0.02, 1), soft)"
     ),
 }
+
+_CHOICES: dict[str, tuple[str, ...]] = {
+    "joint_brake": ("pybullet", "urdf_friction"),
+    "inertia_source": ("collision_aabb", "file"),
+}
+_NONNEGATIVE = (
+    "linear_damping",
+    "angular_damping",
+    "lateral_friction",
+    "rolling_friction",
+    "spinning_friction",
+    "restitution",
+)
+_FLAGS = (
+    "apply_joint_damping",
+    "read_urdf_contact",
+    "self_collision",
+    "enforce_effort_limit",
+    "enforce_velocity_limit",
+)
+_NAMES = ("name", "integrator", "friction_combine", "restitution_combine", "contact_model")
+
+
+def _number(value: Any) -> float | None:
+    """value as a finite float, or None (bools are not numbers here)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def _check_entry(name: str, value: Any) -> None:
+    def bad(detail: str) -> InvalidArgumentError:
+        return InvalidArgumentError(f"profile.{name}", f"{detail}, got {value!r}")
+
+    if name in _CHOICES:
+        if value not in _CHOICES[name]:
+            raise bad(f"must be one of {list(_CHOICES[name])}")
+    elif name in _NONNEGATIVE:
+        x = _number(value)
+        if x is None or x < 0:
+            raise bad("must be a finite number >= 0")
+    elif name in _FLAGS:
+        if not isinstance(value, bool):
+            raise bad("must be True or False")
+    elif name in _NAMES:
+        if not isinstance(value, str):
+            raise bad("must be a string")
+    elif name == "timestep":
+        x = _number(value)
+        if x is None or x <= 0:
+            raise bad("must be a finite number > 0")
+    elif name == "max_joint_velocity":
+        if value is not None and ((x := _number(value)) is None or x <= 0):
+            raise bad("must be None (no clamp) or a finite number > 0")
+    elif name == "solver_iterations":
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise bad("must be an integer >= 1")
+    elif name == "gravity":
+        try:
+            ok = len(value) == 3 and all(_number(v) is not None for v in value)
+        except TypeError:
+            ok = False
+        if not ok:
+            raise bad("must be three finite numbers")
+
 
 PROFILES: dict[str, Profile] = {
     "pybullet": Profile(name="pybullet"),

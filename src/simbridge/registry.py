@@ -74,6 +74,9 @@ def available_backends() -> list[str]:
 
 def load_backend(name: str) -> type[Backend]:
     """Import and return the backend class registered as ``name``."""
+    if not isinstance(name, str):
+        _read_entry_points()
+        raise UnknownBackendError(repr(name), _REGISTRY)
     if name in _LOADED:
         return _LOADED[name]
     if name not in _REGISTRY:

@@ -117,9 +117,15 @@ class Sim:
     ) -> None:
         self._b: Backend = _Closed()  # type: ignore[assignment]
         g = _vec(gravity, 3, "gravity")
-        if not isinstance(timestep, (int, float)) or not math.isfinite(timestep) or timestep <= 0:
+        try:
+            if isinstance(timestep, bool) or not isinstance(timestep, (int, float, np.number)):
+                raise TypeError
+            dt = float(timestep)
+        except (TypeError, OverflowError):
+            dt = math.nan
+        if not math.isfinite(dt) or dt <= 0:
             raise InvalidArgumentError("timestep", f"must be a finite number > 0, got {timestep!r}")
-        prof = get_profile(profile).with_(gravity=g, timestep=float(timestep))
+        prof = get_profile(profile).with_(gravity=g, timestep=dt)
         cls = load_backend(backend)
         self.backend: str = backend
         self._bodies: dict[int, _Body] = {}
