@@ -169,6 +169,7 @@ class MujocoBackend(Backend):
 
     def _new_world(self) -> None:
         self._engine_error: str | None = None  # MuJoCo's error text once it raised one
+        self._diverged: SimulationDivergedError | None = None  # raised again until reset()
         self._spec = build.new_world_spec(self.profile)
         self._meshes = build.MeshLibrary(self._spec)
         self._m = self._spec.compile()
@@ -477,6 +478,8 @@ class MujocoBackend(Backend):
             if kernel is not None and self._viewer is None and not self._pending_torque:
                 status = kernel.step(n, False)  # the hot path: one call into the compiled loop
             elif kernel is None:
+                if self._diverged is not None:
+                    raise self._diverged
                 if self._engine_error is not None:
                     raise EngineError(self.name, self.time, self._engine_error)
                 start = self._d.time
@@ -556,7 +559,14 @@ class MujocoBackend(Backend):
             if w[code].number != self._warnings[i]:
                 self._warnings = [w[c].number for c in _BAD]
                 what = ("positions", "velocities", "accelerations")[i]
-                raise SimulationDivergedError(self.name, self.time, f"joint {what} (qpos/qvel)")
+                # MuJoCo has already put the state back to the model's reference pose: that
+                # world is not the simulation's any more, so it refuses steps and reads until
+                # reset() (PyBullet's world stays NaN, which reads as the same error there)
+                self._diverged = SimulationDivergedError(
+                    self.name, self.time, f"joint {what} (qpos/qvel)"
+                )
+                self._kernel = None
+                raise self._diverged
 
     def _step_python(self, n: int) -> None:
         """The step loop in Python: the reference the compiled loop (_mjkernel.c) follows."""
@@ -788,6 +798,8 @@ class MujocoBackend(Backend):
             if not finite:
                 raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
             return self._state_out.tolist()  # type: ignore[no-any-return]
+        if self._diverged is not None:
+            raise self._diverged
         self._fresh()
         d = self._d
         self._check_finite(d.xipos[bid], body)
@@ -866,6 +878,8 @@ class MujocoBackend(Backend):
         kernel = self._kernel
         if kernel is not None:
             kernel.check_idle()  # no torn reads of a world stepping in another thread
+        elif self._diverged is not None:
+            raise self._diverged
         robot = self._robots[body]
         _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
         d = self._d

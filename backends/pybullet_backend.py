@@ -95,6 +95,7 @@ class PyBulletBackend(Backend):
         super().__init__(profile, gui)
         self._c = -1
         self._stepping = threading.Lock()  # held while step() runs
+        self._diverged: SimulationDivergedError | None = None  # raised again until reset()
         self._check_profile(profile)
         if gui:
             if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
@@ -309,12 +310,15 @@ class PyBulletBackend(Backend):
         self._check_idle()
         self._last_velocity = None
         p.resetSimulation(physicsClientId=self._c)
+        self._diverged = None
         self._configure()
         self._bodies.clear()
         self._steps = 0
         self._next_check = _CHECK_EVERY
 
     def step(self, n: int) -> None:
+        if self._diverged is not None:  # the state is NaN: no step makes it a simulation
+            raise self._diverged
         if not self._stepping.acquire(blocking=False):
             raise SimBusyError(_BUSY)
         try:
@@ -348,7 +352,10 @@ class PyBulletBackend(Backend):
                 continue
             if not math.isfinite(x):
                 where = "base position" if info.free else f"joint {info.probe_joint} velocity"
-                raise SimulationDivergedError(self.name, self.time, f"body {body} {where}")
+                self._diverged = SimulationDivergedError(
+                    self.name, self.time, f"body {body} {where}"
+                )
+                raise self._diverged
 
     def close(self) -> None:
         self._check_idle()

@@ -270,9 +270,21 @@ def test_diverged_simulation_is_reported(backend, make_sim, profile, private_tmp
     with pytest.raises(
         exc.SimulationDivergedError,
         match=rf"simulation on backend '{backend}' diverged at t=.* s: .* is not finite",
-    ):
+    ) as first:
         for _ in range(32):
             sim.step()
+    # the world is not a simulation any more (NaN on PyBullet; MuJoCo has reset its state to
+    # the reference pose): steps and reads say so again, with the same time, until reset()
+    t = sim.time
+    with pytest.raises(exc.SimulationDivergedError) as again:
+        sim.step()
+    assert str(again.value) == str(first.value) and sim.time == t
+    with pytest.raises(exc.SimulationDivergedError):
+        sim.base_state(sim.bodies()[0])
+    sim.reset()  # a new world (with the same 1e200 s step it would diverge again)
+    body = sim.load_urdf("free_box.urdf", base_position=(0, 0, 1))
+    assert sim.time == 0.0
+    assert sim.base_state(body).position == pytest.approx((0, 0, 1))
     sim.close()
     assert sim.closed
     assert list(private_tmp.iterdir()) == []
