@@ -95,6 +95,7 @@ class PyBulletBackend(Backend):
         super().__init__(profile, gui)
         self._c = -1
         self._stepping = threading.Lock()  # held while step() runs
+        self._file_texts: dict[str, str] = {}  # URDF files loaded by path: their first text
         self._diverged: SimulationDivergedError | None = None  # raised again until reset()
         self._check_profile(profile)
         if gui:
@@ -165,10 +166,16 @@ class PyBulletBackend(Backend):
         if prof.self_collision:
             flags |= p.URDF_USE_SELF_COLLISION
         src = model.source
-        needs_rewrite = src.path is None or any(
-            g.mesh_uri.startswith(("package://", "file://"))
-            for link in model.links
-            for g in (*link.visuals, *link.collisions)
+        needs_rewrite = (
+            src.path is None
+            or any(
+                g.mesh_uri.startswith(("package://", "file://"))
+                for link in model.links
+                for g in (*link.visuals, *link.collisions)
+            )
+            # PyBullet caches a file's contents by name for the connection's life: a file
+            # edited since it was first loaded here goes through a fresh temporary name
+            or self._file_texts.setdefault(str(src.path), src.text) != src.text
         )
         if not needs_rewrite:
             body = self._load_file(

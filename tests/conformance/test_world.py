@@ -101,3 +101,24 @@ def test_changing_the_world_while_another_thread_steps_it_is_refused(make_sim):
         worker.join()
         assert sim.time == pytest.approx(start + n / 240)
     assert sim.bodies() == [robot, 1] and sim.num_joints(robot) == 15
+
+
+def test_a_urdf_file_edited_between_two_loads_loads_as_it_is_now(make_sim, tmp_path):
+    """The second load of a file reads what the file says now (PyBullet caches a file's
+    contents by name for the life of its connection: the old robot came back)."""
+    path = tmp_path / "edited.urdf"
+    text = (
+        '<robot name="edited"><link name="a"/><link name="b"/>'
+        '<joint name="{}" type="continuous"><parent link="a"/><child link="b"/>'
+        '<axis xyz="0 0 1"/></joint></robot>'
+    )
+    path.write_text(text.format("first"))
+    sim = make_sim()
+    one = sim.load_urdf(path, fixed_base=True)
+    path.write_text(text.format("second"))
+    two = sim.load_urdf(path, fixed_base=True)
+    assert sim.joint_info(one, 0).name == "first"
+    assert sim.joint_info(two, 0).name == "second"
+    assert sim.joint_index(two, "second") == 0
+    three = sim.load_urdf(path, fixed_base=True)  # unchanged since: the file itself
+    assert sim.joint_info(three, 0).name == "second"
