@@ -57,6 +57,30 @@ _BUSY = (
 )
 
 
+def _x_display_problem() -> str | None:
+    """Why the X display cannot be opened, or None. PyBullet's GUI ends the whole process when
+    it cannot connect to the X server (measured: DISPLAY=:77, exit code 1, no exception), so
+    the display is tried here first with Xlib's own XOpenDisplay."""
+    import ctypes
+    import ctypes.util
+
+    name = ctypes.util.find_library("X11")
+    if name is None:
+        return "libX11 is not installed (PyBullet's GUI needs an X server)"
+    try:
+        xlib = ctypes.CDLL(name)
+    except OSError as exc:
+        return f"libX11 cannot be loaded: {exc}"
+    xlib.XOpenDisplay.restype = ctypes.c_void_p
+    xlib.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    xlib.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    display = xlib.XOpenDisplay(None)
+    if not display:
+        return f"cannot connect to the X server at DISPLAY={os.environ.get('DISPLAY')!r}"
+    xlib.XCloseDisplay(display)
+    return None
+
+
 class _Body:
     __slots__ = ("table", "movable", "probe_joint", "free", "base_inertial", "n", "effort")
 
@@ -99,8 +123,12 @@ class PyBulletBackend(Backend):
         self._diverged: SimulationDivergedError | None = None  # raised again until reset()
         self._check_profile(profile)
         if gui:
-            if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-                raise DisplayError(self.name, "DISPLAY is not set")
+            if sys.platform.startswith("linux"):
+                if not os.environ.get("DISPLAY"):
+                    raise DisplayError(self.name, "DISPLAY is not set")
+                problem = _x_display_problem()
+                if problem:
+                    raise DisplayError(self.name, problem)
             self._c = p.connect(p.GUI)
             if self._c < 0:
                 raise DisplayError(

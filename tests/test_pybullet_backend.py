@@ -6,6 +6,8 @@ These tests import pybullet directly because they compare against raw PyBullet c
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 
 import numpy as np
@@ -146,6 +148,26 @@ def test_gui_without_display_is_a_clear_error(monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     with pytest.raises(DisplayError, match="backend 'pybullet' cannot open a window: DISPLAY"):
         simbridge.Sim("pybullet", gui=True)
+
+
+def test_gui_with_an_unreachable_display_is_a_clear_error_not_an_exit():
+    """PyBullet's GUI ends the process when the X server cannot be reached (exit code 1, no
+    exception); the backend tries the display first. Run in a child process: if the check
+    failed, the test process itself would end."""
+    code = (
+        "import simbridge\n"
+        "try:\n"
+        "    simbridge.Sim('pybullet', gui=True)\n"
+        "except simbridge.exceptions.DisplayError as exc:\n"
+        "    print('refused:', exc)\n"
+    )
+    env = dict(os.environ, DISPLAY=":77")  # no X server listens there
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "refused: backend 'pybullet' cannot open a window:" in out.stdout
+    assert "DISPLAY=':77'" in out.stdout or "libX11" in out.stdout
 
 
 def test_urdf_profile_uses_file_inertia_and_no_brake():
