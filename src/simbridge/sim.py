@@ -165,8 +165,9 @@ class Sim:
             pass
 
     def __repr__(self) -> str:
-        state = "closed" if isinstance(self._b, _Closed) else f"t={self.time:.4f}s"
-        return f"Sim({self.backend!r}, profile={self.profile.name!r}, {state})"
+        if isinstance(self._b, _Closed):  # a repr never raises, closed or not
+            return f"Sim({getattr(self, 'backend', '?')!r}, closed)"
+        return f"Sim({self.backend!r}, profile={self.profile.name!r}, t={self.time:.4f}s)"
 
     # ---------------------------------------------------------------- world
 
@@ -415,7 +416,7 @@ class Sim:
         # the exact test runs only when the sum is not finite (it may also overflow)
         if not math.isfinite(sum(values)) and not all(map(math.isfinite, values)):
             raise InvalidArgumentError(argument, f"values must be finite, got {value!r}")
-        if nonneg and min(values) < 0:
+        if nonneg and values and min(values) < 0:
             raise InvalidArgumentError(argument, f"values must be >= 0, got {value!r}")
         return values
 

@@ -76,31 +76,47 @@ def search_path() -> list[Path]:
     return paths
 
 
+def _is_file(path: Path) -> bool:
+    """Path.is_file, False for names no file system takes (too long, a NUL byte)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
 def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
     """Turn a path, a name on the search path, or URDF XML text into a :class:`UrdfSource`."""
-    if isinstance(source, str) and source.lstrip().startswith("<"):
-        return UrdfSource(source, None, Path.cwd(), "<urdf text>")
+    if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
+        return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), "<urdf text>")
     if not isinstance(source, (str, os.PathLike)):
         raise UrdfNotFoundError(repr(source), ["a path, a name or URDF text was expected"])
-    candidate = Path(source).expanduser()
+    shown = (
+        str(source)
+        if len(str(source)) <= 120
+        else f"{str(source)[:100]}... ({len(str(source))} characters)"
+    )
+    try:
+        candidate = Path(source).expanduser()
+    except (RuntimeError, ValueError):  # "~nosuchuser/..."
+        candidate = Path(source)
     tried: list[str] = []
-    if candidate.is_file():
+    if _is_file(candidate):
         found: Path | None = candidate
     else:
-        tried.append(str(candidate.resolve()))
+        tried.append(shown if len(str(candidate)) > 120 else str(candidate.absolute()))
         found = None
-        if not candidate.is_absolute():
+        if not candidate.is_absolute() and len(str(candidate)) <= 255 and "\0" not in str(source):
             for folder in search_path():
                 for name in (candidate, Path(f"{candidate}.urdf")):
                     path = folder / name
-                    if path.is_file():
+                    if _is_file(path):
                         found = path
                         break
                     tried.append(str(path))
                 if found:
                     break
     if found is None:
-        raise UrdfNotFoundError(str(source), tried)
+        raise UrdfNotFoundError(shown, tried)
     found = found.resolve()
     try:
         text = found.read_text(encoding="utf-8")

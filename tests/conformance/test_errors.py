@@ -352,3 +352,39 @@ def test_a_bad_collada_mesh_is_an_error_not_a_crash(make_sim, tmp_path, content)
     with pytest.raises(exc.UrdfStructureError, match=r"bad\.urdf: link 'a' <visual> #0 <mesh>"):
         sim.load_urdf(urdf)
     assert sim.bodies() == []
+
+
+@pytest.mark.parametrize(
+    ("source", "error", "message"),
+    [
+        ("x" * 300, exc.UrdfNotFoundError, r"URDF 'x{100}\.\.\. \(300 characters\)' is neither"),
+        ("a\x00b", exc.UrdfNotFoundError, r"URDF 'a\\x00b' is neither a file"),
+    ],
+    ids=["a name too long for a file", "a NUL byte"],
+)
+def test_a_source_no_file_system_takes_is_not_found(make_sim, source, error, message):
+    with pytest.raises(error, match=message):
+        make_sim().load_urdf(source)
+
+
+def test_urdf_text_with_a_byte_order_mark_is_text(make_sim):
+    sim = make_sim()
+    body = sim.load_urdf("\ufeff" + GOOD)
+    assert sim.body_name(body) == "ok"
+
+
+def test_an_empty_joint_sequence_is_a_command_on_no_joint(make_sim):
+    sim = make_sim()
+    body = sim.load_urdf("r2d2.urdf")
+    sim.set_joint_velocity(body, [], [], max_force=[])
+    sim.set_joint_position(body, [], [], max_force=1.0)
+    sim.set_joint_torque(body, [], 0.0)
+    assert len(sim.joint_states(body, []).positions) == 0
+    sim.step()
+
+
+def test_repr_never_raises(make_sim):
+    sim = make_sim()
+    assert "t=0.0000s" in repr(sim)
+    sim.close()
+    assert repr(sim).endswith("closed)")
