@@ -296,11 +296,19 @@ def run(
         }
         # Resolve every command once: (body, joint indices, command, recorder, its columns)
         plan = []
-        for p in sc.phases:
+        for pi, p in enumerate(sc.phases):
             cmds = []
-            for c in p.commands:
+            for ci, c in enumerate(p.commands):
                 body, rec = ids[c.robot], recorders[c.robot]
                 idx = [sim.joint_index(body, j) for j in c.joints]
+                for i in idx:
+                    if sim.joint_info(body, i).type == JointType.FIXED:
+                        raise ScenarioError(
+                            str(sc.source or "<scenario>"),
+                            f"phases[{pi}].commands[{ci}].joints",
+                            f"joint {i} ({sim.joint_info(body, i).name!r}) of robot "
+                            f"{c.robot!r} is fixed and takes no command",
+                        )
                 cmds.append((body, idx, c, rec, rec.columns(idx)))
             plan.append((p, cmds))
 

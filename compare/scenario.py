@@ -52,6 +52,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+import simbridge
 from simbridge.exceptions import ScenarioError
 
 __all__ = [
@@ -71,6 +72,7 @@ __all__ = [
 ]
 
 SCENARIOS_DIR = Path(__file__).resolve().parent / "scenarios"
+MAX_STEPS = 1_000_000  # per phase: the recording holds about 0.7 kB per step for r2d2
 MODES = ("velocity", "position", "torque")
 HEADLINE_QUANTITIES = (
     "base_distance",
@@ -169,6 +171,13 @@ class Scenario:
                     f"phase {p.name!r} lasts {p.steps * self.timestep:.6g} s, which is not a whole "
                     f"number of {format_timestep(timestep)} s steps ({steps:.6g})",
                 )
+            if round(steps) > MAX_STEPS:
+                raise ScenarioError(
+                    self._where(),
+                    f"phases[{i}].steps",
+                    f"phase {p.name!r} at {format_timestep(timestep)} s would take "
+                    f"{round(steps)} steps; at most {MAX_STEPS} per phase",
+                )
             phases.append(replace(p, steps=int(round(steps))))
         return replace(self, timestep=float(timestep), phases=tuple(phases))
 
@@ -204,10 +213,15 @@ def parse_timestep(value: Any) -> float:
     if isinstance(value, bool):
         raise ValueError(f"expected a number of seconds or a fraction like '1/240', got {value!r}")
     if isinstance(value, (int, float)):
-        out = float(value)
+        try:
+            out = float(value)
+        except OverflowError:
+            out = math.inf
     elif isinstance(value, str):
         try:
             out = float(Fraction(value.strip()))
+        except OverflowError:
+            out = math.inf
         except (ValueError, ZeroDivisionError):
             raise ValueError(
                 f"expected a number of seconds or a fraction like '1/240', got {value!r}"
@@ -215,7 +229,7 @@ def parse_timestep(value: Any) -> float:
     else:
         raise ValueError(f"expected a number of seconds or a fraction like '1/240', got {value!r}")
     if not math.isfinite(out) or out <= 0:
-        raise ValueError(f"must be > 0, got {value!r}")
+        raise ValueError(f"must be a finite number > 0, got {value!r}")
     return out
 
 
@@ -395,7 +409,7 @@ class _Reader:
             )
         joints: list[tuple[JointRef, float]] = []
         for k, v in jp.items():
-            ref: JointRef = int(k) if k.isdigit() else k
+            ref: JointRef = int(k) if k.isascii() and k.isdigit() else k
             joints.append((ref, self.number(v, [*path, "joint_positions", k])))
         return RobotSpec(name, urdf, position, orientation, fixed, tuple(joints))  # type: ignore[arg-type]
 
@@ -458,10 +472,16 @@ class _Reader:
             ),
         )
         name = self.string(data.get("name", default_name), ["name"])
+        if "/" in name or "\\" in name or name.strip(".") == "":  # it names the report folder
+            raise self.error(["name"], f"expected a folder name (no path), got {name!r}")
         description = data.get("description", "")
         if not isinstance(description, str):
             raise self.error(["description"], f"expected a string, got {description!r}")
         profile = self.string(data.get("profile", "pybullet"), ["profile"])
+        if profile not in simbridge.PROFILES:
+            raise self.error(
+                ["profile"], f"unknown profile {profile!r}; valid: {sorted(simbridge.PROFILES)}"
+            )
         try:
             timestep = parse_timestep(data.get("timestep", 1.0 / 240.0))
         except ValueError as exc:
@@ -494,8 +514,10 @@ class _Reader:
                 raise self.error(path, "expected a table ([[phases]])")
             self.keys(t, path, ("name", "steps", "commands"))
             steps = self.require(t, path, "steps")
-            if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
-                raise self.error([*path, "steps"], f"expected an integer >= 1, got {steps!r}")
+            if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= MAX_STEPS:
+                raise self.error(
+                    [*path, "steps"], f"expected an integer from 1 to {MAX_STEPS}, got {steps!r}"
+                )
             pname = self.string(t.get("name", f"phase {i + 1}"), [*path, "name"])
             raw_cmds = t.get("commands", [])
             if not isinstance(raw_cmds, list):

@@ -38,6 +38,8 @@ def test_scenarios_lists_one_line_each(capsys):
         ["compare", "r2d2", "--profile", "soft"],
         ["compare", "r2d2", "--profile", "urdf", "urdf", "urdf"],
         ["compare", "r2d2", "--duration", "0"],
+        ["compare", "r2d2", "--duration", "inf"],
+        ["compare", "r2d2", "--timestep", "1e400"],
         ["joints"],
     ],
 )
@@ -65,8 +67,28 @@ def test_bad_scenario_file_fails_naming_key_and_line(tmp_path, capsys):
     assert main(["compare", str(path), "--backends", "pybullet", "pybullet"]) == 1
     err = capsys.readouterr().err
     assert err == (
-        f"simbridge: error: {path}:5: key 'phases[0].steps': expected an integer >= 1, got 'many'\n"
+        f"simbridge: error: {path}:5: key 'phases[0].steps': "
+        "expected an integer from 1 to 1000000, got 'many'\n"
     )
+
+
+def test_a_command_on_a_fixed_joint_fails_naming_the_command(tmp_path, capsys):
+    path = tmp_path / "fixed.toml"
+    path.write_text(
+        '[[robots]]\nurdf = "r2d2.urdf"\n\n[[phases]]\nsteps = 2\n[[phases.commands]]\n'
+        'joints = 0\nmode = "velocity"\ntarget = 0.0\nmax_force = 1.0\n'
+    )
+    assert main(["compare", str(path), "--backends", "pybullet", "pybullet"]) == 1
+    err = capsys.readouterr().err
+    assert err == (
+        f"simbridge: error: {path}: key 'phases[0].commands[0].joints': joint 0 "
+        "('base_to_right_leg') of robot 'r2d2' is fixed and takes no command\n"
+    )
+
+
+def test_a_time_step_that_needs_too_many_steps_fails(capsys):
+    assert main(["compare", "pendulum", "--timestep", "1e-9"]) == 1
+    assert "would take 2000000000 steps; at most 1000000 per phase" in capsys.readouterr().err
 
 
 def test_a_step_that_does_not_divide_the_phases_fails(capsys):

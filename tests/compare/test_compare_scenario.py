@@ -173,7 +173,20 @@ def test_syntax_error_gives_the_line():
             "phases[1].commands[1].target",
             "expected one number or 2 (one per joint), got 1",
         ),
-        ("steps = 20", "steps = 0", "phases[1].steps", "expected an integer >= 1, got 0"),
+        ("steps = 20", "steps = 0", "phases[1].steps", "expected an integer from 1 to 1000000"),
+        (
+            "steps = 20",
+            "steps = 9223372036854775807",
+            "phases[1].steps",
+            "expected an integer from 1 to 1000000, got 9223372036854775807",
+        ),
+        (
+            'description = "a test"',
+            'profile = "nope"',
+            "profile",
+            "unknown profile 'nope'; valid: ['pybullet', 'urdf']",
+        ),
+        ('name = "tiny"', 'name = "../../elsewhere"', "name", "expected a folder name (no path)"),
         (
             "position = [0, 0, 0.5]",
             "position = [0, 0]",
