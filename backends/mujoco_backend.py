@@ -29,6 +29,7 @@ from simbridge.exceptions import (
     BackendUnsupportedError,
     DisplayError,
     EngineError,
+    InvalidArgumentError,
     SimBusyError,
     SimulationDivergedError,
     UrdfStructureError,
@@ -100,6 +101,19 @@ class _Robot:
 # at a time (about 12 ms on r2d2): Ctrl-C stops a long call between two chunks, with the time
 # of the steps done; a call costs 0.1 us, nothing per step.
 _STEP_CHUNK = 1000
+
+
+def _refuse_fixed_base_velocity(
+    backend: str, body: int, linear: Vec3 | None, angular: Vec3 | None
+) -> None:
+    if any(v != 0.0 for v in (*(linear or ()), *(angular or ()))):
+        raise InvalidArgumentError(
+            "linear_velocity/angular_velocity",
+            f"body {body} has a fixed base, which takes no velocity on backend {backend!r} "
+            "(PyBullet would move the welded base along; MuJoCo cannot): pass zeros or None",
+        )
+
+
 _MOTOR_FIELDS = ("target_velocity", "target_position", "kp", "kd", "max_force", "effort")
 
 
@@ -919,6 +933,8 @@ class MujocoBackend(Backend):
         angular_velocity: Vec3 | None,
     ) -> None:
         robot = self._robots[body]
+        if robot.free_qadr < 0:
+            _refuse_fixed_base_velocity(self.name, body, linear_velocity, angular_velocity)
         cur = self.base_state(body)
         pos = cur.position if position is None else position
         orn = cur.orientation if orientation is None else orientation

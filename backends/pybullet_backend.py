@@ -25,6 +25,7 @@ from simbridge.backend import Backend
 from simbridge.exceptions import (
     BackendUnsupportedError,
     DisplayError,
+    InvalidArgumentError,
     SimBusyError,
     SimulationDivergedError,
     UrdfStructureError,
@@ -486,6 +487,15 @@ class PyBulletBackend(Backend):
         angular_velocity: Vec3 | None,
     ) -> None:
         c = self._c
+        if not self._bodies[body].free and any(
+            v != 0.0 for v in (*(linear_velocity or ()), *(angular_velocity or ()))
+        ):
+            raise InvalidArgumentError(  # PyBullet moves a welded base along: not a fixed base
+                "linear_velocity/angular_velocity",
+                f"body {body} has a fixed base, which takes no velocity on backend "
+                f"{self.name!r} (PyBullet would move the welded base along; MuJoCo cannot): "
+                "pass zeros or None",
+            )
         cur_lin, cur_ang = p.getBaseVelocity(body, physicsClientId=c)
         if position is not None or orientation is not None:
             cur_pos, cur_orn = p.getBasePositionAndOrientation(body, physicsClientId=c)

@@ -174,3 +174,19 @@ def test_reset_base_state_sets_what_it_is_given_and_keeps_the_rest(make_sim):
     s = sim.base_state(body)
     np.testing.assert_allclose(s.linear_velocity, 0.0, atol=1e-12)
     np.testing.assert_allclose(s.angular_velocity, ang, atol=1e-12)
+
+
+def test_a_fixed_base_takes_a_pose_but_no_velocity(make_sim):
+    """A fixed base can be moved (the weld moves with it), but a velocity for it is refused:
+    PyBullet would carry the welded base along at that velocity, MuJoCo has nothing to carry."""
+    from simbridge.exceptions import InvalidArgumentError
+
+    sim = make_sim(gravity=(0.0, 0.0, 0.0))
+    body = sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True)
+    sim.reset_base_state(body, position=(0.5, 0.0, 0.2))
+    assert sim.base_state(body).position == pytest.approx((0.5, 0.0, 0.2), abs=1e-6)
+    sim.reset_base_state(body, linear_velocity=(0, 0, 0))  # zeros are fine
+    with pytest.raises(InvalidArgumentError, match="fixed base, which takes no velocity"):
+        sim.reset_base_state(body, angular_velocity=(0, 0, 2.0))
+    sim.step(10)
+    assert sim.base_state(body).position == pytest.approx((0.5, 0.0, 0.2), abs=1e-6)
