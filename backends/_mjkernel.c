@@ -106,7 +106,10 @@ typedef struct {
   double *Y, *U, *A, *b;    /* k x nv, k x nv, k x k, k */
   int *free_rows, *piv;
   double *AM, *x;           /* exact_motors: k x k block of M^-1, k forces */
-  int* side;                /* exact_motors: 0 free, +1 / -1 at the upper / lower limit */
+  int* side;                /* exact_motors: 0 free, +1 / -1 at the upper / lower bound */
+  int cap;                  /* rows the scratch holds: k motor rows + 2 per limited joint */
+  int* rdof;                /* exact_motors: each row's dof */
+  double *rsign, *lo, *hi;  /* exact_motors: each row's Jacobian entry (+-1) and bounds */
   int busy; /* step() runs without the GIL: no other call may touch the kernel meanwhile */
   long done; /* steps completed by the last step() call (fewer than asked after an error) */
   int interrupted; /* the last step() raised a Python callback's exception mid-step */
@@ -190,8 +193,14 @@ static void free_motor_scratch(Kernel* self) {
   PyMem_Free(self->AM);
   PyMem_Free(self->x);
   PyMem_Free(self->side);
+  PyMem_Free(self->rdof);
+  PyMem_Free(self->rsign);
+  PyMem_Free(self->lo);
+  PyMem_Free(self->hi);
   self->Y = self->U = self->A = self->b = self->AM = self->x = NULL;
-  self->free_rows = self->piv = self->side = NULL;
+  self->rsign = self->lo = self->hi = NULL;
+  self->free_rows = self->piv = self->side = self->rdof = NULL;
+  self->cap = 0;
 }
 
 static void release_all(Kernel* self) {
@@ -346,17 +355,27 @@ static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
       goto bad;
   if (k) {
     int nv = m->nv;
-    self->Y = PyMem_Calloc((size_t)k * nv, sizeof(double));
-    self->U = PyMem_Calloc((size_t)k * nv, sizeof(double));
-    self->A = PyMem_Calloc((size_t)k * k, sizeof(double));
-    self->b = PyMem_Calloc((size_t)k, sizeof(double));
-    self->free_rows = PyMem_Calloc((size_t)k, sizeof(int));
-    self->piv = PyMem_Calloc((size_t)k, sizeof(int));
-    self->AM = PyMem_Calloc((size_t)k * k, sizeof(double));
-    self->x = PyMem_Calloc((size_t)k, sizeof(double));
-    self->side = PyMem_Calloc((size_t)k, sizeof(int));
+    size_t c = (size_t)k;
+    for (int j = 0; j < m->njnt; j++) /* room for the limit rows of the exact solve */
+      if (m->jnt_limited[j] && (m->jnt_type[j] == mjJNT_HINGE || m->jnt_type[j] == mjJNT_SLIDE))
+        c += 2;
+    self->Y = PyMem_Calloc(c * nv, sizeof(double));
+    self->U = PyMem_Calloc(c * nv, sizeof(double));
+    self->A = PyMem_Calloc(c * c, sizeof(double));
+    self->b = PyMem_Calloc(c, sizeof(double));
+    self->free_rows = PyMem_Calloc(c, sizeof(int));
+    self->piv = PyMem_Calloc(c, sizeof(int));
+    self->AM = PyMem_Calloc(c * c, sizeof(double));
+    self->x = PyMem_Calloc(c, sizeof(double));
+    self->side = PyMem_Calloc(c, sizeof(int));
+    self->rdof = PyMem_Calloc(c, sizeof(int));
+    self->rsign = PyMem_Calloc(c, sizeof(double));
+    self->lo = PyMem_Calloc(c, sizeof(double));
+    self->hi = PyMem_Calloc(c, sizeof(double));
+    self->cap = (int)c;
     if (!self->Y || !self->U || !self->A || !self->b || !self->free_rows || !self->piv ||
-        !self->AM || !self->x || !self->side) {
+        !self->AM || !self->x || !self->side || !self->rdof || !self->rsign || !self->lo ||
+        !self->hi) {
       free_motor_scratch(self);
       return PyErr_NoMemory();
     }
@@ -500,71 +519,125 @@ static int polish(Kernel* self) {
   return 0;
 }
 
-/* When the motor rows are the only constraint rows (no contact, no limit), solve them exactly
- * instead of calling mj_fwdConstraint and polishing (MujocoBackend._exact_motors, the same
- * steps in the same order): the box-constrained problem of PyBullet's motor rows,
- *     A x = b on the free rows, x = +-limit on the others,
- * A the rows' block of M^-1, b = aref - qacc_smooth at the rows' dofs, found by an active set
- * (the free row furthest over its limit goes to it; a row at its limit whose acceleration
- * overshoots its aref is freed). Writes efc_force, qfrc_constraint and qacc. Returns 0, or -1
- * (singular, or no convergence) and the caller falls back to MuJoCo's solver. */
+/* The Jacobian entry of row r at dof (MuJoCo keeps efc_J dense below 60 dofs unless told). */
+static double jac_entry(const mjModel* m, const mjData* d, int r, int dof) {
+  int sparse = m->opt.jacobian == mjJAC_SPARSE || (m->opt.jacobian == mjJAC_AUTO && m->nv >= 60);
+  if (!sparse) return d->efc_J[(size_t)r * m->nv + dof];
+  int adr = d->efc_J_rowadr[r];
+  for (int i = 0; i < d->efc_J_rownnz[r]; i++)
+    if (d->efc_J_colind[adr + i] == dof) return d->efc_J[adr + i];
+  return 0.0;
+}
+
+/* When the motor rows and joint-limit rows are the only constraint rows (no contact), solve
+ * them exactly instead of calling mj_fwdConstraint and polishing (MujocoBackend._exact_motors,
+ * the same steps in the same order): PyBullet's box-constrained problem,
+ *     A x = b on the free rows, x at a bound on the others,
+ * bounds +-max_force for a motor row and [0, inf) for a limit row (it only pushes), A the rows'
+ * block of J M^-1 J^T (each row is +-1 at one dof), b = aref - J qacc_smooth, found by an active
+ * set (the free row furthest past a bound goes to it; a row at a bound whose acceleration
+ * overshoots its aref is freed). Writes efc_force, qfrc_constraint and qacc. Returns 0; 1 when
+ * other rows are present (the caller runs MuJoCo's solver); -1 singular or no convergence (the
+ * caller falls back to MuJoCo's solver). */
 static int exact_motors(Kernel* self) {
   const mjModel* m = self->m;
   mjData* d = self->d;
-  const int k = self->k, nv = m->nv;
+  const int k = self->k, nv = m->nv, n = d->nefc;
+  if (d->ne || d->nf != k || n > self->cap) return 1;
+  for (int r = k; r < n; r++)
+    if (d->efc_type[r] != mjCNSTR_LIMIT_JOINT) return 1;
   const Py_ssize_t* dofs = IP(self->dof_rows);
   const double* aref = d->efc_aref;
-  const double* limit = d->efc_frictionloss;
+  int *rdof = self->rdof, *side = self->side, *fr = self->free_rows;
+  double *sg = self->rsign, *lo = self->lo, *hi = self->hi;
   double *AM = self->AM, *x = self->x, *b = self->b, *A = self->A;
-  int *side = self->side, *fr = self->free_rows;
-  minv_rows(self, NULL, k);
-  for (int r = 0; r < k; r++) {
-    for (int c = 0; c < k; c++) AM[r * k + c] = self->Y[r * nv + dofs[c]];
-    side[r] = 0;
+  for (int r = 0; r < n; r++) {
+    if (r < k) {
+      rdof[r] = (int)dofs[r];
+      sg[r] = 1.0;
+      hi[r] = d->efc_frictionloss[r];
+      lo[r] = -hi[r];
+    } else {
+      rdof[r] = m->jnt_dofadr[d->efc_id[r]];
+      sg[r] = jac_entry(m, d, r, rdof[r]);
+      lo[r] = 0.0;
+      hi[r] = INFINITY;
+    }
+    self->U[r * nv + rdof[r]] = 1.0;
   }
-  int done = 0;
-  for (int it = 0; it < 4 * k + 4 && !done; it++) {
+  self->solveM(m, d, self->Y, self->U, n);
+  for (int r = 0; r < n; r++) {
+    self->U[r * nv + rdof[r]] = 0.0;
+    for (int c = 0; c < n; c++) AM[r * n + c] = sg[r] * sg[c] * self->Y[r * nv + rdof[c]];
+    /* motor rows start free, limit rows at zero force: a joint resting at its limit under a
+     * holding motor is then solved by the motor alone (both free would be singular) */
+    side[r] = r < k ? 0 : -1;
+  }
+  int done = 0, last_freed = -1;
+  for (int it = 0; it < 4 * n + 4 && !done; it++) {
     int nf = 0;
-    for (int r = 0; r < k; r++) {
+    for (int r = 0; r < n; r++) {
       if (side[r]) {
-        x[r] = side[r] * limit[r];
+        x[r] = side[r] > 0 ? hi[r] : lo[r];
       } else {
         fr[nf++] = r;
       }
     }
     for (int i = 0; i < nf; i++) { /* A_FF x_F = b_F - A_FC x_C */
       int r = fr[i];
-      double rhs = aref[r] - d->qacc_smooth[dofs[r]];
-      for (int c = 0; c < k; c++)
-        if (side[c]) rhs -= AM[r * k + c] * x[c];
+      double rhs = aref[r] - sg[r] * d->qacc_smooth[rdof[r]];
+      for (int c = 0; c < n; c++)
+        if (side[c]) rhs -= AM[r * n + c] * x[c];
       b[i] = rhs;
-      for (int j = 0; j < nf; j++) A[i * nf + j] = AM[r * k + fr[j]];
+      for (int j = 0; j < nf; j++) A[i * nf + j] = AM[r * n + fr[j]];
     }
-    if (nf && lu_solve(A, b, self->piv, nf) < 0) return -1;
+    if (nf && lu_solve(A, b, self->piv, nf) < 0) {
+      /* a limit row just freed on the dof of a free motor row: both ask for the same dof's
+       * acceleration, so the motor cannot hold its target against the limit and goes to the
+       * bound it pushes towards */
+      int motor = -1;
+      for (int r = 0; last_freed >= k && r < k; r++)
+        if (!side[r] && rdof[r] == rdof[last_freed]) motor = r;
+      if (motor < 0) return -1;
+      side[motor] = x[motor] > 0.0 ? 1 : -1;
+      last_freed = -1;
+      continue;
+    }
     for (int i = 0; i < nf; i++) x[fr[i]] = b[i];
-    int worst = -1;
+    int worst = -1, to = 0;
     double over = 0.0;
-    for (int i = 0; i < nf; i++) { /* the free row furthest over its limit */
+    for (int i = 0; i < nf; i++) { /* the free row furthest past a bound */
       int r = fr[i];
-      double v = (fabs(x[r]) - limit[r]) / limit[r];
-      if (v > 1e-12 && v > over) over = v, worst = r;
+      double scale = r < k ? hi[r] : fabs(aref[r] - sg[r] * d->qacc_smooth[rdof[r]]) /
+                                         AM[r * n + r] + 1e-300;
+      double up = (x[r] - hi[r]) / scale, down = (lo[r] - x[r]) / scale;
+      if (up > 1e-12 && up > over) over = up, worst = r, to = 1;
+      if (down > 1e-12 && down > over) over = down, worst = r, to = -1;
     }
     if (worst >= 0) {
-      side[worst] = x[worst] > 0.0 ? 1 : -1;
+      side[worst] = to;
       continue;
     }
     int freed = -1;
     double most = 0.0;
-    for (int r = 0; r < k; r++) { /* a limited row whose acceleration overshoots its aref */
+    for (int r = 0; r < n; r++) { /* a row at a bound whose acceleration overshoots its aref */
       if (!side[r]) continue;
-      double acc = d->qacc_smooth[dofs[r]], scale = fabs(aref[r] - acc);
-      for (int c = 0; c < k; c++) acc += AM[r * k + c] * x[c];
+      double acc = sg[r] * d->qacc_smooth[rdof[r]], scale = fabs(aref[r] - acc);
+      double terms = fabs(aref[r]) + fabs(acc); /* what round-off in acc scales with */
+      for (int c = 0; c < n; c++) {
+        acc += AM[r * n + c] * x[c];
+        terms += fabs(AM[r * n + c] * x[c]);
+      }
       double v = side[r] * (acc - aref[r]);
-      scale += fabs(AM[r * k + r]) * limit[r];
-      if (v > 1e-12 * scale && v > most) most = v, freed = r;
+      scale += fabs(AM[r * n + r]) * fabs(x[r]);
+      /* a limit row at zero force is freed only past round-off: a joint resting at its limit
+       * under a holding motor leaves it at zero (freeing it there is degenerate) */
+      double tol = r < k ? 1e-12 * scale : 1e-9 * terms;
+      if (v > tol && v > most) most = v, freed = r;
     }
     if (freed >= 0) {
       side[freed] = 0;
+      last_freed = freed;
       continue;
     }
     done = 1;
@@ -573,14 +646,14 @@ static int exact_motors(Kernel* self) {
   double* qacc = d->qacc;
   for (int c = 0; c < nv; c++) {
     double s = d->qacc_smooth[c];
-    for (int r = 0; r < k; r++) s += x[r] * self->Y[r * nv + c];
+    for (int r = 0; r < n; r++) s += x[r] * sg[r] * self->Y[r * nv + c];
     qacc[c] = s;
     d->qfrc_constraint[c] = 0.0;
   }
-  for (int r = 0; r < k; r++) {
-    if (!side[r]) qacc[dofs[r]] = aref[r]; /* the free rows' own accelerations, exactly */
+  for (int r = 0; r < n; r++) {
+    if (r < k && !side[r]) qacc[rdof[r]] = aref[r]; /* free motor rows exactly, no round-off */
     d->efc_force[r] = x[r];
-    d->qfrc_constraint[dofs[r]] = x[r];
+    d->qfrc_constraint[rdof[r]] += sg[r] * x[r];
   }
   return 0;
 }
@@ -634,8 +707,11 @@ static int run_steps(Kernel* self, long n, int pending) {
       for (int r = d->nf; r < d->nf + d->nl; r++) {
         d->efc_R[r] *= self->r_scale;
         d->efc_D[r] *= inv;
-        double pos = d->efc_pos[r] - d->efc_margin[r];
-        if (pos <= -self->limit_deep) d->efc_aref[r] += self->limit_k * pos; /* stop only */
+        /* MuJoCo's position term is K (pos - margin); PyBullet's is K pos for a penetration
+         * (pos <= 0) under limit_deep, none deeper (stop only) or inside the margin */
+        double pos = d->efc_pos[r], margin = d->efc_margin[r];
+        d->efc_aref[r] += self->limit_k * (pos - margin);
+        if (pos <= 0.0 && pos > -self->limit_deep) d->efc_aref[r] -= self->limit_k * pos;
       }
     }
     TOC(1);
@@ -654,7 +730,7 @@ static int run_steps(Kernel* self, long n, int pending) {
       for (Py_ssize_t i = 0; i < arr_len(&self->kd_rows); i++)
         d->efc_aref[IP(self->kd_rows)[i]] += DP(self->kd_factor)[i] * d->qacc_smooth[IP(self->kd_dof)[i]];
       TIC(4);
-      int exact = k && d->nefc == k && exact_motors(self) == 0;
+      int exact = k && exact_motors(self) == 0;
       if (!exact) self->fn[F_CON](m, d);
       TOC(4);
       TIC(5);

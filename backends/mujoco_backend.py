@@ -114,6 +114,20 @@ def _refuse_fixed_base_velocity(
         )
 
 
+_LIMIT_JOINT = int(mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT)
+
+
+def _jac_entry(m: Any, d: Any, r: int, dof: int) -> float:
+    """The Jacobian entry of constraint row r at dof (efc_J is dense below 60 dofs unless the
+    model says otherwise)."""
+    if not mujoco.mj_isSparse(m):
+        return float(d.efc_J[r * m.nv + dof])
+    adr, nnz = d.efc_J_rowadr[r], d.efc_J_rownnz[r]
+    cols = d.efc_J_colind[adr : adr + nnz]
+    hit = np.flatnonzero(cols == dof)
+    return float(d.efc_J[adr + hit[0]]) if len(hit) else 0.0
+
+
 _MOTOR_FIELDS = ("target_velocity", "target_position", "kp", "kd", "max_force", "effort")
 
 
@@ -600,10 +614,13 @@ class MujocoBackend(Backend):
                 lim = slice(d.nf, d.nf + d.nl)
                 d.efc_R[lim] *= MOTOR_R_SCALE
                 d.efc_D[lim] *= 1.0 / MOTOR_R_SCALE
-                pos = d.efc_pos[lim] - d.efc_margin[lim]
-                deep = pos <= -LIMIT_DEEP  # no push-back that deep: only stop outward motion
-                if deep.any():
-                    d.efc_aref[lim][deep] += self._limit_k * pos[deep]
+                # MuJoCo's position term is K (pos - margin); PyBullet's is K pos for a
+                # penetration (pos <= 0) under LIMIT_DEEP, none deeper (stop only) or inside
+                # the margin
+                pos = d.efc_pos[lim]
+                shallow = (pos <= 0.0) & (pos > -LIMIT_DEEP)
+                d.efc_aref[lim] += self._limit_k * (pos - d.efc_margin[lim])
+                d.efc_aref[lim] -= np.where(shallow, self._limit_k * pos, 0.0)
             if damping is not None:
                 damping.apply(d)
             if len(self._damp_dof):
@@ -629,7 +646,7 @@ class MujocoBackend(Backend):
         t = self._motors
         if len(t.kd_rows):
             d.efc_aref[t.kd_rows] += t.kd_factor * d.qacc_smooth[t.kd_dof]
-        if not (k and d.nefc == k and self._exact_motors(m, d, k)):
+        if not (k and self._exact_motors(m, d, k)):
             mujoco.mj_fwdConstraint(m, d)
             if k:
                 self._polish(m, d, k)
@@ -639,56 +656,96 @@ class MujocoBackend(Backend):
         mujoco.mj_Euler(m, d)
 
     def _exact_motors(self, m: Any, d: Any, k: int) -> bool:
-        """When the motor rows are the only constraint rows (no contact, no limit), solve them
-        exactly instead of running MuJoCo's solver and polishing: PyBullet's motor rows are the
-        box-constrained problem ``A x = b`` on the free rows, ``x = +-limit`` on the others (A
-        the rows' block of M^-1, b = aref - qacc_smooth at their dofs), found by an active set:
-        the free row furthest over its limit goes to it; a row at its limit whose acceleration
-        overshoots its aref is freed. Writes efc_force, qfrc_constraint and qacc; False (no
-        convergence, a singular block) leaves the step to MuJoCo's solver. The compiled loop
-        does the same (_mjkernel.c exact_motors)."""
+        """When the motor rows and joint-limit rows are the only constraint rows (no contact),
+        solve them exactly instead of running MuJoCo's solver and polishing: PyBullet's rows
+        are the box-constrained problem ``A x = b`` on the free rows, ``x`` at a bound on the
+        others (+-max_force for a motor, [0, inf) for a limit, which only pushes; A the rows'
+        block of J M^-1 J^T, each row +-1 at one dof; b = aref - J qacc_smooth), found by an
+        active set: the free row furthest past a bound goes to it; a row at a bound whose
+        acceleration overshoots its aref is freed. Motor rows start free, limit rows at zero.
+        Writes efc_force, qfrc_constraint and qacc; False (other rows, no convergence, a
+        singular block) leaves the step to MuJoCo's solver. The compiled loop does the same
+        (_mjkernel.c exact_motors)."""
+        n = d.nefc
+        if d.ne or d.nf != k or (n > k and (d.efc_type[k:n] != _LIMIT_JOINT).any()):
+            return False
         t = self._motors
-        y = t.minv_rows
-        mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
-        dofs = t.dof_rows
-        am = y[:, dofs]
-        aref = d.efc_aref[:k]
-        limit = d.efc_frictionloss[:k]
-        b = aref - d.qacc_smooth[dofs]
-        side = np.zeros(k)
-        x = np.zeros(k)
-        for _ in range(4 * k + 4):
+        if n == k:
+            y = t.minv_rows
+            mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
+            dofs = t.dof_rows
+            sign = np.ones(k)
+        else:
+            dofs = np.concatenate([t.dof_rows, m.jnt_dofadr[d.efc_id[k:n]]])
+            sign = np.ones(n)
+            sign[k:] = [_jac_entry(m, d, r, int(dofs[r])) for r in range(k, n)]
+            unit = np.zeros((n, m.nv))
+            unit[np.arange(n), dofs] = 1.0
+            y = np.zeros((n, m.nv))
+            mujoco.mj_solveM(m, d, y, unit)
+        am = sign[:, None] * sign[None, :] * y[:, dofs]
+        aref = d.efc_aref[:n]
+        hi = np.concatenate([d.efc_frictionloss[:k], np.full(n - k, np.inf)])
+        lo = np.concatenate([-hi[:k], np.zeros(n - k)])
+        b = aref - sign * d.qacc_smooth[dofs]
+        scale_over = np.concatenate([hi[:k], np.abs(b[k:]) / np.diag(am)[k:] + 1e-300])
+        side = np.concatenate([np.zeros(k), -np.ones(n - k)])
+        x = np.zeros(n)
+        last_freed = -1
+        for _ in range(4 * n + 4):
             free = side == 0
-            x = side * limit
+            before = x
+            x = np.where(side > 0, hi, np.where(side < 0, lo, 0.0))
             if free.any():
                 rhs = b[free] - am[np.ix_(free, ~free)] @ x[~free]
                 try:
                     x[free] = np.linalg.solve(am[np.ix_(free, free)], rhs)
                 except np.linalg.LinAlgError:
-                    return False
-            over = np.where(free, (np.abs(x) - limit) / limit, 0.0)
-            worst = int(np.argmax(over))
-            if over[worst] > 1e-12:
-                side[worst] = 1.0 if x[worst] > 0.0 else -1.0
+                    # a limit row just freed on the dof of a free motor row: the motor cannot
+                    # hold its target against the limit and goes to the bound it pushes to
+                    motors = [
+                        r
+                        for r in range(k)
+                        if side[r] == 0 and last_freed >= k and dofs[r] == dofs[last_freed]
+                    ]
+                    if not motors:
+                        return False
+                    side[motors[-1]] = 1.0 if before[motors[-1]] > 0.0 else -1.0
+                    last_freed = -1
+                    x = before
+                    continue
+            with np.errstate(invalid="ignore"):
+                up = np.where(free, (x - hi) / scale_over, 0.0)
+                down = np.where(free, (lo - x) / scale_over, 0.0)
+            past = np.maximum(np.nan_to_num(up, nan=0.0), down)
+            worst = int(np.argmax(past))
+            if past[worst] > 1e-12:
+                side[worst] = 1.0 if up[worst] > down[worst] else -1.0
                 continue
-            acc = d.qacc_smooth[dofs] + am @ x
-            scale = np.abs(aref - d.qacc_smooth[dofs]) + np.abs(np.diag(am)) * limit
-            over_aref = side * (acc - aref)  # > 0: a limited row overshoots its aref
-            overshoot = np.where(~free & (over_aref > 1e-12 * scale), over_aref, 0.0)
+            smooth = sign * d.qacc_smooth[dofs]
+            acc = smooth + am @ x
+            scale = np.abs(b) + np.abs(np.diag(am)) * np.abs(x)
+            # a limit row at zero force is freed only past round-off: a joint resting at its
+            # limit under a holding motor leaves it at zero (freeing it there is degenerate)
+            terms = np.abs(aref) + np.abs(smooth) + np.abs(am * x[None, :]).sum(axis=1)
+            tol = np.concatenate([1e-12 * scale[:k], 1e-9 * terms[k:]])
+            over_aref = side * (acc - aref)  # > 0: a row at a bound overshoots its aref
+            overshoot = np.where(~free & (over_aref > tol), over_aref, 0.0)
             freed = int(np.argmax(overshoot))
             if overshoot[freed] > 0.0:
                 side[freed] = 0.0
+                last_freed = freed
                 continue
             break
         else:
             return False
         qacc = d.qacc
-        qacc[:] = d.qacc_smooth + x @ y
-        free = side == 0
-        qacc[dofs[free]] = aref[free]  # the free rows' own accelerations, exactly
-        d.efc_force[:k] = x
+        qacc[:] = d.qacc_smooth + (x * sign) @ y
+        free_motor = side[:k] == 0
+        qacc[dofs[:k][free_motor]] = aref[:k][free_motor]  # their own accelerations, exactly
+        d.efc_force[:n] = x
         d.qfrc_constraint[:] = 0.0
-        d.qfrc_constraint[dofs] = x
+        np.add.at(d.qfrc_constraint, dofs, sign * x)
         return True
 
     def _polish(self, m: Any, d: Any, k: int) -> None:
