@@ -54,8 +54,9 @@ MOTOR_R_SCALE = 1e-2
 # than that the row only stops outward motion (0.05 or 0.3 rad past: the joint stays there).
 # The MuJoCo limit row is given that law: solref "direct" (-LIMIT_ERP / dt^2, -1 / dt) times
 # the impedance, a margin of LIMIT_MARGIN so that a joint exactly at its limit is held, the
-# rows hardened like the motor rows, and the position term removed between mj_step1 and
-# mj_step2 for the rows deeper than LIMIT_DEEP.
+# rows hardened like the motor rows, and MuJoCo's position term K (pos - margin) replaced
+# between mj_step1 and mj_step2 by PyBullet's (K pos under LIMIT_DEEP, none deeper or inside
+# the margin).
 LIMIT_ERP = 0.2
 LIMIT_DEEP = 0.04
 LIMIT_MARGIN = 1e-12
