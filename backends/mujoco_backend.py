@@ -895,13 +895,16 @@ class MujocoBackend(Backend):
         robot = self._robots[body]
         v = self._state_of(int(robot.body_ids[link + 1]), body)
         ine = robot.spec.inertials[link + 1]
+        frame = ((v[13], v[14], v[15]), (v[16], v[17], v[18], v[19]))
+        if link == -1 and robot.spec.base_offset is not None:  # body frame = the COM frame
+            frame = K.transform_multiply(frame, robot.spec.base_offset)
         return LinkState(
             (v[0], v[1], v[2]),
             (v[3], v[4], v[5], v[6]),
             ine.position,
             ine.orientation,
-            (v[13], v[14], v[15]),
-            (v[16], v[17], v[18], v[19]),
+            frame[0],  # type: ignore[arg-type]
+            frame[1],  # type: ignore[arg-type]
             (v[7], v[8], v[9]),
             (v[10], v[11], v[12]),
         )
@@ -1004,13 +1007,15 @@ class MujocoBackend(Backend):
         )
         d, m = self._d, self._m
         if robot.free_qadr >= 0:
+            # the free base's body frame: its centre-of-mass frame, or the link frame when the
+            # two coincide (base_offset None)
+            bpos, born = (pos, orn) if robot.spec.base_offset is not None else (fpos, forn)
             a = robot.free_qadr
-            d.qpos[a : a + 3] = fpos
-            d.qpos[a + 3 : a + 7] = K.xyzw_to_wxyz(forn)
+            d.qpos[a : a + 3] = bpos
+            d.qpos[a + 3 : a + 7] = K.xyzw_to_wxyz(born)
             # MuJoCo: linear velocity of the frame origin (world), angular in the body frame
-            com_offset = np.subtract(fpos, pos)
-            v_origin = np.asarray(lin) + np.cross(ang, com_offset)
-            w_local = K.quat_rotate(K.quat_conjugate(forn), ang)
+            v_origin = np.asarray(lin) + np.cross(ang, np.subtract(bpos, pos))
+            w_local = K.quat_rotate(K.quat_conjugate(born), ang)
             v = robot.free_dofadr
             d.qvel[v : v + 3] = v_origin
             d.qvel[v + 3 : v + 6] = w_local
@@ -1128,8 +1133,8 @@ class MujocoBackend(Backend):
         ),
         "speed clamp": (
             "applied to the velocity after the solve, at every step, as PyBullet does; "
-            "free-base coordinates are MuJoCo's (origin velocity, body-frame "
-            "angular velocity), PyBullet's are the centre of mass's and world-frame"
+            "on a free base to the centre of mass's velocity (as PyBullet) and to the angular "
+            "velocity in the base's frame (PyBullet: the world frame)"
         ),
         "joint axis": (
             "MuJoCo normalises a non-unit <axis>; PyBullet moves |axis| rad per unit of q "

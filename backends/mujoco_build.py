@@ -77,6 +77,10 @@ class RobotSpec:
     planes: list[str] = field(default_factory=list)
     pair_names: list[str] = field(default_factory=list)
     skipped_shapes: list[str] = field(default_factory=list)  # meshes without finite vertices
+    # A free base's body frame is its centre-of-mass frame (PyBullet integrates the base there;
+    # a free joint at the link frame moves the centre of mass with a first-order error when the
+    # base spins): the URDF base link frame in that body's frame, None when they coincide.
+    base_offset: tuple[K.Vec3, K.Quat] | None = None
 
 
 def new_world_spec(profile: Profile) -> mujoco.MjSpec:
@@ -252,12 +256,28 @@ def add_robot(
     base_z = K.quat_rotate(base_orientation, (0.0, 0.0, 1.0))
     upright = base_z[2] > 1.0 - 1e-9
 
+    # the link frame of a free base in its body (centre-of-mass) frame
+    offset: tuple[K.Vec3, K.Quat] | None = None
+    if not fixed:
+        ine0 = inertials[0]
+        if any(ine0.position) or tuple(ine0.orientation) != (0.0, 0.0, 0.0, 1.0):
+            offset = K.transform_inverse((ine0.position, ine0.orientation))
+
+    def placed(xyz: K.Vec3, quat: K.Quat, on_base: bool) -> tuple[list[float], list[float]]:
+        """A pose given in a link frame, as MuJoCo position and wxyz quaternion in the body"""
+        if on_base and offset is not None:
+            xyz, quat = K.transform_multiply(offset, (xyz, quat))
+        return list(xyz), _wxyz(quat)
+
     for link in model.links:
         i = link.index
         if i == -1:
             body = spec.worldbody.add_body(name=body_names[0])
-            body.pos = list(base_position)
-            body.quat = _wxyz(base_orientation)
+            frame = (tuple(base_position), tuple(base_orientation))
+            if offset is not None:  # the body frame is the base's centre-of-mass frame
+                frame = K.transform_multiply(frame, K.transform_inverse(offset))
+            body.pos = list(frame[0])
+            body.quat = _wxyz(frame[1])
             if not fixed:
                 free_joint = prefix + "$free"
                 body.add_freejoint(name=free_joint)
@@ -266,8 +286,9 @@ def add_robot(
             joint = model.joints[i]
             parent = model.parent_index(joint)
             body = bodies[parent + 1].add_body(name=body_names[i + 1])
-            body.pos = list(joint.origin_xyz)
-            body.quat = _wxyz(K.quat_from_rpy(joint.origin_rpy))
+            body.pos, body.quat = placed(
+                joint.origin_xyz, K.quat_from_rpy(joint.origin_rpy), parent == -1
+            )
             static[i + 1] = static[parent + 1] and joint.type == "fixed"
             if joint.type == "fixed":
                 joint_names.append(None)
@@ -313,8 +334,12 @@ def add_robot(
         body.explicitinertial = True
         body.mass = mass
         body.inertia = diag
-        body.ipos = list(ine.position)
-        body.iquat = _wxyz(ine.orientation)
+        if i == -1 and offset is not None:  # the body frame is the inertial frame itself
+            body.ipos = [0.0, 0.0, 0.0]
+            body.iquat = [1.0, 0.0, 0.0, 0.0]
+        else:
+            body.ipos = list(ine.position)
+            body.iquat = _wxyz(ine.orientation)
 
         where = f"link {link.name!r}"
         for k, g in enumerate(link.visuals):
@@ -323,6 +348,7 @@ def add_robot(
                 continue  # nothing to draw (e.g. laikago_toes' radius-0 spheres)
             vg = body.add_geom(name=f"{body_names[i + 1]}$v{k}")
             _set_shape(vg, g, meshes, file, f"{where} <visual> #{k}")
+            vg.pos, vg.quat = placed(g.origin_xyz, K.quat_from_rpy(g.origin_rpy), i == -1)
             vg.contype = vg.conaffinity = 0
             vg.group = VISUAL_GROUP
             vg.rgba = list(g.rgba or DEFAULT_RGBA)
@@ -344,6 +370,7 @@ def add_robot(
                 if _degenerate(g):  # MuJoCo refuses size 0: a point-like shape instead
                     g = replace(g, size=tuple(max(v, MIN_SIZE) for v in g.size))
                 _set_shape(cg, g, meshes, file, f"{where} <collision> #{k}")
+                cg.pos, cg.quat = placed(g.origin_xyz, K.quat_from_rpy(g.origin_rpy), i == -1)
             cg.contype = cg.conaffinity = 0
             cg.group = COLLISION_GROUP
             cg.rgba = [0.5, 0.5, 0.5, 0.5]
@@ -364,6 +391,7 @@ def add_robot(
         bounded,
         planes,
         skipped_shapes=skipped,
+        base_offset=offset,
     )
 
 
