@@ -114,6 +114,7 @@ def _compare(args: argparse.Namespace) -> int:
         raise _Usage("--profile takes one profile, or one per backend (two)")
     scenario = load_scenario(args.scenario)
     out = args.out if args.out is not None else Path("reports") / scenario.name
+    _check_writable(out)  # before the engines run, not after
     with ProgressBar() as bar:
         result = compare(
             scenario,
@@ -130,6 +131,17 @@ def _compare(args: argparse.Namespace) -> int:
     print("\n".join(line.replace("**", "") for line in headline(result.summary())))
     print(f"report: {path}")
     return 0
+
+
+def _check_writable(out: Path) -> None:
+    """The report folder can be made and written to (an OSError naming it, else)."""
+    import tempfile
+
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"report folder {str(out)!r} exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryFile(dir=out):
+        pass
 
 
 def _scenarios(args: argparse.Namespace) -> int:

@@ -147,6 +147,9 @@ class UnknownBodyError(SimbridgeError, LookupError):
 class UnknownJointError(SimbridgeError, LookupError):
     def __init__(self, body_name: str, joint: object, valid_names: Iterable[str]):
         names = list(valid_names)
+        if not names:
+            super().__init__(f"body {body_name!r} has no joint {joint!r}: it has no joints")
+            return
         super().__init__(
             f"body {body_name!r} has no joint {joint!r}; valid joints are indices "
             f"0..{len(names) - 1} or names {_choices(names)}"

@@ -167,3 +167,11 @@ def test_python_dash_m_simbridge():
     assert bad.stderr.strip().splitlines()[-1].startswith("simbridge: error:")
     usage = _module("compare")
     assert usage.returncode == 2
+
+
+def test_an_out_path_that_is_no_folder_fails_before_the_engines_run(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(["compare", "pendulum", "--out", str(blocker)]) == 1
+    err = capsys.readouterr().err
+    assert err == f"simbridge: error: report folder {str(blocker)!r} exists and is not a folder\n"

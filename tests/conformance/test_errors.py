@@ -388,3 +388,10 @@ def test_repr_never_raises(make_sim):
     assert "t=0.0000s" in repr(sim)
     sim.close()
     assert repr(sim).endswith("closed)")
+
+
+def test_a_joint_of_a_body_without_joints(make_sim):
+    sim = make_sim()
+    cube = sim.load_urdf("cube.urdf")
+    with pytest.raises(exc.UnknownJointError, match=r"body '.*' has no joint 0: it has no joints"):
+        sim.joint_info(cube, 0)
