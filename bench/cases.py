@@ -161,7 +161,9 @@ def _mujoco_handles(sim: simbridge.Sim, robot: int) -> tuple:
 
 def _mujoco_raw_model(sim: simbridge.Sim, robot: int) -> tuple:
     """What a user of raw MuJoCo drives: the layer's world (the same bodies, geoms and contact
-    pairs) without the layer's motors, brakes and damping, plus one velocity actuator per wheel
+    pairs) without the layer's motors, brakes and damping and with MuJoCo's default joint-limit
+    parameters (the layer's margin keeps r2d2's grippers' limit rows active: a raw model would
+    not have them), plus one velocity actuator per wheel
     (``kv`` 5, force range +-50 N·m), driven by ``d.ctrl``, under the ``implicitfast``
     integrator, as MuJoCo's documentation advises for velocity actuators. Under Euler, kv 5
     is far above the wheels' I/dt: measured, the wheels chatter at +-200 rad/s with ctrl 0 and
@@ -172,6 +174,10 @@ def _mujoco_raw_model(sim: simbridge.Sim, robot: int) -> tuple:
     b = sim._b  # noqa: SLF001 - the raw floor is measured on the model the layer built
     r = b._robots[robot]  # noqa: SLF001
     spec = b._spec.copy()  # noqa: SLF001
+    for jnt in spec.joints:  # MuJoCo's own joint limits (the layer gives them PyBullet's law)
+        jnt.solref_limit = [0.02, 1.0]
+        jnt.solimp_limit = [0.9, 0.95, 0.001, 0.5, 2.0]
+        jnt.margin = 0.0
     for j in WHEELS:
         act = spec.add_actuator(
             name=f"raw/{j}", target=r.spec.joint_names[j], trntype=mujoco.mjtTrn.mjTRN_JOINT
