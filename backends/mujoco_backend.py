@@ -26,7 +26,6 @@ import numpy as np
 from simbridge import kinematics as K
 from simbridge.backend import Backend
 from simbridge.exceptions import (
-    BackendUnsupportedError,
     DisplayError,
     EngineError,
     InvalidArgumentError,
@@ -156,7 +155,7 @@ class MujocoBackend(Backend):
 
     def __init__(self, profile: Profile, gui: bool = False) -> None:
         super().__init__(profile, gui)
-        self._check_profile(profile)
+        self.refuse_unsupported()
         self._viewer: Any = None
         if gui:
             if sys.platform.startswith("linux") and not (
@@ -174,26 +173,6 @@ class MujocoBackend(Backend):
         self._new_world()
 
     # ---------------------------------------------------------------- set-up
-
-    def _check_profile(self, p: Profile) -> None:
-        if p.integrator != "semi-implicit Euler":
-            raise BackendUnsupportedError(
-                self.name, f"integrator {p.integrator!r}", "valid: ['semi-implicit Euler']"
-            )
-        if p.contact_model != "stiff":
-            raise BackendUnsupportedError(
-                self.name, f"contact_model {p.contact_model!r}", "valid: ['stiff']"
-            )
-        if p.friction_combine != "product" or p.restitution_combine != "product":
-            raise BackendUnsupportedError(
-                self.name, "friction/restitution combine rules other than 'product'"
-            )
-        if p.enforce_velocity_limit:
-            raise BackendUnsupportedError(
-                self.name,
-                "enforce_velocity_limit=True",
-                "PyBullet never clamps to <limit velocity> either; use max_joint_velocity",
-            )
 
     def _new_world(self) -> None:
         self._engine_error: str | None = None  # MuJoCo's error text once it raised one

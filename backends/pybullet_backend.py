@@ -23,7 +23,6 @@ import pybullet as p
 
 from simbridge.backend import Backend
 from simbridge.exceptions import (
-    BackendUnsupportedError,
     DisplayError,
     InvalidArgumentError,
     SimBusyError,
@@ -122,7 +121,7 @@ class PyBulletBackend(Backend):
         self._stepping = threading.Lock()  # held while step() runs
         self._file_texts: dict[str, str] = {}  # URDF files loaded by path: their first text
         self._diverged: SimulationDivergedError | None = None  # raised again until reset()
-        self._check_profile(profile)
+        self.refuse_unsupported()
         if gui:
             if sys.platform.startswith("linux"):
                 if not os.environ.get("DISPLAY"):
@@ -147,27 +146,6 @@ class PyBulletBackend(Backend):
         # load, remove or reset forgets it.
         self._last_velocity: tuple[Any, ...] | None = None
         self._configure()
-
-    def _check_profile(self, prof: Profile) -> None:
-        """Entries PyBullet has no switch for (before any connection is opened)."""
-        if prof.integrator != "semi-implicit Euler":
-            raise BackendUnsupportedError(
-                self.name, f"integrator {prof.integrator!r}", "valid: ['semi-implicit Euler']"
-            )
-        if prof.contact_model != "stiff":
-            raise BackendUnsupportedError(
-                self.name, f"contact_model {prof.contact_model!r}", "valid: ['stiff']"
-            )
-        if prof.friction_combine != "product" or prof.restitution_combine != "product":
-            raise BackendUnsupportedError(
-                self.name, "friction/restitution combine rules other than 'product'"
-            )
-        if prof.enforce_velocity_limit:
-            raise BackendUnsupportedError(
-                self.name,
-                "enforce_velocity_limit=True",
-                "PyBullet never clamps to <limit velocity>; use max_joint_velocity",
-            )
 
     def _configure(self) -> None:
         c = self._c

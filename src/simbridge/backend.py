@@ -45,6 +45,36 @@ class Backend(ABC):
         self.profile = profile
         self.gui = gui
 
+    def refuse_unsupported(
+        self,
+        integrators: tuple[str, ...] = ("semi-implicit Euler",),
+        contact_models: tuple[str, ...] = ("stiff",),
+        velocity_limit: bool = False,
+    ) -> None:
+        """Raise BackendUnsupportedError for a profile entry this engine has no switch for (the
+        defaults: what both shipped backends reproduce), before any engine resource exists."""
+        from .exceptions import BackendUnsupportedError
+
+        p = self.profile
+        if p.integrator not in integrators:
+            raise BackendUnsupportedError(
+                self.name, f"integrator {p.integrator!r}", f"valid: {list(integrators)}"
+            )
+        if p.contact_model not in contact_models:
+            raise BackendUnsupportedError(
+                self.name, f"contact_model {p.contact_model!r}", f"valid: {list(contact_models)}"
+            )
+        if p.friction_combine != "product" or p.restitution_combine != "product":
+            raise BackendUnsupportedError(
+                self.name, "friction/restitution combine rules other than 'product'"
+            )
+        if p.enforce_velocity_limit and not velocity_limit:
+            raise BackendUnsupportedError(
+                self.name,
+                "enforce_velocity_limit=True",
+                "PyBullet never clamps to <limit velocity>; use max_joint_velocity",
+            )
+
     # ---------------------------------------------------------------- world
 
     @property
