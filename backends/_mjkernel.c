@@ -573,7 +573,7 @@ static int exact_motors(Kernel* self) {
      * holding motor is then solved by the motor alone (both free would be singular) */
     side[r] = r < k ? 0 : -1;
   }
-  int done = 0, last_freed = -1;
+  int done = 0;
   for (int it = 0; it < 4 * n + 4 && !done; it++) {
     int nf = 0;
     for (int r = 0; r < n; r++) {
@@ -591,18 +591,7 @@ static int exact_motors(Kernel* self) {
       b[i] = rhs;
       for (int j = 0; j < nf; j++) A[i * nf + j] = AM[r * n + fr[j]];
     }
-    if (nf && lu_solve(A, b, self->piv, nf) < 0) {
-      /* a limit row just freed on the dof of a free motor row: both ask for the same dof's
-       * acceleration, so the motor cannot hold its target against the limit and goes to the
-       * bound it pushes towards */
-      int motor = -1;
-      for (int r = 0; last_freed >= k && r < k; r++)
-        if (!side[r] && rdof[r] == rdof[last_freed]) motor = r;
-      if (motor < 0) return -1;
-      side[motor] = x[motor] > 0.0 ? 1 : -1;
-      last_freed = -1;
-      continue;
-    }
+    if (nf && lu_solve(A, b, self->piv, nf) < 0) return -1;
     for (int i = 0; i < nf; i++) x[fr[i]] = b[i];
     int worst = -1, to = 0;
     double over = 0.0;
@@ -637,7 +626,15 @@ static int exact_motors(Kernel* self) {
     }
     if (freed >= 0) {
       side[freed] = 0;
-      last_freed = freed;
+      /* a limit row needed on the dof of a free motor row: both would ask for the same dof's
+       * acceleration (a singular block), so the motor cannot hold its target against the
+       * limit and goes to the bound its force pushes towards */
+      for (int r = 0; freed >= k && r < k; r++)
+        if (!side[r] && rdof[r] == rdof[freed]) side[r] = x[r] > 0.0 ? 1 : -1;
+      /* and a motor row freed on the dof of a free limit row takes the dof over: the limit
+       * row goes back to zero force (it is freed again if still needed) */
+      for (int r = k; freed < k && r < n; r++)
+        if (!side[r] && rdof[r] == rdof[freed]) side[r] = -1;
       continue;
     }
     done = 1;

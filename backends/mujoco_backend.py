@@ -96,6 +96,10 @@ class _Robot:
     cache: dict[int, tuple[np.ndarray, ...]] = field(default_factory=dict)
 
 
+_BUSY = (
+    "this Sim is stepping in another thread; a Sim takes one call at a time (give each "
+    "thread its own Sim)"
+)
 # Sim.step(n) runs the compiled loop (which holds no GIL and sees no signal) this many steps
 # at a time (about 12 ms on r2d2): Ctrl-C stops a long call between two chunks, with the time
 # of the steps done; a call costs 0.1 us, nothing per step.
@@ -166,6 +170,7 @@ class MujocoBackend(Backend):
         self._inv_dt = 1.0 / profile.timestep
         self._limit_k = LIMIT_ERP / profile.timestep / profile.timestep  # limit rows: K
         self._robots: dict[int, _Robot] = {}
+        self._chunking = False  # a step(n) in chunks is under way (another thread's, maybe)
         self._next_id = 0
         self._free_ids: list[int] = []  # removed ids, reused last-freed first (as PyBullet)
         self._steps = 0
@@ -199,10 +204,7 @@ class MujocoBackend(Backend):
     def _check_idle(self) -> None:
         """Changing the world while another thread steps it would race the compiled loop."""
         if getattr(self, "_chunking", False):
-            raise SimBusyError(
-                "this Sim is stepping in another thread; a Sim takes one call at a time "
-                "(give each thread its own Sim)"
-            )
+            raise SimBusyError(_BUSY)
         kernel = getattr(self, "_kernel", None)
         if kernel is not None:
             kernel.check_idle()  # SimBusyError while it steps
@@ -444,7 +446,7 @@ class MujocoBackend(Backend):
         """The compiled step loop bound to this compile's model and arrays (None: step in
         Python; mujoco_kernel.reason() says why)."""
         cls = mujoco_kernel.kernel_class()
-        if cls is None or self._engine_error is not None:
+        if cls is None or self._engine_error is not None or self._diverged is not None:
             return None
         m, d = self._m, self._d
         kernel = cls(m, d, m._address, d._address, mujoco_kernel.functions(), self._dt)
@@ -469,16 +471,21 @@ class MujocoBackend(Backend):
     # ---------------------------------------------------------------- stepping
 
     def step(self, n: int) -> None:
-        if n > _STEP_CHUNK:  # in chunks: Ctrl-C is seen between them, and time counts them
-            self._chunking = True  # the world stays refused to other threads between chunks
-            try:
-                while n > 0:
-                    chunk = min(n, _STEP_CHUNK)
-                    self.step(chunk)
-                    n -= chunk
-            finally:
-                self._chunking = False
+        if self._chunking:  # another thread is between two chunks of its step(n)
+            raise SimBusyError(_BUSY)
+        if n <= _STEP_CHUNK:
+            self._steps_of(n)
             return
+        self._chunking = True  # in chunks: Ctrl-C is seen between them, time counts them,
+        try:  # and the world stays refused to other threads between them
+            while n > 0:
+                chunk = min(n, _STEP_CHUNK)
+                self._steps_of(chunk)
+                n -= chunk
+        finally:
+            self._chunking = False
+
+    def _steps_of(self, n: int) -> None:
         kernel = self._kernel
         ran = None  # steps completed, where a call may have stopped early
         try:
@@ -565,13 +572,11 @@ class MujocoBackend(Backend):
         for i, code in enumerate(_BAD):
             if w[code].number != self._warnings[i]:
                 self._warnings = [w[c].number for c in _BAD]
-                what = ("positions", "velocities", "accelerations")[i]
+                what = ("positions (qpos)", "velocities (qvel)", "accelerations (qacc)")[i]
                 # MuJoCo has already put the state back to the model's reference pose: that
                 # world is not the simulation's any more, so it refuses steps and reads until
                 # reset() (PyBullet's world stays NaN, which reads as the same error there)
-                self._diverged = SimulationDivergedError(
-                    self.name, self.time, f"joint {what} (qpos/qvel)"
-                )
+                self._diverged = SimulationDivergedError(self.name, self.time, f"joint {what}")
                 self._kernel = None
                 raise self._diverged
 
@@ -670,29 +675,15 @@ class MujocoBackend(Backend):
         scale_over = np.concatenate([hi[:k], np.abs(b[k:]) / np.diag(am)[k:] + 1e-300])
         side = np.concatenate([np.zeros(k), -np.ones(n - k)])
         x = np.zeros(n)
-        last_freed = -1
         for _ in range(4 * n + 4):
             free = side == 0
-            before = x
             x = np.where(side > 0, hi, np.where(side < 0, lo, 0.0))
             if free.any():
                 rhs = b[free] - am[np.ix_(free, ~free)] @ x[~free]
                 try:
                     x[free] = np.linalg.solve(am[np.ix_(free, free)], rhs)
                 except np.linalg.LinAlgError:
-                    # a limit row just freed on the dof of a free motor row: the motor cannot
-                    # hold its target against the limit and goes to the bound it pushes to
-                    motors = [
-                        r
-                        for r in range(k)
-                        if side[r] == 0 and last_freed >= k and dofs[r] == dofs[last_freed]
-                    ]
-                    if not motors:
-                        return False
-                    side[motors[-1]] = 1.0 if before[motors[-1]] > 0.0 else -1.0
-                    last_freed = -1
-                    x = before
-                    continue
+                    return False
             with np.errstate(invalid="ignore"):
                 up = np.where(free, (x - hi) / scale_over, 0.0)
                 down = np.where(free, (lo - x) / scale_over, 0.0)
@@ -713,7 +704,16 @@ class MujocoBackend(Backend):
             freed = int(np.argmax(overshoot))
             if overshoot[freed] > 0.0:
                 side[freed] = 0.0
-                last_freed = freed
+                same = dofs == dofs[freed]
+                if freed >= k:  # a limit row needed on the dof of a free motor row: both would
+                    # ask for the same dof's acceleration (a singular block), so the motor
+                    # cannot hold its target against the limit and goes to the bound its force
+                    # pushes towards
+                    for r in np.flatnonzero(same[:k] & (side[:k] == 0)):
+                        side[r] = 1.0 if x[r] > 0.0 else -1.0
+                else:  # a motor row freed on the dof of a free limit row takes the dof over:
+                    # the limit row goes back to zero force (freed again if still needed)
+                    side[k:][same[k:] & (side[k:] == 0)] = -1.0
                 continue
             break
         else:

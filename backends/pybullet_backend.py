@@ -15,6 +15,8 @@ import sys
 import tempfile
 import threading
 import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
@@ -164,7 +166,12 @@ class PyBulletBackend(Backend):
     def load(
         self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
     ) -> int:
-        self._check_idle()
+        with self._idle():
+            return self._load(model, base_position, base_orientation, fixed_base)
+
+    def _load(
+        self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
+    ) -> int:
         self._last_velocity = None
         prof = self.profile
         flags = 0
@@ -308,20 +315,29 @@ class PyBulletBackend(Backend):
                     physicsClientId=c,
                 )
 
-    def _check_idle(self) -> None:
+    @contextmanager
+    def _idle(self) -> Iterator[None]:
         """Changing the world while another thread steps it would end that thread's loop with
-        a raw pybullet.error (measured: close() from another thread mid-step)."""
-        if self._stepping.locked():
+        a raw pybullet.error (measured: close() from another thread mid-step): the change
+        holds the stepping lock, or is refused."""
+        if not self._stepping.acquire(blocking=False):
             raise SimBusyError(_BUSY)
+        try:
+            yield
+        finally:
+            self._stepping.release()
 
     def remove(self, body: int) -> None:
-        self._check_idle()
-        self._last_velocity = None
-        p.removeBody(body, physicsClientId=self._c)
-        del self._bodies[body]
+        with self._idle():
+            self._last_velocity = None
+            p.removeBody(body, physicsClientId=self._c)
+            del self._bodies[body]
 
     def reset(self) -> None:
-        self._check_idle()
+        with self._idle():
+            self._reset()
+
+    def _reset(self) -> None:
         self._last_velocity = None
         p.resetSimulation(physicsClientId=self._c)
         self._diverged = None
@@ -372,13 +388,13 @@ class PyBulletBackend(Backend):
                 raise self._diverged
 
     def close(self) -> None:
-        self._check_idle()
-        if self._c >= 0:
-            try:
-                p.disconnect(physicsClientId=self._c)
-            except p.error:  # already disconnected (e.g. the GUI window was closed)
-                pass
-            self._c = -1
+        with self._idle():
+            if self._c >= 0:
+                try:
+                    p.disconnect(physicsClientId=self._c)
+                except p.error:  # already disconnected (e.g. the GUI window was closed)
+                    pass
+                self._c = -1
 
     # ---------------------------------------------------------------- tables
 

@@ -120,3 +120,15 @@ def test_a_bad_profile_entry_is_refused_when_the_profile_is_made(entry, value, m
 def test_a_backend_name_that_is_not_a_string_is_an_unknown_backend():
     with pytest.raises(exc.UnknownBackendError, match=r"unknown backend \"\['pybullet'\]\""):
         simbridge.Sim(["pybullet"])  # type: ignore[arg-type]
+
+
+def test_numpy_scalars_are_profile_values():
+    import numpy as np
+
+    p = simbridge.PROFILES["pybullet"].with_(
+        solver_iterations=np.int64(50),
+        apply_joint_damping=np.bool_(False),
+        linear_damping=np.float32(0.02),
+        max_joint_velocity=np.float64(50.0),
+    )
+    assert p.solver_iterations == 50 and not p.apply_joint_damping

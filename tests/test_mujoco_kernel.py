@@ -506,3 +506,35 @@ def test_a_raising_mujoco_callback_reaches_the_caller_and_stops_the_world(monkey
         assert sim.time == pytest.approx(5 / 240)
     finally:
         sim.close()
+
+
+def _arms_pressing_on_their_limits(sim, record) -> None:
+    # five arms, every joint reset at a limit with its motor pushing outward (30 N m, which
+    # the limit holds): the exact solve with motor and limit rows on the same dofs, a block of
+    # 70 rows whose degenerate pairs the active set must never free together (numpy's solver
+    # let a near-singular block through where the C one did not: 1e-4 rad/s apart)
+    arms = [
+        sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True, base_position=(2 * i, 0, 0))
+        for i in range(5)
+    ]
+    joints = list(range(7))
+    for arm in arms:
+        table = [sim.joint_info(arm, j) for j in joints]
+        at = [t.upper_limit if j % 2 == 0 else t.lower_limit for j, t in enumerate(table)]
+        sim.reset_joint_state(arm, joints, at)
+        sim.set_joint_velocity(
+            arm, joints, [1.0 if j % 2 == 0 else -1.0 for j in joints], max_force=30.0
+        )
+    for k in range(60):
+        if k == 30:  # and then pulled back off the limits
+            sim.set_joint_velocity(
+                arms[0], joints, [-0.5 if j % 2 == 0 else 0.5 for j in joints], max_force=30.0
+            )
+        sim.step()
+        record()
+    alone = sim.joint_states(arms[1], joints).positions
+    assert np.allclose(alone, sim.joint_states(arms[4], joints).positions, atol=1e-12)
+
+
+def test_arms_pressing_on_their_limits(monkeypatch):
+    _agree(monkeypatch, _arms_pressing_on_their_limits)

@@ -20,6 +20,8 @@ import numbers
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, Literal
 
+import numpy as np
+
 from .exceptions import InvalidArgumentError, InvalidProfileError
 
 __all__ = ["Profile", "PROFILES", "get_profile"]
@@ -138,7 +140,7 @@ _NAMES = ("name", "integrator", "friction_combine", "restitution_combine", "cont
 
 def _number(value: Any) -> float | None:
     """value as a finite float, or None (bools are not numbers here)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         return None
     try:
         x = float(value)
@@ -159,7 +161,7 @@ def _check_entry(name: str, value: Any) -> None:
         if x is None or x < 0:
             raise bad("must be a finite number >= 0")
     elif name in _FLAGS:
-        if not isinstance(value, bool):
+        if not isinstance(value, (bool, np.bool_)):
             raise bad("must be True or False")
     elif name in _NAMES:
         if not isinstance(value, str):
@@ -172,7 +174,9 @@ def _check_entry(name: str, value: Any) -> None:
         if value is not None and ((x := _number(value)) is None or x <= 0):
             raise bad("must be None (no clamp) or a finite number > 0")
     elif name == "solver_iterations":
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+            raise bad("must be an integer >= 1")
+        if value < 1:
             raise bad("must be an integer >= 1")
     elif name == "gravity":
         try:

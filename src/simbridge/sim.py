@@ -226,9 +226,11 @@ class Sim:
         """
         pos = _vec(base_position, 3, "base_position")
         orn = _quat(base_orientation, "base_orientation")
-        from .urdf import parse_urdf, resolve_source  # xml parsing loads on first use
+        from .urdf import check_file_inertia, parse_urdf, resolve_source  # loaded on first use
 
         model = parse_urdf(resolve_source(source))
+        if self._b.profile.inertia_source == "file":
+            check_file_inertia(model)
         body = self._b.load(model, pos, orn, bool(fixed_base))  # type: ignore[arg-type]
         names = [j.name for j in model.joints]
         links = [j.child for j in model.joints]

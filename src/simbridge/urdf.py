@@ -387,12 +387,6 @@ def _inertial(elem: ET.Element | None, where: str, file: str) -> Inertial:
         _float(ie, key, 0.0, f"{where} <inertia>", file)
         for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
     )
-    if min(inertia[0], inertia[3], inertia[5]) < 0:
-        raise UrdfStructureError(
-            file,
-            f"{where} <inertia>",
-            f"ixx, iyy and izz must be >= 0, got {inertia[0]}, {inertia[3]}, {inertia[5]}",
-        )
     return Inertial(xyz, rpy, mass, inertia, True)  # type: ignore[arg-type]
 
 
@@ -419,6 +413,21 @@ def _contact(elem: ET.Element | None, where: str, file: str) -> Contact:
 # ---------------------------------------------------------------- parse
 
 
+def check_file_inertia(model: UrdfModel) -> None:
+    """Under a profile that simulates the file's <inertia> (inertia_source "file"), a negative
+    moment of inertia is an error (PyBullet zeroes it, MuJoCo cannot take it); under the
+    "pybullet" profile the file's inertia is not used and such a file loads, as in PyBullet."""
+    file = model.source.display_name
+    for link in model.links:
+        i = link.inertial.inertia
+        if min(i[0], i[3], i[5]) < 0:
+            raise UrdfStructureError(
+                file,
+                f"link {link.name!r} <inertia>",
+                f"ixx, iyy and izz must be >= 0 to be simulated, got {i[0]}, {i[3]}, {i[5]}",
+            )
+
+
 def parse_urdf(src: UrdfSource) -> UrdfModel:
     """Parse and validate a URDF; raise a :class:`~simbridge.exceptions.UrdfError` subclass
     that names the file and element on anything a backend could not load faithfully."""
@@ -430,7 +439,7 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
     if root.tag != "robot":
         raise UrdfStructureError(file, f"<{root.tag}>", "the root element must be <robot>")
     robot_name = root.get("name")
-    if not robot_name:  # PyBullet: "Expected a name for robot"
+    if robot_name is None:  # PyBullet: "Expected a name for robot"
         raise UrdfStructureError(file, "<robot>", "has no name attribute")
 
     links: dict[str, Link] = {}

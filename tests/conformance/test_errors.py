@@ -79,12 +79,6 @@ LOAD_ERRORS = {
         exc.UrdfStructureError,
         r"link 'a' <visual> #0 <box size>: sizes must be >= 0, got \(-1\.0, 0\.1, 0\.1\)",
     ),
-    "a negative moment of inertia": (
-        '<robot name="bad"><link name="a"><inertial><mass value="1"/>'
-        '<inertia ixx="-1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>',
-        exc.UrdfStructureError,
-        r"link 'a' <inertia>: ixx, iyy and izz must be >= 0, got -1\.0, 1\.0, 1\.0",
-    ),
     "a negative joint damping": (
         _robot(
             '<joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
@@ -281,6 +275,12 @@ def test_diverged_simulation_is_reported(backend, make_sim, profile, private_tmp
     assert str(again.value) == str(first.value) and sim.time == t
     with pytest.raises(exc.SimulationDivergedError):
         sim.base_state(sim.bodies()[0])
+    other = sim.load_urdf("cube_small.urdf", base_position=(3, 0, 1))  # a new model: still
+    with pytest.raises(exc.SimulationDivergedError):  # the diverged world, refused
+        sim.step()
+    sim.remove(other)
+    with pytest.raises(exc.SimulationDivergedError):
+        sim.step()
     sim.reset()  # a new world (with the same 1e200 s step it would diverge again)
     body = sim.load_urdf("free_box.urdf", base_position=(0, 0, 1))
     assert sim.time == 0.0
@@ -395,3 +395,29 @@ def test_a_joint_of_a_body_without_joints(make_sim):
     cube = sim.load_urdf("cube.urdf")
     with pytest.raises(exc.UnknownJointError, match=r"body '.*' has no joint 0: it has no joints"):
         sim.joint_info(cube, 0)
+
+
+def test_a_negative_moment_of_inertia_is_refused_only_where_it_is_simulated(make_sim):
+    """Under "urdf" (the file's inertia) a negative ixx is an error naming the link; under
+    "pybullet" the file's inertia is not used (the collision box's is) and the file loads, as
+    in raw PyBullet."""
+    text = (
+        '<robot name="odd"><link name="a"><inertial><mass value="1"/>'
+        '<inertia ixx="-1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+        '<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link></robot>'
+    )
+    with pytest.raises(
+        exc.UrdfStructureError,
+        match=r"link 'a' <inertia>: ixx, iyy and izz must be >= 0 to be simulated, got -1\.0",
+    ):
+        make_sim(profile="urdf").load_urdf(text)
+    sim = make_sim(profile="pybullet")
+    body = sim.load_urdf(text)
+    sim.step()
+    assert sim.dynamics_info(body).local_inertia_diagonal[0] > 0
+
+
+def test_a_robot_named_with_the_empty_string_loads(make_sim):
+    sim = make_sim()
+    body = sim.load_urdf('<robot name=""><link name="a"/></robot>')
+    assert sim.body_name(body) == ""

@@ -73,7 +73,8 @@ def test_ctrl_c_stops_a_long_step_and_the_time_counts_the_steps_done(make_sim):
 
 
 def test_changing_the_world_while_another_thread_steps_it_is_refused(make_sim):
-    """load, remove, reset and close from another thread while step(n) runs raise SimBusyError
+    """load, remove, reset, close and step from another thread while step(n) runs raise
+    SimBusyError
     (the stepping thread would otherwise die mid-loop or race the engine); the world is left
     as it was and the stepping call completes."""
     import threading
@@ -90,6 +91,7 @@ def test_changing_the_world_while_another_thread_steps_it_is_refused(make_sim):
         lambda: sim.remove(robot),
         sim.reset,
         sim.close,
+        lambda: sim.step(5),  # a second stepper, too
     ):
         start = sim.time
         worker = threading.Thread(target=sim.step, args=(n,))
