@@ -1066,6 +1066,13 @@ class MujocoBackend(Backend):
     ) -> None:
         idx = self._motor_slots(body, joints)
         t = self._motors
+        model = self._robots[body].model
+        target = [  # PyBullet clamps a position target to the joint's limits (measured)
+            min(max(q, model.joints[j].lower), model.joints[j].upper)
+            if model.joints[j].has_limit
+            else q
+            for q, j in zip(target, joints.tolist(), strict=True)
+        ]
         t.target_velocity[idx] = 0.0
         t.target_position[idx] = target
         t.max_force[idx] = max_force
