@@ -181,18 +181,22 @@ def test_joint_limit_rows_follow_pybullets_rule(profile, start, speed):
     assert dv < 5e-6
 
 
-@pytest.mark.parametrize("offset", [0.0, 0.2])
+@pytest.mark.parametrize(
+    "offset", ["0 0 0", "0.2 0 0", '0.2 -0.1 0.05" rpy="0.3 0.5 -0.7'], ids=["none", "x", "rotated"]
+)
 def test_a_free_body_spinning_about_an_offset_centre_of_mass(offset):
-    """One free body, no gravity, no damping ("urdf"), spinning with its centre of mass 0.2 m
-    off its link origin: both engines keep the centre of mass moving straight at 0.1 m/s.
-    MuJoCo's free joint sits at the body frame, so the backend makes a free base's body frame
-    its centre-of-mass frame (as Bullet integrates the base); with the joint at the link origin
-    the centre of mass drifted by 1.25 cm/s after 1 s (first order in dt). Measured: 7.1e-15."""
+    """One free body, no gravity, no damping ("urdf"), spinning with its centre of mass off its
+    link origin (and its inertial frame rotated): both engines keep the centre of mass moving
+    straight at 0.1 m/s and agree on its pose, spin and link frame. MuJoCo's free joint sits at
+    the body frame, so the backend makes a free base's body frame its centre-of-mass frame (as
+    Bullet integrates the base); with the joint at the link origin the centre of mass drifted
+    by 1.25 cm/s after 1 s (first order in dt). Measured: 7.1e-15 (link frame: PyBullet's
+    float32, 6e-8)."""
     _require_engines()
     urdf = (
-        f'<robot name="b"><link name="a"><inertial><origin xyz="{offset} 0 0"/>'
+        f'<robot name="b"><link name="a"><inertial><origin xyz="{offset}"/>'
         '<mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/>'
-        f'</inertial><collision><origin xyz="{offset} 0 0"/><geometry>'
+        '</inertial><collision><origin xyz="0.2 0 0"/><geometry>'
         '<box size="0.1 0.2 0.3"/></geometry></collision></link></robot>'
     )
     out = {}
