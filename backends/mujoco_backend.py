@@ -471,6 +471,29 @@ class MujocoBackend(Backend):
     # ---------------------------------------------------------------- stepping
 
     def step(self, n: int) -> None:
+        kernel = self._kernel
+        if (
+            n <= _STEP_CHUNK
+            and kernel is not None
+            and self._viewer is None
+            and not self._pending_torque
+            and not self._chunking
+        ):  # the hot path: one call into the compiled loop (_steps_of does the same, slower)
+            try:
+                status = kernel.step(n, False)
+            except BaseException as exc:
+                if kernel.interrupted:
+                    self._steps += kernel.steps_done
+                    self._callback_failed(exc)
+                raise
+            if n > 0:
+                self._steps += n
+                self._stale = self._motor_force_valid = self._motor_rows_valid = True
+            if status:
+                if status >= 2:  # a call stopped early: count only the steps that ran
+                    self._steps += kernel.steps_done - n
+                self._kernel_status(status)
+            return
         if self._chunking:  # another thread is between two chunks of its step(n)
             raise SimBusyError(_BUSY)
         if n <= _STEP_CHUNK:
