@@ -96,7 +96,12 @@ def test_changing_the_world_while_another_thread_steps_it_is_refused(make_sim):
         start = sim.time
         worker = threading.Thread(target=sim.step, args=(n,))
         worker.start()
-        time.sleep(0.05)  # well inside the 0.3 s of stepping
+        deadline = time.monotonic() + 10.0
+        while time.monotonic() < deadline:  # until the worker is seen stepping: step(0) is
+            try:  # refused then, and does nothing otherwise
+                sim.step(0)
+            except SimBusyError:
+                break
         assert worker.is_alive()
         with pytest.raises(SimBusyError, match="another thread"):
             change()
