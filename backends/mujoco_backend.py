@@ -28,7 +28,6 @@ from simbridge.backend import Backend
 from simbridge.exceptions import (
     DisplayError,
     EngineError,
-    InvalidArgumentError,
     SimBusyError,
     SimulationDivergedError,
     UrdfStructureError,
@@ -96,25 +95,10 @@ class _Robot:
     cache: dict[int, tuple[np.ndarray, ...]] = field(default_factory=dict)
 
 
-_BUSY = (
-    "this Sim is stepping in another thread; a Sim takes one call at a time (give each "
-    "thread its own Sim)"
-)
 # Sim.step(n) runs the compiled loop (which holds no GIL and sees no signal) this many steps
 # at a time (about 12 ms on r2d2): Ctrl-C stops a long call between two chunks, with the time
 # of the steps done; a call costs 0.1 us, nothing per step.
 _STEP_CHUNK = 1000
-
-
-def _refuse_fixed_base_velocity(
-    backend: str, body: int, linear: Vec3 | None, angular: Vec3 | None
-) -> None:
-    if any(v != 0.0 for v in (*(linear or ()), *(angular or ()))):
-        raise InvalidArgumentError(
-            "linear_velocity/angular_velocity",
-            f"body {body} has a fixed base, which takes no velocity on backend {backend!r} "
-            "(PyBullet would move the welded base along; MuJoCo cannot): pass zeros or None",
-        )
 
 
 _LIMIT_JOINT = int(mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT)
@@ -204,7 +188,7 @@ class MujocoBackend(Backend):
     def _check_idle(self) -> None:
         """Changing the world while another thread steps it would race the compiled loop."""
         if getattr(self, "_chunking", False):
-            raise SimBusyError(_BUSY)
+            raise SimBusyError()
         kernel = getattr(self, "_kernel", None)
         if kernel is not None:
             kernel.check_idle()  # SimBusyError while it steps
@@ -495,7 +479,7 @@ class MujocoBackend(Backend):
                 self._kernel_status(status)
             return
         if self._chunking:  # another thread is between two chunks of its step(n)
-            raise SimBusyError(_BUSY)
+            raise SimBusyError()
         if n <= _STEP_CHUNK:
             self._steps_of(n)
             return
@@ -996,7 +980,7 @@ class MujocoBackend(Backend):
     ) -> None:
         robot = self._robots[body]
         if robot.free_qadr < 0:
-            _refuse_fixed_base_velocity(self.name, body, linear_velocity, angular_velocity)
+            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
         cur = self.base_state(body)
         pos = cur.position if position is None else position
         orn = cur.orientation if orientation is None else orientation

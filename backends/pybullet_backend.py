@@ -26,7 +26,6 @@ import pybullet as p
 from simbridge.backend import Backend
 from simbridge.exceptions import (
     DisplayError,
-    InvalidArgumentError,
     SimBusyError,
     SimulationDivergedError,
     UrdfStructureError,
@@ -53,10 +52,6 @@ _PYBULLET_DEFAULT_FRICTION = 0.5
 # The state is probed for NaN every this many steps (and on every base/link read), which keeps
 # the probe's ~1 µs per body off the per-step cost: a divergence is reported at most 1/15 s late.
 _CHECK_EVERY = 16
-_BUSY = (
-    "this Sim is stepping in another thread; a Sim takes one call at a time (give each "
-    "thread its own Sim)"
-)
 
 
 def _x_display_problem() -> str | None:
@@ -321,7 +316,7 @@ class PyBulletBackend(Backend):
         a raw pybullet.error (measured: close() from another thread mid-step): the change
         holds the stepping lock, or is refused."""
         if not self._stepping.acquire(blocking=False):
-            raise SimBusyError(_BUSY)
+            raise SimBusyError()
         try:
             yield
         finally:
@@ -350,7 +345,7 @@ class PyBulletBackend(Backend):
         if self._diverged is not None:  # the state is NaN: no step makes it a simulation
             raise self._diverged
         if not self._stepping.acquire(blocking=False):
-            raise SimBusyError(_BUSY)
+            raise SimBusyError()
         try:
             if n == 1:
                 p.stepSimulation(physicsClientId=self._c)
@@ -481,15 +476,8 @@ class PyBulletBackend(Backend):
         angular_velocity: Vec3 | None,
     ) -> None:
         c = self._c
-        if not self._bodies[body].free and any(
-            v != 0.0 for v in (*(linear_velocity or ()), *(angular_velocity or ()))
-        ):
-            raise InvalidArgumentError(  # PyBullet moves a welded base along: not a fixed base
-                "linear_velocity/angular_velocity",
-                f"body {body} has a fixed base, which takes no velocity on backend "
-                f"{self.name!r} (PyBullet would move the welded base along; MuJoCo cannot): "
-                "pass zeros or None",
-            )
+        if not self._bodies[body].free:
+            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
         cur_lin, cur_ang = p.getBaseVelocity(body, physicsClientId=c)
         if position is not None or orientation is not None:
             cur_pos, cur_orn = p.getBasePositionAndOrientation(body, physicsClientId=c)

@@ -45,6 +45,21 @@ class Backend(ABC):
         self.profile = profile
         self.gui = gui
 
+    def refuse_fixed_base_velocity(
+        self, body: int, linear: Vec3 | None, angular: Vec3 | None
+    ) -> None:
+        """A fixed base takes a pose but no velocity: PyBullet would carry the welded base
+        along at it, MuJoCo has nothing to carry; both refuse it alike."""
+        from .exceptions import InvalidArgumentError
+
+        if any(v != 0.0 for v in (*(linear or ()), *(angular or ()))):
+            raise InvalidArgumentError(
+                "linear_velocity/angular_velocity",
+                f"body {body} has a fixed base, which takes no velocity on backend "
+                f"{self.name!r} (PyBullet would move the welded base along; MuJoCo cannot): "
+                "pass zeros or None",
+            )
+
     def refuse_unsupported(
         self,
         integrators: tuple[str, ...] = ("semi-implicit Euler",),

@@ -204,6 +204,13 @@ class SimBusyError(SimbridgeError, RuntimeError):
     a time; Sims in different threads step in parallel (MuJoCo's compiled loop releases the
     GIL)."""
 
+    def __init__(self, detail: str | None = None) -> None:
+        super().__init__(
+            detail
+            or "this Sim is stepping in another thread; a Sim takes one call at a time (give "
+            "each thread its own Sim)"
+        )
+
 
 class SimClosedError(SimbridgeError, RuntimeError):
     def __init__(self) -> None:
