@@ -1,0 +1,101 @@
+"""Hashes of every shipped scenario's recorded trajectories, per backend and MuJoCo step loop.
+
+``python tests/_trajectory_hashes.py > tests/data/trajectory_hashes.json`` records them (both
+step loops: it runs itself again under ``SIMBRIDGE_MUJOCO_STEP=python``);
+tests/test_same_results.py checks the tree still produces them bit for bit. They were
+recorded before the MuJoCo backend became the ``backends/mujoco/`` package (issue 11): a
+change that only moves code must leave every number of every step as it was.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+from simbridge.compare.run import _BODY_ARRAYS, Trajectory, run
+from simbridge.compare.scenario import list_scenarios
+
+
+def trajectory_hash(traj: Trajectory) -> str:
+    """sha256 over the time column and every recorded array of every body, as raw bytes."""
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(traj.time, dtype=np.float64).tobytes())
+    for name in sorted(traj.bodies):
+        body = traj.bodies[name]
+        h.update(name.encode())
+        for key in (*_BODY_ARRAYS, "joint_modes"):
+            arr = np.ascontiguousarray(getattr(body, key))
+            h.update(key.encode())
+            h.update(str(arr.shape).encode())
+            h.update(arr.tobytes())
+    return h.hexdigest()
+
+
+def all_hashes(backends: tuple[str, ...] = ("pybullet", "mujoco")) -> dict[str, str]:
+    """``{"<scenario>/<backend>": sha256}`` for every shipped scenario."""
+    return {
+        f"{sc.name}/{backend}": trajectory_hash(run(sc, backend))
+        for sc in list_scenarios()
+        for backend in backends
+    }
+
+
+def _kuka_script(backend: str) -> str:
+    """Not a shipped scenario: a fixed KUKA iiwa under position, then velocity, then torque
+    commands, each joint's state hashed every step (guards the motor table's code paths)."""
+    import simbridge
+
+    h = hashlib.sha256()
+    with simbridge.Sim(backend) as sim:
+        arm = sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True)
+        joints = list(range(sim.num_joints(arm)))
+        for k in range(240):
+            q = [0.5 * np.sin(0.02 * k + j) for j in joints]
+            sim.set_joint_position(arm, joints, q, max_force=300.0)
+            sim.step()
+            h.update(sim.joint_states(arm).positions.tobytes())
+        for k in range(120):
+            sim.set_joint_velocity(arm, joints, [0.3 * (-1) ** j for j in joints], max_force=50.0)
+            sim.step()
+            s = sim.joint_states(arm)
+            h.update(s.positions.tobytes() + s.velocities.tobytes() + s.applied_torques.tobytes())
+        sim.set_joint_velocity(arm, joints, 0.0, max_force=0.0)
+        for k in range(120):
+            sim.set_joint_torque(arm, joints, [5.0 * np.cos(0.05 * k + j) for j in joints])
+            sim.step()
+            h.update(repr(sim.link_state(arm, joints[-1])).encode())
+    return h.hexdigest()
+
+
+def all_extras(backends: tuple[str, ...] = ("pybullet", "mujoco")) -> dict[str, str]:
+    return {f"kuka-script/{b}": _kuka_script(b) for b in backends}
+
+
+def engine_versions() -> dict[str, str]:
+    import mujoco
+    import pybullet
+
+    return {"mujoco": mujoco.__version__, "pybullet_api": str(pybullet.getAPIVersion())}
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] == ["--mujoco-only"]:
+        json.dump({**all_hashes(("mujoco",)), **all_extras(("mujoco",))}, sys.stdout)
+        sys.exit(0)
+    env = dict(os.environ, SIMBRIDGE_MUJOCO_STEP="python")
+    python_loop = subprocess.run(
+        [sys.executable, __file__, "--mujoco-only"], env=env, check=True, capture_output=True,
+        text=True,
+    ).stdout
+    record = {
+        "engines": engine_versions(),
+        "compiled": {**all_hashes(), **all_extras()},
+        "python_loop_mujoco": json.loads(python_loop),
+    }
+    json.dump(record, sys.stdout, indent=2)
+    print()
