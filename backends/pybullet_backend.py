@@ -9,8 +9,10 @@ tutorial user would write (``loadURDF``, ``getJointInfo``, ``setJointMotorContro
 
 from __future__ import annotations
 
+import logging
 import math
 import os
+import re
 import sys
 import tempfile
 import threading
@@ -24,6 +26,7 @@ import numpy as np
 import pybullet as p
 
 from simbridge.backend import Backend
+from simbridge.engine_output import Record, captured, register_classifier
 from simbridge.exceptions import (
     DisplayError,
     SimBusyError,
@@ -52,6 +55,61 @@ _PYBULLET_DEFAULT_FRICTION = 0.5
 # The state is probed for NaN every this many steps (and on every base/link read), which keeps
 # the probe's ~1 µs per body off the per-step cost: a divergence is reported at most 1/15 s late.
 _CHECK_EVERY = 16
+
+
+# What PyBullet writes from C: ``b3Warning[file,line]:\n`` (b3Error, b3Printf alike) and the
+# message, often without a newline before the next marker; the banner on import.
+_B3_MARKER = re.compile(r"b3(Warning|Error|Printf)\[[^\]\n]*\]:\n?")
+_B3_LEVEL = {"Warning": logging.WARNING, "Error": logging.ERROR, "Printf": logging.INFO}
+_BANNER = re.compile(r"^pybullet build time: [^\n]*\n?", re.MULTILINE)
+
+
+def _pybullet_output(text: str) -> tuple[list[Record], str]:
+    """PyBullet's own lines in ``text`` as log records (the banner at DEBUG, b3Warning at
+    WARNING, b3Error at ERROR, b3Printf at INFO; a message is the text after its marker up to
+    the next marker or the end of its line; a one-word message after the same marker names the
+    subject of the one before, and joins it), and the rest of ``text``, which is not PyBullet's
+    (whitespace alone left between PyBullet's lines is dropped)."""
+    records: list[Record] = []
+    rest: list[str] = []
+    at = 0
+    markers = list(_B3_MARKER.finditer(text))
+    for k, m in enumerate(markers):
+        rest.append(text[at : m.start()])
+        end = markers[k + 1].start() if k + 1 < len(markers) else len(text)
+        newline = text.find("\n", m.end(), end)
+        at = end if newline < 0 else newline + 1
+        level, message = _B3_LEVEL[m.group(1)], text[m.end() : at].strip()
+        if (
+            records
+            and message
+            and not any(c.isspace() for c in message)
+            and records[-1][0] == level
+            and k > 0
+            and markers[k - 1].group() == m.group()
+        ):
+            # Bullet reports a link's problem in two calls, the sentence and then the link's
+            # name ("No inertial data for link, ...", "base_footprint"): one record
+            records[-1] = (level, f"{records[-1][1].rstrip(':')}: {message}")
+        else:
+            records.append((level, message))
+    rest.append(text[at:])
+    left = "".join(rest)
+    for m in _BANNER.finditer(left):
+        records.insert(0, (logging.DEBUG, m.group().strip()))
+    left = _BANNER.sub("", left)
+    return records, left if left.strip() else ""
+
+
+def _pybullet_gui_output(text: str) -> tuple[list[Record], str]:
+    """Opening and closing the GUI prints lines of its own (threads, OpenGL versions), all
+    PyBullet's: every line is claimed, those without a b3 marker at DEBUG."""
+    records, rest = _pybullet_output(text)
+    records += [(logging.DEBUG, line.strip()) for line in rest.splitlines() if line.strip()]
+    return records, ""
+
+
+register_classifier("pybullet", _pybullet_output)
 
 
 def _x_display_problem() -> str | None:
@@ -126,13 +184,15 @@ class PyBulletBackend(Backend):
                 problem = _x_display_problem()
                 if problem:
                     raise DisplayError(self.name, problem)
-            self._c = p.connect(p.GUI)
+            with captured(self.name, "opening the GUI", _pybullet_gui_output):
+                self._c = p.connect(p.GUI)
             if self._c < 0:
                 raise DisplayError(
                     self.name, "p.connect(p.GUI) failed (PyBullet allows one GUI per process)"
                 )
         else:
-            self._c = p.connect(p.DIRECT)
+            with captured(self.name, "connecting"):
+                self._c = p.connect(p.DIRECT)
         self._dt = profile.timestep
         self._steps = 0
         self._next_check = _CHECK_EVERY
@@ -234,16 +294,17 @@ class PyBulletBackend(Backend):
         self, path: str, display: str, pos: Vec3, orn: Quat, fixed: bool, flags: int
     ) -> int:
         try:
-            return int(
-                p.loadURDF(
-                    path,
-                    basePosition=pos,
-                    baseOrientation=orn,
-                    useFixedBase=fixed,
-                    flags=flags,
-                    physicsClientId=self._c,
+            with captured(self.name, f"loading {display}"):
+                return int(
+                    p.loadURDF(
+                        path,
+                        basePosition=pos,
+                        baseOrientation=orn,
+                        useFixedBase=fixed,
+                        flags=flags,
+                        physicsClientId=self._c,
+                    )
                 )
-            )
         except p.error as exc:
             raise UrdfStructureError(
                 display, "<robot>", f"PyBullet cannot load it: {exc}"
@@ -386,7 +447,11 @@ class PyBulletBackend(Backend):
         with self._idle():
             if self._c >= 0:
                 try:
-                    p.disconnect(physicsClientId=self._c)
+                    if self.gui:
+                        with captured(self.name, "closing the GUI", _pybullet_gui_output):
+                            p.disconnect(physicsClientId=self._c)
+                    else:
+                        p.disconnect(physicsClientId=self._c)
                 except p.error:  # already disconnected (e.g. the GUI window was closed)
                     pass
                 self._c = -1

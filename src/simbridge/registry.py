@@ -14,6 +14,7 @@ import importlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from .engine_output import captured
 from .exceptions import BackendError, BackendNotInstalledError, UnknownBackendError
 
 if TYPE_CHECKING:
@@ -84,17 +85,20 @@ def load_backend(name: str) -> type[Backend]:
     if not isinstance(name, str) or name not in _REGISTRY:
         raise UnknownBackendError(str(name), _REGISTRY)
     spec = _REGISTRY[name]
-    for required in spec.requires:
-        try:
-            importlib.import_module(required)
-        except ImportError as exc:
-            raise BackendNotInstalledError(name, required, spec.pip_name, exc) from exc
     module_name, _, attr = spec.entry_point.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-        cls: type[Backend] = getattr(module, attr)
-    except (ImportError, AttributeError) as exc:
-        raise BackendError(f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}") from exc
+    with captured(name, "importing"):  # an engine's banner goes to the log (engine_output.py)
+        for required in spec.requires:
+            try:
+                importlib.import_module(required)
+            except ImportError as exc:
+                raise BackendNotInstalledError(name, required, spec.pip_name, exc) from exc
+        try:
+            module = importlib.import_module(module_name)
+            cls: type[Backend] = getattr(module, attr)
+        except (ImportError, AttributeError) as exc:
+            raise BackendError(
+                f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}"
+            ) from exc
     _LOADED[name] = cls
     return cls
 
