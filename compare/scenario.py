@@ -54,6 +54,7 @@ from typing import Any
 
 import simbridge
 from simbridge.exceptions import ScenarioError
+from simbridge.transforms import quat_from_rpy
 
 __all__ = [
     "Command",
@@ -389,7 +390,7 @@ class _Reader:
             raise self.error([*path, "rpy"], "give either orientation or rpy, not both")
         orientation: tuple[float, ...]
         if "rpy" in t:
-            orientation = _quat_from_rpy(*self.vector(t["rpy"], [*path, "rpy"], 3))
+            orientation = quat_from_rpy(self.vector(t["rpy"], [*path, "rpy"], 3))
         else:
             orientation = self.vector(t.get("orientation", [0, 0, 0, 1]), [*path, "orientation"], 4)
             norm = math.sqrt(sum(c * c for c in orientation))
@@ -539,19 +540,6 @@ class _Reader:
             headline=headline,
             source=source,
         )
-
-
-def _quat_from_rpy(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of R = Rz(yaw) Ry(pitch) Rx(roll), the URDF convention."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    )
 
 
 def loads_scenario(text: str, *, file: str = "<scenario>", source: Path | None = None) -> Scenario:

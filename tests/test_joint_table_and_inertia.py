@@ -1,4 +1,4 @@
-"""simbridge.kinematics: quaternion helpers, and PyBullet's joint table and link inertia computed
+"""simbridge.joint_table and simbridge.inertia: PyBullet's joint table and link inertia computed
 from a UrdfModel, checked against PyBullet itself (these tests import pybullet on purpose)."""
 
 from __future__ import annotations
@@ -12,7 +12,8 @@ import pybullet as p
 import pybullet_data
 import pytest
 
-from simbridge import kinematics as K
+from simbridge.inertia import is_fixed_base, model_inertials
+from simbridge.joint_table import joint_table
 from simbridge.urdf import parse_urdf, resolve_source
 
 DATA = pybullet_data.getDataPath()
@@ -44,8 +45,8 @@ def _pybullet(client: int, text: str, fixed: bool, flags: int):
 
 def _ours(text: str, fixed: bool, source: str):
     model = parse_urdf(resolve_source(text))
-    inertials = K.model_inertials(model, fixed, source)
-    return K.joint_table(model, fixed, inertials), inertials
+    inertials = model_inertials(model, fixed, source)
+    return joint_table(model, fixed, inertials), inertials
 
 
 def _same_quat(a, b, tol=1e-9) -> bool:
@@ -70,31 +71,6 @@ def _assert_matches(client, text, fixed, source):
         assert ine.diagonal == pytest.approx(ref[2], rel=1e-6, abs=1e-15)
         assert ine.position == pytest.approx(ref[3], abs=1e-12)
         assert _same_quat(ine.orientation, ref[4])
-
-
-def test_quaternion_helpers_agree_with_pybullet():
-    rng = np.random.default_rng(1)
-    for _ in range(20):
-        rpy = rng.uniform(-3, 3, 3)
-        q = K.quat_from_rpy(rpy)
-        assert q == pytest.approx(p.getQuaternionFromEuler(rpy), abs=1e-12)
-        assert K.quat_from_rpy(K.rpy_from_quat(q)) == pytest.approx(q, abs=1e-9) or _same_quat(
-            K.quat_from_rpy(K.rpy_from_quat(q)), q, 1e-9
-        )
-        m = K.quat_to_matrix(q)
-        assert m.ravel() == pytest.approx(p.getMatrixFromQuaternion(q), abs=1e-12)
-        assert _same_quat(K.quat_from_matrix(m), q)
-        v = rng.normal(size=3)
-        assert K.quat_rotate(q, v) == pytest.approx(m @ v, abs=1e-12)
-        q2 = K.quat_from_rpy(rng.uniform(-3, 3, 3))
-        assert K.quat_to_matrix(K.quat_multiply(q, q2)) == pytest.approx(
-            m @ K.quat_to_matrix(q2), abs=1e-12
-        )
-        pose = (tuple(rng.normal(size=3)), q)
-        ident = K.transform_multiply(pose, K.transform_inverse(pose))
-        assert ident[0] == pytest.approx((0, 0, 0), abs=1e-12)
-        assert _same_quat(ident[1], K.IDENTITY_QUAT)
-    assert K.wxyz_to_xyzw(K.xyzw_to_wxyz((1, 2, 3, 4))) == (1, 2, 3, 4)
 
 
 # Rotated inertial frames, rotated joint frames, an unnormalised axis, every shape, no <inertial>.
@@ -188,8 +164,8 @@ def test_world_link_without_inertial_has_mass_zero_and_fixes_the_base():
         '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>'
     )
     model = parse_urdf(resolve_source(text))
-    assert K.is_fixed_base(model, False)
-    assert K.model_inertials(model, False, "collision_aabb")[0].mass == 0.0
+    assert is_fixed_base(model, False)
+    assert model_inertials(model, False, "collision_aabb")[0].mass == 0.0
 
 
 def test_r2d2_and_a_sample_of_pybullet_data_match(client):
@@ -209,8 +185,8 @@ def test_r2d2_and_a_sample_of_pybullet_data_match(client):
         flags = 0
         body = p.loadURDF(os.path.join(DATA, name), flags=flags, physicsClientId=client)
         try:
-            inertials = K.model_inertials(model, False, "collision_aabb")
-            table = K.joint_table(model, False, inertials)
+            inertials = model_inertials(model, False, "collision_aabb")
+            table = joint_table(model, False, inertials)
             for i, row in enumerate(table):
                 ref = p.getJointInfo(body, i, physicsClientId=client)
                 assert row.parent_frame_position == pytest.approx(ref[14], abs=1e-9), name
@@ -231,7 +207,7 @@ def test_bad_file_inertia_becomes_zero_as_in_pybullet():
         '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="5"/></inertial></link></robot>'
     )
     model = parse_urdf(resolve_source(text))
-    assert K.model_inertials(model, False, "file")[0].diagonal == (0.0, 0.0, 0.0)
+    assert model_inertials(model, False, "file")[0].diagonal == (0.0, 0.0, 0.0)
     assert math.isclose(
-        K.model_inertials(model, False, "collision_aabb")[0].diagonal[0], 2 * 0.002**2 / 12
+        model_inertials(model, False, "collision_aabb")[0].diagonal[0], 2 * 0.002**2 / 12
     )

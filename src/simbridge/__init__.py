@@ -6,9 +6,8 @@ engines disagree.
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
 from . import exceptions
+from ._version import __version__
 from .exceptions import SimbridgeError
 from .profiles import PROFILES, Profile, get_profile
 from .registry import available_backends, register

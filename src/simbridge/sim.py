@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ._version import __version__
 from .backend import Backend
 from .exceptions import (
     InvalidArgumentError,
@@ -196,8 +197,6 @@ class Sim:
     def manifest(self) -> dict[str, Any]:
         """Everything needed to reproduce a run: backend, engine version, profile entries, and
         what the backend could not reproduce exactly (``departures``)."""
-        from . import __version__
-
         out = {"simbridge_version": __version__, "profile": self.profile.as_dict()}
         out.update(self._b.manifest())
         return out

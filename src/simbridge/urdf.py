@@ -23,6 +23,7 @@ from .exceptions import (
     UrdfParseError,
     UrdfStructureError,
 )
+from .meshes import mesh_vertices
 
 __all__ = [
     "UrdfSource",
@@ -363,8 +364,6 @@ def _sizes(values: Sequence[float], where: str, file: str) -> None:
 def _check_collada(path: Path, uri: str, where: str, file: str) -> None:
     """Read a .dae before any engine does: PyBullet's COLLADA reader ends the process on some
     malformed files (an empty <scene>), and MuJoCo's backend converts .dae through trimesh."""
-    from .kinematics import mesh_vertices  # trimesh loads only for a .dae
-
     try:
         vertices = mesh_vertices(path)
     except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file

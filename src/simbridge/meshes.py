@@ -1,0 +1,124 @@
+"""Mesh files read once: one reader per format, cached per path.
+
+Every user of a mesh (PyBullet's inertia rules, the URDF's COLLADA check, the MuJoCo model
+builder) reads it through :func:`read_mesh`, which returns the vertex positions (n, 3) float64,
+in the file's own units and frame, unscaled, and the triangles (m, 3) int64 as indices into
+them. Both arrays are read-only: the result is cached per path string (up to 256 files) for
+the life of the process.
+
+* ``.obj``: ``v`` lines (x y z; any further number is ignored) and ``f`` lines, each polygon a
+  fan of triangles around its first corner; ``i/t/n`` corners use ``i``; a negative index
+  counts back from the last vertex of the file; a face with a corner that is not an integer is
+  left out, as is a triangle with an index out of range;
+* ``.stl``: binary (when the size matches the triangle count in its header) or ASCII
+  (``vertex`` lines); three vertices per triangle, as written, not merged;
+* anything else (``.dae``): through trimesh, imported only then (about 1 s), without
+  processing (no merging, no repair).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+__all__ = ["MeshData", "read_mesh", "mesh_vertices"]
+
+
+class MeshData(NamedTuple):
+    """A mesh as its file holds it (both arrays read-only)."""
+
+    vertices: np.ndarray
+    """(n, 3) float64 vertex positions, unscaled."""
+    faces: np.ndarray
+    """(m, 3) int64 triangles, indices into ``vertices``."""
+
+
+def read_mesh(path: str | Path) -> MeshData:
+    """The vertices and triangles of a mesh file (see the module docstring). Cached per path;
+    raises OSError when the file cannot be read, ValueError or IndexError on an .obj/.stl
+    number that is not one, and trimesh's own errors on a file trimesh cannot read."""
+    return _read_cached(str(path))
+
+
+def mesh_vertices(path: str | Path) -> np.ndarray:
+    """The (n, 3) vertex positions of :func:`read_mesh`, unscaled, read-only."""
+    return _read_cached(str(path)).vertices
+
+
+@lru_cache(maxsize=256)
+def _read_cached(path: str) -> MeshData:
+    suffix = Path(path).suffix.lower()
+    if suffix == ".obj":
+        mesh = _read_obj(path)
+    elif suffix == ".stl":
+        mesh = _read_stl(path)
+    else:
+        mesh = _read_with_trimesh(path)
+    mesh.vertices.setflags(write=False)
+    mesh.faces.setflags(write=False)
+    return mesh
+
+
+def _read_obj(path: str) -> MeshData:
+    rows = []
+    face_lines = []
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            if line.startswith("v "):
+                parts = line.split()
+                rows.append((float(parts[1]), float(parts[2]), float(parts[3])))
+            elif line.startswith("f "):
+                face_lines.append(line)
+    vertices = np.array(rows, dtype=float).reshape(-1, 3)
+    n = len(vertices)
+    tris: list[tuple[int, int, int]] = []
+    for line in face_lines:
+        idx: list[int] = []
+        for token in line.split()[1:]:
+            head = token.split("/", 1)[0]
+            if not head:
+                continue
+            try:
+                i = int(head)
+            except ValueError:  # not an index: the face is unusable, as for PyBullet
+                idx = []
+                break
+            idx.append(i - 1 if i > 0 else n + i)
+        for a in range(1, len(idx) - 1):
+            tris.append((idx[0], idx[a], idx[a + 1]))
+    faces = np.array(tris, dtype=np.int64).reshape(-1, 3)
+    if len(faces) and (faces.min() < 0 or faces.max() >= n):
+        faces = faces[(faces >= 0).all(axis=1) & (faces < n).all(axis=1)]
+    return MeshData(vertices, faces)
+
+
+def _read_stl(path: str) -> MeshData:
+    data = Path(path).read_bytes()
+    vertices: np.ndarray | None = None
+    if len(data) >= 84:
+        n = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
+        if 84 + 50 * n == len(data):
+            rec = np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+            tri = np.frombuffer(data, dtype=rec, count=n, offset=84)
+            vertices = tri["v"].reshape(-1, 3).astype(float)
+    if vertices is None:
+        rows = []
+        for line in data.decode("utf-8", errors="replace").splitlines():
+            parts = line.split()
+            if len(parts) == 4 and parts[0] == "vertex":
+                rows.append((float(parts[1]), float(parts[2]), float(parts[3])))
+        vertices = np.array(rows, dtype=float).reshape(-1, 3)
+    faces = np.arange(len(vertices) // 3 * 3, dtype=np.int64).reshape(-1, 3)
+    return MeshData(vertices, faces)
+
+
+def _read_with_trimesh(path: str) -> MeshData:
+    import trimesh  # ~1 s to import: only for formats read nowhere else (.dae)
+
+    loaded: Any = trimesh.load(path, force="mesh", process=False)
+    vertices = np.asarray(loaded.vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.asarray(loaded.faces, dtype=np.int64).reshape(-1, 3)
+    return MeshData(vertices, faces)

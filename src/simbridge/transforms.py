@@ -1,0 +1,160 @@
+"""Quaternion, roll-pitch-yaw and rigid-transform maths on plain tuples and numpy arrays.
+
+Quaternions are (x, y, z, w) unless a name says ``wxyz``; rotations are active (a quaternion
+turns a vector of the frame it describes into its parent frame); a pose is
+(position (3,) in metres, quaternion (4,)). Pure functions, no engine and no other simbridge
+module but :mod:`simbridge.types`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .types import Quat, Vec3
+
+__all__ = [
+    "IDENTITY_QUAT",
+    "quat_from_rpy",
+    "rpy_from_quat",
+    "quat_multiply",
+    "quat_conjugate",
+    "quat_rotate",
+    "quat_to_matrix",
+    "quat_from_matrix",
+    "transform_multiply",
+    "transform_inverse",
+    "xyzw_to_wxyz",
+    "wxyz_to_xyzw",
+]
+
+IDENTITY_QUAT: Quat = (0.0, 0.0, 0.0, 1.0)
+
+
+def quat_from_rpy(rpy: Sequence[float]) -> Quat:
+    """URDF roll-pitch-yaw in radians (fixed axes X, then Y, then Z:
+    R = Rz(yaw) Ry(pitch) Rx(roll)) to a unit quaternion (x, y, z, w), as
+    ``p.getQuaternionFromEuler``."""
+    r, p, y = (0.5 * float(a) for a in rpy)
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(r),
+        math.sin(r),
+        math.cos(p),
+        math.sin(p),
+        math.cos(y),
+        math.sin(y),
+    )
+    return (
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+        cr * cp * cy + sr * sp * sy,
+    )
+
+
+def rpy_from_quat(q: Sequence[float]) -> Vec3:
+    """Inverse of :func:`quat_from_rpy` (``p.getEulerFromQuaternion``): roll, pitch, yaw in
+    radians, pitch in [-pi/2, pi/2]."""
+    x, y, z, w = (float(c) for c in q)
+    sinp = max(-1.0, min(1.0, 2.0 * (w * y - z * x)))
+    return (
+        math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y)),
+        math.asin(sinp),
+        math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)),
+    )
+
+
+def quat_multiply(a: Sequence[float], b: Sequence[float]) -> Quat:
+    """Hamilton product ``a * b`` (rotation b, then a), both (x, y, z, w)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
+
+
+def quat_conjugate(q: Sequence[float]) -> Quat:
+    """The inverse rotation of a unit quaternion (x, y, z, w)."""
+    return (-q[0], -q[1], -q[2], q[3])
+
+
+def quat_rotate(q: Sequence[float], v: Sequence[float]) -> Vec3:
+    """Rotate vector ``v`` (3,) by unit quaternion ``q`` (x, y, z, w)."""
+    x, y, z, w = q
+    vx, vy, vz = v
+    # t = 2 q_vec x v ; v' = v + w t + q_vec x t
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    return (
+        vx + w * tx + y * tz - z * ty,
+        vy + w * ty + z * tx - x * tz,
+        vz + w * tz + x * ty - y * tx,
+    )
+
+
+def quat_to_matrix(q: Sequence[float]) -> np.ndarray:
+    """3x3 rotation matrix of a unit quaternion (x, y, z, w)."""
+    x, y, z, w = (float(c) for c in q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def quat_from_matrix(m: np.ndarray) -> Quat:
+    """Unit quaternion (x, y, z, w, with w >= 0) of a 3x3 rotation matrix."""
+    m = np.asarray(m, dtype=float)
+    tr = m[0, 0] + m[1, 1] + m[2, 2]
+    if tr > 0:
+        s = 2.0 * math.sqrt(tr + 1.0)
+        q = ((m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s)
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = (0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s)
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = ((m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = ((m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s)
+    n = math.sqrt(sum(c * c for c in q))
+    sign = -1.0 if q[3] < 0 else 1.0
+    return (sign * q[0] / n, sign * q[1] / n, sign * q[2] / n, sign * q[3] / n)
+
+
+def transform_multiply(
+    a: tuple[Sequence[float], Sequence[float]], b: tuple[Sequence[float], Sequence[float]]
+) -> tuple[Vec3, Quat]:
+    """Compose poses ``a * b`` given as (position, quaternion x, y, z, w): ``b`` expressed in
+    the frame ``a`` describes, returned in ``a``'s parent frame."""
+    pa, qa = a
+    pb, qb = b
+    r = quat_rotate(qa, pb)
+    return (pa[0] + r[0], pa[1] + r[1], pa[2] + r[2]), quat_multiply(qa, qb)
+
+
+def transform_inverse(t: tuple[Sequence[float], Sequence[float]]) -> tuple[Vec3, Quat]:
+    """Inverse of a pose (position, quaternion x, y, z, w)."""
+    p, q = t
+    qi = quat_conjugate(q)
+    r = quat_rotate(qi, p)
+    return (-r[0], -r[1], -r[2]), qi
+
+
+def xyzw_to_wxyz(q: Sequence[float]) -> tuple[float, float, float, float]:
+    """(x, y, z, w) to MuJoCo's (w, x, y, z) order."""
+    return (q[3], q[0], q[1], q[2])
+
+
+def wxyz_to_xyzw(q: Sequence[float]) -> Quat:
+    """MuJoCo's (w, x, y, z) order to (x, y, z, w)."""
+    return (q[1], q[2], q[3], q[0])

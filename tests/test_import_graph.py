@@ -1,0 +1,251 @@
+"""No import circle inside the installed ``simbridge`` package (core, backends, compare).
+
+Every module of the package is parsed with :mod:`ast` (none is executed) and every ``import``
+statement in it becomes an edge to the simbridge module it names, wherever the statement
+stands: at the top, inside a function (a lazy import), or under ``if TYPE_CHECKING:``. A lazy
+or type-checking import does not fail at run time, but it still ties the two modules together,
+so a module that imports another that imports it back is a circle however either import is
+written.
+
+``from package import name`` is an edge to ``package.name`` when that is a module; else to
+``package`` itself when its ``__init__`` binds ``name`` (a compiled submodule, such as the
+MuJoCo step loop, is no edge: it imports nothing of simbridge). Importing ``a.b.c`` also runs
+``a`` and ``a.b`` first; those implicit parent-package imports are not edges (a package's
+``__init__`` importing its own submodules is the ordinary layout, not a circle).
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib.util
+import pkgutil
+import tomllib
+from importlib.machinery import ModuleSpec
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _declared_packages() -> list[str]:
+    """The packages the distribution installs (pyproject.toml's [tool.setuptools] packages):
+    an editable install maps simbridge.backends and simbridge.compare from their own folders,
+    so walking simbridge's own folder would not find them."""
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    return list(data["tool"]["setuptools"]["packages"])
+
+
+def _modules() -> dict[str, tuple[Path, bool]]:
+    """Module name -> (source file, is a package), as the installed package resolves them.
+    Only the declared packages' parents are imported to find them (simbridge, its backends
+    and compare folders); no module below them runs."""
+    found: dict[str, tuple[Path, bool]] = {}
+
+    def walk(name: str, spec: ModuleSpec) -> None:
+        if spec.origin and spec.origin.endswith(".py"):
+            found[name] = (Path(spec.origin), spec.submodule_search_locations is not None)
+        for info in pkgutil.iter_modules(spec.submodule_search_locations or []):
+            full = f"{name}.{info.name}"
+            sub = info.module_finder.find_spec(full, None)
+            if sub is not None:
+                walk(full, sub)
+
+    for package in _declared_packages():
+        if package == "simbridge" or package.startswith("simbridge."):
+            spec = importlib.util.find_spec(package)
+            assert spec is not None, f"{package} is declared in pyproject.toml but not found"
+            walk(package, spec)
+    return found
+
+
+def _top_level_names(tree: ast.Module) -> set[str] | None:
+    """The names a module binds outside functions and classes (None after ``import *``: any)."""
+    names: set[str] = set()
+    body: list[ast.stmt] = list(tree.body)
+    while body:
+        node = body.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for alias in node.names:
+                if alias.name == "*":
+                    return None
+                names.add(alias.asname or alias.name.split(".")[0])
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                names.update(n.id for n in ast.walk(target) if isinstance(n, ast.Name))
+        for field in ("body", "orelse", "finalbody", "handlers"):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                body.extend(getattr(node, field, []))
+    return names
+
+
+def _edges(modules: dict[str, tuple[Path, bool]]) -> dict[str, dict[str, int]]:
+    """module -> {imported simbridge module: line of the first import statement}."""
+    trees = {
+        name: ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for name, (path, _) in modules.items()
+    }
+    bound = {name: _top_level_names(trees[name]) for name, (_, pkg) in modules.items() if pkg}
+    graph: dict[str, dict[str, int]] = {}
+    for name, (_, is_package) in modules.items():
+        out: dict[str, int] = {}
+        package = name if is_package else name.rpartition(".")[0]
+        for node in ast.walk(trees[name]):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    # "import a.b.c" binds a, runs a.b.c: the deepest simbridge module named
+                    parts = alias.name.split(".")
+                    for k in range(len(parts), 0, -1):
+                        if ".".join(parts[:k]) in modules:
+                            targets.append(".".join(parts[:k]))
+                            break
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")
+                    base = base[: len(base) - (node.level - 1)]
+                    origin = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    origin = node.module or ""
+                for alias in node.names:
+                    sub = f"{origin}.{alias.name}"
+                    if sub in modules:
+                        targets.append(sub)
+                    elif origin in modules:
+                        names = bound.get(origin)  # a plain module: any name is its own
+                        if origin not in bound or names is None or alias.name in names:
+                            targets.append(origin)
+                    # else: a submodule that is not Python source (the compiled step loop,
+                    # built or not): no edge to the package that would only hold it
+            for target in targets:
+                if target != name:  # a package reading its own attribute is no circle
+                    out.setdefault(target, node.lineno)
+        graph[name] = out
+    return graph
+
+
+def _cycles(graph: dict[str, dict[str, int]]) -> list[list[str]]:
+    """One shortest circle through each strongly connected component of more than one module
+    (Tarjan's algorithm), starting at the component's first module by name."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    components: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, {}):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                components.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+
+    circles = []
+    for component in components:
+        members = set(component)
+        start = component[0]
+        # breadth-first from start back to start inside the component: the shortest circle
+        previous: dict[str, str] = {}
+        queue = [start]
+        end = None
+        while queue and end is None:
+            v = queue.pop(0)
+            for w in sorted(graph[v]):
+                if w not in members:
+                    continue
+                if w == start:
+                    end = v
+                    break
+                if w not in previous:
+                    previous[w] = v
+                    queue.append(w)
+        path = [start]
+        v = end
+        while v is not None and v != start:
+            path.append(v)
+            v = previous[v]
+        circles.append([start, *reversed(path[1:]), start])
+    return circles
+
+
+def _describe(graph: dict[str, dict[str, int]], circle: list[str]) -> str:
+    steps = [f"{a} (line {graph[a][b]}) -> {b}" for a, b in zip(circle, circle[1:], strict=False)]
+    return "; ".join(steps)
+
+
+def test_every_package_module_is_found():
+    modules = _modules()
+    for name in (
+        "simbridge",
+        "simbridge.sim",
+        "simbridge.urdf",
+        "simbridge.backends.pybullet_backend",
+        "simbridge.compare.scenario",
+    ):
+        assert name in modules
+    assert any(name.startswith("simbridge.backends.mujoco") for name in modules)
+
+
+def test_the_import_graph_has_no_circle():
+    graph = _edges(_modules())
+    circles = _cycles(graph)
+    assert not circles, "import circles:\n" + "\n".join(_describe(graph, c) for c in circles)
+
+
+@pytest.mark.parametrize(
+    "sources, circle",
+    [
+        (
+            {
+                "pkg": "from . import a\n",
+                "pkg.a": "import typing\nif typing.TYPE_CHECKING:\n    from .b import X\n",
+                "pkg.b": "def f():\n    from pkg.a import Y\n",
+            },
+            ["pkg.a", "pkg.b", "pkg.a"],
+        ),
+        ({"pkg": "from . import a\n", "pkg.a": "import pkg\n"}, ["pkg", "pkg.a", "pkg"]),
+        (
+            {"pkg": "", "pkg.a": "from pkg import b\n", "pkg.b": "from .a import c\n"},
+            ["pkg.a", "pkg.b", "pkg.a"],
+        ),
+        ({"pkg": "", "pkg.a": "from pkg import b\n", "pkg.b": "x = 1\n"}, []),
+        (
+            {"pkg": "from .a import f\nV = 1\n", "pkg.a": "def f():\n    from . import V\n"},
+            ["pkg", "pkg.a", "pkg"],
+        ),
+        ({"pkg": "from .a import f\n", "pkg.a": "def f():\n    from . import _compiled\n"}, []),
+    ],
+)
+def test_the_checker_sees_lazy_and_type_checking_circles(tmp_path, sources, circle):
+    """The checker itself: a circle through a TYPE_CHECKING import and a lazy import is found,
+    so is one through a package's __init__ (a name it binds); a plain chain is not a circle,
+    nor is a package's import of a compiled submodule."""
+    modules = {}
+    for name, text in sources.items():
+        path = tmp_path / f"{name}.py"
+        path.write_text(text, encoding="utf-8")
+        modules[name] = (path, name == "pkg")
+    graph = _edges(modules)
+    circles = _cycles(graph)
+    assert circles == ([circle] if circle else [])

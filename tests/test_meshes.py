@@ -1,0 +1,110 @@
+"""simbridge.meshes: the one reader per mesh format (vertices and triangles), cached per path."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+import pybullet_data
+import pytest
+
+from simbridge.meshes import MeshData, mesh_vertices, read_mesh
+
+DATA = Path(pybullet_data.getDataPath())
+
+OBJ = """# a quad, a triangle by negative indices, a bad face, an index out of range
+o first
+v 0 0 0
+v 1 0 0 1.0
+v 1 1 0
+v 0 1 0
+vt 0 0
+vn 0 0 1
+f 1/1/1 2/1/1 3/1/1 4/1/1
+f -3 -2 -1
+f 1 x 3
+f 1 2 9
+v 0 0 1
+"""
+
+
+def test_obj_faces_are_fans_of_every_polygon(tmp_path):
+    path = tmp_path / "probe.obj"
+    path.write_text(OBJ, encoding="utf-8")
+    mesh = read_mesh(path)
+    assert isinstance(mesh, MeshData)
+    assert mesh.vertices.dtype == np.float64 and mesh.faces.dtype == np.int64
+    assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1]]
+    # the quad as two triangles around its first corner; negative indices count back from the
+    # last vertex of the file (5 vertices: -3 is vertex 3, index 2); "f 1 x 3" is left out;
+    # "f 1 2 9" names no vertex 9
+    assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 3], [2, 3, 4]]
+
+
+def test_cached_per_path_and_read_only(tmp_path):
+    path = tmp_path / "cached.obj"
+    path.write_text(OBJ, encoding="utf-8")
+    mesh = read_mesh(path)
+    assert read_mesh(str(path)) is mesh
+    assert mesh_vertices(path) is mesh.vertices
+    for array in mesh:
+        assert not array.flags.writeable
+        with pytest.raises(ValueError):
+            array[0, 0] = 7
+
+
+def test_shipped_obj():
+    mesh = read_mesh(DATA / "cube.obj")
+    assert mesh.vertices.shape == (8, 3) and mesh.faces.shape == (12, 3)
+    assert sorted(map(tuple, mesh.vertices * 2)) == sorted(
+        (x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)
+    )
+    # every face is a triangle of the cube's surface: its corners share one coordinate
+    for face in mesh.vertices[mesh.faces]:
+        assert any(len(set(face[:, axis])) == 1 for axis in range(3))
+
+
+def _triangles() -> np.ndarray:
+    return np.array(
+        [[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 0], [0, 1, 0], [0, 0, 0.5]]], dtype=np.float32
+    )
+
+
+def test_binary_and_ascii_stl_read_alike(tmp_path):
+    tri = _triangles()
+    binary = tmp_path / "b.stl"
+    body = b"".join(struct.pack("<3f", 0, 0, 1) + t.tobytes() + b"\0\0" for t in tri)
+    binary.write_bytes(b"\0" * 80 + struct.pack("<I", len(tri)) + body)
+    ascii_ = tmp_path / "a.STL"
+    lines = ["solid probe"]
+    for t in tri:
+        lines += ["facet normal 0 0 1", "outer loop"]
+        lines += [f"vertex {x} {y} {z}" for x, y, z in t]
+        lines += ["endloop", "endfacet"]
+    ascii_.write_text("\n".join([*lines, "endsolid probe"]), encoding="utf-8")
+    for path in (binary, ascii_):
+        mesh = read_mesh(path)
+        assert mesh.vertices.tolist() == tri.reshape(-1, 3).astype(float).tolist()
+        assert mesh.faces.tolist() == [[0, 1, 2], [3, 4, 5]]
+
+
+def test_shipped_stl_agrees_with_trimesh():
+    import trimesh
+
+    path = DATA / "laikago" / "hip_motor.stl"
+    mesh = read_mesh(path)
+    ref = trimesh.load(str(path), force="mesh", process=False)
+    assert np.array_equal(mesh.vertices[mesh.faces], np.asarray(ref.vertices)[ref.faces])
+
+
+def test_collada_through_trimesh():
+    mesh = read_mesh(DATA / "racecar" / "meshes" / "cone.dae")
+    assert mesh.vertices.ndim == 2 and mesh.vertices.shape[1] == 3 and len(mesh.vertices) > 3
+    assert mesh.faces.shape[1] == 3 and len(mesh.faces) > 0
+    assert mesh.faces.min() >= 0 and mesh.faces.max() < len(mesh.vertices)
+
+
+def test_a_missing_file_is_an_os_error(tmp_path):
+    with pytest.raises(OSError):
+        read_mesh(tmp_path / "missing.obj")
