@@ -1,4 +1,4 @@
-"""The one compiled part: the MuJoCo backend's step loop (backends/_mjkernel.c).
+"""The one compiled part: the MuJoCo backend's step loop (backends/mujoco/_mjkernel.c).
 
 It is optional: built against the MuJoCo headers that the ``mujoco`` wheel ships (a build
 requirement in pyproject.toml); where it cannot be built (no C compiler), the package installs
@@ -25,8 +25,8 @@ _include = _mujoco_include()
 setup(
     ext_modules=[
         Extension(
-            "simbridge.backends._mjkernel",
-            sources=["backends/_mjkernel.c"],
+            "simbridge.backends.mujoco._mjkernel",
+            sources=["backends/mujoco/_mjkernel.c"],
             include_dirs=_include,
             extra_compile_args=["-O2", "-std=c11"],
             optional=True,

@@ -154,9 +154,11 @@ def pybullet_raw_drive(record: bool) -> Callable[[], float]:
 
 def _mujoco_handles(sim: simbridge.Sim, robot: int) -> tuple:
     """The compiled model, data, wheel dof addresses and base body id behind a mujoco Sim."""
-    b = sim._b  # noqa: SLF001 - the raw floor is measured on the very model the layer built
-    r = b._robots[robot]  # noqa: SLF001
-    return b._m, b._d, r.dofadr[WHEELS].copy(), int(r.body_ids[0])  # noqa: SLF001
+    from simbridge.backends.mujoco import inspect  # the raw floor: the model the layer built
+
+    r = inspect.robot(sim, robot)
+    m, d = inspect.model_and_data(sim)
+    return m, d, r.dofadr[WHEELS].copy(), int(r.body_ids[0])
 
 
 def _mujoco_raw_model(sim: simbridge.Sim, robot: int) -> tuple:
@@ -171,9 +173,10 @@ def _mujoco_raw_model(sim: simbridge.Sim, robot: int) -> tuple:
     step would cost half of a resting one for a reason that has nothing to do with the layer."""
     import mujoco
 
-    b = sim._b  # noqa: SLF001 - the raw floor is measured on the model the layer built
-    r = b._robots[robot]  # noqa: SLF001
-    spec = b._spec.copy()  # noqa: SLF001
+    from simbridge.backends.mujoco import inspect  # the raw floor: the model the layer built
+
+    r = inspect.robot(sim, robot)
+    spec = inspect.world_spec(sim).copy()
     for jnt in spec.joints:  # MuJoCo's own joint limits (the layer gives them PyBullet's law)
         jnt.solref_limit = [0.02, 1.0]
         jnt.solimp_limit = [0.9, 0.95, 0.001, 0.5, 2.0]
@@ -188,7 +191,7 @@ def _mujoco_raw_model(sim: simbridge.Sim, robot: int) -> tuple:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     m = spec.compile()
     d = mujoco.MjData(m)
-    d.qpos[:] = b._d.qpos  # noqa: SLF001 - the same start
+    d.qpos[:] = inspect.model_and_data(sim)[1].qpos  # the same start
     dofs = np.array(
         [
             m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, r.spec.joint_names[j])]
@@ -292,7 +295,9 @@ def single_calls(backend: str, n: int) -> list[Case]:
         import mujoco
 
         m, d, dofs, _ = _mujoco_handles(sim, robot)
-        body = int(sim._b._robots[robot].body_ids[3])  # noqa: SLF001 - link 2
+        from simbridge.backends.mujoco import inspect
+
+        body = int(inspect.robot(sim, robot).body_ids[3])  # link 2
         qadr = m.jnt_qposadr[m.dof_jntid[dofs]]
 
         def raw_link() -> object:

@@ -1,9 +1,10 @@
 """Where a MuJoCo step of the layer goes: the compiled step loop timed phase by phase.
 
-Compiles backends/_mjkernel.c with its phase timers (-DSIMBRIDGE_KERNEL_TIMERS) into a temporary
-folder (removed at exit), runs r2d2 driving on the plane (wheels at -100 rad/s, 10 N·m, from a
-resting start) through ``Sim("mujoco")`` on it, and prints the time per step of each phase,
-beside raw ``mj_step`` on the same world with velocity actuators (bench/cases.py's raw floor)::
+Compiles backends/mujoco/_mjkernel.c with its phase timers (-DSIMBRIDGE_KERNEL_TIMERS) into a
+temporary folder (removed at exit), runs r2d2 driving on the plane (wheels at -100 rad/s,
+10 N·m, from a resting start) through ``Sim("mujoco")`` on it, and prints the time per step
+of each phase, beside raw ``mj_step`` on the same world with velocity actuators
+(bench/cases.py's raw floor)::
 
     python bench/kernel_phases.py [--repeats 7]
 
@@ -25,7 +26,8 @@ import mujoco
 import numpy as np
 
 import simbridge
-from simbridge.backends import mujoco_kernel
+from simbridge.backends.mujoco import kernel as mujoco_kernel
+from simbridge.backends.mujoco.inspect import compiled
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cases  # noqa: E402
@@ -56,7 +58,7 @@ def build(folder: str):  # type: ignore[no-untyped-def]
         "-DSIMBRIDGE_KERNEL_TIMERS",
         f"-I{include}",
         f"-I{sysconfig.get_paths()['include']}",
-        os.path.join(ROOT, "backends", "_mjkernel.c"),
+        os.path.join(ROOT, "backends", "mujoco", "_mjkernel.c"),
         "-o",
         out,
     ]
@@ -97,11 +99,11 @@ def main() -> int:
                 mujoco.mj_step(m, d, steps)
                 raws.append((time.perf_counter() - t0) / steps * 1e6)
                 sim.set_joint_velocity(robot, cases.WHEELS, -100.0, max_force=10.0)
-                sim._b._kernel.timers()  # noqa: SLF001 - reset
+                compiled(sim).kernel.timers()  # reset
                 t0 = time.perf_counter()
                 sim.step(steps)
                 totals.append((time.perf_counter() - t0) / steps * 1e6)
-                phases.append(np.array(sim._b._kernel.timers()) / steps / 1e3)  # noqa: SLF001
+                phases.append(np.array(compiled(sim).kernel.timers()) / steps / 1e3)
             finally:
                 sim.close()
     med = np.median(np.array(phases), axis=0)

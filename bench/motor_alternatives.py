@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 
 import simbridge
+from simbridge.backends.mujoco import inspect
 
 
 def through_sim(backend, urdf, joints, target, force, steps):
@@ -28,9 +29,8 @@ def raw(urdf, joints, target, force, steps, law, kv_scale=1.0):
     with simbridge.Sim("mujoco", profile="urdf") as s:
         r = s.load_urdf(urdf, fixed_base=True)
         s.set_joint_velocity(r, joints, 0.0, max_force=0.0)  # no rows: the law below drives
-        b = s._b
-        m, d = b._m, b._d
-        dofs = b._robots[r].dofadr[joints]
+        m, d = inspect.model_and_data(s)
+        dofs = inspect.robot(s, r).dofadr[joints]
         tv, F = np.asarray(target, float), np.asarray(force, float)
         dt = m.opt.timestep
         Mfull = np.zeros((m.nv, m.nv))

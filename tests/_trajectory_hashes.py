@@ -59,7 +59,7 @@ def _kuka_script(backend: str) -> str:
             sim.set_joint_position(arm, joints, q, max_force=300.0)
             sim.step()
             h.update(sim.joint_states(arm).positions.tobytes())
-        for k in range(120):
+        for _ in range(120):
             sim.set_joint_velocity(arm, joints, [0.3 * (-1) ** j for j in joints], max_force=50.0)
             sim.step()
             s = sim.joint_states(arm)

@@ -1,7 +1,8 @@
 """MuJoCo-backend specifics: the model it builds, the world edits, and the behaviours only this
 backend has to construct (PyBullet's motor, brake, damping and contact rules on MuJoCo).
 
-These tests look inside the backend (``sim._b``) and import mujoco/pybullet on purpose.
+These tests look inside the backend (through ``simbridge.backends.mujoco.inspect``) and import
+mujoco/pybullet on purpose.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import pybullet_data
 import pytest
 
 import simbridge
+from simbridge.backends.mujoco.inspect import compiled
 from simbridge.exceptions import DisplayError, SimulationDivergedError, UrdfStructureError
 
 WHEELS = [2, 3, 6, 7]
@@ -35,7 +37,7 @@ def _names(m: mujoco.MjModel, obj: mujoco.mjtObj, n: int) -> list[str]:
 def test_one_body_per_link_visuals_kept_and_plane_is_a_plane(sim):
     plane = sim.load_urdf("plane.urdf")
     r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
-    m = sim._b._m
+    m = compiled(sim).m
     bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody)
     links = ["base_link"] + [sim.joint_info(r2d2, i).link_name for i in range(15)]
     assert bodies == ["world", "b0/planeLink"] + [f"b1/{n}" for n in links]  # fixed links too
@@ -101,7 +103,7 @@ def test_link_state_is_current_after_a_step(sim):
     sim.reset_joint_state(body, [0, 1], [0.7, -0.4])
     sim.step(37)
     got = sim.link_state(body, 1)
-    m, d = sim._b._m, sim._b._d
+    m, d = compiled(sim).m, compiled(sim).d
     fresh = mujoco.MjData(m)
     fresh.qpos[:], fresh.qvel[:] = d.qpos, d.qvel
     mujoco.mj_forward(m, fresh)
@@ -205,7 +207,7 @@ def test_dae_meshes_are_converted():
       <visual><geometry><mesh filename="{daes[0]}"/></geometry></visual></link></robot>"""
     with simbridge.Sim("mujoco") as s:
         s.load_urdf(urdf)
-        assert s._b._m.nmesh == 1
+        assert compiled(s).m.nmesh == 1
 
 
 def test_brake_threshold_is_one_newton_second_per_step(sim):
@@ -225,27 +227,28 @@ def _exact_against_solver(monkeypatch, profile: str, scenario) -> tuple[float, i
     """Run ``scenario`` twice on the Python step loop: with the exact motor-only solve, and
     with it switched off (MuJoCo's solver, then the polish). Returns the largest gap in qpos,
     qvel and motor impulses over the run, and how many steps took the exact solve."""
-    from simbridge.backends import mujoco_backend, mujoco_kernel
+    from simbridge.backends.mujoco import kernel as mujoco_kernel
+    from simbridge.backends.mujoco import solve as mujoco_solve
 
     monkeypatch.setenv(mujoco_kernel.ENV, "python")
-    exact = mujoco_backend.MujocoBackend._exact_motors
+    exact = mujoco_solve.exact_motors
     taken = [0]
 
-    def counted(self, m, d, k):  # type: ignore[no-untyped-def]
-        ok = exact(self, m, d, k)
+    def counted(m, d, t, k):  # type: ignore[no-untyped-def]
+        ok = exact(m, d, t, k)
         taken[0] += ok
         return ok
 
     runs = []
-    for solve in (counted, lambda self, m, d, k: False):
-        monkeypatch.setattr(mujoco_backend.MujocoBackend, "_exact_motors", solve)
+    for solve in (counted, lambda m, d, t, k: False):
+        monkeypatch.setattr(mujoco_solve, "exact_motors", solve)
         states: list[np.ndarray] = []
         with simbridge.Sim("mujoco", profile=profile) as s:
 
             def record(s=s, states=states) -> None:
-                d, t = s._b._d, s._b._motors
+                d, t = compiled(s).d, compiled(s).motors
                 impulses = np.zeros(t.n)  # the motor rows' impulses (fewer rows once released)
-                impulses[: t.n_rows] = d.efc_force[: t.n_rows] * s._b._dt
+                impulses[: t.n_rows] = d.efc_force[: t.n_rows] * compiled(s).dt
                 states.append(np.concatenate([d.qpos, d.qvel, impulses]))
 
             scenario(s, record)

@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 
 import simbridge
-from simbridge.backends import mujoco_kernel
+from simbridge.backends.mujoco import kernel as mujoco_kernel
+from simbridge.backends.mujoco.inspect import compiled
 from simbridge.exceptions import SimulationDivergedError
 
 WHEELS = [2, 3, 6, 7]
@@ -43,15 +44,15 @@ def test_kernel_is_built_and_used_where_a_compiler_exists():
         pytest.skip(f"{mujoco_kernel.ENV}=python chooses the Python loop for this run")
     assert mujoco_kernel.reason() == "", mujoco_kernel.reason()
     with simbridge.Sim("mujoco") as sim:
-        assert sim._b._kernel is not None
-        assert sim._b.manifest()["step_loop"].startswith("compiled")
+        assert compiled(sim).kernel is not None
+        assert sim.manifest()["step_loop"].startswith("compiled")
 
 
 def test_environment_variable_selects_the_python_loop(monkeypatch):
     monkeypatch.setenv(mujoco_kernel.ENV, "python")
     with simbridge.Sim("mujoco") as sim:
-        assert sim._b._kernel is None
-        assert sim._b.manifest()["step_loop"] == f"Python ({mujoco_kernel.ENV}=python)"
+        assert compiled(sim).kernel is None
+        assert sim.manifest()["step_loop"] == f"Python ({mujoco_kernel.ENV}=python)"
 
 
 def _select_loop(monkeypatch, loop: str) -> None:
@@ -65,12 +66,12 @@ def _trajectory(monkeypatch, loop: str, scenario, profile: str = "pybullet") -> 
     _select_loop(monkeypatch, loop)
     states: list[np.ndarray] = []
     with simbridge.Sim("mujoco", profile=profile) as sim:
-        assert (sim._b._kernel is None) == (loop == "python")
+        assert (compiled(sim).kernel is None) == (loop == "python")
 
         def record() -> None:
-            d = sim._b._d
-            motor_forces = d.efc_force[: sim._b._motors.n_rows]
-            states.append(np.concatenate([d.qpos, d.qvel, motor_forces * sim._b._dt]))
+            d = compiled(sim).d
+            motor_forces = d.efc_force[: compiled(sim).motors.n_rows]
+            states.append(np.concatenate([d.qpos, d.qvel, motor_forces * compiled(sim).dt]))
 
         scenario(sim, record)
     return states
@@ -111,7 +112,7 @@ def test_r2d2_drive_step_by_step(monkeypatch, profile):
     _select_loop(monkeypatch, "python")
     b, rb = _tutorial_sim(profile)
     try:
-        assert a._b._kernel is not None and b._b._kernel is None
+        assert compiled(a).kernel is not None and compiled(b).kernel is None
         worst = 0.0
         for k in range(980):
             for sim, robot in ((a, ra), (b, rb)):
@@ -120,15 +121,16 @@ def test_r2d2_drive_step_by_step(monkeypatch, profile):
                         sim.set_joint_velocity(robot, WHEELS, [-100, -100, 100, 100], max_force=50)
                     else:
                         sim.set_joint_velocity(robot, WHEELS, -100.0, max_force=10)
-            mujoco.mj_copyData(b._b._d, b._b._m, a._b._d)
+            mujoco.mj_copyData(compiled(b).d, compiled(b).m, compiled(a).d)
             a.step()
             b.step()
-            da, db = a._b._d, b._b._d
-            n = a._b._motors.n_rows
+            da, db = compiled(a).d, compiled(b).d
+            n = compiled(a).motors.n_rows
             gap = max(
                 float(np.abs(da.qpos - db.qpos).max()),
                 float(np.abs(da.qvel - db.qvel).max()),
-                float(np.abs(da.efc_force[:n] - db.efc_force[:n]).max(initial=0.0)) * a._b._dt,
+                float(np.abs(da.efc_force[:n] - db.efc_force[:n]).max(initial=0.0))
+                * compiled(a).dt,
             )
             worst = max(worst, gap)
         print(f"kernel against Python loop, step by step: largest gap {worst:.3g}")
@@ -150,7 +152,7 @@ def _new_target_every_step(sim, record) -> None:
         sim.set_joint_velocity(r, wheels, target, max_force=[5.0 + k % 7, 5.0, 8.0, 3.0])
         sim.step()
         record()
-    assert sim._b._fast  # the hot path was the one taken
+    assert compiled(sim).fast  # the hot path was the one taken
 
 
 def test_new_target_every_step(monkeypatch):
@@ -237,7 +239,8 @@ def test_divergence_is_reported_by_the_compiled_loop():
         body = sim.load_urdf("wheel.urdf", fixed_base=True)
         sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)
         sim.step(2)
-        sim._b._d.qvel[:] = np.inf  # a state no command can make: only the loop's check sees it
+        # a state no command can make: only the loop's check sees it
+        compiled(sim).d.qvel[:] = np.inf
         with pytest.raises(SimulationDivergedError, match="velocities"):
             sim.step(3)
 
@@ -246,7 +249,7 @@ def test_divergence_is_reported_by_the_compiled_loop():
 def test_bad_bindings_raise_instead_of_crashing():
     with simbridge.Sim("mujoco") as sim:
         sim.load_urdf("wheel.urdf", fixed_base=True)
-        k = sim._b._kernel
+        k = compiled(sim).kernel
         ints = np.zeros(1, np.intp)
         floats = np.zeros(1)
         none = np.zeros(0, np.intp)
@@ -266,7 +269,8 @@ def test_bad_bindings_raise_instead_of_crashing():
         with pytest.raises(TypeError):
             k.set_velocity(index, ["fast"], [1.0])
         k.set_velocity(index, [2.0], [3.0])
-        assert sim._b._motors.max_force[0] == 3.0 and sim._b._m.dof_frictionloss[0] == 3.0
+        c = compiled(sim)
+        assert c.motors.max_force[0] == 3.0 and c.m.dof_frictionloss[0] == 3.0
         with pytest.raises(ValueError, match="out of the model's range"):
             k.bind_world(0, nonef, nonef, ints + 50, floats, none, nonef, None, 1.0, 0.0, 1.0)
         with pytest.raises(ValueError, match="15 addresses"):
@@ -308,7 +312,7 @@ def test_link_and_base_state_read_through_the_kernel_as_in_python(monkeypatch):
 def test_body_state_checks_its_arguments():
     with simbridge.Sim("mujoco") as sim:
         sim.load_urdf("wheel.urdf", fixed_base=True)
-        k = sim._b._kernel
+        k = compiled(sim).kernel
         with pytest.raises(ValueError, match="float64 array of 20"):
             k.body_state(1, True, np.zeros(13))
         with pytest.raises(ValueError, match="body id 99"):
@@ -325,10 +329,11 @@ import simbridge
 from simbridge.exceptions import EngineError
 sim = simbridge.Sim("mujoco")
 sim.load_urdf("plane.urdf")
-sim._b._spec.memory = 60_000  # a world too large for its memory: MuJoCo's stack overflows
+from simbridge.backends.mujoco.inspect import world_spec
+world_spec(sim).memory = 60_000  # a world too large for its memory: MuJoCo's stack overflows
 for i in range(30):
     sim.load_urdf("cube_small.urdf", base_position=(0, 0, 0.05 + 0.03 * i))
-print(sim._b.manifest()["step_loop"])
+print(sim.manifest()["step_loop"])
 try:
     sim.step(1000)
 except EngineError as exc:
@@ -408,8 +413,8 @@ def test_sims_in_threads_step_as_they_do_alone():
             t.join()
         for (a, _), (b, _) in zip(alone, together, strict=True):
             assert a.time == b.time
-            assert np.array_equal(a._b._d.qpos, b._b._d.qpos)
-            assert np.array_equal(a._b._d.qvel, b._b._d.qvel)
+            assert np.array_equal(compiled(a).d.qpos, compiled(b).d.qpos)
+            assert np.array_equal(compiled(a).d.qvel, compiled(b).d.qvel)
     finally:
         for sim, _ in alone + together:
             sim.close()
@@ -440,7 +445,7 @@ def test_a_sim_stepping_in_another_thread_refuses_calls():
         assert sim.time == pytest.approx(20001 / 240)
         sim.link_state(robot, 2)  # free again
         # changing the world (load, remove, reset, close) is refused while it steps too
-        kernel = sim._b._kernel
+        kernel = compiled(sim).kernel
 
         def stepping() -> bool:
             try:
@@ -538,3 +543,43 @@ def _arms_pressing_on_their_limits(sim, record) -> None:
 
 def test_arms_pressing_on_their_limits(monkeypatch):
     _agree(monkeypatch, _arms_pressing_on_their_limits)
+
+
+def test_a_lost_compiled_loop_warns_once_naming_both_versions(monkeypatch):
+    """A compiled loop built against another MuJoCo is not used (kernel.reason() says so): the
+    first MuJoCo Sim of the process warns once, naming both versions and what to run, and the
+    manifest says which loop runs."""
+    import mujoco
+
+    from simbridge.exceptions import SlowStepWarning
+
+    monkeypatch.delenv(mujoco_kernel.ENV, raising=False)
+    monkeypatch.setattr(mujoco_kernel, "_state", {})
+    mujoco_kernel._load()  # the real checks first, then the other build's answer on top
+    monkeypatch.setitem(mujoco_kernel._state, "class", None)
+    monkeypatch.setitem(
+        mujoco_kernel._state,
+        "reason",
+        f"the compiled step loop was built for MuJoCo {mujoco_kernel._version(399)}, this is "
+        f"MuJoCo {mujoco.__version__}: {mujoco_kernel._REBUILD}",
+    )
+    with pytest.warns(SlowStepWarning) as caught, simbridge.Sim("mujoco") as sim:
+        assert sim.manifest()["step_loop"].startswith("Python (the compiled step loop was built")
+    assert len(caught) == 1
+    text = str(caught[0].message)
+    assert "3.9.9" in text and mujoco.__version__ in text and "--no-build-isolation" in text
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a second Sim does not warn again
+        simbridge.Sim("mujoco").close()
+
+
+def test_choosing_the_python_loop_does_not_warn(monkeypatch):
+    import warnings
+
+    monkeypatch.setenv(mujoco_kernel.ENV, "python")
+    monkeypatch.setattr(mujoco_kernel, "_state", {})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        simbridge.Sim("mujoco").close()

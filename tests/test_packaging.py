@@ -32,6 +32,8 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/sim.py",
         "simbridge/py.typed",
         "simbridge/backends/pybullet_backend.py",
+        "simbridge/backends/mujoco/backend.py",
+        "simbridge/backends/mujoco/loop.py",
         "simbridge/compare/__init__.py",
         "simbridge/robots/r2d2.urdf",
         "simbridge/robots/plane.urdf",
@@ -46,9 +48,11 @@ def test_wheel_carries_the_compiled_step_loop_where_a_compiler_exists(wheel):
 
     cc = (sysconfig.get_config_var("CC") or "cc").split()[0]
     if not (shutil.which(cc) or shutil.which("gcc")):  # pragma: no cover
-        pytest.skip("no C compiler: the wheel is built without backends/_mjkernel.c")
+        pytest.skip("no C compiler: the wheel is built without backends/mujoco/_mjkernel.c")
     names = zipfile.ZipFile(wheel).namelist()
-    assert any(n.startswith("simbridge/backends/_mjkernel") and n.endswith(".so") for n in names)
+    assert any(
+        n.startswith("simbridge/backends/mujoco/_mjkernel") and n.endswith(".so") for n in names
+    )
 
 
 def test_installed_wheel_imports_and_finds_the_robots(wheel, tmp_path):

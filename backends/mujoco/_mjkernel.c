@@ -1,6 +1,6 @@
 /* The MuJoCo backend's step loop in C.
  *
- * backends/mujoco_backend.py steps in Python: mj_step1, the layer's additions (motor offsets on
+ * backends/mujoco/loop.py steps in Python: mj_step1, the layer's additions (motor offsets on
  * the friction rows, PyBullet's link damping, joint damping, one-step torques), then mj_step2 or
  * a split mj_step2 that makes the motor rows exact (the "polish") and clamps the speeds. That
  * Python is the reference; this file does the same arithmetic, in the same order, once per
@@ -48,7 +48,7 @@ typedef void (*objvelfn)(const mjModel*, const mjData*, int, int, mjtNum*, int);
 typedef mjfLogHandler (*settlsfn)(mjfLogHandler);
 typedef mjfLogHandler (*getglobalfn)(void);
 
-/* the functions taken by address, in the order of mujoco_kernel._FUNCTIONS */
+/* the functions taken by address, in the order of kernel._FUNCTIONS (kernel.py) */
 enum { F_STEP1, F_STEP2, F_ACT, F_ACC, F_CON, F_CHECKACC, F_EULER, F_KIN, F_COMPOS, F_COMVEL,
        N_FN };
 /* + mj_solveM, mju_mat2Quat, mj_objectVelocity, _mjPRIVATE_setTlsLogHandler,
@@ -388,7 +388,7 @@ bad:
 }
 
 /* PyBullet's link damping, added to qfrc_passive as generalised forces
- * (mujoco_damping.LinkDamping.apply, the same arithmetic). Each body's force
+ * (damping.LinkDamping.apply, the same arithmetic). Each body's force
  * and torque become a spatial force about its tree's centre of mass (the point cvel and cdof
  * refer to), summed up the tree, and projected on every dof through cdof. */
 static void link_damping(Kernel* self) {
@@ -699,7 +699,7 @@ static int run_steps(Kernel* self, long n, int pending) {
         d->efc_D[r] *= inv;
       }
     }
-    if (d->nl) { /* PyBullet's limit rows (mujoco_motors.py), after the friction rows */
+    if (d->nl) { /* PyBullet's limit rows (motors.py), after the friction rows */
       const double inv = 1.0 / self->r_scale;
       for (int r = d->nf; r < d->nf + d->nl; r++) {
         d->efc_R[r] *= self->r_scale;

@@ -1,23 +1,27 @@
-"""Loads the MuJoCo backend's compiled step loop (``_mjkernel``, backends/_mjkernel.c).
+"""Loads the MuJoCo backend's compiled step loop (``_mjkernel``, backends/mujoco/_mjkernel.c).
 
 The kernel is used only when it was built against the very MuJoCo that runs (its header version
 equals ``mujoco.mj_version()``), the MuJoCo library file can be found next to the bindings, and
 ``SIMBRIDGE_MUJOCO_STEP`` is not ``python``. Otherwise the backend steps in Python (same
-arithmetic, same results, about 12x slower per step) and :func:`reason` says why.
+arithmetic, same results, about 12x slower per step), :func:`reason` says why, and the first
+MuJoCo ``Sim`` of the process warns once (:func:`warn_if_lost`): the loop is never lost
+silently. ``Sim.manifest()["step_loop"]`` says which loop runs.
 """
 
 from __future__ import annotations
 
 import ctypes
 import glob
+import importlib
 import os
+import warnings
 from typing import Any
 
 import mujoco
 
-from simbridge.exceptions import SimBusyError
+from simbridge.exceptions import SimBusyError, SlowStepWarning
 
-__all__ = ["ENV", "kernel_class", "functions", "reason"]
+__all__ = ["ENV", "kernel_class", "functions", "reason", "warn_if_lost"]
 
 ENV = "SIMBRIDGE_MUJOCO_STEP"  # "python" forces the Python step loop
 _FUNCTIONS = (
@@ -40,6 +44,16 @@ _FUNCTIONS = (
     "_mjPRIVATE_getGlobalLogHandler",
 )
 _state: dict[str, Any] = {}
+_REBUILD = (
+    "rebuild it against the installed MuJoCo: `pip install setuptools wheel`, then `pip install "
+    "--no-build-isolation --no-deps --force-reinstall -e .` in simbridge's folder (for an "
+    "installed copy: the same with `simbridge` in place of `-e .`)"
+)
+
+
+def _version(header: int) -> str:
+    """MuJoCo's header version number (e.g. 400) as its release name (4.0.0)."""
+    return f"{header // 100}.{header // 10 % 10}.{header % 10}"
 
 
 def _load() -> None:
@@ -48,14 +62,17 @@ def _load() -> None:
     _state["class"] = None
     _state["functions"] = ()
     try:
-        from . import _mjkernel  # type: ignore[attr-defined]
+        _mjkernel = importlib.import_module(f"{__package__}._mjkernel")  # the C extension
     except ImportError as exc:
-        _state["reason"] = f"the compiled step loop is not installed ({exc})"
+        _state["reason"] = (
+            f"the compiled step loop is not installed ({exc}); it is built at install where a "
+            f"C compiler exists: {_REBUILD}"
+        )
         return
     if mujoco.mj_version() != _mjkernel.HEADER_VERSION:
         _state["reason"] = (
-            f"the compiled step loop was built for MuJoCo header {_mjkernel.HEADER_VERSION}, "
-            f"running MuJoCo {mujoco.mj_version()}: reinstall simbridge"
+            f"the compiled step loop was built for MuJoCo {_version(_mjkernel.HEADER_VERSION)}, "
+            f"this is MuJoCo {mujoco.__version__}: {_REBUILD}"
         )
         return
     folder = os.path.dirname(mujoco.__file__)
@@ -102,3 +119,19 @@ def reason() -> str:
         return f"{ENV}=python"
     _load()
     return _state["reason"]  # type: ignore[no-any-return]
+
+
+def warn_if_lost() -> None:
+    """One :class:`SlowStepWarning` per process when the compiled loop cannot be used (not built,
+    or built against another MuJoCo), naming why and what to run; nothing when it is in use or
+    ``SIMBRIDGE_MUJOCO_STEP=python`` chose the Python loop."""
+    if _state.get("warned") or os.environ.get(ENV, "").strip().lower() == "python":
+        return
+    _load()
+    if _state["class"] is None:
+        _state["warned"] = True
+        warnings.warn(
+            f"MuJoCo steps in Python, about 12x slower: {_state['reason']}",
+            SlowStepWarning,
+            stacklevel=4,
+        )

@@ -32,7 +32,7 @@ from simbridge.exceptions import UrdfStructureError
 from simbridge.profiles import Profile
 from simbridge.urdf import Geometry, Link, UrdfModel
 
-from .mujoco_motors import LIMIT_ERP, LIMIT_MARGIN, MOTOR_DMAX
+from .motors import LIMIT_ERP, LIMIT_MARGIN, MOTOR_DMAX
 
 __all__ = ["RobotSpec", "GeomContact", "add_robot", "add_pairs", "new_world_spec"]
 
@@ -43,7 +43,7 @@ MIN_MASS = 1e-6  # kg, for a moving body whose URDF mass is 0 (MuJoCo refuses ze
 MIN_INERTIA = 1e-10  # kg m^2, likewise
 MIN_SIZE = 1e-6  # m, for a collision shape of size 0
 # Friction rows of the joint motors: as close to a hard constraint as MuJoCo allows, so the
-# motor reaches the velocity it asks for within a step (see mujoco_motors.py).
+# motor reaches the velocity it asks for within a step (see motors.py).
 MOTOR_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 DEFAULT_RGBA = (1.0, 1.0, 1.0, 1.0)
 
@@ -99,7 +99,7 @@ def new_world_spec(profile: Profile) -> mujoco.MjSpec:
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
     opt.iterations = profile.solver_iterations
     opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
-    # islands copy efc_R/efc_D before the backend hardens the motor rows (mujoco_motors.py)
+    # islands copy efc_R/efc_D before the backend hardens the motor rows (motors.py)
     opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     spec.visual.global_.offwidth = 640
     return spec
@@ -314,7 +314,7 @@ def add_robot(
                     if upper == joint.lower:
                         upper = float(np.nextafter(upper, np.inf))
                     jnt.range = [joint.lower, upper]
-                    # PyBullet's limit row (mujoco_motors.py): aref = -v/dt - erp pos/dt^2
+                    # PyBullet's limit row (motors.py): aref = -v/dt - erp pos/dt^2
                     dt = profile.timestep
                     jnt.solref_limit = [-LIMIT_ERP / dt / dt * MOTOR_DMAX, -MOTOR_DMAX / dt]
                     jnt.solimp_limit = list(MOTOR_SOLIMP)

@@ -22,7 +22,7 @@ The offset is the only per-step Python work of a velocity motor, and it is skipp
 target is 0 (the brake). Coupled motors on one body are solved exactly like PyBullet's rows: in
 one solve with the body's mass matrix, by MuJoCo's solver (with the contacts) and a polish, or,
 when the motor rows are the only rows, by the backend's own active-set solve
-(``MujocoBackend._exact_motors``; see docs/mujoco_backend.md for the measurements).
+(``solve.exact_motors``; see docs/mujoco_backend.md for the measurements).
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2]), MuJoCo's l
 # a motor would reach only 1 - 1e-4 of the velocity change it asks for. Between mj_step1 and
 # mj_step2 the backend scales the rows' R (and D = 1/R) by this factor, to 1e-6 of the inverse
 # inertia, which the Newton solver takes without trouble (islands are disabled so the solver
-# reads efc_R/efc_D directly); the polish then removes the last 1e-6 (mujoco_backend._polish).
+# reads efc_R/efc_D directly); the polish then removes the last 1e-6 (solve.polish).
 MOTOR_R_SCALE = 1e-2
 
 # PyBullet's joint-limit row (btMultiBodyJointLimitConstraint::createConstraintRows), measured

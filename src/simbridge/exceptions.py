@@ -33,6 +33,7 @@ __all__ = [
     "SimBusyError",
     "SimClosedError",
     "ScenarioError",
+    "SlowStepWarning",
 ]
 
 
@@ -234,3 +235,8 @@ class ScenarioError(SimbridgeError, ValueError):
         where = file if line is None else f"{file}:{line}"
         what = f"key {key!r}: " if key else ""
         super().__init__(f"{where}: {what}{detail}")
+
+
+class SlowStepWarning(UserWarning):
+    """A backend runs a slower path than it was installed for (the MuJoCo backend's compiled
+    step loop is missing or was built against another MuJoCo): same results, more time."""

@@ -129,7 +129,7 @@ register(
 )
 register(
     "mujoco",
-    "simbridge.backends.mujoco_backend:MujocoBackend",
+    "simbridge.backends.mujoco:MujocoBackend",
     requires=("mujoco",),
     pip_name="'mujoco>=4'",
 )

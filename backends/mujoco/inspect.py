@@ -1,0 +1,51 @@
+"""Look inside a MuJoCo-backed `Sim`: its engine objects, for tests and debugging.
+
+The `Sim` interface is the way to use simbridge; this is the one door into the backend's
+internals, so that nothing else reaches into private attributes (``sim._b._...``). What it
+returns is live engine state: read it, do not keep it across a ``load``, ``remove`` or
+``reset`` (each compiles a new model).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from simbridge.exceptions import InvalidArgumentError
+
+from .backend import MujocoBackend
+from .world import Compiled, Robot
+
+__all__ = ["backend_of", "compiled", "model_and_data", "robot", "world_spec"]
+
+
+def backend_of(sim: Any) -> MujocoBackend:
+    """The :class:`MujocoBackend` behind ``sim`` (InvalidArgumentError for another backend)."""
+    backend = getattr(sim, "_b", None)
+    if not isinstance(backend, MujocoBackend):
+        raise InvalidArgumentError(
+            "sim", f"a Sim on the 'mujoco' backend is needed, got {type(backend).__name__}"
+        )
+    return backend
+
+
+def compiled(sim: Any) -> Compiled:
+    """The world's current :class:`~.world.Compiled` state (model, data, motor table, the
+    compiled loop or None, hot-path caches)."""
+    return backend_of(sim)._w
+
+
+def model_and_data(sim: Any) -> tuple[Any, Any]:
+    """``(MjModel, MjData)`` of the world as it is now."""
+    c = compiled(sim)
+    return c.m, c.d
+
+
+def world_spec(sim: Any) -> Any:
+    """The ``MjSpec`` the world is compiled from (a change shows at the next load or remove)."""
+    return backend_of(sim)._spec
+
+
+def robot(sim: Any, body: int) -> Robot:
+    """What the backend keeps of body ``body``: its MuJoCo body ids (base first), joint
+    addresses (``qadr``, ``dofadr``, -1 for fixed joints), names in the spec."""
+    return backend_of(sim)._robots[body]

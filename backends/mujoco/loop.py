@@ -1,0 +1,88 @@
+"""The step loop in Python: the reference the compiled loop (_mjkernel.c) follows, step for step
+and in the same order of arithmetic (tests/test_mujoco_kernel.py holds them together).
+
+Each step is ``mj_step1`` (positions, velocities, constraint rows), the layer's additions to the
+rows and forces (PyBullet's motor offsets and hard rows: motors.py; PyBullet's joint-limit rule;
+link and joint damping: damping.py; torque commands), then ``mj_step2``, split when there are
+motor rows or a speed clamp (``mj_fwdActuation``, ``mj_fwdAcceleration``, the kd term, the
+exact solve or MuJoCo's solver and the polish: solve.py, the clamp, ``mj_Euler``).
+
+Errors are not raised here: MuJoCo's own (``mujoco.FatalError``) and a callback's propagate
+to the backend, which turns them into the Sim's errors and counts the steps done.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from . import solve
+from .damping import clamp_acceleration
+from .motors import LIMIT_DEEP, MOTOR_R_SCALE
+from .world import Compiled
+
+__all__ = ["step_python"]
+
+
+def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> None:
+    """``n`` steps of the world ``c``; ``sync`` (the viewer's) is called after each."""
+    m, d = c.m, c.d
+    t = c.motors
+    damping = c.damping
+    step1, step2 = mujoco.mj_step1, mujoco.mj_step2
+    k = t.n_rows
+    for _ in range(n):
+        step1(m, d)
+        if k:  # friction rows come first (no equality constraints)
+            if t.has_offset:
+                d.efc_aref[:k] += t.aref_offset(d.qpos)
+            d.efc_R[:k] *= MOTOR_R_SCALE  # harden the motor rows (motors.py)
+            d.efc_D[:k] *= 1.0 / MOTOR_R_SCALE
+        if d.nl:  # PyBullet's limit rows (motors.py), after the friction rows
+            lim = slice(d.nf, d.nf + d.nl)
+            d.efc_R[lim] *= MOTOR_R_SCALE
+            d.efc_D[lim] *= 1.0 / MOTOR_R_SCALE
+            # MuJoCo's position term is K (pos - margin); PyBullet's is K pos for a
+            # penetration (pos <= 0) under LIMIT_DEEP, none deeper (stop only) or inside
+            # the margin
+            pos = d.efc_pos[lim]
+            shallow = (pos <= 0.0) & (pos > -LIMIT_DEEP)
+            d.efc_aref[lim] += c.limit_k * (pos - d.efc_margin[lim])
+            d.efc_aref[lim] -= np.where(shallow, c.limit_k * pos, 0.0)
+        if damping is not None:
+            damping.apply(d)
+        if len(c.damp_dof):
+            d.qfrc_applied[c.damp_dof] = c.damp_coef * d.qvel[c.damp_dof]
+        if c.pending_torque:
+            d.qfrc_applied[t.dof] += c.torque
+        if k or c.clamp is not None:
+            _step2_split(c, m, d, k)
+        else:
+            step2(m, d)
+        if c.pending_torque:
+            c.pending_torque = False
+            d.qfrc_applied[t.dof] = 0.0
+            c.torque[:] = 0.0
+        if sync is not None:
+            sync()
+
+
+def _step2_split(c: Compiled, m: Any, d: Any, k: int) -> None:
+    """``mj_step2`` in pieces: the kd != 1 term needs ``qacc_smooth``; after the solve the
+    motor rows are made exact (solve.polish) and the speeds clamped."""
+    mujoco.mj_fwdActuation(m, d)
+    mujoco.mj_fwdAcceleration(m, d)
+    t = c.motors
+    if len(t.kd_rows):
+        d.efc_aref[t.kd_rows] += t.kd_factor * d.qacc_smooth[t.kd_dof]
+    if not (k and solve.exact_motors(m, d, t, k)):
+        mujoco.mj_fwdConstraint(m, d)
+        if k:
+            solve.polish(m, d, t, k)
+    if c.clamp is not None:  # PyBullet clamps every dof's speed at every step
+        clamp_acceleration(d, c.dt, c.clamp)
+    mujoco.mj_checkAcc(m, d)
+    mujoco.mj_Euler(m, d)

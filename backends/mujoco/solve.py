@@ -1,0 +1,146 @@
+"""The motor and joint-limit rows made exact: PyBullet's rows ask for an exact acceleration,
+MuJoCo's keep a regulariser.
+
+:func:`exact_motors` solves the rows directly when they are the only constraint rows (no
+contact), :func:`polish` removes the shortfall MuJoCo's solver leaves on the motor rows
+otherwise. The compiled loop (_mjkernel.c) does the same arithmetic in the same order.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from .motors import MotorTable
+
+__all__ = ["exact_motors", "polish"]
+
+_LIMIT_JOINT = int(mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT)
+
+
+def _jac_entry(m: Any, d: Any, r: int, dof: int) -> float:
+    """The Jacobian entry of constraint row r at dof (efc_J is dense below 60 dofs unless the
+    model says otherwise)."""
+    if not mujoco.mj_isSparse(m):
+        return float(d.efc_J[r * m.nv + dof])
+    adr, nnz = d.efc_J_rowadr[r], d.efc_J_rownnz[r]
+    cols = d.efc_J_colind[adr : adr + nnz]
+    hit = np.flatnonzero(cols == dof)
+    return float(d.efc_J[adr + hit[0]]) if len(hit) else 0.0
+
+
+def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
+    """When the motor rows and joint-limit rows are the only constraint rows (no contact),
+    solve them exactly instead of running MuJoCo's solver and polishing: PyBullet's rows
+    are the box-constrained problem ``A x = b`` on the free rows, ``x`` at a bound on the
+    others (+-max_force for a motor, [0, inf) for a limit, which only pushes; A the rows'
+    block of J M^-1 J^T, each row +-1 at one dof; b = aref - J qacc_smooth), found by an
+    active set: the free row furthest past a bound goes to it; a row at a bound whose
+    acceleration overshoots its aref is freed. Motor rows start free, limit rows at zero.
+    Writes efc_force, qfrc_constraint and qacc; False (other rows, no convergence, a
+    singular block) leaves the step to MuJoCo's solver. The compiled loop does the same
+    (_mjkernel.c exact_motors)."""
+    n = d.nefc
+    if d.ne or d.nf != k or (n > k and (d.efc_type[k:n] != _LIMIT_JOINT).any()):
+        return False
+    if n == k:
+        y = t.minv_rows
+        mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
+        dofs = t.dof_rows
+        sign = np.ones(k)
+    else:
+        dofs = np.concatenate([t.dof_rows, m.jnt_dofadr[d.efc_id[k:n]]])
+        sign = np.ones(n)
+        sign[k:] = [_jac_entry(m, d, r, int(dofs[r])) for r in range(k, n)]
+        unit = np.zeros((n, m.nv))
+        unit[np.arange(n), dofs] = 1.0
+        y = np.zeros((n, m.nv))
+        mujoco.mj_solveM(m, d, y, unit)
+    am = sign[:, None] * sign[None, :] * y[:, dofs]
+    aref = d.efc_aref[:n]
+    hi = np.concatenate([d.efc_frictionloss[:k], np.full(n - k, np.inf)])
+    lo = np.concatenate([-hi[:k], np.zeros(n - k)])
+    b = aref - sign * d.qacc_smooth[dofs]
+    scale_over = np.concatenate([hi[:k], np.abs(b[k:]) / np.diag(am)[k:] + 1e-300])
+    side = np.concatenate([np.zeros(k), -np.ones(n - k)])
+    x = np.zeros(n)
+    for _ in range(4 * n + 4):
+        free = side == 0
+        x = np.where(side > 0, hi, np.where(side < 0, lo, 0.0))
+        if free.any():
+            rhs = b[free] - am[np.ix_(free, ~free)] @ x[~free]
+            try:
+                x[free] = np.linalg.solve(am[np.ix_(free, free)], rhs)
+            except np.linalg.LinAlgError:
+                return False
+        with np.errstate(invalid="ignore"):
+            up = np.where(free, (x - hi) / scale_over, 0.0)
+            down = np.where(free, (lo - x) / scale_over, 0.0)
+        past = np.maximum(np.nan_to_num(up, nan=0.0), down)
+        worst = int(np.argmax(past))
+        if past[worst] > 1e-12:
+            side[worst] = 1.0 if up[worst] > down[worst] else -1.0
+            continue
+        smooth = sign * d.qacc_smooth[dofs]
+        acc = smooth + am @ x
+        scale = np.abs(b) + np.abs(np.diag(am)) * np.abs(x)
+        # a limit row at zero force is freed only past round-off: a joint resting at its
+        # limit under a holding motor leaves it at zero (freeing it there is degenerate)
+        terms = np.abs(aref) + np.abs(smooth) + np.abs(am * x[None, :]).sum(axis=1)
+        tol = np.concatenate([1e-12 * scale[:k], 1e-9 * terms[k:]])
+        over_aref = side * (acc - aref)  # > 0: a row at a bound overshoots its aref
+        overshoot = np.where(~free & (over_aref > tol), over_aref, 0.0)
+        freed = int(np.argmax(overshoot))
+        if overshoot[freed] > 0.0:
+            side[freed] = 0.0
+            same = dofs == dofs[freed]
+            if freed >= k:  # a limit row needed on the dof of a free motor row: both would
+                # ask for the same dof's acceleration (a singular block), so the motor
+                # cannot hold its target against the limit and goes to the bound its force
+                # pushes towards
+                for r in np.flatnonzero(same[:k] & (side[:k] == 0)):
+                    side[r] = 1.0 if x[r] > 0.0 else -1.0
+            else:  # a motor row freed on the dof of a free limit row takes the dof over:
+                # the limit row goes back to zero force (freed again if still needed)
+                side[k:][same[k:] & (side[k:] == 0)] = -1.0
+            continue
+        break
+    else:
+        return False
+    qacc = d.qacc
+    qacc[:] = d.qacc_smooth + (x * sign) @ y
+    free_motor = side[:k] == 0
+    qacc[dofs[:k][free_motor]] = aref[:k][free_motor]  # their own accelerations, exactly
+    d.efc_force[:n] = x
+    d.qfrc_constraint[:] = 0.0
+    np.add.at(d.qfrc_constraint, dofs, sign * x)
+    return True
+
+def polish(m: Any, d: Any, t: MotorTable, k: int) -> None:
+    """Make every motor row that is not at its force limit reach exactly the acceleration
+    it asks for (``efc_aref``), as PyBullet's motor row does: MuJoCo's rows keep a
+    regulariser R > 0, so its solution falls short by about R/(A+R) of the change. The
+    shortfall r of the free rows is removed with the forces A^-1 r through M^-1 (A the
+    rows' inverse inertia); rows at their force limit stay there. The contacts do not
+    see this last correction (it is 1e-6 of the motor force)."""
+    y = t.minv_rows
+    mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
+    force = d.efc_force[:k]
+    qacc = d.qacc
+    dofs = t.dof_rows
+    short = d.efc_aref[:k] - qacc[dofs]
+    free = np.abs(force) < t.force_rows_slack
+    if free.all():
+        delta = np.linalg.solve(y[:, dofs], short)
+        qacc += delta @ y
+        qacc[dofs] = d.efc_aref[:k]  # the rows' own accelerations, without round-off
+        force += delta
+    elif free.any():
+        rows = np.flatnonzero(free)
+        sub = y[rows]
+        delta = np.linalg.solve(sub[:, dofs[rows]], short[rows])
+        qacc += delta @ sub
+        qacc[dofs[rows]] = d.efc_aref[:k][rows]
+        force[rows] += delta
