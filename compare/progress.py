@@ -1,12 +1,15 @@
 """A one-line progress bar on stderr for long comparisons.
 
 Silent when the stream is not a terminal, and for runs shorter than ``delay`` seconds: nothing
-is drawn until a run has lasted that long.
+is drawn until a run has lasted that long. Calls from several threads draw one at a time; a
+line printed on the same stream (a log record) calls :meth:`ProgressBar.clear` first, and the
+bar comes back with the next update.
 """
 
 from __future__ import annotations
 
 import sys
+import threading
 import time
 from typing import TextIO
 
@@ -34,6 +37,7 @@ class ProgressBar:
         self.start = time.perf_counter()
         self.drawn = False
         self._last = 0.0
+        self._lock = threading.Lock()
 
     def __call__(self, what: str, done: int, total: int) -> None:
         if not self.enabled:
@@ -47,15 +51,21 @@ class ProgressBar:
         frac = done / total if total else 1.0
         filled = int(round(frac * self.width))
         bar = "#" * filled + "-" * (self.width - filled)
-        self.stream.write(f"\r[{bar}] {frac * 100:5.1f}%  {what:<32.32}")
-        self.stream.flush()
-        self.drawn = True
+        with self._lock:
+            self.stream.write(f"\r[{bar}] {frac * 100:5.1f}%  {what:<32.32}")
+            self.stream.flush()
+            self.drawn = True
+
+    def clear(self) -> None:
+        """Blank the bar's line (the next update draws it again)."""
+        with self._lock:
+            if self.drawn:
+                self.stream.write("\r" + " " * (self.width + 44) + "\r")
+                self.stream.flush()
+                self.drawn = False
 
     def close(self) -> None:
-        if self.drawn:
-            self.stream.write("\r" + " " * (self.width + 44) + "\r")
-            self.stream.flush()
-            self.drawn = False
+        self.clear()
 
     def __enter__(self) -> ProgressBar:
         return self

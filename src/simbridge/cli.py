@@ -5,18 +5,25 @@
                                               speed against accuracy over time steps
   simbridge compare my_scenario.toml --out reports/mine
   simbridge scenarios                         the shipped scenarios, one line each
-  simbridge joints r2d2.urdf --backend mujoco the joint table (17 fields per joint)
+  simbridge joints r2d2.urdf --movable        the joint table as a backend loads it
+  simbridge joints r2d2.urdf --json           the same, every field, for machines
 
-Exit status: 0 on success, 1 when the work failed (one line on stderr says why), 2 on bad usage.
+stdout carries the results alone; the engines' own banners and warnings go to the log, which
+--verbose (-v) shows on stderr.
+
+Exit status: 0 on success, 1 when the work failed (one line on stderr says why), 2 on bad usage
+(an unknown scenario name included).
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 __all__ = ["main", "build_parser"]
 
@@ -52,6 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     from simbridge import __version__
 
     parser.add_argument("--version", action="version", version=f"simbridge {__version__}")
+    _verbose(parser, default=False)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser(
@@ -87,35 +95,63 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
     p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    _verbose(p)
 
-    sub.add_parser(
+    s = sub.add_parser(
         "scenarios",
         help="list the shipped scenarios",
         description="The shipped scenarios, one line each: name, simulated time, description.",
     )
+    _verbose(s)
 
     j = sub.add_parser(
         "joints",
         help="print a URDF's joint table as a backend loads it",
-        description="Print every joint's 17 fields (PyBullet's getJointInfo order) as loaded "
-        "by a backend, one dict per joint, as the tutorial does.",
+        description="Print the joint table as a backend loads the URDF: one row per joint "
+        "(index, name, type, parent -> child link, position limits, max force and velocity, "
+        "axis in the child's inertial frame, damping, friction; units per joint type: rad, "
+        "N·m, rad/s for revolute joints, m, N, m/s for prismatic ones). --json gives every "
+        "joint's 17 fields in PyBullet's getJointInfo order.",
     )
     j.add_argument("urdf", metavar="URDF", help="a path or a name on the search path")
     j.add_argument("--backend", default="pybullet", choices=backends)
     j.add_argument("--fixed-base", action="store_true", help="load with a fixed base")
+    j.add_argument("--movable", action="store_true", help="movable joints only (not fixed)")
+    j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
+    _verbose(j)
     return parser
+
+
+def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) -> None:
+    # on the main parser and on each command (`simbridge compare r2d2 -v`); a command's
+    # default is SUPPRESS so that it does not overwrite a -v given before the command
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        default=default,
+        help="show the log on stderr (the engines' banners and warnings, debug records too)",
+    )
 
 
 def _compare(args: argparse.Namespace) -> int:
     from simbridge.compare import compare, load_scenario, report
     from simbridge.compare.progress import ProgressBar
+    from simbridge.exceptions import ScenarioError
 
     if args.profile is not None and len(args.profile) > 2:
         raise _Usage("--profile takes one profile, or one per backend (two)")
-    scenario = load_scenario(args.scenario)
+    try:
+        scenario = load_scenario(args.scenario)
+    except ScenarioError as exc:
+        if exc.key is None and not Path(args.scenario).exists():  # neither a file nor a name
+            raise _Usage(str(exc)) from None
+        raise
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
     with ProgressBar() as bar:
+        if args.log is not None:
+            args.log.bar = bar  # a record clears the bar's line first
         result = compare(
             scenario,
             args.backends,
@@ -154,15 +190,98 @@ def _scenarios(args: argparse.Namespace) -> int:
     return 0
 
 
-def _joints(args: argparse.Namespace) -> int:
-    import simbridge
+_UNITS = {  # per joint type: position, force, velocity, damping, friction
+    "revolute": ("rad", "N·m", "rad/s", "N·m·s/rad", "N·m"),
+    "prismatic": ("m", "N", "m/s", "N·s/m", "N"),
+}
 
+
+def _num(x: float, unit: str = "") -> str:
+    return f"{x:.6g} {unit}".rstrip()
+
+
+def _joint_rows(infos: list[Any], base: str) -> list[list[str]]:
+    """One row of text per joint, the table's columns (units per joint type)."""
+    rows = []
+    for j in infos:
+        kind = j.type.name.lower()
+        parent = base if j.parent_index < 0 else infos[j.parent_index].link_name
+        cells = [str(j.index), j.name, kind, f"{parent} -> {j.link_name}"]
+        units = _UNITS.get(kind)
+        if units is None:  # fixed: nothing moves
+            cells += ["-"] * 7
+        else:
+            pos, force, vel, damp, fric = units
+            limited = j.lower_limit <= j.upper_limit  # PyBullet's 0, -1: no limits
+            cells += [
+                _num(j.lower_limit, pos) if limited else "none",
+                _num(j.upper_limit, pos) if limited else "none",
+                _num(j.max_force, force),
+                _num(j.max_velocity, vel),
+                "(" + ", ".join(f"{a:.4g}" for a in j.axis) + ")",
+                _num(j.damping, damp),
+                _num(j.friction, fric),
+            ]
+        rows.append(cells)
+    return rows
+
+
+_HEADER = [
+    "index",
+    "name",
+    "type",
+    "parent -> child link",
+    "lower",
+    "upper",
+    "max force",
+    "max velocity",
+    "axis",
+    "damping",
+    "friction",
+]
+
+
+def _joints(args: argparse.Namespace) -> int:
+    import json
+
+    import simbridge
+    from simbridge.urdf import parse_urdf, resolve_source
+
+    base = parse_urdf(resolve_source(args.urdf)).base.name  # the root link: parent -1
     with simbridge.Sim(args.backend) as sim:
         body = sim.load_urdf(args.urdf, fixed_base=args.fixed_base)
-        for info in sim.joints(body):
-            row = info._asdict()
-            row["type"] = int(row["type"])  # PyBullet's numbers: 0 revolute, 1 prismatic, 4 fixed
-            print(row)
+        infos = sim.joints(body)
+        robot = sim.body_name(body)
+    shown = [j for j in infos if j.type != simbridge.JointType.FIXED or not args.movable]
+    if args.json:
+        joints = []
+        for j in shown:
+            row = j._asdict()
+            row["type"] = {"name": j.type.name.lower(), "number": int(j.type)}
+            joints.append(row)
+        doc = {
+            "robot": robot,
+            "backend": args.backend,
+            "fixed_base": args.fixed_base,
+            "base_link": base,
+            "joints": joints,
+        }
+        print(json.dumps(doc, indent=2))
+        return 0
+    rows = [r for r, j in zip(_joint_rows(infos, base), infos, strict=True) if j in shown]
+    widths = [max(len(r[k]) for r in [_HEADER, *rows]) for k in range(len(_HEADER))]
+    right = {0, 4, 5, 6, 7, 9, 10}  # numbers: right-aligned
+    for r in [_HEADER, *rows]:
+        cells = [
+            c.rjust(w) if k in right else c.ljust(w)
+            for k, (c, w) in enumerate(zip(r, widths, strict=True))
+        ]
+        print("  ".join(cells).rstrip())
+    movable = sum(j.type != simbridge.JointType.FIXED for j in infos)
+    print(
+        f"{robot}: {len(infos)} joints, {movable} movable, base link {base}"
+        f"{' (fixed)' if args.fixed_base else ''}; backend {args.backend}"
+    )
     return 0
 
 
@@ -170,10 +289,22 @@ class _Usage(Exception):
     pass
 
 
+class _StderrLog(logging.StreamHandler):
+    """The simbridge log on stderr (--verbose), clearing a progress bar drawn there first."""
+
+    def __init__(self) -> None:
+        super().__init__(sys.stderr)
+        self.setFormatter(logging.Formatter(f"{PROG}: %(levelname)s: %(message)s"))
+        self.bar: Any = None
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if self.bar is not None:
+            self.bar.clear()
+        super().emit(record)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return the exit status."""
-    from simbridge.exceptions import SimbridgeError
-
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -181,8 +312,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exc.code if isinstance(exc.code, int) else 2
     args.argv = None if argv is None else list(argv)
     handler = {"compare": _compare, "scenarios": _scenarios, "joints": _joints}[args.command]
+    log = logging.getLogger("simbridge")
+    level = log.level
+    args.log = _StderrLog() if args.verbose else None
+    if args.log is not None:
+        log.addHandler(args.log)
+        log.setLevel(logging.DEBUG)
     try:
-        return handler(args)
+        return _run(handler, args, parser)
+    finally:
+        if args.log is not None:
+            log.removeHandler(args.log)
+            log.setLevel(level)
+
+
+def _run(handler: Any, args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    from simbridge.exceptions import SimbridgeError
+
+    try:
+        return int(handler(args))
     except _Usage as exc:
         parser.print_usage(sys.stderr)
         print(f"{PROG}: error: {exc}", file=sys.stderr)
