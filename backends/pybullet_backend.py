@@ -23,7 +23,6 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
 import numpy as np
-import pybullet as p
 
 from simbridge.backend import Backend
 from simbridge.engine_output import Record, captured, register_classifier
@@ -110,6 +109,8 @@ def _pybullet_gui_output(text: str) -> tuple[list[Record], str]:
 
 
 register_classifier("pybullet", _pybullet_output)
+with captured("pybullet", "importing"):  # its banner, also where this module is imported first
+    import pybullet as p  # noqa: E402
 
 
 def _x_display_problem() -> str | None:

@@ -1,0 +1,166 @@
+"""What the engines write from C goes to the simbridge logger; nothing else is held or lost.
+
+capfd captures at the file-descriptor level, where PyBullet writes with printf.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import subprocess
+import sys
+import threading
+
+import pytest
+
+import simbridge
+from simbridge.engine_output import captured
+from simbridge.registry import load_backend
+
+# a real URDF on which PyBullet prints b3Warning lines ("No inertial data for link") on load
+WARNING_URDF = "quadruped/spirit40newer.urdf"
+
+
+@pytest.fixture(autouse=True)
+def _pybullet_classifier() -> None:
+    load_backend("pybullet")  # registers PyBullet's classifier
+
+
+def test_a_warning_emitting_load_logs_and_prints_nothing(capfd, caplog):
+    caplog.set_level(logging.DEBUG, logger="simbridge")
+    with simbridge.Sim("pybullet") as sim:
+        body = sim.load_urdf(WARNING_URDF)
+        assert sim.num_joints(body) == 20
+    assert capfd.readouterr() == ("", "")
+    warnings = [r for r in caplog.records if r.name == "simbridge.pybullet"]
+    assert len(warnings) == 4 and all(r.levelno == logging.WARNING for r in warnings)
+    text = warnings[0].getMessage()
+    assert "(loading " in text and text.endswith(
+        "No inertial data for link, using mass=1, localinertiadiagonal = 1,1,1, identity local "
+        "inertial frame: FR_upper_shoulder"
+    )
+
+
+def test_a_quiet_load_logs_nothing(capfd, caplog):
+    caplog.set_level(logging.DEBUG, logger="simbridge")
+    with simbridge.Sim("pybullet") as sim:
+        sim.load_urdf("r2d2.urdf")
+    assert capfd.readouterr() == ("", "")
+    assert not [r for r in caplog.records if r.name.startswith("simbridge")]
+
+
+def test_the_banner_is_a_debug_record_in_a_fresh_process():
+    code = (
+        "import logging, sys\n"
+        "logging.basicConfig(level=logging.DEBUG, stream=sys.stdout, format='%(levelname)s "
+        "%(name)s %(message)s')\n"
+        "import simbridge\n"
+        "simbridge.Sim('pybullet').close()\n"
+    )
+    child = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120
+    )
+    assert child.returncode == 0, child.stderr
+    assert child.stderr == ""
+    assert child.stdout.startswith(
+        "DEBUG simbridge.pybullet pybullet (importing): pybullet build time: "
+    )
+    assert child.stdout.count("\n") == 1
+
+
+def test_no_handler_means_nothing_on_stderr(capfd):
+    """A library user who configured no logging sees no engine warning (no last-resort
+    handler): the simbridge logger has a NullHandler."""
+    with simbridge.Sim("pybullet") as sim:
+        sim.load_urdf(WARNING_URDF)
+    assert capfd.readouterr() == ("", "")
+
+
+def test_text_that_is_not_the_engines_goes_back_where_it_was_going(capfd, caplog):
+    caplog.set_level(logging.DEBUG, logger="simbridge")
+    with captured("pybullet", "a test"):
+        print("a print of the user's", flush=True)
+        os.write(1, b"b3Warning[file.cpp,1]:\nfrom the engine\n")
+        os.write(2, b"to stderr\npybullet build time: today\n")
+    out, err = capfd.readouterr()
+    assert out == "a print of the user's\n"
+    assert err == "to stderr\n"
+    records = [(r.levelno, r.getMessage()) for r in caplog.records]
+    assert records == [
+        (logging.WARNING, "pybullet (a test): from the engine"),
+        (logging.DEBUG, "pybullet (a test): pybullet build time: today"),
+    ]
+
+
+def test_without_a_classifier_nothing_is_claimed(capfd, caplog):
+    caplog.set_level(logging.DEBUG, logger="simbridge")
+    with captured("no-such-engine"):
+        os.write(1, b"b3Warning[file.cpp,1]:\nnot claimed\n")
+    assert capfd.readouterr().out == "b3Warning[file.cpp,1]:\nnot claimed\n"
+    assert not caplog.records
+
+
+def test_a_window_inside_another_joins_it(capfd, caplog):
+    caplog.set_level(logging.DEBUG, logger="simbridge")
+    with captured("pybullet", "outer"):
+        with captured("no-such-engine", "inner"):
+            os.write(1, b"b3Error[f,2]:\ninner line\n")
+        os.write(1, b"after\n")
+    assert capfd.readouterr().out == "after\n"
+    assert [(r.levelno, r.getMessage()) for r in caplog.records] == [
+        (logging.ERROR, "pybullet (outer): inner line")
+    ]
+
+
+def test_more_than_a_pipe_holds_does_not_block(capfd):
+    big = b"x" * 999 + b"\n"
+    with captured("pybullet"):
+        for _ in range(1000):  # 1 MB, 16 pipe buffers
+            os.write(1, big)
+    assert capfd.readouterr().out == big.decode() * 1000
+
+
+def test_the_descriptors_come_back_when_the_body_raises(capfd, caplog):
+    caplog.set_level(logging.DEBUG, logger="simbridge")
+    with pytest.raises(KeyError), captured("pybullet", "failing"):
+        os.write(1, b"b3Error[f,1]:\nbefore the exception\n")
+        raise KeyError("x")
+    os.write(1, b"after\n")
+    assert capfd.readouterr().out == "after\n"
+    assert [r.getMessage() for r in caplog.records] == ["pybullet (failing): before the exception"]
+
+
+def test_another_threads_output_is_held_back_not_dropped_and_windows_take_turns(capfd):
+    opened, written, second_in = threading.Event(), threading.Event(), threading.Event()
+    seen: list[bool] = []
+
+    def first() -> None:
+        with captured("pybullet"):
+            opened.set()
+            written.wait(10)
+            seen.append(second_in.wait(0.05))  # the second window waits for this one
+
+    def second() -> None:
+        with captured("pybullet"):
+            second_in.set()
+
+    a = threading.Thread(target=first)
+    a.start()
+    assert opened.wait(10)
+    os.write(1, b"printed by another thread meanwhile\n")  # lands in the open window
+    b = threading.Thread(target=second)
+    b.start()
+    written.set()
+    a.join(10)
+    b.join(10)
+    assert seen == [False] and second_in.is_set()
+    assert capfd.readouterr().out == "printed by another thread meanwhile\n"
+
+
+def test_the_helper_imports_no_engine():
+    code = (
+        "import sys, simbridge.engine_output\n"
+        "print(sorted(m for m in ('pybullet', 'mujoco') if m in sys.modules))\n"
+    )
+    child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert child.stdout == "[]\n", child.stderr
