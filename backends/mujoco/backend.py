@@ -13,10 +13,9 @@ Poses and velocities are recomputed lazily on the first read after a step (``mj_
 from __future__ import annotations
 
 import logging
-from typing import Any
+from typing import Any, NoReturn
 
 import mujoco
-import numpy as np
 
 from simbridge import kinematics as K
 from simbridge.backend import Backend
@@ -28,12 +27,7 @@ from simbridge.exceptions import (
 )
 from simbridge.profiles import Profile
 from simbridge.types import (
-    BaseState,
-    DynamicsInfo,
-    JointInfo,
-    JointStates,
     JointType,
-    LinkState,
     Quat,
     Vec3,
 )
@@ -41,7 +35,9 @@ from simbridge.urdf import UrdfModel
 
 from . import kernel as kernel_loader
 from . import model as build
+from .commands import MotorCommands
 from .loop import step_python
+from .state import StateAccess
 from .viewer import Viewer, check_display
 from .world import Compiled, Robot, compile_state, default_motors
 
@@ -70,7 +66,7 @@ CONTACT_MARGIN = 0.001
 _STEP_CHUNK = 1000
 
 
-class MujocoBackend(Backend):
+class MujocoBackend(StateAccess, MotorCommands, Backend):
     """`Sim` on MuJoCo 4 (see the module docstring and docs/mujoco_backend.md)."""
 
     name = "mujoco"
@@ -356,7 +352,7 @@ class MujocoBackend(Backend):
         self._w.kernel = None
         self._w.stale = True
 
-    def _engine_failed(self, detail: str) -> None:
+    def _engine_failed(self, detail: str) -> NoReturn:
         """MuJoCo raised an error inside a step: its data is left half-computed (its stack
         marks unwound by a jump), so this world steps no more until reset()."""
         self._engine_error = detail
@@ -409,315 +405,6 @@ class MujocoBackend(Backend):
                 self._viewer.close()
             finally:
                 self._viewer = None
-
-    # ---------------------------------------------------------------- tables
-
-    def joint_info(self, body: int, joint: int) -> JointInfo:
-        return self._robots[body].table[joint]
-
-    def num_joints(self, body: int) -> int:
-        return len(self._robots[body].table)
-
-    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
-        robot = self._robots[body]
-        ine = robot.spec.inertials[link + 1]
-        lateral, rolling, spinning, restitution = build._contact_values(
-            robot.model.link(link), self.profile
-        )
-        return DynamicsInfo(
-            ine.mass,
-            lateral,
-            ine.diagonal,
-            ine.position,
-            ine.orientation,
-            restitution,
-            rolling,
-            spinning,
-        )
-
-    # ---------------------------------------------------------------- state
-
-    def _fresh(self) -> None:
-        c = self._w
-        if c.stale:
-            m, d = c.m, c.d
-            mujoco.mj_kinematics(m, d)
-            mujoco.mj_comPos(m, d)
-            mujoco.mj_comVel(m, d)
-            c.stale = False
-
-    def _com_pose_velocity(self, bid: int) -> tuple[Vec3, Quat, Vec3, Vec3]:
-        d = self._w.d
-        quat = np.empty(4)
-        mujoco.mju_mat2Quat(quat, d.ximat[bid])
-        vel = np.empty(6)
-        mujoco.mj_objectVelocity(self._w.m, d, mujoco.mjtObj.mjOBJ_BODY, bid, vel, 0)
-        pos = d.xipos[bid]
-        return (
-            (float(pos[0]), float(pos[1]), float(pos[2])),
-            (float(quat[1]), float(quat[2]), float(quat[3]), float(quat[0])),
-            (float(vel[3]), float(vel[4]), float(vel[5])),
-            (float(vel[0]), float(vel[1]), float(vel[2])),
-        )
-
-    def _state_of(self, bid: int, body: int) -> list[float]:
-        """Centre-of-mass pose and velocity, then link-frame pose, of MuJoCo body ``bid``
-        (20 floats, quaternions x, y, z, w), after the lazy refresh."""
-        c = self._w
-        kernel = c.kernel
-        if kernel is not None:
-            finite = kernel.body_state(bid, c.stale, c.state_out)
-            if finite is None:
-                self._engine_failed(kernel.last_error())
-            c.stale = False
-            if not finite:
-                raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
-            return c.state_out.tolist()  # type: ignore[no-any-return]
-        if self._diverged is not None:
-            raise self._diverged
-        self._fresh()
-        d = c.d
-        self._check_finite(d.xipos[bid], body)
-        com_pos, com_orn, lin, ang = self._com_pose_velocity(bid)
-        fp = d.xpos[bid]
-        fq = d.xquat[bid]
-        return [
-            *com_pos,
-            *com_orn,
-            *lin,
-            *ang,
-            float(fp[0]),
-            float(fp[1]),
-            float(fp[2]),
-            float(fq[1]),
-            float(fq[2]),
-            float(fq[3]),
-            float(fq[0]),
-        ]
-
-    def link_state(self, body: int, link: int) -> LinkState:
-        robot = self._robots[body]
-        v = self._state_of(int(robot.body_ids[link + 1]), body)
-        ine = robot.spec.inertials[link + 1]
-        frame = ((v[13], v[14], v[15]), (v[16], v[17], v[18], v[19]))
-        if link == -1 and robot.spec.base_offset is not None:  # body frame = the COM frame
-            frame = K.transform_multiply(frame, robot.spec.base_offset)
-        return LinkState(
-            (v[0], v[1], v[2]),
-            (v[3], v[4], v[5], v[6]),
-            ine.position,
-            ine.orientation,
-            frame[0],  # type: ignore[arg-type]
-            frame[1],  # type: ignore[arg-type]
-            (v[7], v[8], v[9]),
-            (v[10], v[11], v[12]),
-        )
-
-    def base_state(self, body: int) -> BaseState:
-        v = self._state_of(int(self._robots[body].body_ids[0]), body)
-        return BaseState(
-            (v[0], v[1], v[2]), (v[3], v[4], v[5], v[6]), (v[7], v[8], v[9]), (v[10], v[11], v[12])
-        )
-
-    def _check_finite(self, values: np.ndarray, body: int) -> None:
-        if not np.isfinite(values).all():
-            raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
-
-    def _joint_cache(self, robot: Robot, joints: np.ndarray) -> tuple[np.ndarray, ...]:
-        key = id(joints)
-        hit = robot.cache.get(key)
-        if hit is not None and hit[0] is joints:
-            return hit
-        movable = robot.qadr[joints] >= 0
-        qadr = robot.qadr[joints][movable]
-        dof = robot.dofadr[joints][movable]
-        pos_of = np.full(len(robot.table), -1, np.intp)
-        pos_of[robot.movable] = robot.motor_index
-        motor = pos_of[joints][movable]
-        entry = (joints, movable, qadr, dof, motor, bool(movable.all()))
-        robot.cache[key] = entry
-        return entry
-
-    def _torque_rows(self, joints: np.ndarray, movable: np.ndarray, motor: np.ndarray) -> tuple:
-        """Motor rows of ``joints`` under the current motor set (cached per motor epoch):
-        (rows, positions in the answer, every joint has a row)."""
-        t = self._w.motors
-        hit = self._w.torque_map.get(id(joints))
-        if hit is not None and hit[0] is joints and hit[1] == t.epoch:
-            return hit[2:]  # type: ignore[no-any-return]
-        rows = t.row_of[motor]
-        on = rows >= 0
-        rows = rows[on]
-        entry = (joints, t.epoch, rows, np.flatnonzero(movable)[on], len(rows) == len(joints))
-        self._w.torque_map[id(joints)] = entry
-        return entry[2:]
-
-    def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
-        c = self._w
-        kernel = c.kernel
-        if kernel is not None:
-            kernel.check_idle()  # no torn reads of a world stepping in another thread
-        elif self._diverged is not None:
-            raise self._diverged
-        robot = self._robots[body]
-        _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
-        d = c.d
-        n = len(joints)
-        if c.motor_force_valid and c.motor_rows_valid:
-            rows, where, full = self._torque_rows(joints, movable, motor)
-            torque = d.efc_force[rows] if full else np.zeros(n)
-            if not full:
-                torque[where] = d.efc_force[rows]
-        else:
-            torque = np.zeros(n)
-        if all_movable:
-            return JointStates(d.qpos[qadr], d.qvel[dof], torque)
-        pos = np.zeros(n)
-        vel = np.zeros(n)
-        pos[movable] = d.qpos[qadr]
-        vel[movable] = d.qvel[dof]
-        return JointStates(pos, vel, torque)
-
-    def reset_joint_state(
-        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
-    ) -> None:
-        self._check_idle()
-        robot = self._robots[body]
-        _, _, qadr, dof, _, _ = self._joint_cache(robot, joints)
-        c = self._w
-        c.d.qpos[qadr] = positions
-        c.d.qvel[dof] = velocities
-        c.stale = True
-        c.motor_force_valid = False
-
-    def reset_base_state(
-        self,
-        body: int,
-        position: Vec3 | None,
-        orientation: Quat | None,
-        linear_velocity: Vec3 | None,
-        angular_velocity: Vec3 | None,
-    ) -> None:
-        robot = self._robots[body]
-        if robot.free_qadr < 0:
-            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
-        cur = self.base_state(body)
-        pos = cur.position if position is None else position
-        orn = cur.orientation if orientation is None else orientation
-        lin = cur.linear_velocity if linear_velocity is None else linear_velocity
-        ang = cur.angular_velocity if angular_velocity is None else angular_velocity
-        ine = robot.spec.inertials[0]
-        # link frame = COM frame * inverse(inertial frame)
-        fpos, forn = K.transform_multiply(
-            (pos, orn), K.transform_inverse((ine.position, ine.orientation))
-        )
-        d, m = self._w.d, self._w.m
-        if robot.free_qadr >= 0:
-            # the free base's body frame: its centre-of-mass frame, or the link frame when the
-            # two coincide (base_offset None)
-            bpos, born = (pos, orn) if robot.spec.base_offset is not None else (fpos, forn)
-            a = robot.free_qadr
-            d.qpos[a : a + 3] = bpos
-            d.qpos[a + 3 : a + 7] = K.xyzw_to_wxyz(born)
-            # MuJoCo: linear velocity of the frame origin (world), angular in the body frame
-            v_origin = np.asarray(lin) + np.cross(ang, np.subtract(bpos, pos))
-            w_local = K.quat_rotate(K.quat_conjugate(born), ang)
-            v = robot.free_dofadr
-            d.qvel[v : v + 3] = v_origin
-            d.qvel[v + 3 : v + 6] = w_local
-        else:
-            bid = int(robot.body_ids[0])
-            m.body_pos[bid] = fpos
-            m.body_quat[bid] = K.xyzw_to_wxyz(forn)
-            robot.spec.root.pos = list(fpos)
-            robot.spec.root.quat = list(K.xyzw_to_wxyz(forn))
-        self._w.stale = True
-
-    # ---------------------------------------------------------------- control
-
-    def _motor_slots(self, body: int, joints: np.ndarray) -> np.ndarray:
-        return self._joint_cache(self._robots[body], joints)[4]
-
-    def set_joint_velocity(
-        self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
-    ) -> None:
-        c = self._w
-        t = c.motors
-        fast = c.fast.get(id(joints))
-        if fast is not None and fast[0] is joints and fast[1] == t.epoch and fast[2] == body:
-            # Hot path: the same joints, still velocity motors with kd 1, all rows present.
-            if target == fast[6] and max_force == fast[7]:
-                return  # the command in force already
-            if min(max_force) > 0.0:
-                kernel = c.kernel
-                if kernel is not None:  # the same writes in C (_mjkernel.c set_velocity)
-                    kernel.set_velocity(fast[8], target, max_force)
-                else:
-                    rows, inv_dt = fast[4], c.inv_dt
-                    t.target_velocity[fast[3]] = target
-                    t.max_force[fast[3]] = max_force
-                    c.m.dof_frictionloss[fast[5]] = max_force
-                    t.offset_rows[rows] = [v * inv_dt for v in target]
-                    t.force_rows_slack[rows] = [f * (1.0 - 1e-9) for f in max_force]
-                t.has_offset = True
-                c.fast[id(joints)] = (*fast[:6], target, max_force, fast[8])
-                return
-        idx = self._motor_slots(body, joints)
-        t.target_velocity[idx] = target
-        t.max_force[idx] = max_force
-        t.kp[idx] = 0.0
-        t.kd[idx] = 1.0
-        c.refresh_motors()
-        rows = t.row_of[idx]
-        if t.n_special == 0 and not self.profile.enforce_effort_limit and (rows >= 0).all():
-            dofs = t.dof[idx]
-            c.fast[id(joints)] = (
-                joints,
-                t.epoch,
-                body,
-                idx,
-                rows,
-                dofs,
-                list(target),
-                list(max_force),
-                np.ascontiguousarray(np.stack([idx, rows, dofs]), dtype=np.intp),
-            )
-
-    def set_joint_position(
-        self,
-        body: int,
-        joints: np.ndarray,
-        target: list[float],
-        max_force: list[float],
-        kp: list[float],
-        kd: list[float],
-    ) -> None:
-        idx = self._motor_slots(body, joints)
-        c = self._w
-        t = c.motors
-        model = self._robots[body].model
-        target = [  # PyBullet clamps a position target to the joint's limits (measured)
-            min(max(q, model.joints[j].lower), model.joints[j].upper)
-            if model.joints[j].has_limit
-            else q
-            for q, j in zip(target, joints.tolist(), strict=True)
-        ]
-        t.target_velocity[idx] = 0.0
-        t.target_position[idx] = target
-        t.max_force[idx] = max_force
-        t.kp[idx] = kp
-        t.kd[idx] = kd
-        c.refresh_motors()
-
-    def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
-        idx = self._motor_slots(body, joints)
-        c = self._w
-        t = c.motors
-        if self.profile.enforce_effort_limit:
-            c.torque[idx] += np.clip(torque, -t.effort[idx], t.effort[idx])  # each command
-        else:
-            c.torque[idx] += torque  # commands before one step add up, as in PyBullet
-        c.pending_torque = True
 
     # ---------------------------------------------------------------- description
 

@@ -28,6 +28,8 @@ spins (a departure listed in the manifest).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = ["LinkDamping", "clamp_acceleration"]
@@ -38,7 +40,7 @@ class LinkDamping:
 
     def __init__(
         self,
-        m,  # type: ignore[no-untyped-def]
+        m: Any,  # mujoco.MjModel
         first: int,
         k_lin: float,
         k_ang: float,
@@ -59,7 +61,7 @@ class LinkDamping:
                 b = parent[b]
         self.subtree = inside[m.dof_bodyid].astype(float)  # (nv, n)
 
-    def apply(self, d) -> None:  # type: ignore[no-untyped-def]
+    def apply(self, d: Any) -> None:
         """Add the damping forces to ``d.qfrc_passive`` as generalised forces (after
         ``mj_step1``, which computes both)."""
         rows = self.rows
@@ -80,7 +82,7 @@ class LinkDamping:
         d.qfrc_passive += np.einsum("jk,jk->j", d.cdof, self.subtree @ spatial)
 
 
-def clamp_acceleration(d, dt: float, limit: float) -> None:  # type: ignore[no-untyped-def]
+def clamp_acceleration(d: Any, dt: float, limit: float) -> None:
     """Limit ``qacc`` so that the velocity after the step, ``qvel + dt qacc``, is within
     +-limit in every coordinate (and the positions integrate with the clamped velocity)."""
     qvel = d.qvel

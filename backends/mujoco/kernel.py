@@ -110,7 +110,7 @@ def kernel_class() -> Any:
 
 def functions() -> tuple[int, ...]:
     _load()
-    return _state["functions"]  # type: ignore[no-any-return]
+    return _state["functions"]
 
 
 def reason() -> str:
@@ -118,7 +118,7 @@ def reason() -> str:
     if os.environ.get(ENV, "").strip().lower() == "python":
         return f"{ENV}=python"
     _load()
-    return _state["reason"]  # type: ignore[no-any-return]
+    return _state["reason"]
 
 
 def warn_if_lost() -> None:

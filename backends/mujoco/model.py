@@ -10,7 +10,7 @@ so the bodies, joints, geoms and inertias are added here one by one:
   revolute/prismatic joints with lower <= upper (PyBullet's rule; lower == upper locks the joint,
   a range one ulp wide here); no damping, friction or
   force range in the model: the backend applies them per step with PyBullet's laws;
-* explicit inertia from :func:`simbridge.kinematics.model_inertials` (PyBullet's numbers for
+* explicit inertia from :func:`simbridge.inertia.model_inertials` (PyBullet's numbers for
   the profile), mass and inertia bounded below for moving bodies (MuJoCo refuses zero);
 * visual geoms (``contype = conaffinity = 0``, group 1) and collision geoms (group 3), also
   ``contype = conaffinity = 0``: every contact comes from an explicit ``<pair>`` (see
@@ -22,14 +22,22 @@ so the bodies, joints, geoms and inertias are added here one by one:
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from simbridge import kinematics as K
 from simbridge.exceptions import UrdfStructureError
+from simbridge.inertia import LinkInertial, is_fixed_base, model_inertials
+from simbridge.meshes import read_mesh
 from simbridge.profiles import Profile
+from simbridge.transforms import (
+    quat_from_rpy,
+    quat_rotate,
+    transform_inverse,
+    transform_multiply,
+    xyzw_to_wxyz,
+)
+from simbridge.types import Quat, Vec3
 from simbridge.urdf import Geometry, Link, UrdfModel
 
 from .motors import LIMIT_ERP, LIMIT_MARGIN, MOTOR_DMAX
@@ -72,7 +80,7 @@ class RobotSpec:
     joint_names: list[str | None]  # per URDF joint; None for fixed joints
     free_joint: str | None
     geoms: list[GeomContact]
-    inertials: list[K.LinkInertial]
+    inertials: list[LinkInertial]
     bounded_links: list[str] = field(default_factory=list)  # mass/inertia raised for MuJoCo
     planes: list[str] = field(default_factory=list)
     pair_names: list[str] = field(default_factory=list)
@@ -80,7 +88,7 @@ class RobotSpec:
     # A free base's body frame is its centre-of-mass frame (PyBullet integrates the base there;
     # a free joint at the link frame moves the centre of mass with a first-order error when the
     # base spins): the URDF base link frame in that body's frame, None when they coincide.
-    base_offset: tuple[K.Vec3, K.Quat] | None = None
+    base_offset: tuple[Vec3, Quat] | None = None
 
 
 def new_world_spec(profile: Profile) -> mujoco.MjSpec:
@@ -105,8 +113,8 @@ def new_world_spec(profile: Profile) -> mujoco.MjSpec:
     return spec
 
 
-def _wxyz(q: K.Quat) -> list[float]:
-    return [q[3], q[0], q[1], q[2]]
+def _wxyz(q: Quat) -> list[float]:
+    return list(xyzw_to_wxyz(q))
 
 
 def _contact_values(link: Link, profile: Profile) -> tuple[float, float, float, float]:
@@ -138,10 +146,10 @@ class MeshLibrary:
         shape is left out here too (MuJoCo cannot compile it) and listed in the manifest."""
         assert g.mesh_path is not None
         try:
-            verts = K.mesh_vertices(g.mesh_path)
-            if g.mesh_path.suffix.lower() == ".obj" and len(_obj_arrays(g.mesh_path)[1]) == 0:
-                return False
+            verts, faces = read_mesh(g.mesh_path)
         except (OSError, ValueError, IndexError):
+            return False
+        if g.mesh_path.suffix.lower() == ".obj" and len(faces) == 0:
             return False
         return len(verts) > 0 and bool(np.isfinite(verts).all())
 
@@ -174,50 +182,14 @@ class MeshLibrary:
             mesh.file = str(g.mesh_path)
         else:
             # MuJoCo's OBJ decoder refuses files PyBullet reads (e.g. table_square's face normal
-            # indices): .obj is read here (positions and faces only), other formats by trimesh
-            verts, faces = (
-                _obj_arrays(g.mesh_path) if suffix == ".obj" else _trimesh_arrays(g.mesh_path)
-            )
+            # indices): .obj is read by simbridge.meshes (positions and faces only), other
+            # formats (.dae) through trimesh there
+            verts, faces = read_mesh(g.mesh_path)
             if len(verts) < 4 or len(faces) == 0:
                 raise UrdfStructureError(file, where, f"mesh {g.mesh_uri!r} has no triangles")
             mesh.uservert = verts.astype(np.float32).ravel().tolist()
             mesh.userface = faces.astype(np.int32).ravel().tolist()
         return name
-
-
-def _obj_arrays(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex positions and triangles (fans of every polygon) of a Wavefront .obj file."""
-    verts = K.mesh_vertices(path)
-    n = len(verts)
-    tris: list[tuple[int, int, int]] = []
-    with open(path, encoding="utf-8", errors="replace") as f:
-        for line in f:
-            if not line.startswith("f "):
-                continue
-            idx = []
-            for token in line.split()[1:]:
-                head = token.split("/", 1)[0]
-                if not head:
-                    continue
-                try:
-                    i = int(head)
-                except ValueError:  # not an index: the face is unusable, as for PyBullet
-                    idx = []
-                    break
-                idx.append(i - 1 if i > 0 else n + i)
-            for a in range(1, len(idx) - 1):
-                tris.append((idx[0], idx[a], idx[a + 1]))
-    faces = np.array(tris, dtype=np.int64).reshape(-1, 3)
-    if len(faces) and (faces.min() < 0 or faces.max() >= n):
-        faces = faces[(faces >= 0).all(axis=1) & (faces < n).all(axis=1)]
-    return np.asarray(verts, dtype=float), faces
-
-
-def _trimesh_arrays(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh  # ~1 s to import: only for formats MuJoCo cannot read (.dae)
-
-    loaded = trimesh.load(str(path), force="mesh", process=False)
-    return np.asarray(loaded.vertices, dtype=float), np.asarray(loaded.faces, dtype=np.int64)
 
 
 def _is_ground_box(g: Geometry) -> bool:
@@ -234,15 +206,15 @@ def add_robot(
     meshes: MeshLibrary,
     model: UrdfModel,
     prefix: str,
-    base_position: K.Vec3,
-    base_orientation: K.Quat,
+    base_position: Vec3,
+    base_orientation: Quat,
     fixed_base: bool,
     profile: Profile,
 ) -> RobotSpec:
     """Add ``model`` to ``spec`` as bodies named ``prefix + link name``."""
     file = model.source.display_name
-    fixed = K.is_fixed_base(model, fixed_base)
-    inertials = K.model_inertials(model, fixed_base, profile.inertia_source)
+    fixed = is_fixed_base(model, fixed_base)
+    inertials = model_inertials(model, fixed_base, profile.inertia_source)
     body_names = [prefix + link.name for link in model.links]
     bodies: list[mujoco.MjsBody] = []
     static = [False] * len(model.links)
@@ -253,20 +225,20 @@ def add_robot(
     free_joint = None
     skipped: list[str] = []
     # A base whose z axis is the world's keeps a huge box's top face horizontal.
-    base_z = K.quat_rotate(base_orientation, (0.0, 0.0, 1.0))
+    base_z = quat_rotate(base_orientation, (0.0, 0.0, 1.0))
     upright = base_z[2] > 1.0 - 1e-9
 
     # the link frame of a free base in its body (centre-of-mass) frame
-    offset: tuple[K.Vec3, K.Quat] | None = None
+    offset: tuple[Vec3, Quat] | None = None
     if not fixed:
         ine0 = inertials[0]
         if any(ine0.position) or tuple(ine0.orientation) != (0.0, 0.0, 0.0, 1.0):
-            offset = K.transform_inverse((ine0.position, ine0.orientation))
+            offset = transform_inverse((ine0.position, ine0.orientation))
 
-    def placed(xyz: K.Vec3, quat: K.Quat, on_base: bool) -> tuple[list[float], list[float]]:
+    def placed(xyz: Vec3, quat: Quat, on_base: bool) -> tuple[list[float], list[float]]:
         """A pose given in a link frame, as MuJoCo position and wxyz quaternion in the body"""
         if on_base and offset is not None:
-            xyz, quat = K.transform_multiply(offset, (xyz, quat))
+            xyz, quat = transform_multiply(offset, (xyz, quat))
         return list(xyz), _wxyz(quat)
 
     for link in model.links:
@@ -275,7 +247,7 @@ def add_robot(
             body = spec.worldbody.add_body(name=body_names[0])
             frame = (tuple(base_position), tuple(base_orientation))
             if offset is not None:  # the body frame is the base's centre-of-mass frame
-                frame = K.transform_multiply(frame, K.transform_inverse(offset))
+                frame = transform_multiply(frame, transform_inverse(offset))
             body.pos = list(frame[0])
             body.quat = _wxyz(frame[1])
             if not fixed:
@@ -287,7 +259,7 @@ def add_robot(
             parent = model.parent_index(joint)
             body = bodies[parent + 1].add_body(name=body_names[i + 1])
             body.pos, body.quat = placed(
-                joint.origin_xyz, K.quat_from_rpy(joint.origin_rpy), parent == -1
+                joint.origin_xyz, quat_from_rpy(joint.origin_rpy), parent == -1
             )
             static[i + 1] = static[parent + 1] and joint.type == "fixed"
             if joint.type == "fixed":
@@ -348,7 +320,7 @@ def add_robot(
                 continue  # nothing to draw (e.g. laikago_toes' radius-0 spheres)
             vg = body.add_geom(name=f"{body_names[i + 1]}$v{k}")
             _set_shape(vg, g, meshes, file, f"{where} <visual> #{k}")
-            vg.pos, vg.quat = placed(g.origin_xyz, K.quat_from_rpy(g.origin_rpy), i == -1)
+            vg.pos, vg.quat = placed(g.origin_xyz, quat_from_rpy(g.origin_rpy), i == -1)
             vg.contype = vg.conaffinity = 0
             vg.group = VISUAL_GROUP
             vg.rgba = list(g.rgba or DEFAULT_RGBA)
@@ -370,7 +342,7 @@ def add_robot(
                 if _degenerate(g):  # MuJoCo refuses size 0: a point-like shape instead
                     g = replace(g, size=tuple(max(v, MIN_SIZE) for v in g.size))
                 _set_shape(cg, g, meshes, file, f"{where} <collision> #{k}")
-                cg.pos, cg.quat = placed(g.origin_xyz, K.quat_from_rpy(g.origin_rpy), i == -1)
+                cg.pos, cg.quat = placed(g.origin_xyz, quat_from_rpy(g.origin_rpy), i == -1)
             cg.contype = cg.conaffinity = 0
             cg.group = COLLISION_GROUP
             cg.rgba = [0.5, 0.5, 0.5, 0.5]
@@ -397,7 +369,7 @@ def add_robot(
 
 def _set_shape(geom: mujoco.MjsGeom, g: Geometry, meshes: MeshLibrary, file: str, where: str):
     geom.pos = list(g.origin_xyz)
-    geom.quat = _wxyz(K.quat_from_rpy(g.origin_rpy))
+    geom.quat = _wxyz(quat_from_rpy(g.origin_rpy))
     if g.kind == "box":
         geom.type = mujoco.mjtGeom.mjGEOM_BOX
         geom.size = [0.5 * v for v in g.size]

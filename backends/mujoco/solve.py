@@ -118,6 +118,7 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
     np.add.at(d.qfrc_constraint, dofs, sign * x)
     return True
 
+
 def polish(m: Any, d: Any, t: MotorTable, k: int) -> None:
     """Make every motor row that is not at its force limit reach exactly the acceleration
     it asks for (``efc_aref``), as PyBullet's motor row does: MuJoCo's rows keep a

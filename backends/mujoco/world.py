@@ -62,9 +62,7 @@ class Robot:
     cache: dict[int, tuple[Any, ...]] = field(default_factory=dict)
 
 
-def default_motors(
-    model: UrdfModel, movable: list[int], profile: Profile
-) -> dict[str, np.ndarray]:
+def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> dict[str, np.ndarray]:
     """The motor every movable joint starts with: PyBullet's brake (velocity 0, impulse
     1 N·s per step) or, under joint_brake "urdf_friction", the file's friction."""
     joints = [model.joints[j] for j in movable]

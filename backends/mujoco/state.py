@@ -1,0 +1,271 @@
+"""The world as the Sim reads and sets it: joint table, link and base states, joint states.
+
+Poses and velocities are recomputed lazily on the first read after a step (``mj_kinematics``,
+``mj_comPos``, ``mj_comVel``, or the compiled loop's ``body_state``), so the stepping loop pays
+nothing for them. Frames and units are PyBullet's (see simbridge.types); the free base's body
+frame is its centre-of-mass frame (model.py), turned back into the URDF link frame here.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, NoReturn
+
+import mujoco
+import numpy as np
+
+from simbridge import kinematics as K
+from simbridge.exceptions import SimulationDivergedError
+from simbridge.profiles import Profile
+from simbridge.types import BaseState, DynamicsInfo, JointInfo, JointStates, LinkState, Quat, Vec3
+
+from . import model as build
+from .world import Compiled, Robot
+
+__all__ = ["StateAccess"]
+
+
+class StateAccess:
+    """The ``Backend`` methods that read or set state (a part of :class:`MujocoBackend`)."""
+
+    if TYPE_CHECKING:  # provided by MujocoBackend and simbridge.backend.Backend
+        name: str
+        profile: Profile
+        _robots: dict[int, Robot]
+        _diverged: SimulationDivergedError | None
+
+        @property
+        def _w(self) -> Compiled: ...
+
+        @property
+        def time(self) -> float: ...
+
+        def _engine_failed(self, detail: str) -> NoReturn: ...
+
+        def _check_idle(self) -> None: ...
+
+        def refuse_fixed_base_velocity(
+            self, body: int, linear: Vec3 | None, angular: Vec3 | None
+        ) -> None: ...
+
+    # ---------------------------------------------------------------- tables
+
+    def joint_info(self, body: int, joint: int) -> JointInfo:
+        return self._robots[body].table[joint]
+
+    def num_joints(self, body: int) -> int:
+        return len(self._robots[body].table)
+
+    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        robot = self._robots[body]
+        ine = robot.spec.inertials[link + 1]
+        lateral, rolling, spinning, restitution = build._contact_values(
+            robot.model.link(link), self.profile
+        )
+        return DynamicsInfo(
+            ine.mass,
+            lateral,
+            ine.diagonal,
+            ine.position,
+            ine.orientation,
+            restitution,
+            rolling,
+            spinning,
+        )
+
+    # ---------------------------------------------------------------- state
+
+    def _fresh(self) -> None:
+        c = self._w
+        if c.stale:
+            m, d = c.m, c.d
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_comVel(m, d)
+            c.stale = False
+
+    def _com_pose_velocity(self, bid: int) -> tuple[Vec3, Quat, Vec3, Vec3]:
+        d = self._w.d
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, d.ximat[bid])
+        vel = np.empty(6)
+        mujoco.mj_objectVelocity(self._w.m, d, mujoco.mjtObj.mjOBJ_BODY, bid, vel, 0)
+        pos = d.xipos[bid]
+        return (
+            (float(pos[0]), float(pos[1]), float(pos[2])),
+            (float(quat[1]), float(quat[2]), float(quat[3]), float(quat[0])),
+            (float(vel[3]), float(vel[4]), float(vel[5])),
+            (float(vel[0]), float(vel[1]), float(vel[2])),
+        )
+
+    def _state_of(self, bid: int, body: int) -> list[float]:
+        """Centre-of-mass pose and velocity, then link-frame pose, of MuJoCo body ``bid``
+        (20 floats, quaternions x, y, z, w), after the lazy refresh."""
+        c = self._w
+        kernel = c.kernel
+        if kernel is not None:
+            finite = kernel.body_state(bid, c.stale, c.state_out)
+            if finite is None:
+                self._engine_failed(kernel.last_error())
+            c.stale = False
+            if not finite:
+                raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
+            return c.state_out.tolist()
+        if self._diverged is not None:
+            raise self._diverged
+        self._fresh()
+        d = c.d
+        self._check_finite(d.xipos[bid], body)
+        com_pos, com_orn, lin, ang = self._com_pose_velocity(bid)
+        fp = d.xpos[bid]
+        fq = d.xquat[bid]
+        return [
+            *com_pos,
+            *com_orn,
+            *lin,
+            *ang,
+            float(fp[0]),
+            float(fp[1]),
+            float(fp[2]),
+            float(fq[1]),
+            float(fq[2]),
+            float(fq[3]),
+            float(fq[0]),
+        ]
+
+    def link_state(self, body: int, link: int) -> LinkState:
+        robot = self._robots[body]
+        v = self._state_of(int(robot.body_ids[link + 1]), body)
+        ine = robot.spec.inertials[link + 1]
+        frame = ((v[13], v[14], v[15]), (v[16], v[17], v[18], v[19]))
+        if link == -1 and robot.spec.base_offset is not None:  # body frame = the COM frame
+            frame = K.transform_multiply(frame, robot.spec.base_offset)
+        return LinkState(
+            (v[0], v[1], v[2]),
+            (v[3], v[4], v[5], v[6]),
+            ine.position,
+            ine.orientation,
+            frame[0],
+            frame[1],
+            (v[7], v[8], v[9]),
+            (v[10], v[11], v[12]),
+        )
+
+    def base_state(self, body: int) -> BaseState:
+        v = self._state_of(int(self._robots[body].body_ids[0]), body)
+        return BaseState(
+            (v[0], v[1], v[2]), (v[3], v[4], v[5], v[6]), (v[7], v[8], v[9]), (v[10], v[11], v[12])
+        )
+
+    def _check_finite(self, values: np.ndarray, body: int) -> None:
+        if not np.isfinite(values).all():
+            raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
+
+    def _joint_cache(self, robot: Robot, joints: np.ndarray) -> tuple[Any, ...]:
+        key = id(joints)
+        hit = robot.cache.get(key)
+        if hit is not None and hit[0] is joints:
+            return hit
+        movable = robot.qadr[joints] >= 0
+        qadr = robot.qadr[joints][movable]
+        dof = robot.dofadr[joints][movable]
+        pos_of = np.full(len(robot.table), -1, np.intp)
+        pos_of[robot.movable] = robot.motor_index
+        motor = pos_of[joints][movable]
+        entry = (joints, movable, qadr, dof, motor, bool(movable.all()))
+        robot.cache[key] = entry
+        return entry
+
+    def _torque_rows(self, joints: np.ndarray, movable: np.ndarray, motor: np.ndarray) -> tuple:
+        """Motor rows of ``joints`` under the current motor set (cached per motor epoch):
+        (rows, positions in the answer, every joint has a row)."""
+        t = self._w.motors
+        hit = self._w.torque_map.get(id(joints))
+        if hit is not None and hit[0] is joints and hit[1] == t.epoch:
+            return hit[2:]
+        rows = t.row_of[motor]
+        on = rows >= 0
+        rows = rows[on]
+        entry = (joints, t.epoch, rows, np.flatnonzero(movable)[on], len(rows) == len(joints))
+        self._w.torque_map[id(joints)] = entry
+        return entry[2:]
+
+    def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        c = self._w
+        kernel = c.kernel
+        if kernel is not None:
+            kernel.check_idle()  # no torn reads of a world stepping in another thread
+        elif self._diverged is not None:
+            raise self._diverged
+        robot = self._robots[body]
+        _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
+        d = c.d
+        n = len(joints)
+        if c.motor_force_valid and c.motor_rows_valid:
+            rows, where, full = self._torque_rows(joints, movable, motor)
+            torque = d.efc_force[rows] if full else np.zeros(n)
+            if not full:
+                torque[where] = d.efc_force[rows]
+        else:
+            torque = np.zeros(n)
+        if all_movable:
+            return JointStates(d.qpos[qadr], d.qvel[dof], torque)
+        pos = np.zeros(n)
+        vel = np.zeros(n)
+        pos[movable] = d.qpos[qadr]
+        vel[movable] = d.qvel[dof]
+        return JointStates(pos, vel, torque)
+
+    def reset_joint_state(
+        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
+    ) -> None:
+        self._check_idle()
+        robot = self._robots[body]
+        _, _, qadr, dof, _, _ = self._joint_cache(robot, joints)
+        c = self._w
+        c.d.qpos[qadr] = positions
+        c.d.qvel[dof] = velocities
+        c.stale = True
+        c.motor_force_valid = False
+
+    def reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        robot = self._robots[body]
+        if robot.free_qadr < 0:
+            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
+        cur = self.base_state(body)
+        pos = cur.position if position is None else position
+        orn = cur.orientation if orientation is None else orientation
+        lin = cur.linear_velocity if linear_velocity is None else linear_velocity
+        ang = cur.angular_velocity if angular_velocity is None else angular_velocity
+        ine = robot.spec.inertials[0]
+        # link frame = COM frame * inverse(inertial frame)
+        fpos, forn = K.transform_multiply(
+            (pos, orn), K.transform_inverse((ine.position, ine.orientation))
+        )
+        d, m = self._w.d, self._w.m
+        if robot.free_qadr >= 0:
+            # the free base's body frame: its centre-of-mass frame, or the link frame when the
+            # two coincide (base_offset None)
+            bpos, born = (pos, orn) if robot.spec.base_offset is not None else (fpos, forn)
+            a = robot.free_qadr
+            d.qpos[a : a + 3] = bpos
+            d.qpos[a + 3 : a + 7] = K.xyzw_to_wxyz(born)
+            # MuJoCo: linear velocity of the frame origin (world), angular in the body frame
+            v_origin = np.asarray(lin) + np.cross(ang, np.subtract(bpos, pos))
+            w_local = K.quat_rotate(K.quat_conjugate(born), ang)
+            v = robot.free_dofadr
+            d.qvel[v : v + 3] = v_origin
+            d.qvel[v + 3 : v + 6] = w_local
+        else:
+            bid = int(robot.body_ids[0])
+            m.body_pos[bid] = fpos
+            m.body_quat[bid] = K.xyzw_to_wxyz(forn)
+            robot.spec.root.pos = list(fpos)
+            robot.spec.root.quat = list(K.xyzw_to_wxyz(forn))
+        self._w.stale = True
