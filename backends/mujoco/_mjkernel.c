@@ -14,6 +14,13 @@
  * Arrays are borrowed from the caller (numpy, via the buffer protocol): the kernel keeps a
  * reference to each, and reads them at every step, so the caller's in-place command updates
  * are seen without a call here.
+ *
+ * Why one file of about 1,000 lines: it is one C extension module, compiled as one translation
+ * unit so that the per-step helpers (motor offsets, limit rows, damping, the exact solve, the
+ * polish, the clamp) inline into the step loop, with no header shared between .c files to keep
+ * in step. Its sections follow the Python rooms it mirrors: loop.py (the step), solve.py (the
+ * exact solve and the polish), damping.py (link damping and the clamp), state.py (body_state),
+ * commands.py (set_velocity), and the module's Python type at the end.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
