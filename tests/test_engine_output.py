@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -164,3 +165,31 @@ def test_the_helper_imports_no_engine():
     )
     child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert child.stdout == "[]\n", child.stderr
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork here")
+def test_a_fork_while_another_thread_holds_a_window(capfd):
+    opened, done = threading.Event(), threading.Event()
+
+    def hold() -> None:
+        with captured("pybullet"):
+            opened.set()
+            done.wait(10)
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    assert opened.wait(10)
+    pid = os.fork()
+    if pid == 0:  # the child: the holder thread is not here
+        try:
+            signal.alarm(10)  # a window that waited for the parent's thread would hang
+            with captured("pybullet"):
+                os.write(1, b"b3Warning[f,1]:\nin the child\n")
+            os.write(1, b"from the child\n")
+        finally:
+            os._exit(0)
+    _, status = os.waitpid(pid, 0)
+    done.set()
+    holder.join(10)
+    assert status == 0
+    assert capfd.readouterr().out == "from the child\n"

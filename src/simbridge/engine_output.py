@@ -18,6 +18,10 @@ The rule for threads (file descriptors belong to the whole process):
   a line the engine's classifier does not claim (a user's ``print`` from another thread,
   simbridge's own progress bar) is written back when the window closes: held back for the
   length of one engine call (a URDF load: milliseconds), never dropped.
+- A process forked while another thread holds a window starts with its descriptors put back
+  and the lock free. A child process started (``subprocess``) by another thread while a window
+  is open inherits the window's file as its stdout and stderr: start children outside engine
+  loads, or give them their own ``stdout=``.
 - Only calls measured to print are wrapped (the engine's import, connect, URDF load); steps,
   commands and state reads are not, and cost nothing more.
 
@@ -58,6 +62,7 @@ Classifier = Callable[[str], tuple[list[Record], str]]
 _classifiers: dict[str, Classifier] = {}
 _lock = threading.Lock()  # one window at a time in the process
 _owner: int | None = None  # the thread holding the window (read unlocked by that thread only)
+_open: list[tuple[int, int, IO[bytes]]] = []  # the open window's (fd, its copy, its file)
 _libc: ctypes.CDLL | None = None
 
 
@@ -111,15 +116,36 @@ def captured(engine: str, during: str = "", classify: Classifier | None = None) 
         with _lock:
             _owner = me
             try:
-                saved = _redirect()
+                _open[:] = _redirect()
                 try:
                     yield
                 finally:
-                    _restore(saved, texts)
+                    _restore(_open, texts)
+                    _open.clear()
             finally:
                 _owner = None
     finally:  # outside the lock: a log handler may itself open a window
         _emit(engine, during, classify, texts)
+
+
+def _after_fork_in_child() -> None:
+    """A process forked while another thread held a window: that thread is not in the child,
+    so the child puts its fds 1 and 2 back and starts with a free lock (else its first engine
+    call would wait forever). Forked by the window's own thread: the window closes as usual."""
+    global _lock, _owner
+    if _owner is None or _owner == threading.get_ident():
+        return
+    for fd, copy, sink in _open:
+        os.dup2(copy, fd)
+        os.close(copy)
+        sink.close()
+    _open.clear()
+    _owner = None
+    _lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork_in_child)
 
 
 def _redirect() -> list[tuple[int, int, IO[bytes]]]:
