@@ -17,7 +17,6 @@ from typing import Any, NoReturn
 
 import mujoco
 
-from simbridge import kinematics as K
 from simbridge.backend import Backend
 from simbridge.exceptions import (
     EngineError,
@@ -25,6 +24,8 @@ from simbridge.exceptions import (
     SimulationDivergedError,
     UrdfStructureError,
 )
+from simbridge.inertia import is_fixed_base
+from simbridge.joint_table import joint_table
 from simbridge.profiles import Profile
 from simbridge.types import (
     JointType,
@@ -175,8 +176,8 @@ class MujocoBackend(StateAccess, MotorCommands, Backend):
                 CONTACT_MARGIN,
                 skip,
             )
-            fixed = K.is_fixed_base(model, fixed_base)
-            table = K.joint_table(model, fixed_base, rspec.inertials)
+            fixed = is_fixed_base(model, fixed_base)
+            table = joint_table(model, fixed_base, rspec.inertials)
             movable = [j.index for j in table if j.type != JointType.FIXED]
             robot = Robot(body, model, rspec, table, fixed, movable)
             robot.motor_state = default_motors(model, movable, self.profile)

@@ -13,9 +13,15 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import mujoco
 import numpy as np
 
-from simbridge import kinematics as K
 from simbridge.exceptions import SimulationDivergedError
 from simbridge.profiles import Profile
+from simbridge.transforms import (
+    quat_conjugate,
+    quat_rotate,
+    transform_inverse,
+    transform_multiply,
+    xyzw_to_wxyz,
+)
 from simbridge.types import BaseState, DynamicsInfo, JointInfo, JointStates, LinkState, Quat, Vec3
 
 from . import model as build
@@ -138,7 +144,7 @@ class StateAccess:
         ine = robot.spec.inertials[link + 1]
         frame = ((v[13], v[14], v[15]), (v[16], v[17], v[18], v[19]))
         if link == -1 and robot.spec.base_offset is not None:  # body frame = the COM frame
-            frame = K.transform_multiply(frame, robot.spec.base_offset)
+            frame = transform_multiply(frame, robot.spec.base_offset)
         return LinkState(
             (v[0], v[1], v[2]),
             (v[3], v[4], v[5], v[6]),
@@ -245,8 +251,8 @@ class StateAccess:
         ang = cur.angular_velocity if angular_velocity is None else angular_velocity
         ine = robot.spec.inertials[0]
         # link frame = COM frame * inverse(inertial frame)
-        fpos, forn = K.transform_multiply(
-            (pos, orn), K.transform_inverse((ine.position, ine.orientation))
+        fpos, forn = transform_multiply(
+            (pos, orn), transform_inverse((ine.position, ine.orientation))
         )
         d, m = self._w.d, self._w.m
         if robot.free_qadr >= 0:
@@ -255,17 +261,17 @@ class StateAccess:
             bpos, born = (pos, orn) if robot.spec.base_offset is not None else (fpos, forn)
             a = robot.free_qadr
             d.qpos[a : a + 3] = bpos
-            d.qpos[a + 3 : a + 7] = K.xyzw_to_wxyz(born)
+            d.qpos[a + 3 : a + 7] = xyzw_to_wxyz(born)
             # MuJoCo: linear velocity of the frame origin (world), angular in the body frame
             v_origin = np.asarray(lin) + np.cross(ang, np.subtract(bpos, pos))
-            w_local = K.quat_rotate(K.quat_conjugate(born), ang)
+            w_local = quat_rotate(quat_conjugate(born), ang)
             v = robot.free_dofadr
             d.qvel[v : v + 3] = v_origin
             d.qvel[v + 3 : v + 6] = w_local
         else:
             bid = int(robot.body_ids[0])
             m.body_pos[bid] = fpos
-            m.body_quat[bid] = K.xyzw_to_wxyz(forn)
+            m.body_quat[bid] = xyzw_to_wxyz(forn)
             robot.spec.root.pos = list(fpos)
-            robot.spec.root.quat = list(K.xyzw_to_wxyz(forn))
+            robot.spec.root.quat = list(xyzw_to_wxyz(forn))
         self._w.stale = True
