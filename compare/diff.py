@@ -33,6 +33,9 @@ __all__ = [
     "PhaseRow",
     "Divergence",
     "diff",
+    "features",
+    "distance",
+    "FEATURE_SOURCES",
     "yaw",
     "tilt",
     "rotation_angle",
@@ -94,6 +97,49 @@ def rotation_angle(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
 def _wrap(angle: np.ndarray) -> np.ndarray:
     """Into (-pi, pi]."""
     return -((-angle + math.pi) % (2 * math.pi) - math.pi)
+
+
+# ---------------------------------------------------------------- quantities as distances
+
+FEATURE_SOURCES: dict[str, str] = {
+    "base_distance": "base_position",
+    "link_distance": "link_positions",
+    "heading": "base_orientation",
+    "orientation": "base_orientation",
+    "joint_position_rms": "joint_positions",
+    "joint_velocity_rms": "joint_velocities",
+}
+"""The :class:`~simbridge.compare.run.BodyTrajectory` array each quantity is computed from."""
+
+
+def features(quantity: str, source: np.ndarray) -> np.ndarray:
+    """What :func:`distance` compares for ``quantity``, from its source array
+    (:data:`FEATURE_SOURCES`, rows = recorded instants): the array itself, except ``heading``,
+    which takes the yaw (rad) of the (x, y, z, w) orientations. Shapes: base position (T, 3),
+    link positions (T, L, 3), yaw (T,), orientation (T, 4), joints (T, J)."""
+    if quantity == "heading":
+        return yaw(source)
+    return np.asarray(source, dtype=np.float64)
+
+
+def distance(quantity: str, fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
+    """``quantity`` between two runs at every instant, from their :func:`features` (any leading
+    shape, broadcast): metres between base positions, the largest distance between the same
+    link (m), the wrapped yaw difference in [0, pi], the rotation angle between orientations,
+    the RMS over joints (rad or m, rad/s or m/s). Shape: the features' less their own axes."""
+    if quantity == "base_distance":
+        return np.linalg.norm(fa - fb, axis=-1)
+    if quantity == "link_distance":
+        return np.max(np.linalg.norm(fa - fb, axis=-1), axis=-1)
+    if quantity == "heading":
+        return np.abs(_wrap(fa - fb))
+    if quantity == "orientation":
+        return rotation_angle(fa, fb)
+    if quantity in ("joint_position_rms", "joint_velocity_rms"):
+        if fa.shape[-1] == 0:
+            return np.zeros(np.broadcast_shapes(fa.shape, fb.shape)[:-1])
+        return np.sqrt(np.mean((fa - fb) ** 2, axis=-1))
+    raise KeyError(f"unknown quantity {quantity!r}; quantities: {', '.join(QUANTITIES)}")
 
 
 # ---------------------------------------------------------------- alignment
@@ -264,15 +310,19 @@ def diff(a: Trajectory, b: Trajectory) -> Divergence:
 
     sa, sb = take(a), take(b)
     n_joints = sa["q"].shape[1]
-    series = {
-        "base_distance": np.linalg.norm(sa["pos"] - sb["pos"], axis=1),
-        "link_distance": np.max(np.linalg.norm(sa["links"] - sb["links"], axis=2), axis=1),
-        "heading": np.abs(_wrap(yaw(sa["quat"]) - yaw(sb["quat"]))),
-        "orientation": rotation_angle(sa["quat"], sb["quat"]),
+    keys = {
+        "base_distance": "pos",
+        "link_distance": "links",
+        "heading": "quat",
+        "orientation": "quat",
+        "joint_position_rms": "q",
+        "joint_velocity_rms": "v",
     }
-    if n_joints:
-        series["joint_position_rms"] = np.sqrt(np.mean((sa["q"] - sb["q"]) ** 2, axis=1))
-        series["joint_velocity_rms"] = np.sqrt(np.mean((sa["v"] - sb["v"]) ** 2, axis=1))
+    series = {
+        k: distance(k, features(k, sa[src]), features(k, sb[src]))
+        for k, src in keys.items()
+        if n_joints or not k.startswith("joint_")
+    }
     crossings = {
         k: {thr: _crossing(t, v, thr) for thr in QUANTITIES[k].thresholds}
         for k, v in series.items()

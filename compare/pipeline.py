@@ -3,6 +3,7 @@ time steps: :func:`compare` and :class:`Comparison`."""
 
 from __future__ import annotations
 
+import math
 import sys
 import time as _time
 from collections.abc import Callable, Sequence
@@ -13,8 +14,16 @@ from typing import Any
 from simbridge.exceptions import InvalidArgumentError, ScenarioError
 
 from .diff import QUANTITIES, Divergence, diff
+from .ensemble import (
+    DEFAULT_ENSEMBLE,
+    DEFAULT_PERTURB,
+    DEFAULT_SEED,
+    Ensemble,
+    EnsembleRunner,
+)
 from .run import Trajectory, run
 from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
+from .verdict import Verdict, judge
 
 __all__ = ["Comparison", "compare", "ProgressCallback"]
 
@@ -29,7 +38,9 @@ class Comparison:
     ``runs[(slot, dt)]`` is engine ``slot`` (0 or 1) run at time step ``dt``; every ``dt`` of
     ``timesteps`` is run, and so is ``dt / 2`` for the engine's own time-step error.
     ``cross[dt]`` diffs the two engines at ``dt``; ``own[(slot, dt)]`` diffs an engine at ``dt``
-    against itself at ``dt / 2``. ``timesteps[0]`` is the one the headline speaks of."""
+    against itself at ``dt / 2``. ``timesteps[0]`` is the one the headline speaks of.
+    ``ensembles`` holds each engine's runs from perturbed spawn poses at that time step, and
+    ``verdict`` the judgement over the whole run (:mod:`simbridge.compare.verdict`)."""
 
     scenario: Scenario
     backends: tuple[str, str]
@@ -40,6 +51,10 @@ class Comparison:
     own: dict[tuple[int, float], Divergence]
     command_line: list[str] = field(default_factory=list)
     wall_time: float = 0.0
+    ensembles: list[Ensemble] = field(default_factory=list)
+    verdict: Verdict | None = None
+    ensemble_settings: dict[str, Any] = field(default_factory=dict)
+    """size, perturbation (position m, orientation rad), seed, workers, wall_time (s)."""
 
     @property
     def timestep(self) -> float:
@@ -47,23 +62,21 @@ class Comparison:
 
     @property
     def labels(self) -> tuple[str, str]:
-        """Engine names for the report (``pybullet``, ``mujoco``; a backend compared with
-        itself under another profile or the same one gets a suffix)."""
+        """Engine names for the report (``pybullet``, ``mujoco``; with different profiles each
+        name carries its profile, ``pybullet (urdf)``; a backend compared with itself under the
+        same profile gets a suffix)."""
         a, b = self.backends
-        if a != b:
-            return a, b
         if self.profiles[0] != self.profiles[1]:
             return f"{a} ({self.profiles[0]})", f"{b} ({self.profiles[1]})"
+        if a != b:
+            return a, b
         return a, f"{b} (2)"
 
     @property
     def headline_quantity(self) -> str:
         """The scenario's ``headline``, else ``base_distance`` for a free-moving subject and
         ``link_distance`` for a fixed base."""
-        if self.scenario.headline:
-            return self.scenario.headline
-        fixed = self.scenario.robot(self.scenario.subject).fixed_base
-        return "link_distance" if fixed else "base_distance"
+        return _headline_quantity(self.scenario)
 
     def summary(self) -> dict[str, Any]:
         """Every headline figure, JSON-ready (SI units: m, rad, s)."""
@@ -72,6 +85,7 @@ class Comparison:
         cross = self.cross[dt]
         gap = cross.final[q]
         first = cross.first_to_diverge()
+        floor = self.verdict.floor if self.verdict is not None else 0.0
         own = {}
         for slot, label in enumerate(self.labels):
             d = self.own[(slot, dt)]
@@ -81,8 +95,8 @@ class Comparison:
                 "half_timestep": dt / 2,
                 "final": err,
                 "max": d.maximum[q],
-                "gap_ratio": _ratio(gap, err),
-                "gap_exceeds": bool(gap > err),
+                "gap_ratio": _ratio(gap, max(err, floor)),
+                "gap_exceeds": bool(gap > max(err, floor)),
             }
         sweep = []
         for t in self.timesteps:
@@ -139,12 +153,42 @@ class Comparison:
                 label: self.own[(slot, dt)].to_dict() for slot, label in enumerate(self.labels)
             },
             "sweep": sweep,
+            "verdict": None if self.verdict is None else self.verdict.to_dict(),
+            "ensemble": self._ensemble_summary(),
             "wall_time": self.wall_time,
             "manifest": {
                 "simbridge_version": _version(),
                 "command_line": self.command_line,
                 "engines": manifests,
             },
+        }
+
+    def _ensemble_summary(self) -> dict[str, Any] | None:
+        if not self.ensembles:
+            return None
+        s = self.ensemble_settings
+        v = self.verdict
+        engines = {}
+        for slot, e in enumerate(self.ensembles):
+            fig = v.per_engine[slot] if v is not None else None
+            engines[e.label] = {
+                "backend": e.backend,
+                "profile": e.profile,
+                "spread_end": fig.spread_end.to_dict() if fig else float(e.spread[-1]),
+                "spread_max": float(e.spread.max()),
+                "horizons": [{"threshold": t, "time": h} for t, h in e.horizons()],
+                "end_points": e.end_points.tolist(),
+                "wall_time": e.wall_time,
+            }
+        return {
+            "size": s["size"],
+            "perturbation": {"position": s["perturb"][0], "orientation": s["perturb"][1]},
+            "seed": s["seed"],
+            "workers": s["workers"],
+            "quantity": self.ensembles[0].quantity,
+            "instants": len(self.ensembles[0].time),
+            "wall_time": s.get("wall_time", 0.0),
+            "engines": engines,
         }
 
 
@@ -168,9 +212,14 @@ def compare(
     duration: float | None = None,
     progress: ProgressCallback | None = None,
     command_line: Sequence[str] | None = None,
+    ensemble: int = DEFAULT_ENSEMBLE,
+    perturb: float | tuple[float, float] = DEFAULT_PERTURB,
+    seed: int = DEFAULT_SEED,
+    tolerance: float | None = None,
+    workers: int | None = None,
 ) -> Comparison:
     """Run ``scenario`` on two backends at every time step of ``timesteps`` and at half of each,
-    and diff them.
+    run each engine's ensemble at the first time step, diff and judge them.
 
     Args:
         scenario: a shipped scenario name, a TOML path or a :class:`Scenario`.
@@ -181,9 +230,20 @@ def compare(
         duration: only the first ``duration`` seconds of the scenario.
         progress: ``progress(what, done, total)`` in steps over all runs.
         command_line: recorded in the manifest (default ``sys.argv``).
+        ensemble: runs per engine at the headline time step, the nominal one included (1: none
+            perturbed; chaos then cannot be told from an engine difference).
+        perturb: size of each perturbed run's spawn-pose offset: one number for metres and
+            radians alike, or ``(m, rad)``.
+        seed: seeds the offsets, the bootstrap and the permutation test.
+        tolerance: the gap below which the engines agree, in the headline quantity's unit
+            (default its first threshold: 1 cm, 1°, 0.1 rad/s).
+        workers: processes for the ensemble (default: the CPU count; 0: in this process).
+            A script that calls this with ``ensemble > 1`` must guard its top level with
+            ``if __name__ == "__main__":`` (worker processes are spawned).
 
     Raises:
         ScenarioError, SimbridgeError: a bad scenario or time step, a backend that fails.
+        InvalidArgumentError: a bad ensemble size, perturbation, seed or worker count.
     """
     start = _time.perf_counter()
     sc = load_scenario(scenario)
@@ -213,27 +273,74 @@ def compare(
             scaled[d] = s.truncated(duration) if duration is not None else s
     todo = [(slot, d) for slot in (0, 1) for dt in dts for d in (dt, dt / 2)]
     todo = list(dict.fromkeys(todo))
-    total = sum(scaled[d].steps for _, d in todo)
+    quantity = _headline_quantity(sc)
+    if tolerance is not None and (
+        isinstance(tolerance, bool)
+        or not isinstance(tolerance, (int, float))
+        or not (math.isfinite(tolerance) and tolerance > 0)
+    ):
+        raise InvalidArgumentError("tolerance", f"expected a finite number > 0, got {tolerance!r}")
+    runner = EnsembleRunner(
+        scaled[dts[0]],
+        [(pair[0], profiles[0]), (pair[1], profiles[1])],
+        quantity,
+        size=ensemble,
+        perturb=perturb,
+        seed=seed,
+        workers=workers,
+    )
+    nominal_total = sum(scaled[d].steps for _, d in todo)
+    total = nominal_total + runner.total_steps
     done = 0
     runs: dict[tuple[int, float], Trajectory] = {}
     cache: dict[tuple[str, str, float], Trajectory] = {}
-    for slot, d in todo:
-        key = (pair[slot], profiles[slot], d)
-        if key not in cache:
-            what = f"{pair[slot]} @ {format_timestep(d)} s"
-            base = done
+    runner.submit()  # the workers run the perturbed members meanwhile
+    try:
+        for slot, d in todo:
+            key = (pair[slot], profiles[slot], d)
+            if key not in cache:
+                what = f"{pair[slot]} @ {format_timestep(d)} s"
+                base = done
 
-            def tick(n: int, _total: int, _what: str = what, _base: int = base) -> None:
-                if progress is not None:
-                    progress(_what, _base + n, total)
+                def tick(n: int, _total: int, _what: str = what, _base: int = base) -> None:
+                    if progress is not None:
+                        progress(_what, _base + n, total)
 
-            cache[key] = run(scaled[d], pair[slot], profile=profiles[slot], progress=tick)
-        runs[(slot, d)] = cache[key]
-        done += scaled[d].steps
+                cache[key] = run(scaled[d], pair[slot], profile=profiles[slot], progress=tick)
+            runs[(slot, d)] = cache[key]
+            done += scaled[d].steps
+    except BaseException:
+        runner.cancel()
+        raise
+    pending = Comparison(
+        scenario=sc,
+        backends=pair,
+        profiles=profiles,
+        timesteps=dts,
+        runs=runs,
+        cross={},
+        own={},
+    )
+
+    def ens_tick(what: str, n: int) -> None:
+        if progress is not None:
+            progress(what, nominal_total + n, total)
+
+    ensembles = runner.collect([runs[(0, dts[0])], runs[(1, dts[0])]], pending.labels, ens_tick)
     cross = {dt: diff(runs[(0, dt)], runs[(1, dt)]) for dt in dts}
     own = {
         (slot, dt): diff(runs[(slot, dt)], runs[(slot, dt / 2)]) for slot in (0, 1) for dt in dts
     }
+    rows = ensembles[0].rows
+    verdict = judge(
+        ensembles[0].time,
+        quantity,
+        pending.labels,
+        [e.features for e in ensembles],
+        [own[(slot, dts[0])].series[quantity][rows] for slot in (0, 1)],
+        tolerance=tolerance,
+        seed=runner.seed,
+    )
     return Comparison(
         scenario=sc,
         backends=pair,
@@ -244,4 +351,19 @@ def compare(
         own=own,
         command_line=list(sys.argv if command_line is None else command_line),
         wall_time=_time.perf_counter() - start,
+        ensembles=ensembles,
+        verdict=verdict,
+        ensemble_settings={
+            "size": runner.size,
+            "perturb": runner.eps,
+            "seed": runner.seed,
+            "workers": runner.workers,
+            "wall_time": runner.wall_time,
+        },
     )
+
+
+def _headline_quantity(sc: Scenario) -> str:
+    if sc.headline:
+        return sc.headline
+    return "link_distance" if sc.robot(sc.subject).fixed_base else "base_distance"

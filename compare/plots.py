@@ -19,7 +19,7 @@ from .scenario import format_timestep
 if TYPE_CHECKING:
     from .pipeline import Comparison
 
-__all__ = ["paths", "distance", "heading", "joints", "sweep", "all_plots"]
+__all__ = ["paths", "distance", "heading", "joints", "sweep", "ensemble", "all_plots"]
 
 COLORS = ("tab:blue", "tab:orange")
 
@@ -87,14 +87,17 @@ def paths(c: Comparison, path: Path) -> Path:
 
 def distance(c: Comparison, path: Path) -> Path:
     """The headline quantity (a distance, unless the scenario names another) over time, log
-    scale, with its thresholds (1 cm / 10 cm / 1 m) and each engine's own time-step error (the
-    same quantity, dt against dt/2)."""
+    scale, with its thresholds (1 cm / 10 cm / 1 m), each engine's own time-step error (the
+    same quantity, dt against dt/2) and each engine's ensemble spread (dotted), the yardsticks
+    the verdict measures the gap against."""
     plt = _plt()
     q = c.headline_quantity
     dt = c.timestep
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    floor = 1e-9
+    fig, ax = plt.subplots(figsize=(8, 5.4))
+    v = c.verdict
+    floor = max(v.floor, 1e-12) if v is not None else 1e-9
     d = c.cross[dt]
+    lowest = [1e-7]
     ax.semilogy(
         d.time,
         np.maximum(d.series[q], floor),
@@ -112,6 +115,26 @@ def distance(c: Comparison, path: Path) -> Path:
             ls="--",
             label=f"{label}: own error (dt vs dt/2)",
         )
+    if v is not None and c.ensembles and c.ensembles[0].size > 1:
+        ax.semilogy(
+            v.time,
+            np.maximum(v.gap_series, floor),
+            color="0.45",
+            lw=1.2,
+            label="median gap over every pair of runs (judged)",
+        )
+        for slot, e in enumerate(c.ensembles):
+            ax.semilogy(
+                v.time,
+                np.maximum(v.spreads[slot], floor),
+                color=COLORS[slot],
+                lw=1.3,
+                ls=":",
+                label=f"{e.label}: spread of {e.size} perturbed runs",
+            )
+            positive = v.spreads[slot][v.spreads[slot] > 0]
+            if positive.size:
+                lowest.append(float(positive.min()) / 2)
     for thr in QUANTITIES[q].thresholds:
         ax.axhline(thr, color="tab:red", lw=0.7, alpha=0.6)
         ax.annotate(
@@ -125,13 +148,13 @@ def distance(c: Comparison, path: Path) -> Path:
         )
     highest = max(float(np.max(x.series[q])) for x in [d] + [c.own[(k, dt)] for k in (0, 1)])
     top = max(QUANTITIES[q].thresholds[-1] * 1.5, highest * 2)
-    ax.set_ylim(1e-7, top)
+    ax.set_ylim(max(min(lowest), floor), top)
     _phase_lines(ax, c)
     ax.set_xlabel("time (s)")
     ax.set_ylabel(f"{QUANTITIES[q].title} ({QUANTITIES[q].unit})")
     ax.set_title(f"{c.scenario.name}: how far apart, at dt = {format_timestep(dt)} s")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, loc="lower center")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
     return _save(fig, path)
 
 
@@ -231,6 +254,58 @@ def sweep(c: Comparison, path: Path) -> Path | None:
     return _save(fig, path)
 
 
+def ensemble(c: Comparison, path: Path) -> Path | None:
+    """Where every ensemble run ends, both engines: top view (x, y) and side view (x, z) of the
+    followed robot's base (of its last link's centre of mass for a fixed base), member 0 (the
+    nominal run) ringed. The legend sits below the axes. None without perturbed runs."""
+    if not c.ensembles or c.ensembles[0].size < 2:
+        return None
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.9))
+    markers = ("o", "x")
+    fixed = c.scenario.robot(c.scenario.subject).fixed_base
+    for ax, (i, j, names) in zip(axes, ((0, 1, "xy"), (0, 2, "xz")), strict=True):
+        for slot, e in enumerate(c.ensembles):
+            pts = e.end_points
+            ax.plot(
+                pts[:, i],
+                pts[:, j],
+                markers[slot],
+                color=COLORS[slot],
+                ms=6,
+                mfc="none" if markers[slot] == "o" else COLORS[slot],
+                alpha=0.8,
+                label=f"{e.label}: {e.size} runs",
+            )
+            ax.plot(
+                pts[0, i],
+                pts[0, j],
+                "s",
+                color=COLORS[slot],
+                ms=11,
+                mfc="none",
+                mew=1.2,
+                label=f"{e.label}: nominal run",
+            )
+        ax.set_xlabel(f"{names[0]} (m)")
+        ax.set_ylabel(f"{names[1]} (m)")
+        ax.set_title("top view" if names == "xy" else "side view")
+        ax.grid(alpha=0.3)
+        ax.margins(0.15)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+    what = "last link" if fixed else "base"
+    v = c.verdict
+    title = f"{c.scenario.name}: where each run ends ({c.scenario.subject}'s {what})"
+    if v is not None:
+        title += f"; verdict: {v.verdict}"
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def all_plots(c: Comparison, out: Path) -> dict[str, Path]:
     """Every figure into folder ``out``: name -> path (figures with nothing to show left out)."""
     made = {
@@ -239,5 +314,6 @@ def all_plots(c: Comparison, out: Path) -> dict[str, Path]:
         "heading": heading(c, out / "heading.png"),
         "joints": joints(c, out / "joints.png"),
         "sweep": sweep(c, out / "sweep.png"),
+        "ensemble": ensemble(c, out / "ensemble.png"),
     }
     return {k: v for k, v in made.items() if v is not None}

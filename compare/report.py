@@ -1,9 +1,10 @@
 """The comparison report: ``report.md`` beside its figures, ``summary.json`` for machines, and
 the trajectories (``.npz`` and ``.csv``).
 
-The first lines of ``report.md`` give the headline in words: how far apart the engines end,
-when they part, which quantity goes first, and whether the gap is larger than what either
-engine changes by itself when its time step is halved.
+The first lines of ``report.md`` give the headline in words: the verdict (``agree``,
+``differ``, ``chaotic`` naming the engine, or ``unresolved``) with its test and intervals, the
+predictability horizons, then how far apart the nominal runs end, when they part, which quantity
+goes first, and what halving the time step changes in each engine.
 """
 
 from __future__ import annotations
@@ -16,45 +17,39 @@ from .diff import DEG, QUANTITIES
 from .fmt import fmt_distance, fmt_threshold, fmt_time, fmt_value
 from .pipeline import Comparison
 from .scenario import format_timestep
+from .verdict import verdict_lines
 
 __all__ = ["report", "headline", "fmt_distance", "fmt_time", "fmt_value"]
 
 
-NOISE_FLOOR = {"m": 1e-6, "rad": 1e-6, "rad/s": 1e-6}
-"""Below these, a difference is floating-point noise: 1 µm, 1 µrad, 1 µrad/s."""
-
-
-def _ratio_words(ratio: float | None) -> str:
-    return "" if ratio is None else f" (the gap is {ratio:.3g} times that)"
-
-
 def headline(summary: dict[str, Any]) -> list[str]:
-    """The report's opening sentences, from ``summary.json``'s figures alone."""
+    """The report's opening sentences, from ``summary.json``'s figures alone: the verdict
+    (:func:`~simbridge.compare.verdict.verdict_lines`), then the nominal runs' figures."""
     h = summary["headline"]
     a, b = summary["labels"]
     unit = h["unit"]
     subject = summary["subject"]
+    lines: list[str] = []
+    if summary.get("verdict"):
+        lines += verdict_lines(summary)
     if h["quantity"] == "base_distance":
-        apart = f"{fmt_value(h['final'], unit)} apart** ({subject}'s base position"
+        apart = f"{fmt_value(h['final'], unit)} apart ({subject}'s base position"
     elif h["quantity"] == "link_distance":
         apart = (
-            f"{fmt_value(h['final'], unit)} apart** ({subject}'s links' centres of mass, the "
+            f"{fmt_value(h['final'], unit)} apart ({subject}'s links' centres of mass, the "
             "farthest pair"
         )
     else:
-        apart = f"{fmt_value(h['final'], unit)} apart** (the {h['title']} of {subject}"
-    lines = [
-        f"**{a} and {b} end {apart}, after {summary['duration']:.3g} s of simulated time at "
-        f"dt = {summary['timestep_text']} s; the largest gap on the way was "
+        apart = f"{fmt_value(h['final'], unit)} apart (the {h['title']} of {subject}"
+    lines += [
+        f"The nominal runs (no offset) end {apart}, after {summary['duration']:.3g} s of "
+        f"simulated time at dt = {summary['timestep_text']} s; the largest gap on the way was "
         f"{fmt_value(h['max'], unit)})."
     ]
     crossings = [(c["threshold"], c["time"]) for c in h["crossings"]]
     (t1, c1), (t2, c2) = crossings[0], crossings[1]
     if c1 is None:
-        lines.append(
-            f"They never come {fmt_threshold(t1, unit)} apart: the engines agree on this "
-            f"scenario to {fmt_value(h['max'], unit)}."
-        )
+        lines.append(f"They never come {fmt_threshold(t1, unit)} apart.")
     elif c2 is None:
         lines.append(
             f"They part at t = {fmt_time(c1)} (first {fmt_threshold(t1, unit)} apart) and never "
@@ -78,32 +73,8 @@ def headline(summary: dict[str, Any]) -> list[str]:
             f"{fmt_threshold(first['threshold'], qq.unit)} at t = {fmt_time(first['time'])}."
         )
     own = h["own_error"]
-    parts = [
-        f"halving the time step moves {label}'s end by {fmt_value(e['final'], unit)}"
-        + _ratio_words(e["gap_ratio"])
-        for label, e in own.items()
-    ]
-    exceeds = [e["gap_exceeds"] for e in own.values()]
-    if h["max"] < NOISE_FLOOR[unit]:
-        verdict = (
-            "The engines agree to floating-point noise (under "
-            f"{fmt_value(NOISE_FLOOR[unit], unit)} all along), so there is no gap to weigh "
-            "against their own time-step errors"
-        )
-    elif all(exceeds):
-        verdict = "The gap between the engines is larger than each engine's own time-step error"
-    elif not any(exceeds):
-        verdict = (
-            "The gap between the engines is NOT larger than either engine's own time-step "
-            "error, so at this time step it does not tell the engines apart"
-        )
-    else:
-        within = [label for label, e in own.items() if not e["gap_exceeds"]]
-        verdict = (
-            "The gap between the engines is larger than one engine's own time-step error but "
-            f"not {' and '.join(within)}'s"
-        )
-    lines.append(verdict + ": " + "; ".join(parts) + ".")
+    parts = [f"moves {label}'s end by {fmt_value(e['final'], unit)}" for label, e in own.items()]
+    lines.append("Halving the time step " + "; it ".join(parts) + ".")
     return lines
 
 
@@ -124,6 +95,9 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
     lines += [""]
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
+    # -- verdict
+    if s.get("verdict"):
+        lines += _verdict_section(s)
     # -- setup
     lines += ["## Setup", ""]
     rows = []
@@ -282,7 +256,10 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
     captions = {
         "paths": "Paths of both engines (phase starts marked, x = end).",
         "distance": "Distance over time (log scale) with the 1 cm / 10 cm / 1 m thresholds; "
-        "dashed: each engine against itself at half the time step.",
+        "dashed: each engine against itself at half the time step; dotted: the spread of each "
+        "engine's perturbed runs.",
+        "ensemble": "Where every run of each engine's ensemble ends (top and side views); the "
+        "squares ring the nominal runs.",
         "heading": "Heading of each engine and their difference.",
         "joints": "Commanded joints: speed against the target.",
         "sweep": "Speed against self-consistency, and the cross-engine gap against the time step.",
@@ -319,6 +296,103 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         "",
     ]
     return "\n".join(lines)
+
+
+def _verdict_section(s: dict[str, Any]) -> list[str]:
+    """The judgement in a table: each engine's spread, own error and their ratios to the gap,
+    the test, the instants of each kind, the horizons."""
+    v = s["verdict"]
+    e = s.get("ensemble") or {}
+    unit = v["unit"]
+    q = QUANTITIES[v["quantity"]]
+    t = v["judged_at"]
+    where = "at the end" if t["why"] == "end" else f"at t = {fmt_time(t['time'])} (largest gap)"
+
+    def iv(x: dict[str, Any]) -> str:
+        if x.get("low") is None:
+            return fmt_value(x["value"], unit)
+        return (
+            f"{fmt_value(x['value'], unit)} [{fmt_value(x['low'], unit)}, "
+            f"{fmt_value(x['high'], unit)}]"
+        )
+
+    lines = [
+        f"## Verdict: {v['verdict']}" + (" (marginal)" if v["marginal"] else ""),
+        "",
+    ]
+    if e:
+        pert = e["perturbation"]
+        lines += [
+            f"Each engine ran the scenario {e['size']} times: the nominal run and "
+            f"{e['size'] - 1} with every spawn pose moved by {pert['position']:g} m and turned "
+            f"by {pert['orientation']:g} rad in random directions (seed {e['seed']}). The "
+            f"{q.title} is judged at every one of {v['instants']['total']} recorded instants "
+            f"against each engine's own spread (the {v['spread_percentile']:g}th percentile of "
+            "the distances between its runs) and its own time-step error (dt against dt/2); "
+            f"figures below are {where}, with 95% bootstrap intervals in brackets.",
+            "",
+        ]
+    rows = []
+    for label, f in v["engine_figures"].items():
+        hz = ", ".join(
+            f"{fmt_threshold(h['threshold'], unit)}: {fmt_time(h['time'])}" for h in f["horizons"]
+        )
+        rows.append(
+            [
+                label,
+                str(f["size"]),
+                iv(f["spread"]),
+                iv(f["spread_end"]),
+                fmt_value(f["largest_pair"], unit),
+                f"{f['gap_over_spread']:.3g}",
+                fmt_value(f["own_error"], unit),
+                f"{f['gap_over_own_error']:.3g}",
+                hz,
+            ]
+        )
+    lines += _table(
+        [
+            "engine",
+            "runs",
+            "spread",
+            "spread at the end",
+            "farthest pair",
+            "gap / spread",
+            "own error",
+            "gap / own error",
+            "spread first reaches",
+        ],
+        rows,
+    )
+    test = v["test"]
+    test_words = (
+        "not run (the gap stays below the tolerance, or one run per engine)"
+        if test is None
+        else f"{test['name']}: statistic {test['statistic']:.3g}, p = {test['p_value']:.3g} "
+        f"({'every split' if test['exact'] else str(test['resamples']) + ' random splits'}; "
+        f"alpha {test['alpha']:g})"
+    )
+    n = v["instants"]
+    lines += [
+        "",
+        f"Gap between the engines (median over every pair of runs, one of each engine): "
+        f"{iv(v['gap'])}; the nominal runs' gap: {fmt_value(v['nominal_gap'], unit)}; largest "
+        f"on the way {fmt_value(v['max_gap']['value'], unit)} at t = "
+        f"{fmt_time(v['max_gap']['time'])}. Tolerance for `agree`: "
+        f"{fmt_threshold(v['tolerance'], unit)}; precision floor {v['floor']:.2g} {unit}.",
+        "",
+        f"Two-sample test on the runs' states {where}: {test_words}.",
+        "",
+        f"Instants: {n['agree']} below the tolerance, {n['chaotic']} within an engine's spread, "
+        f"{n['unresolved']} within an engine's own time-step error, {n['differ']} beyond every "
+        f"one of them (of {n['total']}). A ratio between {v['marginal_range'][0]:g} and "
+        f"{v['marginal_range'][1]:g} is near 1: the gap is not clearly larger, and the verdict "
+        "says marginal.",
+        "",
+    ]
+    if v["marginal_reasons"]:
+        lines += ["Marginal: " + "; ".join(v["marginal_reasons"]) + ".", ""]
+    return lines
 
 
 # ---------------------------------------------------------------- entry point
