@@ -49,6 +49,36 @@ def _duration(text: str) -> float:
     return value
 
 
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
+
+
+def _size(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not (value >= 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     from simbridge import PROFILES, available_backends
 
@@ -95,6 +125,30 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
     p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    from simbridge.compare.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
+
+    p.add_argument(
+        "--ensemble",
+        type=_count,
+        default=DEFAULT_ENSEMBLE,
+        metavar="N",
+        help="runs per engine, the nominal one and N-1 from perturbed spawn poses, in parallel "
+        f"processes; 1: no perturbed run (default: {DEFAULT_ENSEMBLE})",
+    )
+    p.add_argument(
+        "--perturb",
+        type=_size,
+        default=DEFAULT_PERTURB,
+        metavar="EPS",
+        help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
+    )
+    p.add_argument(
+        "--seed",
+        type=_seed,
+        default=DEFAULT_SEED,
+        metavar="S",
+        help=f"seed of the offsets, bootstrap and test (default: {DEFAULT_SEED})",
+    )
     _verbose(p)
 
     s = sub.add_parser(
@@ -159,6 +213,9 @@ def _compare(args: argparse.Namespace) -> int:
             timesteps=args.timestep,
             duration=args.duration,
             progress=bar,
+            ensemble=args.ensemble,
+            perturb=args.perturb,
+            seed=args.seed,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots)
