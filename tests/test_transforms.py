@@ -38,3 +38,13 @@ def test_quaternion_helpers_agree_with_pybullet():
         assert ident[0] == pytest.approx((0, 0, 0), abs=1e-12)
         assert _same_quat(ident[1], T.IDENTITY_QUAT)
     assert T.wxyz_to_xyzw(T.xyzw_to_wxyz((1, 2, 3, 4))) == (1, 2, 3, 4)
+
+
+def test_rpy_from_quat_agrees_with_pybullet_and_scalars_match_scenarios():
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        q = T.quat_from_rpy(rng.uniform(-1.5, 1.5, 3))
+        assert T.rpy_from_quat(q) == pytest.approx(p.getEulerFromQuaternion(q), abs=1e-12)
+    # integers, as a scenario file may give them, are the same angles as floats
+    assert T.quat_from_rpy([0, 0, 1]) == T.quat_from_rpy((0.0, 0.0, 1.0))
+    assert T.xyzw_to_wxyz(T.IDENTITY_QUAT) == (1.0, 0.0, 0.0, 0.0)
