@@ -89,7 +89,10 @@ if __name__ == "__main__":
         sys.exit(0)
     env = dict(os.environ, SIMBRIDGE_MUJOCO_STEP="python")
     python_loop = subprocess.run(
-        [sys.executable, __file__, "--mujoco-only"], env=env, check=True, capture_output=True,
+        [sys.executable, __file__, "--mujoco-only"],
+        env=env,
+        check=True,
+        capture_output=True,
         text=True,
     ).stdout
     record = {

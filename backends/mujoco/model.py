@@ -245,7 +245,7 @@ def add_robot(
         i = link.index
         if i == -1:
             body = spec.worldbody.add_body(name=body_names[0])
-            frame = (tuple(base_position), tuple(base_orientation))
+            frame: tuple[Vec3, Quat] = (base_position, base_orientation)
             if offset is not None:  # the body frame is the base's centre-of-mass frame
                 frame = transform_multiply(frame, transform_inverse(offset))
             body.pos = list(frame[0])

@@ -8,7 +8,7 @@ frame is its centre-of-mass frame (model.py), turned back into the URDF link fra
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any, ClassVar, NoReturn
 
 import mujoco
 import numpy as np
@@ -34,7 +34,7 @@ class StateAccess:
     """The ``Backend`` methods that read or set state (a part of :class:`MujocoBackend`)."""
 
     if TYPE_CHECKING:  # provided by MujocoBackend and simbridge.backend.Backend
-        name: str
+        name: ClassVar[str]
         profile: Profile
         _robots: dict[int, Robot]
         _diverged: SimulationDivergedError | None
