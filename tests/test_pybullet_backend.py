@@ -1,6 +1,7 @@
 """PyBullet-backend specifics: the layer adds nothing to raw PyBullet under the "pybullet" profile.
 
-These tests import pybullet directly because they compare against raw PyBullet code.
+These tests import pybullet directly because they compare against raw PyBullet code, and look
+inside the backend only through ``simbridge.backends.pybullet_inspect``.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import pybullet_data
 import pytest
 
 import simbridge
+from simbridge.backends.pybullet_inspect import client_id
 from simbridge.exceptions import DisplayError
 
 WHEELS_RIGHT, WHEELS_LEFT = (2, 3), (6, 7)
@@ -135,13 +137,31 @@ def test_failed_text_load_leaves_no_temp_file_and_sim_stays_usable():
 
 def test_each_sim_owns_and_releases_its_client():
     sim = simbridge.Sim("pybullet")
-    client = sim._b._c  # the backend's physics client id
+    client = client_id(sim)
     assert p.getConnectionInfo(client)["isConnected"] == 1
     sim.close()
     assert p.getConnectionInfo(client)["isConnected"] == 0
     sim.close()  # twice is fine
     with pytest.raises(simbridge.exceptions.SimClosedError, match="closed"):
         sim.step()
+
+
+def test_inspect_gives_the_client_of_this_sim_and_refuses_others():
+    with simbridge.Sim("pybullet") as a, simbridge.Sim("pybullet") as b:
+        a.load_urdf("plane")
+        robot = a.load_urdf("r2d2", base_position=(0, 0, 0.5))
+        c = client_id(a)
+        assert c != client_id(b)
+        assert p.getNumBodies(physicsClientId=c) == 2
+        assert p.getNumBodies(physicsClientId=client_id(b)) == 0
+        pos, _ = p.getBasePositionAndOrientation(robot, physicsClientId=c)
+        assert pos == a.base_state(robot).position
+    with pytest.raises(simbridge.exceptions.InvalidArgumentError, match="got _Closed"):
+        client_id(a)
+    if "mujoco" in simbridge.available_backends():
+        with simbridge.Sim("mujoco") as m:
+            with pytest.raises(simbridge.exceptions.InvalidArgumentError, match="MujocoBackend"):
+                client_id(m)
 
 
 def test_gui_without_display_is_a_clear_error(monkeypatch):

@@ -1,0 +1,35 @@
+"""Look inside a PyBullet-backed `Sim`: its physics client, for tests, benchmarks and debugging.
+
+The `Sim` interface is the way to use simbridge; this is the one door into the PyBullet
+backend's internals, so that nothing else reaches into private attributes (``sim._b._...``).
+A raw PyBullet call made on :func:`client_id` acts on the very world the `Sim` steps: read
+from it freely; a change made behind the backend's back (a body added or removed, a motor set)
+is not seen by its tables.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from simbridge.exceptions import InvalidArgumentError
+
+from .pybullet_backend import PyBulletBackend
+
+__all__ = ["backend_of", "client_id"]
+
+
+def backend_of(sim: Any) -> PyBulletBackend:
+    """The :class:`PyBulletBackend` behind ``sim`` (InvalidArgumentError for another backend,
+    or for a closed `Sim`)."""
+    backend = getattr(sim, "_b", None)
+    if not isinstance(backend, PyBulletBackend):
+        raise InvalidArgumentError(
+            "sim", f"an open Sim on the 'pybullet' backend is needed, got {type(backend).__name__}"
+        )
+    return backend
+
+
+def client_id(sim: Any) -> int:
+    """The PyBullet physics client id of ``sim``'s world (the ``physicsClientId`` argument of
+    every raw PyBullet call); it is disconnected when the `Sim` closes."""
+    return backend_of(sim)._c
