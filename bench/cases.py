@@ -272,7 +272,9 @@ def single_calls(backend: str, n: int) -> list[Case]:
     if backend == "pybullet":
         import pybullet as p
 
-        c = sim._b._c  # noqa: SLF001 - the same client, called raw
+        from simbridge.backends.pybullet_inspect import client_id
+
+        c = client_id(sim)  # the same client, called raw
 
         def raw_link() -> object:
             return p.getLinkState(
