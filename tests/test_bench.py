@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+import simbridge
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -44,10 +46,10 @@ def test_bench_runs_with_a_tiny_repeat_count():
 def test_kernel_phases_runs_and_accounts_for_the_step():
     """bench/kernel_phases.py builds the timed kernel in a temporary folder and its phases add
     up to the timed step (they are timed inside it), which is all a smoke run can check."""
-    from simbridge.backends.mujoco import kernel as mujoco_kernel
-
-    if mujoco_kernel.reason():  # pragma: no cover - machines without the compiled loop
-        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    with simbridge.Sim("mujoco") as sim:
+        loop = sim.manifest()["step_loop"]
+    if not loop.startswith("compiled"):  # pragma: no cover - machines without the compiled loop
+        pytest.skip(f"no compiled loop: {loop}")
     proc = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "kernel_phases.py"), "--repeats", "1"],
         capture_output=True,

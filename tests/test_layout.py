@@ -1,0 +1,203 @@
+"""Tests, benchmarks and examples speak the `Sim` interface; a look inside a backend goes
+through that backend's own door, from that backend's own test file.
+
+Every file is parsed with :mod:`ast` (none is executed), so a rule holds wherever the code
+stands: at the top, inside a function, or in a string given to ``getattr``.
+
+- No file under tests/, bench/ or examples/ reaches into a `Sim`'s backend (``sim._b``): the
+  backends' inspect modules (``simbridge.backends.mujoco.inspect``,
+  ``simbridge.backends.pybullet_inspect``) are the doors.
+- A test file imports a backend's modules only when it is that backend's own test file
+  (tests/test_mujoco_*.py, tests/test_pybullet_*.py); bench/ may use the doors for its raw
+  floors.
+- The conformance suite (tests/conformance/) runs the same tests on every registered backend,
+  a third-party one too: it speaks the public interface alone, with no private name of
+  simbridge imported and no private attribute read.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+TESTS = ROOT / "tests"
+
+# The backends this project ships: module prefix under simbridge.backends -> own test files.
+OWN_TESTS = {"mujoco": "test_mujoco_*.py", "pybullet": "test_pybullet_*.py"}
+
+# The public API of namedtuples (JointInfo and the other state records) starts with "_".
+NAMEDTUPLE_API = {"_asdict", "_fields", "_replace", "_make", "_field_defaults"}
+
+
+def _files(*folders: str) -> list[Path]:
+    return sorted(p for folder in folders for p in (ROOT / folder).rglob("*.py"))
+
+
+def _tree(path: Path) -> ast.Module:
+    return ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+
+
+def _backend_reaches(tree: ast.Module) -> Iterator[tuple[int, str]]:
+    """(line, code) of every read of a backend attribute ``_b``: ``x._b`` or
+    ``getattr(x, "_b")`` (also hasattr, setattr, delattr)."""
+    for node in ast.walk(tree):
+        attribute = isinstance(node, ast.Attribute) and node.attr == "_b"
+        by_name = (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Name)
+            and node.func.id in {"getattr", "hasattr", "setattr", "delattr"}
+            and len(node.args) >= 2
+            and isinstance(node.args[1], ast.Constant)
+            and node.args[1].value == "_b"
+        )
+        if attribute or by_name:
+            yield node.lineno, ast.unparse(node)
+
+
+def _imported_modules(tree: ast.Module) -> Iterator[tuple[int, str]]:
+    """(line, dotted name) of every absolute import: ``import a.b`` gives a.b, ``from a import
+    b`` gives a.b (b may be a module or a name in a: both are listed), ``importlib.import_module
+    ("a.b")`` gives a.b."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            for alias in node.names:
+                yield node.lineno, f"{node.module}.{alias.name}"
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, (ast.Name, ast.Attribute))
+            and (node.func.id if isinstance(node.func, ast.Name) else node.func.attr)
+            == "import_module"
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+            and isinstance(node.args[0].value, str)
+        ):
+            yield node.lineno, node.args[0].value
+
+
+def _backend_of_module(name: str) -> str | None:
+    """Which shipped backend a module under simbridge.backends belongs to ("" for the
+    simbridge.backends package itself or a module of no known backend; None: not a backend
+    module)."""
+    if name != "simbridge.backends" and not name.startswith("simbridge.backends."):
+        return None
+    first = name.removeprefix("simbridge.backends").lstrip(".").split(".")[0]
+    return next((b for b in OWN_TESTS if first == b or first.startswith(b + "_")), "")
+
+
+def _foreign_backend_imports(path: Path, tree: ast.Module) -> Iterator[tuple[int, str]]:
+    """Imports of a backend's modules in a test file that is not that backend's own."""
+    for line, name in _imported_modules(tree):
+        backend = _backend_of_module(name)
+        if backend is None:
+            continue
+        if not backend or path.parent != TESTS or not path.match(OWN_TESTS[backend]):
+            yield line, name
+
+
+def _private_uses(tree: ast.Module) -> Iterator[tuple[int, str]]:
+    """Private names of simbridge imported, and private attributes read (not on self or cls;
+    dunders and the namedtuple API are public)."""
+    for line, name in _imported_modules(tree):
+        parts = name.split(".")
+        if parts[0] == "simbridge" and any(p.startswith("_") for p in parts[1:]):
+            yield line, name
+    for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Attribute)
+            and node.attr.startswith("_")
+            and not (node.attr.startswith("__") and node.attr.endswith("__"))
+            and node.attr not in NAMEDTUPLE_API
+            and not (isinstance(node.value, ast.Name) and node.value.id in {"self", "cls"})
+        ):
+            yield node.lineno, ast.unparse(node)
+
+
+def _report(found: dict[Path, list[tuple[int, str]]]) -> str:
+    return "\n".join(
+        f"  {path.relative_to(ROOT)}:{line}: {code}"
+        for path, hits in found.items()
+        for line, code in hits
+    )
+
+
+def test_no_file_reaches_into_a_sims_backend():
+    found = {
+        path: hits
+        for path in _files("tests", "bench", "examples")
+        if (hits := list(_backend_reaches(_tree(path))))
+    }
+    assert not found, (
+        "these read a Sim's backend (sim._b); use the public interface, or the backend's "
+        "inspect module (simbridge.backends.mujoco.inspect, simbridge.backends.pybullet_inspect) "
+        "from that backend's own test file:\n" + _report(found)
+    )
+
+
+def test_backend_modules_are_imported_only_by_their_own_test_files():
+    found = {
+        path: hits
+        for path in _files("tests")
+        if (hits := list(_foreign_backend_imports(path, _tree(path))))
+    }
+    own = ", ".join(f"tests/{pattern}" for pattern in OWN_TESTS.values())
+    assert not found, (
+        f"a backend's modules are looked into only from its own test file ({own}); these "
+        "should use the public interface (sim.manifest(), sim.profile, ...) or move there:\n"
+        + _report(found)
+    )
+
+
+def test_conformance_suite_speaks_the_public_interface():
+    found = {
+        path: hits
+        for path in _files("tests/conformance")
+        if (hits := list(_private_uses(_tree(path))))
+    }
+    assert not found, (
+        "the conformance suite runs on any backend through the public interface; move these "
+        "checks to the backend's own test file or find a public way:\n" + _report(found)
+    )
+
+
+def test_the_rules_see_what_they_forbid():
+    """Each rule flags a sample of what it forbids, in each way it can be written."""
+    code = ast.parse(
+        "import simbridge.backends.mujoco.inspect\n"
+        "def f(sim):\n"
+        "    from simbridge.backends.pybullet_inspect import client_id\n"
+        "    from simbridge.backends import mujoco\n"
+        "    from simbridge import _version\n"
+        "    importlib.import_module('simbridge.backends.pybullet_backend')\n"
+        "    c = sim._b._c\n"
+        "    return getattr(sim, '_b'), info._asdict(), self._x, x.__class__, ref._rule\n"
+    )
+    assert sorted(line for line, _ in _backend_reaches(code)) == [7, 8]
+    elsewhere = TESTS / "test_core.py"
+    assert [n for _, n in sorted(_foreign_backend_imports(elsewhere, code))] == [
+        "simbridge.backends.mujoco.inspect",
+        "simbridge.backends.pybullet_inspect.client_id",
+        "simbridge.backends.mujoco",
+        "simbridge.backends.pybullet_backend",
+    ]
+    # in a backend's own test file, only the other backend's modules are flagged
+    own = TESTS / "test_mujoco_backend.py"
+    assert [n for _, n in sorted(_foreign_backend_imports(own, code))] == [
+        "simbridge.backends.pybullet_inspect.client_id",
+        "simbridge.backends.pybullet_backend",
+    ]
+    own = TESTS / "test_pybullet_backend.py"
+    assert [n for _, n in sorted(_foreign_backend_imports(own, code))] == [
+        "simbridge.backends.mujoco.inspect",
+        "simbridge.backends.mujoco",
+    ]
+    assert sorted(code for _, code in _private_uses(code)) == [
+        "ref._rule",
+        "sim._b",
+        "sim._b._c",
+        "simbridge._version",
+    ]
