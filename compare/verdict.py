@@ -549,12 +549,14 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
     lines: list[str] = []
     if v["verdict"] == "agree":
         mg = v["max_gap"]
-        spreads = ", ".join(f"{lab} {fmt_value(f['spread_max'], unit)}" for lab, f in figs.items())
+        spreads = " and ".join(
+            f"{fmt_value(f['spread_max'], unit)} ({lab})" for lab, f in figs.items()
+        )
         lines.append(
             f"**{a} and {b} agree on this scenario**{marg}: the gap between them stays below "
             f"{tol} all along (largest {fmt_value(mg['value'], unit)}, at t = "
             f"{fmt_time(mg['time'])})."
-            + (f" Each engine's {n} {started} stay within: {spreads}." if n > 1 else "")
+            + (f" Each engine's {n} {started} spread by at most {spreads}." if n > 1 else "")
         )
     elif v["verdict"] == "chaotic":
         names = v["engines"]

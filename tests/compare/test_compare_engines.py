@@ -23,7 +23,8 @@ CONTACT_FREE = ["pendulum", "double-pendulum", "spinning-wheel"]
 @pytest.mark.parametrize("profile", ["pybullet", "urdf"])
 @pytest.mark.parametrize("scenario", CONTACT_FREE)
 def test_contact_free_scenarios_agree_across_engines(other, scenario, profile):
-    c = compare(scenario, ["pybullet", other], profile=profile)
+    c = compare(scenario, ["pybullet", other], profile=profile, ensemble=3)
+    assert c.verdict.verdict == "agree" and not c.verdict.marginal, c.verdict.to_dict()
     cross = c.cross[c.timestep]
     # no quantity ever reaches its first threshold (1 cm, 1°, 0.1 rad/s)
     assert cross.first_to_diverge() is None, cross.maximum
@@ -36,7 +37,7 @@ def test_contact_free_scenarios_agree_across_engines(other, scenario, profile):
 
 
 def test_r2d2_report_records_the_divergence_from_the_trajectories(other, tmp_path):
-    c = compare("r2d2", ["pybullet", other])
+    c = compare("r2d2", ["pybullet", other], ensemble=4)
     path = report(c, tmp_path, plots=False)
     summary = json.loads((tmp_path / "summary.json").read_text())
     h = summary["headline"]
@@ -53,6 +54,8 @@ def test_r2d2_report_records_the_divergence_from_the_trajectories(other, tmp_pat
         assert own["final"] == c.own[(slot, c.timestep)].final["base_distance"]
         assert own["gap_exceeds"] == (gap > own["final"])
     text = path.read_text()
-    assert fmt_value(gap, "m") + " apart" in text.splitlines()[2]
+    assert text.splitlines()[2] == h["text"][0]  # the verdict first
+    assert f"The nominal runs (no offset) end {fmt_value(gap, 'm')} apart" in text
+    assert summary["verdict"]["verdict"] == c.verdict.verdict
     assert summary["manifest"]["engines"][other]["backend"] == other
     assert set(QUANTITIES) <= set(summary["cross"]["final"])

@@ -28,6 +28,7 @@ def written(tmp_path_factory):
         timesteps=["1/240", "1/480"],
         duration=1.5,
         command_line=["simbridge", "compare", "r2d2"],
+        ensemble=4,
     )
     path = report(c, out)
     return c, out, path, json.loads((out / "summary.json").read_text())
@@ -36,7 +37,8 @@ def written(tmp_path_factory):
 def test_files_exist(written):
     c, out, path, summary = written
     assert path == out / "report.md"
-    for name in ("paths.png", "distance.png", "heading.png", "joints.png", "sweep.png"):
+    names = ("paths.png", "distance.png", "heading.png", "joints.png", "sweep.png", "ensemble.png")
+    for name in names:
         assert (out / name).read_bytes()[:8] == PNG, name
         assert f"]({name})" in path.read_text()
     for label in ("pybullet__pybullet_", "pybullet__urdf_"):
@@ -49,9 +51,14 @@ def test_opening_lines_carry_the_headline_figures(written):
     c, out, path, s = written
     h = s["headline"]
     lines = path.read_text().splitlines()
-    top = "\n".join(lines[:6])
+    n = len(h["text"])
+    top = "\n".join(lines[2 : 2 + n])
     assert lines[0] == "# r2d2: pybullet (pybullet) against pybullet (urdf)"
-    assert f"end {fmt_value(h['final'], 'm')} apart" in lines[2]
+    # the verdict first, then the nominal runs' figures
+    v = s["verdict"]
+    assert v["verdict"] in ("agree", "differ", "chaotic", "unresolved")
+    assert lines[2].startswith("**")
+    assert f"The nominal runs (no offset) end {fmt_value(h['final'], 'm')} apart" in top
     part = h["crossings"][0]["time"]
     assert part is not None
     assert f"They part at t = {fmt_time(part)} (first 1 cm apart)" in top
@@ -60,7 +67,8 @@ def test_opening_lines_carry_the_headline_figures(written):
     assert f"the {q.title}: it reaches {fmt_threshold(first['threshold'], q.unit)}" in top
     for label, e in h["own_error"].items():
         assert f"moves {label}'s end by {fmt_value(e['final'], 'm')}" in top
-    assert lines[2:6] == h["text"]
+    assert lines[2 : 2 + n] == h["text"]
+    assert lines[2 + n] == ""
     assert h["text"] == headline(s)
 
 
@@ -97,6 +105,7 @@ def test_report_tables(written):
     c, out, path, s = written
     text = path.read_text()
     for heading in (
+        "## Verdict: ",
         "## When each quantity parts",
         "## Per phase",
         "## Final poses",

@@ -1,0 +1,200 @@
+"""Ensembles and the verdict on real engines, and the command line's --ensemble, --perturb,
+--seed.
+
+Measured verdicts (PyBullet 3.2.7, MuJoCo 4.0, 1/240 s): the pendulum agrees (gap 1e-9 m); on
+r2d2-gentle the engines differ (7.2 cm, spreads 1e-4 m and 1e-9 m); the balanced pendulum
+(tests/compare/data) is chaotic on whichever engine runs it under the "urdf" profile (nothing
+holds it up) and still on the other (the "pybullet" profile's brake holds it).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from simbridge.cli import main
+from simbridge.compare import compare, report
+from simbridge.compare.ensemble import run_ensembles
+from simbridge.compare.scenario import load_scenario
+from simbridge.exceptions import InvalidArgumentError
+
+BALANCED = Path(__file__).parent / "data" / "balanced-pendulum.toml"
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
+
+
+def test_pendulum_agrees(other):
+    c = compare("pendulum", ["pybullet", other], ensemble=4)
+    v = c.verdict
+    assert v.verdict == "agree" and not v.marginal, v.to_dict()
+    assert v.max_gap[0] < 1e-6 and v.test is None
+    for e in v.per_engine:
+        assert e.size == 4 and e.spread_end.value < 1e-6
+        assert [h for _, h in e.horizons] == [None, None, None]
+
+
+def test_r2d2_gentle_differs(other):
+    c = compare("r2d2-gentle", ["pybullet", other], ensemble=4)
+    v = c.verdict
+    assert v.verdict == "differ" and v.judged_at == "end", v.to_dict()
+    assert 0.06 < v.gap.value < 0.08  # measured 7.18 cm
+    assert v.gap.low <= v.gap.value <= v.gap.high
+    # 4 + 4 runs: 70 splits; separated means p = 2/70
+    assert v.test.exact and v.test.p_value == pytest.approx(2 / 70)
+    for e in v.per_engine:
+        assert e.spread_end.value < 1e-3  # measured 1.1e-4 m (PyBullet), 2e-9 m (MuJoCo)
+        assert e.gap_over_spread > 2 and e.gap_over_own_error > 2
+
+
+@pytest.mark.parametrize("loose", [0, 1])
+def test_balanced_pendulum_is_chaotic_on_the_engine_without_a_brake(other, loose, tmp_path):
+    profiles = ["pybullet", "pybullet"]
+    profiles[loose] = "urdf"
+    c = compare(BALANCED, ["pybullet", other], profile=profiles, ensemble=6)
+    v = c.verdict
+    assert v.verdict == "chaotic", v.to_dict()
+    assert v.engines == [c.labels[loose]]
+    held, fell = v.per_engine[1 - loose], v.per_engine[loose]
+    assert held.spread_end.value < 1e-6
+    assert fell.spread_end.value > 0.1 and fell.gap_over_spread < 1
+    assert fell.horizons[0][1] is not None  # its spread reached 1 cm
+    first = report(c, tmp_path, plots=False, trajectories=False).read_text().splitlines()[2]
+    assert first.startswith(f"**{c.labels[loose]} is chaotic on this scenario**: 6 runs started")
+
+
+def test_members_run_in_workers_equal_members_run_here():
+    sc = load_scenario("pendulum").truncated(0.25)
+    engines = [("pybullet", "pybullet"), ("mujoco", "pybullet")]
+    here = run_ensembles(sc, engines, "link_distance", size=3, perturb=1e-6, workers=0)
+    there = run_ensembles(sc, engines, "link_distance", size=3, perturb=1e-6, workers=2)
+    for a, b in zip(here, there, strict=True):
+        assert np.array_equal(a.features, b.features)
+        assert np.array_equal(a.end_points, b.end_points)
+        assert a.features.shape == (3, 61, 2, 3)  # members, instants, links, xyz
+    # perturbed members differ from the nominal one, by about the perturbation
+    d = np.abs(here[0].features[1:] - here[0].features[:1]).max()
+    assert 1e-8 < d < 1e-4
+    other_seed = run_ensembles(sc, engines[:1], "link_distance", size=3, perturb=1e-6, seed=1)
+    assert not np.array_equal(other_seed[0].features, here[0].features)
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"ensemble": 0}, "ensemble"),
+        ({"ensemble": 2.5}, "ensemble"),
+        ({"perturb": -1e-9}, "perturb"),
+        ({"perturb": float("nan")}, "perturb"),
+        ({"perturb": (1e-9, 1e-9, 1e-9)}, "perturb"),
+        ({"seed": -1}, "seed"),
+        ({"workers": -1}, "workers"),
+        ({"tolerance": 0.0}, "tolerance"),
+    ],
+)
+def test_bad_ensemble_arguments_are_refused(kw, name):
+    with pytest.raises(InvalidArgumentError, match=name):
+        compare("pendulum", ["pybullet", "pybullet"], duration=0.05, **kw)
+
+
+def test_report_carries_the_ensemble_and_its_plot(tmp_path):
+    c = compare("pendulum", ["pybullet", "mujoco"], ensemble=3, duration=0.5, seed=2)
+    path = report(c, tmp_path)
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert (tmp_path / "ensemble.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "ensemble.png" in s["files"] and "](ensemble.png)" in path.read_text()
+    e = s["ensemble"]
+    assert e["size"] == 3 and e["seed"] == 2
+    assert e["perturbation"] == {"position": 1e-9, "orientation": 1e-9}
+    assert set(e["engines"]) == {"pybullet", "mujoco"}
+    for fig in e["engines"].values():
+        assert len(fig["end_points"]) == 3 and len(fig["horizons"]) == 3
+    v = s["verdict"]
+    assert v["verdict"] == "agree" and v["labels"] == ["pybullet", "mujoco"]
+    lines = path.read_text().splitlines()
+    assert lines[2].startswith("**pybullet and mujoco agree on this scenario**")
+    assert "## Verdict: agree" in lines
+
+
+def test_every_summary_field_is_described_in_the_docs():
+    c = compare("r2d2-gentle", ["pybullet", "pybullet"], ensemble=2, duration=0.1)
+    s = c.summary()
+    docs = DOCS.read_text()
+    keys = set(s["verdict"]) | set(s["ensemble"]) | {"verdict", "ensemble"}
+    keys |= set(s["verdict"]["engine_figures"]["pybullet"])
+    keys |= set(next(iter(s["ensemble"]["engines"].values())))
+    keys |= set(s["verdict"]["test"] or {}) | set(s["verdict"]["timeline"][0])
+    missing = sorted(k for k in keys if f"`{k}`" not in docs)
+    assert not missing, f"docs/compare.md does not describe {missing}"
+
+
+# ---------------------------------------------------------------- command line
+
+
+def test_cli_flags_reach_the_summary(tmp_path, capsys):
+    out = tmp_path / "rep"
+    argv = ["compare", "pendulum", "--duration", "0.25", "--no-plots", "--out", str(out)]
+    argv += ["--ensemble", "3", "--perturb", "1e-6", "--seed", "7"]
+    assert main(argv) == 0
+    stdout = capsys.readouterr().out.splitlines()
+    s = json.loads((out / "summary.json").read_text())
+    assert s["ensemble"]["size"] == 3 and s["ensemble"]["seed"] == 7
+    assert s["ensemble"]["perturbation"] == {"position": 1e-6, "orientation": 1e-6}
+    assert s["verdict"]["verdict"] == "agree"
+    assert stdout[0] == s["headline"]["text"][0].replace("**", "")
+    assert "agree on this scenario" in stdout[0] and "1e-06 m / 1e-06 rad apart" in stdout[0]
+
+
+@pytest.mark.parametrize(
+    "flag, value",
+    [
+        ("--ensemble", "0"),
+        ("--ensemble", "many"),
+        ("--perturb", "-1e-9"),
+        ("--perturb", "nan"),
+        ("--perturb", "inf"),
+        ("--seed", "-1"),
+        ("--seed", "1.5"),
+    ],
+)
+def test_cli_bad_flag_values_exit_2(flag, value, capsys):
+    assert main(["compare", "pendulum", flag, value]) == 2
+    err = capsys.readouterr().err
+    assert "usage: simbridge" in err and f"argument {flag}" in err
+
+
+def _noise(args: list[str], out: Path) -> list[str]:
+    """Lines the command prints besides its headline and report path."""
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "simbridge",
+            "compare",
+            "pendulum",
+            "--duration",
+            "0.1",
+            "--no-plots",
+            "--out",
+            str(out),
+            *args,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    text = done.stdout + done.stderr
+    headline = json.loads((out / "summary.json").read_text())["headline"]["text"]
+    keep = {line.replace("**", "") for line in headline} | {f"report: {out / 'report.md'}"}
+    return sorted(line for line in text.splitlines() if line not in keep)
+
+
+def test_workers_print_nothing(tmp_path):
+    alone = _noise(["--ensemble", "1"], tmp_path / "one")
+    many = _noise(["--ensemble", "4"], tmp_path / "four")
+    # six engine runs in worker processes add no line to what the parent itself prints
+    assert many == alone
