@@ -63,6 +63,7 @@ class ProgressBar:
                 self.stream.write("\r" + " " * (self.width + 44) + "\r")
                 self.stream.flush()
                 self.drawn = False
+                self._last = 0.0  # the next update draws at once
 
     def close(self) -> None:
         self.clear()

@@ -174,3 +174,23 @@ def test_a_scenario_file_that_is_broken_still_fails_with_1(tmp_path, capsys):
     path.write_text("[[robots]\n")
     assert main(["compare", str(path)]) == 1
     assert capsys.readouterr().err.startswith(f"simbridge: error: {path}:")
+
+
+def test_a_log_record_clears_the_progress_bar_line_first(capsys):
+    import io
+    import logging
+
+    from simbridge.cli import _StderrLog
+    from simbridge.compare.progress import ProgressBar
+
+    stream = io.StringIO()
+    bar = ProgressBar(stream, enabled=True, delay=0.0)
+    bar("pybullet run", 5, 10)
+    assert bar.drawn and stream.getvalue().startswith("\r[###############")
+    handler = _StderrLog()  # writes to sys.stderr, here capsys's
+    handler.bar = bar
+    handler.emit(logging.LogRecord("simbridge.x", logging.WARNING, "", 0, "a record", None, None))
+    assert not bar.drawn and stream.getvalue().endswith(" " * 74 + "\r")
+    assert capsys.readouterr().err == "simbridge: WARNING: a record\n"
+    bar("pybullet run", 6, 10)  # the next update draws it again
+    assert bar.drawn
