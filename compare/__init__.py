@@ -10,6 +10,8 @@
     print(d.final["base_distance"], d.first_crossing("base_distance", 0.01))
 
     c = compare.compare("r2d2", ["pybullet", "mujoco"], timesteps=["1/240", "1/480"])
+    c.verdict.verdict, c.verdict.engines           # "chaotic", ["pybullet"]
+    c.ensembles[0].spread, c.ensembles[0].horizons()   # 16 runs per engine, judged
     compare.report(c, "reports/r2d2")              # report.md, summary.json, figures
 
 Only the :class:`simbridge.Sim` interface is used: no engine is imported here.
@@ -18,6 +20,7 @@ Only the :class:`simbridge.Sim` interface is used: no engine is imported here.
 from __future__ import annotations
 
 from .diff import QUANTITIES, Divergence, PhaseRow, Quantity, diff
+from .ensemble import Ensemble, run_ensembles
 from .pipeline import Comparison, compare
 from .report import headline, report
 from .run import BodyTrajectory, Trajectory, run
@@ -32,6 +35,7 @@ from .scenario import (
     loads_scenario,
     save_scenario,
 )
+from .verdict import Verdict, judge
 
 __all__ = [
     "run",
@@ -46,6 +50,10 @@ __all__ = [
     "Quantity",
     "QUANTITIES",
     "Comparison",
+    "Ensemble",
+    "run_ensembles",
+    "Verdict",
+    "judge",
     "Scenario",
     "RobotSpec",
     "Phase",

@@ -433,7 +433,7 @@ def judge(
         verdict, engines, reason = "agree", [], "below tolerance"
         ratio = float(np.max(gap)) / tol
         if ratio >= lo_m:
-            marginal.append(f"the largest gap is {ratio:.2g}x the tolerance")
+            marginal.append(f"the largest gap is {ratio:.3g}x the tolerance")
     else:
         if na >= 2 and nb >= 2:
             both = np.concatenate([fa[:, j], fb[:, j]])
@@ -444,7 +444,7 @@ def judge(
             verdict, engines, reason = "chaotic", [e.label for e in covering], "within spread"
             for e in covering:
                 if e.gap_over_spread >= lo_m:
-                    marginal.append(f"the gap is {e.gap_over_spread:.2g}x {e.label}'s spread")
+                    marginal.append(f"the gap is {e.gap_over_spread:.3g}x {e.label}'s spread")
         else:
             own_cover = [e for e in per_engine if e.gap_over_own_error <= within]
             if own_cover:
@@ -456,7 +456,7 @@ def judge(
                 for e in own_cover:
                     if e.gap_over_own_error >= lo_m:
                         marginal.append(
-                            f"the gap is {e.gap_over_own_error:.2g}x {e.label}'s own time-step "
+                            f"the gap is {e.gap_over_own_error:.3g}x {e.label}'s own time-step "
                             "error"
                         )
             elif test is None:
@@ -511,11 +511,11 @@ def _iv(x: dict[str, Any], unit: str, *, inner: bool = False) -> str:
 
 
 def _x(r: float) -> str:
-    """A ratio: ``1.1x``, ``33x``, ``670x``, ``3.1e7x``."""
+    """A ratio: ``1.04x``, ``33x``, ``670x``, ``3.1e7x``."""
     if r < 10:
-        return f"{r:.2g}x"
+        return f"{r:.3g}x"
     if r < 10_000:
-        return f"{r:.2g}x" if r < 100 else f"{round(r, -1):.0f}x"
+        return f"{r:.3g}x" if r < 100 else f"{round(r, -1):.0f}x"
     return f"{r:.1e}x".replace("e+0", "e").replace("e+", "e")
 
 
