@@ -53,7 +53,7 @@ def test_verbose_shows_the_banner_on_stderr_and_stdout_stays_clean(tmp_path):
         "pendulum",
         "--backends",
         "pybullet",
-        "mujoco",
+        "pybullet",
         "--duration",
         "0.1",
         "--no-plots",
