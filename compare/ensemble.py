@@ -217,6 +217,15 @@ def member_of(tr: Trajectory, quantity: str, index: int = 0) -> Member:
     return Member(index, features(quantity, src), end_point(body), tr.wall_total)
 
 
+def _main_importable() -> bool:
+    """Whether a spawned process can import this program's ``__main__`` (it always tries): no
+    file (``python -c``, an interactive session) or a file that exists."""
+    import sys
+
+    path = getattr(sys.modules.get("__main__"), "__file__", None)
+    return path is None or os.path.isfile(path)
+
+
 def _quiet() -> None:
     """Worker initialiser: file descriptors 1 and 2 to os.devnull, so that nothing an engine
     prints from C (or Python) reaches the parent's terminal."""
@@ -292,8 +301,13 @@ class EnsembleRunner:
         return len(self.jobs) * self.scenario.steps
 
     def submit(self) -> None:
-        """Start the workers (no-op with ``workers=0`` or no perturbed member)."""
+        """Start the workers (no-op with ``workers=0`` or no perturbed member). A main module
+        that a spawned process cannot import (a script read from stdin) runs the members here
+        instead."""
         if self.workers == 0 or not self.jobs:
+            return
+        if not _main_importable():
+            self.workers = 0
             return
         import multiprocessing
 

@@ -198,3 +198,17 @@ def test_workers_print_nothing(tmp_path):
     many = _noise(["--ensemble", "4"], tmp_path / "four")
     # six engine runs in worker processes add no line to what the parent itself prints
     assert many == alone
+
+
+def test_a_script_read_from_stdin_runs_its_members_in_process():
+    # a spawned worker would try to import "<stdin>" as the main module, and die
+    script = (
+        "from simbridge.compare import compare\n"
+        "c = compare('pendulum', ['pybullet', 'pybullet'], ensemble=3, duration=0.1)\n"
+        "print(c.verdict.verdict, c.ensemble_settings['workers'], c.ensembles[0].size)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-"], input=script, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["agree", "0", "3"]
