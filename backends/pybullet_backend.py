@@ -35,15 +35,20 @@ from simbridge.exceptions import (
 from simbridge.profiles import Profile
 from simbridge.types import (
     BaseState,
+    ContactPoint,
     DynamicsInfo,
+    JointCommands,
     JointInfo,
     JointStates,
     JointType,
     LinkState,
+    MotorMode,
     Quat,
     Vec3,
 )
 from simbridge.urdf import UrdfModel, resolve_mesh
+
+from .pybullet_state import Records, Saved, contact_point
 
 __all__ = ["PyBulletBackend"]
 
@@ -203,6 +208,7 @@ class PyBulletBackend(Backend):
         # (a control loop repeating it every step pays 1.4 us less); any other motor command,
         # load, remove or reset forgets it.
         self._last_velocity: tuple[Any, ...] | None = None
+        self._records = Records()  # the commands given and saved states (pybullet_state.py)
         self._configure()
 
     def _configure(self) -> None:
@@ -262,6 +268,7 @@ class PyBulletBackend(Backend):
         base_mass = dyn[0]
         free = not fixed_base and base_mass > 0
         info = self._bodies[body] = _Body(table, free, (dyn[3], dyn[4]))
+        self._records.loaded(body)
         if prof.enforce_effort_limit:
             info.effort = [j.max_force if j.max_force > 0 else math.inf for j in table]
             self._clamp_brake(body, info, model)
@@ -389,6 +396,7 @@ class PyBulletBackend(Backend):
             self._last_velocity = None
             p.removeBody(body, physicsClientId=self._c)
             del self._bodies[body]
+            self._records.removed(body)
 
     def reset(self) -> None:
         with self._idle():
@@ -400,6 +408,7 @@ class PyBulletBackend(Backend):
         self._diverged = None
         self._configure()
         self._bodies.clear()
+        self._records.reset()
         self._steps = 0
         self._next_check = _CHECK_EVERY
 
@@ -590,6 +599,7 @@ class PyBulletBackend(Backend):
             physicsClientId=self._c,
         )
         self._last_velocity = (joints, body, target, max_force)
+        self._records.motor(body, joints, 0, target, max_force, None, None)
 
     def set_joint_position(
         self,
@@ -611,6 +621,7 @@ class PyBulletBackend(Backend):
             velocityGains=kd,
             physicsClientId=self._c,
         )
+        self._records.motor(body, joints, 2, target, max_force, kp, kd)
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         self._last_velocity = None
@@ -623,6 +634,7 @@ class PyBulletBackend(Backend):
         p.setJointMotorControlArray(
             body, joints.tolist(), p.TORQUE_CONTROL, forces=torque, physicsClientId=self._c
         )
+        self._records.torque(self._steps, body, joints, torque)
 
     # ---------------------------------------------------------------- description
 
@@ -638,3 +650,102 @@ class PyBulletBackend(Backend):
             "native_defaults": self.NATIVE_DEFAULTS,
             "departures": {},
         }
+
+    # ---------------------------------------------------------------- contacts and state
+
+    def contact_points(self) -> list[ContactPoint]:
+        # unfiltered: PyBullet keeps the friction fields in its own order of A and B when it
+        # swaps them to answer a filtered query (Sim.contact_points orients them itself)
+        return [contact_point(r) for r in p.getContactPoints(physicsClientId=self._c)]
+
+    def joint_commands(self, body: int) -> JointCommands:
+        return self._records.commands(
+            body, self._bodies[body].table, self.profile.joint_brake, self._dt, self._steps
+        )
+
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """Re-issue the motors that differ from those in force (a restore into the same world
+        sends none), then cancel the pending torques and give the new ones."""
+        c = self._c
+        now = self.joint_commands(body)
+        movable = np.asarray(self._bodies[body].movable, dtype=np.intp)
+        differ = np.zeros(len(now.mode), dtype=bool)
+        for field in range(5):
+            differ |= now[field] != commands[field]
+        for mode in (MotorMode.VELOCITY, MotorMode.POSITION):
+            joints = movable[differ[movable] & (commands.mode[movable] == mode)]
+            if not len(joints):
+                continue
+            force = self._within_effort(body, joints, commands.max_force[joints].tolist())
+            target = commands.target[joints].tolist()
+            if mode == MotorMode.VELOCITY:
+                p.setJointMotorControlArray(
+                    body,
+                    joints.tolist(),
+                    p.VELOCITY_CONTROL,
+                    targetVelocities=target,
+                    forces=force,
+                    physicsClientId=c,
+                )
+            else:
+                p.setJointMotorControlArray(
+                    body,
+                    joints.tolist(),
+                    p.POSITION_CONTROL,
+                    targetPositions=target,
+                    forces=force,
+                    positionGains=commands.kp[joints].tolist(),
+                    velocityGains=commands.kd[joints].tolist(),
+                    physicsClientId=c,
+                )
+        self._last_velocity = None
+        if (now.pending_torque != commands.pending_torque).any():
+            for torque in (-now.pending_torque[movable], commands.pending_torque[movable]):
+                if torque.any():  # x + (-x) is exactly 0: the engine's sum starts afresh
+                    p.setJointMotorControlArray(
+                        body,
+                        movable.tolist(),
+                        p.TORQUE_CONTROL,
+                        forces=torque.tolist(),
+                        physicsClientId=c,
+                    )
+        self._records.set(body, commands, self._steps, movable)
+
+    def _world_key(self) -> tuple[Any, ...]:
+        return tuple(self._bodies.items())
+
+    def _free_dead_states(self) -> None:
+        records = self._records
+        while records.dead:
+            generation, state_id = records.dead.pop()
+            if generation == records.generation:
+                p.removeState(state_id, physicsClientId=self._c)
+
+    def snapshot(self) -> Any:
+        if self._diverged is not None:
+            raise self._diverged
+        with self._idle():
+            self._free_dead_states()
+            state_id = p.saveState(physicsClientId=self._c)
+            return Saved(self._c, self._records, self._world_key(), state_id, self._steps)
+
+    def restore(self, native: Any) -> bool:
+        if self._diverged is not None:
+            raise self._diverged
+        with self._idle():
+            self._free_dead_states()
+            if not (
+                isinstance(native, Saved) and native.fits(self._c, self._records, self._world_key())
+            ):
+                return False  # PyBullet's contact caches cannot be dropped: they stay
+            with captured(self.name, "restoring a state"):
+                p.restoreState(native.state_id, physicsClientId=self._c)
+            self.set_time(native.steps * self._dt)
+            return True
+
+    def set_time(self, time: float) -> None:
+        steps = round(time / self._dt)
+        if steps != self._steps:
+            self._records.restamp(self._steps, steps)
+            self._steps = steps
+            self._next_check = steps + _CHECK_EVERY

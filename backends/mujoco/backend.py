@@ -37,7 +37,9 @@ from simbridge.urdf import UrdfModel
 from . import kernel as kernel_loader
 from . import model as build
 from .commands import MotorCommands
+from .contacts import ContactReads
 from .loop import step_python
+from .snapshot import Snapshots
 from .state import StateAccess
 from .viewer import Viewer, check_display
 from .world import Compiled, Robot, compile_state, default_motors
@@ -67,7 +69,7 @@ CONTACT_MARGIN = 0.001
 _STEP_CHUNK = 1000
 
 
-class MujocoBackend(StateAccess, MotorCommands, Backend):
+class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend):
     """`Sim` on MuJoCo 4 (see the module docstring and docs/mujoco_backend.md)."""
 
     name = "mujoco"

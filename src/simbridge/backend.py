@@ -28,7 +28,17 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from .profiles import Profile
-from .types import BaseState, DynamicsInfo, JointInfo, JointStates, LinkState, Quat, Vec3
+from .types import (
+    BaseState,
+    ContactPoint,
+    DynamicsInfo,
+    JointCommands,
+    JointInfo,
+    JointStates,
+    LinkState,
+    Quat,
+    Vec3,
+)
 
 if TYPE_CHECKING:
     from .urdf import UrdfModel
@@ -204,3 +214,55 @@ class Backend(ABC):
     def manifest(self) -> dict[str, Any]:
         """Engine name and version, native defaults, and departures from the profile."""
         return {"backend": self.name, "engine_version": "unknown", "departures": {}}
+
+    # ---------------------------------------------------------------- contacts and state
+    # Not abstract: a backend without them refuses these calls (BackendUnsupportedError).
+
+    def contact_points(self) -> list[ContactPoint]:
+        """Every contact point the last step solved, each once, A and B in the engine's own
+        order (the Sim filters and orients them): links as PyBullet's indices (-1 = base),
+        forces in N, and the friction fields the friction force on A (see
+        :class:`~simbridge.types.ContactPoint`). Empty before the first step."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "contact points")
+
+    def joint_commands(self, body: int) -> JointCommands:
+        """The motor in force and the torque pending for the next step of every joint of
+        ``body`` (arrays over all joints; fixed joints: mode NONE, zeros). A motor set by a
+        velocity command reads back as VELOCITY with kp 0 and kd 1, one set by a position
+        command as POSITION (the default brake: VELOCITY, target 0, the profile's brake force);
+        ``max_force`` is the force asked for, before any effort limit of the profile."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "reading the commands in force (get_state)")
+
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """Make ``commands`` (checked: modes NONE exactly on the fixed joints, finite values,
+        forces and gains >= 0) the motors in force and the pending torques of ``body``,
+        replacing both (a pending torque is not added to: it is set). Afterwards
+        ``joint_commands(body)`` reads them back."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "setting the commands in force (set_state)")
+
+    def snapshot(self) -> Any:
+        """The engine's own data that ``restore`` needs to put this world back bit-exactly
+        (solver warm starts, contact caches), or None when the portable state is all there
+        is. Opaque to the Sim; never used by another backend."""
+        return None
+
+    def restore(self, native: Any) -> bool:
+        """Called first by every ``set_state``. Put back the positions, velocities, time and
+        engine data saved by ``snapshot`` and return True; or, when ``native`` is None or does
+        not fit this world as it is now (another world, a load, remove or reset since), drop
+        what the engine keeps of its past where it can (MuJoCo: the solver's warm start), so
+        that the portable state the Sim sets next means the same in any world, and return
+        False. Motors and pending torques are set after it by ``set_joint_commands``."""
+        return False
+
+    def set_time(self, time: float) -> None:
+        """Set the simulated time (s), to the nearest whole step of this world's time step."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "setting the time (set_state)")

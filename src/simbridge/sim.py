@@ -37,7 +37,17 @@ from .exceptions import (
 )
 from .profiles import Profile, get_profile
 from .registry import available_backends, load_backend
-from .types import BaseState, DynamicsInfo, JointInfo, JointStates, JointType, LinkState
+from .types import (
+    BaseState,
+    BodyState,
+    ContactPoint,
+    DynamicsInfo,
+    JointInfo,
+    JointStates,
+    JointType,
+    LinkState,
+    WorldState,
+)
 
 _F64 = np.dtype(np.float64)  # native float64: ``arr.dtype is _F64`` is the hot path's test
 
@@ -539,6 +549,131 @@ class Sim:
         first with ``set_joint_velocity(..., max_force=0)``."""
         idx = self._joints(body, joints, True)
         self._b.set_joint_torque(body, idx, self._values(torque, len(idx), "torque"))
+
+    # ---------------------------------------------------------------- contacts and state
+
+    def contact_points(
+        self,
+        body_a: int | None = None,
+        body_b: int | None = None,
+        *,
+        link_a: LinkArg | None = None,
+        link_b: LinkArg | None = None,
+    ) -> tuple[ContactPoint, ...]:
+        """The contact points of the last step (``p.getContactPoints``): all of them, those of
+        ``body_a`` (as A), or those between ``body_a`` and ``body_b``; ``link_a``/``link_b``
+        (index or name, -1 = base) narrow to one link of each. See
+        :class:`~simbridge.types.ContactPoint` for the frames, signs and units.
+
+        The contacts are those found at the start of the last step, with the forces that step
+        applied; a teleport or ``set_state`` changes them only at the next step.
+
+        Raises:
+            UnknownBodyError, UnknownLinkError: a body or link that is not there.
+            InvalidArgumentError: ``body_b`` without ``body_a`` (PyBullet answers that with
+                nothing), or a link without its body.
+        """
+        if body_a is None and body_b is not None:
+            raise InvalidArgumentError(
+                "body_b",
+                "give body_a too (PyBullet's getContactPoints filters by bodyB only "
+                "together with bodyA); the points of one body are contact_points(body)",
+            )
+        if link_a is not None and body_a is None:
+            raise InvalidArgumentError("link_a", "a link filter needs its body: give body_a")
+        if link_b is not None and body_b is None:
+            raise InvalidArgumentError("link_b", "a link filter needs its body: give body_b")
+        la = lb = None
+        if body_a is not None:
+            self._body(body_a)
+            la = None if link_a is None else self.link_index(body_a, link_a)
+        if body_b is not None:
+            self._body(body_b)
+            lb = None if link_b is None else self.link_index(body_b, link_b)
+        from .contacts import select
+
+        return select(self._b.contact_points(), body_a, la, body_b, lb)
+
+    def get_state(self, *, exact: bool = True) -> WorldState:
+        """Everything :meth:`set_state` needs to put this world back: per body (load order)
+        the base's centre-of-mass pose and velocities, every joint's position and velocity,
+        the commands in force (motor mode, target, max force, gains) and the torques pending
+        for the next step; the time.
+
+        Args:
+            exact: also keep the engine's own data (``WorldState.native``: MuJoCo's solver warm
+                start, PyBullet's ``saveState`` with its contact caches, which costs about 2.6
+                ms on r2d2), so that a restore into this same world steps bit for bit as the
+                uninterrupted run. Without it the state is the portable one alone.
+        """
+        b = self._b
+        native = b.snapshot() if exact else None
+        bodies = []
+        for body, info in self._bodies.items():
+            base = b.base_state(body)
+            js = b.joint_states(body, self._joints(body, None, False))
+            cmd = b.joint_commands(body)
+            bodies.append(
+                BodyState(
+                    body,
+                    info.name,
+                    tuple(info.joint_names),
+                    base.position,
+                    base.orientation,
+                    base.linear_velocity,
+                    base.angular_velocity,
+                    np.array(js.positions, dtype=np.float64),
+                    np.array(js.velocities, dtype=np.float64),
+                    cmd.mode,
+                    cmd.target,
+                    cmd.max_force,
+                    cmd.kp,
+                    cmd.kd,
+                    cmd.pending_torque,
+                )
+            )
+        return WorldState(self.backend, self._dt, b.time, tuple(bodies), native)
+
+    def set_state(self, state: WorldState) -> None:
+        """Put the world in ``state`` (from :meth:`get_state` of this Sim, or of another Sim,
+        on any backend, with the same robots loaded in the same order): base poses and
+        velocities, joint positions and velocities, the commands in force, pending torques and
+        the time (to the nearest whole step of this Sim's time step).
+
+        Into the world it was taken from (no load, remove or reset since) a state with its
+        engine data restores bit-exactly; anywhere else, or after ``state.portable()``, what
+        the engine keeps of its past (contact caches, solver warm start) stays out: see
+        docs/state_and_contacts.md for each engine's one-step error after such a restore.
+        ``joint_states(...).applied_torques`` describe the last step until the next one.
+
+        Raises:
+            InvalidArgumentError: not a WorldState; other robots or another load order (the
+                message lists both); a value of the wrong shape, non-finite, a motor mode on a
+                fixed joint; a velocity for a fixed base. Nothing is set then, but for the last,
+                which the backend refuses when it reaches that body.
+            SimClosedError: the Sim is closed.
+        """
+        b = self._b
+        b.time  # noqa: B018 - raises SimClosedError after close()
+        from .state import check_state
+
+        checked = check_state(state, self._bodies)
+        exact = b.restore(state.native if state.backend == self.backend else None)
+        for c in checked:
+            if not exact:
+                pos, orn, lin, ang = c.base
+                b.reset_base_state(c.body, pos, orn, lin, ang)  # type: ignore[arg-type]
+                movable = self._joints(c.body, None, True)
+                if len(movable):
+                    b.reset_joint_state(
+                        c.body,
+                        movable,
+                        c.positions[movable].tolist(),
+                        c.velocities[movable].tolist(),
+                    )
+            b.set_joint_commands(c.body, c.commands)
+        b.set_time(float(state.time))
+        self._wall_start = None
 
 
 def backends() -> list[str]:

@@ -7,8 +7,9 @@ named access (``info.link_name``) work. Units are SI (m, rad, kg, s, N, N·m); q
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field, replace
 from enum import IntEnum
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -22,6 +23,11 @@ __all__ = [
     "LinkState",
     "BaseState",
     "JointStates",
+    "ContactPoint",
+    "MotorMode",
+    "JointCommands",
+    "BodyState",
+    "WorldState",
 ]
 
 
@@ -133,3 +139,135 @@ class JointStates(NamedTuple):
     positions: np.ndarray  # (n,)
     velocities: np.ndarray  # (n,)
     applied_torques: np.ndarray  # (n,)
+
+
+class ContactPoint(NamedTuple):
+    """One contact point of the last step: the 14 fields of ``p.getContactPoints``, in its order.
+
+    The forces are those the last step applied (N, not impulses) at the contact found at the
+    start of that step. ``normal_force * normal_on_b + lateral_friction_1 * lateral_friction_dir_1
+    + lateral_friction_2 * lateral_friction_dir_2`` is the contact force on A (world frame); on
+    B it is the opposite. Raw PyBullet leaves the friction fields as they are when it swaps A and
+    B to answer a query; here they follow the order asked for, so that sum is always A's.
+    """
+
+    contact_flag: int
+    """0 (PyBullet's reserved field)."""
+    body_a: int
+    body_b: int
+    link_a: int
+    """Link index of A (-1 = base)."""
+    link_b: int
+    position_on_a: Vec3
+    """Contact point on A's surface (m, world)."""
+    position_on_b: Vec3
+    normal_on_b: Vec3
+    """Unit contact normal on B, pointing from B towards A (world):
+    ``position_on_a = position_on_b + distance * normal_on_b``."""
+    distance: float
+    """Signed separation along the normal (m): negative = penetration. Where an engine keeps
+    contacts a margin apart (PyBullet's collision margin, the MuJoCo backend's 1 mm pair margin),
+    0 is where the contact force starts."""
+    normal_force: float
+    """Normal force of the last step (N, >= 0)."""
+    lateral_friction_1: float
+    """Friction force along ``lateral_friction_dir_1`` on A (N)."""
+    lateral_friction_dir_1: Vec3
+    lateral_friction_2: float
+    lateral_friction_dir_2: Vec3
+    """The second friction direction: ``normal_on_b``, dir 1 and dir 2 are orthonormal."""
+
+    def swapped(self) -> ContactPoint:
+        """The same contact with A and B exchanged (the normal and the friction directions
+        reversed, so the forces stay the forces on the new A)."""
+        n, d1, d2 = self.normal_on_b, self.lateral_friction_dir_1, self.lateral_friction_dir_2
+        return ContactPoint(
+            self.contact_flag,
+            self.body_b,
+            self.body_a,
+            self.link_b,
+            self.link_a,
+            self.position_on_b,
+            self.position_on_a,
+            (-n[0], -n[1], -n[2]),
+            self.distance,
+            self.normal_force,
+            self.lateral_friction_1,
+            (-d1[0], -d1[1], -d1[2]),
+            self.lateral_friction_2,
+            (-d2[0], -d2[1], -d2[2]),
+        )
+
+
+class MotorMode(IntEnum):
+    """The motor of a joint, with PyBullet's control-mode numbers; NONE for a fixed joint."""
+
+    NONE = -1
+    VELOCITY = 0  # p.VELOCITY_CONTROL (the default brake is one: target 0)
+    POSITION = 2  # p.POSITION_CONTROL
+
+
+class JointCommands(NamedTuple):
+    """The commands in force on a body's joints: arrays of shape (n,) over all its joints in
+    index order (see :class:`BodyState`, whose motor fields these are)."""
+
+    mode: np.ndarray  # (n,) int, MotorMode values
+    target: np.ndarray  # (n,) rad/s, m/s (VELOCITY) or rad, m (POSITION)
+    max_force: np.ndarray  # (n,) N·m or N
+    kp: np.ndarray  # (n,)
+    kd: np.ndarray  # (n,)
+    pending_torque: np.ndarray  # (n,) N·m or N
+
+
+class BodyState(NamedTuple):
+    """One body's part of a :class:`WorldState`. Arrays are float64 of shape (n,) over all the
+    body's joints in index order (fixed joints: 0, mode NONE).
+
+    The motor in force per joint is PyBullet's motor: VELOCITY drives towards ``motor_target``
+    (rad/s or m/s) with ``motor_kd`` = 1 and ``motor_kp`` = 0; POSITION towards
+    ``motor_target`` (rad or m) with gains ``motor_kp``, ``motor_kd``; both limited to
+    ``motor_max_force`` (N·m or N, 0 = released). The default brake is VELOCITY, target 0. A
+    position command with kp 0 is the same row as a velocity command with target 0 and may read
+    back as one."""
+
+    body: int
+    """The body's id in the Sim the state was taken from."""
+    name: str
+    """``<robot name>``."""
+    joint_names: tuple[str, ...]
+    base_position: Vec3
+    """The base's centre of mass (m, world), as :class:`BaseState`."""
+    base_orientation: Quat
+    base_linear_velocity: Vec3
+    base_angular_velocity: Vec3
+    joint_positions: np.ndarray  # (n,)
+    joint_velocities: np.ndarray  # (n,)
+    motor_mode: np.ndarray  # (n,) int, MotorMode values
+    motor_target: np.ndarray  # (n,)
+    motor_max_force: np.ndarray  # (n,)
+    motor_kp: np.ndarray  # (n,)
+    motor_kd: np.ndarray  # (n,)
+    pending_torque: np.ndarray
+    """(n,) torque commands given since the last step (they act during the next one)."""
+
+
+@dataclass(frozen=True, eq=False)
+class WorldState:
+    """Everything ``Sim.set_state`` needs to put a world back where it was: the time and, per
+    body in load order, its :class:`BodyState`. Returned by ``Sim.get_state``.
+
+    ``native`` is the engine's own data (MuJoCo: qpos, qvel and the solver's warm start;
+    PyBullet: a ``saveState`` snapshot with its contact caches) that makes a restore into the
+    same world bit-exact; it is never used by another engine or world. :meth:`portable` drops
+    it: what another engine would get (the one-step error floor of a state carried across).
+    """
+
+    backend: str
+    timestep: float
+    time: float
+    bodies: tuple[BodyState, ...]
+    native: Any = field(default=None, repr=False)
+
+    def portable(self) -> WorldState:
+        """This state without the engine's own data."""
+        return replace(self, native=None)

@@ -1,0 +1,128 @@
+"""Contact points of the last step in PyBullet's terms (``Backend.contact_points``).
+
+MuJoCo keeps the contacts its last step found in ``d.contact`` (found at the start of the step)
+and their forces in ``d.efc_force``; ``mj_contactForce`` turns a contact's pyramid-edge forces
+into a force in the contact frame (normal first, then the two tangents), the force geom 1 puts
+on geom 2. Each contact becomes one :class:`~simbridge.types.ContactPoint` with A = geom 1's link
+and B = geom 2's (the Sim orients them as asked):
+
+* a geom's link comes from model.py's record of the collision geoms (``RobotSpec.geoms``);
+* ``normal_on_b`` is minus MuJoCo's normal (which points from geom 1 to geom 2);
+* ``distance`` is MuJoCo's ``dist`` less the contact's ``includemargin`` (the pair margin, 1
+  mm, that stands in for PyBullet's collision margin), so 0 is where the force starts, as in
+  PyBullet; the points on A and B lie ``distance / 2`` either side of MuJoCo's contact point
+  along the normal, so ``position_on_a = position_on_b + distance * normal_on_b``;
+* the friction directions are minus MuJoCo's tangents, the forces along them MuJoCo's: the
+  friction force on A.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, NoReturn
+
+import mujoco
+import numpy as np
+
+from simbridge.exceptions import SimulationDivergedError
+from simbridge.types import ContactPoint
+
+from .world import Compiled, Robot
+
+__all__ = ["ContactReads"]
+
+
+class ContactReads:
+    """``contact_points`` (a part of :class:`MujocoBackend`)."""
+
+    if TYPE_CHECKING:  # provided by MujocoBackend
+        _robots: dict[int, Robot]
+        _diverged: SimulationDivergedError | None
+
+        @property
+        def _w(self) -> Compiled: ...
+
+        def _engine_failed(self, detail: str) -> NoReturn: ...
+
+    # (compile, owner body id per geom, link per geom): rebuilt when the world is recompiled
+    _geom_owner_cache: tuple[Compiled, np.ndarray, np.ndarray] | None = None
+
+    def _geom_owners(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per MuJoCo geom: the body id and PyBullet link index of its robot (-1, -2 for a
+        geom that is no collision geom of a robot)."""
+        c = self._w
+        cached = self._geom_owner_cache
+        if cached is not None and cached[0] is c:
+            return cached[1], cached[2]
+        m = c.m
+        owner = np.full(m.ngeom, -1, np.intp)
+        link = np.full(m.ngeom, -2, np.intp)
+        for robot in self._robots.values():
+            for g in robot.spec.geoms:
+                gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g.name)
+                if gid >= 0:
+                    owner[gid] = robot.id
+                    link[gid] = g.link
+        self._geom_owner_cache = (c, owner, link)
+        return owner, link
+
+    def contact_points(self) -> list[ContactPoint]:
+        c = self._w
+        if c.kernel is not None:
+            c.kernel.check_idle()  # no torn reads of a world stepping in another thread
+        elif self._diverged is not None:
+            raise self._diverged
+        m, d = c.m, c.d
+        n = d.ncon
+        if n == 0:
+            return []
+        owner, link = self._geom_owners()
+        con = d.contact
+        geom = con.geom[:n]
+        dist = con.dist[:n] - con.includemargin[:n]
+        pos = con.pos[:n]
+        frame = con.frame[:n]
+        adr = con.efc_address[:n]
+        force = np.zeros((n, 6))
+        for i in range(n):
+            if adr[i] >= 0:
+                mujoco.mj_contactForce(m, d, i, force[i])
+        normal = frame[:, 0:3]
+        on_a = pos - normal * (0.5 * dist)[:, None]
+        on_b = pos + normal * (0.5 * dist)[:, None]
+        rows = zip(
+            owner[geom[:, 0]].tolist(),
+            owner[geom[:, 1]].tolist(),
+            link[geom[:, 0]].tolist(),
+            link[geom[:, 1]].tolist(),
+            on_a.tolist(),
+            on_b.tolist(),
+            (-normal).tolist(),
+            dist.tolist(),
+            force[:, 0:3].tolist(),
+            (-frame[:, 3:6]).tolist(),
+            (-frame[:, 6:9]).tolist(),
+            strict=True,
+        )
+        out: list[ContactPoint] = []
+        for body_a, body_b, link_a, link_b, pa, pb, nb, dd, f, t1, t2 in rows:
+            if body_a < 0 or body_b < 0:
+                continue  # not a robot's collision geom (none is made so)
+            out.append(
+                ContactPoint(
+                    0,
+                    body_a,
+                    body_b,
+                    link_a,
+                    link_b,
+                    tuple(pa),
+                    tuple(pb),
+                    tuple(nb),
+                    dd,
+                    f[0],
+                    f[1],
+                    tuple(t1),
+                    f[2],
+                    tuple(t2),
+                )
+            )
+        return out

@@ -1,0 +1,160 @@
+"""What the PyBullet backend keeps to answer ``joint_commands``, ``contact_points`` and
+``snapshot``/``restore`` (PyBullet has no getter for the commands in force).
+
+* :class:`Records`: the velocity and position commands given per body since it was loaded
+  (or since the last ``set_joint_commands``), in order, and the torque commands of the current
+  step. The default motor is derived from the joint table and the profile: PyBullet's brake
+  (VELOCITY, target 0, 1 N·s per step = 1/dt N·m) or, under ``joint_brake="urdf_friction"``,
+  the joint's ``<dynamics friction>``.
+* :class:`Saved`: one ``p.saveState`` snapshot (positions, velocities and the contact caches
+  with their warm-started impulses, kept in the physics client's memory; about 2.6 ms on
+  r2d2). It fits only the world it was taken in: the same client, no load, remove or reset
+  since. When it is garbage-collected its id is queued and removed by the backend on its next
+  snapshot or restore, in the backend's own thread; a reset drops the queue (resetSimulation
+  frees every saved state, and PyBullet numbers new ones from 0 again).
+"""
+
+from __future__ import annotations
+
+import itertools
+import weakref
+from typing import Any
+
+import numpy as np
+
+from simbridge.types import ContactPoint, JointCommands, JointInfo, JointType, MotorMode
+
+__all__ = ["Records", "Saved", "contact_point"]
+
+
+class Records:
+    """The commands given to each body (see the module docstring)."""
+
+    def __init__(self) -> None:
+        # body -> id(joints) -> (order, joints, mode, target, max_force, kp, kd); the joints
+        # array is kept, so its id is not reused while it is here
+        self.motors: dict[int, dict[int, tuple[Any, ...]]] = {}
+        self.baseline: dict[int, JointCommands] = {}  # set by set_joint_commands
+        self.order = itertools.count()
+        # torque commands: (step, body, joints, torques); only those of the current step count
+        self.torques: list[tuple[int, int, np.ndarray, list[float]]] = []
+        self.generation = 0  # bumped by every reset (saved states die with it)
+        self.dead: list[tuple[int, int]] = []  # (generation, state id) of collected snapshots
+
+    def loaded(self, body: int) -> None:
+        self.motors[body] = {}
+        self.baseline.pop(body, None)
+
+    def removed(self, body: int) -> None:
+        self.motors.pop(body, None)
+        self.baseline.pop(body, None)
+        self.torques = [t for t in self.torques if t[1] != body]
+
+    def reset(self) -> None:
+        self.motors.clear()
+        self.baseline.clear()
+        self.torques.clear()
+        self.generation += 1
+        self.dead.clear()
+
+    def motor(
+        self,
+        body: int,
+        joints: np.ndarray,
+        mode: int,
+        target: list[float],
+        max_force: list[float],
+        kp: list[float] | None,
+        kd: list[float] | None,
+    ) -> None:
+        """A velocity (kp, kd None) or position command given."""
+        log = self.motors[body]
+        log.pop(id(joints), None)  # the latest command goes last
+        log[id(joints)] = (next(self.order), joints, mode, target, max_force, kp, kd)
+
+    def torque(self, step: int, body: int, joints: np.ndarray, torque: list[float]) -> None:
+        """A torque command given before step ``step`` (as applied: after any effort clamp)."""
+        log = self.torques
+        if log and log[0][0] != step:
+            log.clear()  # those of an earlier step acted and are gone
+        log.append((step, body, joints, torque))
+
+    def commands(
+        self, body: int, table: list[JointInfo], brake: str, dt: float, step: int
+    ) -> JointCommands:
+        """The commands in force on ``body`` and its torques pending before step ``step``."""
+        n = len(table)
+        base = self.baseline.get(body)
+        if base is not None:
+            mode, target, max_force, kp, kd = (a.copy() for a in base[:5])
+        else:
+            movable = np.array([j.type != JointType.FIXED for j in table], dtype=bool)
+            mode = np.where(movable, MotorMode.VELOCITY, MotorMode.NONE).astype(np.int8)
+            target = np.zeros(n)
+            if brake == "pybullet":
+                max_force = np.where(movable, 1.0 / dt, 0.0)
+            else:
+                max_force = np.array(
+                    [j.friction if m else 0.0 for j, m in zip(table, movable, strict=True)]
+                )
+            kp = np.zeros(n)
+            kd = np.where(movable, 1.0, 0.0)
+        for _, joints, m, t, f, p, d in sorted(self.motors.get(body, {}).values(), key=_first):
+            mode[joints] = m
+            target[joints] = t
+            max_force[joints] = f
+            kp[joints] = 0.0 if p is None else p
+            kd[joints] = 1.0 if d is None else d
+        pending = np.zeros(n)
+        for s, b, joints, torque in self.torques:
+            if s == step and b == body:
+                pending[joints] += torque
+        return JointCommands(mode, target, max_force, kp, kd, pending)
+
+    def set(self, body: int, commands: JointCommands, step: int, movable: np.ndarray) -> None:
+        """``commands`` are now in force on ``body`` (the log starts again from them)."""
+        self.baseline[body] = JointCommands(*(np.array(a) for a in commands))
+        self.motors[body] = {}
+        self.torques = [t for t in self.torques if not (t[0] == step and t[1] == body)]
+        self.torques.append((step, body, movable, commands.pending_torque[movable].tolist()))
+
+    def restamp(self, old: int, new: int) -> None:
+        """The step counter moved from ``old`` to ``new`` (set_time): pending torques follow."""
+        self.torques = [(new, *t[1:]) for t in self.torques if t[0] == old]
+
+
+def _first(entry: tuple[Any, ...]) -> Any:
+    return entry[0]
+
+
+class Saved:
+    """One ``p.saveState`` snapshot and what it fits (see the module docstring)."""
+
+    __slots__ = ("client", "generation", "world", "state_id", "steps", "__weakref__")
+
+    def __init__(
+        self, client: int, records: Records, world: tuple[Any, ...], state_id: int, steps: int
+    ) -> None:
+        self.client = client
+        self.generation = records.generation
+        self.world = world  # ((body id, its _Body object), ...): the very objects, not copies
+        self.state_id = state_id
+        self.steps = steps
+        done = weakref.finalize(self, records.dead.append, (records.generation, state_id))
+        done.atexit = False
+
+    def fits(self, client: int, records: Records, world: tuple[Any, ...]) -> bool:
+        return (
+            self.client == client
+            and self.generation == records.generation
+            and len(self.world) == len(world)
+            and all(a[0] == b[0] and a[1] is b[1] for a, b in zip(self.world, world, strict=True))
+        )
+
+
+def contact_point(r: tuple[Any, ...]) -> ContactPoint:
+    """One row of ``p.getContactPoints()`` (unfiltered: PyBullet's own order of A and B, in
+    which the friction fields are the friction force on A)."""
+    return ContactPoint(
+        int(r[0]), r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], r[10], r[11], r[12], r[13]
+    )
