@@ -519,8 +519,13 @@ def _x(r: float) -> str:
     return f"{r:.1e}x".replace("e+0", "e").replace("e+", "e")
 
 
-def _p(p: float) -> str:
-    return f"{p:.2g}"
+def _p(test: dict[str, Any]) -> str:
+    """``p = 0.029``; ``p <= 0.0001`` when no random split reached the observed statistic (the
+    smallest p that many splits can show)."""
+    p = test["p_value"]
+    if not test["exact"] and p <= 1.0 / (test["resamples"] + 1) * (1 + 1e-9):
+        return f"p <= {p:.2g}"
+    return f"p = {p:.2g}"
 
 
 def _perturbation(ensemble: dict[str, Any] | None) -> str:
@@ -605,7 +610,7 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
             told = "tells" if t["p_value"] < ALPHA else "does not tell"
             lines[-1] += (
                 f" (A permutation test on the energy distance {told} the two sets of runs apart, "
-                f"p = {_p(t['p_value'])}: "
+                f"{_p(t)}: "
                 + (
                     "they are distributed differently, but within the spread of "
                     f"{names[0]}'s own runs.)"
@@ -627,7 +632,7 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
         )
         lines.append(
             f"A permutation test on the energy distance separates the two sets of {n} "
-            f"{started} (p = {_p(t['p_value'])}): the gap is the engines', not chaos or the "
+            f"{started} ({_p(t)}): the gap is the engines', not chaos or the "
             "time step."
         )
     else:
@@ -651,7 +656,7 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
             t = v["test"]
             why = (
                 f"but the permutation test does not separate the two sets of {n} {started} "
-                f"(p = {_p(t['p_value'])}); a larger --ensemble may"
+                f"({_p(t)}); a larger --ensemble may"
             )
         lines.append(
             f"**Unresolved**{marg}: the engines' runs {when} a median {_iv(v['gap'], unit)} "
