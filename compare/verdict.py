@@ -520,11 +520,11 @@ def _x(r: float) -> str:
 
 
 def _p(test: dict[str, Any]) -> str:
-    """``p = 0.029``; ``p <= 0.0001`` when no random split reached the observed statistic (the
-    smallest p that many splits can show)."""
+    """``p = 0.029``; ``p < 0.001`` from random splits below that (their p-value cannot go
+    under 1 / (splits + 1): it bounds the true one)."""
     p = test["p_value"]
-    if not test["exact"] and p <= 1.0 / (test["resamples"] + 1) * (1 + 1e-9):
-        return f"p <= {p:.2g}"
+    if not test["exact"] and p < 0.001:
+        return "p < 0.001"
     return f"p = {p:.2g}"
 
 
