@@ -88,6 +88,22 @@ typedef struct {
   int held;
 } Arr;
 
+/* A command bound to the kernel (Sim.velocity_command, Sim.position_command): its own target
+ * and force arrays, read at every step() call; a change is written with the command writes
+ * below when the rows are armed, and sent through the Python path (resend) otherwise. */
+typedef struct Bound {
+  int used;
+  int position;  /* 0 velocity, 1 position */
+  int armed;     /* index (and limits) are valid for the motor rows bound now */
+  int stale;     /* the motor rows were rebound since: send through Python at the next step */
+  Py_ssize_t n;
+  Arr index;     /* intp, 3 x n (slots, rows, dofs) or 4 x n (+ position rows) */
+  Arr limits;    /* position: float64, 2 x n (lower, upper; -inf, inf: none) */
+  Arr targets, force; /* the command's arrays (float64, n) */
+  double* last;  /* 2 x n: the targets and forces last sent */
+  PyObject* resend;   /* the Python path: checks, sends, and arms the command again */
+} Bound;
+
 typedef struct {
   PyObject_HEAD
   PyObject* owners;  /* (MjModel, MjData): kept alive while the kernel lives */
@@ -108,8 +124,12 @@ typedef struct {
   /* motor arrays (bound after every refresh) */
   int k;
   Arr offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows, slack;
-  /* the motor table's commands (bound once per compile, for set_velocity) */
-  Arr cmd_target, cmd_force;
+  /* the motor table's commands (bound once per compile, for the command writes) */
+  Arr cmd_target, cmd_force, cmd_position;
+  Arr pos_target; /* the position rows' targets (MotorTable.position_target), optional */
+  /* bound commands (Sim.velocity_command, Sim.position_command): read at every step() */
+  struct Bound* bound;
+  int n_bound;
   double *Y, *U, *A, *b;    /* k x nv, k x nv, k x k, k */
   int *free_rows, *piv;
   double *AM, *x;           /* exact_motors: k x k block of M^-1, k forces */
@@ -210,13 +230,29 @@ static void free_motor_scratch(Kernel* self) {
   self->cap = 0;
 }
 
+static void bound_clear(Bound* b) {
+  arr_release(&b->index);
+  arr_release(&b->limits);
+  arr_release(&b->targets);
+  arr_release(&b->force);
+  PyMem_Free(b->last);
+  b->last = NULL;
+  Py_CLEAR(b->resend);
+  b->used = b->armed = b->stale = 0;
+  b->n = 0;
+}
+
 static void release_all(Kernel* self) {
   Arr* all[] = {&self->lin_gain, &self->ang_gain, &self->jd_dof,   &self->jd_coef,
                 &self->tq_dof,   &self->tq,       &self->offset,   &self->pos_rows,
                 &self->pos_qadr, &self->pos_gain, &self->kd_rows,  &self->kd_dof,
                 &self->kd_factor, &self->dof_rows, &self->slack, &self->cmd_target,
-                &self->cmd_force};
+                &self->cmd_force, &self->cmd_position, &self->pos_target};
   for (size_t i = 0; i < sizeof(all) / sizeof(all[0]); i++) arr_release(all[i]);
+  for (int i = 0; i < self->n_bound; i++) bound_clear(&self->bound[i]);
+  PyMem_Free(self->bound);
+  self->bound = NULL;
+  self->n_bound = 0;
   free_motor_scratch(self);
   self->k = 0;
   PyMem_Free(self->cfrc);
@@ -329,16 +365,24 @@ bad_dof:
 }
 
 /* bind_motors(offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows,
- *             slack): the motor rows after a refresh (k = len(dof_rows)) */
+ *             slack[, pos_target]): the motor rows after a refresh (k = len(dof_rows)); the
+ * position rows' targets are needed by set_position. Every bound command is disarmed: its
+ * rows may have moved, and the table may have been rewritten (it is sent again, through
+ * Python, at the next step). */
 static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
   if (refuse_if_busy(self) < 0) return NULL;
-  PyObject *o[9];
-  if (!PyArg_ParseTuple(args, "OOOOOOOOO", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
-                        &o[7], &o[8]))
+  PyObject *o[10] = {NULL};
+  if (!PyArg_ParseTuple(args, "OOOOOOOOO|O", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
+                        &o[7], &o[8], &o[9]))
     return NULL;
   const mjModel* m = self->m;
   free_motor_scratch(self);
   self->k = 0;
+  arr_release(&self->pos_target);
+  for (int i = 0; i < self->n_bound; i++) {
+    self->bound[i].armed = 0;
+    self->bound[i].stale = 1;
+  }
   if (arr_take(&self->dof_rows, o[7], 'n', -1, "dof_rows") < 0) return NULL;
   Py_ssize_t k = arr_len(&self->dof_rows);
   if (arr_take(&self->offset, o[0], 'd', k, "offset_rows") < 0 ||
@@ -348,7 +392,9 @@ static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
       arr_take(&self->kd_rows, o[4], 'n', -1, "kd_rows") < 0 ||
       arr_take(&self->kd_dof, o[5], 'n', arr_len(&self->kd_rows), "kd_dof") < 0 ||
       arr_take(&self->kd_factor, o[6], 'd', arr_len(&self->kd_rows), "kd_factor") < 0 ||
-      arr_take(&self->slack, o[8], 'd', k, "force_rows_slack") < 0)
+      arr_take(&self->slack, o[8], 'd', k, "force_rows_slack") < 0 ||
+      (o[9] && arr_take(&self->pos_target, o[9], 'd', arr_len(&self->pos_rows),
+                        "position_target") < 0))
     return NULL;
   for (Py_ssize_t i = 0; i < k; i++)
     if (IP(self->dof_rows)[i] < 0 || IP(self->dof_rows)[i] >= m->nv) goto bad;
@@ -813,6 +859,8 @@ static int parse_int_flag(PyObject* const* args, Py_ssize_t nargs, Py_ssize_t wa
   return 0;
 }
 
+static int send_bound(Kernel* self); /* the bound commands, before a step (below) */
+
 /* step(n, pending_torque) -> status: run_steps's, or 4 for a MuJoCo error (last_error() says
  * which). The GIL is released meanwhile: Sims in other threads step in parallel. */
 static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
@@ -821,6 +869,7 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
   if (refuse_if_busy(self) < 0 || parse_int_flag(args, nargs, 2, "step(n, pending_torque)", &n,
                                                  &pending) < 0)
     return NULL;
+  if (self->n_bound && send_bound(self) < 0) return NULL; /* no step ran */
   int status;
   self->busy = 1;
   self->interrupted = 0;
@@ -898,71 +947,315 @@ static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize
   return PyBool_FromLong(finite);
 }
 
-/* bind_commands(target_velocity, max_force): the motor table's command arrays (one entry per
- * motor), which set_velocity updates with the rows. */
+/* bind_commands(target_velocity, max_force[, target_position]): the motor table's command
+ * arrays (one entry per motor), which the command writes below update with the rows. */
 static PyObject* Kernel_bind_commands(Kernel* self, PyObject* args) {
   if (refuse_if_busy(self) < 0) return NULL;
-  PyObject *tv, *mf;
-  if (!PyArg_ParseTuple(args, "OO", &tv, &mf)) return NULL;
+  PyObject *tv, *mf, *tp = NULL;
+  if (!PyArg_ParseTuple(args, "OO|O", &tv, &mf, &tp)) return NULL;
   if (arr_take(&self->cmd_target, tv, 'd', -1, "target_velocity") < 0) return NULL;
   if (arr_take(&self->cmd_force, mf, 'd', arr_len(&self->cmd_target), "max_force") < 0)
+    return NULL;
+  arr_release(&self->cmd_position);
+  if (tp && arr_take(&self->cmd_position, tp, 'd', arr_len(&self->cmd_target),
+                     "target_position") < 0)
     return NULL;
   Py_RETURN_NONE;
 }
 
-/* set_velocity(index, target, max_force): a velocity command on motors whose rows are present
- * (MujocoBackend.set_joint_velocity's hot path, the same arithmetic): index is an intp array
- * [motor slots, their friction rows, their dofs] (3 x n), target and max_force lists of n
- * floats (max_force > 0). Writes the table's target and force, dof_frictionloss, the rows'
- * offset (target / dt) and slack (force (1 - 1e-9)). Everything is checked before the first
- * write. */
-static PyObject* Kernel_set_velocity(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+/* ---------------------------------------------------------------- command writes
+ * (commands.py's hot paths and the bound commands): the same arithmetic as MotorTable.refresh
+ * and Compiled.refresh_motors, on motors whose rows are present and stay present (every force
+ * > 0), so that a command written here leaves the table, the model and the rows exactly as the
+ * full refresh would. Indices are checked (check_index) before the first write. */
+
+/* index: nrow x n intp (slots, rows, dofs[, position rows]); 0, or -1 with ValueError */
+static int check_index(const Kernel* self, const Py_ssize_t* ix, Py_ssize_t n, int position,
+                       const char* what) {
+  const Py_ssize_t* slot = ix;
+  const Py_ssize_t* row = ix + n;
+  const Py_ssize_t* dof = ix + 2 * n;
+  const Py_ssize_t* prow = ix + 3 * n;
+  const Py_ssize_t np_ = arr_len(&self->pos_rows);
+  for (Py_ssize_t i = 0; i < n; i++) {
+    int bad = slot[i] < 0 || slot[i] >= arr_len(&self->cmd_target) || row[i] < 0 ||
+              row[i] >= self->k || dof[i] < 0 || dof[i] >= self->m->nv ||
+              IP(self->dof_rows)[row[i]] != dof[i];
+    if (position)
+      bad = bad || arr_len(&self->cmd_position) != arr_len(&self->cmd_target) ||
+            arr_len(&self->pos_target) != np_ || prow[i] < 0 || prow[i] >= np_ ||
+            IP(self->pos_rows)[prow[i]] != row[i];
+    if (bad) {
+      PyErr_Format(PyExc_ValueError, "%s: a slot, row, dof or position row index out of range",
+                   what);
+      return -1;
+    }
+  }
+  return 0;
+}
+
+/* A velocity command (kp 0, kd 1): offset kd v / dt with kd 1, slack f (1 - 1e-9). */
+static void write_velocity(Kernel* self, const Py_ssize_t* ix, Py_ssize_t n, const double* v,
+                           const double* f) {
+  const Py_ssize_t *slot = ix, *row = ix + n, *dof = ix + 2 * n;
+  double* frictionloss = ((mjModel*)self->m)->dof_frictionloss;
+  for (Py_ssize_t i = 0; i < n; i++) {
+    DP(self->cmd_target)[slot[i]] = v[i];
+    DP(self->cmd_force)[slot[i]] = f[i];
+    frictionloss[dof[i]] = f[i];
+    DP(self->offset)[row[i]] = v[i] / self->dt;
+    DP(self->slack)[row[i]] = f[i] * (1.0 - 1e-9);
+  }
+}
+
+/* A position command on motors already in position mode with the same kp and kd (target
+ * velocity 0): the target clamped to [lo, hi] as PyBullet does (Python's min(max(q, lo), hi)),
+ * offset 0 + gain q (refresh's kd 0 / dt, then += gain q), slack f (1 - 1e-9). */
+static void write_position(Kernel* self, const Py_ssize_t* ix, const double* lohi, Py_ssize_t n,
+                           const double* target, const double* f) {
+  const Py_ssize_t *slot = ix, *row = ix + n, *dof = ix + 2 * n, *prow = ix + 3 * n;
+  double* frictionloss = ((mjModel*)self->m)->dof_frictionloss;
+  for (Py_ssize_t i = 0; i < n; i++) {
+    double q = target[i];
+    if (lohi[i] > q) q = lohi[i];
+    if (lohi[n + i] < q) q = lohi[n + i];
+    DP(self->cmd_position)[slot[i]] = q;
+    DP(self->cmd_force)[slot[i]] = f[i];
+    frictionloss[dof[i]] = f[i];
+    DP(self->pos_target)[prow[i]] = q;
+    DP(self->offset)[row[i]] = 0.0 + DP(self->pos_gain)[prow[i]] * q;
+    DP(self->slack)[row[i]] = f[i] * (1.0 - 1e-9);
+  }
+}
+
+/* Two lists of n exact Python floats into buf (2 x n): 0, or -1 with an exception. Exact
+ * floats (what Sim's checks produce): reading them runs no Python code. */
+static int read_lists(PyObject* a, PyObject* b, Py_ssize_t n, double* buf, const char* what) {
+  if (!PyList_Check(a) || !PyList_Check(b) || PyList_GET_SIZE(a) != n ||
+      PyList_GET_SIZE(b) != n) {
+    PyErr_Format(PyExc_ValueError, "%s: two lists of n floats (n = %zd)", what, n);
+    return -1;
+  }
+  for (Py_ssize_t i = 0; i < n; i++) {
+    PyObject *x = PyList_GET_ITEM(a, i), *y = PyList_GET_ITEM(b, i);
+    if (!PyFloat_CheckExact(x) || !PyFloat_CheckExact(y)) {
+      PyErr_Format(PyExc_TypeError, "%s: the lists hold Python floats", what);
+      return -1;
+    }
+    buf[i] = PyFloat_AS_DOUBLE(x);
+    buf[n + i] = PyFloat_AS_DOUBLE(y);
+  }
+  return 0;
+}
+
+/* set_velocity(index, target, max_force) and set_position(index, limits, target, max_force):
+ * a command on motors whose rows are present (MotorCommands' hot paths): index 3 x n (slots,
+ * rows, dofs) or 4 x n (+ rows in the position arrays), limits 2 x n float64 (lower, upper),
+ * target and max_force lists of n floats (max_force > 0). Everything is checked before the
+ * first write. */
+static PyObject* command_write(Kernel* self, PyObject* const* args, Py_ssize_t nargs,
+                               int position) {
+  const char* what = position ? "set_position" : "set_velocity";
   if (refuse_if_busy(self) < 0) return NULL;
-  if (nargs != 3) {
-    PyErr_SetString(PyExc_TypeError, "set_velocity(index, target, max_force)");
+  if (nargs != 3 + position) {
+    PyErr_SetString(PyExc_TypeError, position ? "set_position(index, limits, target, max_force)"
+                                              : "set_velocity(index, target, max_force)");
+    return NULL;
+  }
+  const int nrow = 3 + position;
+  Arr ix = {.held = 0}, lim = {.held = 0};
+  double small[128];
+  double* buf = small;
+  PyObject* result = NULL;
+  if (arr_take(&ix, args[0], 'n', -1, "index") < 0) return NULL;
+  Py_ssize_t n = arr_len(&ix) / nrow;
+  if (arr_len(&ix) != nrow * n) {
+    PyErr_Format(PyExc_ValueError, "%s: a %d x n index", what, nrow);
+    goto done;
+  }
+  if (position && arr_take(&lim, args[1], 'd', 2 * n, "limits") < 0) goto done;
+  if (2 * n > 128 && !(buf = PyMem_Malloc(2 * (size_t)n * sizeof(double)))) {
+    PyErr_NoMemory();
+    goto done;
+  }
+  if (read_lists(args[1 + position], args[2 + position], n, buf, what) < 0 ||
+      check_index(self, IP(ix), n, position, what) < 0)
+    goto done;
+  if (position)
+    write_position(self, IP(ix), DP(lim), n, buf, buf + n);
+  else
+    write_velocity(self, IP(ix), n, buf, buf + n);
+  result = Py_None;
+  Py_INCREF(result);
+done:
+  if (buf != small) PyMem_Free(buf);
+  arr_release(&ix);
+  arr_release(&lim);
+  return result;
+}
+
+static PyObject* Kernel_set_velocity(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  return command_write(self, args, nargs, 0);
+}
+
+static PyObject* Kernel_set_position(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  return command_write(self, args, nargs, 1);
+}
+
+/* add_torque(slots, torque): torque commands for the next step, added to the pending ones
+ * (tq[slot] += torque, as numpy's torque[slots] += torque); slots intp, torque a list of
+ * Python floats. */
+static PyObject* Kernel_add_torque(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  if (nargs != 2) {
+    PyErr_SetString(PyExc_TypeError, "add_torque(slots, torque)");
     return NULL;
   }
   Arr ix = {.held = 0};
-  if (arr_take(&ix, args[0], 'n', -1, "index") < 0) return NULL;
-  Py_ssize_t n = arr_len(&ix) / 3;
-  PyObject *tl = args[1], *fl = args[2];
-  const Py_ssize_t* slot = IP(ix);
-  const Py_ssize_t* row = slot + n;
-  const Py_ssize_t* dof = row + n;
-  if (arr_len(&ix) != 3 * n || !PyList_Check(tl) || !PyList_Check(fl) ||
-      PyList_GET_SIZE(tl) != n || PyList_GET_SIZE(fl) != n) {
+  if (arr_take(&ix, args[0], 'n', -1, "slots") < 0) return NULL;
+  Py_ssize_t n = arr_len(&ix);
+  PyObject* tl = args[1];
+  int ok = PyList_Check(tl) && PyList_GET_SIZE(tl) == n;
+  for (Py_ssize_t i = 0; ok && i < n; i++)
+    ok = IP(ix)[i] >= 0 && IP(ix)[i] < arr_len(&self->tq) && PyFloat_CheckExact(PyList_GET_ITEM(tl, i));
+  if (!ok) {
     arr_release(&ix);
-    PyErr_SetString(PyExc_ValueError, "set_velocity: a 3 x n index and two lists of n floats");
+    PyErr_SetString(PyExc_ValueError, "add_torque: slots in range and a list of as many floats");
     return NULL;
   }
-  for (Py_ssize_t i = 0; i < n; i++) {
-    if (slot[i] < 0 || slot[i] >= arr_len(&self->cmd_target) || row[i] < 0 ||
-        row[i] >= self->k || dof[i] < 0 || dof[i] >= self->m->nv) {
-      arr_release(&ix);
-      PyErr_SetString(PyExc_ValueError, "set_velocity: a slot, row or dof index out of range");
-      return NULL;
-    }
-    /* exact floats (what Sim's checks produce): reading them runs no Python code, so the
-     * lists cannot change between this check and the writes below */
-    if (!PyFloat_CheckExact(PyList_GET_ITEM(tl, i)) || !PyFloat_CheckExact(PyList_GET_ITEM(fl, i))) {
-      arr_release(&ix);
-      PyErr_SetString(PyExc_TypeError, "set_velocity: target and max_force hold Python floats");
-      return NULL;
-    }
-  }
-  const double inv_dt = 1.0 / self->dt;
-  double* frictionloss = ((mjModel*)self->m)->dof_frictionloss;
-  for (Py_ssize_t i = 0; i < n; i++) {
-    double v = PyFloat_AS_DOUBLE(PyList_GET_ITEM(tl, i));
-    double f = PyFloat_AS_DOUBLE(PyList_GET_ITEM(fl, i));
-    DP(self->cmd_target)[slot[i]] = v;
-    DP(self->cmd_force)[slot[i]] = f;
-    frictionloss[dof[i]] = f;
-    DP(self->offset)[row[i]] = v * inv_dt;
-    DP(self->slack)[row[i]] = f * (1.0 - 1e-9);
-  }
+  for (Py_ssize_t i = 0; i < n; i++) DP(self->tq)[IP(ix)[i]] += PyFloat_AS_DOUBLE(PyList_GET_ITEM(tl, i));
   arr_release(&ix);
   Py_RETURN_NONE;
+}
+
+/* ---------------------------------------------------------------- bound commands */
+
+static Bound* bound_of(Kernel* self, PyObject* handle) {
+  long h = PyLong_AsLong(handle);
+  if (h == -1 && PyErr_Occurred()) return NULL;
+  if (h < 0 || h >= self->n_bound || !self->bound[h].used) {
+    PyErr_Format(PyExc_ValueError, "no bound command %ld", h);
+    return NULL;
+  }
+  return &self->bound[h];
+}
+
+/* add_command(position, targets, max_force, resend) -> handle: bind a command's arrays
+ * (float64, n each), taken as sent (the caller sent them); disarmed until arm_command. */
+static PyObject* Kernel_add_command(Kernel* self, PyObject* args) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  int position;
+  PyObject *t, *f, *resend;
+  if (!PyArg_ParseTuple(args, "pOOO", &position, &t, &f, &resend)) return NULL;
+  if (!PyCallable_Check(resend)) {
+    PyErr_SetString(PyExc_TypeError, "add_command: resend must be callable");
+    return NULL;
+  }
+  int h = 0;
+  while (h < self->n_bound && self->bound[h].used) h++;
+  if (h == self->n_bound) {
+    Bound* grown = PyMem_Realloc(self->bound, (size_t)(self->n_bound + 1) * sizeof(Bound));
+    if (!grown) return PyErr_NoMemory();
+    self->bound = grown;
+    memset(&self->bound[h], 0, sizeof(Bound));
+    self->n_bound++;
+  }
+  Bound* b = &self->bound[h];
+  if (arr_take(&b->targets, t, 'd', -1, "targets") < 0) goto fail;
+  b->n = arr_len(&b->targets);
+  if (arr_take(&b->force, f, 'd', b->n, "max_force") < 0) goto fail;
+  b->last = PyMem_Malloc(2 * (size_t)(b->n ? b->n : 1) * sizeof(double));
+  if (!b->last) {
+    PyErr_NoMemory();
+    goto fail;
+  }
+  memcpy(b->last, DP(b->targets), (size_t)b->n * sizeof(double));
+  memcpy(b->last + b->n, DP(b->force), (size_t)b->n * sizeof(double));
+  Py_INCREF(resend);
+  b->resend = resend;
+  b->position = position;
+  b->used = 1;
+  b->armed = b->stale = 0;
+  return PyLong_FromLong(h);
+fail:
+  bound_clear(b);
+  return NULL;
+}
+
+/* arm_command(handle, index, limits): the command was just sent (through Python): its arrays
+ * are what is in force. index (3 or 4 x n intp, as set_velocity / set_position) arms it: its
+ * next changes are written here; None leaves it to the Python path (rows absent, say). */
+static PyObject* Kernel_arm_command(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  if (nargs != 3) {
+    PyErr_SetString(PyExc_TypeError, "arm_command(handle, index, limits)");
+    return NULL;
+  }
+  Bound* b = bound_of(self, args[0]);
+  if (!b) return NULL;
+  Py_ssize_t n = b->n;
+  b->armed = 0;
+  arr_release(&b->index);
+  arr_release(&b->limits);
+  if (args[1] != Py_None) {
+    if (arr_take(&b->index, args[1], 'n', (3 + b->position) * n, "index") < 0 ||
+        (b->position && arr_take(&b->limits, args[2], 'd', 2 * n, "limits") < 0) ||
+        check_index(self, IP(b->index), n, b->position, "arm_command") < 0) {
+      arr_release(&b->index);
+      arr_release(&b->limits);
+      return NULL;
+    }
+    b->armed = 1;
+  }
+  b->stale = 0;
+  memcpy(b->last, DP(b->targets), (size_t)n * sizeof(double));
+  memcpy(b->last + n, DP(b->force), (size_t)n * sizeof(double));
+  Py_RETURN_NONE;
+}
+
+/* remove_command(handle): unbind (the motors keep the command last sent) */
+static PyObject* Kernel_remove_command(Kernel* self, PyObject* handle) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  Bound* b = bound_of(self, handle);
+  if (!b) return NULL;
+  bound_clear(b);
+  Py_RETURN_NONE;
+}
+
+/* Before a step() call, with the GIL: each bound command whose arrays changed since they were
+ * last sent (by value, as Python's ==) is written here when it is armed and every value is
+ * finite with a force > 0, and otherwise sent through its Python path (which checks the
+ * values, raising on a bad one, and arms it again); a disarmed (stale) command is sent through
+ * Python whether it changed or not. 0, or -1 with the Python path's exception. */
+static int send_bound(Kernel* self) {
+  for (int h = 0; h < self->n_bound; h++) {
+    Bound* b = &self->bound[h];
+    if (!b->used) continue;
+    const Py_ssize_t n = b->n;
+    const double *t = DP(b->targets), *f = DP(b->force), *last = b->last;
+    int changed = b->stale, fast = b->armed && !b->stale;
+    for (Py_ssize_t i = 0; i < n && !changed; i++)
+      changed = t[i] != last[i] || f[i] != last[n + i];
+    if (!changed) continue;
+    for (Py_ssize_t i = 0; i < n && fast; i++)
+      fast = isfinite(t[i]) && isfinite(f[i]) && f[i] > 0.0;
+    if (fast) {
+      if (b->position)
+        write_position(self, IP(b->index), DP(b->limits), n, t, f);
+      else
+        write_velocity(self, IP(b->index), n, t, f);
+      memcpy(b->last, t, (size_t)n * sizeof(double));
+      memcpy(b->last + n, f, (size_t)n * sizeof(double));
+      continue;
+    }
+    PyObject* resend = b->resend;
+    Py_INCREF(resend); /* the call may unbind it */
+    PyObject* r = PyObject_CallNoArgs(resend);
+    Py_DECREF(resend);
+    if (!r) return -1;
+    Py_DECREF(r);
+  }
+  return 0;
 }
 
 #ifdef SIMBRIDGE_KERNEL_TIMERS
@@ -992,6 +1285,16 @@ static PyMethodDef Kernel_methods[] = {
      "Bind the motor table's command arrays."},
     {"set_velocity", (PyCFunction)(void (*)(void))Kernel_set_velocity, METH_FASTCALL,
      "set_velocity(index, target, max_force): a velocity command on present rows"},
+    {"set_position", (PyCFunction)(void (*)(void))Kernel_set_position, METH_FASTCALL,
+     "set_position(index, limits, target, max_force): a position command on present rows"},
+    {"add_torque", (PyCFunction)(void (*)(void))Kernel_add_torque, METH_FASTCALL,
+     "add_torque(slots, torque): torques for the next step, added"},
+    {"add_command", (PyCFunction)Kernel_add_command, METH_VARARGS,
+     "add_command(position, targets, max_force, resend) -> handle: bind a command's arrays"},
+    {"arm_command", (PyCFunction)(void (*)(void))Kernel_arm_command, METH_FASTCALL,
+     "arm_command(handle, index, limits): the command was sent; write its changes here"},
+    {"remove_command", (PyCFunction)Kernel_remove_command, METH_O,
+     "remove_command(handle): unbind a command"},
     {"body_state", (PyCFunction)(void (*)(void))Kernel_body_state, METH_FASTCALL,
      "body_state(body_id, fresh, out) -> pose is finite"},
     {NULL, NULL, 0, NULL},

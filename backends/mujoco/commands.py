@@ -1,14 +1,24 @@
 """Joint commands: PyBullet's velocity, position and torque control on the motor table.
 
-A velocity or position command rewrites the commanded joints' columns of the motor table and
-pushes them into the model (``Compiled.refresh_motors``); a repeated velocity command on the
-same joints takes a hot path that writes the targets in place (in C when the compiled loop
-runs). Torques add up until the next step, as in PyBullet.
+A command that changes the motor set (a joint's mode, gains or force limit crossing 0) rewrites
+the commanded joints' columns of the motor table and pushes the whole table into the model
+(``Compiled.refresh_motors``). A command that only moves targets and force limits on motors
+whose rows stay as they are takes a hot path (one per mode, cached per joints array and motor
+epoch) that writes those entries in place, in C when the compiled loop runs
+(``_mjkernel.c``'s command writes): the same arithmetic as the refresh, so the table, the model
+and the rows are exactly what the refresh would leave, whichever path a command took. Torques
+add up until the next step, as in PyBullet.
+
+Bound commands (``Sim.velocity_command``, ``Sim.position_command``) are handed to the compiled
+loop, which reads their arrays at every step and writes a change with the same command writes;
+a change the writes cannot take (a force of 0, a bad value, rows rebound by another command) is
+sent through :meth:`set_joint_velocity` / :meth:`set_joint_position`, which check it.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import weakref
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -16,7 +26,25 @@ from simbridge.profiles import Profile
 
 from .world import Compiled, Robot
 
-__all__ = ["MotorCommands"]
+if TYPE_CHECKING:
+    from simbridge.bound import BoundCommand
+
+__all__ = ["MotorCommands", "PositionPath"]
+
+
+class PositionPath(NamedTuple):
+    """set_joint_position's hot path for one joints array: valid while the motor epoch is
+    ``epoch`` and the command keeps ``kp`` and ``kd``."""
+
+    joints: np.ndarray
+    epoch: int
+    body: int
+    kp: list[float]
+    kd: list[float]
+    packed: np.ndarray  # intp 4 x n: motor slots, friction rows, dofs, rows in the position arrays
+    limits: np.ndarray  # float64 2 x n: lower, upper (-inf, inf: no limit)
+    lower: list[float]
+    upper: list[float]
 
 
 class MotorCommands:
@@ -25,6 +53,7 @@ class MotorCommands:
     if TYPE_CHECKING:  # provided by MujocoBackend
         profile: Profile
         _robots: dict[int, Robot]
+        _c: Compiled | None
 
         @property
         def _w(self) -> Compiled: ...
@@ -48,14 +77,14 @@ class MotorCommands:
                 return  # the command in force already
             if min(max_force) > 0.0:
                 kernel = c.kernel
-                if kernel is not None:  # the same writes in C (_mjkernel.c set_velocity)
+                if kernel is not None:  # the same writes in C (_mjkernel.c write_velocity)
                     kernel.set_velocity(fast[8], target, max_force)
-                else:
-                    rows, inv_dt = fast[4], c.inv_dt
+                else:  # MotorTable.refresh's arithmetic: kd v / dt with kd 1
+                    rows, dt = fast[4], c.dt
                     t.target_velocity[fast[3]] = target
                     t.max_force[fast[3]] = max_force
                     c.m.dof_frictionloss[fast[5]] = max_force
-                    t.offset_rows[rows] = [v * inv_dt for v in target]
+                    t.offset_rows[rows] = [v / dt for v in target]
                     t.force_rows_slack[rows] = [f * (1.0 - 1e-9) for f in max_force]
                 t.has_offset = True
                 c.fast[id(joints)] = (*fast[:6], target, max_force, fast[8])
@@ -67,7 +96,7 @@ class MotorCommands:
         t.kd[idx] = 1.0
         c.refresh_motors()
         rows = t.row_of[idx]
-        if t.n_special == 0 and not self.profile.enforce_effort_limit and (rows >= 0).all():
+        if not self.profile.enforce_effort_limit and (rows >= 0).all():
             dofs = t.dof[idx]
             c.fast[id(joints)] = (
                 joints,
@@ -90,15 +119,28 @@ class MotorCommands:
         kp: list[float],
         kd: list[float],
     ) -> None:
-        idx = self._motor_slots(body, joints)
         c = self._w
         t = c.motors
-        model = self._robots[body].model
+        fast = c.fast_position.get(id(joints))
+        if (
+            fast is not None
+            and fast.joints is joints
+            and fast.epoch == t.epoch
+            and fast.body == body
+            and kp == fast.kp
+            and kd == fast.kd
+            and min(max_force) > 0.0
+        ):  # Hot path: position motors with the same gains, all rows present and staying.
+            kernel = c.kernel
+            if kernel is not None:  # _mjkernel.c write_position: the same arithmetic
+                kernel.set_position(fast.packed, fast.limits, target, max_force)
+            else:
+                self._write_position(c, fast, target, max_force)
+            return
+        idx = self._motor_slots(body, joints)
+        lower, upper = self._limits(body, joints)
         target = [  # PyBullet clamps a position target to the joint's limits (measured)
-            min(max(q, model.joints[j].lower), model.joints[j].upper)
-            if model.joints[j].has_limit
-            else q
-            for q, j in zip(target, joints.tolist(), strict=True)
+            min(max(q, lo), hi) for q, lo, hi in zip(target, lower, upper, strict=True)
         ]
         t.target_velocity[idx] = 0.0
         t.target_position[idx] = target
@@ -106,6 +148,61 @@ class MotorCommands:
         t.kp[idx] = kp
         t.kd[idx] = kd
         c.refresh_motors()
+        path = self._position_path(c, body, joints, idx, kp, kd)
+        if path is not None:
+            c.fast_position[id(joints)] = path
+
+    def _limits(self, body: int, joints: np.ndarray) -> tuple[list[float], list[float]]:
+        """Each joint's position limits, (-inf, inf) where it has none."""
+        model = self._robots[body].model
+        js = [model.joints[j] for j in joints.tolist()]
+        return (
+            [j.lower if j.has_limit else -np.inf for j in js],
+            [j.upper if j.has_limit else np.inf for j in js],
+        )
+
+    def _position_path(
+        self, c: Compiled, body: int, joints: np.ndarray, idx: np.ndarray, kp: Any, kd: Any
+    ) -> PositionPath | None:
+        """The hot path of position commands on ``joints`` after a refresh, or None when
+        the rows cannot be written in place (a force of 0, kp 0, an effort limit)."""
+        t = c.motors
+        rows = t.row_of[idx]
+        if self.profile.enforce_effort_limit or not (rows >= 0).all():
+            return None
+        prows = np.searchsorted(t.position_rows, rows)
+        if (prows >= len(t.position_rows)).any() or (t.position_rows[prows] != rows).any():
+            return None  # kp 0 somewhere: a velocity row, not a position row
+        lower, upper = self._limits(body, joints)
+        return PositionPath(
+            joints,
+            t.epoch,
+            body,
+            list(kp),
+            list(kd),
+            np.ascontiguousarray(np.stack([idx, rows, t.dof[idx], prows]), dtype=np.intp),
+            np.array([lower, upper], dtype=np.float64),
+            lower,
+            upper,
+        )
+
+    @staticmethod
+    def _write_position(
+        c: Compiled, path: PositionPath, target: list[float], max_force: list[float]
+    ) -> None:
+        """The Python loop's hot path of a position command (_mjkernel.c write_position):
+        MotorTable.refresh's arithmetic on the commanded entries alone."""
+        t = c.motors
+        slots, rows, dofs, prows = path.packed
+        q = [min(max(x, lo), hi) for x, lo, hi in zip(target, path.lower, path.upper, strict=True)]
+        t.target_position[slots] = q
+        t.max_force[slots] = max_force
+        c.m.dof_frictionloss[dofs] = max_force
+        t.position_target[prows] = q
+        gains = t.position_gain[prows].tolist()
+        t.offset_rows[rows] = [0.0 + g * x for g, x in zip(gains, q, strict=True)]
+        t.force_rows_slack[rows] = [f * (1.0 - 1e-9) for f in max_force]
+        t.has_offset = True
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         idx = self._motor_slots(body, joints)
@@ -113,6 +210,101 @@ class MotorCommands:
         t = c.motors
         if self.profile.enforce_effort_limit:
             c.torque[idx] += np.clip(torque, -t.effort[idx], t.effort[idx])  # each command
+        elif c.kernel is not None:
+            c.kernel.add_torque(idx, torque)  # torque[idx] += torque, in C
         else:
             c.torque[idx] += torque  # commands before one step add up, as in PyBullet
         c.pending_torque = True
+
+    # ---------------------------------------------------------------- bound commands
+
+    def bind_command(self, command: BoundCommand) -> bool:
+        """Hand ``command`` to the compiled loop, which reads its arrays at every step (True);
+        False without the compiled loop: the Sim sends it before every step."""
+        c = self._w
+        kernel = c.kernel
+        if kernel is None:
+            return False
+
+        # The kernel holds resend, so resend holds no strong reference back to what holds the
+        # kernel (the backend, the compiled world, the command and its Sim): the kernel is
+        # not seen by Python's cycle collector, and such a cycle would never be freed.
+        weak_self, weak_c, weak_command = weakref.ref(self), weakref.ref(c), weakref.ref(command)
+
+        def resend() -> None:  # what the compiled loop's writes cannot take
+            backend, world, cmd = weak_self(), weak_c(), weak_command()
+            if backend is None or world is None or cmd is None:
+                return
+            if not backend._in_force(world, cmd):
+                world.fast.pop(id(cmd.joints), None)  # the full path: the table is rewritten
+                world.fast_position.pop(id(cmd.joints), None)
+                cmd.send()  # checks the values (raises on a bad one), then set_joint_*
+            backend._arm(world, cmd, handle)
+
+        handle = kernel.add_command(
+            command.mode == "position", command.targets, command.max_force, resend
+        )
+        command.backend_handle = (c, handle)
+        self._arm(c, command, handle)
+        return True
+
+    def _in_force(self, c: Compiled, command: BoundCommand) -> bool:
+        """Whether the motor table holds ``command``'s arrays as they are (by value, as a
+        repeated plain command is recognised): after another command rebound the motor rows,
+        the compiled loop needs only the new rows, not a new command."""
+        t = c.motors
+        idx = self._motor_slots(command.body, command.joints)
+        kp, kd = t.kp[idx].tolist(), t.kd[idx].tolist()
+        if t.max_force[idx].tolist() != command.max_force.tolist():
+            return False
+        if command.mode == "velocity":
+            n = len(idx)
+            return (
+                t.target_velocity[idx].tolist() == command.targets.tolist()
+                and kp == [0.0] * n
+                and kd == [1.0] * n
+            )
+        lower, upper = self._limits(command.body, command.joints)
+        q = [
+            min(max(x, lo), hi)
+            for x, lo, hi in zip(command.targets.tolist(), lower, upper, strict=True)
+        ]
+        return (
+            t.target_position[idx].tolist() == q
+            and not t.target_velocity[idx].any()
+            and kp == command.kp
+            and kd == command.kd
+        )
+
+    def _arm(self, c: Compiled, command: BoundCommand, handle: int) -> None:
+        """Tell the compiled loop where the command's next changes go (or that they go
+        through Python: rows absent, an effort limit)."""
+        kernel = c.kernel
+        if kernel is None:
+            return
+        idx = self._motor_slots(command.body, command.joints)
+        if command.mode == "position":
+            path = self._position_path(c, command.body, command.joints, idx, command.kp, command.kd)
+            if path is None:
+                kernel.arm_command(handle, None, None)
+            else:
+                kernel.arm_command(handle, path.packed, path.limits)
+            return
+        t = c.motors
+        rows = t.row_of[idx]
+        if self.profile.enforce_effort_limit or not (rows >= 0).all():
+            kernel.arm_command(handle, None, None)
+            return
+        index = np.ascontiguousarray(np.stack([idx, rows, t.dof[idx]]), dtype=np.intp)
+        kernel.arm_command(handle, index, None)
+
+    def unbind_command(self, command: BoundCommand) -> None:
+        """Stop reading ``command``'s arrays (the motors keep the command last sent)."""
+        bound = command.backend_handle
+        command.backend_handle = None
+        if bound is None:
+            return
+        c, handle = bound
+        kernel = c.kernel
+        if c is self._c and kernel is not None:
+            kernel.remove_command(handle)

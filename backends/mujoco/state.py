@@ -262,12 +262,16 @@ class StateAccess:
             a = robot.free_qadr
             d.qpos[a : a + 3] = bpos
             d.qpos[a + 3 : a + 7] = xyzw_to_wxyz(born)
-            # MuJoCo: linear velocity of the frame origin (world), angular in the body frame
-            v_origin = np.asarray(lin) + np.cross(ang, np.subtract(bpos, pos))
-            w_local = quat_rotate(quat_conjugate(born), ang)
+            # MuJoCo: linear velocity of the frame origin (world), angular in the body frame:
+            # lin + ang x (bpos - pos), in floats (np.cross's own arithmetic, 20 us faster)
+            r0, r1, r2 = bpos[0] - pos[0], bpos[1] - pos[1], bpos[2] - pos[2]
             v = robot.free_dofadr
-            d.qvel[v : v + 3] = v_origin
-            d.qvel[v + 3 : v + 6] = w_local
+            d.qvel[v : v + 6] = (
+                lin[0] + (ang[1] * r2 - ang[2] * r1),
+                lin[1] + (ang[2] * r0 - ang[0] * r2),
+                lin[2] + (ang[0] * r1 - ang[1] * r0),
+                *quat_rotate(quat_conjugate(born), ang),
+            )
         else:
             bid = int(robot.body_ids[0])
             m.body_pos[bid] = fpos

@@ -108,6 +108,8 @@ class Compiled:
     # set_joint_velocity's hot path: joints array id -> (joints, epoch, body, slots, rows,
     # dofs, last target, last max_force, packed slots/rows/dofs for the compiled loop)
     fast: dict[int, tuple[Any, ...]] = field(default_factory=dict)
+    # set_joint_position's hot path: joints array id -> commands.PositionPath
+    fast_position: dict[int, Any] = field(default_factory=dict)
     # joint_states' motor rows: joints array id -> (joints, epoch, rows, positions, full)
     torque_map: dict[int, tuple[Any, ...]] = field(default_factory=dict)
     state_out: np.ndarray = field(default_factory=lambda: np.empty(20))
@@ -143,6 +145,7 @@ class Compiled:
                 t.kd_factor,
                 t.dof_rows,
                 t.force_rows_slack,
+                t.position_target,
             )
         if len(before) != len(t.active) or (before != t.active).any():
             self.motor_rows_valid = False  # the last solve's rows belong to the old set
@@ -195,7 +198,7 @@ def _bind_kernel(c: Compiled) -> Any:
         return None
     m, d = c.m, c.d
     kernel = cls(m, d, m._address, d._address, kernel_loader.functions(), c.dt)
-    kernel.bind_commands(c.motors.target_velocity, c.motors.max_force)
+    kernel.bind_commands(c.motors.target_velocity, c.motors.max_force, c.motors.target_position)
     damping = c.damping
     empty = np.zeros(0)
     kernel.bind_world(
