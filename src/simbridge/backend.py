@@ -41,6 +41,7 @@ from .types import (
 )
 
 if TYPE_CHECKING:
+    from .bound import BoundCommand
     from .urdf import UrdfModel
 
 __all__ = ["Backend"]
@@ -208,6 +209,32 @@ class Backend(ABC):
         """TORQUE_CONTROL: added during the next step only. As in PyBullet it does not remove
         the joint's motor: under the "pybullet" profile the default brake cancels small torques
         until ``set_joint_velocity(..., max_force=0)`` releases it."""
+
+    # ---------------------------------------------------------------- bound commands
+    # Not abstract: the default (the Sim sends a bound command before every step through
+    # set_joint_velocity / set_joint_position) is right for every backend; a backend whose
+    # step can read the arrays itself overrides both.
+
+    def bind_command(self, command: BoundCommand) -> bool:
+        """Take a bound command (``Sim.velocity_command``/``position_command``): its
+        ``targets`` and ``max_force`` (float64 arrays of ``len(command.joints)``, owned by the
+        command, written in place by the user) are the command of ``command.joints`` at every
+        step, as if ``set_joint_velocity`` (or ``set_joint_position`` with ``command.kp``,
+        ``command.kd``) were called with them just before it. The Sim has checked the joints
+        and sent the first values; while bound, no other velocity or position command reaches
+        these joints.
+
+        Return False (the default) to have the Sim call ``command.send()`` (which checks the
+        values and calls ``set_joint_*``) before every ``step``; True when this backend's
+        ``step`` reads the arrays itself, before it steps: a change must then give the same
+        results as that call, bit for bit, and a value ``send()`` would refuse (non-finite, a
+        negative force) must go through ``send()`` so that it raises before any step. The Sim
+        calls :meth:`unbind_command` before any world change (load, remove, reset) and after
+        ``close``."""
+        return False
+
+    def unbind_command(self, command: BoundCommand) -> None:
+        """Stop reading ``command``'s arrays; its joints keep the command last sent."""
 
     # ---------------------------------------------------------------- description
 

@@ -32,6 +32,7 @@ __all__ = [
     "EngineError",
     "SimBusyError",
     "SimClosedError",
+    "StaleCommandError",
     "ScenarioError",
     "SlowStepWarning",
 ]
@@ -216,6 +217,17 @@ class SimBusyError(SimbridgeError, RuntimeError):
 class SimClosedError(SimbridgeError, RuntimeError):
     def __init__(self) -> None:
         super().__init__("this Sim is closed; create a new one")
+
+
+class StaleCommandError(SimbridgeError, RuntimeError):
+    """A bound command (``Sim.velocity_command``, ``Sim.position_command``) used after it was
+    released or after a world change (load_urdf, remove, reset, close) ended it."""
+
+    def __init__(self, command: str, why: str) -> None:
+        super().__init__(
+            f"the {command} is no longer bound: {why}; bind a new one "
+            "(sim.velocity_command / sim.position_command)"
+        )
 
 
 # ---------------------------------------------------------------- comparison scenarios

@@ -27,6 +27,7 @@ import numpy as np
 
 from ._version import __version__
 from .backend import Backend
+from .bound import BoundCommand
 from .exceptions import (
     InvalidArgumentError,
     SimBusyError,
@@ -127,6 +128,9 @@ class Sim:
         gui: bool = False,
     ) -> None:
         self._b: Backend = _Closed()  # type: ignore[assignment]
+        self._commands: list[BoundCommand] = []  # bound commands, in binding order
+        self._presend: list[BoundCommand] = []  # ... those the Sim sends before each step
+        self._held: dict[int, dict[int, BoundCommand]] = {}  # body -> joint -> its command
         g = _vec(gravity, 3, "gravity")
         try:
             if isinstance(timestep, bool) or not isinstance(timestep, (int, float, np.number)):
@@ -159,9 +163,11 @@ class Sim:
         except BaseException:
             self._b = _Closed()  # type: ignore[assignment]
             self._bodies.clear()
+            self._end_commands("the Sim was closed")
             raise
         self._b = _Closed()  # type: ignore[assignment]
         self._bodies.clear()
+        self._end_commands("the Sim was closed")
 
     def __enter__(self) -> Sim:
         return self
@@ -240,6 +246,7 @@ class Sim:
         model = parse_urdf(resolve_source(source))
         if self._b.profile.inertia_source == "file":
             check_file_inertia(model)
+        self._end_commands("load_urdf changed the world")
         body = self._b.load(model, pos, orn, bool(fixed_base))  # type: ignore[arg-type]
         names = [j.name for j in model.joints]
         links = [j.child for j in model.joints]
@@ -257,11 +264,14 @@ class Sim:
     def remove(self, body: int) -> None:
         """Remove a body from the world."""
         self._body(body)
+        self._end_commands("remove changed the world")
         self._b.remove(body)
         del self._bodies[body]
 
     def reset(self) -> None:
         """Remove every body and set time to 0 (``p.resetSimulation``)."""
+        self._b.time  # noqa: B018 - raises SimClosedError after close()
+        self._end_commands("reset changed the world")
         self._b.reset()
         self._bodies.clear()
         self._wall_start = None
@@ -283,15 +293,25 @@ class Sim:
             realtime: pace the steps to the wall clock (the tutorial's ``time.sleep(1/240)``),
                 keeping the pace across calls.
 
+        Bound commands (:meth:`velocity_command`) are read when the call starts: a step(n)
+        runs its n steps on those values.
+
         Raises:
             SimulationDivergedError: the state became NaN or infinite.
+            InvalidArgumentError: a bound command holds a non-finite target or a negative or
+                non-finite force (no step is taken).
         """
         if type(n) is int and n >= 0 and not realtime:  # the hot path: one check, one call
+            if self._presend:
+                for command in self._presend:
+                    command.send()
             self._b.step(n)
             self._wall_start = None
             return
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
             raise InvalidArgumentError("n", f"must be an integer >= 0, got {n!r}")
+        for command in self._presend:
+            command.send()
         if not realtime:
             self._b.step(int(n))
             self._wall_start = None
@@ -511,6 +531,8 @@ class Sim:
         ``max_force`` (N·m or N). Persists until replaced; ``max_force=0`` releases the joint
         (and removes the default brake)."""
         idx = self._joints(body, joints, True)
+        if self._held:
+            self._refuse_held(body, idx)
         n = len(idx)
         self._b.set_joint_velocity(
             body,
@@ -533,6 +555,8 @@ class Sim:
         change ``kp * (target - q) / dt - kd * v`` (so it depends on dt), its force clamped to
         ``max_force``. Persists until replaced."""
         idx = self._joints(body, joints, True)
+        if self._held:
+            self._refuse_held(body, idx)
         n = len(idx)
         self._b.set_joint_position(
             body,
@@ -542,6 +566,130 @@ class Sim:
             self._values(kp, n, "kp", nonneg=True),
             self._values(kd, n, "kd", nonneg=True),
         )
+
+    # ---------------------------------------------------------------- bound commands
+
+    def velocity_command(
+        self, body: int, joints: JointsArg, target: Any, *, max_force: Any
+    ) -> BoundCommand:
+        """A velocity command bound to ``joints``, for a tight control loop: sent now, then
+        at every :meth:`step` from its own arrays, which are written in place::
+
+            cmd = sim.velocity_command(robot, [2, 3, 6, 7], 0.0, max_force=50)
+            for k in range(1000):
+                cmd.targets[:] = policy(observation)   # rad/s or m/s, shape (4,)
+                sim.step()
+
+        Each step gives the results of ``set_joint_velocity(body, joints, cmd.targets,
+        max_force=cmd.max_force)`` called just before it, bit for bit, without its per-call
+        checks: the joints (known, movable, not driven by another bound command) and the
+        arguments' shapes are checked here, once; the values are checked when a step reads
+        them (a non-finite target or a negative or non-finite force raises
+        InvalidArgumentError from ``step`` before any step). While bound, plain velocity and
+        position commands on these joints are refused; :meth:`BoundCommand.release` frees
+        them. ``load_urdf``, ``remove``, ``reset`` and ``close`` end every bound command
+        (StaleCommandError on its next use). See :mod:`simbridge.bound`.
+
+        Returns:
+            a :class:`~simbridge.bound.BoundCommand`: ``targets`` and ``max_force`` are
+            float64 arrays of shape (n,), n the number of joints, in the order given.
+        """
+        idx = self._joints(body, joints, True)
+        self._refuse_held(body, idx)
+        n = len(idx)
+        command = BoundCommand(
+            self,
+            "velocity",
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+            [0.0] * n,
+            [1.0] * n,
+        )
+        return self._bind(command)
+
+    def position_command(
+        self,
+        body: int,
+        joints: JointsArg,
+        target: Any,
+        *,
+        max_force: Any,
+        kp: Any = 0.1,
+        kd: Any = 1.0,
+    ) -> BoundCommand:
+        """A position command bound to ``joints`` (rad or m; PyBullet's law with gains ``kp``
+        and ``kd``, fixed here): sent now, then at every :meth:`step` from its own arrays, as
+        :meth:`set_joint_position` called just before each step would, bit for bit. Checks,
+        ownership and the end of the binding as for :meth:`velocity_command`."""
+        idx = self._joints(body, joints, True)
+        self._refuse_held(body, idx)
+        n = len(idx)
+        command = BoundCommand(
+            self,
+            "position",
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+            self._values(kp, n, "kp", nonneg=True),
+            self._values(kd, n, "kd", nonneg=True),
+        )
+        return self._bind(command)
+
+    def _bind(self, command: BoundCommand) -> BoundCommand:
+        command.send()  # the first command, through the plain path
+        held = self._held.setdefault(command.body, {})
+        for j in command.joints.tolist():
+            held[j] = command
+        self._commands.append(command)
+        try:
+            stepped = self._b.bind_command(command)
+        except BaseException:
+            self._release_command(command)
+            raise
+        if not stepped:
+            self._presend.append(command)
+        return command
+
+    def _refuse_held(self, body: int, idx: np.ndarray) -> None:
+        held = self._held.get(body)
+        if not held:
+            return
+        for j in idx.tolist():
+            command = held.get(j)
+            if command is not None:
+                b = self._bodies[body]
+                raise InvalidArgumentError(
+                    "joints",
+                    f"joint {b.joint_names[j]!r} (index {j}) of body {b.name!r} is driven by a "
+                    f"bound {command.mode} command: write its targets, or release() it first",
+                )
+
+    def _release_command(self, command: BoundCommand) -> None:
+        """Unbind one command (BoundCommand.release)."""
+        if command in self._commands:
+            self._commands.remove(command)
+        if command in self._presend:
+            self._presend.remove(command)
+        held = self._held.get(command.body, {})
+        for j in command.joints.tolist():
+            if held.get(j) is command:
+                del held[j]
+        if not held:
+            self._held.pop(command.body, None)
+        if not isinstance(self._b, _Closed):
+            self._b.unbind_command(command)
+
+    def _end_commands(self, why: str) -> None:
+        """A world change ends every bound command (unbound before the change)."""
+        if not self._commands:
+            return
+        commands = self._commands
+        for command in list(commands):
+            self._release_command(command)
+            command._end(why)
 
     def set_joint_torque(self, body: int, joints: JointsArg, torque: Any) -> None:
         """TORQUE_CONTROL: add ``torque`` (N·m or N) during the next step only (commands before
