@@ -68,9 +68,8 @@ class Records:
         kd: list[float] | None,
     ) -> None:
         """A velocity (kp, kd None) or position command given."""
-        log = self.motors[body]
-        log.pop(id(joints), None)  # the latest command goes last
-        log[id(joints)] = (next(self.order), joints, mode, target, max_force, kp, kd)
+        # keyed by joints array, replaced by the next command on it; read back in ``order``
+        self.motors[body][id(joints)] = (next(self.order), joints, mode, target, max_force, kp, kd)
 
     def torque(self, step: int, body: int, joints: np.ndarray, torque: list[float]) -> None:
         """A torque command given before step ``step`` (as applied: after any effort clamp)."""

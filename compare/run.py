@@ -40,6 +40,9 @@ _BODY_ARRAYS = (
     "joint_targets",
     "link_positions",
 )
+# Recorded beside _BODY_ARRAYS, saved and loaded alike, but kept out of that tuple: the
+# trajectory hashes (tests/_trajectory_hashes.py) cover _BODY_ARRAYS alone.
+_CONTACT_ARRAYS = ("contact_counts", "contact_normal_forces")
 
 
 @dataclass
@@ -69,6 +72,12 @@ class BodyTrajectory:
     link_positions: np.ndarray
     """(T, L, 3) m: world position of every link's centre of mass, base first (PyBullet's
     ``linkWorldPosition``, ``Sim.link_state(...).com_position``)."""
+    contact_counts: np.ndarray | None = None
+    """(T, L) int: contact points of every link (base first) in the step that ended there
+    (``Sim.contact_points``, with any body, this robot's other links included); None in a
+    trajectory recorded without them."""
+    contact_normal_forces: np.ndarray | None = None
+    """(T, L) N: the sum of those points' normal forces."""
 
 
 @dataclass
@@ -145,6 +154,9 @@ class Trajectory:
             arrays[f"{name}/joint_modes"] = b.joint_modes
             for key in _BODY_ARRAYS:
                 arrays[f"{name}/{key}"] = getattr(b, key)
+            for key in _CONTACT_ARRAYS:
+                if getattr(b, key) is not None:
+                    arrays[f"{name}/{key}"] = getattr(b, key)
         arrays["meta"] = np.array(json.dumps(meta, default=_json_default))
         with path.open("wb") as f:
             np.savez_compressed(f, **arrays)  # type: ignore[arg-type]
@@ -164,6 +176,7 @@ class Trajectory:
                     link_names=list(m["link_names"]),
                     joint_modes=data[f"{name}/joint_modes"],
                     **{key: data[f"{name}/{key}"] for key in _BODY_ARRAYS},
+                    **{k: data[f"{name}/{k}"] for k in _CONTACT_ARRAYS if f"{name}/{k}" in data},
                 )
             return cls(
                 scenario=meta["scenario"],
@@ -198,6 +211,10 @@ class Trajectory:
             for i, link in enumerate(b.link_names):
                 names += [f"{bname}.link_positions.{link}.{a}" for a in "xyz"]
                 cols.append(b.link_positions[:, i, :])
+            for key in _CONTACT_ARRAYS:
+                if getattr(b, key) is not None:
+                    names += [f"{bname}.{key}.{link}" for link in b.link_names]
+                    cols.append(getattr(b, key))
         return names, np.hstack(cols)
 
     def save_csv(self, path: str | Path) -> Path:
@@ -393,6 +410,8 @@ class _Recorder:
         self.targets = np.full((rows, n_j), np.nan)
         self.modes = np.zeros((rows, n_j), dtype=np.int8)
         self.links_xyz = np.empty((rows, n_l, 3))
+        self.contact_counts = np.zeros((rows, n_l), dtype=np.int32)
+        self.contact_forces = np.zeros((rows, n_l))
         self._col = {int(j): i for i, j in enumerate(self.joint_indices)}
 
     def columns(self, idx: list[int]) -> list[int]:
@@ -415,6 +434,13 @@ class _Recorder:
             self.q[row] = js.positions
             self.v[row] = js.velocities
             self.f[row] = js.applied_torques
+        counts, forces = self.contact_counts[row], self.contact_forces[row]
+        for c in sim.contact_points(body):  # A is this body; B another or this one again
+            counts[c.link_a + 1] += 1
+            forces[c.link_a + 1] += c.normal_force
+            if c.body_b == body:
+                counts[c.link_b + 1] += 1
+                forces[c.link_b + 1] += c.normal_force
 
     def finish(self, name: str) -> BodyTrajectory:
         return BodyTrajectory(
@@ -433,4 +459,6 @@ class _Recorder:
             joint_targets=self.targets,
             joint_modes=self.modes,
             link_positions=self.links_xyz,
+            contact_counts=self.contact_counts,
+            contact_normal_forces=self.contact_forces,
         )
