@@ -85,7 +85,7 @@ def test_missing_mesh_names_file_link_and_uri(tmp_path):
     )
     with pytest.raises(
         exc.MeshNotFoundError,
-        match=r"broken\.urdf: link 'base' <visual> #0: "
+        match=r"broken\.urdf:1: link 'base' <visual> #0: "
         r"mesh file 'package://pkg/meshes/gone.stl' not found",
     ):
         parse_urdf(resolve_source(str(urdf)))

@@ -31,7 +31,6 @@ from simbridge.inertia import LinkInertial, is_fixed_base, model_inertials
 from simbridge.meshes import read_mesh
 from simbridge.profiles import Profile
 from simbridge.transforms import (
-    quat_from_rpy,
     quat_rotate,
     transform_inverse,
     transform_multiply,
@@ -258,9 +257,7 @@ def add_robot(
             joint = model.joints[i]
             parent = model.parent_index(joint)
             body = bodies[parent + 1].add_body(name=body_names[i + 1])
-            body.pos, body.quat = placed(
-                joint.origin_xyz, quat_from_rpy(joint.origin_rpy), parent == -1
-            )
+            body.pos, body.quat = placed(joint.origin_xyz, joint.origin_quat, parent == -1)
             static[i + 1] = static[parent + 1] and joint.type == "fixed"
             if joint.type == "fixed":
                 joint_names.append(None)
@@ -315,12 +312,14 @@ def add_robot(
 
         where = f"link {link.name!r}"
         for k, g in enumerate(link.visuals):
+            if g.kind == "plane":
+                continue  # PyBullet draws no <plane> either ("No default visual")
             if _degenerate(g) or (g.kind == "mesh" and not meshes.usable(g)):
                 skipped.append(f"{where} <visual> #{k}")
                 continue  # nothing to draw (e.g. laikago_toes' radius-0 spheres)
             vg = body.add_geom(name=f"{body_names[i + 1]}$v{k}")
             _set_shape(vg, g, meshes, file, f"{where} <visual> #{k}")
-            vg.pos, vg.quat = placed(g.origin_xyz, quat_from_rpy(g.origin_rpy), i == -1)
+            vg.pos, vg.quat = placed(g.origin_xyz, g.origin_quat, i == -1)
             vg.contype = vg.conaffinity = 0
             vg.group = VISUAL_GROUP
             vg.rgba = list(g.rgba or DEFAULT_RGBA)
@@ -332,8 +331,16 @@ def add_robot(
                 continue
             name = f"{body_names[i + 1]}$c{k}"
             cg = body.add_geom(name=name)
-            is_plane = static[i + 1] and upright and _is_ground_box(g)
-            if is_plane:
+            is_plane = g.kind == "plane" or (static[i + 1] and upright and _is_ground_box(g))
+            if g.kind == "plane":  # Bullet's infinite plane through the shape's origin
+                cg.type = mujoco.mjtGeom.mjGEOM_PLANE
+                cg.size = [0.0, 0.0, 1.0]
+                turn = transform_multiply(
+                    (g.origin_xyz, g.origin_quat), ((0.0, 0.0, 0.0), _z_to(g.size))
+                )
+                cg.pos, cg.quat = placed(turn[0], turn[1], i == -1)
+                planes.append(name)
+            elif is_plane:
                 cg.type = mujoco.mjtGeom.mjGEOM_PLANE
                 cg.size = [0.5 * g.size[0], 0.5 * g.size[1], 1.0]
                 cg.pos = [g.origin_xyz[0], g.origin_xyz[1], g.origin_xyz[2] + 0.5 * g.size[2]]
@@ -342,7 +349,7 @@ def add_robot(
                 if _degenerate(g):  # MuJoCo refuses size 0: a point-like shape instead
                     g = replace(g, size=tuple(max(v, MIN_SIZE) for v in g.size))
                 _set_shape(cg, g, meshes, file, f"{where} <collision> #{k}")
-                cg.pos, cg.quat = placed(g.origin_xyz, quat_from_rpy(g.origin_rpy), i == -1)
+                cg.pos, cg.quat = placed(g.origin_xyz, g.origin_quat, i == -1)
             cg.contype = cg.conaffinity = 0
             cg.group = COLLISION_GROUP
             cg.rgba = [0.5, 0.5, 0.5, 0.5]
@@ -369,7 +376,7 @@ def add_robot(
 
 def _set_shape(geom: mujoco.MjsGeom, g: Geometry, meshes: MeshLibrary, file: str, where: str):
     geom.pos = list(g.origin_xyz)
-    geom.quat = _wxyz(quat_from_rpy(g.origin_rpy))
+    geom.quat = _wxyz(g.origin_quat)
     if g.kind == "box":
         geom.type = mujoco.mjtGeom.mjGEOM_BOX
         geom.size = [0.5 * v for v in g.size]
@@ -385,6 +392,17 @@ def _set_shape(geom: mujoco.MjsGeom, g: Geometry, meshes: MeshLibrary, file: str
     else:
         geom.type = mujoco.mjtGeom.mjGEOM_MESH
         geom.meshname = meshes.get(g, file, where)
+
+
+def _z_to(normal: tuple[float, ...]) -> Quat:
+    """The shortest turn (x, y, z, w) of the z axis onto ``normal`` (not zero)."""
+    n = np.asarray(normal, dtype=float) / np.linalg.norm(normal)
+    w = 1.0 + n[2]
+    if w < 1e-12:  # normal = -z: half a turn about x
+        return (1.0, 0.0, 0.0, 0.0)
+    q = np.array([-n[1], n[0], 0.0, w])
+    q /= np.linalg.norm(q)
+    return (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
 
 
 def _degenerate(g: Geometry) -> bool:

@@ -112,28 +112,47 @@ class UrdfParseError(UrdfError):
         super().__init__(f"{file}: malformed URDF XML: {detail}")
 
 
-class UrdfStructureError(UrdfError):
-    """Well-formed XML that is not a valid robot (no links, a cycle, a missing parent...)."""
+def _at(file: str, line: int | None) -> str:
+    """``file:line`` where the line is known (1-based), else ``file``."""
+    return file if line is None else f"{file}:{line}"
 
-    def __init__(self, file: str, element: str, detail: str):
+
+class UrdfStructureError(UrdfError):
+    """Well-formed XML that is not a valid robot (no links, a cycle, a missing parent...).
+    ``line``: the element's line in the file (1-based), None where no one line is to blame."""
+
+    def __init__(self, file: str, element: str, detail: str, line: int | None = None):
         self.file = file
         self.element = element
-        super().__init__(f"{file}: {element}: {detail}")
+        self.line = line
+        super().__init__(f"{_at(file, line)}: {element}: {detail}")
 
 
 class MeshNotFoundError(UrdfError, FileNotFoundError):
-    def __init__(self, file: str, element: str, filename: str, resolved: str):
+    def __init__(
+        self, file: str, element: str, filename: str, resolved: str, line: int | None = None
+    ):
         self.file = file
         self.mesh_uri = filename
+        self.line = line
         super().__init__(
-            f"{file}: {element}: mesh file {filename!r} not found (resolved to {resolved!r})"
+            f"{_at(file, line)}: {element}: mesh file {filename!r} not found "
+            f"(resolved to {resolved!r})"
         )
 
 
 class UnsupportedJointError(UrdfError):
-    def __init__(self, file: str, joint: str, joint_type: str, supported: Iterable[str]):
+    def __init__(
+        self,
+        file: str,
+        joint: str,
+        joint_type: str,
+        supported: Iterable[str],
+        line: int | None = None,
+    ):
+        self.line = line
         super().__init__(
-            f"{file}: joint {joint!r}: joint type {joint_type!r} is not supported; "
+            f"{_at(file, line)}: joint {joint!r}: joint type {joint_type!r} is not supported; "
             f"supported types: {_choices(supported)}"
         )
 

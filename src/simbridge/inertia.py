@@ -41,7 +41,6 @@ from .meshes import mesh_vertices
 from .transforms import (
     IDENTITY_QUAT,
     quat_from_matrix,
-    quat_from_rpy,
     quat_to_matrix,
     transform_inverse,
     transform_multiply,
@@ -60,6 +59,7 @@ __all__ = [
 ]
 
 URDF_COLLISION_MARGIN = 0.001  # PyBullet's collision margin of shapes loaded from a URDF (m)
+PLANE_HALF_EXTENT = 1e30  # m: a plane's bounding box in Bullet (BT_LARGE_FLOAT, double precision)
 
 
 class LinkInertial(NamedTuple):
@@ -84,6 +84,8 @@ def _shape_local_box(
         return np.zeros(3), 0.5 * np.asarray(g.size, dtype=float)
     if g.kind == "sphere":
         return np.zeros(3), np.full(3, g.size[0])
+    if g.kind == "plane":  # Bullet's plane: the box of its AABB, +-BT_LARGE_FLOAT (double)
+        return np.zeros(3), np.full(3, PLANE_HALF_EXTENT)
     if g.kind == "capsule":
         r, length = g.size
         return np.zeros(3), np.array([r, r, r + 0.5 * length])
@@ -124,7 +126,7 @@ def collision_aabb_inertia(
     inv = transform_inverse(frame)
     shapes = []
     for g in link.collisions:
-        pos, orn = transform_multiply(inv, (g.origin_xyz, quat_from_rpy(g.origin_rpy)))
+        pos, orn = transform_multiply(inv, (g.origin_xyz, g.origin_quat))
         shapes.append((g, pos, orn))
     if len(shapes) == 1:
         g, pos, orn = shapes[0]
@@ -133,7 +135,7 @@ def collision_aabb_inertia(
         # share their origin (equal non-zero rotations leave round-off, measured on r2d2).
         same_frame = (
             tuple(g.origin_xyz) == tuple(frame[0])
-            and not any(g.origin_rpy)
+            and tuple(g.origin_quat) == IDENTITY_QUAT
             and tuple(frame[1]) == IDENTITY_QUAT
         )
         if same_frame:
@@ -152,7 +154,7 @@ def collision_aabb_inertia(
         c = rot @ centre + np.asarray(pos)
         # a sphere's box does not grow when turned; every other shape's box is the box around
         # its turned local box
-        h = half if g.kind == "sphere" else np.abs(rot) @ half
+        h = half if g.kind in ("sphere", "plane") else np.abs(rot) @ half
         lo = c - h if k == 0 else np.minimum(lo, c - h)
         hi = c + h if k == 0 else np.maximum(hi, c + h)
     return _box_inertia(mass, hi - lo + 2.0 * URDF_COLLISION_MARGIN)
@@ -239,7 +241,7 @@ def link_inertial(
     """
     ine = link.inertial
     pos: Vec3 = tuple(float(v) for v in ine.origin_xyz)  # type: ignore[assignment]
-    orn = quat_from_rpy(ine.origin_rpy)
+    orn = ine.origin_quat
     if not ine.from_file:
         pos, orn = (0.0, 0.0, 0.0), IDENTITY_QUAT
         mass = 0.0 if link.name == "world" else 1.0
@@ -261,7 +263,7 @@ def link_inertial(
             x, y, z = file_diag
             if min(x, y, z) < 0 or x > y + z or y > x + z or z > x + y:
                 file_diag = np.zeros(3)
-                orn = quat_from_rpy(ine.origin_rpy)
+                orn = ine.origin_quat
         diag = tuple(float(v) for v in file_diag)
     else:
         diag = collision_aabb_inertia(link, mass, (pos, orn), vertices)
@@ -272,21 +274,12 @@ def link_inertial(
 
 def inertia_scalings(model: UrdfModel) -> dict[str, float]:
     """Bullet's ``<contact><inertia_scaling value=..>`` per link name (links without one are
-    left out). Read from the URDF text, since :class:`~simbridge.urdf.Contact` has no field for
-    it."""
-    import xml.etree.ElementTree as ET
-
-    if "inertia_scaling" not in model.source.text:
-        return {}
-    out: dict[str, float] = {}
-    for link in ET.fromstring(model.source.text).findall("link"):
-        elem = link.find("contact/inertia_scaling")
-        if elem is not None and elem.get("value") is not None:
-            try:
-                out[link.get("name", "")] = float(elem.get("value", "1"))
-            except ValueError:
-                continue
-    return out
+    left out)."""
+    return {
+        link.name: link.contact.inertia_scaling
+        for link in model.links
+        if link.contact.inertia_scaling is not None
+    }
 
 
 def model_inertials(

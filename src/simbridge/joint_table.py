@@ -14,7 +14,6 @@ from collections.abc import Sequence
 from .inertia import LinkInertial
 from .transforms import (
     quat_conjugate,
-    quat_from_rpy,
     quat_multiply,
     quat_rotate,
     transform_inverse,
@@ -63,9 +62,7 @@ def joint_table(
         pin = inertials[parent + 1]
         cin = inertials[joint.index + 1]
         inv_parent = transform_inverse((pin.position, pin.orientation))
-        fpos, jorn = transform_multiply(
-            inv_parent, (joint.origin_xyz, quat_from_rpy(joint.origin_rpy))
-        )
+        fpos, jorn = transform_multiply(inv_parent, (joint.origin_xyz, joint.origin_quat))
         # Bullet's rotParentToThis: child inertial frame relative to the joint frame seen
         # from the parent's inertial frame, inverted (what getJointInfo reports).
         forn = quat_conjugate(quat_multiply(jorn, cin.orientation))

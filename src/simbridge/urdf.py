@@ -1,29 +1,45 @@
-"""URDF sources, parsing and validation, shared by every backend.
+"""URDF parsing and validation, shared by every backend.
 
-The core reads a URDF once, with the standard library, into a :class:`UrdfModel`: links, joints,
-geometry, inertia and contact values, and PyBullet's link order (joint i moves link i, the root
-is -1). Every backend builds its engine model from, or checks its engine's model against, this
-one object, so a bad file gets the same error on every backend before any engine sees it.
+The core reads a URDF once into a :class:`UrdfModel`: links, joints, geometry, inertia and
+contact values, and PyBullet's link order (joint i moves link i, the root is -1). Every backend
+builds its engine model from, or checks its engine's model against, this one object, so a bad
+file gets the same error on every backend before any engine sees it.
+
+The values are the ones PyBullet 3.2.7 reads from the same file (bullet3
+``Importers/ImportURDFDemo/UrdfParser.cpp``), leniency included (:mod:`simbridge.urdf_xml`:
+numbers read with C's ``atof``, vectors split at spaces, their first three numbers used, a NUL
+byte a line break...); whatever a strict reading would not have read so is logged as one
+warning naming the file and the lines. What PyBullet refuses is refused here too, with an error
+naming the file, the line and the element; a few things PyBullet loads are refused on purpose
+(no engine simulates them faithfully): a non-finite number, a negative mass, size, joint
+damping or friction, a zero joint axis, several root links (PyBullet crashes), and the joint
+types outside :data:`SUPPORTED_JOINT_TYPES`.
+
+Sources (files, names on the search path, URDF text) are :mod:`simbridge.urdf_source`'s part.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import os
-import xml.etree.ElementTree as ET
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import replace
 from pathlib import Path
 
 from .exceptions import (
     MeshNotFoundError,
     UnsupportedJointError,
-    UrdfNotFoundError,
-    UrdfParseError,
     UrdfStructureError,
 )
 from .meshes import mesh_vertices
+from .urdf_model import Contact, Geometry, Inertial, Joint, Link, UrdfModel, Vec3
+from .urdf_source import (  # noqa: F401 - re-exported: simbridge.urdf is the public module
+    UrdfSource,
+    _robots_dir,
+    resolve_mesh,
+    resolve_source,
+    search_path,
+)
+from .urdf_xml import Leniency, XmlElement, c_atof, pybullet_numbers, read_urdf_xml
 
 __all__ = [
     "UrdfSource",
@@ -34,379 +50,299 @@ __all__ = [
     "Inertial",
     "Contact",
     "resolve_source",
+    "resolve_mesh",
     "parse_urdf",
     "search_path",
+    "check_file_inertia",
     "SUPPORTED_JOINT_TYPES",
+    "MESH_FORMATS",
 ]
 
 SUPPORTED_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 _KNOWN_UNSUPPORTED = ("floating", "planar", "spherical")
+MESH_FORMATS = (".obj", ".stl", ".dae")  # what PyBullet's URDF importer reads
+
+# ---------------------------------------------------------------- reading values
 
 
-# ---------------------------------------------------------------- sources
+def _fmt(values: Sequence[float]) -> str:
+    return "(" + ", ".join(f"{v:g}" for v in values) + ")"
 
 
-@dataclass(frozen=True)
-class UrdfSource:
-    """Where a URDF came from: its text, its file (None for text) and the folder that relative
-    mesh paths resolve against."""
+class _Reader:
+    """Attribute values read as PyBullet reads them (``atof``; vectors split at spaces), with
+    a note on the leniency record where a strict reading would differ, and errors that name
+    the file, the line and the element."""
 
-    text: str
-    path: Path | None
-    base_dir: Path
-    display_name: str
+    def __init__(self, file: str, lenient: Leniency) -> None:
+        self.file = file
+        self.lenient = lenient
 
+    def error(self, elem: XmlElement | None, where: str, detail: str) -> UrdfStructureError:
+        return UrdfStructureError(self.file, where, detail, getattr(elem, "line", None))
 
-def _robots_dir() -> Path:
-    spec = importlib.util.find_spec("simbridge.robots")
-    if spec is None or not spec.submodule_search_locations:  # pragma: no cover - broken install
-        raise RuntimeError("simbridge.robots package data is missing from this installation")
-    return Path(next(iter(spec.submodule_search_locations)))
+    def require(self, elem: XmlElement, attr: str, where: str) -> str:
+        text = elem.get(attr)
+        if text is None:
+            raise self.error(elem, where, f"has no {attr} attribute (PyBullet refuses it too)")
+        return text
 
+    def _finite(self, elem: XmlElement, where: str, values: Sequence[float], text: str) -> None:
+        if not all(math.isfinite(v) for v in values):
+            raise self.error(elem, where, f"numbers must be finite, got {text!r}")
 
-def search_path() -> list[Path]:
-    """Folders searched for a URDF given by name: the package's robots, then pybullet_data.
+    def number(
+        self, elem: XmlElement | None, attr: str, default: float, where: str, required=False
+    ) -> float:
+        """One number (``atof`` of the whole attribute); ``default`` when it is absent."""
+        if elem is None:
+            return default
+        text = self.require(elem, attr, where) if required else elem.get(attr)
+        if text is None:
+            return default
+        value, whole = c_atof(text)
+        if not whole:
+            self.lenient.add(
+                elem.line, f"{where} {attr}={text!r} read as {value:g} (C atof: its leading number)"
+            )
+        self._finite(elem, f"{where} {attr}", (value,), text)
+        return value
 
-    ``SIMBRIDGE_URDF_PATH`` (os.pathsep-separated) is searched first when set.
-    """
-    paths = [Path(p) for p in os.environ.get("SIMBRIDGE_URDF_PATH", "").split(os.pathsep) if p]
-    paths.append(_robots_dir())
-    spec = importlib.util.find_spec("pybullet_data")
-    if spec is not None and spec.submodule_search_locations:
-        paths.append(Path(next(iter(spec.submodule_search_locations))))
-    return paths
+    def vector(self, elem: XmlElement, attr: str, n: int, where: str) -> tuple[float, ...] | None:
+        """PyBullet's ``parseVector3`` (n 3: the first 3 numbers, None for fewer) or
+        ``parseVector4`` (n 4: exactly 4, else None); None also when the attribute is absent.
+        The caller says what None stands for (and notes it)."""
+        text = elem.get(attr)
+        if text is None:
+            return None
+        values, clean = pybullet_numbers(text)
+        if len(values) < n or (n == 4 and len(values) != n):
+            return None
+        reasons = []
+        if not clean:
+            reasons.append(
+                "each space-separated piece read with C atof (its leading number, 0 if none)"
+            )
+        if len(values) > n:
+            reasons.append(f"the first {n} of {len(values)} numbers used")
+        if reasons:
+            self.lenient.add(
+                elem.line, f"{where} {text!r} read as {_fmt(values[:n])}: {'; '.join(reasons)}"
+            )
+        self._finite(elem, where, values[:n], text)
+        return tuple(values[:n])
 
+    def short(self, elem: XmlElement, attr: str, where: str, assumed: str) -> None:
+        self.lenient.add(
+            elem.line,
+            f"{where} {elem.get(attr)!r}: fewer than 3 numbers (split at spaces), read as "
+            f"{assumed}",
+        )
 
-def _is_file(path: Path) -> bool:
-    """Path.is_file, False for names no file system takes (too long, a NUL byte)."""
-    try:
-        return path.is_file()
-    except (OSError, ValueError):
-        return False
-
-
-def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
-    """Turn a path, a name on the search path, or URDF XML text into a :class:`UrdfSource`."""
-    if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
-        return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), "<urdf text>")
-    if not isinstance(source, (str, os.PathLike)):
-        raise UrdfNotFoundError(repr(source), ["a path, a name or URDF text was expected"])
-    shown = (
-        str(source)
-        if len(str(source)) <= 120
-        else f"{str(source)[:100]}... ({len(str(source))} characters)"
-    )
-    try:
-        candidate = Path(source).expanduser()
-    except (RuntimeError, ValueError):  # "~nosuchuser/..."
-        candidate = Path(source)
-    tried: list[str] = []
-    if _is_file(candidate):
-        found: Path | None = candidate
-    else:
-        tried.append(shown if len(str(candidate)) > 120 else str(candidate.absolute()))
-        found = None
-        if not candidate.is_absolute() and len(str(candidate)) <= 255 and "\0" not in str(source):
-            for folder in search_path():
-                for name in (candidate, Path(f"{candidate}.urdf")):
-                    path = folder / name
-                    if _is_file(path):
-                        found = path
-                        break
-                    tried.append(str(path))
-                if found:
-                    break
-    if found is None:
-        raise UrdfNotFoundError(shown, tried)
-    found = found.resolve()
-    try:
-        text = found.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UrdfParseError(str(found), f"cannot read the file: {exc}") from exc
-    return UrdfSource(text, found, found.parent, str(found))
-
-
-# ---------------------------------------------------------------- model
-
-
-@dataclass(frozen=True)
-class Geometry:
-    """One ``<visual>`` or ``<collision>`` element. ``origin`` is (xyz, rpy) in the link frame."""
-
-    kind: str  # "box" | "cylinder" | "sphere" | "capsule" | "mesh"
-    origin_xyz: tuple[float, float, float]
-    origin_rpy: tuple[float, float, float]
-    size: tuple[float, ...] = ()  # box: (x, y, z) full sizes; cylinder/capsule: (radius, length);
-    # sphere: (radius,); mesh: scale (sx, sy, sz)
-    mesh_path: Path | None = None  # resolved absolute mesh path
-    mesh_uri: str = ""  # filename as written in the URDF
-    rgba: tuple[float, float, float, float] | None = None
-    name: str = ""
+    def origin(self, elem: XmlElement, where: str) -> tuple[Vec3, Vec3]:
+        """PyBullet's ``parseTransform``: xyz (0 0 0 if unreadable), rpy (none if unreadable)."""
+        origin = elem.find("origin")
+        if origin is None:
+            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+        xyz = self.vector(origin, "xyz", 3, f"{where} <origin xyz>")  # type: ignore[arg-type]
+        if xyz is None and origin.get("xyz") is not None:
+            self.short(origin, "xyz", f"{where} <origin xyz>", "(0, 0, 0)")  # type: ignore[arg-type]
+        rpy = self.vector(origin, "rpy", 3, f"{where} <origin rpy>")  # type: ignore[arg-type]
+        if rpy is None and origin.get("rpy") is not None:
+            self.short(origin, "rpy", f"{where} <origin rpy>", "no rotation")  # type: ignore[arg-type]
+        return xyz or (0.0, 0.0, 0.0), rpy or (0.0, 0.0, 0.0)  # type: ignore[return-value]
 
 
-@dataclass(frozen=True)
-class Inertial:
-    origin_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    origin_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    mass: float = 1.0
-    inertia: tuple[float, float, float, float, float, float] = (1.0, 0.0, 0.0, 1.0, 0.0, 1.0)
-    # ixx, ixy, ixz, iyy, iyz, izz in the inertial frame
-    from_file: bool = False  # False when the link had no <inertial> (PyBullet: mass 1)
+# ---------------------------------------------------------------- elements
 
 
-@dataclass(frozen=True)
-class Contact:
-    """Bullet's ``<contact>`` extension; None where the file says nothing."""
-
-    lateral_friction: float | None = None
-    rolling_friction: float | None = None
-    spinning_friction: float | None = None
-    restitution: float | None = None
-    stiffness: float | None = None
-    damping: float | None = None
-
-
-@dataclass
-class Link:
-    name: str
-    inertial: Inertial
-    visuals: list[Geometry] = field(default_factory=list)
-    collisions: list[Geometry] = field(default_factory=list)
-    contact: Contact = field(default_factory=Contact)
-    index: int = -1  # PyBullet link index; -1 = base
-
-
-@dataclass
-class Joint:
-    name: str
-    type: str  # URDF type: revolute, continuous, prismatic, fixed
-    parent: str
-    child: str
-    origin_xyz: tuple[float, float, float]
-    origin_rpy: tuple[float, float, float]
-    axis: tuple[float, float, float]
-    lower: float
-    upper: float
-    effort: float
-    velocity: float
-    damping: float
-    friction: float
-    has_limit: bool
-    index: int = -1  # PyBullet joint index (= child link index)
-
-
-@dataclass
-class UrdfModel:
-    """A parsed, validated URDF in PyBullet's order.
-
-    ``links[0]`` is the root (PyBullet link -1); ``links[i + 1]`` is link i; ``joints[i]`` is
-    joint i, whose child is link i.
-    """
-
-    name: str
-    source: UrdfSource
-    links: list[Link]
-    joints: list[Joint]
-
-    @property
-    def base(self) -> Link:
-        return self.links[0]
-
-    def link(self, index: int) -> Link:
-        """Link by PyBullet index (-1 = base)."""
-        return self.links[index + 1]
-
-    def parent_index(self, joint: Joint) -> int:
-        return self._link_index[joint.parent]
-
-    def __post_init__(self) -> None:
-        self._link_index = {link.name: link.index for link in self.links}
-
-
-# ---------------------------------------------------------------- parsing helpers
-
-
-def _floats(
-    text: str | None, n: int, default: tuple[float, ...], where: str, file: str
-) -> tuple[float, ...]:
-    if text is None:
-        return default
-    try:
-        values = tuple(float(v) for v in text.split())
-    except ValueError:
-        raise UrdfStructureError(file, where, f"expected {n} numbers, got {text!r}") from None
-    if len(values) != n:
-        raise UrdfStructureError(file, where, f"expected {n} numbers, got {text!r}")
-    if not all(math.isfinite(v) for v in values):
-        raise UrdfStructureError(file, where, f"numbers must be finite, got {text!r}")
-    return values
-
-
-def _float(elem: ET.Element | None, attr: str, default: float, where: str, file: str) -> float:
-    if elem is None or elem.get(attr) is None:
-        return default
-    return _floats(elem.get(attr), 1, (default,), f"{where} attribute {attr!r}", file)[0]
-
-
-def _nonneg(elem: ET.Element | None, attr: str, where: str, file: str) -> float:
-    value = _float(elem, attr, 0.0, where, file)
-    if value < 0:
-        raise UrdfStructureError(file, where, f"{attr} must be >= 0, got {value}")
-    return value
-
-
-def _origin(
-    elem: ET.Element, where: str, file: str
-) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    origin = elem.find("origin")
-    if origin is None:
-        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-    xyz = _floats(origin.get("xyz"), 3, (0.0, 0.0, 0.0), f"{where} <origin xyz>", file)
-    rpy = _floats(origin.get("rpy"), 3, (0.0, 0.0, 0.0), f"{where} <origin rpy>", file)
-    return xyz, rpy  # type: ignore[return-value]
-
-
-def resolve_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
-    """Resolve a mesh filename against the URDF's own tree.
-
-    ``package://NAME/rest`` is looked up in every ancestor of ``base_dir`` (a folder that is, or
-    contains, NAME), then as ``rest`` and ``NAME/rest`` relative to ``base_dir``;
-    ``file://`` and plain paths resolve relative to ``base_dir``. Returns the first existing
-    candidate (or the first candidate) and every candidate tried.
-    """
-    candidates: list[Path] = []
-    if uri.startswith("package://"):
-        rest = uri[len("package://") :]
-        package, _, sub = rest.partition("/")
-        for ancestor in [base_dir, *base_dir.parents]:
-            if ancestor.name == package:
-                candidates.append(ancestor / sub)
-            candidates.append(ancestor / package / sub)
-        candidates += [base_dir / sub, base_dir / rest]
-    else:
-        path = uri[len("file://") :] if uri.startswith("file://") else uri
-        candidates.append(Path(path) if os.path.isabs(path) else base_dir / path)
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate.resolve(), candidates
-    return candidates[0], candidates
-
-
-def _geometry(elem: ET.Element, where: str, src: UrdfSource, is_visual: bool) -> Geometry | None:
+def _geometry(
+    r: _Reader,
+    elem: XmlElement,
+    where: str,
+    src: UrdfSource,
+    rgba: tuple[float, float, float, float] | None,
+) -> Geometry:
     file = src.display_name
-    xyz, rpy = _origin(elem, where, file)
+    xyz, rpy = r.origin(elem, where)
     geom = elem.find("geometry")
     if geom is None or len(geom) == 0:
-        raise UrdfStructureError(file, where, "has no <geometry>")
-    shape = geom[0]
-    rgba = None
-    if is_visual:
-        material = elem.find("material")
-        color = material.find("color") if material is not None else None
-        if color is not None:
-            rgba = _floats(color.get("rgba"), 4, (1.0, 1.0, 1.0, 1.0), f"{where} <color>", file)
+        raise r.error(elem, where, "has no <geometry> (PyBullet refuses it too)")
+    shape: XmlElement = geom[0]  # type: ignore[assignment]
+    tag, line = shape.tag, shape.line
     name = elem.get("name", "")
-    tag = shape.tag
+    common = {"rgba": rgba, "name": name, "line": elem.line}
     if tag == "box":
-        if shape.get("size") is None:  # PyBullet: "box requires a size attribute"
-            raise UrdfStructureError(file, f"{where} <box>", "has no size attribute")
-        size = _floats(shape.get("size"), 3, (1.0, 1.0, 1.0), f"{where} <box size>", file)
-        _sizes(size, f"{where} <box size>", file)
-        return Geometry("box", xyz, rpy, size, rgba=rgba, name=name)  # type: ignore[arg-type]
+        r.require(shape, "size", f"{where} <box>")
+        size = r.vector(shape, "size", 3, f"{where} <box size>")
+        if size is None:
+            r.short(shape, "size", f"{where} <box size>", "(0, 0, 0)")
+            size = (0.0, 0.0, 0.0)
+        _sizes(r, shape, size, f"{where} <box size>")
+        return Geometry("box", xyz, rpy, size, **common)  # type: ignore[arg-type]
     if tag in ("cylinder", "capsule"):
-        radius = _float(shape, "radius", 1.0, f"{where} <{tag}>", file)
-        length = _float(shape, "length", 1.0, f"{where} <{tag}>", file)
-        _sizes((radius, length), f"{where} <{tag} radius, length>", file)
-        return Geometry(tag, xyz, rpy, (radius, length), rgba=rgba, name=name)  # type: ignore[arg-type]
+        radius = r.number(shape, "radius", 0.0, f"{where} <{tag}>", required=True)
+        length = r.number(shape, "length", 0.0, f"{where} <{tag}>", required=True)
+        _sizes(r, shape, (radius, length), f"{where} <{tag} radius, length>")
+        return Geometry(tag, xyz, rpy, (radius, length), **common)  # type: ignore[arg-type]
     if tag == "sphere":
-        radius = _float(shape, "radius", 1.0, f"{where} <sphere>", file)
-        _sizes((radius,), f"{where} <sphere radius>", file)
-        return Geometry("sphere", xyz, rpy, (radius,), rgba=rgba, name=name)  # type: ignore[arg-type]
+        radius = r.number(shape, "radius", 0.0, f"{where} <sphere>", required=True)
+        _sizes(r, shape, (radius,), f"{where} <sphere radius>")
+        return Geometry("sphere", xyz, rpy, (radius,), **common)  # type: ignore[arg-type]
+    if tag == "plane":
+        r.require(shape, "normal", f"{where} <plane>")
+        normal = r.vector(shape, "normal", 3, f"{where} <plane normal>")
+        if normal is None or not any(normal):
+            raise r.error(
+                shape,
+                f"{where} <plane normal>",
+                f"must be 3 numbers, not all 0, got {shape.get('normal')!r}",
+            )
+        return Geometry("plane", xyz, rpy, normal, **common)  # type: ignore[arg-type]
     if tag == "mesh":
         uri = shape.get("filename")
         if not uri:
-            raise UrdfStructureError(file, f"{where} <mesh>", "has no filename attribute")
-        scale = _floats(shape.get("scale"), 3, (1.0, 1.0, 1.0), f"{where} <mesh scale>", file)
+            raise r.error(shape, f"{where} <mesh>", "has no filename (PyBullet refuses it too)")
+        scale: tuple[float, ...] = (1.0, 1.0, 1.0)
+        if shape.get("scale") is not None:
+            read = r.vector(shape, "scale", 3, f"{where} <mesh scale>")
+            if read is None:  # PyBullet: one number s is (s, s, s); no number leaves zeros
+                s = c_atof(shape.get("scale", ""))[0]
+                read = (s, s, s)
+                r.lenient.add(
+                    line, f"{where} <mesh scale> {shape.get('scale')!r} read as {_fmt(read)}"
+                )
+                r._finite(shape, f"{where} <mesh scale>", read, shape.get("scale", ""))
+            scale = read
         path, tried = resolve_mesh(uri, src.base_dir)
         if not path.is_file():
-            raise MeshNotFoundError(file, where, uri, str(tried[0]))
+            raise MeshNotFoundError(file, where, uri, str(tried[0]), line)
         if path.suffix.lower() not in MESH_FORMATS:
-            raise UrdfStructureError(
-                file,
+            raise r.error(
+                shape,
                 f"{where} <mesh>",
                 f"{uri!r}: unsupported mesh format; valid: {', '.join(MESH_FORMATS)}",
             )
         if path.suffix.lower() == ".dae":
-            _check_collada(path, uri, f"{where} <mesh>", file)
-        return Geometry(
-            "mesh",
-            xyz,
-            rpy,
-            scale,
-            mesh_path=path,
-            mesh_uri=uri,
-            rgba=rgba,  # type: ignore[arg-type]
-            name=name,
-        )
-    raise UrdfStructureError(
-        file, where, f"unknown geometry <{tag}>; valid: box, cylinder, sphere, capsule, mesh"
+            _check_collada(r, shape, path, uri, f"{where} <mesh>")
+        return Geometry("mesh", xyz, rpy, scale, mesh_path=path, mesh_uri=uri, **common)  # type: ignore[arg-type]
+    raise r.error(
+        shape,
+        where,
+        f"unknown geometry <{tag}>; valid: box, cylinder, sphere, capsule, mesh, plane",
     )
 
 
-MESH_FORMATS = (".obj", ".stl", ".dae")  # what PyBullet's URDF importer reads
-
-
-def _sizes(values: Sequence[float], where: str, file: str) -> None:
+def _sizes(r: _Reader, elem: XmlElement, values: Sequence[float], where: str) -> None:
     if any(v < 0 for v in values):
-        raise UrdfStructureError(file, where, f"sizes must be >= 0, got {tuple(values)}")
+        raise r.error(elem, where, f"sizes must be >= 0, got {tuple(values)}")
 
 
-def _check_collada(path: Path, uri: str, where: str, file: str) -> None:
+def _check_collada(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:
     """Read a .dae before any engine does: PyBullet's COLLADA reader ends the process on some
     malformed files (an empty <scene>), and MuJoCo's backend converts .dae through trimesh."""
     try:
         vertices = mesh_vertices(path)
     except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
-        raise UrdfStructureError(
-            file, where, f"{uri!r} cannot be read as COLLADA ({type(exc).__name__}: {exc})"
+        raise r.error(
+            elem, where, f"{uri!r} cannot be read as COLLADA ({type(exc).__name__}: {exc})"
         ) from None
     if len(vertices) < 3:
-        raise UrdfStructureError(file, where, f"{uri!r} holds no geometry (no vertices)")
+        raise r.error(elem, where, f"{uri!r} holds no geometry (no vertices)")
 
 
-def _inertial(elem: ET.Element | None, where: str, file: str) -> Inertial:
+def _inertial(r: _Reader, elem: XmlElement | None, where: str) -> Inertial:
     if elem is None:
         return Inertial()
-    xyz, rpy = _origin(elem, f"{where} <inertial>", file)
-    mass = _float(elem.find("mass"), "value", 0.0, f"{where} <mass>", file)
+    xyz, rpy = r.origin(elem, f"{where} <inertial>")
+    mass_elem = elem.find("mass")
+    if mass_elem is None:
+        raise r.error(elem, f"{where} <inertial>", "has no <mass> (PyBullet refuses it too)")
+    mass = r.number(mass_elem, "value", 0.0, f"{where} <mass>", required=True)  # type: ignore[arg-type]
     if mass < 0:
-        raise UrdfStructureError(file, f"{where} <mass>", f"mass must be >= 0, got {mass}")
-    ie = elem.find("inertia")
-    inertia = tuple(
-        _float(ie, key, 0.0, f"{where} <inertia>", file)
-        for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-    )
-    return Inertial(xyz, rpy, mass, inertia, True)  # type: ignore[arg-type]
+        raise r.error(mass_elem, f"{where} <mass>", f"mass must be >= 0, got {mass}")  # type: ignore[arg-type]
+    ie: XmlElement | None = elem.find("inertia")  # type: ignore[assignment]
+    if ie is None:
+        raise r.error(elem, f"{where} <inertial>", "has no <inertia> (PyBullet refuses it too)")
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    present = [ie.get(k) is not None for k in keys]
+    if not all(present[k] for k in (0, 3, 5)):
+        raise r.error(
+            ie, f"{where} <inertia>", "needs at least ixx, iyy and izz (PyBullet refuses it too)"
+        )
+    # PyBullet reads the products of inertia only when all six are there
+    used = keys if all(present) else ("ixx", "iyy", "izz")
+    inertia = tuple(r.number(ie, k, 0.0, f"{where} <inertia>") if k in used else 0.0 for k in keys)
+    if not all(present) and any(present):
+        given = [k for k, p in zip(keys, present, strict=True) if p and k not in used]
+        if given:
+            r.lenient.add(
+                ie.line,
+                f"{where} <inertia>: {', '.join(given)} ignored "
+                "(PyBullet reads products of inertia only when all six are given)",
+            )
+    return Inertial(xyz, rpy, mass, inertia, True, line=ie.line)  # type: ignore[arg-type]
 
 
-def _contact(elem: ET.Element | None, where: str, file: str) -> Contact:
+_CONTACT = (
+    "lateral_friction",
+    "rolling_friction",
+    "spinning_friction",
+    "restitution",
+    "stiffness",
+    "damping",
+    "inertia_scaling",
+)
+
+
+def _contact(r: _Reader, elem: XmlElement | None, where: str) -> Contact:
     if elem is None:
         return Contact()
+    values: dict[str, float] = {}
+    for tag in _CONTACT:
+        child: XmlElement | None = elem.find(tag)  # type: ignore[assignment]
+        if child is not None:
+            values[tag] = r.number(child, "value", 0.0, f"{where} <contact><{tag}>", required=True)
+    return Contact(**values)
 
-    def value(tag: str) -> float | None:
-        child = elem.find(tag)
-        if child is None:
-            return None
-        return _float(child, "value", 0.0, f"{where} <contact><{tag}>", file)
 
-    return Contact(
-        value("lateral_friction"),
-        value("rolling_friction"),
-        value("spinning_friction"),
-        value("restitution"),
-        value("stiffness"),
-        value("damping"),
-    )
+def _material_color(
+    r: _Reader, elem: XmlElement, where: str
+) -> tuple[float, float, float, float] | None:
+    """A ``<material>``'s ``<color rgba>``: exactly 4 numbers, else (0, 0, 0, 0) as in PyBullet;
+    None without a color."""
+    color: XmlElement | None = elem.find("color")  # type: ignore[assignment]
+    if color is None or color.get("rgba") is None:
+        return None
+    rgba = r.vector(color, "rgba", 4, f"{where} <color rgba>")
+    if rgba is None:
+        r.lenient.add(
+            color.line,
+            f"{where} <color rgba> {color.get('rgba')!r}: not 4 numbers, read as (0, 0, 0, 0)",
+        )
+        return (0.0, 0.0, 0.0, 0.0)
+    return rgba  # type: ignore[return-value]
+
+
+def _visual_color(
+    r: _Reader,
+    visual: XmlElement,
+    where: str,
+    materials: dict[str, tuple[float, float, float, float] | None],
+) -> tuple[float, float, float, float] | None:
+    material: XmlElement | None = visual.find("material")  # type: ignore[assignment]
+    if material is None:
+        return None
+    name = material.get("name")
+    if name is None:
+        raise r.error(
+            material, f"{where} <material>", "has no name attribute (PyBullet refuses it too)"
+        )
+    if any(material.find(t) is not None for t in ("texture", "color", "specular")):
+        rgba = _material_color(r, material, f"{where} <material>")
+        materials[name] = rgba  # a local material replaces one of the same name
+        return rgba
+    return materials.get(name)
 
 
 # ---------------------------------------------------------------- parse
@@ -424,49 +360,153 @@ def check_file_inertia(model: UrdfModel) -> None:
                 file,
                 f"link {link.name!r} <inertia>",
                 f"ixx, iyy and izz must be >= 0 to be simulated, got {i[0]}, {i[3]}, {i[5]}",
+                link.inertial.line or None,
             )
 
 
+def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> Joint:
+    where = f"joint {name!r}"
+    jtype = elem.get("type")
+    if jtype is None:
+        raise r.error(elem, where, "has no type attribute (PyBullet refuses it too)")
+    if jtype not in SUPPORTED_JOINT_TYPES:
+        if jtype in _KNOWN_UNSUPPORTED:
+            raise UnsupportedJointError(r.file, name, jtype, SUPPORTED_JOINT_TYPES, elem.line)
+        raise r.error(
+            elem, where, f"unknown joint type {jtype!r}; valid: {list(SUPPORTED_JOINT_TYPES)}"
+        )
+    parent_elem, child_elem = elem.find("parent"), elem.find("child")
+    if parent_elem is None or child_elem is None:
+        raise r.error(elem, where, "needs both <parent link> and <child link>")
+    parent, child = parent_elem.get("link", ""), child_elem.get("link", "")
+    for role, link_name in (("parent", parent), ("child", child)):
+        if link_name not in links:
+            raise r.error(elem, where, f"{role} link {link_name!r} is not a <link> of this robot")
+    if parent == child:
+        raise r.error(elem, where, f"link {child!r} is its own parent (a cycle)")
+    xyz, rpy = r.origin(elem, where)
+    axis: tuple[float, ...] = (1.0, 0.0, 0.0)  # PyBullet's axis without an <axis> element
+    axis_elem: XmlElement | None = elem.find("axis")  # type: ignore[assignment]
+    if jtype == "fixed":
+        if axis_elem is not None:  # not read by PyBullet; kept when it reads as 3 numbers
+            values, clean = pybullet_numbers(axis_elem.get("xyz", ""))
+            if clean and len(values) == 3 and all(math.isfinite(v) for v in values):
+                axis = tuple(values)
+    elif axis_elem is not None:
+        if axis_elem.get("xyz") is None:
+            axis = (0.0, 0.0, 0.0)  # PyBullet: an <axis> without xyz is the zero axis
+        else:
+            read = r.vector(axis_elem, "xyz", 3, f"{where} <axis>")
+            if read is None:
+                raise r.error(
+                    axis_elem,
+                    f"{where} <axis>",
+                    f"expected 3 numbers, got {axis_elem.get('xyz')!r} (PyBullet refuses it too)",
+                )
+            axis = read
+    # The axis is kept as written (PyBullet reports it unnormalised); engines normalise it.
+    if jtype != "fixed" and max(abs(a) for a in axis) < 1e-12:
+        raise r.error(
+            axis_elem if axis_elem is not None else elem,
+            f"{where} <axis>",
+            f"axis must not be zero, got {_fmt(axis)}",
+        )
+    limit: XmlElement | None = elem.find("limit")  # type: ignore[assignment]
+    dynamics: XmlElement | None = elem.find("dynamics")  # type: ignore[assignment]
+    if jtype in ("revolute", "prismatic") and limit is None:
+        raise r.error(elem, where, f"a {jtype} joint needs a <limit> element (effort, velocity)")
+    if (
+        dynamics is not None
+        and dynamics.get("damping") is None
+        and dynamics.get("friction") is None
+    ):
+        raise r.error(
+            dynamics,
+            f"{where} <dynamics>",
+            "has neither damping nor friction (PyBullet refuses it too)",
+        )
+    has_range = limit is not None and (
+        limit.get("lower") is not None or limit.get("upper") is not None
+    )
+    # PyBullet's defaults: lower 0, upper -1 ("no range"); attributes override. Fixed joints
+    # report their <limit> too (PyBullet 3.2.7, e.g. microtaur.urdf's plate joints).
+    lower = r.number(limit, "lower", 0.0, f"{where} <limit>")
+    upper = r.number(limit, "upper", -1.0, f"{where} <limit>")
+    damping = r.number(dynamics, "damping", 0.0, f"{where} <dynamics>")
+    friction = r.number(dynamics, "friction", 0.0, f"{where} <dynamics>")
+    for what, value in (("damping", damping), ("friction", friction)):
+        if value < 0:
+            raise r.error(dynamics, f"{where} <dynamics>", f"{what} must be >= 0, got {value}")
+    return Joint(
+        name=name,
+        type=jtype,
+        parent=parent,
+        child=child,
+        origin_xyz=xyz,
+        origin_rpy=rpy,
+        axis=axis,  # type: ignore[arg-type]
+        lower=lower,
+        upper=upper,
+        effort=r.number(limit, "effort", 0.0, f"{where} <limit>"),
+        velocity=r.number(limit, "velocity", 0.0, f"{where} <limit>"),
+        damping=damping,
+        friction=friction,
+        has_limit=jtype in ("revolute", "prismatic") and has_range and lower <= upper,
+        line=elem.line,
+    )
+
+
 def parse_urdf(src: UrdfSource) -> UrdfModel:
-    """Parse and validate a URDF; raise a :class:`~simbridge.exceptions.UrdfError` subclass
-    that names the file and element on anything a backend could not load faithfully."""
+    """Parse and validate a URDF as PyBullet reads it (see the module docstring); raise a
+    :class:`~simbridge.exceptions.UrdfError` subclass naming the file, the line and the
+    element on anything a backend could not load faithfully. What was read leniently is
+    logged as one warning on the ``simbridge.urdf`` logger and kept in ``model.assumed``."""
     file = src.display_name
-    try:
-        root = ET.fromstring(src.text)
-    except ET.ParseError as exc:
-        raise UrdfParseError(file, str(exc)) from None
+    lenient = Leniency(file)
+    xml = read_urdf_xml(src.text, file, lenient)
+    root = xml.root
+    r = _Reader(file, lenient)
     if root.tag != "robot":
-        raise UrdfStructureError(file, f"<{root.tag}>", "the root element must be <robot>")
+        raise r.error(root, f"<{root.tag}>", "the root element must be <robot>")
     robot_name = root.get("name")
     if robot_name is None:  # PyBullet: "Expected a name for robot"
-        raise UrdfStructureError(file, "<robot>", "has no name attribute")
+        raise r.error(root, "<robot>", "has no name attribute")
+
+    materials: dict[str, tuple[float, float, float, float] | None] = {}
+    for elem in root.findall("material"):
+        name = elem.get("name")
+        if name is not None and name not in materials:  # the first of a name counts
+            materials[name] = _material_color(r, elem, f"<material {name!r}>")  # type: ignore[arg-type]
 
     links: dict[str, Link] = {}
     for elem in root.findall("link"):
         name = elem.get("name")
-        if not name:
-            raise UrdfStructureError(file, "<link>", "a link has no name attribute")
+        if name is None:
+            raise r.error(elem, "<link>", "a link has no name attribute")  # type: ignore[arg-type]
         where = f"link {name!r}"
         if name in links:
-            raise UrdfStructureError(file, where, "link name is used twice")
-        link = Link(
-            name=name,
-            inertial=_inertial(elem.find("inertial"), where, file),
-            visuals=[
-                g
-                for i, v in enumerate(elem.findall("visual"))
-                if (g := _geometry(v, f"{where} <visual> #{i}", src, True))
-            ],
-            collisions=[
-                g
-                for i, c in enumerate(elem.findall("collision"))
-                if (g := _geometry(c, f"{where} <collision> #{i}", src, False))
-            ],
-            contact=_contact(elem.find("contact"), where, file),
+            raise r.error(elem, where, "link name is used twice")  # type: ignore[arg-type]
+        contact = _contact(r, elem.find("contact"), where)  # type: ignore[arg-type]
+        inertial = _inertial(r, elem.find("inertial"), where)  # type: ignore[arg-type]
+        visuals = []
+        for i, v in enumerate(elem.findall("visual")):
+            vwhere = f"{where} <visual> #{i}"
+            rgba = _visual_color(r, v, vwhere, materials)  # type: ignore[arg-type]
+            visuals.append(_geometry(r, v, vwhere, src, rgba))  # type: ignore[arg-type]
+        collisions = [
+            _geometry(r, c, f"{where} <collision> #{i}", src, None)  # type: ignore[arg-type]
+            for i, c in enumerate(elem.findall("collision"))
+        ]
+        links[name] = Link(
+            name,
+            inertial,
+            visuals,
+            collisions,
+            contact,
+            line=elem.line,  # type: ignore[attr-defined]
         )
-        links[name] = link
     if not links:
-        raise UrdfStructureError(file, f"robot {robot_name!r}", "has no <link>")
+        raise r.error(root, f"robot {robot_name!r}", "has no <link>")
 
     joints: list[Joint] = []
     child_of: dict[str, Joint] = {}
@@ -474,95 +514,55 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
     for elem in root.findall("joint"):
         name = elem.get("name")
         if not name:
-            raise UrdfStructureError(file, "<joint>", "a joint has no name attribute")
-        where = f"joint {name!r}"
+            raise r.error(elem, "<joint>", "a joint has no name attribute")  # type: ignore[arg-type]
         if name in names:
-            raise UrdfStructureError(file, where, "joint name is used twice")
+            raise r.error(elem, f"joint {name!r}", "joint name is used twice")  # type: ignore[arg-type]
         names.add(name)
-        jtype = elem.get("type", "")
-        if jtype not in SUPPORTED_JOINT_TYPES:
-            if jtype in _KNOWN_UNSUPPORTED:
-                raise UnsupportedJointError(file, name, jtype, SUPPORTED_JOINT_TYPES)
-            raise UrdfStructureError(
-                file, where, f"unknown joint type {jtype!r}; valid: {list(SUPPORTED_JOINT_TYPES)}"
-            )
-        parent_elem, child_elem = elem.find("parent"), elem.find("child")
-        if parent_elem is None or child_elem is None:
-            raise UrdfStructureError(file, where, "needs both <parent link> and <child link>")
-        parent, child = parent_elem.get("link", ""), child_elem.get("link", "")
-        for role, link_name in (("parent", parent), ("child", child)):
-            if link_name not in links:
-                raise UrdfStructureError(
-                    file, where, f"{role} link {link_name!r} is not a <link> of this robot"
-                )
-        if parent == child:
-            raise UrdfStructureError(file, where, f"link {child!r} is its own parent (a cycle)")
-        if child in child_of:
-            raise UrdfStructureError(
-                file,
-                where,
-                f"link {child!r} already has parent joint {child_of[child].name!r}; "
+        joint = _joint(r, elem, name, links)  # type: ignore[arg-type]
+        if joint.child in child_of:
+            raise r.error(
+                elem,  # type: ignore[arg-type]
+                f"joint {name!r}",
+                f"link {joint.child!r} already has parent joint {child_of[joint.child].name!r}; "
                 "a URDF is a tree (each link has at most one parent)",
             )
-        xyz, rpy = _origin(elem, where, file)
-        axis_elem = elem.find("axis")
-        axis = _floats(
-            axis_elem.get("xyz") if axis_elem is not None else None,
-            3,
-            (1.0, 0.0, 0.0),
-            f"{where} <axis>",
-            file,
-        )
-        # The axis is kept as written (PyBullet reports it unnormalised); engines normalise it.
-        if jtype != "fixed" and max(abs(a) for a in axis) < 1e-12:
-            raise UrdfStructureError(file, f"{where} <axis>", "axis must not be zero")
-        limit = elem.find("limit")
-        dynamics = elem.find("dynamics")
-        if jtype in ("revolute", "prismatic") and limit is None:
-            raise UrdfStructureError(
-                file, where, f"a {jtype} joint needs a <limit> element (effort, velocity)"
-            )
-        has_range = limit is not None and (
-            limit.get("lower") is not None or limit.get("upper") is not None
-        )
-        # PyBullet's defaults: lower 0, upper -1 ("no range"); attributes override. Fixed joints
-        # report their <limit> too (PyBullet 3.2.7, e.g. microtaur.urdf's plate joints).
-        lower = _float(limit, "lower", 0.0, f"{where} <limit>", file)
-        upper = _float(limit, "upper", -1.0, f"{where} <limit>", file)
-        joint = Joint(
-            name=name,
-            type=jtype,
-            parent=parent,
-            child=child,
-            origin_xyz=xyz,
-            origin_rpy=rpy,
-            axis=axis,  # type: ignore[arg-type]
-            lower=lower,
-            upper=upper,
-            effort=_float(limit, "effort", 0.0, f"{where} <limit>", file),
-            velocity=_float(limit, "velocity", 0.0, f"{where} <limit>", file),
-            damping=_nonneg(dynamics, "damping", f"{where} <dynamics>", file),
-            friction=_nonneg(dynamics, "friction", f"{where} <dynamics>", file),
-            has_limit=jtype in ("revolute", "prismatic") and has_range and lower <= upper,
-        )
         joints.append(joint)
-        child_of[child] = joint
+        child_of[joint.child] = joint
 
     roots = [name for name in links if name not in child_of]
     if len(roots) != 1:
         if not roots:
             detail = "every link has a parent: the joints form a cycle"
         else:
-            detail = f"{len(roots)} root links {roots}; a URDF needs exactly one root"
-        raise UrdfStructureError(file, f"robot {robot_name!r}", detail)
+            detail = (
+                f"{len(roots)} root links {roots}; a URDF needs exactly one root "
+                "(PyBullet crashes on several)"
+            )
+        raise r.error(root, f"robot {robot_name!r}", detail)
 
-    # PyBullet's order: depth-first, pre-order, children in the order their joints appear.
+    ordered_links, ordered_joints = pybullet_order(links, joints, roots[0])
+    if len(ordered_links) != len(links):
+        unreached = sorted(set(links) - {link.name for link in ordered_links})
+        raise r.error(
+            root, f"robot {robot_name!r}", f"links {unreached} form a cycle detached from the root"
+        )
+    lenient.log()
+    return UrdfModel(
+        robot_name, replace(src, text=xml.text), ordered_links, ordered_joints, lenient.notes
+    )
+
+
+def pybullet_order(
+    links: dict[str, Link], joints: Sequence[Joint], root: str
+) -> tuple[list[Link], list[Joint]]:
+    """PyBullet's order: depth-first, pre-order, children in the order their joints appear
+    (``joints``' order). Sets each link's and joint's index (the root's -1)."""
     children: dict[str, list[Joint]] = {name: [] for name in links}
     for joint in joints:
         children[joint.parent].append(joint)
-    ordered_links = [links[roots[0]]]
+    ordered_links = [links[root]]
     ordered_joints: list[Joint] = []
-    stack = list(reversed(children[roots[0]]))
+    stack = list(reversed(children[root]))
     while stack:
         joint = stack.pop()
         joint.index = len(ordered_joints)
@@ -571,10 +571,5 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
         link.index = joint.index
         ordered_links.append(link)
         stack.extend(reversed(children[link.name]))
-    if len(ordered_links) != len(links):
-        unreached = sorted(set(links) - {link.name for link in ordered_links})
-        raise UrdfStructureError(
-            file, f"robot {robot_name!r}", f"links {unreached} form a cycle detached from the root"
-        )
     ordered_links[0].index = -1
-    return UrdfModel(robot_name, src, ordered_links, ordered_joints)
+    return ordered_links, ordered_joints

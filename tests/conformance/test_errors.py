@@ -49,7 +49,7 @@ LOAD_ERRORS = {
         '<robot name="bad"><link name="a"><collision><geometry>'
         '<mesh filename="no_such_mesh.stl"/></geometry></collision></link></robot>',
         exc.MeshNotFoundError,
-        r"<urdf text>: link 'a' <collision> #0: mesh file 'no_such_mesh\.stl' not found",
+        r"<urdf text>:1: link 'a' <collision> #0: mesh file 'no_such_mesh\.stl' not found",
     ),
     "a floating joint": (
         _robot('<joint name="float" type="floating"><parent link="a"/><child link="b"/></joint>'),
@@ -65,7 +65,7 @@ LOAD_ERRORS = {
     "a robot without a name": (
         '<robot><link name="a"/></robot>',
         exc.UrdfStructureError,
-        r"<urdf text>: <robot>: has no name attribute",
+        r"<urdf text>:1: <robot>: has no name attribute",
     ),
     "a box without a size": (
         '<robot name="bad"><link name="a"><collision><geometry><box/></geometry></collision>'
@@ -349,7 +349,7 @@ def test_a_bad_collada_mesh_is_an_error_not_a_crash(make_sim, tmp_path, content)
         "</geometry></visual></link></robot>"
     )
     sim = make_sim()
-    with pytest.raises(exc.UrdfStructureError, match=r"bad\.urdf: link 'a' <visual> #0 <mesh>"):
+    with pytest.raises(exc.UrdfStructureError, match=r"bad\.urdf:1: link 'a' <visual> #0 <mesh>"):
         sim.load_urdf(urdf)
     assert sim.bodies() == []
 

@@ -1,0 +1,142 @@
+"""Where a URDF comes from: a file, a name on the search path, or URDF text; and where its
+meshes are.
+
+A source is read as text (UTF-8) once; what PyBullet makes of that text (its line reader, its
+lenient XML parser) is :mod:`simbridge.urdf_xml`'s part.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from .exceptions import UrdfNotFoundError, UrdfParseError
+
+__all__ = ["UrdfSource", "resolve_source", "resolve_mesh", "search_path"]
+
+
+@dataclass(frozen=True)
+class UrdfSource:
+    """Where a URDF came from: its text, its file (None for text) and the folder that relative
+    mesh paths resolve against."""
+
+    text: str
+    path: Path | None
+    base_dir: Path
+    display_name: str
+
+
+def _robots_dir() -> Path:
+    spec = importlib.util.find_spec("simbridge.robots")
+    if spec is None or not spec.submodule_search_locations:  # pragma: no cover - broken install
+        raise RuntimeError("simbridge.robots package data is missing from this installation")
+    return Path(next(iter(spec.submodule_search_locations)))
+
+
+def search_path() -> list[Path]:
+    """Folders searched for a URDF given by name: the package's robots, then pybullet_data.
+
+    ``SIMBRIDGE_URDF_PATH`` (os.pathsep-separated) is searched first when set.
+    """
+    paths = [Path(p) for p in os.environ.get("SIMBRIDGE_URDF_PATH", "").split(os.pathsep) if p]
+    paths.append(_robots_dir())
+    spec = importlib.util.find_spec("pybullet_data")
+    if spec is not None and spec.submodule_search_locations:
+        paths.append(Path(next(iter(spec.submodule_search_locations))))
+    return paths
+
+
+def _is_file(path: Path) -> bool:
+    """Path.is_file, False for names no file system takes (too long, a NUL byte)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
+    """Turn a path, a name on the search path, or URDF XML text into a :class:`UrdfSource`."""
+    if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
+        return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), "<urdf text>")
+    if not isinstance(source, (str, os.PathLike)):
+        raise UrdfNotFoundError(repr(source), ["a path, a name or URDF text was expected"])
+    shown = (
+        str(source)
+        if len(str(source)) <= 120
+        else f"{str(source)[:100]}... ({len(str(source))} characters)"
+    )
+    try:
+        candidate = Path(source).expanduser()
+    except (RuntimeError, ValueError):  # "~nosuchuser/..."
+        candidate = Path(source)
+    tried: list[str] = []
+    if _is_file(candidate):
+        found: Path | None = candidate
+    else:
+        tried.append(shown if len(str(candidate)) > 120 else str(candidate.absolute()))
+        found = None
+        if not candidate.is_absolute() and len(str(candidate)) <= 255 and "\0" not in str(source):
+            for folder in search_path():
+                for name in (candidate, Path(f"{candidate}.urdf")):
+                    path = folder / name
+                    if _is_file(path):
+                        found = path
+                        break
+                    tried.append(str(path))
+                if found:
+                    break
+    if found is None:
+        raise UrdfNotFoundError(shown, tried)
+    found = found.resolve()
+    try:
+        data = found.read_bytes()
+    except OSError as exc:
+        raise UrdfParseError(str(found), f"cannot read the file: {exc}") from exc
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise UrdfParseError(
+            str(found), f"not UTF-8 text: byte {data[exc.start]:#04x} at line {line}"
+        ) from None
+    return UrdfSource(text, found, found.parent, str(found))
+
+
+def resolve_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
+    """Resolve a mesh filename as PyBullet does (bullet3 ``UrdfFindMeshFile.h``).
+
+    ``file://`` and ``model://`` are dropped; a relative path is then tried as it stands (from
+    the working directory), then in ``base_dir`` (the URDF's folder) and each of its ancestors,
+    nearest first, then as ``./``, ``../`` and ``../../`` of it. ``package://NAME/rest`` is
+    looked up in every ancestor of ``base_dir`` (a folder that is, or contains, NAME), then as
+    ``rest`` and ``NAME/rest`` relative to ``base_dir``. Returns the first existing candidate
+    (else the one in ``base_dir``) and every candidate tried, that one first.
+    """
+    candidates: list[Path] = []
+    if uri.startswith("package://"):
+        rest = uri[len("package://") :]
+        package, _, sub = rest.partition("/")
+        for ancestor in [base_dir, *base_dir.parents]:
+            if ancestor.name == package:
+                candidates.append(ancestor / sub)
+            candidates.append(ancestor / package / sub)
+        candidates += [base_dir / sub, base_dir / rest]
+        primary = candidates[0]
+    else:
+        path = uri
+        for prefix in ("file://", "model://"):
+            if path.startswith(prefix):
+                path = path[len(prefix) :]
+        if os.path.isabs(path):
+            candidates.append(Path(path))
+        else:
+            candidates.append(Path(path).absolute())
+            candidates += [folder / path for folder in (base_dir, *base_dir.parents)]
+            candidates += [(Path(p) / path).absolute() for p in ("./", "../", "../../")]
+        primary = candidates[0] if os.path.isabs(path) else base_dir / path
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate.resolve(), candidates
+    return primary, [primary, *(c for c in candidates if c != primary)]
