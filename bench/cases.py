@@ -8,6 +8,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.metadata import version
+from typing import Any
 
 import numpy as np
 
@@ -85,6 +86,34 @@ def layer_drive(backend: str, record: bool) -> Callable[[], float]:
                     wheel_state[k, :4] = js.positions
                     wheel_state[k, 4:8] = js.velocities
                     wheel_state[k, 8:] = js.applied_torques
+            return time.perf_counter() - t0
+        finally:
+            sim.close()
+
+    return run
+
+
+def layer_bound_drive(backend: str) -> Callable[[], float]:
+    """The same drive through a bound velocity command (``Sim.velocity_command``), written as
+    the raw drive is: bound at the first command (once, timed; where raw code would have set
+    its actuators up), its force limit written once where the schedule changes it (raw:
+    ``actuator_forcerange``), its targets written in place every step after (raw:
+    ``d.ctrl[:] = ...``)."""
+    wheels = np.array(WHEELS)
+
+    def run() -> float:
+        sim, robot = _layer_sim(backend)
+        try:
+            cmd: Any = None
+            t0 = time.perf_counter()
+            for k in range(980):
+                if k == TURN_FROM:
+                    cmd = sim.velocity_command(robot, wheels, TURN, max_force=50.0)
+                if k == FORWARD_FROM:
+                    cmd.max_force[:] = 10.0
+                if k >= TURN_FROM:
+                    cmd.targets[:] = TURN if k < FORWARD_FROM else FORWARD
+                sim.step()
             return time.perf_counter() - t0
         finally:
             sim.close()
@@ -237,6 +266,7 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
 
 
 DRIVES: dict[str, Case] = {}
+BOUND_DRIVES: dict[str, Case] = {}
 RECORDED_DRIVES: dict[str, Case] = {}
 for _b, _raw, _t, _tr in (
     ("pybullet", pybullet_raw_drive, 1.03, 1.10),
@@ -244,6 +274,7 @@ for _b, _raw, _t, _tr in (
 ):
     if _b in BACKENDS:
         DRIVES[_b] = Case("drive", _raw(False), layer_drive(_b, False), _t)
+        BOUND_DRIVES[_b] = Case("bound drive", _raw(False), layer_bound_drive(_b), _t)
         RECORDED_DRIVES[_b] = Case("drive+record", _raw(True), layer_drive(_b, True), _tr)
 
 

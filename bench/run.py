@@ -113,6 +113,17 @@ def main(argv: list[str] | None = None) -> int:
                 drive.target,
             )
         )
+        bound = cases.BOUND_DRIVES[backend]
+        raw, lay = interleave(bound.raw, bound.layer, reps)
+        rows.append(
+            Row(
+                f"{backend}: same drive through a bound velocity command",
+                "µs/step",
+                [t / 980 for t in raw],
+                [t / 980 for t in lay],
+                bound.target,
+            )
+        )
         rec = cases.RECORDED_DRIVES[backend]
         raw, lay = interleave(rec.raw, rec.layer, reps)
         rows.append(

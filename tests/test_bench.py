@@ -26,6 +26,8 @@ def test_bench_runs_with_a_tiny_repeat_count():
     for row in (
         "pybullet: r2d2 drive, 980 steps",
         "mujoco: r2d2 drive, 980 steps",
+        "pybullet: same drive through a bound velocity command",
+        "mujoco: same drive through a bound velocity command",
         "recording base pose + wheel states",
         "single call: link_state",
         "single call: joint_states",
@@ -41,6 +43,44 @@ def test_bench_runs_with_a_tiny_repeat_count():
     for line in table:
         cells = [c.strip() for c in line.strip("|").split("|")]
         assert float(cells[4]) > 0, line
+
+
+def test_calls_table_times_every_call_on_both_engines():
+    """bench/calls.py: every Sim call on r2d2 and a fixed KUKA, PyBullet and MuJoCo side by
+    side (a figure in each column, a ratio), then command + step against the step alone, and
+    the drive raw, plain and through a bound command."""
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "bench" / "calls.py"), "--quick", "--repeats", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = proc.stdout.splitlines()
+    calls = [line for line in lines if line.startswith(("| r2d2: ", "| kuka: "))]
+    names = {line.split("|")[1].split(":", 1)[1].strip() for line in calls}
+    for call in (
+        "set_joint_velocity (list)",
+        "set_joint_velocity (numpy)",
+        "set_joint_position (numpy)",
+        "set_joint_torque (list)",
+        "link_state(link)",
+        "base_state",
+        "joint_states(commanded joints)",
+        "joint_info",
+        "dynamics_info",
+        "reset_joint_state(commanded joints)",
+        "reset_base_state(pose)",
+        "step, contact-free",
+    ):
+        assert call in names, f"{call!r} missing:\n{proc.stdout}"
+    assert len(calls) == 2 * len(names)  # each call on both robots
+    for line in calls:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert float(cells[1]) > 0 and float(cells[2]) > 0 and float(cells[3].split()[0]) > 0
+    assert any("position_command targets" in line for line in lines)
+    drive = [line for line in lines if line.startswith(("| pybullet |", "| mujoco |"))]
+    assert len(drive) == 2 and all(float(line.split("|")[6]) > 0 for line in drive)
 
 
 def test_kernel_phases_runs_and_accounts_for_the_step():

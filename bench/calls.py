@@ -1,0 +1,531 @@
+"""Every call of the `Sim` interface, PyBullet and MuJoCo side by side, with the raw engine call.
+
+    python bench/calls.py                        # full run (a few minutes)
+    python bench/calls.py --quick --repeats 1    # smoke run
+
+Two robots: r2d2 resting on plane.urdf (4 wheels commanded, link 2 read) and a fixed-base
+KUKA iiwa (7 joints commanded, link 6 read). Every call is timed per call over a loop of
+``--calls`` calls (a command alternates two targets, so every call is a new command; a step
+row times single ``sim.step()`` calls, contact-free: r2d2 reset into the air before each
+repeat, the KUKA in free space). Each repeat times every row once, in turn (PyBullet layer,
+MuJoCo layer, raw PyBullet, raw MuJoCo), and the table gives the medians over ``--repeats``
+repeats, less the loop's own cost (a call of an empty lambda, measured the same way). The
+ratio is MuJoCo's layer call over PyBullet's layer call, the target (../shared/PERFORMANCE.md,
+issue 11) at most 1.5x.
+
+Raw calls: PyBullet's own function on the same client (``setJointMotorControlArray``,
+``getLinkState(computeLinkVelocity=1, computeForwardKinematics=1)``...); for MuJoCo, what a raw
+user writes: a ``d.ctrl[:] = array`` write (a model with one actuator per commanded joint),
+copies out of ``MjData`` for reads, ``mj_step`` on the same world without the layer's motors,
+brakes and damping. "-" where there is no raw counterpart.
+
+A second table: the position-controlled KUKA, a new target every step: the command and the
+step against the step alone (the target: within 1.3x), through ``set_joint_position`` and
+through a bound command (``sim.position_command``), and the r2d2 drive through a bound
+velocity command against raw MuJoCo and PyBullet.
+
+The machine is shared: compare ratios measured in one run, not absolute times across runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import cases  # noqa: E402  (bench/cases.py: the r2d2 world and the raw drives)
+
+import simbridge  # noqa: E402
+
+KUKA = "kuka_iiwa/model.urdf"
+TARGET = 1.5  # no MuJoCo call more than 1.5x the same call on PyBullet
+
+
+@dataclass
+class Row:
+    """One call: a callable per column, taking 0 or 1 (which of two alternating arguments)."""
+
+    name: str
+    columns: dict[str, Callable[[int], object]]
+    note: str = ""
+    times: dict[str, list[float]] = field(default_factory=dict)
+
+
+COLUMNS = ("pybullet", "mujoco", "raw pybullet", "raw mujoco")
+
+
+# ---------------------------------------------------------------- worlds
+
+
+class World:
+    """One robot on one backend: the Sim, the body, the joints commanded, the link read."""
+
+    def __init__(self, backend: str, robot: str) -> None:
+        self.sim = simbridge.Sim(backend)
+        if robot == "r2d2":
+            self.sim.load_urdf("plane.urdf")
+            self.body = self.sim.load_urdf("r2d2.urdf", base_position=(0, 0, cases.START_Z))
+            self.joints = list(cases.WHEELS)
+            self.link = 2
+        else:
+            self.body = self.sim.load_urdf(KUKA, fixed_base=True)
+            self.joints = list(range(7))
+            self.link = 6
+        self.sim.step(10)
+        self.np_joints = np.array(self.joints)
+
+
+def _pybullet_raw(w: World) -> dict[str, Callable[[Any], object]]:
+    import pybullet as p
+
+    from simbridge.backends.pybullet_inspect import client_id
+
+    c = client_id(w.sim)  # the same client, called raw
+    b, j, link, n = w.body, w.joints, w.link, len(w.joints)
+    forces = [50.0] * n
+    gains = ([0.1] * n, [1.0] * n)
+
+    def reset_joints(q: list[float]) -> None:
+        for i, v in zip(j, q, strict=True):
+            p.resetJointState(b, i, v, 0.0, physicsClientId=c)
+
+    return {
+        "set_joint_velocity": lambda t: p.setJointMotorControlArray(
+            b, j, p.VELOCITY_CONTROL, targetVelocities=t, forces=forces, physicsClientId=c
+        ),
+        "set_joint_position": lambda t: p.setJointMotorControlArray(
+            b,
+            j,
+            p.POSITION_CONTROL,
+            targetPositions=t,
+            forces=forces,
+            positionGains=gains[0],
+            velocityGains=gains[1],
+            physicsClientId=c,
+        ),
+        "set_joint_torque": lambda t: p.setJointMotorControlArray(
+            b, j, p.TORQUE_CONTROL, forces=t, physicsClientId=c
+        ),
+        "link_state": lambda _: p.getLinkState(
+            b, link, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
+        ),
+        "base_state": lambda _: (
+            p.getBasePositionAndOrientation(b, physicsClientId=c),
+            p.getBaseVelocity(b, physicsClientId=c),
+        ),
+        "joint_states": lambda _: p.getJointStates(b, j, physicsClientId=c),
+        "joint_info": lambda _: p.getJointInfo(b, link, physicsClientId=c),
+        "dynamics_info": lambda _: p.getDynamicsInfo(b, link, physicsClientId=c),
+        "num_joints": lambda _: p.getNumJoints(b, physicsClientId=c),
+        "reset_joint_state": reset_joints,
+        "reset_base_state": lambda pose: p.resetBasePositionAndOrientation(
+            b, pose[0], pose[1], physicsClientId=c
+        ),
+        "step": lambda _: p.stepSimulation(physicsClientId=c),
+    }
+
+
+def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
+    """Raw MuJoCo on the layer's world: a copy of its spec with MuJoCo's own joint-limit
+    parameters, none of the layer's motors, brakes and damping, and one velocity actuator per
+    commanded joint (for the ``d.ctrl`` writes; ctrl 0 and kv 0 while stepping)."""
+    import mujoco
+
+    from simbridge.backends.mujoco import inspect
+
+    r = inspect.robot(w.sim, w.body)
+    spec = inspect.world_spec(w.sim).copy()
+    for jnt in spec.joints:
+        jnt.solref_limit = [0.02, 1.0]
+        jnt.solimp_limit = [0.9, 0.95, 0.001, 0.5, 2.0]
+        jnt.margin = 0.0
+    for j in w.joints:
+        act = spec.add_actuator(
+            name=f"raw/{j}", target=r.spec.joint_names[j], trntype=mujoco.mjtTrn.mjTRN_JOINT
+        )
+        act.set_to_velocity(kv=0.0)
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    d.qpos[:] = inspect.model_and_data(w.sim)[1].qpos
+    mujoco.mj_forward(m, d)
+    jid = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, r.spec.joint_names[j]) for j in w.joints]
+    qadr = m.jnt_qposadr[jid].copy()
+    dofs = m.jnt_dofadr[jid].copy()
+    link = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, r.spec.body_names[w.link + 1])
+    base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, r.spec.body_names[0])
+    free = m.body_jntadr[base] >= 0 and m.jnt_type[m.body_jntadr[base]] == 0
+    a = m.jnt_qposadr[m.body_jntadr[base]] if free else -1
+    v = m.jnt_dofadr[m.body_jntadr[base]] if free else -1
+
+    def ctrl(t: np.ndarray) -> None:
+        d.ctrl[:] = t
+
+    def link_state(_: object) -> object:
+        return d.xipos[link].copy(), d.xquat[link].copy(), d.xpos[link].copy(), d.cvel[link].copy()
+
+    def base_state(_: object) -> object:
+        if free:
+            return d.xipos[base].copy(), d.xquat[base].copy(), d.qvel[v : v + 6].copy()
+        return d.xipos[base].copy(), d.xquat[base].copy()
+
+    def dynamics(_: object) -> object:
+        return (
+            float(m.body_mass[link]),
+            m.body_inertia[link].copy(),
+            m.body_ipos[link].copy(),
+            m.body_iquat[link].copy(),
+        )
+
+    def reset_joints(q: np.ndarray) -> None:
+        d.qpos[qadr] = q
+        d.qvel[dofs] = 0.0
+
+    def reset_base(pose: tuple[np.ndarray, np.ndarray]) -> None:
+        if free:
+            d.qpos[a : a + 3] = pose[0]
+            d.qpos[a + 3 : a + 7] = pose[1]
+        else:
+            m.body_pos[base] = pose[0]
+            m.body_quat[base] = pose[1]
+
+    return {
+        "set_joint_velocity": ctrl,
+        "set_joint_position": ctrl,
+        "set_joint_torque": ctrl,
+        "link_state": link_state,
+        "base_state": base_state,
+        "joint_states": lambda _: (d.qpos[qadr].copy(), d.qvel[dofs].copy()),
+        "dynamics_info": dynamics,
+        "num_joints": lambda _: int(m.njnt),
+        "reset_joint_state": reset_joints,
+        "reset_base_state": reset_base,
+        "step": lambda _: mujoco.mj_step(m, d),
+    }
+
+
+def _targets(w: World, kind: str) -> tuple[Any, Any]:
+    n = len(w.joints)
+    base = np.linspace(0.1, 0.7, n)
+    if kind == "velocity":
+        return base * 10.0, base * -10.0
+    if kind == "position":
+        return base, base * -0.5
+    return base * 2.0, base * -2.0
+
+
+def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
+    """The rows of one robot: each call on every backend present, and its raw counterparts."""
+    layer: dict[str, dict[str, Callable[[Any], object]]] = {}
+    raw: dict[str, dict[str, Callable[[Any], object]]] = {}
+    for backend, w in worlds.items():
+        s, b, link = w.sim, w.body, w.link
+        layer[backend] = {
+            "set_joint_velocity": lambda t, s=s, b=b, j=w.joints: s.set_joint_velocity(
+                b, j, t, max_force=50.0
+            ),
+            "set_joint_velocity np": lambda t, s=s, b=b, j=w.np_joints: s.set_joint_velocity(
+                b, j, t, max_force=50.0
+            ),
+            "set_joint_position": lambda t, s=s, b=b, j=w.joints: s.set_joint_position(
+                b, j, t, max_force=50.0
+            ),
+            "set_joint_position np": lambda t, s=s, b=b, j=w.np_joints: s.set_joint_position(
+                b, j, t, max_force=50.0
+            ),
+            "set_joint_torque": lambda t, s=s, b=b, j=w.joints: s.set_joint_torque(b, j, t),
+            "set_joint_torque np": lambda t, s=s, b=b, j=w.np_joints: s.set_joint_torque(b, j, t),
+            "link_state": lambda _, s=s, b=b, lk=link: s.link_state(b, lk),
+            "link_state(-1)": lambda _, s=s, b=b: s.link_state(b, -1),
+            "base_state": lambda _, s=s, b=b: s.base_state(b),
+            "joint_states": lambda _, s=s, b=b, j=w.np_joints: s.joint_states(b, j),
+            "joint_states(all)": lambda _, s=s, b=b: s.joint_states(b),
+            "joint_info": lambda _, s=s, b=b, lk=link: s.joint_info(b, lk),
+            "dynamics_info": lambda _, s=s, b=b, lk=link: s.dynamics_info(b, lk),
+            "num_joints": lambda _, s=s, b=b: s.num_joints(b),
+            "reset_joint_state": lambda q, s=s, b=b, j=w.np_joints: s.reset_joint_state(b, j, q),
+            "reset_base_state": lambda pose, s=s, b=b: s.reset_base_state(b, pose[0], pose[1]),
+            "step": lambda _, s=s: s.step(),
+        }
+        if backend == "pybullet":
+            raw[backend] = _pybullet_raw(w)
+        else:
+            raw[backend] = _mujoco_raw(w)
+    w0 = next(iter(worlds.values()))
+    vel = _targets(w0, "velocity")
+    pos = _targets(w0, "position")
+    tq = _targets(w0, "torque")
+    here = (0.0, 0.0, 1.0) if robot == "r2d2" else (0.0, 0.0, 0.0)
+    there = (0.01, 0.0, 1.0) if robot == "r2d2" else (0.01, 0.0, 0.0)
+    q0 = (0.0, 0.0, 0.0, 1.0)
+    poses = ((here, q0), (there, q0))
+    raw_poses = tuple((np.array(p), np.array([1.0, 0.0, 0.0, 0.0])) for p, _ in poses)
+    spec: list[tuple[str, str, tuple[Any, Any], tuple[Any, Any], str]] = [
+        # (row name, raw key, layer args, raw args, note)
+        ("set_joint_velocity (list)", "set_joint_velocity", _lists(vel), vel, "new target"),
+        ("set_joint_velocity (numpy)", "set_joint_velocity", vel, vel, "new target"),
+        ("set_joint_position (list)", "set_joint_position", _lists(pos), pos, "new target"),
+        ("set_joint_position (numpy)", "set_joint_position", pos, pos, "new target"),
+        ("set_joint_torque (list)", "set_joint_torque", _lists(tq), tq, ""),
+        ("set_joint_torque (numpy)", "set_joint_torque", tq, tq, ""),
+        ("link_state(link)", "link_state", (0, 0), (0, 0), "velocity + fresh pose"),
+        ("link_state(-1)", "", (0, 0), (0, 0), "the base as a link"),
+        ("base_state", "base_state", (0, 0), (0, 0), ""),
+        ("joint_states(commanded joints)", "joint_states", (0, 0), (0, 0), ""),
+        ("joint_states(all)", "", (0, 0), (0, 0), ""),
+        ("joint_info", "joint_info", (0, 0), (0, 0), ""),
+        ("dynamics_info", "dynamics_info", (0, 0), (0, 0), ""),
+        ("num_joints", "num_joints", (0, 0), (0, 0), ""),
+        ("reset_joint_state(commanded joints)", "reset_joint_state", pos, pos, ""),
+        ("reset_base_state(pose)", "reset_base_state", poses, poses, ""),
+        ("step, contact-free", "step", (0, 0), (0, 0), ""),
+    ]
+    layer_key = {
+        "set_joint_velocity (list)": "set_joint_velocity",
+        "set_joint_velocity (numpy)": "set_joint_velocity np",
+        "set_joint_position (list)": "set_joint_position",
+        "set_joint_position (numpy)": "set_joint_position np",
+        "set_joint_torque (list)": "set_joint_torque",
+        "set_joint_torque (numpy)": "set_joint_torque np",
+        "link_state(link)": "link_state",
+        "link_state(-1)": "link_state(-1)",
+        "base_state": "base_state",
+        "joint_states(commanded joints)": "joint_states",
+        "joint_states(all)": "joint_states(all)",
+        "joint_info": "joint_info",
+        "dynamics_info": "dynamics_info",
+        "num_joints": "num_joints",
+        "reset_joint_state(commanded joints)": "reset_joint_state",
+        "reset_base_state(pose)": "reset_base_state",
+        "step, contact-free": "step",
+    }
+    out: list[Row] = []
+    for name, raw_key, args, raw_args, note in spec:
+        cols: dict[str, Callable[[int], object]] = {}
+        for backend in worlds:
+            cols[backend] = _alternating(layer[backend][layer_key[name]], args)
+        for backend in worlds:
+            fn = raw[backend].get(raw_key)
+            if fn is None:
+                continue
+            if backend == "mujoco" and raw_key == "reset_base_state":
+                cols["raw mujoco"] = _alternating(fn, raw_poses)
+            elif backend == "pybullet" and raw_key.startswith(("set_joint", "reset_joint")):
+                cols["raw pybullet"] = _alternating(fn, _lists(raw_args))
+            else:
+                cols[f"raw {backend}"] = _alternating(fn, raw_args)
+        out.append(Row(f"{robot}: {name}", cols, note))
+    return out
+
+
+def _alternating(fn: Callable[[Any], object], args: tuple[Any, Any]) -> Callable[[int], object]:
+    """``fn`` called with ``args[i]`` for i = 0, 1, 0, 1 ... (the timed loop passes i)."""
+    return lambda i: fn(args[i])
+
+
+def _lists(pair: tuple[Any, Any]) -> tuple[Any, Any]:
+    return tuple(v.tolist() if isinstance(v, np.ndarray) else v for v in pair)  # type: ignore[return-value]
+
+
+def _prepare_step(worlds: dict[str, World]) -> Callable[[], None]:
+    """Before each timing of r2d2's step row: r2d2 back into the air at rest (no contact)."""
+
+    def prepare() -> None:
+        for w in worlds.values():
+            w.sim.reset_base_state(w.body, (0, 0, 1.0), (0, 0, 0, 1), (0, 0, 0), (0, 0, 0))
+
+    return prepare
+
+
+def time_row(row: Row, n: int, reps: int, prepare: Callable[[], None] | None) -> None:
+    """Time every column of ``row`` ``reps`` times, the columns interleaved (so that they are
+    measured side by side, within a second of each other, on a machine shared with other
+    work), appending seconds per call less the loop's own cost."""
+
+    def loop(fn: Callable[[int], object]) -> float:
+        t0 = time.perf_counter()
+        for i in range(n):
+            fn(i & 1)
+        return (time.perf_counter() - t0) / n
+
+    empty = _alternating(lambda _: None, (0, 0))
+    for _ in range(reps):
+        overhead = loop(empty)
+        for col in COLUMNS:
+            fn = row.columns.get(col)
+            if fn is None:
+                continue
+            if prepare is not None:
+                prepare()
+            row.times.setdefault(col, []).append(max(loop(fn) - overhead, 1e-9))
+
+
+# ---------------------------------------------------------------- command + step
+
+
+def kuka_position_loop(backend: str, how: str, steps: int) -> Callable[[], float]:
+    """A fixed KUKA following a new position target every step: ``how`` is "step alone" (the
+    command in force, not renewed), "set_joint_position" (numpy targets) or "bound command"
+    (``sim.position_command``, its targets written in place each step)."""
+    sim = simbridge.Sim(backend)
+    arm = sim.load_urdf(KUKA, fixed_base=True)
+    joints = np.arange(7)
+    path = 0.5 * np.sin(0.02 * np.arange(steps)[:, None] + joints[None, :])
+    sim.set_joint_position(arm, joints, path[0], max_force=300.0)
+    cmd = sim.position_command(arm, joints, path[0], max_force=300.0) if how == "bound" else None
+    sim.step(10)
+
+    def run() -> float:
+        t0 = time.perf_counter()
+        if how == "step alone":
+            for _ in range(steps):
+                sim.step()
+        elif how == "set_joint_position":
+            for k in range(steps):
+                sim.set_joint_position(arm, joints, path[k], max_force=300.0)
+                sim.step()
+        else:
+            assert cmd is not None
+            targets = cmd.targets
+            for k in range(steps):
+                targets[:] = path[k]
+                sim.step()
+        return (time.perf_counter() - t0) / steps
+
+    return run
+
+
+# ---------------------------------------------------------------- main
+
+
+def fmt_us(values: list[float] | None) -> str:
+    if not values:
+        return "-"
+    return f"{statistics.median(values) * 1e6:.2f}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--repeats", type=int, default=9, help="repeats per row (default 9)")
+    parser.add_argument("--calls", type=int, default=2000, help="calls per timing (default 2000)")
+    parser.add_argument("--quick", action="store_true", help="200 calls, 240 steps (smoke run)")
+    args = parser.parse_args(argv)
+    reps, n = max(1, args.repeats), 200 if args.quick else max(10, args.calls)
+    backends = cases.BACKENDS
+
+    print(
+        f"# simbridge calls: {platform.node()} | {platform.processor() or platform.machine()}"
+        f" | Python {platform.python_version()} | {cases.engine_versions()}"
+        f" | medians of {reps} repeats of {n} calls"
+    )
+    print()
+    missed = calls_table(backends, reps, n)
+    position_table(backends, reps, 240 if args.quick else 1000)
+    drive_table(backends, reps)
+    print()
+    print(f"calls over {TARGET}x PyBullet's: {missed}")
+    return 0
+
+
+def calls_table(backends: list[str], reps: int, n: int) -> int:
+    """The table of single calls; returns how many miss the 1.5x target."""
+    print("| call | PyBullet µs | MuJoCo µs | MuJoCo/PyBullet | raw PyBullet µs | raw MuJoCo µs |")
+    print("|------|------|------|------|------|------|")
+    missed = 0
+    for robot in ("r2d2", "kuka"):
+        worlds = {b: World(b, robot) for b in backends}
+        rows = rows_for(robot, worlds)
+        for row in rows:
+            for col in row.columns.values():  # warm up: caches, first compile of a path
+                col(0)
+                col(1)
+            prepare = _prepare_step(worlds) if row.name == "r2d2: step, contact-free" else None
+            time_row(row, n, reps, prepare)
+            pb, mj = row.times.get("pybullet"), row.times.get("mujoco")
+            ratio = ""
+            if pb and mj:
+                r = statistics.median(mj) / statistics.median(pb)
+                ok = r <= TARGET
+                missed += not ok
+                ratio = f"{r:.2f}" + ("" if ok else " MISSED")
+            print(
+                f"| {row.name} | {fmt_us(pb)} | {fmt_us(mj)} | {ratio} "
+                f"| {fmt_us(row.times.get('raw pybullet'))} "
+                f"| {fmt_us(row.times.get('raw mujoco'))} |"
+            )
+        for w in worlds.values():
+            w.sim.close()
+    return missed
+
+
+def position_table(backends: list[str], reps: int, steps: int) -> None:
+    """The position-controlled KUKA: command + step against the step alone."""
+    print()
+    print("| per step | PyBullet µs | ratio | MuJoCo µs | ratio | target |")
+    print("|------|------|------|------|------|------|")
+    loops = {
+        how: {b: kuka_position_loop(b, how, steps) for b in backends}
+        for how in ("step alone", "set_joint_position", "bound")
+    }
+    times: dict[str, dict[str, list[float]]] = {h: {b: [] for b in backends} for h in loops}
+    for _ in range(reps):
+        for how, per in loops.items():
+            for b, fn in per.items():
+                times[how][b].append(fn())
+    for how, label in (
+        ("step alone", "KUKA, position motors in force: step alone"),
+        ("set_joint_position", "KUKA: set_joint_position(numpy) + step"),
+        ("bound", "KUKA: position_command targets[:] = q + step"),
+    ):
+        cells = []
+        for b in ("pybullet", "mujoco"):
+            if b not in backends:
+                cells += ["-", "-"]
+                continue
+            med = statistics.median(times[how][b])
+            base = statistics.median(times["step alone"][b])
+            cells += [f"{med * 1e6:.2f}", f"{med / base:.2f}"]
+        print(f"| {label} | {' | '.join(cells)} | {'-' if how == 'step alone' else '1.30x'} |")
+
+
+def drive_table(backends: list[str], reps: int) -> None:
+    """The r2d2 drive: raw, plain set_joint_velocity, and a bound velocity command."""
+    drives = {
+        b: (cases.DRIVES[b].raw, cases.DRIVES[b].layer, cases.BOUND_DRIVES[b].layer)
+        for b in backends
+    }
+    dtimes: dict[str, list[list[float]]] = {b: [[], [], []] for b in backends}
+    for _ in range(reps):
+        for b, fns in drives.items():
+            for i, fn in enumerate(fns):
+                t = fn()
+                dtimes[b][i].append(t / 980)
+    print()
+    print(
+        "| r2d2 drive, 980 steps, per step | raw µs | plain µs | ratio | bound µs | ratio |", end=""
+    )
+    print(" target |")
+    print("|------|------|------|------|------|------|------|")
+    for b in backends:
+        raw_m, plain_m, bound_m = (statistics.median(x) for x in dtimes[b])
+        target = "1.15x" if b == "mujoco" else "1.03x"
+        print(
+            f"| {b} | {raw_m * 1e6:.2f} | {plain_m * 1e6:.2f} | {plain_m / raw_m:.3f} "
+            f"| {bound_m * 1e6:.2f} | {bound_m / raw_m:.3f} | {target} |"
+        )
+
+
+if __name__ == "__main__":
+    sys.exit(main())
