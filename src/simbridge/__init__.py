@@ -12,7 +12,18 @@ from .exceptions import SimbridgeError
 from .profiles import PROFILES, Profile, get_profile
 from .registry import available_backends, register
 from .sim import Sim
-from .types import BaseState, DynamicsInfo, JointInfo, JointStates, JointType, LinkState
+from .types import (
+    BaseState,
+    BodyState,
+    ContactPoint,
+    DynamicsInfo,
+    JointInfo,
+    JointStates,
+    JointType,
+    LinkState,
+    MotorMode,
+    WorldState,
+)
 
 __all__ = [
     "__version__",
@@ -23,6 +34,10 @@ __all__ = [
     "LinkState",
     "BaseState",
     "JointStates",
+    "ContactPoint",
+    "WorldState",
+    "BodyState",
+    "MotorMode",
     "Profile",
     "PROFILES",
     "get_profile",
