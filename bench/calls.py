@@ -133,6 +133,35 @@ def _pybullet_raw(w: World) -> dict[str, Callable[[Any], object]]:
             b, pose[0], pose[1], physicsClientId=c
         ),
         "step": lambda _: p.stepSimulation(physicsClientId=c),
+        "two groups": lambda i: p.setJointMotorControlArray(
+            b,
+            _groups(w)[i],
+            p.VELOCITY_CONTROL,
+            targetVelocities=[1.0 + i] * len(_groups(w)[i]),
+            forces=[50.0] * len(_groups(w)[i]),
+            physicsClientId=c,
+        ),
+        "mode change": lambda i: (
+            p.setJointMotorControlArray(
+                b,
+                j,
+                p.VELOCITY_CONTROL,
+                targetVelocities=[0.5] * n,
+                forces=forces,
+                physicsClientId=c,
+            )
+            if i
+            else p.setJointMotorControlArray(
+                b,
+                j,
+                p.POSITION_CONTROL,
+                targetPositions=[0.2] * n,
+                forces=forces,
+                positionGains=gains[0],
+                velocityGains=gains[1],
+                physicsClientId=c,
+            )
+        ),
     }
 
 
@@ -214,6 +243,12 @@ def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
     }
 
 
+def _groups(w: World) -> tuple[list[int], list[int]]:
+    """The commanded joints in two halves (r2d2's right and left wheels)."""
+    half = len(w.joints) // 2
+    return w.joints[:half], w.joints[half:]
+
+
 def _targets(w: World, kind: str) -> tuple[Any, Any]:
     n = len(w.joints)
     base = np.linspace(0.1, 0.7, n)
@@ -230,6 +265,7 @@ def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
     raw: dict[str, dict[str, Callable[[Any], object]]] = {}
     for backend, w in worlds.items():
         s, b, link = w.sim, w.body, w.link
+        groups = _groups(w)
         layer[backend] = {
             "set_joint_velocity": lambda t, s=s, b=b, j=w.joints: s.set_joint_velocity(
                 b, j, t, max_force=50.0
@@ -256,6 +292,14 @@ def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
             "reset_joint_state": lambda q, s=s, b=b, j=w.np_joints: s.reset_joint_state(b, j, q),
             "reset_base_state": lambda pose, s=s, b=b: s.reset_base_state(b, pose[0], pose[1]),
             "step": lambda _, s=s: s.step(),
+            "two groups": lambda i, s=s, b=b, g=groups: s.set_joint_velocity(
+                b, g[i], 1.0 + i, max_force=50.0
+            ),
+            "mode change": lambda i, s=s, b=b, j=w.joints: (
+                s.set_joint_velocity(b, j, 0.5, max_force=50.0)
+                if i
+                else s.set_joint_position(b, j, 0.2, max_force=50.0)
+            ),
         }
         if backend == "pybullet":
             raw[backend] = _pybullet_raw(w)
@@ -289,6 +333,20 @@ def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
         ("reset_joint_state(commanded joints)", "reset_joint_state", pos, pos, ""),
         ("reset_base_state(pose)", "reset_base_state", poses, poses, ""),
         ("step, contact-free", "step", (0, 0), (0, 0), ""),
+        (
+            "set_joint_velocity, two joint groups in turn",
+            "two groups",
+            (0, 1),
+            (0, 1),
+            "each group's command repeated",
+        ),
+        (
+            "velocity <-> position command in turn",
+            "mode change",
+            (0, 1),
+            (0, 1),
+            "the motor set changes each call",
+        ),
     ]
     layer_key = {
         "set_joint_velocity (list)": "set_joint_velocity",
@@ -308,6 +366,8 @@ def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
         "reset_joint_state(commanded joints)": "reset_joint_state",
         "reset_base_state(pose)": "reset_base_state",
         "step, contact-free": "step",
+        "set_joint_velocity, two joint groups in turn": "two groups",
+        "velocity <-> position command in turn": "mode change",
     }
     out: list[Row] = []
     for name, raw_key, args, raw_args, note in spec:

@@ -365,21 +365,23 @@ bad_dof:
 }
 
 /* bind_motors(offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows,
- *             slack[, pos_target]): the motor rows after a refresh (k = len(dof_rows)); the
- * position rows' targets are needed by set_position. Every bound command is disarmed: its
- * rows may have moved, and the table may have been rewritten (it is sent again, through
- * Python, at the next step). */
+ *             slack[, pos_target[, keep_bound]]): the motor rows after a refresh (k =
+ * len(dof_rows)); the position rows' targets are needed by set_position. Unless keep_bound
+ * (a command on other motors, rows in the same places), every bound command is made stale:
+ * its rows may have moved and the table may have been rewritten, so the next step hands it
+ * to Python (which checks it against the table, and sends it or arms it again). */
 static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
   if (refuse_if_busy(self) < 0) return NULL;
   PyObject *o[10] = {NULL};
-  if (!PyArg_ParseTuple(args, "OOOOOOOOO|O", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
-                        &o[7], &o[8], &o[9]))
+  int keep = 0;
+  if (!PyArg_ParseTuple(args, "OOOOOOOOO|Op", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
+                        &o[7], &o[8], &o[9], &keep))
     return NULL;
   const mjModel* m = self->m;
   free_motor_scratch(self);
   self->k = 0;
   arr_release(&self->pos_target);
-  for (int i = 0; i < self->n_bound; i++) {
+  for (int i = 0; i < self->n_bound && !keep; i++) {
     self->bound[i].armed = 0;
     self->bound[i].stale = 1;
   }

@@ -3,8 +3,8 @@
 A command that changes the motor set (a joint's mode, gains or force limit crossing 0) rewrites
 the commanded joints' columns of the motor table and pushes the whole table into the model
 (``Compiled.refresh_motors``). A command that only moves targets and force limits on motors
-whose rows stay as they are takes a hot path (one per mode, cached per joints array and motor
-epoch) that writes those entries in place, in C when the compiled loop runs
+whose rows stay as they are takes a hot path (one per mode, cached per joints array while the
+rows keep their layout) that writes those entries in place, in C when the compiled loop runs
 (``_mjkernel.c``'s command writes): the same arithmetic as the refresh, so the table, the model
 and the rows are exactly what the refresh would leave, whichever path a command took. Torques
 add up until the next step, as in PyBullet.
@@ -29,16 +29,33 @@ from .world import Compiled, Robot
 if TYPE_CHECKING:
     from simbridge.bound import BoundCommand
 
-__all__ = ["MotorCommands", "PositionPath"]
+__all__ = ["MotorCommands", "PositionPath", "VelocityPath"]
+
+
+class VelocityPath(NamedTuple):
+    """set_joint_velocity's hot path for one joints array (Compiled.fast): the motors are
+    velocity motors with kd 1 and all their rows are present; the entry is dropped when the
+    rows move or another command rewrites one of these motors (Compiled.refresh_motors)."""
+
+    joints: np.ndarray
+    body: int
+    slots: np.ndarray
+    rows: np.ndarray
+    dofs: np.ndarray
+    slot_set: frozenset[int]
+    target: list[float]  # the command in force
+    max_force: list[float]
+    packed: np.ndarray  # intp 3 x n: slots, rows, dofs (the compiled loop's index)
 
 
 class PositionPath(NamedTuple):
-    """set_joint_position's hot path for one joints array: valid while the motor epoch is
-    ``epoch`` and the command keeps ``kp`` and ``kd``."""
+    """set_joint_position's hot path for one joints array (Compiled.fast_position): position
+    motors with all their rows present, taken while the command keeps ``kp`` and ``kd``;
+    dropped as a VelocityPath is."""
 
     joints: np.ndarray
-    epoch: int
     body: int
+    slot_set: frozenset[int]
     kp: list[float]
     kd: list[float]
     packed: np.ndarray  # intp 4 x n: motor slots, friction rows, dofs, rows in the position arrays
@@ -71,40 +88,40 @@ class MotorCommands:
         c = self._w
         t = c.motors
         fast = c.fast.get(id(joints))
-        if fast is not None and fast[0] is joints and fast[1] == t.epoch and fast[2] == body:
+        if fast is not None and fast.joints is joints and fast.body == body:
             # Hot path: the same joints, still velocity motors with kd 1, all rows present.
-            if target == fast[6] and max_force == fast[7]:
+            if target == fast.target and max_force == fast.max_force:
                 return  # the command in force already
             if min(max_force) > 0.0:
                 kernel = c.kernel
                 if kernel is not None:  # the same writes in C (_mjkernel.c write_velocity)
-                    kernel.set_velocity(fast[8], target, max_force)
+                    kernel.set_velocity(fast.packed, target, max_force)
                 else:  # MotorTable.refresh's arithmetic: kd v / dt with kd 1
-                    rows, dt = fast[4], c.dt
-                    t.target_velocity[fast[3]] = target
-                    t.max_force[fast[3]] = max_force
-                    c.m.dof_frictionloss[fast[5]] = max_force
+                    rows, dt = fast.rows, c.dt
+                    t.target_velocity[fast.slots] = target
+                    t.max_force[fast.slots] = max_force
+                    c.m.dof_frictionloss[fast.dofs] = max_force
                     t.offset_rows[rows] = [v / dt for v in target]
                     t.force_rows_slack[rows] = [f * (1.0 - 1e-9) for f in max_force]
                 t.has_offset = True
-                c.fast[id(joints)] = (*fast[:6], target, max_force, fast[8])
+                c.fast[id(joints)] = fast._replace(target=target, max_force=max_force)
                 return
         idx = self._motor_slots(body, joints)
         t.target_velocity[idx] = target
         t.max_force[idx] = max_force
         t.kp[idx] = 0.0
         t.kd[idx] = 1.0
-        c.refresh_motors()
+        c.refresh_motors(idx)
         rows = t.row_of[idx]
         if not self.profile.enforce_effort_limit and (rows >= 0).all():
             dofs = t.dof[idx]
-            c.fast[id(joints)] = (
+            c.fast[id(joints)] = VelocityPath(
                 joints,
-                t.epoch,
                 body,
                 idx,
                 rows,
                 dofs,
+                frozenset(idx.tolist()),
                 list(target),
                 list(max_force),
                 np.ascontiguousarray(np.stack([idx, rows, dofs]), dtype=np.intp),
@@ -125,7 +142,6 @@ class MotorCommands:
         if (
             fast is not None
             and fast.joints is joints
-            and fast.epoch == t.epoch
             and fast.body == body
             and kp == fast.kp
             and kd == fast.kd
@@ -147,7 +163,7 @@ class MotorCommands:
         t.max_force[idx] = max_force
         t.kp[idx] = kp
         t.kd[idx] = kd
-        c.refresh_motors()
+        c.refresh_motors(idx)
         path = self._position_path(c, body, joints, idx, kp, kd)
         if path is not None:
             c.fast_position[id(joints)] = path
@@ -176,8 +192,8 @@ class MotorCommands:
         lower, upper = self._limits(body, joints)
         return PositionPath(
             joints,
-            t.epoch,
             body,
+            frozenset(idx.tolist()),
             list(kp),
             list(kd),
             np.ascontiguousarray(np.stack([idx, rows, t.dof[idx], prows]), dtype=np.intp),

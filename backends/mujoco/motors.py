@@ -62,6 +62,12 @@ LIMIT_DEEP = 0.04
 LIMIT_MARGIN = 1e-12
 
 
+_NO_ROWS = np.zeros(0, dtype=np.intp)
+_NO_VALUES = np.zeros(0)
+_NO_ROWS.setflags(write=False)
+_NO_VALUES.setflags(write=False)
+
+
 class MotorTable:
     """Motor settings of every movable joint of the world, in dof order (the order of MuJoCo's
     friction rows). Arrays are float64 of shape (n,)."""
@@ -90,39 +96,71 @@ class MotorTable:
         self.kd_dof = np.zeros(0, dtype=np.intp)
         self.kd_factor = np.zeros(0)  # 1 - kd
         self.n_rows = 0
-        self.n_special = 0  # motors with kp != 0 or kd != 1 (position mode, velocity gain)
+        self.dof_rows = np.zeros(0, dtype=np.intp)  # dof of each row
+        self.force_rows_slack = np.zeros(0)
+        self._nv = 0
+        self._unit_rows: np.ndarray | None = None
+        self._minv_rows = np.zeros((0, 0))
         self.epoch = 0  # bumped by every refresh: caches of row numbers check it
+        # bumped by a refresh that moves rows (the active motors or the position rows change):
+        # the command hot paths' caches hold row numbers, and are dropped then
+        self.layout = 0
 
     def refresh(self, dt: float, force: np.ndarray, nv: int) -> None:
         """Recompute the per-row arrays after a command; ``force`` is the force limit in use
         (max_force, clamped to the effort limit when the profile enforces it)."""
         active = np.flatnonzero(force > 0.0)
+        k = len(active)
         self.active = active
         self.dof_rows = self.dof[active]
         self.force_rows_slack = force[active] * (1.0 - 1e-9)  # below this a row is not at its limit
-        self.unit_rows = np.zeros((len(active), nv))
-        self.row_range = np.arange(len(active))
-        self.unit_rows[self.row_range, self.dof_rows] = 1.0
-        self.minv_rows = np.empty((len(active), nv))
-        self.n_special = int(np.count_nonzero((self.kp != 0.0) | (self.kd != 1.0)))
+        self._nv = nv
+        self._unit_rows = None  # made on first use (the Python loop's solve)
         self.epoch += 1
         self.row_of = np.full(self.n, -1, np.intp)  # friction row of each motor, -1 = none
-        self.row_of[active] = np.arange(len(active))
-        self.n_rows = len(active)
-        self.all_active = self.n_rows == self.n
+        self.row_of[active] = np.arange(k)
+        self.n_rows = k
+        self.all_active = k == self.n
         kd = self.kd[active]
+        kp = self.kp[active]
         self.offset_rows = kd * self.target_velocity[active] / dt
-        pos = np.flatnonzero(self.kp[active] != 0.0)
+        pos = np.flatnonzero(kp)
         self.position_rows = pos
-        self.position_qadr = self.qadr[active[pos]]
-        self.position_gain = self.kp[active[pos]] / (dt * dt)
-        self.position_target = self.target_position[active[pos]]
-        self.offset_rows[pos] += self.position_gain * self.position_target
-        self.has_offset = bool(np.any(self.offset_rows != 0.0)) or len(pos) > 0
+        if len(pos):
+            at = active[pos]
+            self.position_qadr = self.qadr[at]
+            self.position_gain = kp[pos] / (dt * dt)
+            self.position_target = self.target_position[at]
+            self.offset_rows[pos] += self.position_gain * self.position_target
+            self.has_offset = True
+        else:
+            self.position_qadr = _NO_ROWS
+            self.position_gain = self.position_target = _NO_VALUES
+            self.has_offset = bool(self.offset_rows.any())
         kdr = np.flatnonzero(kd != 1.0)
         self.kd_rows = kdr
-        self.kd_dof = self.dof[active[kdr]]
-        self.kd_factor = 1.0 - kd[kdr]
+        if len(kdr):
+            self.kd_dof = self.dof_rows[kdr]
+            self.kd_factor = 1.0 - kd[kdr]
+        else:
+            self.kd_dof, self.kd_factor = _NO_ROWS, _NO_VALUES
+
+    @property
+    def unit_rows(self) -> np.ndarray:
+        """(rows, nv): row i is 1 at the dof of motor row i (the right-hand sides of
+        ``mj_solveM`` for the rows of M^-1 the Python loop's solve needs)."""
+        if self._unit_rows is None:
+            k = len(self.active)
+            self._unit_rows = np.zeros((k, self._nv))
+            self._unit_rows[np.arange(k), self.dof_rows] = 1.0
+            self._minv_rows = np.empty((k, self._nv))
+        return self._unit_rows
+
+    @property
+    def minv_rows(self) -> np.ndarray:
+        """(rows, nv) scratch for ``mj_solveM``'s answer (rows of M^-1)."""
+        self.unit_rows  # noqa: B018 - made together
+        return self._minv_rows
 
     def aref_offset(self, qpos: np.ndarray) -> np.ndarray:
         """The per-row offset of this step (without the kd != 1 term)."""

@@ -105,10 +105,10 @@ class Compiled:
     stale: bool = True  # poses and velocities not yet recomputed since the last step
     motor_force_valid: bool = False  # efc_force holds the last step's motor forces
     motor_rows_valid: bool = False  # ... and the current motor set's rows
-    # set_joint_velocity's hot path: joints array id -> (joints, epoch, body, slots, rows,
-    # dofs, last target, last max_force, packed slots/rows/dofs for the compiled loop)
-    fast: dict[int, tuple[Any, ...]] = field(default_factory=dict)
-    # set_joint_position's hot path: joints array id -> commands.PositionPath
+    # the command hot paths (commands.py), per joints array id: set_joint_velocity's
+    # (commands.VelocityPath) and set_joint_position's (commands.PositionPath); an entry lives
+    # while the row layout holds and no other command rewrites one of its motors
+    fast: dict[int, Any] = field(default_factory=dict)
     fast_position: dict[int, Any] = field(default_factory=dict)
     # joint_states' motor rows: joints array id -> (joints, epoch, rows, positions, full)
     torque_map: dict[int, tuple[Any, ...]] = field(default_factory=dict)
@@ -125,15 +125,33 @@ class Compiled:
                 return i
         return None
 
-    def refresh_motors(self) -> None:
-        """Push the motor table into the model (frictionloss, solref) after a command."""
+    def refresh_motors(self, commanded: np.ndarray | None = None) -> None:
+        """Push the motor table into the model (frictionloss, solref) and rebuild the rows
+        after a change of the table. ``commanded``: the motor slots a command has just
+        rewritten (the hot paths of other joints stay while the rows keep their layout, and so
+        do the bound commands the compiled loop writes); None: any entry may have changed (a
+        restored state, a new compile): every hot path is dropped and every bound command is
+        checked against the table again at the next step."""
         t, m = self.motors, self.m
         force = np.minimum(t.max_force, t.effort)
         m.dof_frictionloss[t.dof] = force
         m.dof_solref[t.dof, 0] = 0.0
         m.dof_solref[t.dof, 1] = -t.kd * MOTOR_DMAX * self.inv_dt
-        before = t.active
+        before, before_position = t.active, t.position_rows
         t.refresh(self.dt, force, m.nv)
+        moved = not (
+            np.array_equal(before, t.active) and np.array_equal(before_position, t.position_rows)
+        )
+        if moved:
+            t.layout += 1
+        if commanded is None or moved:
+            self.fast.clear()
+            self.fast_position.clear()
+        else:  # the commanded motors' own entries go; the others' stay
+            slots = set(commanded.tolist())
+            for cache in (self.fast, self.fast_position):
+                for key in [k for k, e in cache.items() if not slots.isdisjoint(e.slot_set)]:
+                    del cache[key]
         if self.kernel is not None:
             self.kernel.bind_motors(
                 t.offset_rows,
@@ -146,6 +164,7 @@ class Compiled:
                 t.dof_rows,
                 t.force_rows_slack,
                 t.position_target,
+                commanded is not None and not moved,  # bound commands keep their rows
             )
         if len(before) != len(t.active) or (before != t.active).any():
             self.motor_rows_valid = False  # the last solve's rows belong to the old set
