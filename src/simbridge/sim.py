@@ -753,8 +753,15 @@ class Sim:
                 start, PyBullet's ``saveState`` with its contact caches, which costs about 2.6
                 ms on r2d2), so that a restore into this same world steps bit for bit as the
                 uninterrupted run. Without it the state is the portable one alone.
+
+        Bound commands are sent first (as a step would), so the state holds their values.
+
+        Raises:
+            InvalidArgumentError: a bound command holds a bad value (as ``step`` would).
         """
         b = self._b
+        for command in self._commands:  # a bound command's values are the ones in force
+            command.send()
         native = b.snapshot() if exact else None
         bodies = []
         for body, info in self._bodies.items():
@@ -793,6 +800,8 @@ class Sim:
         the engine keeps of its past (contact caches, solver warm start) stays out: see
         docs/state_and_contacts.md for each engine's one-step error after such a restore.
         ``joint_states(...).applied_torques`` describe the last step until the next one.
+        Bound commands (:meth:`velocity_command`) end here, as at a world change: the state's
+        commands replace them.
 
         Raises:
             InvalidArgumentError: not a WorldState; other robots or another load order (the
@@ -806,6 +815,7 @@ class Sim:
         from .state import check_state
 
         checked = check_state(state, self._bodies)
+        self._end_commands("set_state replaced the commands in force")
         exact = b.restore(state.native if state.backend == self.backend else None)
         for c in checked:
             if not exact:

@@ -266,3 +266,22 @@ def test_set_state_errors(make_sim):
         sim.get_state()
     with pytest.raises(exc.SimClosedError):
         sim.set_state(state)
+
+
+def test_bound_commands_are_read_and_then_replaced(make_sim):
+    sim, _, robot = _r2d2(make_sim)
+    cmd = sim.velocity_command(robot, WHEELS, 0.0, max_force=10.0)
+    for k in range(40):
+        cmd.targets[:] = [-2.0, -2.0, 2.0, 2.0] if k < 20 else -5.0
+        sim.step()
+    cmd.targets[:] = [1.0, 2.0, 3.0, 4.0]  # written since the last step: in force at the next
+    state = sim.get_state()
+    np.testing.assert_array_equal(state.bodies[1].motor_target[WHEELS], [1.0, 2.0, 3.0, 4.0])
+    sim.step()
+    truth = _observe(sim, robot)
+    sim.set_state(state)
+    assert not cmd.bound  # the state's commands replaced it
+    with pytest.raises(exc.StaleCommandError, match=r"set_state replaced the commands in force"):
+        cmd.targets[:] = 0.0
+    sim.step()
+    np.testing.assert_array_equal(_observe(sim, robot), truth)
