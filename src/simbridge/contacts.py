@@ -40,8 +40,10 @@ def select(
         return pts
     out: list[ContactPoint] = []
     for c in pts:
-        if _matches(c, body_a, link_a, body_b, link_b):
+        if c.body_a == body_a and _matches(c, body_a, link_a, body_b, link_b):
             out.append(c)
-        elif _matches(c.swapped(), body_a, link_a, body_b, link_b):
-            out.append(c.swapped())
+        elif c.body_b == body_a:
+            s = c.swapped()
+            if _matches(s, body_a, link_a, body_b, link_b):
+                out.append(s)
     return tuple(out)
