@@ -56,6 +56,7 @@ __all__ = [
     "is_fixed_base",
     "inertia_scalings",
     "URDF_COLLISION_MARGIN",
+    "jacobi_principal",
 ]
 
 URDF_COLLISION_MARGIN = 0.001  # PyBullet's collision margin of shapes loaded from a URDF (m)
@@ -99,8 +100,24 @@ def _shape_local_box(
     v = v[np.isfinite(v).all(axis=1)]  # (pybullet_data's random_urdfs/168 is all NaN)
     if len(v) == 0:
         return np.zeros(3), np.full(3, grow)
+    if not _is_obj(g):
+        v = _bullet_hull_points(v)
     lo, hi = v.min(axis=0), v.max(axis=0)
     return 0.5 * (lo + hi), 0.5 * (hi - lo) + grow
+
+
+def _bullet_hull_points(v: np.ndarray) -> np.ndarray:
+    """The points (n, 3) as Bullet's ``btConvexHullComputer`` returns them: snapped, per axis,
+    to a grid of 1/10216 of the points' extent, truncated towards their bounding box's centre
+    (``btConvexHullInternal::compute``). An .stl or .dae collision hull's bounding box is taken
+    after this (``optimizeConvexHull`` then ``recalcLocalAabb``); an .obj hull's and a
+    cylinder's before it. The snap moves an extreme by one grid step when the scaled extent's
+    arithmetic rounds below the grid (measured: kuka_iiwa link 4 at global_scaling 1.7)."""
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    s = (hi - lo) / 10216.0
+    inv = np.divide(1.0, s, out=np.zeros(3), where=s != 0)
+    center = (lo + hi) * 0.5
+    return np.trunc((v - center) * inv) * s + center
 
 
 def _is_obj(g: Geometry) -> bool:
@@ -160,15 +177,18 @@ def collision_aabb_inertia(
     return _box_inertia(mass, hi - lo + 2.0 * URDF_COLLISION_MARGIN)
 
 
-def _jacobi_principal(tensor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def jacobi_principal(
+    tensor: np.ndarray, threshold: float = 1e-6, max_steps: int = 30
+) -> tuple[np.ndarray, np.ndarray]:
     """Principal moments and axes (columns) of a symmetric 3x3 matrix by cyclic Jacobi
     rotations, in the order Bullet's ``btMatrix3x3::diagonalize`` visits them (largest
-    off-diagonal first, threshold 1e-6, at most 30 sweeps), so the principal frame's
-    orientation (axis order and signs) is the one PyBullet reports."""
+    off-diagonal first; ``threshold`` relative to the trace, at most ``max_steps`` rotations:
+    1e-6 and 30 for a link's file inertia), so the principal frame's orientation (axis order
+    and signs) is the one PyBullet reports."""
     a = np.array(tensor, dtype=float)
     rot = np.eye(3)
     eps = np.finfo(float).eps
-    steps = 30
+    steps = max_steps
     while steps > 0:
         p, q, r = 0, 1, 2
         biggest = abs(a[0, 1])
@@ -176,7 +196,7 @@ def _jacobi_principal(tensor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             q, r, biggest = 2, 1, abs(a[0, 2])
         if abs(a[1, 2]) > biggest:
             p, q, r, biggest = 1, 2, 0, abs(a[1, 2])
-        limit = 1e-6 * (abs(a[0, 0]) + abs(a[1, 1]) + abs(a[2, 2]))
+        limit = threshold * (abs(a[0, 0]) + abs(a[1, 1]) + abs(a[2, 2]))
         if biggest <= limit:
             if biggest <= eps * limit:
                 break
@@ -258,7 +278,7 @@ def link_inertial(
                 file_diag = np.array([ixx, iyy, izz], dtype=float)
             else:
                 tensor = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
-                file_diag, axes = _jacobi_principal(tensor)
+                file_diag, axes = jacobi_principal(tensor)
                 orn = quat_from_matrix(quat_to_matrix(orn) @ axes)
             x, y, z = file_diag
             if min(x, y, z) < 0 or x > y + z or y > x + z or z > x + y:
