@@ -43,6 +43,8 @@ _BODY_ARRAYS = (
 # Recorded beside _BODY_ARRAYS, saved and loaded alike, but kept out of that tuple: the
 # trajectory hashes (tests/_trajectory_hashes.py) cover _BODY_ARRAYS alone.
 _CONTACT_ARRAYS = ("contact_counts", "contact_normal_forces")
+# Likewise outside the hashes: what the events (compare/events.py) need of the joints.
+_JOINT_EXTRAS = ("joint_limits", "joint_max_forces")
 
 
 @dataclass
@@ -78,6 +80,14 @@ class BodyTrajectory:
     trajectory recorded without them."""
     contact_normal_forces: np.ndarray | None = None
     """(T, L) N: the sum of those points' normal forces."""
+    joint_types: list[str] | None = None
+    """(J,) ``revolute``, ``continuous`` or ``prismatic``; None in an older trajectory."""
+    joint_limits: np.ndarray | None = None
+    """(J, 2) lower, upper position limit (rad or m; NaN: none, as a continuous joint)."""
+    joint_max_forces: np.ndarray | None = None
+    """(T, J) N·m or N: the ``max_force`` of the velocity or position command in force during
+    the step that ended there (commands persist into later phases until replaced, as in the
+    engines); NaN: none (no command, or a torque command)."""
 
 
 @dataclass
@@ -149,12 +159,13 @@ class Trajectory:
                 "fixed_base": b.fixed_base,
                 "joint_names": b.joint_names,
                 "link_names": b.link_names,
+                "joint_types": b.joint_types,
             }
             arrays[f"{name}/joint_indices"] = b.joint_indices
             arrays[f"{name}/joint_modes"] = b.joint_modes
             for key in _BODY_ARRAYS:
                 arrays[f"{name}/{key}"] = getattr(b, key)
-            for key in _CONTACT_ARRAYS:
+            for key in _CONTACT_ARRAYS + _JOINT_EXTRAS:
                 if getattr(b, key) is not None:
                     arrays[f"{name}/{key}"] = getattr(b, key)
         arrays["meta"] = np.array(json.dumps(meta, default=_json_default))
@@ -177,6 +188,8 @@ class Trajectory:
                     joint_modes=data[f"{name}/joint_modes"],
                     **{key: data[f"{name}/{key}"] for key in _BODY_ARRAYS},
                     **{k: data[f"{name}/{k}"] for k in _CONTACT_ARRAYS if f"{name}/{k}" in data},
+                    **{k: data[f"{name}/{k}"] for k in _JOINT_EXTRAS if f"{name}/{k}" in data},
+                    joint_types=m.get("joint_types"),
                 )
             return cls(
                 scenario=meta["scenario"],
@@ -215,6 +228,9 @@ class Trajectory:
                 if getattr(b, key) is not None:
                     names += [f"{bname}.{key}.{link}" for link in b.link_names]
                     cols.append(getattr(b, key))
+            if b.joint_max_forces is not None:
+                names += [f"{bname}.joint_max_forces.{j}" for j in b.joint_names]
+                cols.append(b.joint_max_forces)
         return names, np.hstack(cols)
 
     def save_csv(self, path: str | Path) -> Path:
@@ -359,6 +375,9 @@ def run(
                 for _, _, c, rec, cols in cmds:
                     rec.targets[row, cols] = c.target
                     rec.modes[row, cols] = _MODE_CODE[c.mode]
+                    rec.held_force[cols] = np.nan if c.max_force is None else c.max_force
+                for rec in recorders.values():
+                    rec.max_forces[row] = rec.held_force
                 if progress is not None and (row % every == 0 or row == total):
                     progress(row, total)
             phases.append((p.name, first, row))
@@ -400,6 +419,19 @@ class _Recorder:
         movable = [j for j in table if j.type != JointType.FIXED]
         self.joint_indices = np.array([j.index for j in movable], dtype=np.intp)
         self.joint_names = [j.name for j in movable]
+        self.joint_types = [
+            "continuous"
+            if j.type == JointType.REVOLUTE and j.lower_limit > j.upper_limit
+            else j.type.name.lower()
+            for j in movable
+        ]
+        self.joint_limits = np.array(
+            [
+                (j.lower_limit, j.upper_limit) if j.lower_limit <= j.upper_limit else (np.nan,) * 2
+                for j in movable
+            ],
+            dtype=np.float64,
+        ).reshape(len(movable), 2)
         self.link_names = ["base"] + [j.link_name for j in table]
         self.links = list(range(-1, len(table)))
         n_j, n_l = len(movable), len(self.links)
@@ -412,6 +444,8 @@ class _Recorder:
         self.links_xyz = np.empty((rows, n_l, 3))
         self.contact_counts = np.zeros((rows, n_l), dtype=np.int32)
         self.contact_forces = np.zeros((rows, n_l))
+        self.max_forces = np.full((rows, n_j), np.nan)
+        self.held_force = np.full(n_j, np.nan)  # the max_force of the command in force
         self._col = {int(j): i for i, j in enumerate(self.joint_indices)}
 
     def columns(self, idx: list[int]) -> list[int]:
@@ -461,4 +495,7 @@ class _Recorder:
             link_positions=self.links_xyz,
             contact_counts=self.contact_counts,
             contact_normal_forces=self.contact_forces,
+            joint_types=self.joint_types,
+            joint_limits=self.joint_limits,
+            joint_max_forces=self.max_forces,
         )
