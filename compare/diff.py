@@ -38,6 +38,9 @@ __all__ = [
     "FEATURE_SOURCES",
     "yaw",
     "tilt",
+    "tilt_from",
+    "rotate",
+    "up_axis",
     "rotation_angle",
 ]
 
@@ -78,6 +81,36 @@ def tilt(q: np.ndarray) -> np.ndarray:
     """Angle (rad) between the body's z axis and world z: 0 upright, pi/2 on its side."""
     x, y, _, _ = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
     return np.arccos(np.clip(1.0 - 2.0 * (x * x + y * y), -1.0, 1.0))
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` (..., 3) rotated by quaternions ``q`` (..., 4) x, y, z, w (broadcast)."""
+    q = np.asarray(q, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    u, w = q[..., :3], q[..., 3:4]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def up_axis(gravity: Any) -> np.ndarray:
+    """The unit vector against ``gravity`` (m/s², world); world z when gravity is zero or
+    unknown (None)."""
+    g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=np.float64)
+    n = float(np.linalg.norm(g))
+    return -g / n if n > 0 else np.array([0.0, 0.0, 1.0])
+
+
+def tilt_from(q: np.ndarray, q_ref: np.ndarray, up: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
+    """Angle (rad, in [0, pi]) between the body axis that pointed ``up`` (world, unit) in the
+    reference orientation ``q_ref`` and where that axis points in ``q`` (both x, y, z, w): 0
+    while the body stands as it stood at ``q_ref``, pi/2 on its side, whatever its yaw and
+    whichever of its own axes is its up (a y-up URDF turned upright included)."""
+    up = np.asarray(up, dtype=np.float64)
+    q_ref = np.asarray(q_ref, dtype=np.float64)
+    conj = q_ref * np.array([-1.0, -1.0, -1.0, 1.0])
+    axis = rotate(conj, up)  # the body-frame axis that was up
+    now = rotate(q, axis)
+    return np.arccos(np.clip(now @ up, -1.0, 1.0))
 
 
 def rotation_angle(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
@@ -202,6 +235,14 @@ class Divergence:
     final_pose: dict[str, dict[str, Any]]  # "a"/"b" -> position, yaw, tilt, joints...
     path_a: np.ndarray = field(repr=False, default_factory=lambda: np.empty((0, 3)))
     path_b: np.ndarray = field(repr=False, default_factory=lambda: np.empty((0, 3)))
+    joint_names: list[str] = field(default_factory=list)
+    joint_units: list[str] = field(default_factory=list)
+    """(J,) ``rad`` (revolute, continuous) or ``m`` (prismatic)."""
+    joint_gaps: np.ndarray = field(repr=False, default_factory=lambda: np.empty((0, 0)))
+    """(T, J) |q_a - q_b| of every movable joint of the subject (rad or m, angles unwrapped)."""
+    link_names: list[str] = field(default_factory=list)
+    link_gaps: np.ndarray = field(repr=False, default_factory=lambda: np.empty((0, 0)))
+    """(T, L) m: distance between the same link's centres of mass, base first."""
 
     @property
     def final(self) -> dict[str, float]:
@@ -264,13 +305,14 @@ def _crossing(time: np.ndarray, values: np.ndarray, threshold: float) -> float |
     return float(time[hit[0]]) if hit.size else None
 
 
-def _pose(body: BodyTrajectory, row: int) -> dict[str, Any]:
+def _pose(body: BodyTrajectory, row: int, up: np.ndarray) -> dict[str, Any]:
     q = body.base_orientation[row]
     return {
         "position": [float(v) for v in body.base_position[row]],
         "orientation": [float(v) for v in q],
         "yaw": float(yaw(q)),
         "tilt": float(tilt(q)),
+        "tilt_from_spawn": float(tilt_from(q, body.base_orientation[0], up)),
         "joint_names": list(body.joint_names),
         "joint_positions": [float(v) for v in body.joint_positions[row]],
         "joint_velocities": [float(v) for v in body.joint_velocities[row]],
@@ -353,7 +395,20 @@ def diff(a: Trajectory, b: Trajectory) -> Divergence:
         series=series,
         crossings=crossings,
         phases=phases,
-        final_pose={"a": _pose(ba, row_a), "b": _pose(bb, row_b)},
+        final_pose={"a": _pose(ba, row_a, up_of(a)), "b": _pose(bb, row_b, up_of(b))},
         path_a=sa["pos"],
         path_b=sb["pos"],
+        joint_names=list(ba.joint_names),
+        joint_units=[
+            "m" if kind == "prismatic" else "rad"
+            for kind in (ba.joint_types or ["revolute"] * n_joints)
+        ],
+        joint_gaps=np.abs(sa["q"] - sb["q"]),
+        link_names=list(ba.link_names),
+        link_gaps=np.linalg.norm(sa["links"] - sb["links"], axis=-1),
     )
+
+
+def up_of(tr: Trajectory) -> np.ndarray:
+    """The world's up (against the gravity the run had, from its manifest; z when unknown)."""
+    return up_axis((tr.manifest.get("profile") or {}).get("gravity"))
