@@ -561,30 +561,70 @@ def position_table(backends: list[str], reps: int, steps: int) -> None:
 
 
 def drive_table(backends: list[str], reps: int) -> None:
-    """The r2d2 drive: raw, plain set_joint_velocity, and a bound velocity command."""
-    drives = {
-        b: (cases.DRIVES[b].raw, cases.DRIVES[b].layer, cases.BOUND_DRIVES[b].layer)
+    """The r2d2 drive: raw, plain set_joint_velocity, a bound velocity command; for MuJoCo
+    also the stepping alone (the schedule in three step(n) calls, one command at each change:
+    no Python per step), the floor under any per-step loop."""
+    drives: dict[str, list[Callable[[], float]]] = {
+        b: [cases.DRIVES[b].raw, cases.DRIVES[b].layer, cases.BOUND_DRIVES[b].layer]
         for b in backends
     }
-    dtimes: dict[str, list[list[float]]] = {b: [[], [], []] for b in backends}
+    if "mujoco" in drives:
+        drives["mujoco"] += [_mujoco_raw_chunks, _layer_chunks]
+    dtimes: dict[str, list[list[float]]] = {b: [[] for _ in fns] for b, fns in drives.items()}
     for _ in range(reps):
         for b, fns in drives.items():
             for i, fn in enumerate(fns):
-                t = fn()
-                dtimes[b][i].append(t / 980)
+                dtimes[b][i].append(fn() / 980)
     print()
-    print(
-        "| r2d2 drive, 980 steps, per step | raw µs | plain µs | ratio | bound µs | ratio |", end=""
-    )
-    print(" target |")
-    print("|------|------|------|------|------|------|------|")
+    head = "| raw µs | plain µs | ratio | bound µs | ratio | target |"
+    print(f"| r2d2 drive, 980 steps, per step {head} stepping alone: raw, layer µs |")
+    print("|------|------|------|------|------|------|------|------|")
     for b in backends:
-        raw_m, plain_m, bound_m = (statistics.median(x) for x in dtimes[b])
+        med = [statistics.median(x) for x in dtimes[b]]
+        raw_m, plain_m, bound_m = med[:3]
         target = "1.15x" if b == "mujoco" else "1.03x"
+        alone = "-"
+        if len(med) == 5:
+            alone = f"{med[3] * 1e6:.2f}, {med[4] * 1e6:.2f} ({med[4] / med[3]:.3f})"
         print(
             f"| {b} | {raw_m * 1e6:.2f} | {plain_m * 1e6:.2f} | {plain_m / raw_m:.3f} "
-            f"| {bound_m * 1e6:.2f} | {bound_m / raw_m:.3f} | {target} |"
+            f"| {bound_m * 1e6:.2f} | {bound_m / raw_m:.3f} | {target} | {alone} |"
         )
+
+
+def _mujoco_raw_chunks() -> float:
+    """Raw MuJoCo's drive stepped in three ``mj_step(m, d, n)`` calls."""
+    import mujoco
+
+    sim, robot = cases._layer_sim("mujoco")  # noqa: SLF001
+    try:
+        m, d, _, _ = cases._mujoco_raw_model(sim, robot)  # noqa: SLF001
+        t0 = time.perf_counter()
+        mujoco.mj_step(m, d, cases.TURN_FROM)
+        d.ctrl[:] = cases.TURN
+        mujoco.mj_step(m, d, cases.FORWARD_FROM - cases.TURN_FROM)
+        m.actuator_forcerange[:] = [-10.0, 10.0]
+        d.ctrl[:] = cases.FORWARD
+        mujoco.mj_step(m, d, 980 - cases.FORWARD_FROM)
+        return time.perf_counter() - t0
+    finally:
+        sim.close()
+
+
+def _layer_chunks() -> float:
+    """The layer's drive stepped in three ``Sim.step(n)`` calls."""
+    sim, robot = cases._layer_sim("mujoco")  # noqa: SLF001
+    try:
+        wheels = np.array(cases.WHEELS)
+        t0 = time.perf_counter()
+        sim.step(cases.TURN_FROM)
+        sim.set_joint_velocity(robot, wheels, cases.TURN, max_force=50.0)
+        sim.step(cases.FORWARD_FROM - cases.TURN_FROM)
+        sim.set_joint_velocity(robot, wheels, cases.FORWARD, max_force=10.0)
+        sim.step(980 - cases.FORWARD_FROM)
+        return time.perf_counter() - t0
+    finally:
+        sim.close()
 
 
 if __name__ == "__main__":
