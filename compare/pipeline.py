@@ -13,6 +13,7 @@ from typing import Any
 
 from simbridge.exceptions import InvalidArgumentError, ScenarioError
 
+from .born import where_born
 from .diff import QUANTITIES, Divergence, diff
 from .ensemble import (
     DEFAULT_ENSEMBLE,
@@ -155,6 +156,7 @@ class Comparison:
             "sweep": sweep,
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
             "ensemble": self._ensemble_summary(),
+            **where_born(self),
             "wall_time": self.wall_time,
             "manifest": {
                 "simbridge_version": _version(),
