@@ -9,8 +9,11 @@ by ``eps_rad`` radians about a random axis (world frame). Both engines get the s
 Each worker process creates its own engines (nothing engine-made crosses a process boundary),
 sends nothing to stdout or stderr (its file descriptors 1 and 2 go to ``os.devnull`` before any
 engine is imported), and returns only what the judgement needs: the followed robot's
-:func:`~simbridge.compare.diff.features` for the headline quantity at every kept instant, and
-its end point. Only the :class:`simbridge.Sim` interface is used.
+:func:`~simbridge.compare.diff.features` for the headline quantity at every kept instant, its
+end point, and the scenario's outcomes measured on the run
+(:func:`simbridge.compare.outcomes.evaluate`, in the worker). A phase's controller is named by
+its reference in the scenario the worker receives, and made there afresh: no controller object
+crosses a process boundary. Only the :class:`simbridge.Sim` interface is used.
 """
 
 from __future__ import annotations
@@ -69,6 +72,9 @@ class Member:
     features: np.ndarray  # (T, ...) the headline quantity's features at the kept instants
     end_point: np.ndarray  # (3,) m, world: base position (free base) or last link's CoM (fixed)
     wall_time: float  # s, the whole run in its worker
+    outcomes: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """The scenario's outcomes on this run, by name (:func:`~simbridge.compare.outcomes.evaluate`
+    records)."""
 
 
 @dataclass
@@ -89,6 +95,8 @@ class Ensemble:
     offsets_m: np.ndarray  # (N, R, 3) m: position offset per member and robot
     offsets_rad: np.ndarray  # (N, R, 3) rad: rotation vector per member and robot
     wall_time: float = 0.0  # s, summed over the members run in workers
+    outcomes: list[dict[str, dict[str, Any]]] = field(default_factory=list)
+    """Per member (member 0 first), the scenario's outcomes by name."""
     _spread: np.ndarray | None = field(default=None, repr=False)
 
     @property
@@ -214,7 +222,7 @@ def member_of(tr: Trajectory, quantity: str, index: int = 0) -> Member:
     body = tr.body
     rows = kept_rows(tr.steps)
     src = getattr(body, FEATURE_SOURCES[quantity])[rows]
-    return Member(index, features(quantity, src), end_point(body), tr.wall_total)
+    return Member(index, features(quantity, src), end_point(body), tr.wall_total, tr.outcomes)
 
 
 def _main_importable() -> bool:
@@ -387,6 +395,7 @@ class EnsembleRunner:
                     offsets_m=self.dpos,
                     offsets_rad=self.drot,
                     wall_time=sum(m.wall_time for m in members[1:]),
+                    outcomes=[m.outcomes for m in members],
                 )
             )
         self.wall_time = wall

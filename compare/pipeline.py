@@ -156,6 +156,7 @@ class Comparison:
             "sweep": sweep,
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
             "ensemble": self._ensemble_summary(),
+            "outcomes": self._outcomes_summary(),
             **where_born(self),
             "wall_time": self.wall_time,
             "manifest": {
@@ -164,6 +165,17 @@ class Comparison:
                 "engines": manifests,
             },
         }
+
+    def _outcomes_summary(self) -> dict[str, Any] | None:
+        """The scenario's outcomes over each engine's runs (the ensemble's, else the nominal
+        run alone): :func:`simbridge.compare.outcomes.outcomes_summary`."""
+        from .outcomes import outcomes_summary
+
+        if self.ensembles:
+            runs = [e.outcomes for e in self.ensembles]
+        else:
+            runs = [[self.runs[(slot, self.timestep)].outcomes] for slot in (0, 1)]
+        return outcomes_summary(self.scenario, self.labels, runs)
 
     def _ensemble_summary(self) -> dict[str, Any] | None:
         if not self.ensembles:
@@ -219,6 +231,7 @@ def compare(
     seed: int = DEFAULT_SEED,
     tolerance: float | None = None,
     workers: int | None = None,
+    controller: Any = None,
 ) -> Comparison:
     """Run ``scenario`` on two backends at every time step of ``timesteps`` and at half of each,
     run each engine's ensemble at the first time step, diff and judge them.
@@ -242,6 +255,10 @@ def compare(
         workers: processes for the ensemble (default: the CPU count; 0: in this process).
             A script that calls this with ``ensemble > 1`` must guard its top level with
             ``if __name__ == "__main__":`` (worker processes are spawned).
+        controller: a controller driving every phase in place of the scenario's own (a class
+            or function at a module's top level, a ``"file.py:Name"`` or
+            ``"package.module:Name"`` reference, or a ``ControllerSpec``); see
+            :meth:`Scenario.with_controller`.
 
     Raises:
         ScenarioError, SimbridgeError: a bad scenario or time step, a backend that fails.
@@ -249,6 +266,8 @@ def compare(
     """
     start = _time.perf_counter()
     sc = load_scenario(scenario)
+    if controller is not None:
+        sc = sc.with_controller(controller)
     if len(backends) != 2:
         raise InvalidArgumentError("backends", f"expected two backend names, got {backends!r}")
     pair = (backends[0], backends[1])

@@ -15,6 +15,7 @@ from typing import Any
 
 from .diff import DEG, QUANTITIES
 from .fmt import fmt_distance, fmt_threshold, fmt_time, fmt_value
+from .outcomes import outcome_lines, outcomes_section
 from .pipeline import Comparison
 from .scenario import format_timestep
 from .verdict import verdict_lines
@@ -29,7 +30,7 @@ def headline(summary: dict[str, Any]) -> list[str]:
     a, b = summary["labels"]
     unit = h["unit"]
     subject = summary["subject"]
-    lines: list[str] = []
+    lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
     if summary.get("verdict"):
         lines += verdict_lines(summary)
     if h["quantity"] == "base_distance":
@@ -96,6 +97,7 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
     # -- verdict
+    lines += outcomes_section(s)
     if s.get("verdict"):
         lines += _verdict_section(s)
     # -- setup

@@ -12,7 +12,8 @@ import json
 import sys
 import time as _time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +23,7 @@ import simbridge
 from simbridge.exceptions import ScenarioError
 from simbridge.types import JointType
 
+from .controllers import PhaseControl
 from .scenario import Scenario, load_scenario, parse_timestep
 
 __all__ = ["BodyTrajectory", "Trajectory", "run", "urdf_sha256"]
@@ -111,6 +113,9 @@ class Trajectory:
     wall_total: float = 0.0
     """Seconds of the whole run: loading, stepping and recording."""
     manifest: dict[str, Any] = field(default_factory=dict)
+    outcomes: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """The scenario's outcomes measured on this run, by name
+    (:func:`simbridge.compare.outcomes.evaluate`)."""
 
     @property
     def body(self) -> BodyTrajectory:
@@ -152,6 +157,7 @@ class Trajectory:
             "wall_time": self.wall_time,
             "wall_total": self.wall_total,
             "manifest": self.manifest,
+            "outcomes": self.outcomes,
             "bodies": {},
         }
         for name, b in self.bodies.items():
@@ -203,6 +209,7 @@ class Trajectory:
                 wall_time=meta["wall_time"],
                 wall_total=meta["wall_total"],
                 manifest=meta["manifest"],
+                outcomes=meta.get("outcomes", {}),
             )
 
     def columns(self) -> tuple[list[str], np.ndarray]:
@@ -275,6 +282,7 @@ def run(
     gravity: tuple[float, float, float] | None = None,
     duration: float | None = None,
     progress: Progress | None = None,
+    controller: Any = None,
 ) -> Trajectory:
     """Run ``scenario`` on ``backend`` and record every step.
 
@@ -287,15 +295,25 @@ def run(
         gravity: instead of the scenario's (m/s²).
         duration: only the first ``duration`` seconds.
         progress: called as ``progress(steps_done, steps_total)`` every few steps.
+        controller: a controller to drive every phase in place of the scenario's own: a class
+            or factory function defined at a module's top level, a ``"file.py:Name"`` or
+            ``"package.module:Name"`` reference, or a
+            :class:`~simbridge.compare.controllers.ControllerSpec` (with params and period);
+            see :meth:`Scenario.with_controller`.
 
     Returns:
-        The :class:`Trajectory`: T = steps + 1 rows (the state at t = 0, then after each step).
+        The :class:`Trajectory`: T = steps + 1 rows (the state at t = 0, then after each
+        step), with the scenario's outcomes measured on it (``outcomes``).
 
     Raises:
         ScenarioError, SimbridgeError: a bad scenario, an unknown joint, a failed backend.
+        ControllerError: a controller that fails (a ScenarioError naming the controller, the
+            phase and the time; its ``trajectory`` holds the run recorded up to there).
     """
     t_start = _time.perf_counter()
     sc = load_scenario(scenario)
+    if controller is not None:
+        sc = sc.with_controller(controller)
     if timestep is not None:
         try:
             dt = parse_timestep(timestep)
@@ -352,12 +370,21 @@ def run(
         phases: list[tuple[str, int, int]] = []
         wall = 0.0
         every = max(1, total // 200)
-        for p, cmds in plan:
+        for pi, (p, cmds) in enumerate(plan):
             first = row
             for body, idx, c, _, _ in cmds:
                 if c.mode == "torque":  # release the velocity motor (the profile's brake)
                     sim.set_joint_velocity(body, idx, 0.0, max_force=0.0)
-            for _ in range(p.steps):
+            ctl = _start_control(
+                sc,
+                pi,
+                sim,
+                ids,
+                recorders,
+                row,
+                partial(_partial, sc, backend, prof, recorders, phases),
+            )
+            for i in range(p.steps):
                 t0 = _time.perf_counter()
                 for body, idx, c, _, _ in cmds:
                     if c.mode == "velocity":
@@ -367,6 +394,8 @@ def run(
                         sim.set_joint_position(body, idx, c.target, max_force=c.max_force, **kw)
                     else:
                         sim.set_joint_torque(body, idx, c.target)
+                if ctl is not None:
+                    ctl.before_step(i, row * sc.timestep)
                 sim.step()
                 wall += _time.perf_counter() - t0
                 row += 1
@@ -378,6 +407,8 @@ def run(
                     rec.held_force[cols] = np.nan if c.max_force is None else c.max_force
                 for rec in recorders.values():
                     rec.max_forces[row] = rec.held_force
+                if ctl is not None:
+                    ctl.record(row)
                 if progress is not None and (row % every == 0 or row == total):
                     progress(row, total)
             phases.append((p.name, first, row))
@@ -393,7 +424,7 @@ def run(
             manifest["command_line"] = list(sys.argv)
         time = np.arange(total + 1, dtype=np.float64) * sc.timestep
         bodies = {name: rec.finish(name) for name, rec in recorders.items()}
-    return Trajectory(
+    tr = Trajectory(
         scenario=sc.name,
         backend=backend,
         profile=prof,
@@ -405,6 +436,84 @@ def run(
         wall_time=wall,
         wall_total=_time.perf_counter() - t_start,
         manifest=manifest,
+    )
+    if sc.outcomes:
+        from .outcomes import evaluate_all
+
+        tr.outcomes = evaluate_all(sc, tr)
+    return tr
+
+
+def _start_control(
+    sc: Scenario,
+    pi: int,
+    sim: simbridge.Sim,
+    ids: dict[str, int],
+    recorders: dict[str, _Recorder],
+    row: int,
+    stopped: Callable[[str, int, int], Trajectory],
+) -> PhaseControl | None:
+    """Make phase ``pi``'s controller (None: it has none) and start it at row ``row``."""
+    p = sc.phases[pi]
+    if p.controller is None:
+        return None
+    by_body = {body: recorders[name] for name, body in ids.items()}
+
+    def columns(body: int, joints: list[int]) -> tuple[_Recorder, list[int]] | None:
+        rec = by_body.get(body)
+        if rec is None or any(j not in rec._col for j in joints):
+            return None
+        return rec, rec.columns(joints)
+
+    ctl = PhaseControl(
+        p.controller,
+        phase=p.name,
+        key=f"phases[{pi}].controller",
+        file=sc._where(),
+        base=sc.folder,
+        sim=sim,
+        robots=ids,
+        columns=columns,
+        stopped=stopped,
+    )
+    ctl.start(row, row * sc.timestep)
+    return ctl
+
+
+def _partial(
+    sc: Scenario,
+    backend: str,
+    profile: str,
+    recorders: dict[str, _Recorder],
+    done: list[tuple[str, int, int]],
+    phase: str,
+    first: int,
+    row: int,
+) -> Trajectory:
+    """The run recorded up to row ``row`` (a run stopped there, in ``phase`` begun at row
+    ``first`` after the phases ``done``: T = row + 1 rows)."""
+    phases = [*done, (phase, first, row)]
+    n = row + 1
+    bodies = {}
+    for name, rec in recorders.items():
+        body = rec.finish(name)
+        for f in fields(body):
+            value = getattr(body, f.name)
+            if f.name in ("joint_indices", "joint_limits"):  # per joint, not per instant
+                continue
+            if isinstance(value, np.ndarray) and value.ndim and value.shape[0] == len(rec.q):
+                setattr(body, f.name, value[:n].copy())
+        bodies[name] = body
+    return Trajectory(
+        scenario=sc.name,
+        backend=backend,
+        profile=profile,
+        timestep=sc.timestep,
+        time=np.arange(n, dtype=np.float64) * sc.timestep,
+        bodies=bodies,
+        subject=sc.subject,
+        phases=phases,
+        manifest={"stopped_at": {"row": row, "time": row * sc.timestep}},
     )
 
 

@@ -31,14 +31,33 @@ A scenario is a TOML file (read with the standard library's ``tomllib``)::
     max_force = 50                # N·m or N; required for velocity and position, not for torque
     # kp = 0.1, kd = 1.0          # position mode only (PyBullet's gains)
 
+    [phases.controller]           # optional: a closed-loop controller drives this phase
+    class = "goto.py:GoTo"        # a file beside this scenario, or "package.module:GoTo"
+    every = 4                     # control period, in steps (default 1: before every step)
+    [phases.controller.params]    # keyword arguments: GoTo(goal = [0.0, 2.0])
+    goal = [0.0, 2.0]
+    # (or, with no params and every = 1: controller = "goto.py:GoTo")
+
+    [[outcomes]]                  # optional: what success means (see outcomes.py)
+    name = "reaches the goal"
+    kind = "reach"                # reach, upright, track, final_pose, effort, function
+    robot = "r2d2"                # default: the subject
+    point = [0.0, 2.0]
+    within = 0.05
+
 Semantics, as in the tutorial: every command of a phase is re-issued before every step of that
 phase. A phase without a command for a joint leaves whatever the engine holds (the profile's
 default brake, or the last velocity/position command, which persist). A torque command first
 releases the joint's velocity motor (``max_force=0``) at the start of its phase, as PyBullet
 requires for torque control; torque lasts one step, so it is re-applied every step.
 
-A scenario rerun at another time step keeps each phase's duration (see
-:meth:`Scenario.with_timestep`).
+A phase's controller (:mod:`simbridge.compare.controllers`) is made when the phase starts, in
+every run, and called after the phase's commands, before its first step and every ``every``
+steps after; its velocity and position commands persist, its torques are held until its next
+call.
+
+A scenario rerun at another time step keeps each phase's duration and each controller's period
+in seconds (see :meth:`Scenario.with_timestep`).
 """
 
 from __future__ import annotations
@@ -56,8 +75,14 @@ import simbridge
 from simbridge.exceptions import ScenarioError
 from simbridge.transforms import quat_from_rpy
 
+from .controllers import ControllerSpec, RefError, absolute_ref, load_object
+from .outcomes import KINDS as OUTCOME_KINDS
+from .outcomes import Outcome
+
 __all__ = [
     "Command",
+    "ControllerSpec",
+    "Outcome",
     "Phase",
     "RobotSpec",
     "Scenario",
@@ -108,6 +133,9 @@ class Phase:
     name: str
     steps: int
     commands: tuple[Command, ...] = ()
+    controller: ControllerSpec | None = None
+    """A closed-loop controller run during this phase (see
+    :mod:`simbridge.compare.controllers`), or None."""
 
 
 @dataclass(frozen=True)
@@ -138,6 +166,47 @@ class Scenario:
     ``link_distance``."""
     source: Path | None = field(default=None, compare=False)
     """The file this scenario was read from (URDF paths are relative to its folder)."""
+    outcomes: tuple[Outcome, ...] = ()
+    """What success means (:mod:`simbridge.compare.outcomes`), measured on every run."""
+
+    @property
+    def closed_loop(self) -> bool:
+        """Whether a phase runs a controller."""
+        return any(p.controller is not None for p in self.phases)
+
+    @property
+    def folder(self) -> Path | None:
+        """The folder file references (URDFs, controllers, functions) are relative to: the
+        source file's, or None (the current folder) for a scenario made in Python."""
+        return self.source.parent if self.source is not None else None
+
+    def with_controller(
+        self,
+        controller: Any,
+        params: dict[str, Any] | None = None,
+        every: int | None = None,
+        *,
+        phases: Sequence[str] | None = None,
+    ) -> Scenario:
+        """The same scenario with ``controller`` driving every phase (or the phases named in
+        ``phases``), in place of their own. ``controller``: a class or factory function
+        defined at the top level of a module or script, a ``"file.py:Name"`` or
+        ``"package.module:Name"`` reference, or a :class:`ControllerSpec`; ``params`` its
+        keyword arguments; ``every`` its period in steps."""
+        spec = ControllerSpec.of(controller, params, every)
+        names = {p.name for p in self.phases}
+        for name in phases or ():
+            if name not in names:
+                raise ScenarioError(
+                    self._where(), "phases", f"no phase {name!r}; phases: {sorted(names)}"
+                )
+        chosen = set(phases) if phases is not None else names
+        return replace(
+            self,
+            phases=tuple(
+                replace(p, controller=spec) if p.name in chosen else p for p in self.phases
+            ),
+        )
 
     @property
     def steps(self) -> int:
@@ -179,7 +248,19 @@ class Scenario:
                     f"phase {p.name!r} at {format_timestep(timestep)} s would take "
                     f"{round(steps)} steps; at most {MAX_STEPS} per phase",
                 )
-            phases.append(replace(p, steps=int(round(steps))))
+            ctl = p.controller
+            if ctl is not None:
+                every = ctl.every * ratio
+                if abs(every - round(every)) > 1e-6 * max(1.0, every) or round(every) < 1:
+                    raise ScenarioError(
+                        self._where(),
+                        f"phases[{i}].controller.every",
+                        f"the controller of phase {p.name!r} runs every "
+                        f"{ctl.every * self.timestep:.6g} s, which is not a whole number of "
+                        f"{format_timestep(timestep)} s steps ({every:.6g})",
+                    )
+                ctl = replace(ctl, every=int(round(every)))
+            phases.append(replace(p, steps=int(round(steps)), controller=ctl))
         return replace(self, timestep=float(timestep), phases=tuple(phases))
 
     def truncated(self, duration: float) -> Scenario:
@@ -456,6 +537,229 @@ class _Reader:
                 kd = self.number(t["kd"], [*path, "kd"], nonneg=True)
         return Command(robot, joints, mode, target, max_force, kp, kd)
 
+    def controller(self, raw: Any, path: list[str | int], base: Path | None) -> ControllerSpec:
+        if isinstance(raw, str):
+            raw = {"class": raw}
+            key: list[str | int] = path
+        elif isinstance(raw, dict):
+            self.keys(raw, path, ("class", "every", "params"))
+            key = [*path, "class"]
+        else:
+            raise self.error(
+                path,
+                'expected a reference ("ctrl.py:Name" or "package.module:Name") or a table '
+                "with class, every and params",
+            )
+        ref = self.string(self.require(raw, path, "class"), key)
+        try:
+            factory = load_object(ref, base)
+        except RefError as exc:
+            raise self.error(key, f"controller {ref!r}: {exc}") from None
+        if not callable(factory):
+            raise self.error(key, f"{ref!r} is not a class or a factory function")
+        every = raw.get("every", 1)
+        if isinstance(every, bool) or not isinstance(every, int) or not 1 <= every <= MAX_STEPS:
+            raise self.error([*path, "every"], f"expected an integer >= 1 (steps), got {every!r}")
+        params = raw.get("params", {})
+        if not isinstance(params, dict):
+            raise self.error(
+                [*path, "params"],
+                "expected a table of keyword arguments ([phases.controller.params])",
+            )
+        return ControllerSpec(absolute_ref(ref, base), dict(params), every)
+
+    def outcome(
+        self,
+        t: Any,
+        path: list[str | int],
+        robots: dict[str, RobotSpec],
+        phases: Sequence[str],
+        base: Path | None,
+    ) -> Outcome:
+        if not isinstance(t, dict):
+            raise self.error(path, "expected a table ([[outcomes]])")
+        kind = self.require(t, path, "kind")
+        if kind not in OUTCOME_KINDS:
+            raise self.error(
+                [*path, "kind"], f"expected one of {', '.join(OUTCOME_KINDS)}, got {kind!r}"
+            )
+        common = ("name", "kind", "robot", "phase")
+        allowed = {
+            "reach": (*common, "link", "point", "within", "by", "hold"),
+            "upright": (*common, "max_tilt"),
+            "track": (*common, "joints", "quantity", "targets", "link", "points", "max"),
+            "final_pose": (*common, "link", "point", "joints", "targets", "within"),
+            "effort": (*common, "joints", "max"),
+            "function": ("name", "kind", "function", "params", "max", "min", "unit"),
+        }[kind]
+        self.keys(t, path, allowed)
+        name = self.string(self.require(t, path, "name"), [*path, "name"])
+        robot = ""
+        if "robot" in t:
+            robot = self.string(t["robot"], [*path, "robot"])
+            if robot not in robots:
+                raise self.error([*path, "robot"], f"no robot {robot!r}; robots: {sorted(robots)}")
+        phase = ""
+        if "phase" in t:
+            phase = self.string(t["phase"], [*path, "phase"])
+            if phase not in phases:
+                raise self.error([*path, "phase"], f"no phase {phase!r}; phases: {list(phases)}")
+            if list(phases).count(phase) > 1:
+                raise self.error(
+                    [*path, "phase"], f"two phases are named {phase!r}: name them apart"
+                )
+        link: JointRef = "base"
+        if "link" in t:
+            link = t["link"]
+            if isinstance(link, bool) or not isinstance(link, (int, str)) or link == "":
+                raise self.error(
+                    [*path, "link"], f'expected "base", a link name or index, got {link!r}'
+                )
+
+        def positive(key: str) -> float | None:
+            if key not in t:
+                return None
+            v = self.number(t[key], [*path, key])
+            if v <= 0:
+                raise self.error([*path, key], f"must be > 0, got {t[key]!r}")
+            return v
+
+        def point(key: str) -> tuple[float, ...] | None:
+            if key not in t:
+                return None
+            v = t[key]
+            if not isinstance(v, list) or len(v) not in (2, 3):
+                raise self.error(
+                    [*path, key], f"expected 2 (x, y) or 3 (x, y, z) numbers, got {v!r}"
+                )
+            return tuple(self.number(x, [*path, key, i]) for i, x in enumerate(v))
+
+        def joints() -> tuple[JointRef, ...]:
+            if "joints" not in t:
+                return ()
+            raw = t["joints"]
+            refs = raw if isinstance(raw, list) else [raw]
+            if not refs:
+                raise self.error([*path, "joints"], "expected at least one joint")
+            return tuple(self.joint_ref(j, [*path, "joints"]) for j in refs)
+
+        if kind == "reach":
+            pt = point("point")
+            if pt is None:
+                raise self.error([*path, "point"], "missing (required by reach)")
+            within = positive("within")
+            if within is None:
+                raise self.error([*path, "within"], "missing (required by reach): metres")
+            hold = t.get("hold", False)
+            if not isinstance(hold, bool):
+                raise self.error([*path, "hold"], f"expected true or false, got {hold!r}")
+            return Outcome.reach(
+                name, pt, within, robot=robot, link=link, by=positive("by"), hold=hold, phase=phase
+            )
+        if kind == "upright":
+            bound = positive("max_tilt")
+            if bound is None:
+                raise self.error([*path, "max_tilt"], "missing (required by upright): radians")
+            return Outcome.upright(name, bound, robot=robot, phase=phase)
+        if kind == "track":
+            quantity = t.get("quantity", "position")
+            if quantity not in ("position", "velocity"):
+                raise self.error(
+                    [*path, "quantity"], f"expected position or velocity, got {quantity!r}"
+                )
+            js = joints()
+            pts: list[tuple[float, ...]] = []
+            if "points" in t:
+                raw_pts = t["points"]
+                if not isinstance(raw_pts, list) or not raw_pts:
+                    raise self.error(
+                        [*path, "points"], "expected a list of [t, x, y] or [t, x, y, z] rows"
+                    )
+                width = None
+                for i, row in enumerate(raw_pts):
+                    if not isinstance(row, list) or len(row) not in (3, 4):
+                        raise self.error(
+                            [*path, "points", i], f"expected [t, x, y] or [t, x, y, z], got {row!r}"
+                        )
+                    if width is not None and len(row) != width:
+                        raise self.error([*path, "points", i], "every row needs the same length")
+                    width = len(row)
+                    pts.append(tuple(self.number(x, [*path, "points", i]) for x in row))
+                times = [p[0] for p in pts]
+                if times != sorted(times):
+                    raise self.error([*path, "points"], "times must not decrease")
+                if js or "targets" in t:
+                    raise self.error(
+                        [*path, "points"], "track either a link (points) or joints, not both"
+                    )
+            elif "link" in t:
+                raise self.error([*path, "link"], "a tracked link needs points")
+            targets: tuple[float, ...] = ()
+            if "targets" in t:
+                if not js:
+                    raise self.error([*path, "targets"], "constant targets need joints")
+                targets = self.per_joint(t["targets"], [*path, "targets"], len(js))
+            return Outcome.track(
+                name,
+                robot=robot,
+                joints=js,
+                quantity=quantity,
+                targets=targets,
+                link=link,
+                points=pts,
+                max=positive("max"),
+                phase=phase,
+            )
+        if kind == "final_pose":
+            pt = point("point")
+            js = joints()
+            if (pt is None) == (not js):
+                raise self.error(
+                    path, "final_pose takes either point (a base or link position) or joints"
+                )
+            targets = ()
+            if js:
+                if "targets" not in t:
+                    raise self.error([*path, "targets"], "missing (joints need targets)")
+                targets = self.per_joint(t["targets"], [*path, "targets"], len(js))
+            elif "targets" in t:
+                raise self.error([*path, "targets"], "targets go with joints")
+            return Outcome.final_pose(
+                name,
+                robot=robot,
+                point=pt,
+                link=link,
+                joints=js,
+                targets=targets,
+                within=positive("within"),
+                phase=phase,
+            )
+        if kind == "effort":
+            return Outcome.effort(
+                name, robot=robot, joints=joints(), max=positive("max"), phase=phase
+            )
+        # function
+        ref = self.string(self.require(t, path, "function"), [*path, "function"])
+        try:
+            fn = load_object(ref, base)
+        except RefError as exc:
+            raise self.error([*path, "function"], f"function {ref!r}: {exc}") from None
+        if not callable(fn):
+            raise self.error([*path, "function"], f"{ref!r} is not a function")
+        params = t.get("params", {})
+        if not isinstance(params, dict):
+            raise self.error([*path, "params"], "expected a table of keyword arguments")
+        bounds = {}
+        for key in ("max", "min"):
+            if key in t:
+                bounds[key] = self.number(t[key], [*path, key])
+        unit = t.get("unit", "")
+        if not isinstance(unit, str):
+            raise self.error([*path, "unit"], f"expected a string, got {unit!r}")
+        return Outcome.function_of(
+            name, absolute_ref(ref, base), params=params, unit=unit, **bounds
+        )
+
     def scenario(self, data: dict[str, Any], default_name: str, source: Path | None) -> Scenario:
         self.keys(
             data,
@@ -470,6 +774,7 @@ class _Reader:
                 "headline",
                 "robots",
                 "phases",
+                "outcomes",
             ),
         )
         name = self.string(data.get("name", default_name), ["name"])
@@ -505,6 +810,7 @@ class _Reader:
             raise self.error(
                 ["headline"], f"expected one of {', '.join(HEADLINE_QUANTITIES)}, got {headline!r}"
             )
+        base = source.parent if source is not None else None
         raw_phases = self.require(data, [], "phases")
         if not isinstance(raw_phases, list) or not raw_phases:
             raise self.error(["phases"], "expected at least one [[phases]] table")
@@ -513,7 +819,7 @@ class _Reader:
             path: list[str | int] = ["phases", i]
             if not isinstance(t, dict):
                 raise self.error(path, "expected a table ([[phases]])")
-            self.keys(t, path, ("name", "steps", "commands"))
+            self.keys(t, path, ("name", "steps", "commands", "controller"))
             steps = self.require(t, path, "steps")
             if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= MAX_STEPS:
                 raise self.error(
@@ -527,7 +833,23 @@ class _Reader:
                 self.command(c, [*path, "commands", j], by_name, subject)
                 for j, c in enumerate(raw_cmds)
             )
-            phases.append(Phase(pname, steps, cmds))
+            ctl = None
+            if "controller" in t:
+                ctl = self.controller(t["controller"], [*path, "controller"], base)
+            phases.append(Phase(pname, steps, cmds, ctl))
+        names = [p.name for p in phases]
+        raw_outcomes = data.get("outcomes", [])
+        if not isinstance(raw_outcomes, list):
+            raise self.error(["outcomes"], "expected [[outcomes]] tables")
+        outcomes = tuple(
+            self.outcome(o, ["outcomes", i], by_name, names, base)
+            for i, o in enumerate(raw_outcomes)
+        )
+        seen: set[str] = set()
+        for i, o in enumerate(outcomes):
+            if o.name in seen:
+                raise self.error(["outcomes", i, "name"], f"outcome name {o.name!r} is used twice")
+            seen.add(o.name)
         return Scenario(
             name=name,
             robots=tuple(robots),
@@ -539,6 +861,7 @@ class _Reader:
             subject=subject,
             headline=headline,
             source=source,
+            outcomes=outcomes,
         )
 
 
@@ -607,6 +930,9 @@ def _toml_value(v: Any) -> str:
         return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        items = ", ".join(f"{_toml_key(str(k))} = {_toml_value(x)}" for k, x in v.items())
+        return "{ " + items + " }" if items else "{}"
     raise TypeError(f"cannot write {v!r} as TOML")
 
 
@@ -655,6 +981,20 @@ def _lines(s: Scenario) -> Iterator[str]:
                 yield f"kp = {_toml_value(c.kp)}"
             if c.kd is not None:
                 yield f"kd = {_toml_value(c.kd)}"
+        if p.controller is not None:
+            yield "[phases.controller]"
+            yield f"class = {_toml_value(p.controller.ref)}"
+            yield f"every = {p.controller.every}"
+            if p.controller.params:
+                yield "[phases.controller.params]"
+                for k, v in p.controller.params.items():
+                    yield f"{_toml_key(k)} = {_toml_value(v)}"
+    for o in s.outcomes:
+        yield ""
+        yield "[[outcomes]]"
+        for k, v in o.to_dict().items():
+            if k != "unit" or o.kind == "function":
+                yield f"{_toml_key(k)} = {_toml_value(v)}"
 
 
 def dumps_scenario(scenario: Scenario) -> str:

@@ -35,6 +35,8 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/backends/mujoco/backend.py",
         "simbridge/backends/mujoco/loop.py",
         "simbridge/compare/__init__.py",
+        "simbridge/compare/scenarios/r2d2-goto.toml",
+        "simbridge/compare/scenarios/goto.py",  # a shipped scenario's controller, beside it
         "simbridge/robots/r2d2.urdf",
         "simbridge/robots/plane.urdf",
         "simbridge/robots/l_finger.stl",

@@ -59,7 +59,7 @@ def test_unknown_scenario_is_bad_usage(capsys):
     assert err.count("\n") == 2 and "usage: simbridge" in err
     assert err.splitlines()[1].startswith(
         "simbridge: error: no-such-scenario: no such scenario file, and not a shipped scenario; "
-        "shipped scenarios: double-pendulum, pendulum, r2d2,"
+        "shipped scenarios: double-pendulum, kuka-reach, laikago-stand, pendulum, r2d2,"
     )
 
 

@@ -16,7 +16,16 @@ from simbridge.compare import (
 from simbridge.compare.scenario import find_key_line
 from simbridge.exceptions import ScenarioError
 
-SHIPPED = ["double-pendulum", "pendulum", "r2d2", "r2d2-gentle", "spinning-wheel"]
+SHIPPED = [
+    "double-pendulum",
+    "kuka-reach",
+    "laikago-stand",
+    "pendulum",
+    "r2d2",
+    "r2d2-gentle",
+    "r2d2-goto",
+    "spinning-wheel",
+]
 
 GOOD = """\
 name = "tiny"
@@ -130,7 +139,7 @@ def test_a_user_file_path_loads_and_resolves_urdfs_beside_it(tmp_path):
 
 
 def test_unknown_scenario_lists_the_shipped_ones():
-    with pytest.raises(ScenarioError, match="shipped scenarios: double-pendulum, pendulum"):
+    with pytest.raises(ScenarioError, match="shipped scenarios: double-pendulum, kuka-reach"):
         load_scenario("no-such-scenario")
 
 

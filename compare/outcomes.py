@@ -1,0 +1,796 @@
+"""Outcomes: what a scenario calls success, measured on every run (:func:`evaluate`) and over
+each engine's ensemble (:func:`summarize`: success rate with a 95% interval, the distribution of
+each value).
+
+Kinds (:data:`KINDS`), each on one robot (default the scenario's subject), over the whole run or
+one phase (``phase``: rows from the phase's first to its last, times counted from its start):
+
+- ``reach``: a body's base (``link = "base"``: the URDF root link frame) or a link (its centre
+  of mass) comes within ``within`` m of ``point`` (2 coordinates: distance in the horizontal
+  plane; 3: in space). Value: the time it took (s; None: never). With ``hold = true`` it must
+  stay within until the window's end (the value is then the settling time); with ``by`` it must
+  get there by that time (s) to succeed.
+- ``upright``: the tilt stays below ``max_tilt`` (rad) throughout. The tilt is the angle
+  between the world's z axis and the body axis that pointed along it at the window's first
+  instant: against the robot's own initial orientation, whatever it is. Value: the largest tilt.
+- ``track``: RMS error of joints against targets (``quantity`` ``position``, the default, or
+  ``velocity``: the commanded targets recorded with the run, or constant ``targets``), or of a
+  link against ``points`` (``[t, x, y, z]`` rows, each held from its time, t from the window's
+  start). Value: the RMS (rad, m, or rad/s); success when ``max`` is given: value <= max.
+- ``final_pose``: at the window's last instant, the distance of the base or link from
+  ``point`` (m), or the RMS of joints' positions against ``targets`` (rad or m). Success when
+  ``within`` is given.
+- ``effort``: the sum over steps and joints of |joint force x joint speed| times the time
+  step (J): the work the motors did, counting braking as work too. Success when ``max`` is
+  given.
+- ``function``: ``function = "file.py:name"`` (or ``"package.module:name"``) called as
+  ``name(trajectory, **params)``; a number is the value (success by ``max``/``min`` when
+  given), a bool the success itself, None no value.
+
+Every evaluation is a plain dict (JSON-ready, picklable): ``name``, ``kind``, ``unit``,
+``value``, ``success`` (True, False, or None where the outcome declares no bound) and the kind's
+own figures (see :func:`evaluate`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from simbridge.exceptions import ScenarioError
+
+if TYPE_CHECKING:
+    from .run import BodyTrajectory, Trajectory
+    from .scenario import Scenario
+
+__all__ = [
+    "KINDS",
+    "CONFIDENCE",
+    "Outcome",
+    "evaluate",
+    "evaluate_all",
+    "success_interval",
+    "summarize",
+    "outcomes_summary",
+    "outcome_lines",
+    "outcomes_section",
+]
+
+KINDS = ("reach", "upright", "track", "final_pose", "effort", "function")
+CONFIDENCE = 0.95
+INTERVAL_METHOD = "wilson"
+"""``scipy.stats.binomtest(...).proportion_ci(method=...)``: Wilson's score interval, which
+stays inside [0, 1] and is not degenerate at 0/n or n/n."""
+
+_UNITS = {"reach": "s", "upright": "rad", "effort": "J"}
+_TITLES = {
+    "reach": "time to reach",
+    "upright": "largest tilt",
+    "track": "RMS error",
+    "final_pose": "final error",
+    "effort": "effort",
+    "function": "value",
+}
+
+JointRef = int | str
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One declared outcome (see the module's docstring for each kind's keys).
+
+    Make one with the class methods (:meth:`reach`, :meth:`upright`, :meth:`track`,
+    :meth:`final_pose`, :meth:`effort`, :meth:`function_of`) or read it from a scenario's
+    ``[[outcomes]]`` tables."""
+
+    name: str
+    kind: str
+    robot: str = ""
+    """A robot's scenario name; "" = the subject."""
+    phase: str = ""
+    """A phase's name: its rows only; "" = the whole run."""
+    link: JointRef = "base"
+    """``"base"`` (the URDF root link frame), or a link's name or index (its centre of mass)."""
+    point: tuple[float, ...] | None = None
+    """m, world: 2 coordinates (x, y; horizontal distance) or 3."""
+    within: float | None = None
+    by: float | None = None
+    hold: bool = False
+    max_tilt: float | None = None
+    quantity: str = "position"
+    joints: tuple[JointRef, ...] = ()
+    targets: tuple[float, ...] = ()
+    points: tuple[tuple[float, ...], ...] = ()
+    max: float | None = None
+    min: float | None = None
+    function: str = ""
+    params: dict[str, Any] = field(default_factory=dict)
+    function_unit: str = ""
+    """The unit of a function's value (shown in the report)."""
+
+    # ------------------------------------------------------------ constructors
+
+    @classmethod
+    def reach(
+        cls,
+        name: str,
+        point: Sequence[float],
+        within: float,
+        *,
+        robot: str = "",
+        link: JointRef = "base",
+        by: float | None = None,
+        hold: bool = False,
+        phase: str = "",
+    ) -> Outcome:
+        return cls(
+            name,
+            "reach",
+            robot,
+            phase,
+            link,
+            tuple(float(x) for x in point),
+            float(within),
+            by,
+            hold,
+        )
+
+    @classmethod
+    def upright(cls, name: str, max_tilt: float, *, robot: str = "", phase: str = "") -> Outcome:
+        return cls(name, "upright", robot, phase, max_tilt=float(max_tilt))
+
+    @classmethod
+    def track(
+        cls,
+        name: str,
+        *,
+        robot: str = "",
+        joints: Sequence[JointRef] = (),
+        quantity: str = "position",
+        targets: Sequence[float] = (),
+        link: JointRef = "base",
+        points: Sequence[Sequence[float]] = (),
+        max: float | None = None,
+        phase: str = "",
+    ) -> Outcome:
+        return cls(
+            name,
+            "track",
+            robot,
+            phase,
+            link=link,
+            quantity=quantity,
+            joints=tuple(joints),
+            targets=tuple(float(x) for x in targets),
+            points=tuple(tuple(float(x) for x in p) for p in points),
+            max=max,
+        )
+
+    @classmethod
+    def final_pose(
+        cls,
+        name: str,
+        *,
+        robot: str = "",
+        point: Sequence[float] | None = None,
+        link: JointRef = "base",
+        joints: Sequence[JointRef] = (),
+        targets: Sequence[float] = (),
+        within: float | None = None,
+        phase: str = "",
+    ) -> Outcome:
+        return cls(
+            name,
+            "final_pose",
+            robot,
+            phase,
+            link=link,
+            point=None if point is None else tuple(float(x) for x in point),
+            within=within,
+            joints=tuple(joints),
+            targets=tuple(float(x) for x in targets),
+        )
+
+    @classmethod
+    def effort(
+        cls,
+        name: str,
+        *,
+        robot: str = "",
+        joints: Sequence[JointRef] = (),
+        max: float | None = None,
+        phase: str = "",
+    ) -> Outcome:
+        return cls(name, "effort", robot, phase, joints=tuple(joints), max=max)
+
+    @classmethod
+    def function_of(
+        cls,
+        name: str,
+        function: Any,
+        *,
+        params: Mapping[str, Any] | None = None,
+        max: float | None = None,
+        min: float | None = None,
+        unit: str = "",
+    ) -> Outcome:
+        """``function``: a top-level function, or a ``"file.py:name"`` /
+        ``"package.module:name"`` reference (ensemble workers import it again)."""
+        from .controllers import reference_of
+
+        ref = function if isinstance(function, str) else reference_of(function)
+        return cls(
+            name,
+            "function",
+            function=ref,
+            params=dict(params or {}),
+            max=max,
+            min=min,
+            function_unit=unit,
+        )
+
+    @property
+    def unit(self) -> str:
+        """The value's unit: s, rad, m, rad/s, J, or a function's ``unit``."""
+        if self.kind in _UNITS:
+            return _UNITS[self.kind]
+        if self.kind == "function":
+            return self.function_unit
+        if self.kind == "track" and self.points:
+            return "m"
+        if self.kind == "final_pose" and self.point is not None:
+            return "m"
+        unit = "rad"  # joints: rad (revolute); a prismatic joint's error is in m
+        return unit + "/s" if self.quantity == "velocity" else unit
+
+    @property
+    def title(self) -> str:
+        return _TITLES[self.kind]
+
+    def has_bound(self) -> bool:
+        """Whether success is defined (reach and upright always; others with a bound)."""
+        if self.kind in ("reach", "upright"):
+            return True
+        if self.kind == "final_pose":
+            return self.within is not None
+        if self.kind == "function":
+            return True  # a bool result is a success; a number needs max or min (else None)
+        return self.max is not None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The declaration, JSON-ready (only the keys this kind uses)."""
+        out: dict[str, Any] = {"name": self.name, "kind": self.kind, "unit": self.unit}
+        for key in (
+            "robot",
+            "phase",
+            "link",
+            "point",
+            "within",
+            "by",
+            "hold",
+            "max_tilt",
+            "quantity",
+            "joints",
+            "targets",
+            "points",
+            "max",
+            "min",
+            "function",
+            "params",
+        ):
+            value = getattr(self, key)
+            default = Outcome.__dataclass_fields__[key].default
+            if key == "params":
+                if not value:
+                    continue
+            elif value == default:
+                continue
+            out[key] = list(value) if isinstance(value, tuple) else value
+        return out
+
+
+# ---------------------------------------------------------------- evaluation
+
+
+def _fail(outcome: Outcome, index: int | None, key: str, detail: str, file: str) -> ScenarioError:
+    where = f"outcomes[{index}].{key}" if index is not None else f"outcome {outcome.name!r}.{key}"
+    return ScenarioError(file, where, detail)
+
+
+def _window(outcome: Outcome, tr: Trajectory) -> tuple[int, int] | None:
+    if not outcome.phase:
+        return 0, len(tr.time) - 1
+    for name, a, b in tr.phases:
+        if name == outcome.phase:
+            return a, b
+    return None
+
+
+def _link_column(body: BodyTrajectory, link: JointRef) -> int | None:
+    """Column of ``body.link_positions`` for ``link`` (None: the base frame)."""
+    if link == "base" or link == -1:
+        return None
+    if isinstance(link, int):
+        if 0 <= link < len(body.link_names) - 1:
+            return link + 1
+        raise KeyError(link)
+    if link in body.link_names[1:]:
+        return body.link_names.index(link, 1)
+    raise KeyError(link)
+
+
+def _joint_columns(body: BodyTrajectory, joints: Sequence[JointRef]) -> list[int]:
+    cols = []
+    indices = [int(j) for j in body.joint_indices]
+    for j in joints:
+        if isinstance(j, str):
+            if j not in body.joint_names:
+                raise KeyError(j)
+            cols.append(body.joint_names.index(j))
+        else:
+            if j not in indices:
+                raise KeyError(j)
+            cols.append(indices.index(j))
+    return cols
+
+
+def _positions(body: BodyTrajectory, link: JointRef) -> np.ndarray:
+    col = _link_column(body, link)
+    return body.base_position if col is None else body.link_positions[:, col, :]
+
+
+def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Quaternions q (T, 4) (x, y, z, w) applied to the vector v (3,): (T, 3)."""
+    u = q[:, :3]
+    w = q[:, 3:4]
+    t = 2.0 * np.cross(u, np.broadcast_to(v, u.shape))
+    return v + w * t + np.cross(u, t)
+
+
+def tilt(orientation: np.ndarray) -> np.ndarray:
+    """(T,) rad: the angle between the world z axis and the body axis that pointed along it at
+    the first instant (orientations (T, 4), x, y, z, w)."""
+    q0 = orientation[0]
+    conj = np.array([-q0[0], -q0[1], -q0[2], q0[3]])
+    up_body = _rotate(conj[None, :], np.array([0.0, 0.0, 1.0]))[0]
+    up = _rotate(orientation, up_body)
+    up /= np.linalg.norm(up, axis=1, keepdims=True)
+    return np.arccos(np.clip(up[:, 2], -1.0, 1.0))
+
+
+def _record(outcome: Outcome, value: float | None, success: bool | None, **extra: Any):
+    out: dict[str, Any] = {
+        "name": outcome.name,
+        "kind": outcome.kind,
+        "unit": outcome.unit,
+        "value": value,
+        "success": success,
+    }
+    out.update(extra)
+    return out
+
+
+def evaluate(
+    outcome: Outcome,
+    tr: Trajectory,
+    *,
+    base: Path | None = None,
+    file: str = "<scenario>",
+    index: int | None = None,
+) -> dict[str, Any]:
+    """Measure ``outcome`` on the recorded run ``tr``.
+
+    Returns a dict: ``name``, ``kind``, ``unit``, ``value`` (float or None), ``success`` (bool,
+    or None where no bound is declared or the window was not run), and per kind:
+    ``reach``: ``closest`` (m, smallest distance), ``final_distance`` (m); ``upright``:
+    ``exceeded_at`` (s, first instant over the bound, None: never), ``final_tilt`` (rad);
+    ``track``: ``samples`` (instants counted), ``max_error``; ``final_pose``: nothing more;
+    ``effort``: nothing more. A phase the run did not reach (a shortened run) gives value and
+    success None and ``note``.
+
+    Raises:
+        ScenarioError: an unknown robot, link or joint (naming the outcome and the valid
+            names), or a function that fails.
+    """
+    if outcome.kind == "function":
+        return _evaluate_function(outcome, tr, base, file, index)
+    robot = outcome.robot or tr.subject
+    if robot not in tr.bodies:
+        raise _fail(
+            outcome, index, "robot", f"no robot {robot!r}; robots: {sorted(tr.bodies)}", file
+        )
+    body = tr.bodies[robot]
+    window = _window(outcome, tr)
+    if window is None:
+        return _record(outcome, None, None, note=f"phase {outcome.phase!r} was not run")
+    a, b = window
+    t = tr.time[a : b + 1] - tr.time[a]
+    try:
+        if outcome.kind == "reach":
+            return _reach(outcome, body, a, b, t)
+        if outcome.kind == "upright":
+            angles = tilt(body.base_orientation[a : b + 1])
+            assert outcome.max_tilt is not None
+            over = np.flatnonzero(angles >= outcome.max_tilt)
+            worst = float(angles.max())
+            return _record(
+                outcome,
+                worst,
+                bool(over.size == 0),
+                exceeded_at=float(t[over[0]]) if over.size else None,
+                final_tilt=float(angles[-1]),
+            )
+        if outcome.kind == "track":
+            return _track(outcome, body, a, b, t)
+        if outcome.kind == "final_pose":
+            if outcome.point is not None:
+                n = len(outcome.point)
+                pos = _positions(body, outcome.link)[b, :n]
+                err = float(np.linalg.norm(pos - np.asarray(outcome.point)))
+            else:
+                cols = _joint_columns(body, outcome.joints)
+                q = body.joint_positions[b, cols]
+                err = float(np.sqrt(np.mean((q - np.asarray(outcome.targets)) ** 2)))
+            ok = None if outcome.within is None else bool(err <= outcome.within)
+            return _record(outcome, err, ok)
+        if outcome.kind == "effort":
+            cols = (
+                _joint_columns(body, outcome.joints)
+                if outcome.joints
+                else list(range(len(body.joint_names)))
+            )
+            power = np.abs(
+                body.joint_forces[a + 1 : b + 1, cols] * body.joint_velocities[a + 1 : b + 1, cols]
+            )
+            work = float(power.sum() * tr.timestep)
+            ok = None if outcome.max is None else bool(work <= outcome.max)
+            return _record(outcome, work, ok)
+    except KeyError as exc:
+        (missing,) = exc.args
+        if outcome.kind in ("track", "final_pose", "effort") and outcome.joints:
+            valid = ", ".join(body.joint_names)
+            if missing in outcome.joints:
+                raise _fail(
+                    outcome,
+                    index,
+                    "joints",
+                    f"robot {robot!r} has no movable joint {missing!r}; movable joints: {valid}",
+                    file,
+                ) from None
+        valid = ", ".join(["base", *body.link_names[1:]])
+        raise _fail(
+            outcome, index, "link", f"robot {robot!r} has no link {missing!r}; links: {valid}", file
+        ) from None
+    raise _fail(outcome, index, "kind", f"unknown kind {outcome.kind!r}; kinds: {KINDS}", file)
+
+
+def _reach(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray):
+    assert outcome.point is not None and outcome.within is not None
+    n = len(outcome.point)
+    pos = _positions(body, outcome.link)[a : b + 1, :n]
+    d = np.linalg.norm(pos - np.asarray(outcome.point), axis=1)
+    inside = d <= outcome.within
+    if outcome.hold:
+        outside = np.flatnonzero(~inside)
+        first = 0 if outside.size == 0 else int(outside[-1]) + 1
+        row = first if first < len(d) else None
+    else:
+        hits = np.flatnonzero(inside)
+        row = int(hits[0]) if hits.size else None
+    when = None if row is None else float(t[row])
+    ok = when is not None and (outcome.by is None or when <= outcome.by)
+    return _record(outcome, when, bool(ok), closest=float(d.min()), final_distance=float(d[-1]))
+
+
+def _track(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray):
+    if outcome.points:
+        pos = _positions(body, outcome.link)[a : b + 1]
+        pts = np.asarray(outcome.points, dtype=np.float64)
+        n = pts.shape[1] - 1
+        k = np.searchsorted(pts[:, 0], t, side="right") - 1  # the last point at or before t
+        use = k >= 0
+        if not use.any():
+            return _record(outcome, None, None, samples=0, max_error=None)
+        err = np.linalg.norm(pos[use, :n] - pts[k[use], 1:], axis=1)
+    else:
+        cols = (
+            _joint_columns(body, outcome.joints)
+            if outcome.joints
+            else list(range(len(body.joint_names)))
+        )
+        source = body.joint_velocities if outcome.quantity == "velocity" else body.joint_positions
+        actual = source[a : b + 1, cols]
+        if outcome.targets:
+            target = np.broadcast_to(np.asarray(outcome.targets), actual.shape)
+            mask = np.ones(actual.shape, dtype=bool)
+        else:
+            code = 1 if outcome.quantity == "velocity" else 2
+            target = body.joint_targets[a : b + 1, cols]
+            mask = (body.joint_modes[a : b + 1, cols] == code) & np.isfinite(target)
+            if not outcome.joints:  # all joints: those commanded in this mode at some instant
+                keep = mask.any(axis=0)
+                actual, target, mask = actual[:, keep], target[:, keep], mask[:, keep]
+        if not mask.any():
+            return _record(outcome, None, None, samples=0, max_error=None)
+        err = np.abs(actual - target)[mask]
+    rms = float(np.sqrt(np.mean(err**2)))
+    ok = None if outcome.max is None else bool(rms <= outcome.max)
+    return _record(outcome, rms, ok, samples=int(err.size), max_error=float(err.max()))
+
+
+def _evaluate_function(
+    outcome: Outcome, tr: Trajectory, base: Path | None, file: str, index: int | None
+) -> dict[str, Any]:
+    from .controllers import RefError, load_object
+
+    try:
+        fn = load_object(outcome.function, base)
+    except RefError as exc:
+        raise _fail(outcome, index, "function", str(exc), file) from None
+    try:
+        out = fn(tr, **outcome.params)
+    except Exception as exc:
+        raise _fail(
+            outcome,
+            index,
+            "function",
+            f"{outcome.function}(trajectory) raised {type(exc).__name__}: {exc}",
+            file,
+        ) from exc
+    if out is None:
+        return _record(outcome, None, None)
+    if isinstance(out, (bool, np.bool_)):
+        return _record(outcome, float(bool(out)), bool(out))
+    if isinstance(out, (int, float, np.integer, np.floating)) and math.isfinite(float(out)):
+        v = float(out)
+        ok: bool | None = None
+        if outcome.max is not None or outcome.min is not None:
+            ok = (outcome.max is None or v <= outcome.max) and (
+                outcome.min is None or v >= outcome.min
+            )
+        return _record(outcome, v, ok)
+    raise _fail(
+        outcome,
+        index,
+        "function",
+        f"{outcome.function}(trajectory) returned {out!r}; expected a finite number, a bool or "
+        "None",
+        file,
+    )
+
+
+def evaluate_all(scenario: Scenario, tr: Trajectory) -> dict[str, dict[str, Any]]:
+    """Every outcome the scenario declares, measured on ``tr``: ``{name: record}``."""
+    base = scenario.source.parent if scenario.source is not None else None
+    file = str(scenario.source) if scenario.source is not None else f"<scenario {scenario.name}>"
+    return {
+        o.name: evaluate(o, tr, base=base, file=file, index=i)
+        for i, o in enumerate(scenario.outcomes)
+    }
+
+
+# ---------------------------------------------------------------- over an ensemble
+
+
+def success_interval(successes: int, runs: int, confidence: float = CONFIDENCE):
+    """``(low, high)``: the ``confidence`` interval of a success rate from ``successes`` of
+    ``runs`` (Wilson's score interval, ``scipy.stats.binomtest(...).proportion_ci``)."""
+    from scipy.stats import binomtest
+
+    ci = binomtest(int(successes), int(runs)).proportion_ci(
+        confidence_level=confidence, method=INTERVAL_METHOD
+    )
+    return float(ci.low), float(ci.high)
+
+
+def _distribution(values: Sequence[float]) -> dict[str, Any] | None:
+    if not values:
+        return None
+    v = np.asarray(values, dtype=np.float64)
+    return {
+        "runs": int(v.size),
+        "mean": float(v.mean()),
+        "std": float(v.std(ddof=1)) if v.size > 1 else 0.0,
+        "min": float(v.min()),
+        "median": float(np.median(v)),
+        "max": float(v.max()),
+    }
+
+
+def summarize(outcome: Outcome, records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """One engine's runs of one outcome (``records``: :func:`evaluate`'s dicts, the nominal
+    run first): ``success`` (``{successes, runs, rate, low, high, confidence, method}``, or
+    None when no run has a success), ``value`` (the distribution over the runs with a value:
+    ``{runs, mean, std, min, median, max}``, std with ddof 1; None without one), ``nominal``
+    (run 0's record) and ``runs`` (every record, run 0 first)."""
+    judged = [r["success"] for r in records if r.get("success") is not None]
+    success = None
+    if judged:
+        k, n = sum(bool(s) for s in judged), len(judged)
+        low, high = success_interval(k, n)
+        success = {
+            "successes": k,
+            "runs": n,
+            "rate": k / n,
+            "low": low,
+            "high": high,
+            "confidence": CONFIDENCE,
+            "method": INTERVAL_METHOD,
+        }
+    values = [float(r["value"]) for r in records if r.get("value") is not None]
+    return {
+        "name": outcome.name,
+        "kind": outcome.kind,
+        "unit": outcome.unit,
+        "success": success,
+        "value": _distribution(values),
+        "nominal": dict(records[0]) if records else None,
+        "runs": [dict(r) for r in records],
+    }
+
+
+def outcomes_summary(
+    scenario: Scenario, labels: Sequence[str], per_engine: Sequence[Sequence[Mapping[str, Any]]]
+) -> dict[str, Any] | None:
+    """``summary.json``'s ``outcomes``: ``declared`` (each outcome's declaration) and
+    ``engines`` (per engine label, per outcome name, :func:`summarize`); ``per_engine[slot]``
+    is the list of every run's ``{name: record}``, nominal first. None when the scenario
+    declares no outcome."""
+    if not scenario.outcomes:
+        return None
+    engines: dict[str, Any] = {}
+    for label, runs in zip(labels, per_engine, strict=True):
+        engines[label] = {
+            o.name: summarize(o, [r[o.name] for r in runs if o.name in r])
+            for o in scenario.outcomes
+        }
+    return {
+        "declared": [o.to_dict() for o in scenario.outcomes],
+        "closed_loop": any(p.controller is not None for p in scenario.phases),
+        "confidence": CONFIDENCE,
+        "method": INTERVAL_METHOD,
+        "engines": engines,
+    }
+
+
+# ---------------------------------------------------------------- in words
+
+
+def _fmt(x: float, unit: str) -> str:
+    from .fmt import fmt_value
+
+    if unit == "s":
+        return f"{x:.3g} s"
+    if unit == "J":
+        return f"{x:.3g} J"
+    return fmt_value(x, unit)
+
+
+def _pm(dist: dict[str, Any] | None, unit: str, runs: int, none: str = "none") -> str:
+    """``mean ± std`` over the runs with a value (``6.6 ± 0.02 s``), the count when some runs
+    have none."""
+    if dist is None:
+        return none
+    if dist["runs"] == 1:
+        return _fmt(dist["mean"], unit) + (f" (1 run of {runs})" if runs > 1 else "")
+    if unit in ("s", "J", ""):
+        text = f"{dist['mean']:.3g} ± {dist['std']:.2g} {unit}".rstrip()
+    else:
+        text = f"{_fmt(dist['mean'], unit)} ± {_fmt(dist['std'], unit)}"
+    if dist["runs"] < runs:
+        text += f" ({dist['runs']} runs of {runs})"
+    return text
+
+
+def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
+    """The headline's outcome sentences, one per outcome, from ``summary.json`` alone::
+
+        **goal (0, 2)**: reached in 16/16 runs on pybullet [81%, 100%], 16/16 on mujoco
+        [81%, 100%]; time to reach 6.1 ± 0.01 s against 6.13 ± 0.002 s.
+
+    Empty when the scenario declares no outcome."""
+    out = summary.get("outcomes")
+    if not out:
+        return []
+    labels = list(out["engines"])
+    lines = []
+    for decl in out["declared"]:
+        name, unit = decl["name"], decl["unit"]
+        per = [out["engines"][label][name] for label in labels]
+        parts = []
+        verb = {
+            "reach": "reached",
+            "upright": "upright",
+            "track": "within bound",
+            "final_pose": "within bound",
+            "effort": "within bound",
+            "function": "succeeded",
+        }[decl["kind"]]
+        if all(p["success"] is not None for p in per):
+            cells = []
+            for i, (label, p) in enumerate(zip(labels, per, strict=True)):
+                s = p["success"]
+                ci = f"[{s['low'] * 100:.0f}%, {s['high'] * 100:.0f}%]"
+                head = f"{verb} in " if i == 0 else ""
+                cells.append(f"{head}{s['successes']}/{s['runs']} runs on {label} {ci}")
+            parts.append(", ".join(cells))
+        runs = [len(p["runs"]) for p in per]
+        never = "never" if decl["kind"] == "reach" else "none"
+        values = [_pm(p["value"], unit, n, never) for p, n in zip(per, runs, strict=True)]
+        title = _TITLES[decl["kind"]]
+        if decl["kind"] == "reach" and all(p["value"] is None for p in per):
+            values_text = "no run reached it"
+            closest = [
+                min(r["closest"] for r in p["runs"] if r.get("closest") is not None)
+                for p in per
+                if p["runs"]
+            ]
+            if len(closest) == len(per):
+                values_text += "; closest " + " and ".join(
+                    f"{_fmt(c, 'm')} on {label}" for c, label in zip(closest, labels, strict=True)
+                )
+            parts.append(values_text)
+        elif decl["kind"] == "reach":
+            parts.append(f"{title}: {values[0]} on {labels[0]}, {values[1]} on {labels[1]}")
+        else:
+            parts.append(f"{title} {values[0]} on {labels[0]} against {values[1]} on {labels[1]}")
+        lines.append(f"**{name}**: " + "; ".join(parts) + ".")
+    return lines
+
+
+def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
+    """The report's ``## Outcomes`` section (markdown lines): per outcome and engine, the
+    success count and rate with its interval, the value's distribution and the nominal run's
+    value. Empty when the scenario declares no outcome."""
+    out = summary.get("outcomes")
+    if not out:
+        return []
+    pct = f"{out['confidence'] * 100:g}%"
+    lines = [
+        "## Outcomes",
+        "",
+        "What the scenario calls success, measured on every run of each engine's ensemble "
+        f"(the nominal run first). Success rates carry {pct} Wilson score intervals "
+        "(`scipy.stats.binomtest`); values are mean ± standard deviation over the runs that "
+        "have one (a goal never reached has no time).",
+        "",
+        "| outcome | engine | success | rate [interval] | value: mean ± std | median | "
+        "min – max | nominal run |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for decl in out["declared"]:
+        name, unit = decl["name"], decl["unit"]
+        for label, per in out["engines"].items():
+            p = per[name]
+            s, v, nom = p["success"], p["value"], p["nominal"]
+            cells = [f"{name} ({_TITLES[decl['kind']]})", label]
+            if s is None:
+                cells += ["n/a", "n/a"]
+            else:
+                cells += [
+                    f"{s['successes']}/{s['runs']}",
+                    f"{s['rate'] * 100:.0f}% [{s['low'] * 100:.0f}%, {s['high'] * 100:.0f}%]",
+                ]
+            if v is None:
+                cells += ["none", "", ""]
+            else:
+                cells += [
+                    _pm(v, unit, len(p["runs"])),
+                    _fmt(v["median"], unit),
+                    f"{_fmt(v['min'], unit)} – {_fmt(v['max'], unit)}",
+                ]
+            nv = None if nom is None else nom.get("value")
+            cells.append("none" if nv is None else _fmt(nv, unit))
+            lines.append("| " + " | ".join(cells) + " |")
+    lines.append("")
+    for decl in out["declared"]:
+        keys = {k: v for k, v in decl.items() if k not in ("name", "kind", "unit")}
+        words = ", ".join(f"{k} = {v}" for k, v in keys.items())
+        lines.append(f"- `{decl['name']}`: {decl['kind']}" + (f" ({words})" if words else ""))
+    lines.append("")
+    return lines
