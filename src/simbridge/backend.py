@@ -235,6 +235,7 @@ class Backend(ABC):
 
     def unbind_command(self, command: BoundCommand) -> None:
         """Stop reading ``command``'s arrays; its joints keep the command last sent."""
+        return None  # the default binding keeps nothing: the Sim stops sending it
 
     # ---------------------------------------------------------------- description
 

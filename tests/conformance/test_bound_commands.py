@@ -251,5 +251,6 @@ def test_a_step_of_n_runs_on_the_values_read_when_it_starts(make_sim):
                 sim.step()
         else:
             sim.step(30)
+        assert cmd.bound
         results.append(_state(sim, robot))
     assert results[0] == results[1]
