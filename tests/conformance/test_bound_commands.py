@@ -31,8 +31,11 @@ def _state(sim, body) -> bytes:
     b = sim.base_state(body)
     js = sim.joint_states(body)
     flat = np.array([*b.position, *b.orientation, *b.linear_velocity, *b.angular_velocity])
-    return flat.tobytes() + js.positions.tobytes() + js.velocities.tobytes() + (
-        js.applied_torques.tobytes()
+    return (
+        flat.tobytes()
+        + js.positions.tobytes()
+        + js.velocities.tobytes()
+        + (js.applied_torques.tobytes())
     )
 
 
