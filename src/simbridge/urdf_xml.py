@@ -162,7 +162,10 @@ def _pybullet_lines(data: bytes, lenient: Leniency) -> tuple[bytes, list[int]]:
 
 _DECLARATION = re.compile(r"<\?xml[ \t\n\r][^>]*?\?>|<\?xml\?>")
 _LEADING = re.compile(r"[ \t\n\r\v\f]*\ufeff?")
-_BAD_AMPERSAND = re.compile(r"&(?!(?:amp|lt|gt|quot|apos|#[0-9]+|#x[0-9a-fA-F]+);)")
+_AMPERSAND_OUTSIDE = re.compile(
+    r"<!--.*?-->|<!\[CDATA\[.*?\]\]>|<\?.*?\?>|(&)(?!(?:amp|lt|gt|quot|apos|#[0-9]+|#x[0-9a-fA-F]+);)",
+    re.S,
+)
 _RAW_SPACE_IN_VALUE = re.compile(r"""=\s*(?:"[^"<]*[\t\n][^"<]*"|'[^'<]*[\t\n][^'<]*')""")
 _START_TAG = re.compile(
     r"<!--.*?-->|<!\[CDATA\[.*?\]\]>|<[?!][^>]*>|<[^/!?](?:\"[^\"]*\"|'[^']*'|[^>\"'])*>",
@@ -202,15 +205,20 @@ def _prolog(text: str, line_at, lenient: Leniency) -> str:
 
 def _ampersands(text: str, line_at, lenient: Leniency) -> str:
     """An '&' that starts no entity is the character '&' for TinyXML-2; Python's parser
-    refuses it: written as '&amp;'."""
-    m = _BAD_AMPERSAND.search(text)
-    if m is None:
-        return text
-    lenient.add(
-        line_at(text.count("\n", 0, m.start()) + 1),
-        "an '&' that starts no XML entity read as the character '&'",
-    )
-    return _BAD_AMPERSAND.sub("&amp;", text)
+    refuses it outside comments and CDATA: written there as '&amp;'."""
+    noted: list[int] = []
+
+    def fix(m: re.Match[str]) -> str:
+        if m.group(1) is None:  # a comment, CDATA or a processing instruction: as it is
+            return m.group(0)
+        if not noted:
+            noted.append(line_at(text.count("\n", 0, m.start()) + 1))
+        return "&amp;"
+
+    out = _AMPERSAND_OUTSIDE.sub(fix, text)
+    if noted:
+        lenient.add(noted[0], "an '&' that starts no XML entity read as the character '&'")
+    return out
 
 
 def _raw_attribute_spaces(text: str, line_of: list[int]) -> tuple[str, list[int]]:
