@@ -32,6 +32,7 @@ from simbridge.exceptions import (
     SimulationDivergedError,
     UrdfStructureError,
 )
+from simbridge.load_options import LoadOptions
 from simbridge.profiles import Profile
 from simbridge.types import (
     BaseState,
@@ -116,6 +117,17 @@ def _pybullet_gui_output(text: str) -> tuple[list[Record], str]:
 register_classifier("pybullet", _pybullet_output)
 with captured("pybullet", "importing"):  # its banner, also where this module is imported first
     import pybullet as p  # noqa: E402
+
+# Sim.load_urdf's self_collision -> loadURDF's flags (URDF_USE_SELF_COLLISION_EXCLUDE_PARENT
+# is not read by PyBullet 3.2.7: excluding the parent is what URDF_USE_SELF_COLLISION does)
+_SELF_COLLISION_FLAGS = {
+    "off": 0,
+    "exclude_parent": p.URDF_USE_SELF_COLLISION,
+    "exclude_all_parents": (
+        p.URDF_USE_SELF_COLLISION | p.URDF_USE_SELF_COLLISION_EXCLUDE_ALL_PARENTS
+    ),
+    "include_parent": p.URDF_USE_SELF_COLLISION | p.URDF_USE_SELF_COLLISION_INCLUDE_PARENT,
+}
 
 
 def _x_display_problem() -> str | None:
@@ -226,21 +238,33 @@ class PyBulletBackend(Backend):
         return self._steps * self._dt
 
     def load(
-        self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
+        self,
+        model: UrdfModel,
+        base_position: Vec3,
+        base_orientation: Quat,
+        fixed_base: bool,
+        options: LoadOptions,
     ) -> int:
         with self._idle():
-            return self._load(model, base_position, base_orientation, fixed_base)
+            return self._load(model, base_position, base_orientation, fixed_base, options)
 
     def _load(
-        self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
+        self,
+        model: UrdfModel,
+        base_position: Vec3,
+        base_orientation: Quat,
+        fixed_base: bool,
+        options: LoadOptions,
     ) -> int:
         self._last_velocity = None
         prof = self.profile
-        flags = 0
-        if prof.inertia_source == "file":
+        # loadURDF's own options: PyBullet scales and merges the file it reads itself
+        flags = _SELF_COLLISION_FLAGS[options.self_collision]
+        if options.inertia_source == "file":
             flags |= p.URDF_USE_INERTIA_FROM_FILE
-        if prof.self_collision:
-            flags |= p.URDF_USE_SELF_COLLISION
+        if options.merge_fixed_links:
+            flags |= p.URDF_MERGE_FIXED_LINKS
+        scale = options.global_scaling
         src = model.source
         needs_rewrite = (
             src.path is None
@@ -255,10 +279,16 @@ class PyBulletBackend(Backend):
         )
         if not needs_rewrite:
             body = self._load_file(
-                str(src.path), src.display_name, base_position, base_orientation, fixed_base, flags
+                str(src.path),
+                src.display_name,
+                base_position,
+                base_orientation,
+                fixed_base,
+                flags,
+                scale,
             )
         else:
-            body = self._load_text(model, base_position, base_orientation, fixed_base, flags)
+            body = self._load_text(model, base_position, base_orientation, fixed_base, flags, scale)
         self._apply_profile(body, model)
         table = [
             self._read_joint_info(body, i)
@@ -299,8 +329,17 @@ class PyBulletBackend(Backend):
         return [min(f, effort[i]) for f, i in zip(force, joints.tolist(), strict=True)]
 
     def _load_file(
-        self, path: str, display: str, pos: Vec3, orn: Quat, fixed: bool, flags: int
+        self,
+        path: str,
+        display: str,
+        pos: Vec3,
+        orn: Quat,
+        fixed: bool,
+        flags: int,
+        scale: float = 1.0,
     ) -> int:
+        # globalScaling only when asked: PyBullet's default call stays the tutorial's call
+        scaling = {} if scale == 1.0 else {"globalScaling": scale}
         try:
             with captured(self.name, f"loading {display}"):
                 return int(
@@ -311,6 +350,7 @@ class PyBulletBackend(Backend):
                         useFixedBase=fixed,
                         flags=flags,
                         physicsClientId=self._c,
+                        **scaling,
                     )
                 )
         except p.error as exc:
@@ -318,7 +358,9 @@ class PyBulletBackend(Backend):
                 display, "<robot>", f"PyBullet cannot load it: {exc}"
             ) from None
 
-    def _load_text(self, model: UrdfModel, pos: Vec3, orn: Quat, fixed: bool, flags: int) -> int:
+    def _load_text(
+        self, model: UrdfModel, pos: Vec3, orn: Quat, fixed: bool, flags: int, scale: float = 1.0
+    ) -> int:
         """Load through a uniquely named temporary file that is always removed (PyBullet reads
         files only, and caches their contents by name). Mesh paths are made absolute."""
         root = ET.fromstring(model.source.text)
@@ -330,7 +372,7 @@ class PyBulletBackend(Backend):
         try:
             with os.fdopen(fd, "wb") as f:
                 f.write(ET.tostring(root, encoding="utf-8"))
-            return self._load_file(path, model.source.display_name, pos, orn, fixed, flags)
+            return self._load_file(path, model.source.display_name, pos, orn, fixed, flags, scale)
         finally:
             os.unlink(path)
 

@@ -26,6 +26,7 @@ from simbridge.exceptions import (
 )
 from simbridge.inertia import is_fixed_base
 from simbridge.joint_table import joint_table
+from simbridge.load_options import LoadOptions, self_collision_exclusions
 from simbridge.profiles import Profile
 from simbridge.types import (
     JointType,
@@ -151,9 +152,18 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             kernel.check_idle()  # SimBusyError while it steps
 
     def load(
-        self, model: UrdfModel, base_position: Vec3, base_orientation: Quat, fixed_base: bool
+        self,
+        model: UrdfModel,
+        base_position: Vec3,
+        base_orientation: Quat,
+        fixed_base: bool,
+        options: LoadOptions,
     ) -> int:
         self._check_idle()
+        # this body's inertia source (the profile's unless load_urdf said otherwise)
+        profile = self.profile
+        if options.inertia_source != profile.inertia_source:
+            profile = profile.with_(inertia_source=options.inertia_source)
         body = self._free_ids[-1] if self._free_ids else self._next_id
         prefix = f"b{body}/"
         spec = self._spec
@@ -167,9 +177,9 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
                 base_position,
                 base_orientation,
                 fixed_base,
-                self.profile,
+                profile,
             )
-            skip = build.adjacent_links(model) if self.profile.self_collision else None
+            skip = self_collision_exclusions(model, options.self_collision)
             build.add_pairs(
                 spec,
                 rspec,

@@ -42,6 +42,7 @@ from .types import (
 
 if TYPE_CHECKING:
     from .bound import BoundCommand
+    from .load_options import LoadOptions
     from .urdf import UrdfModel
 
 __all__ = ["Backend"]
@@ -115,11 +116,19 @@ class Backend(ABC):
         base_position: Vec3,
         base_orientation: Quat,
         fixed_base: bool,
+        options: LoadOptions,
     ) -> int:
         """Add the robot to the world; return its body id.
 
         ``base_position``/``base_orientation`` place the root's URDF link frame (not its centre
-        of mass), as ``p.loadURDF`` does.
+        of mass), as ``p.loadURDF`` does; ``base_orientation`` is a unit quaternion.
+
+        ``options`` are ``loadURDF``'s (:mod:`simbridge.load_options`). ``model`` is already
+        scaled by ``options.global_scaling`` and has its fixed links merged when
+        ``options.merge_fixed_links``: a backend that builds its engine model from ``model``
+        uses it as it is; one whose engine reads the file itself passes both on to it (and its
+        link order must then be ``model``'s). Every backend honours ``options.inertia_source``
+        and ``options.self_collision`` for this body in place of the profile's entries.
         """
 
     @abstractmethod

@@ -16,6 +16,7 @@ replaced; a torque command lasts one step.
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import time as _time
@@ -68,6 +69,7 @@ class _Body:
     link_index: dict[str, int]
     cache: dict[Any, np.ndarray] = field(default_factory=dict)  # joints arg -> indices
     movable_cache: dict[Any, np.ndarray] = field(default_factory=dict)
+    load: dict[str, Any] = field(default_factory=dict)  # how it was loaded (the manifest's)
 
 
 class _Closed:
@@ -89,13 +91,27 @@ def _vec(value: Any, n: int, argument: str) -> tuple[float, ...]:
     return out
 
 
-def _quat(value: Any, argument: str) -> tuple[float, float, float, float]:
+def _quat(value: Any, argument: str, normalise: bool = False) -> tuple[float, float, float, float]:
+    """A unit quaternion (x, y, z, w). One whose norm is off 1 by more than 1e-3 is refused,
+    or with ``normalise`` (a spawn pose: PyBullet's loadURDF normalises) divided by its norm,
+    with one warning on the ``simbridge.sim`` logger; a zero one is always refused."""
     q = _vec(value, 4, argument)
     norm = math.sqrt(sum(c * c for c in q))
     if abs(norm - 1.0) > 1e-3:
-        raise InvalidArgumentError(
-            argument, f"expected a unit quaternion (x, y, z, w), got {value!r} with norm {norm:.6g}"
+        if not normalise or not norm > 0.0:
+            raise InvalidArgumentError(
+                argument,
+                f"expected a unit quaternion (x, y, z, w), got {value!r} with norm {norm:.6g}",
+            )
+        unit = (q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm)
+        logging.getLogger("simbridge.sim").warning(
+            "%s %r has norm %.6g: normalised to (%s), as PyBullet does",
+            argument,
+            value,
+            norm,
+            ", ".join(f"{c:.6g}" for c in unit),
         )
+        return unit
     return (q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm)
 
 
@@ -213,8 +229,14 @@ class Sim:
     def manifest(self) -> dict[str, Any]:
         """Everything needed to reproduce a run: backend, engine version, profile entries, and
         what the backend could not reproduce exactly (``departures``)."""
-        out = {"simbridge_version": __version__, "profile": self.profile.as_dict()}
+        out: dict[str, Any] = {
+            "simbridge_version": __version__,
+            "profile": self.profile.as_dict(),
+        }
         out.update(self._b.manifest())
+        # each body's load: source, pose and loadURDF's options (global_scaling, ...)
+        bodies: dict[int, dict[str, Any]] = {body: dict(b.load) for body, b in self._bodies.items()}
+        out["bodies"] = bodies
         return out
 
     def load_urdf(
@@ -224,6 +246,10 @@ class Sim:
         base_position: Sequence[float] = (0.0, 0.0, 0.0),
         base_orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
         fixed_base: bool = False,
+        global_scaling: float = 1.0,
+        self_collision: bool | str | None = None,
+        inertia_source: str | None = None,
+        merge_fixed_links: bool = False,
     ) -> int:
         """Load a robot and return its body id.
 
@@ -232,22 +258,47 @@ class Sim:
                 pybullet_data; ``".urdf"`` may be left off); or URDF XML text.
                 ``package://`` mesh URIs resolve against the URDF's own folder tree.
             base_position: where the root's URDF link frame goes (m, world).
-            base_orientation: its orientation, (x, y, z, w).
+            base_orientation: its orientation, (x, y, z, w); normalised (with a warning) when
+                its norm is not 1, as PyBullet does.
             fixed_base: weld the root to the world.
+            global_scaling: ``loadURDF``'s ``globalScaling``: every length of the file times
+                this (> 0); masses and the file's inertia tensors are not scaled.
+            self_collision: whether links of this body collide with each other: False
+                (``"off"``), True (``"exclude_parent"``: ``URDF_USE_SELF_COLLISION``, a link
+                never with its parent), ``"exclude_all_parents"``, ``"include_parent"``; None:
+                the profile's ``self_collision`` entry.
+            inertia_source: ``"collision_aabb"`` or ``"file"`` (``URDF_USE_INERTIA_FROM_FILE``)
+                for this body; None: the profile's entry.
+            merge_fixed_links: ``URDF_MERGE_FIXED_LINKS``: links on fixed joints merged into
+                their parents (fewer joints and links, PyBullet's numbering).
+
+        The options are listed per body in :meth:`manifest` and mean the same on every
+        backend (:mod:`simbridge.load_options`).
 
         Raises:
             UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
-            UnsupportedJointError: the message names the file and the element.
+            UnsupportedJointError: the message names the file, the line and the element.
+            InvalidArgumentError: a bad pose or option.
         """
         pos = _vec(base_position, 3, "base_position")
-        orn = _quat(base_orientation, "base_orientation")
-        from .urdf import check_file_inertia, parse_urdf, resolve_source  # loaded on first use
+        orn = _quat(base_orientation, "base_orientation", normalise=True)
+        # loaded on first use
+        from .load_options import apply_load_options, load_options
+        from .urdf import check_file_inertia, parse_urdf, resolve_source
 
+        options = load_options(
+            self._b.profile,
+            global_scaling=global_scaling,
+            self_collision=self_collision,
+            inertia_source=inertia_source,
+            merge_fixed_links=merge_fixed_links,
+        )
         model = parse_urdf(resolve_source(source))
-        if self._b.profile.inertia_source == "file":
+        if options.inertia_source == "file":
             check_file_inertia(model)
+        model = apply_load_options(model, options, bool(fixed_base))
         self._end_commands("load_urdf changed the world")
-        body = self._b.load(model, pos, orn, bool(fixed_base))  # type: ignore[arg-type]
+        body = self._b.load(model, pos, orn, bool(fixed_base), options)  # type: ignore[arg-type]
         names = [j.name for j in model.joints]
         links = [j.child for j in model.joints]
         types = [self._b.joint_info(body, i).type for i in range(len(names))]
@@ -258,6 +309,13 @@ class Sim:
             types,
             {n: i for i, n in enumerate(names)},
             {n: i for i, n in enumerate(links)} | {model.base.name: -1},
+            load={
+                "source": model.source.display_name,
+                "base_position": pos,
+                "base_orientation": orn,
+                "fixed_base": bool(fixed_base),
+                **options.as_dict(),
+            },
         )
         return body
 
