@@ -2,6 +2,10 @@
 
 Each function takes a :class:`~simbridge.compare.pipeline.Comparison` and a path, writes one
 PNG and returns the path, or None when the figure has nothing to show.
+
+Both engines are drawn so that neither hides the other: the first solid, the second dashed on
+top of it, in distinct colours, with sparse markers of different shapes; legends sit below the
+axes, never on the data.
 """
 
 from __future__ import annotations
@@ -19,9 +23,59 @@ from .scenario import format_timestep
 if TYPE_CHECKING:
     from .pipeline import Comparison
 
-__all__ = ["paths", "distance", "heading", "joints", "sweep", "ensemble", "all_plots"]
+__all__ = [
+    "paths",
+    "distance",
+    "heading",
+    "height",
+    "joints",
+    "motors",
+    "events",
+    "sweep",
+    "ensemble",
+    "all_plots",
+    "JOINT_PLOTS",
+]
 
 COLORS = ("tab:blue", "tab:orange")
+LINES = ("-", (0, (5, 3)))  # solid, dashed
+MARKERS = ("o", "s")
+JOINT_PLOTS = {1: "velocity", 2: "position", 3: "torque"}
+"""Command mode code -> the name of its figure (``joints_<name>.png``)."""
+
+
+def _style(slot: int, n: int) -> dict[str, Any]:
+    """Line keywords of engine ``slot`` for a series of ``n`` points: a wide solid line or a
+    thinner dashed one drawn over it, its colour, a marker every ``n // 12`` points (offset so
+    the two engines' markers alternate)."""
+    every = max(1, n // 12)
+    return {
+        "color": COLORS[slot],
+        "ls": LINES[slot],
+        "lw": 2.0 if slot == 0 else 1.3,  # the wider solid line shows under the dashed one
+        "marker": MARKERS[slot],
+        "ms": 4,
+        "mfc": "none" if slot == 0 else COLORS[slot],
+        "markevery": (slot * every // 2, every),
+        "zorder": 2 + slot,
+    }
+
+
+def _legend_below(fig: Any, ax: Any, ncol: int = 3) -> None:
+    """One legend for the figure, centred below its axes (out of the data's way)."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles:
+        return
+    rows = math.ceil(len(handles) / ncol)
+    fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.035 + 0.035 * rows, 1, 1))
+
+
+def _save_fixed(fig: Any, path: Path) -> Path:
+    """Save without a further tight_layout (the layout already leaves room for the legend)."""
+    fig.savefig(path, dpi=110)
+    _plt().close(fig)
+    return path
 
 
 def _plt() -> Any:
@@ -34,19 +88,21 @@ def _plt() -> Any:
 
 
 def _phase_lines(ax: Any, c: Comparison) -> None:
-    """Dotted lines at phase starts, names along the bottom of the axes."""
+    """Dotted lines at phase starts, names just above the axes (over no data: callers lift
+    their title with ``pad=14``)."""
     tr = c.runs[(0, c.timestep)]
     for _name, first, _ in tr.phases[1:]:
         ax.axvline(tr.time[first], color="0.6", lw=0.8, ls=":")
     for name, first, _ in tr.phases:
         ax.annotate(
             name,
-            (tr.time[first], 0.02),
+            (tr.time[first], 1.0),
             xycoords=ax.get_xaxis_transform(),
-            xytext=(3, 0),
+            xytext=(3, 2),
             textcoords="offset points",
-            fontsize=8,
-            color="0.4",
+            va="bottom",
+            fontsize=7.5,
+            color="0.35",
         )
 
 
@@ -63,12 +119,12 @@ def paths(c: Comparison, path: Path) -> Path:
     plt = _plt()
     fig, ax = plt.subplots(figsize=(6.4, 5.6))
     fixed = c.scenario.robot(c.scenario.subject).fixed_base
-    markers = "os^Dvp*"
+    markers = "D^vph*"  # phase starts; the lines carry o and s
     for slot, label in enumerate(c.labels):
         tr = c.runs[(slot, c.timestep)]
         body = tr.body
         xy = body.link_positions[:, -1, :][:, [0, 2]] if fixed else body.base_position[:, :2]
-        ax.plot(xy[:, 0], xy[:, 1], color=COLORS[slot], lw=1.4, label=label)
+        ax.plot(xy[:, 0], xy[:, 1], label=label, **_style(slot, len(xy)))
         for k, (_name, first, _) in enumerate(tr.phases):
             ax.plot(*xy[first], markers[k % len(markers)], color=COLORS[slot], ms=7, mfc="none")
         ax.plot(*xy[-1], "x", color=COLORS[slot], ms=9, mew=2)
@@ -81,8 +137,8 @@ def paths(c: Comparison, path: Path) -> Path:
     ax.set_ylabel("z (m)" if fixed else "y (m)")
     ax.set_title(f"{c.scenario.name}: path of {c.scenario.subject} ({what})")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
-    return _save(fig, path)
+    _legend_below(fig, ax, ncol=3)
+    return _save_fixed(fig, path)
 
 
 def distance(c: Comparison, path: Path) -> Path:
@@ -102,7 +158,7 @@ def distance(c: Comparison, path: Path) -> Path:
         d.time,
         np.maximum(d.series[q], floor),
         color="k",
-        lw=1.6,
+        lw=2.6,
         label=f"{c.labels[0]} vs {c.labels[1]}",
     )
     for slot, label in enumerate(c.labels):
@@ -111,8 +167,8 @@ def distance(c: Comparison, path: Path) -> Path:
             own.time,
             np.maximum(own.series[q], floor),
             color=COLORS[slot],
-            lw=1.1,
-            ls="--",
+            lw=2.2 if slot == 0 else 1.2,
+            ls="--" if slot == 0 else (0, (3, 2)),
             label=f"{label}: own error (dt vs dt/2)",
         )
     if v is not None and c.ensembles and c.ensembles[0].size > 1:
@@ -128,7 +184,7 @@ def distance(c: Comparison, path: Path) -> Path:
                 v.time,
                 np.maximum(v.spreads[slot], floor),
                 color=COLORS[slot],
-                lw=1.3,
+                lw=2.4 if slot == 0 else 1.3,
                 ls=":",
                 label=f"{e.label}: spread of {e.size} perturbed runs",
             )
@@ -152,14 +208,17 @@ def distance(c: Comparison, path: Path) -> Path:
     _phase_lines(ax, c)
     ax.set_xlabel("time (s)")
     ax.set_ylabel(f"{QUANTITIES[q].title} ({QUANTITIES[q].unit})")
-    ax.set_title(f"{c.scenario.name}: how far apart, at dt = {format_timestep(dt)} s")
+    ax.set_title(f"{c.scenario.name}: how far apart, at dt = {format_timestep(dt)} s", pad=14)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
     return _save(fig, path)
 
 
-def heading(c: Comparison, path: Path) -> Path:
-    """Base yaw of each engine over time (unwrapped, degrees) and their wrapped difference."""
+def heading(c: Comparison, path: Path) -> Path | None:
+    """Base yaw of each engine over time (unwrapped, degrees) and their wrapped difference.
+    None for a fixed base (its heading never changes)."""
+    if c.scenario.robot(c.scenario.subject).fixed_base:
+        return None
     plt = _plt()
     fig, (ax, ax2) = plt.subplots(
         2, 1, figsize=(8, 5.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]}
@@ -167,7 +226,10 @@ def heading(c: Comparison, path: Path) -> Path:
     for slot, label in enumerate(c.labels):
         tr = c.runs[(slot, c.timestep)]
         ax.plot(
-            tr.time, np.unwrap(yaw(tr.body.base_orientation)) / DEG, color=COLORS[slot], label=label
+            tr.time,
+            np.unwrap(yaw(tr.body.base_orientation)) / DEG,
+            label=label,
+            **_style(slot, len(tr.time)),
         )
     d = c.cross[c.timestep]
     ax2.plot(d.time, d.series["heading"] / DEG, color="k", lw=1.2)
@@ -176,48 +238,284 @@ def heading(c: Comparison, path: Path) -> Path:
     ax.set_ylabel("heading (yaw, deg, unwrapped)")
     ax2.set_ylabel("|difference| (deg)")
     ax2.set_xlabel("time (s)")
-    ax.set_title(f"{c.scenario.name}: heading of {c.scenario.subject}")
+    ax.set_title(f"{c.scenario.name}: heading of {c.scenario.subject}", pad=14)
     ax.grid(alpha=0.3)
     ax2.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax2.plot([], [], color="k", lw=1.2, label="|difference|")
+    ax2.plot([], [], color="tab:red", lw=0.7, label="1° and 10°")
     _phase_lines(ax, c)
-    return _save(fig, path)
+    handles, labels = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    fig.legend(handles + h2, labels + l2, loc="lower center", ncol=4, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    return _save_fixed(fig, path)
 
 
-def joints(c: Comparison, path: Path) -> Path | None:
-    """Speed of every velocity-commanded joint of the subject against its target, both
-    engines. None when no joint of the subject gets a velocity command."""
-    tr0 = c.runs[(0, c.timestep)]
-    modes = tr0.body.joint_modes
-    cols = [j for j in range(modes.shape[1]) if np.any(modes[:, j] == 1)]
-    if not cols:
-        cols = [j for j in range(modes.shape[1]) if np.any(modes[:, j] > 0)]
-    if not cols:
-        return None
+def _joint_columns(c: Comparison, mode: int) -> list[int]:
+    """The subject's joints commanded in ``mode`` (1 velocity, 2 position, 3 torque) at some
+    step, by either engine's record."""
+    cols: set[int] = set()
+    for slot in (0, 1):
+        modes = c.runs[(slot, c.timestep)].body.joint_modes
+        cols |= {j for j in range(modes.shape[1]) if np.any(modes[:, j] == mode)}
+    return sorted(cols)
+
+
+_WHAT = {
+    "speed ({unit})": "velocity",
+    "position ({unit})": "position",
+    "torque ({unit})": "force",
+    "|force| ({unit})": "force",
+}
+_UNITS = {
+    "position": ("rad", "m"),
+    "velocity": ("rad/s", "m/s"),
+    "force": ("N·m", "N"),
+}
+
+
+def _unit(body: Any, j: int, what: str) -> str:
+    """The unit of joint ``j``'s ``what`` (position, velocity, force): prismatic or not."""
+    prismatic = body.joint_types is not None and body.joint_types[j] == "prismatic"
+    return _UNITS[what][1 if prismatic else 0]
+
+
+def _joint_grid(
+    c: Comparison,
+    cols: list[int],
+    series: Any,
+    target: Any,
+    ylabel: str,
+    title: str,
+    target_label: str,
+    path: Path,
+) -> Path:
+    """One panel per joint: ``series(body, j)`` of both engines, ``target(body, j)`` (NaN where
+    none) as a thin black dotted line; the legend below every panel."""
     plt = _plt()
     n = len(cols)
-    ncols = 2 if n > 1 else 1
+    ncols = 1 if n == 1 else 2 if n <= 4 else 3
     nrows = math.ceil(n / ncols)
     fig, axes = plt.subplots(
-        nrows, ncols, figsize=(8, 2.6 * nrows + 0.6), sharex=True, squeeze=False
+        nrows, ncols, figsize=(4.2 * ncols + 1.0, 2.3 * nrows + 1.3), sharex=True, squeeze=False
     )
+    tr0 = c.runs[(0, c.timestep)]
     for k, j in enumerate(cols):
         ax = axes[k // ncols][k % ncols]
         for slot, label in enumerate(c.labels):
             tr = c.runs[(slot, c.timestep)]
-            ax.plot(tr.time, tr.body.joint_velocities[:, j], color=COLORS[slot], lw=1, label=label)
-        target = np.where(tr0.body.joint_modes[:, j] == 1, tr0.body.joint_targets[:, j], np.nan)
-        ax.plot(tr0.time, target, color="k", lw=1, ls="--", label="target")
-        ax.set_title(tr0.body.joint_names[j], fontsize=9)
+            ax.plot(tr.time, series(tr.body, j), label=label, **_style(slot, len(tr.time)))
+        tgt = target(tr0.body, j)
+        if tgt is not None and np.isfinite(tgt).any():
+            ax.plot(tr0.time, tgt, color="k", lw=1.0, ls=":", label=target_label, zorder=5)
+        ax.set_title(tr0.body.joint_names[j], fontsize=9, pad=11)  # above a "1e-5" offset
         ax.grid(alpha=0.3)
-        ax.set_ylabel("rad/s")
+        ax.tick_params(labelsize=8)
+        ax.set_ylabel(ylabel.format(unit=_unit(tr0.body, j, _WHAT[ylabel])), fontsize=8)
     for k in range(n, nrows * ncols):
         axes[k // ncols][k % ncols].set_visible(False)
-    axes[0][0].legend(fontsize=7)
-    for ax in axes[-1]:
-        ax.set_xlabel("time (s)")
-    fig.suptitle(f"{c.scenario.name}: joint speed against its target")
-    return _save(fig, path)
+    for k in range(min(ncols, n)):
+        bottom = k + ncols * ((n - 1 - k) // ncols)  # the lowest panel of column k
+        axes[bottom // ncols][bottom % ncols].set_xlabel("time (s)", fontsize=8)
+        axes[bottom // ncols][bottom % ncols].xaxis.set_tick_params(labelbottom=True)
+    fig.suptitle(title, fontsize=10)
+    handles, labels = [], []
+    for ax in axes.flat:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.45 / (2.3 * nrows + 1.3), 1, 1))
+    return _save_fixed(fig, path)
+
+
+def joints(c: Comparison, out: Path) -> dict[str, Path]:
+    """One figure per command mode the subject's joints get (``joints_velocity.png``: speed
+    against its target; ``joints_position.png``: position against its target;
+    ``joints_torque.png``: the applied torque against the commanded one), both engines, one
+    panel per commanded joint. Returns name -> path (``joints_velocity``...), modes without a
+    commanded joint left out."""
+    made = {}
+    sc = c.scenario.name
+
+    def where(mode: int) -> Any:
+        def target(body: Any, j: int) -> np.ndarray:
+            return np.where(body.joint_modes[:, j] == mode, body.joint_targets[:, j], np.nan)
+
+        return target
+
+    specs = {
+        1: (lambda b, j: b.joint_velocities[:, j], "speed ({unit})", "joint speed", "target speed"),
+        2: (lambda b, j: b.joint_positions[:, j], "position ({unit})", "joint position", "target"),
+        3: (lambda b, j: b.joint_forces[:, j], "torque ({unit})", "joint torque", "commanded"),
+    }
+    for mode, name in JOINT_PLOTS.items():
+        cols = _joint_columns(c, mode)
+        if not cols:
+            continue
+        series, unit, what, target_label = specs[mode]
+        made[f"joints_{name}"] = _joint_grid(
+            c,
+            cols,
+            series,
+            where(mode),
+            unit,
+            f"{sc}: {what} against its target ({name}-commanded joints)",
+            target_label,
+            out / f"joints_{name}.png",
+        )
+    return made
+
+
+def motors(c: Comparison, path: Path) -> Path | None:
+    """The force (absolute) of every velocity- or position-commanded joint of the subject
+    against its ``max_force`` (dotted): where a line runs along it, the motor saturates.
+    None when no joint has such a command (or the runs did not record ``max_force``)."""
+    cols = sorted(set(_joint_columns(c, 1)) | set(_joint_columns(c, 2)))
+    if not cols or c.runs[(0, c.timestep)].body.joint_max_forces is None:
+        return None
+
+    def limit(body: Any, j: int) -> np.ndarray:
+        mf = body.joint_max_forces[:, j]
+        return mf
+
+    path = _joint_grid(
+        c,
+        cols,
+        lambda b, j: np.abs(b.joint_forces[:, j]),
+        limit,
+        "|force| ({unit})",
+        f"{c.scenario.name}: motor force against its max_force (saturated where they meet)",
+        "max_force",
+        path,
+    )
+    return path
+
+
+def height(c: Comparison, path: Path) -> Path:
+    """Height over time (along the world's up, against gravity): the base link frame of a
+    mobile subject, the last link's centre of mass of a fixed one; both engines, with the
+    instant the gap first reaches its threshold."""
+    from .diff import up_of
+
+    plt = _plt()
+    fixed = c.scenario.robot(c.scenario.subject).fixed_base
+    fig, ax = plt.subplots(figsize=(8, 4.6))
+    for slot, label in enumerate(c.labels):
+        tr = c.runs[(slot, c.timestep)]
+        up = up_of(tr)
+        pts = tr.body.link_positions[:, -1, :] if fixed else tr.body.base_position
+        ax.plot(tr.time, pts @ up, label=label, **_style(slot, len(tr.time)))
+    q = c.headline_quantity
+    thr = QUANTITIES[q].thresholds[0]
+    t = c.cross[c.timestep].first_crossing(q, thr)
+    if t is not None:
+        ax.axvline(t, color="tab:red", lw=1.0, ls="-.", alpha=0.8)
+        ax.plot(
+            [],
+            [],
+            color="tab:red",
+            lw=1.0,
+            ls="-.",
+            label=(f"the gap reaches {fmt_threshold(thr, QUANTITIES[q].unit)} (t = {t:.3f} s)"),
+        )
+    _phase_lines(ax, c)
+    what = f"{c.runs[(0, c.timestep)].body.link_names[-1]}'s centre of mass" if fixed else "base"
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("height (m, against gravity)")
+    ax.set_title(f"{c.scenario.name}: height of {c.scenario.subject} ({what})", pad=14)
+    ax.grid(alpha=0.3)
+    _legend_below(fig, ax, ncol=3)
+    return _save_fixed(fig, path)
+
+
+_LANE_KINDS = (
+    "contact_made",
+    "contact_lost",
+    "contact_chatter",
+    "airborne",
+    "peak_height",
+    "tipped_over",
+    "joint_limit",
+    "motor_saturated",
+)
+
+
+def events(c: Comparison, path: Path) -> Path | None:
+    """A timeline of both engines' events (:mod:`.events`), one lane per engine and kind:
+    intervals as bars, instants as markers; the instant the gap first reaches its threshold
+    as a vertical line. None when neither engine has an event."""
+    from .born import engine_events
+
+    found = engine_events(c)
+    lanes = [
+        (slot, kind)
+        for slot, e in enumerate(found)
+        for kind in _LANE_KINDS
+        if any(x.kind == kind for x in e.events)
+    ]
+    if not lanes:
+        return None
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(9, 1.2 + 0.32 * len(lanes) + 0.6))
+    end = float(c.runs[(0, c.timestep)].time[-1])
+    for y, (slot, kind) in enumerate(lanes):
+        for x in found[slot].events:
+            if x.kind != kind:
+                continue
+            if kind in (
+                "airborne",
+                "tipped_over",
+                "contact_chatter",
+                "joint_limit",
+                "motor_saturated",
+            ):
+                stop = end if x.end is None else x.end
+                ax.broken_barh(
+                    [(x.time, max(stop - x.time, c.timestep))],
+                    (y - 0.3, 0.6),
+                    facecolors=COLORS[slot],
+                    alpha=0.55,
+                    edgecolor=COLORS[slot],
+                )
+            else:
+                ax.plot(
+                    x.time,
+                    y,
+                    {"contact_made": "v", "contact_lost": "^", "peak_height": "*"}[kind],
+                    color=COLORS[slot],
+                    ms=6,
+                    mfc="none" if kind == "contact_lost" else COLORS[slot],
+                )
+    ax.set_yticks(range(len(lanes)))
+    ax.set_yticklabels([f"{c.labels[s]}: {k.replace('_', ' ')}" for s, k in lanes], fontsize=8)
+    ax.set_ylim(len(lanes) - 0.5, -0.5)
+    ax.set_xlim(0, end)
+    q = c.headline_quantity
+    thr = QUANTITIES[q].thresholds[0]
+    t = c.cross[c.timestep].first_crossing(q, thr)
+    if t is not None:
+        ax.axvline(t, color="tab:red", lw=1.0, ls="-.")
+        ax.plot(
+            [],
+            [],
+            color="tab:red",
+            lw=1.0,
+            ls="-.",
+            label=(f"the gap reaches {fmt_threshold(thr, QUANTITIES[q].unit)} (t = {t:.3f} s)"),
+        )
+    ax.plot([], [], "v", color="0.3", label="contact made")
+    ax.plot([], [], "^", color="0.3", mfc="none", label="contact lost")
+    ax.plot([], [], "*", color="0.3", label="peak height")
+    tr = c.runs[(0, c.timestep)]
+    for _name, first, _ in tr.phases[1:]:
+        ax.axvline(tr.time[first], color="0.6", lw=0.8, ls=":")
+    ax.set_xlabel("time (s); dotted: phase starts " + ", ".join(f"'{n}'" for n, _, _ in tr.phases))
+    ax.set_title(f"{c.scenario.name}: events of {c.scenario.subject} (bars: how long they last)")
+    ax.grid(alpha=0.3, axis="x")
+    _legend_below(fig, ax, ncol=4)
+    return _save_fixed(fig, path)
 
 
 def sweep(c: Comparison, path: Path) -> Path | None:
@@ -308,12 +606,15 @@ def ensemble(c: Comparison, path: Path) -> Path | None:
 
 def all_plots(c: Comparison, out: Path) -> dict[str, Path]:
     """Every figure into folder ``out``: name -> path (figures with nothing to show left out)."""
-    made = {
+    made: dict[str, Path | None] = {
         "paths": paths(c, out / "paths.png"),
         "distance": distance(c, out / "distance.png"),
+        "height": height(c, out / "height.png"),
         "heading": heading(c, out / "heading.png"),
-        "joints": joints(c, out / "joints.png"),
-        "sweep": sweep(c, out / "sweep.png"),
-        "ensemble": ensemble(c, out / "ensemble.png"),
+        "events": events(c, out / "events.png"),
     }
+    made.update(joints(c, out))
+    made["motors"] = motors(c, out / "motors.png")
+    made["sweep"] = sweep(c, out / "sweep.png")
+    made["ensemble"] = ensemble(c, out / "ensemble.png")
     return {k: v for k, v in made.items() if v is not None}

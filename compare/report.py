@@ -14,8 +14,10 @@ from pathlib import Path
 from typing import Any
 
 from .diff import DEG, QUANTITIES
+from .events import KINDS, TIP_ANGLE, event_words, parting_words, with_start
 from .fmt import fmt_distance, fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
+from .parts import parts_words
 from .pipeline import Comparison
 from .scenario import format_timestep
 from .verdict import verdict_lines
@@ -64,6 +66,9 @@ def headline(summary: dict[str, Any]) -> list[str]:
             f"They part at t = {fmt_time(c1)} (first {fmt_threshold(t1, unit)} apart) and are "
             f"{fmt_threshold(t2, unit)} apart from t = {fmt_time(c2)}{more}."
         )
+    born = parting_words(summary.get("parting") or {})
+    if born:
+        lines[-1] += f" The gap is born {born}."
     first = h["first_to_diverge"]
     if first is None:
         lines.append("No quantity reaches its first threshold (1 cm, 1°, 0.1 rad/s).")
@@ -73,6 +78,8 @@ def headline(summary: dict[str, Any]) -> list[str]:
             f"The first quantity to diverge is the {qq.title}: it reaches "
             f"{fmt_threshold(first['threshold'], qq.unit)} at t = {fmt_time(first['time'])}."
         )
+    if summary.get("parts"):
+        lines.append(parts_words(summary["parts"]))
     own = h["own_error"]
     parts = [f"moves {label}'s end by {fmt_value(e['final'], unit)}" for label, e in own.items()]
     lines.append("Halving the time step " + "; it ".join(parts) + ".")
@@ -113,7 +120,7 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
                 f"{format_timestep(c.timestep)} s",
                 str(c.runs[(slot, c.timestep)].steps),
                 f"{c.runs[(slot, c.timestep)].wall_per_sim_second() * 1000:.1f} ms",
-                str(len(m.get("departures", {}) or {})),
+                _departure_count(s, label, m),
             ]
         )
     lines += _table(
@@ -124,7 +131,7 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
             "time step",
             "steps",
             "wall per sim. second",
-            "profile departures",
+            "profile departures here",
         ],
         rows,
     )
@@ -166,6 +173,9 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         )
     lines += _table(["phase", "time"] + [QUANTITIES[k].title + " at end" for k in keys], rows)
     lines += [""]
+    # -- where the gap is born, which part
+    lines += _born_section(s)
+    lines += _parts_section(s)
     # -- final poses
     lines += ["## Final poses", ""]
     pa, pb = cross.final_pose["a"], cross.final_pose["b"]
@@ -178,9 +188,9 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         ["base orientation (x, y, z, w)", xyz(pa["orientation"]), xyz(pb["orientation"])],
         ["heading (yaw)", f"{pa['yaw'] / DEG:.2f}°", f"{pb['yaw'] / DEG:.2f}°"],
         [
-            "tilt from upright",
-            f"{pa['tilt'] / DEG:.1f}°" + (" (tipped over)" if pa["tilt"] > 45 * DEG else ""),
-            f"{pb['tilt'] / DEG:.1f}°" + (" (tipped over)" if pb["tilt"] > 45 * DEG else ""),
+            "tilt from its spawn orientation",
+            _tilt_cell(pa),
+            _tilt_cell(pb),
         ],
     ]
     for j, name in enumerate(pa["joint_names"]):
@@ -262,14 +272,23 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         "engine's perturbed runs.",
         "ensemble": "Where every run of each engine's ensemble ends (top and side views); the "
         "squares ring the nominal runs.",
+        "height": "Height of the followed robot over time (against gravity; a fixed base's last "
+        "link), with the instant the gap first reaches its threshold.",
         "heading": "Heading of each engine and their difference.",
-        "joints": "Commanded joints: speed against the target.",
+        "events": "Each engine's events: bars last as long as the condition, markers are "
+        "instants; the dash-dotted line is where the gap first reaches its threshold.",
+        "joints_velocity": "Velocity-commanded joints: speed against the target.",
+        "joints_position": "Position-commanded joints: position against the target.",
+        "joints_torque": "Torque-commanded joints: applied against commanded torque.",
+        "motors": "Velocity- and position-commanded joints: motor force against its max_force.",
         "sweep": "Speed against self-consistency, and the cross-engine gap against the time step.",
     }
     if images:
         lines += ["## Figures", ""]
         for key, path in images.items():
             lines += [f"![{key}]({path.name})", "", captions.get(key, ""), ""]
+    # -- departures
+    lines += _departures_section(s)
     # -- manifest
     lines += ["## Reproduce", ""]
     lines += [
@@ -285,9 +304,6 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         m = c.runs[(slot, c.timestep)].manifest
         for robot, u in (m.get("urdf") or {}).items():
             rows.append([label, robot, f"`{u['urdf']}`", f"`{u['sha256'][:16]}…`"])
-        deps = m.get("departures") or {}
-        for k, v in deps.items():
-            rows.append([label, "departure", f"`{k}`", str(v)])
     lines += _table(["engine", "robot", "URDF", "sha256"], rows)
     lines += [
         "",
@@ -298,6 +314,185 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         "",
     ]
     return "\n".join(lines)
+
+
+def _tilt_cell(pose: dict[str, Any]) -> str:
+    t = pose.get("tilt_from_spawn", pose["tilt"])
+    return f"{t / DEG:.1f}°" + (" (tipped over)" if t > TIP_ANGLE else "")
+
+
+def _departure_count(s: dict[str, Any], label: str, manifest: dict[str, Any]) -> str:
+    total = len(manifest.get("departures", {}) or {})
+    deps = (s.get("departures") or {}).get(label)
+    if deps is None:
+        return str(total)
+    return f"{len(deps['apply'])} of {total}"
+
+
+MAX_EVENT_ROWS = 40
+MAX_PART_ROWS = 15
+
+
+def _born_section(s: dict[str, Any]) -> list[str]:
+    """Each engine's events, the one the gap parted after, and the counts of each kind."""
+    events = s.get("events")
+    if not events:
+        return []
+    labels = list(events)
+    p = s.get("parting") or {}
+    q = QUANTITIES[s["headline_quantity"]]
+    lines = ["## Where the gap is born", ""]
+    if p.get("time") is not None:
+        lines += [
+            f"The {q.title} first reaches {fmt_threshold(p['threshold'], q.unit)} at "
+            f"t = {fmt_time(p['time'])}, {parting_words(p)}.",
+            "",
+        ]
+        if p["ongoing"]:
+            shown = [with_start(event_words(o, o["label"]), o["time"]) for o in p["ongoing"][:6]]
+            more = len(p["ongoing"]) - len(shown)
+            lines += [
+                "Going on at that instant: "
+                + "; ".join(shown)
+                + (f"; and {more} more" if more > 0 else "")
+                + ".",
+                "",
+            ]
+    else:
+        lines += [f"The {q.title} never reaches {fmt_threshold(q.thresholds[0], q.unit)}.", ""]
+    rows = [
+        [kind.replace("_", " ")] + [str(events[lab]["counts"][kind]) for lab in labels]
+        for kind in KINDS
+    ]
+    rows.append(
+        ["touching from the first step"]
+        + [", ".join(events[lab]["initial_contacts"]) or "nothing" for lab in labels]
+    )
+    rows.append(
+        ["at a joint limit from the start"]
+        + [
+            ", ".join(f"{x['joint']} ({x['side']})" for x in events[lab]["initial_limits"])
+            or "none"
+            for lab in labels
+        ]
+    )
+    lines += _table(["events of " + s["subject"]] + labels, rows)
+    lines += [
+        "",
+        "Contacts are per link (with the other bodies touching anything at that instant); a "
+        "contact or condition interrupted for less than 0.05 s counts as going on; tilt is "
+        "measured from the spawn orientation, about the world's up (against gravity).",
+        "",
+    ]
+    merged = sorted(
+        ((e["time"], k, lab, e) for k, lab in enumerate(labels) for e in events[lab]["events"]),
+        key=lambda x: (x[0], x[1]),
+    )
+    if merged:
+        chosen = merged
+        t = p.get("time")
+        if len(merged) > MAX_EVENT_ROWS:
+            if t is None:
+                chosen = merged[:MAX_EVENT_ROWS]
+            else:
+                before = [x for x in merged if x[0] <= t][-MAX_EVENT_ROWS // 2 :]
+                after = [x for x in merged if x[0] > t]
+                chosen = before + after[: MAX_EVENT_ROWS - len(before)]
+        mark = p.get("event")
+        rows = []
+        for time, _, lab, e in chosen:
+            words = event_words(e, lab)
+            if mark and mark["label"] == lab and {**e, "label": lab} == mark:
+                words = f"**{words}** (the gap parts {p['relation']} this)"
+            until = (
+                ""
+                if e["end"] is None
+                and e["kind"]
+                not in (
+                    "airborne",
+                    "tipped_over",
+                    "contact_chatter",
+                    "joint_limit",
+                    "motor_saturated",
+                )
+                else ("the end" if e["end"] is None else fmt_time(e["end"]))
+            )
+            rows.append([fmt_time(time), e["phase"], lab, words, until])
+        total = sum(events[lab]["total"] for lab in labels)
+        lines += _table(["t", "phase", "engine", "event", "until"], rows)
+        lines += [""]
+        if len(chosen) < total:
+            lines += [
+                f"{len(chosen)} of {total} events shown (those around the parting); every one "
+                "is in `summary.json` under `events`.",
+                "",
+            ]
+    return lines
+
+
+def _parts_section(s: dict[str, Any]) -> list[str]:
+    """Joints and links ranked by when the engines part there, and how far."""
+    parts = s.get("parts")
+    if not parts:
+        return []
+    lines = ["## Which part parts first", ""]
+    lines += [parts_words(parts), ""]
+    rows = []
+    for k, p in enumerate(parts[:MAX_PART_ROWS]):
+        rows.append(
+            [
+                str(k + 1),
+                f"{p['kind']} `{p['name']}`",
+                f"{fmt_threshold(p['threshold'], p['unit'])}: {fmt_time(p['first'])}",
+                f"{fmt_value(p['largest'], p['unit'])} at {fmt_time(p['largest_at'])}",
+                fmt_value(p["at_end"], p["unit"]),
+            ]
+        )
+    lines += _table(["rank", "part", "apart by", "largest gap", "at the end"], rows)
+    lines += [
+        "",
+        "A joint's gap is the difference of its positions (angles unwrapped), a link's the "
+        "distance between its centres of mass; parts that come apart rank first, earliest "
+        "first, then the rest by their largest gap over the threshold.",
+        "",
+    ]
+    if len(parts) > MAX_PART_ROWS:
+        lines += [
+            f"{MAX_PART_ROWS} of {len(parts)} shown; all in `summary.json` under `parts`.",
+            "",
+        ]
+    return lines
+
+
+def _departures_section(s: dict[str, Any]) -> list[str]:
+    """The profile departures that apply to this scenario, with this run's figures."""
+    deps = s.get("departures")
+    if not deps:
+        return []
+    lines = ["## Profile departures that apply here", ""]
+    for label, d in deps.items():
+        if not d["apply"] and not d["left_out"]:
+            lines += [f"{label}: none (it reproduces the profile).", ""]
+            continue
+        if d["apply"]:
+            rows = [
+                [f"`{x['key']}`", x["text"], x["why"], x["measured"] or "none"] for x in d["apply"]
+            ]
+            lines += [f"{label}:", ""]
+            lines += _table(
+                ["departure", "what", "why it applies here", "measured in this run"], rows
+            )
+            lines += [""]
+        else:
+            lines += [f"{label}: none of its departures applies here.", ""]
+        if d["left_out"]:
+            lines += [
+                f"Left out for {label} (they do not apply to this scenario): "
+                + ", ".join(f"`{k}`" for k in d["left_out"])
+                + ".",
+                "",
+            ]
+    return lines
 
 
 def _verdict_section(s: dict[str, Any]) -> list[str]:

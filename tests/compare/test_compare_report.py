@@ -37,7 +37,8 @@ def written(tmp_path_factory):
 def test_files_exist(written):
     c, out, path, summary = written
     assert path == out / "report.md"
-    names = ("paths.png", "distance.png", "heading.png", "joints.png", "sweep.png", "ensemble.png")
+    names = ("paths.png", "distance.png", "height.png", "heading.png", "events.png")
+    names += ("joints_velocity.png", "motors.png", "sweep.png", "ensemble.png")
     for name in names:
         assert (out / name).read_bytes()[:8] == PNG, name
         assert f"]({name})" in path.read_text()
