@@ -178,17 +178,17 @@ def _judge(
     if key == "joint limits":
         per = []
         for e in events:
-            hits = [x for x in e.events if x.kind == "joint_limit"]
-            words = []
+            reached = [x for x in e.events if x.kind == "joint_limit"]
+            words: list[str] = []
             if e.initial_limits:
                 words.append(
                     "from the start "
                     + ", ".join(f"{x['joint']} ({x['side']})" for x in e.initial_limits)
                 )
-            if hits:
-                first = hits[0]
+            if reached:
+                first = reached[0]
                 words.append(
-                    f"reached {len(hits)} time(s), first {first.part} ({first.side}) at "
+                    f"reached {len(reached)} time(s), first {first.part} ({first.side}) at "
                     f"t = {first.time:.3f} s"
                 )
             if words:

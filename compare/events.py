@@ -373,7 +373,7 @@ def _airborne_events(
 ) -> None:
     assert b.contact_counts is not None
     rows = len(time)
-    any_contact = (b.contact_counts[1:] > 0).any(axis=1)
+    any_contact: np.ndarray = np.asarray((b.contact_counts[1:] > 0).any(axis=1))
     runs = _runs(any_contact, bridge)
     if not runs:
         return  # never touched anything: nothing to leave
