@@ -283,6 +283,7 @@ def run(
     duration: float | None = None,
     progress: Progress | None = None,
     controller: Any = None,
+    before_step: Callable[[simbridge.Sim, int], None] | None = None,
 ) -> Trajectory:
     """Run ``scenario`` on ``backend`` and record every step.
 
@@ -300,6 +301,9 @@ def run(
             ``"package.module:Name"`` reference, or a
             :class:`~simbridge.compare.controllers.ControllerSpec` (with params and period);
             see :meth:`Scenario.with_controller`.
+        before_step: called as ``before_step(sim, row)`` before every step, once its commands
+            are issued (the state at ``row`` with the commands in force: what
+            :func:`simbridge.compare.resync.resync` takes); its time counts in ``wall_time``.
 
     Returns:
         The :class:`Trajectory`: T = steps + 1 rows (the state at t = 0, then after each
@@ -396,6 +400,8 @@ def run(
                         sim.set_joint_torque(body, idx, c.target)
                 if ctl is not None:
                     ctl.before_step(i, row * sc.timestep)
+                if before_step is not None:
+                    before_step(sim, row)
                 sim.step()
                 wall += _time.perf_counter() - t0
                 row += 1
