@@ -106,6 +106,18 @@ def _pybullet_output(text: str) -> tuple[list[Record], str]:
     return records, left if left.strip() else ""
 
 
+# URDF_MERGE_FIXED_LINKS makes Bullet print the link tree as it merges (printf, no b3 marker)
+_MERGE_TREE = re.compile(r"^\t*(?:processing \S.*|merge \S.* into \S.*!|relink \S.*!)\n?", re.M)
+
+
+def _pybullet_merge_output(text: str) -> tuple[list[Record], str]:
+    """A load with merged fixed links: Bullet's printout of the merge at DEBUG, the rest as
+    :func:`_pybullet_output` classifies it."""
+    merged: list[Record] = [(logging.DEBUG, m.group().strip()) for m in _MERGE_TREE.finditer(text)]
+    records, rest = _pybullet_output(_MERGE_TREE.sub("", text))
+    return merged + records, rest
+
+
 def _pybullet_gui_output(text: str) -> tuple[list[Record], str]:
     """Opening and closing the GUI prints lines of its own (threads, OpenGL versions), all
     PyBullet's: every line is claimed, those without a b3 marker at DEBUG."""
@@ -340,8 +352,9 @@ class PyBulletBackend(Backend):
     ) -> int:
         # globalScaling only when asked: PyBullet's default call stays the tutorial's call
         scaling = {} if scale == 1.0 else {"globalScaling": scale}
+        merging = _pybullet_merge_output if flags & p.URDF_MERGE_FIXED_LINKS else None
         try:
-            with captured(self.name, f"loading {display}"):
+            with captured(self.name, f"loading {display}", merging):
                 return int(
                     p.loadURDF(
                         path,

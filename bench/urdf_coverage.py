@@ -8,8 +8,9 @@ table row (floats to 1e-9, quaternions up to sign), and every link's world frame
 file that fails or differs with its reason. Files are shared among worker processes (a crash
 in one file loses only its chunk, reported as such).
 
-    python bench/urdf_coverage.py               # all of pybullet_data (about 30 s on 2 cores)
+    python bench/urdf_coverage.py               # all of pybullet_data (about 20 s on 2 cores)
     python bench/urdf_coverage.py husky/husky.urdf plane_implicit.urdf
+    python bench/urdf_coverage.py --global-scaling 1.7 --merge-fixed-links --inertia-from-file
 """
 
 from __future__ import annotations
@@ -39,9 +40,19 @@ def all_files() -> list[str]:
     )
 
 
-def _raw(p: Any, c: int, path: str) -> dict[str, Any]:
+def _raw(p: Any, c: int, path: str, options: dict[str, Any]) -> dict[str, Any]:
+    flags = (p.URDF_MERGE_FIXED_LINKS if options["merge_fixed_links"] else 0) | (
+        p.URDF_USE_INERTIA_FROM_FILE if options["inertia_source"] == "file" else 0
+    )
     try:
-        body = p.loadURDF(path, POSE[0], POSE[1], physicsClientId=c)
+        body = p.loadURDF(
+            path,
+            POSE[0],
+            POSE[1],
+            flags=flags,
+            globalScaling=options["global_scaling"],
+            physicsClientId=c,
+        )
     except p.error as exc:
         return {"error": str(exc)}
     n = p.getNumJoints(body, physicsClientId=c)
@@ -59,9 +70,9 @@ def _raw(p: Any, c: int, path: str) -> dict[str, Any]:
     return {"n": n, "table": table, "frames": frames}
 
 
-def _sim(sim: Any, path: str) -> dict[str, Any]:
+def _sim(sim: Any, path: str, options: dict[str, Any]) -> dict[str, Any]:
     try:
-        body = sim.load_urdf(path, base_position=POSE[0], base_orientation=POSE[1])
+        body = sim.load_urdf(path, base_position=POSE[0], base_orientation=POSE[1], **options)
     except Exception as exc:  # noqa: BLE001 - reported
         return {"error": f"{type(exc).__name__}: {exc}"}
     n = sim.num_joints(body)
@@ -107,7 +118,7 @@ def compare(raw: dict[str, Any], got: dict[str, Any]) -> str | None:
     return None
 
 
-def work(names: list[str]) -> dict[str, dict[str, Any]]:
+def work(names: list[str], options: dict[str, Any]) -> dict[str, dict[str, Any]]:
     import simbridge
     from simbridge.engine_output import captured
 
@@ -121,10 +132,10 @@ def work(names: list[str]) -> dict[str, dict[str, Any]]:
     for name in names:
         path = os.path.join(DATA, name)
         with captured("pybullet", "sweep"):
-            result = {"raw": _raw(p, c, path)}
+            result = {"raw": _raw(p, c, path, options)}
             p.resetSimulation(physicsClientId=c)
         for backend, sim in sims.items():
-            result[backend] = _sim(sim, path)
+            result[backend] = _sim(sim, path, options)
             sim.reset()
         out[name] = result
     return out
@@ -136,14 +147,22 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("files", nargs="*", help="paths under pybullet_data (default: all)")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--global-scaling", type=float, default=1.0)
+    parser.add_argument("--merge-fixed-links", action="store_true")
+    parser.add_argument("--inertia-from-file", action="store_true")
     args = parser.parse_args(argv)
+    options = {
+        "global_scaling": args.global_scaling,
+        "merge_fixed_links": args.merge_fixed_links,
+        "inertia_source": "file" if args.inertia_from_file else "collision_aabb",
+    }
     files = args.files or all_files()
     start = time.perf_counter()
     chunks = [files[i :: 8 * args.workers] for i in range(8 * args.workers)]
     chunks = [c for c in chunks if c]
     results: dict[str, dict[str, Any]] = {}
     with ProcessPoolExecutor(args.workers) as pool:
-        futures = {pool.submit(work, chunk): chunk for chunk in chunks}
+        futures = {pool.submit(work, chunk, options): chunk for chunk in chunks}
         for future, chunk in futures.items():
             try:
                 results.update(future.result())
@@ -174,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
                 else:
                     lines.append(f"[{backend}] {name}: differs: {why}")
         counts[backend] = (len(loaded), same)
-    print(f"{len(files)} URDF files; raw PyBullet loads {len(raw_ok)}")
+    print(f"{len(files)} URDF files, loaded with {options}; raw PyBullet loads {len(raw_ok)}")
     for backend, (loaded, same) in counts.items():
         print(f"Sim({backend!r}) loads {loaded}; same joint table and link frames as raw: {same}")
     for name in sorted(n for n, r in results.items() if "raw" in r and "error" in r["raw"]):

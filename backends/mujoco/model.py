@@ -21,6 +21,7 @@ so the bodies, joints, geoms and inertias are added here one by one:
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field, replace
 
 import mujoco
@@ -132,11 +133,12 @@ def _contact_values(link: Link, profile: Profile) -> tuple[float, float, float, 
 
 
 class MeshLibrary:
-    """Mesh assets of one world spec, one per (file, scale); .dae converted with trimesh."""
+    """Mesh assets of one world spec, one per (file version, scale); .dae converted with
+    trimesh. A file rewritten since (another modification time or size) is a new asset."""
 
     def __init__(self, spec: mujoco.MjSpec) -> None:
         self.spec = spec
-        self.names: dict[tuple[str, tuple[float, ...]], str] = {}
+        self.names: dict[tuple[str, int, int, tuple[float, ...]], str] = {}
 
     def usable(self, g: Geometry) -> bool:
         """False for a mesh PyBullet gets nothing from: no finite vertex (pybullet_data's
@@ -167,7 +169,8 @@ class MeshLibrary:
 
     def get(self, g: Geometry, file: str, where: str) -> str:
         assert g.mesh_path is not None
-        key = (str(g.mesh_path), tuple(g.size))
+        stat = os.stat(g.mesh_path)
+        key = (str(g.mesh_path), stat.st_mtime_ns, stat.st_size, tuple(g.size))
         name = self.names.get(key)
         if name is not None:
             return name

@@ -3,8 +3,8 @@
 Every user of a mesh (PyBullet's inertia rules, the URDF's COLLADA check, the MuJoCo model
 builder) reads it through :func:`read_mesh`, which returns the vertex positions (n, 3) float64,
 in the file's own units and frame, unscaled, and the triangles (m, 3) int64 as indices into
-them. Both arrays are read-only: the result is cached per path string (up to 256 files) for
-the life of the process.
+them. Both arrays are read-only: the result is cached per file (its path, modification time
+and size: a file rewritten in the meantime is read again), up to 256 files.
 
 * ``.obj``: ``v`` lines (x y z; any further number is ignored) and ``f`` lines, each polygon a
   fan of triangles around its first corner; ``i/t/n`` corners use ``i``; a negative index
@@ -18,6 +18,7 @@ the life of the process.
 
 from __future__ import annotations
 
+import os
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -37,19 +38,23 @@ class MeshData(NamedTuple):
 
 
 def read_mesh(path: str | Path) -> MeshData:
-    """The vertices and triangles of a mesh file (see the module docstring). Cached per path;
-    raises OSError when the file cannot be read, ValueError or IndexError on an .obj/.stl
-    number that is not one, and trimesh's own errors on a file trimesh cannot read."""
-    return _read_cached(str(path))
+    """The vertices and triangles of a mesh file (see the module docstring). Cached per path,
+    modification time and size; raises OSError when the file cannot be read, ValueError or
+    IndexError on an .obj/.stl number that is not one, and trimesh's own errors on a file
+    trimesh cannot read."""
+    name = str(path)
+    stat = os.stat(name)
+    return _read_cached(name, stat.st_mtime_ns, stat.st_size)
 
 
 def mesh_vertices(path: str | Path) -> np.ndarray:
     """The (n, 3) vertex positions of :func:`read_mesh`, unscaled, read-only."""
-    return _read_cached(str(path)).vertices
+    return read_mesh(path).vertices
 
 
 @lru_cache(maxsize=256)
-def _read_cached(path: str) -> MeshData:
+def _read_cached(path: str, mtime_ns: int, size: int) -> MeshData:
+    """One version of a file (``mtime_ns`` and ``size`` are the cache's key, not read)."""
     suffix = Path(path).suffix.lower()
     if suffix == ".obj":
         mesh = _read_obj(path)
