@@ -22,6 +22,8 @@ from .ensemble import (
     Ensemble,
     EnsembleRunner,
 )
+from .resync import Resync, default_every
+from .resync import resync as one_step_resync
 from .run import Trajectory, run
 from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
 from .verdict import Verdict, judge
@@ -54,6 +56,9 @@ class Comparison:
     wall_time: float = 0.0
     ensembles: list[Ensemble] = field(default_factory=list)
     verdict: Verdict | None = None
+    resync: Resync | None = None
+    """The one-step error from each other's states and each engine's floor
+    (:mod:`simbridge.compare.resync`); None with ``resync_every=0``."""
     ensemble_settings: dict[str, Any] = field(default_factory=dict)
     """size, perturbation (position m, orientation rad), seed, workers, wall_time (s)."""
 
@@ -156,6 +161,7 @@ class Comparison:
             "sweep": sweep,
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
             "ensemble": self._ensemble_summary(),
+            "resync": None if self.resync is None else self.resync.to_dict(),
             "outcomes": self._outcomes_summary(),
             **where_born(self),
             "wall_time": self.wall_time,
@@ -232,6 +238,7 @@ def compare(
     tolerance: float | None = None,
     workers: int | None = None,
     controller: Any = None,
+    resync_every: int | None = None,
 ) -> Comparison:
     """Run ``scenario`` on two backends at every time step of ``timesteps`` and at half of each,
     run each engine's ensemble at the first time step, diff and judge them.
@@ -259,6 +266,10 @@ def compare(
             or function at a module's top level, a ``"file.py:Name"`` or
             ``"package.module:Name"`` reference, or a ``ControllerSpec``); see
             :meth:`Scenario.with_controller`.
+        resync_every: every this many steps set each engine's state into the other engine
+            and into a second Sim of its own, and step once (:mod:`~simbridge.compare.resync`);
+            default about 150 points per run (:func:`~simbridge.compare.resync.default_every`);
+            0: none.
 
     Raises:
         ScenarioError, SimbridgeError: a bad scenario or time step, a backend that fails.
@@ -301,6 +312,13 @@ def compare(
         or not (math.isfinite(tolerance) and tolerance > 0)
     ):
         raise InvalidArgumentError("tolerance", f"expected a finite number > 0, got {tolerance!r}")
+    if resync_every is None:
+        resync_every = default_every(scaled[dts[0]].steps)
+    if isinstance(resync_every, bool) or not isinstance(resync_every, int) or resync_every < 0:
+        raise InvalidArgumentError(
+            "resync_every", f"expected a whole number of steps >= 0 (0: none), got {resync_every!r}"
+        )
+    resync_total = 2 * scaled[dts[0]].steps if resync_every else 0
     runner = EnsembleRunner(
         scaled[dts[0]],
         [(pair[0], profiles[0]), (pair[1], profiles[1])],
@@ -311,7 +329,7 @@ def compare(
         workers=workers,
     )
     nominal_total = sum(scaled[d].steps for _, d in todo)
-    total = nominal_total + runner.total_steps
+    total = nominal_total + resync_total + runner.total_steps
     done = 0
     runs: dict[tuple[int, float], Trajectory] = {}
     cache: dict[tuple[str, str, float], Trajectory] = {}
@@ -343,9 +361,30 @@ def compare(
         own={},
     )
 
-    def ens_tick(what: str, n: int) -> None:
+    def resync_tick(what: str, n: int, _total: int) -> None:
         if progress is not None:
             progress(what, nominal_total + n, total)
+
+    try:
+        resynced = None
+        if resync_every:
+            resynced = one_step_resync(
+                scaled[dts[0]],
+                pair,
+                profiles=profiles,
+                labels=pending.labels,
+                every=resync_every,
+                quantity=quantity,
+                tolerance=tolerance,
+                progress=resync_tick,
+            )
+    except BaseException:
+        runner.cancel()
+        raise
+
+    def ens_tick(what: str, n: int) -> None:
+        if progress is not None:
+            progress(what, nominal_total + resync_total + n, total)
 
     ensembles = runner.collect([runs[(0, dts[0])], runs[(1, dts[0])]], pending.labels, ens_tick)
     cross = {dt: diff(runs[(0, dt)], runs[(1, dt)]) for dt in dts}
@@ -374,6 +413,7 @@ def compare(
         wall_time=_time.perf_counter() - start,
         ensembles=ensembles,
         verdict=verdict,
+        resync=resynced,
         ensemble_settings={
             "size": runner.size,
             "perturb": runner.eps,

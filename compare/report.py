@@ -19,6 +19,7 @@ from .fmt import fmt_distance, fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
 from .parts import parts_words
 from .pipeline import Comparison
+from .resync import plot_resync, resync_lines, resync_section
 from .scenario import format_timestep
 from .verdict import verdict_lines
 
@@ -83,6 +84,7 @@ def headline(summary: dict[str, Any]) -> list[str]:
     own = h["own_error"]
     parts = [f"moves {label}'s end by {fmt_value(e['final'], unit)}" for label, e in own.items()]
     lines.append("Halving the time step " + "; it ".join(parts) + ".")
+    lines += resync_lines(summary)  # one step from the same state: the model error
     return lines
 
 
@@ -176,6 +178,7 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
     # -- where the gap is born, which part
     lines += _born_section(s)
     lines += _parts_section(s)
+    lines += resync_section(s, images.pop("resync", None))  # its figure here, not in Figures
     # -- final poses
     lines += ["## Final poses", ""]
     pa, pb = cross.final_pose["a"], cross.final_pose["b"]
@@ -626,6 +629,8 @@ def report(
         from .plots import all_plots
 
         images = all_plots(comparison, out)
+        if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
+            images["resync"] = out / "resync.png"
     summary["files"] = files + [p.name for p in images.values()]
     summary["headline"]["text"] = headline(summary)
     (out / "summary.json").write_text(

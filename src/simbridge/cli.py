@@ -149,6 +149,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="S",
         help=f"seed of the offsets, bootstrap and test (default: {DEFAULT_SEED})",
     )
+    p.add_argument(
+        "--resync-every",
+        type=_seed,  # an integer >= 0
+        metavar="K",
+        help="every K steps set each engine's state into the other engine (and into a second "
+        "Sim of its own, the floor) and step once: the one-step model error; 0: none "
+        "(default: about 150 points per run)",
+    )
     _verbose(p)
 
     s = sub.add_parser(
@@ -216,6 +224,7 @@ def _compare(args: argparse.Namespace) -> int:
             ensemble=args.ensemble,
             perturb=args.perturb,
             seed=args.seed,
+            resync_every=args.resync_every,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots)
