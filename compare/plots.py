@@ -193,12 +193,14 @@ def distance(c: Comparison, path: Path) -> Path:
                 lowest.append(float(positive.min()) / 2)
     for thr in QUANTITIES[q].thresholds:
         ax.axhline(thr, color="tab:red", lw=0.7, alpha=0.6)
-        ax.annotate(
+        ax.annotate(  # right of the axes, over no data
             fmt_threshold(thr, QUANTITIES[q].unit),
-            (d.time[-1], thr),
-            xytext=(-2, 2),
+            (1.0, thr),
+            xycoords=ax.get_yaxis_transform(),
+            xytext=(3, 0),
             textcoords="offset points",
-            ha="right",
+            ha="left",
+            va="center",
             fontsize=8,
             color="tab:red",
         )
@@ -235,6 +237,7 @@ def heading(c: Comparison, path: Path) -> Path | None:
     ax2.plot(d.time, d.series["heading"] / DEG, color="k", lw=1.2)
     for thr in QUANTITIES["heading"].thresholds:
         ax2.axhline(thr / DEG, color="tab:red", lw=0.7, alpha=0.6)
+    ax.ticklabel_format(axis="y", useOffset=False)  # no "+1.8e2" over the phase names
     ax.set_ylabel("heading (yaw, deg, unwrapped)")
     ax2.set_ylabel("|difference| (deg)")
     ax2.set_xlabel("time (s)")
@@ -249,6 +252,16 @@ def heading(c: Comparison, path: Path) -> Path | None:
     fig.legend(handles + h2, labels + l2, loc="lower center", ncol=4, fontsize=8, frameon=False)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
     return _save_fixed(fig, path)
+
+
+def held_commands(modes: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One joint's recorded command modes and targets (T,) with the velocity and position
+    commands carried into the later rows that record none, as the engines hold them until
+    replaced (a torque command lasts its own steps)."""
+    rows = np.arange(len(modes))
+    last = np.maximum.accumulate(np.where(modes != 0, rows, 0))
+    held = (modes == 0) & np.isin(modes[last], (1, 2))
+    return np.where(held, modes[last], modes), np.where(held, targets[last], targets)
 
 
 def _joint_columns(c: Comparison, mode: int) -> list[int]:
@@ -289,15 +302,21 @@ def _joint_grid(
     title: str,
     target_label: str,
     path: Path,
+    target_axis: str | None = None,
 ) -> Path:
     """One panel per joint: ``series(body, j)`` of both engines, ``target(body, j)`` (NaN where
-    none) as a thin black dotted line; the legend below every panel."""
+    none) as a thin black dotted line (on a second y axis labelled ``target_axis`` when given:
+    another quantity than the series); the legend below every panel."""
     plt = _plt()
     n = len(cols)
     ncols = 1 if n == 1 else 2 if n <= 4 else 3
     nrows = math.ceil(n / ncols)
     fig, axes = plt.subplots(
-        nrows, ncols, figsize=(4.2 * ncols + 1.0, 2.3 * nrows + 1.3), sharex=True, squeeze=False
+        nrows,
+        ncols,
+        figsize=(max(7.5, 4.2 * ncols + 1.0), 2.3 * nrows + 1.3),
+        sharex=True,
+        squeeze=False,
     )
     tr0 = c.runs[(0, c.timestep)]
     for k, j in enumerate(cols):
@@ -307,7 +326,16 @@ def _joint_grid(
             ax.plot(tr.time, series(tr.body, j), label=label, **_style(slot, len(tr.time)))
         tgt = target(tr0.body, j)
         if tgt is not None and np.isfinite(tgt).any():
-            ax.plot(tr0.time, tgt, color="k", lw=1.0, ls=":", label=target_label, zorder=5)
+            tax = ax
+            if target_axis is not None:
+                tax = ax.twinx()
+                tax.set_ylabel(target_axis.format(unit=_unit(tr0.body, j, "force")), fontsize=8)
+                tax.tick_params(labelsize=8)
+                lo, hi = float(np.nanmin(tgt)), float(np.nanmax(tgt))
+                if max(abs(lo), abs(hi)) > 0:  # from zero: the torque's size, not its noise
+                    tax.set_ylim(1.15 * min(lo, 0.0), 1.15 * max(hi, 0.0))
+            tax.plot(tr0.time, tgt, color="k", lw=1.0, ls=":", zorder=5)
+            ax.plot([], [], color="k", lw=1.0, ls=":", label=target_label)  # in the legend
         ax.set_title(tr0.body.joint_names[j], fontsize=9, pad=11)  # above a "1e-5" offset
         ax.grid(alpha=0.3)
         ax.tick_params(labelsize=8)
@@ -333,37 +361,44 @@ def _joint_grid(
 def joints(c: Comparison, out: Path) -> dict[str, Path]:
     """One figure per command mode the subject's joints get (``joints_velocity.png``: speed
     against its target; ``joints_position.png``: position against its target;
-    ``joints_torque.png``: the applied torque against the commanded one), both engines, one
-    panel per commanded joint. Returns name -> path (``joints_velocity``...), modes without a
-    commanded joint left out."""
+    ``joints_torque.png``: the joint's speed under the commanded torque, on a second axis; the
+    force an engine reports is its motor's, not the torque applied: on spinning-wheel PyBullet
+    reports 0.0625 N·m, its velocity motor's last, and MuJoCo 0 while 0.05 N·m is applied),
+    both engines, one panel per commanded joint. Returns name -> path (``joints_velocity``...),
+    modes without a commanded joint left out."""
     made = {}
     sc = c.scenario.name
 
     def where(mode: int) -> Any:
         def target(body: Any, j: int) -> np.ndarray:
-            return np.where(body.joint_modes[:, j] == mode, body.joint_targets[:, j], np.nan)
+            modes, targets = held_commands(body.joint_modes[:, j], body.joint_targets[:, j])
+            return np.where(modes == mode, targets, np.nan)
 
         return target
 
     specs = {
         1: (lambda b, j: b.joint_velocities[:, j], "speed ({unit})", "joint speed", "target speed"),
         2: (lambda b, j: b.joint_positions[:, j], "position ({unit})", "joint position", "target"),
-        3: (lambda b, j: b.joint_forces[:, j], "torque ({unit})", "joint torque", "commanded"),
+        3: (lambda b, j: b.joint_velocities[:, j], "speed ({unit})", "", "commanded torque"),
     }
     for mode, name in JOINT_PLOTS.items():
         cols = _joint_columns(c, mode)
         if not cols:
             continue
         series, unit, what, target_label = specs[mode]
+        title = f"{sc}: {what} against its target ({name}-commanded joints)"
+        if mode == 3:
+            title = f"{sc}: joint speed under the commanded torque (dotted, right axis)"
         made[f"joints_{name}"] = _joint_grid(
             c,
             cols,
             series,
             where(mode),
             unit,
-            f"{sc}: {what} against its target ({name}-commanded joints)",
+            title,
             target_label,
             out / f"joints_{name}.png",
+            target_axis="torque ({unit})" if mode == 3 else None,
         )
     return made
 

@@ -336,3 +336,13 @@ def test_parts_that_never_part_rank_by_their_gap_over_the_threshold():
         "No joint or link comes 1° or 1 cm apart; the nearest to it is joint `j0` "
         "(largest gap 0.5° at t = 0.000 s)."
     )
+
+
+def test_held_commands_carry_velocity_and_position_targets_until_replaced():
+    from simbridge.compare.plots import held_commands
+
+    modes = np.array([0, 0, 2, 2, 0, 0, 3, 0, 1, 0])
+    targets = np.array([np.nan, np.nan, 1, 2, np.nan, np.nan, 5, np.nan, 7, np.nan])
+    m, t = held_commands(modes, targets)
+    assert m.tolist() == [0, 0, 2, 2, 2, 2, 3, 0, 1, 1]  # a torque command is not held
+    np.testing.assert_array_equal(t, [np.nan, np.nan, 1, 2, 2, 2, 5, np.nan, 7, 7])
