@@ -14,6 +14,7 @@ import pytest
 from simbridge.cli import main
 from simbridge.compare import compare, report, run
 from simbridge.compare.resync import PARTS, default_every, resync
+from simbridge.compare.scenario import load_scenario
 from simbridge.exceptions import InvalidArgumentError
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
@@ -185,3 +186,15 @@ def test_the_resync_every_flag(tmp_path, capsys):
     assert s["resync"] is None
     assert main([*args, "--resync-every", "-1"]) == 2
     assert "--resync-every" in capsys.readouterr().err
+
+
+def test_a_closed_loop_controllers_commands_travel_with_the_state():
+    """r2d2-goto's PD controller commands the wheels inside the step loop: the state taken
+    after it carries those commands, so MuJoCo's own floor stays at its cold-start size (a
+    state without them would brake the wheels: errors of cm/s)."""
+    sc = load_scenario("r2d2-goto").truncated(0.5)
+    r = resync(sc, ["mujoco", "pybullet"], every=4)
+    mujoco = r.directions[0]
+    assert mujoco.floor_parts["base_linear_velocity"].max() < 1e-7
+    assert mujoco.floor_parts["joint_velocities"].max() < 1e-9
+    assert mujoco.failed == 0 and np.isfinite(mujoco.error).all()
