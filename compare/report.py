@@ -282,7 +282,8 @@ def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: 
         "instants; the dash-dotted line is where the gap first reaches its threshold.",
         "joints_velocity": "Velocity-commanded joints: speed against the target.",
         "joints_position": "Position-commanded joints: position against the target.",
-        "joints_torque": "Torque-commanded joints: applied against commanded torque.",
+        "joints_torque": "Torque-commanded joints: speed under the commanded torque (dotted, "
+        "right axis).",
         "motors": "Velocity- and position-commanded joints: motor force against its max_force.",
         "sweep": "Speed against self-consistency, and the cross-engine gap against the time step.",
     }
