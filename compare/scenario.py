@@ -876,6 +876,10 @@ def loads_scenario(text: str, *, file: str = "<scenario>", source: Path | None =
             line = int(m.group(1)) if m else None
         detail = str(exc)  # "Invalid value (at line 3, column 10)"
         raise ScenarioError(file, None, f"TOML syntax error: {detail}", line) from None
+    except RecursionError:  # tomllib recurses once per nested array or inline table
+        raise ScenarioError(file, None, "TOML nested too deeply for the reader") from None
+    except ValueError as exc:  # an integer of more digits than Python converts (4300)
+        raise ScenarioError(file, None, f"TOML value the reader cannot take: {exc}") from None
     default = source.stem if source is not None else "scenario"
     return _Reader(text, file).scenario(data, default, source)
 
