@@ -103,12 +103,14 @@ def raw_client() -> Any:
     return _client()
 
 
-def _close(a: Any, b: Any, tol: float) -> bool:
+def close(a: Any, b: Any, tol: float) -> bool:
+    """Every element of ``a`` within ``tol`` of ``b``'s."""
     return bool(np.allclose(np.asarray(a, float), np.asarray(b, float), rtol=0.0, atol=tol))
 
 
-def _same_quat(a: Any, b: Any, tol: float) -> bool:
-    return _close(a, b, tol) or _close(a, -np.asarray(b, float), tol)
+def same_quat(a: Any, b: Any, tol: float) -> bool:
+    """The same rotation: quaternions equal to ``tol`` up to sign."""
+    return close(a, b, tol) or close(a, -np.asarray(b, float), tol)
 
 
 def table_difference(got: list[Any], raw: list[tuple[Any, ...]]) -> str | None:
@@ -127,9 +129,9 @@ def table_difference(got: list[Any], raw: list[tuple[Any, ...]]) -> str | None:
                 return f"joint {k} field {f}: {g[f]!r}, raw {r[f]!r}"
         if g[16] != r[16]:
             return f"joint {k} parent {g[16]}, raw {r[16]}"
-        if not _close(g[13], r[13], TABLE_TOL) or not _close(g[14], r[14], TABLE_TOL):
+        if not close(g[13], r[13], TABLE_TOL) or not close(g[14], r[14], TABLE_TOL):
             return f"joint {k} axis, parent frame position {g[13]}, {g[14]}; raw {r[13]}, {r[14]}"
-        if not _same_quat(g[15], r[15], TABLE_TOL):
+        if not same_quat(g[15], r[15], TABLE_TOL):
             return f"joint {k} parent frame orientation {g[15]}, raw {r[15]}"
     return None
 
@@ -149,7 +151,7 @@ def frames_difference(got: list[Any], raw: list[Any]) -> str | None:
         return f"{len(got)} links, raw {len(raw)}"
     for k, ((gp, go), (rp, ro)) in enumerate(zip(got, raw, strict=True)):
         tol = FRAME_REL * max(1.0, float(np.abs(rp).max()))
-        if not _close(gp, rp, tol) or not _same_quat(go, ro, FRAME_REL):
+        if not close(gp, rp, tol) or not same_quat(go, ro, FRAME_REL):
             return f"link {k - 1} frame {gp}, {go}; raw {rp}, {ro}"
     return None
 
@@ -162,9 +164,9 @@ def dynamics_difference(sim: simbridge.Sim, body: int, raw: list[Any], rel: floa
         if not math.isclose(d.mass, r[0], rel_tol=1e-12, abs_tol=1e-15):
             return f"link {k - 1} mass {d.mass}, raw {r[0]}"
         scale = max(1e-12, float(np.abs(r[2]).max()))
-        if not _close(d.local_inertia_diagonal, r[2], rel * scale):
+        if not close(d.local_inertia_diagonal, r[2], rel * scale):
             return f"link {k - 1} inertia {d.local_inertia_diagonal}, raw {r[2]}"
-        if not _close(d.local_inertial_position, r[3], TABLE_TOL) or not _same_quat(
+        if not close(d.local_inertial_position, r[3], TABLE_TOL) or not same_quat(
             d.local_inertial_orientation, r[4], 1e-7
         ):
             return (

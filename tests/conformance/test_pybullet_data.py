@@ -94,12 +94,12 @@ def _core_difference(name: str, raw: _raw.RawBody) -> str | None:
         mass = 0.0 if (k == 0 and fixed and not ours.mass) else ours.mass
         if not math.isclose(mass, r[0], rel_tol=1e-12, abs_tol=1e-15):
             return f"link {k - 1} mass {mass}, raw {r[0]}"
-        if not _raw._close(ours.position, r[3], _raw.TABLE_TOL):
+        if not _raw.close(ours.position, r[3], _raw.TABLE_TOL):
             return f"link {k - 1} inertial position {ours.position}, raw {r[3]}"
         # PyBullet's moments carry float32 rounding somewhere on their way (measured worst
         # 7.8e-8 relative, random_urdfs/419 base; minitaur's legs 4e-8): 1e-7
         scale = max(1e-12, max(abs(v) for v in r[2]))
-        if not _raw._close(ours.diagonal, r[2], 1e-7 * scale):
+        if not _raw.close(ours.diagonal, r[2], 1e-7 * scale):
             return f"link {k - 1} inertia {ours.diagonal}, raw {r[2]}"
     return None
 

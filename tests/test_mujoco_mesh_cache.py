@@ -1,5 +1,6 @@
 """simbridge.meshes caches a mesh per file version: a file rewritten while the process runs is
-read again (the cache is keyed on path, modification time and size), an unchanged one is not."""
+read again (the cache is keyed on path, modification time and size), an unchanged one is not;
+the MuJoCo world's mesh assets likewise."""
 
 from __future__ import annotations
 
