@@ -463,15 +463,6 @@ def add_pairs(
                 add(a, b)
 
 
-def adjacent_links(model: UrdfModel) -> set[tuple[int, int]]:
-    """Parent-child link pairs (PyBullet never collides them, even with self-collision)."""
-    out = set()
-    for joint in model.joints:
-        parent = model.parent_index(joint)
-        out.add((min(parent, joint.index), max(parent, joint.index)))
-    return out
-
-
 def mass_bound_note(robot: RobotSpec) -> str:
     return (
         f"links {robot.bounded_links} move but have zero mass or inertia: raised to "
