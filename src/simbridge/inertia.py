@@ -157,7 +157,7 @@ def collision_aabb_inertia(
         )
         if same_frame:
             if g.kind == "sphere":
-                v = 0.4 * mass * g.size[0] ** 2
+                v = 0.4 * mass * (g.size[0] * g.size[0])  # inf, not OverflowError, past 1e154
                 return (v, v, v)
             if g.kind in ("box", "capsule") or _is_obj(g):
                 return _box_inertia(mass, 2.0 * _shape_local_box(g, vertices)[1])
