@@ -29,7 +29,7 @@ PAIR = ["pybullet", "mujoco"]
 
 def _written(tmp_path_factory, name):
     out = tmp_path_factory.mktemp(name)
-    c = compare(DATA / f"{name}.toml", PAIR, ensemble=2, workers=0)
+    c = compare(DATA / f"{name}.toml", PAIR, ensemble=2, workers=0, resync_every=0)
     path = report(c, out, trajectories=False)
     return c, out, path.read_text(), json.loads((out / "summary.json").read_text())
 
@@ -172,7 +172,7 @@ def test_y_up_quadruped_departures_apply_with_its_own_figures(laikago):
 
 
 def test_r2d2_gentle_parts_while_mujoco_chatters_in_the_turn():
-    c = compare("r2d2-gentle", PAIR, ensemble=1)
+    c = compare("r2d2-gentle", PAIR, ensemble=1, resync_every=0)
     s = c.summary()
     p = s["parting"]
     assert p["phase"] == "turn" and p["relation"] == "during"
@@ -185,7 +185,7 @@ def test_r2d2_gentle_parts_while_mujoco_chatters_in_the_turn():
 
 
 def test_torque_commands_get_their_own_figure(tmp_path):
-    c = compare("spinning-wheel", PAIR, ensemble=1, duration=1.5)  # motor, then torque
+    c = compare("spinning-wheel", PAIR, ensemble=1, duration=1.5, resync_every=0)  # torque
     report(c, tmp_path, trajectories=False)
     for name in ("joints_velocity", "joints_torque", "height"):
         assert (tmp_path / f"{name}.png").is_file(), name
