@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -104,6 +105,35 @@ def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
     return UrdfSource(text, found, found.parent, str(found))
 
 
+def _mesh_candidates(uri: str, base_dir: Path) -> Iterator[str]:
+    """Where :func:`resolve_mesh` looks, in order."""
+    join = os.path.join
+    folders = [str(base_dir), *map(str, base_dir.parents)]
+    if uri.startswith("package://"):
+        rest = uri[len("package://") :]
+        package, _, sub = rest.partition("/")
+        for ancestor in folders:
+            if os.path.basename(ancestor) == package:
+                yield join(ancestor, sub)
+            yield join(ancestor, package, sub)
+        yield join(folders[0], sub)
+        yield join(folders[0], rest)
+        return
+    path = uri
+    for prefix in ("file://", "model://"):
+        if path.startswith(prefix):
+            path = path[len(prefix) :]
+    if os.path.isabs(path):
+        yield path
+        return
+    cwd = os.getcwd()
+    yield join(cwd, path)
+    for folder in folders:
+        yield join(folder, path)
+    for up in (".", "..", join("..", "..")):
+        yield join(cwd, up, path)
+
+
 def resolve_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
     """Resolve a mesh filename as PyBullet does (bullet3 ``UrdfFindMeshFile.h``).
 
@@ -112,31 +142,15 @@ def resolve_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
     nearest first, then as ``./``, ``../`` and ``../../`` of it. ``package://NAME/rest`` is
     looked up in every ancestor of ``base_dir`` (a folder that is, or contains, NAME), then as
     ``rest`` and ``NAME/rest`` relative to ``base_dir``. Returns the first existing candidate
-    (else the one in ``base_dir``) and every candidate tried, that one first.
+    and the candidates tried so far; when none exists, the one in ``base_dir`` (the first for
+    ``package://`` and absolute paths) and every candidate, that one first.
     """
-    candidates: list[Path] = []
-    if uri.startswith("package://"):
-        rest = uri[len("package://") :]
-        package, _, sub = rest.partition("/")
-        for ancestor in [base_dir, *base_dir.parents]:
-            if ancestor.name == package:
-                candidates.append(ancestor / sub)
-            candidates.append(ancestor / package / sub)
-        candidates += [base_dir / sub, base_dir / rest]
-        primary = candidates[0]
-    else:
-        path = uri
-        for prefix in ("file://", "model://"):
-            if path.startswith(prefix):
-                path = path[len(prefix) :]
-        if os.path.isabs(path):
-            candidates.append(Path(path))
-        else:
-            candidates.append(Path(path).absolute())
-            candidates += [folder / path for folder in (base_dir, *base_dir.parents)]
-            candidates += [(Path(p) / path).absolute() for p in ("./", "../", "../../")]
-        primary = candidates[0] if os.path.isabs(path) else base_dir / path
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate.resolve(), candidates
-    return primary, [primary, *(c for c in candidates if c != primary)]
+    tried: list[Path] = []
+    for candidate in _mesh_candidates(uri, base_dir):
+        tried.append(Path(candidate))
+        if os.path.isfile(candidate):
+            return Path(os.path.realpath(candidate)), tried
+    path = uri.split("://", 1)[1] if uri.startswith(("file://", "model://")) else uri
+    relative = not uri.startswith("package://") and not os.path.isabs(path)
+    primary = base_dir / path if relative else tried[0]
+    return primary, [primary, *(c for c in tried if c != primary)]

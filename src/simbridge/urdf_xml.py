@@ -35,6 +35,7 @@ __all__ = ["Leniency", "UrdfXml", "XmlElement", "read_urdf_xml", "c_atof", "pybu
 LOGGER = logging.getLogger("simbridge.urdf")
 
 LINE_BYTES = 8191  # PyBullet's line buffer holds 8191 bytes and the terminating NUL
+
 _SHOWN = 10  # assumptions listed in full in one warning
 
 
@@ -94,6 +95,11 @@ def c_atof(text: str) -> tuple[float, bool]:
     """C's ``atof`` (``strtod`` in the C locale): the value of the longest prefix that is a
     number, 0.0 when there is none; and whether the whole text (blanks around it aside) was
     that number."""
+    if text.isascii() and text.isprintable() and "_" not in text:  # float reads as strtod
+        try:
+            return float(text), True
+        except ValueError:
+            pass
     m = _C_NUMBER.match(text)
     if m is None:
         return 0.0, False
@@ -124,9 +130,17 @@ def pybullet_numbers(text: str) -> tuple[list[float], bool]:
 # ---------------------------------------------------------------- lines
 
 
+def _longest_line(data: bytes) -> int:
+    return len(data) if len(data) <= LINE_BYTES else max(map(len, data.split(b"\n")))
+
+
 def _pybullet_lines(data: bytes, lenient: Leniency) -> tuple[bytes, list[int]]:
     """The bytes PyBullet's line reader passes on (lines joined by newlines) and the source
     line of each of its lines."""
+    if b"\0" not in data and _longest_line(data) <= LINE_BYTES:
+        plain = data.replace(b"\r\n", b"\n")  # a carriage return ending a line: no matter
+        if b"\r" not in plain:
+            return plain, list(range(1, plain.count(b"\n") + 2))
     out: list[bytes] = []
     line_of: list[int] = []
     line = 1
