@@ -170,9 +170,40 @@ def load_object(ref: str, base: Path | None = None) -> Any:
     return obj
 
 
+def _defining_file(obj: Any) -> str | None:
+    """The source file ``obj`` was defined in, found without importing anything."""
+    module = sys.modules.get(getattr(obj, "__module__", "") or "")
+    file = getattr(module, "__file__", None)
+    if file:
+        return str(file)
+    code = getattr(obj, "__code__", None)  # a function
+    if code is not None:
+        return str(code.co_filename)
+    for member in vars(obj).values() if inspect.isclass(obj) else ():  # a class: its methods
+        code = getattr(getattr(member, "__func__", member), "__code__", None)
+        if code is not None:
+            return str(code.co_filename)
+    return None
+
+
+def _importable_as(modname: str, file: str | None) -> bool:
+    """Whether ``import modname`` (what a worker would do) finds the file ``obj`` came from."""
+    if modname in ("__main__", "__mp_main__") or modname.startswith(_FILE_MODULE_PREFIX):
+        return False
+    try:
+        spec = importlib.util.find_spec(modname)
+    except (ImportError, ValueError):
+        return False
+    if spec is None or not spec.origin or not Path(spec.origin).is_file():
+        return False  # not found, or a namespace package (a bare folder), or built in
+    return file is None or Path(spec.origin).resolve() == Path(file).resolve()
+
+
 def reference_of(obj: Any) -> str:
-    """The reference a worker process can import ``obj`` (a class or function) by: its file for
-    a script's own objects (``__main__``) and files loaded by path, else ``module:qualname``.
+    """The reference a worker process can import ``obj`` (a class or function) by:
+    ``module:qualname`` when ``import module`` finds the file it came from, else
+    ``/its/file.py:qualname`` (a script's own objects, a file loaded by path, a module loaded
+    under another name).
 
     Raises:
         RefError: ``obj`` is defined inside a function, or in no file.
@@ -186,16 +217,15 @@ def reference_of(obj: Any) -> str:
             f"{qual} is defined inside a function: define it at the top level of a module, so "
             "that every run (and the ensemble's worker processes) can import it"
         )
-    module = sys.modules.get(modname)
-    file = getattr(module, "__file__", None)
-    if modname in ("__main__", "__mp_main__") or modname.startswith(_FILE_MODULE_PREFIX):
-        if not file:
-            raise RefError(
-                f"{qual} is defined in {modname}, which has no file (an interactive session or "
-                "a script read from stdin): put it in a file and name it 'file.py:Name'"
-            )
-        return f"{Path(file).resolve()}:{qual}"
-    return f"{modname}:{qual}"
+    file = _defining_file(obj)
+    if _importable_as(modname, file):
+        return f"{modname}:{qual}"
+    if not file or not Path(file).is_file():
+        raise RefError(
+            f"{qual} is defined in {modname}, which has no file (an interactive session or "
+            "a script read from stdin): put it in a file and name it 'file.py:Name'"
+        )
+    return f"{Path(file).resolve()}:{qual}"
 
 
 # ---------------------------------------------------------------- the spec
@@ -338,7 +368,7 @@ class ControlSim:
     ``set_joint_torque``) are also noted, so that the run records their targets and holds a
     torque until the next control step."""
 
-    def __init__(self, sim: simbridge.Sim, note: Callable[[int, Any, str, Any], None]):
+    def __init__(self, sim: simbridge.Sim, note: Callable[..., None]):
         object.__setattr__(self, "_sim", sim)
         object.__setattr__(self, "_note", note)
 
@@ -358,13 +388,13 @@ class ControlSim:
 
     def set_joint_velocity(self, body: int, joints: Any, target: Any, *, max_force: Any) -> None:
         self._sim.set_joint_velocity(body, joints, target, max_force=max_force)
-        self._note(body, joints, "velocity", target)
+        self._note(body, joints, "velocity", target, max_force=max_force)
 
     def set_joint_position(
         self, body: int, joints: Any, target: Any, *, max_force: Any, kp: Any = 0.1, kd: Any = 1.0
     ) -> None:
         self._sim.set_joint_position(body, joints, target, max_force=max_force, kp=kp, kd=kd)
-        self._note(body, joints, "position", target)
+        self._note(body, joints, "position", target, max_force=max_force, kp=kp, kd=kd)
 
     def set_joint_torque(self, body: int, joints: Any, torque: Any) -> None:
         self._sim.set_joint_torque(body, joints, torque)
@@ -376,9 +406,11 @@ class ControlSim:
 
 class PhaseControl:
     """One phase's controller in one run: made with :meth:`start`, called with
-    :meth:`before_step` before every step of the phase (it calls the controller on control
-    steps and re-sends its torques in between), and :meth:`record` after each step writes the
-    held commands' targets into the recording.
+    :meth:`before_step` before every step of the phase, after the phase's own commands (it
+    calls the controller on control steps; in between it re-sends the last call's torques, and
+    its velocity and position commands on joints the phase's commands also drive, so that the
+    controller's command holds until its next call), and :meth:`record` after each step writes
+    the held commands' targets into the recording.
 
     Every failure is a :class:`ControllerError` naming the controller, the phase and the
     time."""
@@ -395,6 +427,7 @@ class PhaseControl:
         robots: Mapping[str, int],
         columns: Callable[[int, list[int]], tuple[Any, list[int]] | None],
         stopped: Callable[[str, int, int], Trajectory] | None = None,
+        overridden: set[tuple[int, int]] | None = None,
     ):
         self.spec = spec
         self.phase = phase
@@ -410,7 +443,10 @@ class PhaseControl:
         self.view = ControlSim(sim, self._note)
         self.obj: Any = None
         self.held: dict[tuple[int, int], tuple[int, float]] = {}  # (body, joint) -> mode, target
-        self.torques: list[tuple[int, Any, Any]] = []  # the last control step's torque calls
+        self.overridden = set(overridden or ())  # (body, joint) the phase's commands drive
+        # the last call's commands: (mode, body, joint indices, values, keyword arguments)
+        self.sent: list[tuple[str, int, list[int], list[float], dict[str, Any]]] = []
+        self.resend: list[tuple[str, int, list[int], list[float], dict[str, Any]]] = []
         self.calls = 0
         self.time = 0.0
 
@@ -421,15 +457,18 @@ class PhaseControl:
             err.trajectory = self.stopped(self.phase, self.first, self.row)
         return err
 
-    def _note(self, body: int, joints: Any, mode: str, target: Any) -> None:
+    def _note(self, body: int, joints: Any, mode: str, target: Any, **kw: Any) -> None:
         if isinstance(joints, (int, str)) or not hasattr(joints, "__iter__"):
             items = [joints]
         else:
             items = list(joints)
         idx = [self.sim.joint_index(body, j) for j in items]
-        values = list(target) if hasattr(target, "__iter__") else [target] * len(idx)
-        if mode == "torque":
-            self.torques.append((body, list(idx), list(values)))
+        values = (
+            [float(v) for v in target]
+            if hasattr(target, "__iter__")
+            else [float(target)] * len(idx)
+        )
+        self.sent.append((mode, body, idx, values, kw))
         code = _MODE_CODE[mode]
         for j, v in zip(idx, values, strict=False):
             self.held[(body, j)] = (code, float(v))
@@ -465,7 +504,7 @@ class PhaseControl:
             self._call(begin, "start", time, self.view, dict(self.robots), time)
 
     def _call(self, fn: Callable[..., Any], what: str, time: float, *args: Any) -> None:
-        self.torques = []
+        self.sent = []
         try:
             out = fn(*args)
         except ControllerMisuse as exc:
@@ -478,19 +517,32 @@ class PhaseControl:
                 f"{what}() returned {out!r}; a controller acts through the Sim "
                 "(set_joint_velocity, set_joint_position, set_joint_torque) and returns None",
             )
+        self.resend = [
+            c
+            for c in self.sent
+            if c[0] == "torque" or any((c[1], j) in self.overridden for j in c[2])
+        ]
 
     def before_step(self, i: int, time: float) -> None:
-        """Before step ``i`` (0-based, in the phase) at ``time`` (s): call the controller on a
-        control step, else re-send the torques of its last control step (a zero-order hold:
-        velocity and position commands persist in the engine by themselves)."""
+        """Before step ``i`` (0-based, in the phase) at ``time`` (s), after the phase's own
+        commands: call the controller on a control step; else hold its last call's commands (a
+        zero-order hold): re-send its torques (a torque lasts one step), and its velocity and
+        position commands on joints the phase's commands have just overwritten (elsewhere they
+        persist in the engine by themselves)."""
         self.row = self.first + i
         if i % self.spec.every == 0:
             self.time = time
             self.calls += 1
             self._call(self.obj.step, "step", time, self.view, time)
-        else:
-            for body, idx, values in self.torques:
-                self.sim.set_joint_torque(body, idx, values)
+            return
+        sim = self.sim
+        for mode, body, idx, values, kw in self.resend:
+            if mode == "torque":
+                sim.set_joint_torque(body, idx, values)
+            elif mode == "velocity":
+                sim.set_joint_velocity(body, idx, values, **kw)
+            else:
+                sim.set_joint_position(body, idx, values, **kw)
 
     def record(self, row: int) -> None:
         """Write the targets of the commands the controller holds into row ``row``."""

@@ -44,6 +44,8 @@ import numpy as np
 
 from simbridge.exceptions import ScenarioError
 
+DEG = math.pi / 180.0
+
 if TYPE_CHECKING:
     from .run import BodyTrajectory, Trajectory
     from .scenario import Scenario
@@ -635,12 +637,16 @@ def summarize(outcome: Outcome, records: Sequence[Mapping[str, Any]]) -> dict[st
 
 
 def outcomes_summary(
-    scenario: Scenario, labels: Sequence[str], per_engine: Sequence[Sequence[Mapping[str, Any]]]
+    scenario: Scenario,
+    labels: Sequence[str],
+    per_engine: Sequence[Sequence[Mapping[str, Any]]],
+    half_timestep: Sequence[Mapping[str, Any]] | None = None,
 ) -> dict[str, Any] | None:
     """``summary.json``'s ``outcomes``: ``declared`` (each outcome's declaration) and
     ``engines`` (per engine label, per outcome name, :func:`summarize`); ``per_engine[slot]``
-    is the list of every run's ``{name: record}``, nominal first. None when the scenario
-    declares no outcome."""
+    is the list of every run's ``{name: record}``, nominal first; ``half_timestep[slot]`` the
+    records of the engine's nominal run at half the time step (its own-error run). None when the
+    scenario declares no outcome."""
     if not scenario.outcomes:
         return None
     engines: dict[str, Any] = {}
@@ -655,6 +661,14 @@ def outcomes_summary(
         "confidence": CONFIDENCE,
         "method": INTERVAL_METHOD,
         "engines": engines,
+        "half_timestep": (
+            None
+            if half_timestep is None
+            else {
+                label: {k: dict(v) for k, v in runs.items()}
+                for label, runs in zip(labels, half_timestep, strict=True)
+            }
+        ),
     }
 
 
@@ -678,10 +692,15 @@ def _pm(dist: dict[str, Any] | None, unit: str, runs: int, none: str = "none") -
         return none
     if dist["runs"] == 1:
         return _fmt(dist["mean"], unit) + (f" (1 run of {runs})" if runs > 1 else "")
-    if unit in ("s", "J", ""):
-        text = f"{dist['mean']:.3g} ± {dist['std']:.2g} {unit}".rstrip()
+    mean, std = dist["mean"], dist["std"]
+    if unit == "m":  # both in the mean's unit: 0.68 ± 0.025 mm
+        steps = ((1.0, 1.0, "m"), (0.01, 100.0, "cm"), (1e-4, 1000.0, "mm"))
+        factor, name = next(((f, n) for lim, f, n in steps if abs(mean) >= lim), (1.0, "m"))
+        text = f"{mean * factor:.3g} ± {std * factor:.2g} {name}"
+    elif unit == "rad":
+        text = f"{mean / DEG:.3g} ± {std / DEG:.2g}°"
     else:
-        text = f"{_fmt(dist['mean'], unit)} ± {_fmt(dist['std'], unit)}"
+        text = f"{mean:.3g} ± {std:.2g} {unit}".rstrip()
     if dist["runs"] < runs:
         text += f" ({dist['runs']} runs of {runs})"
     return text
@@ -743,6 +762,29 @@ def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
     return lines
 
 
+def _state(record: Mapping[str, Any], unit: str) -> str:
+    ok = {True: "succeeds", False: "fails", None: "has no success"}[record["success"]]
+    v = record.get("value")
+    return ok + ("" if v is None else f" ({_fmt(v, unit)})")
+
+
+def _half_timestep_changes(out: Mapping[str, Any]) -> list[str]:
+    """Outcomes whose success differs between an engine's nominal run and its run at half the
+    time step, in words."""
+    half = out.get("half_timestep") or {}
+    words = []
+    for decl in out["declared"]:
+        name, unit = decl["name"], decl["unit"]
+        for label, records in half.items():
+            nominal = out["engines"][label][name]["nominal"]
+            there = records.get(name)
+            if nominal is None or there is None or nominal["success"] == there["success"]:
+                continue
+            a, b = _state(nominal, unit), _state(there, unit)
+            words.append(f"{name} on {label} {a} at dt, {b} at dt/2")
+    return words
+
+
 def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
     """The report's ``## Outcomes`` section (markdown lines): per outcome and engine, the
     success count and rate with its interval, the value's distribution and the nominal run's
@@ -777,7 +819,7 @@ def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
                     f"{s['rate'] * 100:.0f}% [{s['low'] * 100:.0f}%, {s['high'] * 100:.0f}%]",
                 ]
             if v is None:
-                cells += ["none", "", ""]
+                cells += ["never" if decl["kind"] == "reach" else "none", "", ""]
             else:
                 cells += [
                     _pm(v, unit, len(p["runs"])),
@@ -785,9 +827,21 @@ def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
                     f"{_fmt(v['min'], unit)} – {_fmt(v['max'], unit)}",
                 ]
             nv = None if nom is None else nom.get("value")
-            cells.append("none" if nv is None else _fmt(nv, unit))
+            if nv is not None:
+                cells.append(_fmt(nv, unit))
+            elif decl["kind"] == "reach" and nom is not None and nom.get("closest") is not None:
+                cells.append(f"never (closest {_fmt(nom['closest'], 'm')})")
+            else:
+                cells.append("none")
             lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
+    changed = _half_timestep_changes(out)
+    if changed:
+        lines += [
+            "At half the time step (each engine's own-error run) the nominal run's outcome "
+            "changes: " + "; ".join(changed) + ".",
+            "",
+        ]
     for decl in out["declared"]:
         keys = {k: v for k, v in decl.items() if k not in ("name", "kind", "unit")}
         words = ", ".join(f"{k} = {v}" for k, v in keys.items())

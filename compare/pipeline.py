@@ -181,7 +181,13 @@ class Comparison:
             runs = [e.outcomes for e in self.ensembles]
         else:
             runs = [[self.runs[(slot, self.timestep)].outcomes] for slot in (0, 1)]
-        return outcomes_summary(self.scenario, self.labels, runs)
+        half = [self.runs.get((slot, self.timestep / 2)) for slot in (0, 1)]
+        return outcomes_summary(
+            self.scenario,
+            self.labels,
+            runs,
+            None if None in half else [tr.outcomes for tr in half if tr is not None],
+        )
 
     def _ensemble_summary(self) -> dict[str, Any] | None:
         if not self.ensembles:

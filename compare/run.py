@@ -471,6 +471,9 @@ def _start_control(
             return None
         return rec, rec.columns(joints)
 
+    overridden = {
+        (ids[c.robot], sim.joint_index(ids[c.robot], j)) for c in p.commands for j in c.joints
+    }
     ctl = PhaseControl(
         p.controller,
         phase=p.name,
@@ -481,6 +484,7 @@ def _start_control(
         robots=ids,
         columns=columns,
         stopped=stopped,
+        overridden=overridden,
     )
     ctl.start(row, row * sc.timestep)
     return ctl
