@@ -3,10 +3,10 @@
 :class:`HoldHeight` bends all four legs by one angle ``a`` (rad): hip 0, upper leg
 ``-0.7 - a / 2``, lower leg ``0.7 + a`` (laikago's standing pose at ``a = 0``, from PyBullet's
 laikago example; a larger ``a`` folds the legs and lowers the body). Every control step it
-reads the base height (its URDF link frame's z) and rate and sets ``a`` by a PID law on the height error, then sends
-the twelve position setpoints (force up to ``max_force`` N·m). :func:`height_error` is the
-scenario's outcome function: the RMS of the base height against the target over the run's
-last seconds.
+reads the base height (its URDF link frame's z) and rate and sets ``a`` by a PID law on the
+height error, then sends the twelve position setpoints (force up to ``max_force`` N·m).
+:func:`height_error` is the scenario's outcome function: the RMS of the base height against
+the target over the run's last seconds.
 """
 
 from __future__ import annotations
