@@ -336,6 +336,14 @@ def add_robot(
             cg = body.add_geom(name=name)
             is_plane = g.kind == "plane" or (static[i + 1] and upright and _is_ground_box(g))
             if g.kind == "plane":  # Bullet's infinite plane through the shape's origin
+                if not static[i + 1]:
+                    raise UrdfStructureError(
+                        file,
+                        f"{where} <collision> #{k} <plane>",
+                        "MuJoCo takes a plane only on a body welded to the world; this link "
+                        "moves (PyBullet moves the plane with it)",
+                        g.line or None,
+                    )
                 cg.type = mujoco.mjtGeom.mjGEOM_PLANE
                 cg.size = [0.0, 0.0, 1.0]
                 turn = transform_multiply(

@@ -156,6 +156,8 @@ def collision_aabb_inertia(
             and tuple(frame[1]) == IDENTITY_QUAT
         )
         if same_frame:
+            if g.kind == "plane":  # btStaticPlaneShape::calculateLocalInertia
+                return (0.0, 0.0, 0.0)
             if g.kind == "sphere":
                 v = 0.4 * mass * (g.size[0] * g.size[0])  # inf, not OverflowError, past 1e154
                 return (v, v, v)
