@@ -30,6 +30,7 @@ import hashlib
 import importlib
 import importlib.util
 import inspect
+import math
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -442,7 +443,8 @@ class PhaseControl:
         self.row = 0  # rows recorded so far in the run, less one
         self.view = ControlSim(sim, self._note)
         self.obj: Any = None
-        self.held: dict[tuple[int, int], tuple[int, float]] = {}  # (body, joint) -> mode, target
+        # (body, joint) -> mode code, target, max_force (NaN: a torque)
+        self.held: dict[tuple[int, int], tuple[int, float, float]] = {}
         self.overridden = set(overridden or ())  # (body, joint) the phase's commands drive
         # the last call's commands: (mode, body, joint indices, values, keyword arguments)
         self.sent: list[tuple[str, int, list[int], list[float], dict[str, Any]]] = []
@@ -470,8 +472,15 @@ class PhaseControl:
         )
         self.sent.append((mode, body, idx, values, kw))
         code = _MODE_CODE[mode]
-        for j, v in zip(idx, values, strict=False):
-            self.held[(body, j)] = (code, float(v))
+        mf: Any = kw.get("max_force")
+        if mf is None:  # a torque: no motor limit
+            forces = [math.nan] * len(idx)
+        elif hasattr(mf, "__iter__"):
+            forces = [float(x) for x in mf]
+        else:
+            forces = [float(mf)] * len(idx)
+        for j, v, force in zip(idx, values, forces, strict=False):
+            self.held[(body, j)] = (code, float(v), force)
 
     def start(self, row: int, time: float) -> None:
         """Make the controller (``factory(**params)``) and call its ``start``, if it has one,
@@ -545,11 +554,16 @@ class PhaseControl:
                 sim.set_joint_position(body, idx, values, **kw)
 
     def record(self, row: int) -> None:
-        """Write the targets of the commands the controller holds into row ``row``."""
-        for (body, joint), (code, value) in self.held.items():
+        """Write the targets (and the max_force, where the recording keeps one) of the
+        commands the controller holds into row ``row``."""
+        for (body, joint), (code, value, force) in self.held.items():
             found = self.columns(body, [joint])
             if found is None:
                 continue
             rec, cols = found
             rec.targets[row, cols[0]] = value
             rec.modes[row, cols[0]] = code
+            held_force = getattr(rec, "held_force", None)
+            if held_force is not None:  # persists past the phase, as the engine's motor does
+                held_force[cols[0]] = force
+                rec.max_forces[row, cols[0]] = force

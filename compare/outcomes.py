@@ -18,8 +18,9 @@ one phase (``phase``: rows from the phase's first to its last, times counted fro
   link against ``points`` (``[t, x, y, z]`` rows, each held from its time, t from the window's
   start). Value: the RMS (rad, m, or rad/s); success when ``max`` is given: value <= max.
 - ``final_pose``: at the window's last instant, the distance of the base or link from
-  ``point`` (m), or the RMS of joints' positions against ``targets`` (rad or m). Success when
-  ``within`` is given.
+  ``point`` (m), the angle of the base's rotation from ``orientation`` (x, y, z, w; rad), or
+  the RMS of joints' positions against ``targets`` (rad or m). Success when ``within`` is
+  given.
 - ``effort``: the sum over steps and joints of |joint force x joint speed| times the time
   step (J): the work the motors did, counting braking as work too. Success when ``max`` is
   given.
@@ -108,6 +109,8 @@ class Outcome:
     joints: tuple[JointRef, ...] = ()
     targets: tuple[float, ...] = ()
     points: tuple[tuple[float, ...], ...] = ()
+    orientation: tuple[float, float, float, float] | None = None
+    """final_pose: the base's target orientation (x, y, z, w)."""
     max: float | None = None
     min: float | None = None
     function: str = ""
@@ -183,9 +186,14 @@ class Outcome:
         link: JointRef = "base",
         joints: Sequence[JointRef] = (),
         targets: Sequence[float] = (),
+        orientation: Sequence[float] | None = None,
         within: float | None = None,
         phase: str = "",
     ) -> Outcome:
+        quat = None
+        if orientation is not None:
+            x, y, z, w = (float(c) for c in orientation)
+            quat = (x, y, z, w)
         return cls(
             name,
             "final_pose",
@@ -196,6 +204,7 @@ class Outcome:
             within=within,
             joints=tuple(joints),
             targets=tuple(float(x) for x in targets),
+            orientation=quat,
         )
 
     @classmethod
@@ -280,6 +289,7 @@ class Outcome:
             "joints",
             "targets",
             "points",
+            "orientation",
             "max",
             "min",
             "function",
@@ -434,6 +444,13 @@ def evaluate(
                 n = len(outcome.point)
                 pos = _positions(body, outcome.link)[b, :n]
                 err = float(np.linalg.norm(pos - np.asarray(outcome.point)))
+            elif outcome.orientation is not None:
+                q = body.base_orientation[b]
+                target = np.asarray(outcome.orientation)
+                dot = abs(float(np.dot(q, target))) / float(
+                    np.linalg.norm(q) * np.linalg.norm(target)
+                )
+                err = 2.0 * math.acos(min(1.0, dot))
             else:
                 cols = _joint_columns(body, outcome.joints)
                 q = body.joint_positions[b, cols]

@@ -588,7 +588,7 @@ class _Reader:
             "reach": (*common, "link", "point", "within", "by", "hold"),
             "upright": (*common, "max_tilt"),
             "track": (*common, "joints", "quantity", "targets", "link", "points", "max"),
-            "final_pose": (*common, "link", "point", "joints", "targets", "within"),
+            "final_pose": (*common, "link", "point", "orientation", "joints", "targets", "within"),
             "effort": (*common, "joints", "max"),
             "function": ("name", "kind", "function", "params", "max", "min", "unit"),
         }[kind]
@@ -713,9 +713,18 @@ class _Reader:
         if kind == "final_pose":
             pt = point("point")
             js = joints()
-            if (pt is None) == (not js):
+            quat = None
+            if "orientation" in t:
+                quat = self.vector(t["orientation"], [*path, "orientation"], 4)
+                if abs(math.sqrt(sum(c * c for c in quat)) - 1) > 1e-3:
+                    raise self.error(
+                        [*path, "orientation"], "expected a unit quaternion (x, y, z, w)"
+                    )
+            if [pt is not None, bool(js), quat is not None].count(True) != 1:
                 raise self.error(
-                    path, "final_pose takes either point (a base or link position) or joints"
+                    path,
+                    "final_pose takes one of point (a base or link position), orientation (the "
+                    "base's, x, y, z, w) or joints",
                 )
             targets = ()
             if js:
@@ -731,6 +740,7 @@ class _Reader:
                 link=link,
                 joints=js,
                 targets=targets,
+                orientation=quat,
                 within=positive("within"),
                 phase=phase,
             )

@@ -171,6 +171,7 @@ def test_a_controller_from_a_file_beside_the_scenario_drives_the_run(tmp_path, b
     targets = tr.body.joint_targets[1:, 0]
     assert targets == pytest.approx(np.arange(24) * DT + 2.0, abs=0)
     assert (tr.body.joint_modes[1:, 0] == 1).all() and math.isnan(tr.body.joint_targets[0, 0])
+    assert (tr.body.joint_max_forces[1:, 0] == 5.0).all()  # the controller's max_force
     # the motor follows (5 N·m against the bob's weight: 1.92 rad/s on both engines)
     assert 1.8 < tr.body.joint_velocities[-1, 0] < targets[-1]
 

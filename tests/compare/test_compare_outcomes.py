@@ -146,6 +146,16 @@ def test_final_pose_of_a_position_or_of_joints():
     assert r["unit"] == "rad"
 
 
+def test_final_orientation_is_the_angle_of_the_rotation_between():
+    tr = trajectory(yaw=lambda t: 0.25 * t)  # ends turned 0.5 rad about z
+    r = evaluate(Outcome.final_pose("facing", orientation=(0, 0, 0, 1), within=0.4), tr)
+    assert r["value"] == pytest.approx(0.5, abs=1e-12) and r["success"] is False
+    assert r["unit"] == "rad"
+    # q and -q are the same orientation
+    r = evaluate(Outcome.final_pose("facing", orientation=tuple(-quat_z(0.5))), tr)
+    assert r["value"] == pytest.approx(0.0, abs=1e-7)
+
+
 def test_effort_is_the_sum_of_force_times_speed_over_the_steps():
     tr = trajectory(v=lambda t: np.stack([3 + 0 * t, -2 + 0 * t], axis=1))
     b = tr.bodies["bot"]
@@ -371,10 +381,17 @@ def test_outcomes_are_read_and_written_back():
         [[outcomes]]
         name = "work"
         kind = "effort"
+
+        [[outcomes]]
+        name = "facing"
+        kind = "final_pose"
+        orientation = [0.0, 0.0, 0.0, 1.0]
         """
     )
     sc = loads_scenario(text)
-    assert [o.kind for o in sc.outcomes] == ["reach", "upright", "track", "final_pose", "effort"]
+    kinds = ["reach", "upright", "track", "final_pose", "effort", "final_pose"]
+    assert [o.kind for o in sc.outcomes] == kinds
+    assert sc.outcomes[5].orientation == (0.0, 0.0, 0.0, 1.0)
     reach = sc.outcomes[0]
     assert (reach.link, reach.point, reach.within, reach.hold, reach.by) == (
         "bob",
@@ -397,7 +414,8 @@ def test_outcomes_are_read_and_written_back():
         ('kind = "upright"\nmax_tilt = 0.1\nrobot = "r2"', "outcomes[0].robot", "no robot 'r2'"),
         ('kind = "upright"\nmax_tilt = 0.1\nphase = "x"', "outcomes[0].phase", "no phase 'x'"),
         ('kind = "upright"\nmax_tilt = 0.1\npoint = [1, 2]', "outcomes[0].point", "unknown key"),
-        ('kind = "final_pose"', "outcomes[0]", "either point"),
+        ('kind = "final_pose"', "outcomes[0]", "one of point"),
+        ('kind = "final_pose"\norientation = [0, 0, 0, 2]', "outcomes[0].orientation", "unit"),
         ('kind = "track"\nlink = "bob"', "outcomes[0].link", "needs points"),
         ('kind = "track"\nquantity = "force"', "outcomes[0].quantity", "position or velocity"),
         ('kind = "function"\nfunction = "nowhere.py:f"', "outcomes[0].function", "no such file"),
