@@ -21,7 +21,8 @@ __all__ = ["UrdfSource", "resolve_source", "resolve_mesh", "search_path"]
 @dataclass(frozen=True)
 class UrdfSource:
     """Where a URDF came from: its text, its file (None for text) and the folder that relative
-    mesh paths resolve against."""
+    mesh paths resolve against. A file's bytes that are not UTF-8 are in ``text`` as
+    surrogate escapes (``errors="surrogateescape"``) until the parser reads them."""
 
     text: str
     path: Path | None
@@ -95,13 +96,9 @@ def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
         data = found.read_bytes()
     except OSError as exc:
         raise UrdfParseError(str(found), f"cannot read the file: {exc}") from exc
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise UrdfParseError(
-            str(found), f"not UTF-8 text: byte {data[exc.start]:#04x} at line {line}"
-        ) from None
+    # bytes that are not UTF-8 are kept (as surrogates) for the reader to judge: PyBullet's
+    # parser takes them (a Latin-1 comment, say)
+    text = data.decode("utf-8", errors="surrogateescape")
     return UrdfSource(text, found, found.parent, str(found))
 
 

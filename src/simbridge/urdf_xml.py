@@ -424,8 +424,18 @@ def read_urdf_xml(text: str, file: str, lenient: Leniency) -> UrdfXml:
     every element with its source line; notes on ``lenient`` for what a strict reading would
     not have read so. Raises :class:`~simbridge.exceptions.UrdfParseError` (naming the line,
     the column and the element it is in) for what PyBullet's parser also refuses."""
-    data, line_of = _pybullet_lines(text.encode("utf-8"), lenient)
-    view = data.decode("utf-8", errors="replace")
+    try:
+        raw = text.encode("utf-8", errors="surrogateescape")  # a file's bytes as they were
+    except UnicodeEncodeError:  # text with a lone surrogate of its own
+        lenient.add(None, "a lone surrogate in the text written as '?'")
+        raw = text.encode("utf-8", errors="replace")
+    data, line_of = _pybullet_lines(raw, lenient)
+    try:
+        view = data.decode("utf-8")
+    except UnicodeDecodeError as exc:  # TinyXML-2 takes any byte: each kept as U+FFFD
+        line = line_of[min(data.count(b"\n", 0, exc.start), len(line_of) - 1)]
+        lenient.add(line, f"byte {data[exc.start]:#04x} is not UTF-8: read as U+FFFD")
+        view = data.decode("utf-8", errors="replace")
 
     def line_at(n: int) -> int:
         return line_of[min(max(n, 1), len(line_of)) - 1] if line_of else n

@@ -119,6 +119,10 @@ LENIENT = {
         robot(link_b=f"{INERTIAL}{BOX}<!-- & -->").replace('name="r"', 'name="r&d"'),
         r"line 1: an '&' that starts no XML entity read as the character '&'",
     ),
+    "a Latin-1 byte in a comment": (
+        robot(head="<!-- caf\xe9 -->").encode("latin-1"),
+        r"line 1: byte 0xe9 is not UTF-8: read as U\+FFFD",
+    ),
     "products of inertia given in part": (
         robot(link_b=INERTIAL.replace(' iyz="0"', "") + BOX),
         r"line 3: link 'b' <inertia>: ixy, ixz ignored",
@@ -130,7 +134,7 @@ LENIENT = {
 def test_lenient_input_reads_as_pybullet_reads_it(make_sim, case, caplog, tmp_path):
     text, warning = LENIENT[case]
     path = tmp_path / "lenient.urdf"
-    path.write_bytes(text.encode())
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
     raw = _raw.raw_load(str(path))
     caplog.set_level(logging.WARNING, logger="simbridge")
     sim = make_sim()
