@@ -9,6 +9,7 @@ tutorial user would write (``loadURDF``, ``getJointInfo``, ``setJointMotorContro
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import os
@@ -17,16 +18,17 @@ import sys
 import tempfile
 import threading
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
 from simbridge.backend import Backend
 from simbridge.engine_output import Record, captured, register_classifier
 from simbridge.exceptions import (
+    BackendUnsupportedError,
     DisplayError,
     SimBusyError,
     SimulationDivergedError,
@@ -57,9 +59,43 @@ _PYBULLET_DEFAULT_LINK_DAMPING = 0.04
 _PYBULLET_DEFAULT_MAX_JOINT_VELOCITY = 100.0
 _NO_CLAMP = 1e30  # "no speed clamp": PyBullet takes a number; this one is never reached
 _PYBULLET_DEFAULT_FRICTION = 0.5
-# The state is probed for NaN every this many steps (and on every base/link read), which keeps
-# the probe's ~1 µs per body off the per-step cost: a divergence is reported at most 1/15 s late.
-_CHECK_EVERY = 16
+# Divergence: every state read checks the values it returns (a few float additions), so no
+# read ever hands out a NaN or an infinity. Besides, every body is probed (one engine call each:
+# its base pose, or its leaf joints for a fixed base) after the first step following a load or
+# a teleport, and after every _CHECK_EVERY-th step: a probe costs 0.6-1.5 µs per body, 5-10 % of
+# a fixed KUKA's 11-16 µs step if taken at every step; one in 8 steps is under 2 % (measured:
+# python bench/divergence.py). A divergence nobody reads is raised by step at most 7 steps late.
+_CHECK_EVERY = 8
+# PyBullet's state reads (getJointState(s), getLinkState, getBasePositionAndOrientation,
+# getBaseVelocity) fail with "getJointState failed" & co. for every joint of a body with more
+# than this many joints (measured on PyBullet 3.2.7: 127 work, 128 fail, fixed or free base,
+# chain or branches; stepping still runs): such a body is refused when it is loaded.
+MAX_BODY_JOINTS = 127
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _exclusive(method: _F) -> _F:
+    """A call that touches the world: refused with SimBusyError while another thread steps
+    it (the stepping lock is re-entrant: the stepping thread's own nested calls pass)."""
+
+    @functools.wraps(method)
+    def call(self: PyBulletBackend, *args: Any, **kwargs: Any) -> Any:
+        lock = self._stepping
+        if not lock.acquire(False):
+            raise SimBusyError()
+        try:
+            return method(self, *args, **kwargs)
+        finally:
+            lock.release()
+
+    return call  # type: ignore[return-value]
+
+
+def _all_finite(*groups: Any) -> bool:
+    """Whether every number in ``groups`` (sequences of floats) is finite: the exact test
+    behind the reads' quick one (a sum overflows where no value is infinite)."""
+    return all(math.isfinite(v) for g in groups for v in g)
 
 
 # What PyBullet writes from C: ``b3Warning[file,line]:\n`` (b3Error, b3Printf alike) and the
@@ -167,14 +203,23 @@ def _x_display_problem() -> str | None:
 
 
 class _Body:
-    __slots__ = ("table", "movable", "probe_joint", "free", "base_inertial", "n", "effort")
+    __slots__ = ("table", "movable", "probe_joints", "free", "base_inertial", "n", "effort")
 
     def __init__(self, table: list[JointInfo], free: bool, base_inertial: Any) -> None:
         self.table = table
         self.n = len(table)
         self.movable = [i for i, j in enumerate(table) if j.type != JointType.FIXED]
         self.free = free
-        self.probe_joint = self.movable[-1] if self.movable else -1
+        # a fixed base's probe: its movable leaves (no movable joint below them). A NaN in a
+        # joint reaches every joint below it within the step (the articulated-body algorithm's
+        # outward pass), so some leaf shows it; a free base shows any joint's NaN in its pose.
+        above: set[int] = set()
+        for i in self.movable:
+            k = table[i].parent_index
+            while k >= 0:
+                above.add(k)
+                k = table[k].parent_index
+        self.probe_joints = [] if free else [i for i in self.movable if i not in above]
         self.base_inertial = base_inertial  # (pos, orn) of the COM in the base link frame
         # <limit effort> per joint, the clamp on motor force and torque when the profile
         # enforces it (None: not enforced)
@@ -203,9 +248,12 @@ class PyBulletBackend(Backend):
     def __init__(self, profile: Profile, gui: bool = False) -> None:
         super().__init__(profile, gui)
         self._c = -1
-        self._stepping = threading.Lock()  # held while step() runs
+        # held by step() and by every call that touches the world (re-entrant: a call's own
+        # nested calls pass); a call from another thread meanwhile raises SimBusyError
+        self._stepping = threading.RLock()
         self._file_texts: dict[str, str] = {}  # URDF files loaded by path: their first text
         self._diverged: SimulationDivergedError | None = None  # raised again until reset()
+        self._checked_at = 0.0  # the time of the last probe that found every body finite
         self.refuse_unsupported()
         if gui:
             if sys.platform.startswith("linux"):
@@ -257,8 +305,19 @@ class PyBulletBackend(Backend):
         fixed_base: bool,
         options: LoadOptions,
     ) -> int:
+        if len(model.joints) > MAX_BODY_JOINTS:
+            raise BackendUnsupportedError(
+                self.name,
+                f"{model.source.display_name}: a body with {len(model.joints)} joints",
+                f"PyBullet reads no state of a body with more than {MAX_BODY_JOINTS} joints (its "
+                "getJointState, getLinkState and getBasePositionAndOrientation fail for every "
+                "joint of it); merge fixed links (merge_fixed_links=True), split the robot, or "
+                "use the 'mujoco' backend",
+            )
         with self._idle():
-            return self._load(model, base_position, base_orientation, fixed_base, options)
+            body = self._load(model, base_position, base_orientation, fixed_base, options)
+            self._next_check = self._steps + 1  # a new model: probed after its first step
+            return body
 
     def _load(
         self,
@@ -466,11 +525,13 @@ class PyBulletBackend(Backend):
         self._records.reset()
         self._steps = 0
         self._next_check = _CHECK_EVERY
+        self._checked_at = 0.0
 
     def step(self, n: int) -> None:
         if self._diverged is not None:  # the state is NaN: no step makes it a simulation
             raise self._diverged
-        if not self._stepping.acquire(blocking=False):
+        lock = self._stepping
+        if not lock.acquire(False):
             raise SimBusyError()
         try:
             if n == 1:
@@ -486,27 +547,35 @@ class PyBulletBackend(Backend):
                 finally:  # Ctrl-C between two steps: the time counts the steps done
                     self._steps += done
         finally:
-            self._stepping.release()
+            lock.release()
         if self._steps >= self._next_check:
-            self._next_check = self._steps + _CHECK_EVERY
-            self._check_finite()
+            self._probe()
 
-    def _check_finite(self) -> None:
-        """One cheap probe per body (NaN spreads through a body within a step or two)."""
+    def _probe(self) -> None:
+        """Probe every body for a non-finite state (one engine call per body that can move:
+        a free base's pose; a fixed base's movable leaf joints, see _Body)."""
+        self._next_check = self._steps + _CHECK_EVERY
         c = self._c
         for body, info in self._bodies.items():
             if info.free:
-                x = p.getBasePositionAndOrientation(body, physicsClientId=c)[0][0]
-            elif info.probe_joint >= 0:
-                x = p.getJointState(body, info.probe_joint, physicsClientId=c)[1]
-            else:
-                continue
-            if not math.isfinite(x):
-                where = "base position" if info.free else f"joint {info.probe_joint} velocity"
-                self._diverged = SimulationDivergedError(
-                    self.name, self.time, f"body {body} {where}"
-                )
-                raise self._diverged
+                pos, orn = p.getBasePositionAndOrientation(body, c)
+                if not math.isfinite(sum(pos) + sum(orn)) and not _all_finite(pos, orn):
+                    self._diverge(f"body {body} base pose")
+            elif info.probe_joints:
+                rows = p.getJointStates(body, info.probe_joints, c)
+                for j, r in zip(info.probe_joints, rows, strict=True):
+                    if not math.isfinite(r[0] + r[1] + r[3]) and not _all_finite(r[:2], r[3:]):
+                        self._diverge(f"body {body} joint {j} state")
+        self._checked_at = self.time
+
+    def _diverge(self, where: str) -> None:
+        """The world holds a non-finite value (``where``): it is refused from now on, by every
+        step and state read, with this error, until reset()."""
+        if self._diverged is None:
+            if self.time > self._checked_at:
+                where += f" (finite at the last check, t={self._checked_at:.6f} s)"
+            self._diverged = SimulationDivergedError(self.name, self.time, where)
+        raise self._diverged
 
     def close(self) -> None:
         with self._idle():
@@ -551,6 +620,7 @@ class PyBulletBackend(Backend):
     def num_joints(self, body: int) -> int:
         return self._bodies[body].n
 
+    @_exclusive
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
         r = p.getDynamicsInfo(body, link, physicsClientId=self._c)
         return DynamicsInfo(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7])
@@ -558,45 +628,82 @@ class PyBulletBackend(Backend):
     # ---------------------------------------------------------------- state
 
     def link_state(self, body: int, link: int) -> LinkState:
-        c = self._c
-        if link >= 0:
-            r = p.getLinkState(
-                body, link, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
-            )
-            if not math.isfinite(r[0][0]):
-                self._check_finite()
-            return LinkState(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7])
-        pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
-        if not math.isfinite(pos[0]):
-            self._check_finite()
-        lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+        if self._diverged is not None:
+            raise self._diverged
+        lock = self._stepping
+        if not lock.acquire(False):
+            raise SimBusyError()
+        try:
+            c = self._c
+            if link >= 0:
+                r = p.getLinkState(
+                    body, link, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
+                )
+                if not math.isfinite(
+                    sum(r[0]) + sum(r[1]) + sum(r[4]) + sum(r[5]) + sum(r[6]) + sum(r[7])
+                ) and not _all_finite(r[0], r[1], r[4], r[5], r[6], r[7]):
+                    self._diverge(f"body {body} link {link} state")
+                return LinkState(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7])
+            pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+            lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+        finally:
+            lock.release()
+        if not math.isfinite(sum(pos) + sum(orn) + sum(lin) + sum(ang)) and not _all_finite(
+            pos, orn, lin, ang
+        ):
+            self._diverge(f"body {body} base state")
         lp, lo = self._bodies[body].base_inertial
         inv_pos, inv_orn = p.invertTransform(lp, lo)
         fpos, forn = p.multiplyTransforms(pos, orn, inv_pos, inv_orn)
         return LinkState(pos, orn, lp, lo, fpos, forn, lin, ang)
 
     def base_state(self, body: int) -> BaseState:
-        c = self._c
-        pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
-        if not math.isfinite(pos[0]):
-            self._check_finite()
-        lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+        if self._diverged is not None:
+            raise self._diverged
+        lock = self._stepping
+        if not lock.acquire(False):
+            raise SimBusyError()
+        try:
+            c = self._c
+            pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+            lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+        finally:
+            lock.release()
+        if not math.isfinite(sum(pos) + sum(orn) + sum(lin) + sum(ang)) and not _all_finite(
+            pos, orn, lin, ang
+        ):
+            self._diverge(f"body {body} base state")
         return BaseState(pos, orn, lin, ang)
 
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
-        rows = p.getJointStates(body, joints.tolist(), physicsClientId=self._c)
+        if self._diverged is not None:
+            raise self._diverged
+        lock = self._stepping
+        if not lock.acquire(False):
+            raise SimBusyError()
+        try:
+            rows = p.getJointStates(body, joints.tolist(), physicsClientId=self._c)
+        finally:
+            lock.release()
         if not rows:
             return JointStates(np.zeros(0), np.zeros(0), np.zeros(0))
         pos, vel, _, torque = zip(*rows, strict=True)  # position, velocity, reaction, torque
+        if not math.isfinite(sum(pos) + sum(vel) + sum(torque)) and not _all_finite(
+            pos, vel, torque
+        ):
+            self._diverge(f"body {body} joint states")
         return JointStates(np.array(pos), np.array(vel), np.array(torque))
 
+    @_exclusive
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
         c = self._c
         for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
             p.resetJointState(body, j, q, v, physicsClientId=c)
+        self._next_check = self._steps + 1  # a teleport: probed after the next step
 
+    @_exclusive
     def reset_base_state(
         self,
         body: int,
@@ -605,6 +712,9 @@ class PyBulletBackend(Backend):
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
+        if self._diverged is not None:  # it reads the state it keeps
+            raise self._diverged
+        self._next_check = self._steps + 1  # a teleport: probed after the next step
         c = self._c
         if not self._bodies[body].free:
             self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
@@ -635,27 +745,34 @@ class PyBulletBackend(Backend):
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
-        last = self._last_velocity
-        # joints: Sim's cached read-only index array, so the same object means the same joints
-        if (
-            last is not None
-            and last[0] is joints
-            and last[1] == body
-            and last[2] == target
-            and last[3] == max_force
-        ):
-            return  # the command in force already
-        p.setJointMotorControlArray(
-            body,
-            joints.tolist(),
-            p.VELOCITY_CONTROL,
-            targetVelocities=target,
-            forces=self._within_effort(body, joints, max_force),
-            physicsClientId=self._c,
-        )
-        self._last_velocity = (joints, body, target, max_force)
-        self._records.motor(body, joints, 0, target, max_force, None, None)
+        lock = self._stepping
+        if not lock.acquire(False):
+            raise SimBusyError()
+        try:
+            last = self._last_velocity
+            # joints: Sim's cached read-only index array: the same object, the same joints
+            if (
+                last is not None
+                and last[0] is joints
+                and last[1] == body
+                and last[2] == target
+                and last[3] == max_force
+            ):
+                return  # the command in force already
+            p.setJointMotorControlArray(
+                body,
+                joints.tolist(),
+                p.VELOCITY_CONTROL,
+                targetVelocities=target,
+                forces=self._within_effort(body, joints, max_force),
+                physicsClientId=self._c,
+            )
+            self._last_velocity = (joints, body, target, max_force)
+            self._records.motor(body, joints, 0, target, max_force, None, None)
+        finally:
+            lock.release()
 
+    @_exclusive
     def set_joint_position(
         self,
         body: int,
@@ -678,6 +795,7 @@ class PyBulletBackend(Backend):
         )
         self._records.motor(body, joints, 2, target, max_force, kp, kd)
 
+    @_exclusive
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         self._last_velocity = None
         effort = self._bodies[body].effort
@@ -708,16 +826,26 @@ class PyBulletBackend(Backend):
 
     # ---------------------------------------------------------------- contacts and state
 
+    @_exclusive
     def contact_points(self) -> list[ContactPoint]:
+        if self._diverged is not None:
+            raise self._diverged
         # unfiltered: PyBullet keeps the friction fields in its own order of A and B when it
         # swaps them to answer a filtered query (Sim.contact_points orients them itself)
-        return [contact_point(r) for r in p.getContactPoints(physicsClientId=self._c)]
+        rows = p.getContactPoints(physicsClientId=self._c)
+        for r in rows:  # positions, normal, distance, forces and friction directions
+            values = (*r[5], *r[6], *r[7], r[8], r[9], r[10], *r[11], r[12], *r[13])
+            if not math.isfinite(sum(values)) and not _all_finite(values):
+                self._diverge(f"a contact point of bodies {r[1]} and {r[2]}")
+        return [contact_point(r) for r in rows]
 
+    @_exclusive
     def joint_commands(self, body: int) -> JointCommands:
         return self._records.commands(
             body, self._bodies[body].table, self.profile.joint_brake, self._dt, self._steps
         )
 
+    @_exclusive
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
         """Re-issue the motors that differ from those in force (a restore into the same world
         sends none), then cancel the pending torques and give the new ones."""
@@ -798,9 +926,10 @@ class PyBulletBackend(Backend):
             self.set_time(native.steps * self._dt)
             return True
 
+    @_exclusive
     def set_time(self, time: float) -> None:
         steps = round(time / self._dt)
         if steps != self._steps:
             self._records.restamp(self._steps, steps)
             self._steps = steps
-            self._next_check = steps + _CHECK_EVERY
+            self._next_check = steps + 1  # a restored state: probed after the next step
