@@ -66,11 +66,14 @@ _PYBULLET_DEFAULT_FRICTION = 0.5
 # a fixed KUKA's 11-16 µs step if taken at every step; one in 8 steps is under 2 % (measured:
 # python bench/divergence.py). A divergence nobody reads is raised by step at most 7 steps late.
 _CHECK_EVERY = 8
-# PyBullet's state reads (getJointState(s), getLinkState, getBasePositionAndOrientation,
+# What PyBullet 3.2.7 can read and set of one body (measured on chains and trees, fixed or free
+# base): its state reads (getJointState(s), getLinkState, getBasePositionAndOrientation,
 # getBaseVelocity) fail with "getJointState failed" & co. for every joint of a body with more
-# than this many joints (measured on PyBullet 3.2.7: 127 work, 128 fail, fixed or free base,
-# chain or branches; stepping still runs): such a body is refused when it is loaded.
+# than 127 joints (fixed ones included); and its state arrays hold 128 coordinates, the 7 of
+# the base first (a fixed base too), so a movable joint past the 121st reads position and
+# velocity 0 and takes no reset or motor, silently. Such bodies are refused when loaded.
 MAX_BODY_JOINTS = 127
+MAX_BODY_MOVABLE_JOINTS = 121
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -305,14 +308,18 @@ class PyBulletBackend(Backend):
         fixed_base: bool,
         options: LoadOptions,
     ) -> int:
-        if len(model.joints) > MAX_BODY_JOINTS:
+        movable = sum(j.type != "fixed" for j in model.joints)
+        if len(model.joints) > MAX_BODY_JOINTS or movable > MAX_BODY_MOVABLE_JOINTS:
             raise BackendUnsupportedError(
                 self.name,
-                f"{model.source.display_name}: a body with {len(model.joints)} joints",
-                f"PyBullet reads no state of a body with more than {MAX_BODY_JOINTS} joints (its "
-                "getJointState, getLinkState and getBasePositionAndOrientation fail for every "
-                "joint of it); merge fixed links (merge_fixed_links=True), split the robot, or "
-                "use the 'mujoco' backend",
+                f"{model.source.display_name}: a body with {len(model.joints)} joints "
+                f"({movable} movable)",
+                f"PyBullet reads no state of a body with more than {MAX_BODY_JOINTS} joints "
+                "(getJointState, getLinkState and getBasePositionAndOrientation fail for every "
+                f"joint of it), and no more than {MAX_BODY_MOVABLE_JOINTS} movable ones (its "
+                "state arrays hold 128 coordinates, 7 of them the base's: past them a joint "
+                "reads 0 and takes no reset or motor); merge fixed links "
+                "(merge_fixed_links=True), split the robot, or use the 'mujoco' backend",
             )
         with self._idle():
             body = self._load(model, base_position, base_orientation, fixed_base, options)

@@ -19,6 +19,7 @@ import mujoco
 
 from simbridge.backend import Backend
 from simbridge.exceptions import (
+    BackendUnsupportedError,
     EngineError,
     SimBusyError,
     SimulationDivergedError,
@@ -63,6 +64,22 @@ if mujoco.get_mju_user_warning() is None:  # leave a handler the user installed 
 # and rest that far apart; MuJoCo's pair margin makes its soft contact balance about as far
 # out (measured: r2d2 rests with its base at z 0.4710 on PyBullet; see docs/mujoco_backend.md).
 CONTACT_MARGIN = 0.001
+
+# MuJoCo's compiler refuses a body tree deeper than 1023 bodies below the world ("depth limit
+# exceeded in signature computation"), after spending tens of seconds on it (measured, MuJoCo
+# 4.0: a 2000-link chain, 40 s): a robot whose joints nest deeper than this (its root is one
+# body) is refused before any compile. Near the limit a chain is slow anyway: 1000 links load in
+# 4 s and step in 1 s (python bench/limits.py).
+MAX_TREE_DEPTH = 1022
+
+
+def tree_depth(model: UrdfModel) -> int:
+    """The most joints on a path from the root to a link (0: the root alone)."""
+    depth = {model.base.name: 0}
+    for joint in model.joints:  # in PyBullet's order: a parent before its children
+        depth[joint.child] = depth[joint.parent] + 1
+    return max(depth.values())
+
 
 # Sim.step(n) runs the compiled loop (which holds no GIL and sees no signal) this many steps
 # at a time (about 12 ms on r2d2): Ctrl-C stops a long call between two chunks, with the time
@@ -160,6 +177,14 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         options: LoadOptions,
     ) -> int:
         self._check_idle()
+        depth = tree_depth(model)
+        if depth > MAX_TREE_DEPTH:
+            raise BackendUnsupportedError(
+                self.name,
+                f"{model.source.display_name}: joints nested {depth} deep",
+                f"MuJoCo's compiler refuses a body tree deeper than {MAX_TREE_DEPTH + 1} bodies "
+                f"(at most {MAX_TREE_DEPTH} joints from the root to any link)",
+            )
         # this body's inertia source (the profile's unless load_urdf said otherwise)
         profile = self.profile
         if options.inertia_source != profile.inertia_source:

@@ -91,6 +91,38 @@ def _vec(value: Any, n: int, argument: str) -> tuple[float, ...]:
     return out
 
 
+# A position or velocity past this (m, rad, m/s, rad/s) is refused where it is given (a spawn or
+# a teleport): MuJoCo takes any joint position or velocity past 1e10 for a divergence (its
+# mjMAXVAL) and puts the world back to its reference pose, and PyBullet reports link poses in
+# float32, past 3.4e38 infinite (measured: a base teleported to 1e308 reads as NaN). No robot
+# is 1e10 m away or moves that fast; a larger value can only be a mistake or a blow-up.
+MAX_STATE_VALUE = 1e10
+
+
+def _within(values: Sequence[float], argument: str) -> None:
+    """Refuse a position or velocity past MAX_STATE_VALUE (see there)."""
+    if values and max(map(abs, values)) > MAX_STATE_VALUE:
+        raise InvalidArgumentError(
+            argument,
+            f"values must be within +-{MAX_STATE_VALUE:g} (m, rad, m/s or rad/s: MuJoCo takes "
+            f"a state past it for a divergence), got {tuple(values)!r}",
+        )
+
+
+def _flag(value: Any, argument: str) -> bool:
+    """A switch: a bool (or numpy bool), never a truthy string or number."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise InvalidArgumentError(argument, f"must be True or False (a bool), got {value!r}")
+
+
+def _state_vec(value: Any, argument: str) -> tuple[float, ...]:
+    """Three finite numbers within MAX_STATE_VALUE (a teleport's position or velocity)."""
+    out = _vec(value, 3, argument)
+    _within(out, argument)
+    return out
+
+
 def _quat(value: Any, argument: str, normalise: bool = False) -> tuple[float, float, float, float]:
     """A unit quaternion (x, y, z, w). One whose norm is off 1 by more than 1e-3 is refused,
     or with ``normalise`` (a spawn pose: PyBullet's loadURDF normalises) divided by its norm,
@@ -160,7 +192,7 @@ class Sim:
         cls = load_backend(backend)
         self.backend: str = backend
         self._bodies: dict[int, _Body] = {}
-        self._b = cls(prof, bool(gui))
+        self._b = cls(prof, _flag(gui, "gui"))
         self._dt = float(timestep)
         self._wall_start: float | None = None
 
@@ -281,7 +313,9 @@ class Sim:
             InvalidArgumentError: a bad pose or option.
         """
         pos = _vec(base_position, 3, "base_position")
+        _within(pos, "base_position")
         orn = _quat(base_orientation, "base_orientation", normalise=True)
+        fixed_base = _flag(fixed_base, "fixed_base")
         # loaded on first use
         from .load_options import apply_load_options, load_options
         from .urdf import check_file_inertia, parse_urdf, resolve_source
@@ -359,7 +393,7 @@ class Sim:
             InvalidArgumentError: a bound command holds a non-finite target or a negative or
                 non-finite force (no step is taken).
         """
-        if type(n) is int and n >= 0 and not realtime:  # the hot path: one check, one call
+        if type(n) is int and n >= 0 and realtime is False:  # the hot path: one check, one call
             if self._presend:
                 for command in self._presend:
                     command.send()
@@ -368,6 +402,7 @@ class Sim:
             return
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
             raise InvalidArgumentError("n", f"must be an integer >= 0, got {n!r}")
+        realtime = _flag(realtime, "realtime")
         for command in self._presend:
             command.send()
         if not realtime:
@@ -384,12 +419,22 @@ class Sim:
 
     # ---------------------------------------------------------------- lookups
 
-    def _body(self, body: int) -> _Body:
-        try:
-            return self._bodies[body]
-        except (KeyError, TypeError):
+    def _body(self, body: int, argument: str = "body") -> _Body:
+        if type(body) is int:  # the hot path
+            found = self._bodies.get(body)
+            if found is not None:
+                return found
+        elif isinstance(body, np.integer):
+            found = self._bodies.get(int(body))
+            if found is not None:
+                return found
+        else:  # True would be body 1, 1.0 too: an id is an int
             self._b.time  # noqa: B018 - raises SimClosedError after close()
-            raise UnknownBodyError(body, self._bodies) from None
+            raise InvalidArgumentError(
+                argument, f"a body id is an int (as load_urdf returns it), got {body!r}"
+            )
+        self._b.time  # noqa: B018 - raises SimClosedError after close()
+        raise UnknownBodyError(body, self._bodies)
 
     def joint_index(self, body: int, joint: int | str) -> int:
         """The index of a joint given by index or name."""
@@ -462,6 +507,14 @@ class Sim:
         arr.setflags(write=False)
         cache[key] = arr
         return arr
+
+    @classmethod
+    def _checked_state(cls, value: Any, n: int, argument: str) -> list[float]:
+        """Joint positions or velocities for a teleport: as :meth:`_values`, within
+        MAX_STATE_VALUE."""
+        values = cls._values(value, n, argument)
+        _within(values, argument)
+        return values
 
     @staticmethod
     def _values(value: Any, n: int, argument: str, nonneg: bool = False) -> list[float]:
@@ -556,8 +609,8 @@ class Sim:
         self._b.reset_joint_state(
             body,
             idx,
-            self._values(positions, n, "positions"),
-            self._values(velocities, n, "velocities"),
+            self._checked_state(positions, n, "positions"),
+            self._checked_state(velocities, n, "velocities"),
         )
 
     def reset_base_state(
@@ -574,10 +627,10 @@ class Sim:
         self._body(body)
         self._b.reset_base_state(
             body,
-            None if position is None else _vec(position, 3, "position"),  # type: ignore[arg-type]
+            None if position is None else _state_vec(position, "position"),  # type: ignore[arg-type]
             None if orientation is None else _quat(orientation, "orientation"),
-            None if linear_velocity is None else _vec(linear_velocity, 3, "linear_velocity"),  # type: ignore[arg-type]
-            None if angular_velocity is None else _vec(angular_velocity, 3, "angular_velocity"),  # type: ignore[arg-type]
+            None if linear_velocity is None else _state_vec(linear_velocity, "linear_velocity"),  # type: ignore[arg-type]
+            None if angular_velocity is None else _state_vec(angular_velocity, "angular_velocity"),  # type: ignore[arg-type]
         )
 
     # ---------------------------------------------------------------- control
@@ -791,10 +844,10 @@ class Sim:
             raise InvalidArgumentError("link_b", "a link filter needs its body: give body_b")
         la = lb = None
         if body_a is not None:
-            self._body(body_a)
+            self._body(body_a, "body_a")
             la = None if link_a is None else self.link_index(body_a, link_a)
         if body_b is not None:
-            self._body(body_b)
+            self._body(body_b, "body_b")
             lb = None if link_b is None else self.link_index(body_b, link_b)
         from .contacts import select
 
@@ -820,7 +873,7 @@ class Sim:
         b = self._b
         for command in self._commands:  # a bound command's values are the ones in force
             command.send()
-        native = b.snapshot() if exact else None
+        native = b.snapshot() if _flag(exact, "exact") else None
         bodies = []
         for body, info in self._bodies.items():
             base = b.base_state(body)

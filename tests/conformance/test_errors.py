@@ -421,3 +421,221 @@ def test_a_robot_named_with_the_empty_string_loads(make_sim):
     sim = make_sim()
     body = sim.load_urdf('<robot name=""><link name="a"/></robot>')
     assert sim.body_name(body) == ""
+
+
+# ---------------------------------------------------------------- non-finite states
+
+
+def _pair(mass: str = "1", xyz: str = "0 0 0") -> str:
+    """Two boxes on a continuous joint; the base's mass and inertial origin as given."""
+    inertia = '<inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/>'
+    box = '<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision>'
+    return (
+        f'<robot name="pair"><link name="a"><inertial><origin xyz="{xyz}"/>'
+        f'<mass value="{mass}"/>{inertia}</inertial>{box}</link>'
+        f'<link name="b"><inertial><mass value="1"/>{inertia}</inertial>{box}</link>'
+        '<joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
+        '<origin xyz="0 0 0.2"/><axis xyz="0 0 1"/></joint></robot>'
+    )
+
+
+def _torque(sim, body):
+    sim.set_joint_velocity(body, "j", 0.0, max_force=0.0)  # release the brake
+    sim.set_joint_torque(body, "j", 1e308)
+
+
+# Inputs after which one step leaves PyBullet's state NaN (measured before the fix: the reads
+# returned NaN and joint_states never raised); MuJoCo takes a mass of 1e300 as a finite world.
+BLOW_UPS = {
+    "a mass of 1e300 in the URDF": (_pair(mass="1e300"), None),
+    "an inertial origin of 1e300 in the URDF": (_pair(xyz="1e300 0 0"), None),
+    "a torque of 1e308": (_pair(), _torque),
+}
+
+
+def _reads(sim, body):
+    """Every state read of the Sim, as flat lists of floats."""
+    return {
+        "base_state": lambda: [v for part in sim.base_state(body) for v in part],
+        "link_state": lambda: [v for part in sim.link_state(body, 0) for v in part],
+        "joint_states": lambda: np.concatenate(sim.joint_states(body)[:3]).tolist(),
+        "contact_points": lambda: [
+            v
+            for c in sim.contact_points()
+            for v in (*c.position_on_a, *c.position_on_b, c.contact_distance, c.normal_force)
+        ],
+        "get_state": lambda: [
+            v for b in sim.get_state().bodies for v in (*b.base_position, *b.joint_positions)
+        ],
+    }
+
+
+@pytest.mark.parametrize("case", sorted(BLOW_UPS))
+def test_after_any_step_a_non_finite_state_is_refused_until_reset(make_sim, private_tmp, case):
+    """After each step, each read returns finite numbers or raises SimulationDivergedError;
+    once one raised, every read and step raises it until reset(), and the world works again
+    after it."""
+    urdf, then = BLOW_UPS[case]
+    sim = make_sim()
+    sim.load_urdf("plane.urdf")
+    body = sim.load_urdf(urdf, base_position=(0, 0, 1))
+    if then is not None:
+        then(sim, body)
+    reads = _reads(sim, body)
+    diverged = None
+    for _ in range(3):
+        try:
+            sim.step()
+        except exc.SimulationDivergedError as error:
+            diverged = error
+        for name, read in reads.items():
+            try:
+                values = read()
+            except exc.SimulationDivergedError as error:
+                diverged = diverged or error
+                continue
+            assert diverged is None, f"{name} answered after the divergence ({diverged})"
+            assert np.isfinite(values).all(), f"{name} returned {values}"
+        if diverged is not None:
+            break
+    if diverged is not None:
+        assert re.search(r"diverged at t=.* s: .* is not finite", str(diverged))
+        for name, read in [("step", sim.step), *reads.items()]:
+            with pytest.raises(exc.SimulationDivergedError):
+                read()
+                pytest.fail(f"{name} answered")
+        sim.reset()
+        body = sim.load_urdf(_pair(), base_position=(0, 0, 1))
+        sim.step(10)
+        assert np.isfinite(sim.joint_states(body).positions).all()
+    sim.close()
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_a_divergence_nobody_reads_is_raised_by_a_step_soon_after(make_sim):
+    """Stepping on without reading: step raises SimulationDivergedError within 8 steps of the
+    one that blew up (PyBullet probes every body every 8th step; MuJoCo at every step). Under
+    "urdf" (no speed clamp: under "pybullet" MuJoCo clamps the wheel to 100 rad/s, finite)."""
+    sim = make_sim(profile="urdf")
+    body = sim.load_urdf(_pair(), base_position=(0, 0, 1))
+    sim.step(21)
+    _torque(sim, body)
+    with pytest.raises(exc.SimulationDivergedError, match=r"is not finite"):
+        for _ in range(8):
+            sim.step()
+    with pytest.raises(exc.SimulationDivergedError):
+        sim.joint_states(body)
+
+
+# ---------------------------------------------------------------- switches and ids
+
+SWITCHES = {
+    "fixed_base 'false'": (
+        lambda s: s.load_urdf("pendulum.urdf", fixed_base="false"),
+        r"argument 'fixed_base': must be True or False \(a bool\), got 'false'",
+    ),
+    "fixed_base 'no'": (
+        lambda s: s.load_urdf("pendulum.urdf", fixed_base="no"),
+        r"argument 'fixed_base': must be True or False \(a bool\), got 'no'",
+    ),
+    "fixed_base 1": (
+        lambda s: s.load_urdf("pendulum.urdf", fixed_base=1),
+        r"argument 'fixed_base': must be True or False \(a bool\), got 1",
+    ),
+    "realtime 'no'": (
+        lambda s: s.step(1, realtime="no"),
+        r"argument 'realtime': must be True or False \(a bool\), got 'no'",
+    ),
+    "exact 'false'": (
+        lambda s: s.get_state(exact="false"),
+        r"argument 'exact': must be True or False \(a bool\), got 'false'",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(SWITCHES))
+def test_a_switch_is_a_bool_not_a_truthy_value(make_sim, case):
+    """A truthy string welded the base (fixed_base="false") on both backends: a switch takes
+    True or False (numpy's too) and names itself otherwise."""
+    call, message = SWITCHES[case]
+    sim = make_sim()
+    with pytest.raises(exc.InvalidArgumentError, match=message):
+        call(sim)
+    assert sim.bodies() == [] and sim.time == 0.0
+    body = sim.load_urdf("pendulum.urdf", fixed_base=np.False_)
+    assert sim.manifest()["bodies"][body]["fixed_base"] is False
+
+
+def test_gui_is_a_bool(backend):
+    with pytest.raises(
+        exc.InvalidArgumentError, match=r"argument 'gui': must be True or False \(a bool\)"
+    ):
+        simbridge.Sim(backend, gui="false")
+
+
+def test_a_body_id_is_an_int_not_a_bool(make_sim):
+    """set_joint_velocity(body=True, ...) drove body 1: ids are ints (numpy's too)."""
+    sim = make_sim()
+    sim.load_urdf("pendulum.urdf", fixed_base=True)
+    one = sim.load_urdf("pendulum.urdf", base_position=(1, 0, 0), fixed_base=True)
+    assert one == 1
+    for call, argument in (
+        (lambda: sim.set_joint_velocity(True, 0, 1.0, max_force=1.0), "body"),
+        (lambda: sim.base_state(True), "body"),
+        (lambda: sim.joint_states(1.0), "body"),
+        (lambda: sim.remove(True), "body"),
+        (lambda: sim.contact_points(True), "body_a"),
+        (lambda: sim.contact_points(0, True), "body_b"),
+    ):
+        with pytest.raises(
+            exc.InvalidArgumentError,
+            match=rf"argument '{argument}': a body id is an int \(as load_urdf returns it\)",
+        ):
+            call()
+    assert sim.bodies() == [0, 1]
+    assert sim.joint_states(one).velocities.tolist() == [0.0]  # nothing was commanded
+    sim.set_joint_velocity(np.int64(1), 0, 1.0, max_force=1.0)
+    assert sim.base_state(np.int32(1)) == sim.base_state(1)
+
+
+# ---------------------------------------------------------------- state values past any use
+
+STATE_BOUNDS = {
+    "a spawn at 1e308": (
+        lambda s, b: s.load_urdf("pendulum.urdf", base_position=(1e308, 0, 0)),
+        "base_position",
+    ),
+    "a teleport to 1e308": (lambda s, b: s.reset_base_state(b, position=(0, 1e308, 0)), "position"),
+    "a base velocity of 1e300": (
+        lambda s, b: s.reset_base_state(b, linear_velocity=(0, 0, -1e300)),
+        "linear_velocity",
+    ),
+    "a spin of 1e11": (
+        lambda s, b: s.reset_base_state(b, angular_velocity=(1e11, 0, 0)),
+        "angular_velocity",
+    ),
+    "a joint velocity of 1e300": (
+        lambda s, b: s.reset_joint_state(b, "j", 0.0, 1e300),
+        "velocities",
+    ),
+    "a joint position of -1e11": (lambda s, b: s.reset_joint_state(b, "j", -1e11), "positions"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(STATE_BOUNDS))
+def test_a_position_or_velocity_no_engine_can_take_is_refused_where_it_is_given(make_sim, case):
+    """Positions and velocities past 1e10 (m, rad, m/s, rad/s) guarantee a blow-up: MuJoCo
+    resets a state past 1e10 as diverged at the next step, and PyBullet's float32 link poses
+    read past 3.4e38 as infinite (a base teleported to 1e308: NaN link states, measured). They
+    are refused when given, naming the argument; 1e10 itself is taken."""
+    call, argument = STATE_BOUNDS[case]
+    sim = make_sim()
+    body = sim.load_urdf(_pair(), base_position=(0, 0, 1))
+    with pytest.raises(
+        exc.InvalidArgumentError, match=rf"argument '{argument}': values must be within \+-1e\+10"
+    ):
+        call(sim, body)
+    assert sim.bodies() == [body]
+    assert sim.base_state(body).position == pytest.approx((0, 0, 1), abs=1e-6)
+    sim.reset_joint_state(body, "j", 1e10)  # the bound itself is a position
+    sim.step()
