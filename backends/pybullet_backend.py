@@ -75,7 +75,22 @@ _CHECK_EVERY = 8
 MAX_BODY_JOINTS = 127
 MAX_BODY_MOVABLE_JOINTS = 121
 
+# PyBullet's XML reader (tinyxml2) refuses a file whose elements nest deeper than this, <robot>
+# counting 1 (measured: 98 loads, 99 is XML_ELEMENT_DEPTH_EXCEEDED)
+_MAX_XML_DEPTH = 98
+
 _F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _nesting(root: ET.Element) -> int:
+    """How deep the elements under ``root`` nest (``root`` alone: 1), without recursion."""
+    deepest = 0
+    stack = [(root, 1)]
+    while stack:
+        element, depth = stack.pop()
+        deepest = max(deepest, depth)
+        stack.extend((child, depth + 1) for child in element)
+    return deepest
 
 
 def _exclusive(method: _F) -> _F:
@@ -443,6 +458,14 @@ class PyBulletBackend(Backend):
         """Load through a uniquely named temporary file that is always removed (PyBullet reads
         files only, and caches their contents by name). Mesh paths are made absolute."""
         root = ET.fromstring(model.source.text)
+        depth = _nesting(root)
+        if depth > _MAX_XML_DEPTH:  # ET.tostring would recurse past Python's limit first
+            raise UrdfStructureError(
+                model.source.display_name,
+                "<robot>",
+                f"elements nested {depth} deep: PyBullet's XML reader refuses more than "
+                f"{_MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED)",
+            )
         for mesh in root.iter("mesh"):
             uri = mesh.get("filename")
             if uri:

@@ -639,3 +639,31 @@ def test_a_position_or_velocity_no_engine_can_take_is_refused_where_it_is_given(
     assert sim.base_state(body).position == pytest.approx((0, 0, 1), abs=1e-6)
     sim.reset_joint_state(body, "j", 1e10)  # the bound itself is a position
     sim.step()
+
+
+# The deepest element nesting each backend's engine reads (None: no limit of its own).
+DEEPEST_XML = {"pybullet": 98, "mujoco": None}
+
+
+@pytest.mark.parametrize("depth", [96, 200_000])
+def test_elements_nested_deeper_than_the_engine_reads(make_sim, backend, private_tmp, depth):
+    """Unknown elements nested inside a link (one a line): PyBullet's XML reader refuses more
+    than 98 levels, <robot> counting 1 (measured on raw PyBullet); the backend says so instead
+    of raising a raw RecursionError (200,000 levels) from rewriting the text for it."""
+    nested = "<a>\n" * depth + "</a>\n" * depth
+    text = f'<robot name="deep"><link name="l">\n{nested}</link></robot>'
+    sim = make_sim()
+    limit = DEEPEST_XML[backend]
+    if limit is not None and depth + 2 > limit:
+        with pytest.raises(
+            exc.UrdfStructureError,
+            match=rf"elements nested {depth + 2} deep: PyBullet's XML reader refuses more than "
+            rf"{limit}",
+        ):
+            sim.load_urdf(text)
+        assert sim.bodies() == []
+    else:
+        body = sim.load_urdf(text)
+        assert sim.body_name(body) == "deep"
+    sim.step()
+    assert list(private_tmp.iterdir()) == []
