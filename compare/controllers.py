@@ -43,7 +43,7 @@ from simbridge.exceptions import ScenarioError
 if TYPE_CHECKING:
     import simbridge
 
-    from .run import Trajectory
+Trajectory = Any  # simbridge.compare.run.Trajectory: run.py imports this module, not the reverse
 
 __all__ = [
     "ControllerSpec",

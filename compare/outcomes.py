@@ -39,7 +39,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -47,9 +47,12 @@ from simbridge.exceptions import ScenarioError
 
 DEG = math.pi / 180.0
 
-if TYPE_CHECKING:
-    from .run import BodyTrajectory, Trajectory
-    from .scenario import Scenario
+# simbridge.compare.run's Trajectory and BodyTrajectory and scenario's Scenario, by name only:
+# run.py and scenario.py import this module, and no module here imports one that imports it
+# (tests/test_import_graph.py), not even for type checking.
+Trajectory = Any
+BodyTrajectory = Any
+Scenario = Any
 
 __all__ = [
     "KINDS",
@@ -693,13 +696,21 @@ def outcomes_summary(
 
 
 def _fmt(x: float, unit: str) -> str:
-    from .fmt import fmt_value
-
-    if unit == "s":
-        return f"{x:.3g} s"
-    if unit == "J":
-        return f"{x:.3g} J"
-    return fmt_value(x, unit)
+    """A value for people, as the report writes distances and angles (``fmt.fmt_value``, not
+    imported: fmt imports diff, which imports run, which imports this module): ``4.2 cm``,
+    ``0.83 mm``, ``2.1e-06 m``; angles in degrees; other units as they are."""
+    if unit == "m":
+        a = abs(x)
+        if a >= 1:
+            return f"{x:.2f} m"
+        if a >= 0.01:
+            return f"{x * 100:.1f} cm"
+        if a >= 1e-4:
+            return f"{x * 1000:.2f} mm"
+        return "0 m" if a == 0 else f"{x:.1e} m"
+    if unit == "rad":
+        return f"{x / DEG:.3g}°" if abs(x) < 2 * math.pi else f"{x:.3g} rad"
+    return f"{x:.3g} {unit}".rstrip()
 
 
 def _pm(dist: dict[str, Any] | None, unit: str, runs: int, none: str = "none") -> str:

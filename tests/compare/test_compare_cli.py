@@ -16,12 +16,16 @@ def test_scenarios_lists_one_line_each(capsys):
     lines = capsys.readouterr().out.splitlines()
     assert [line.split()[0] for line in lines] == [
         "double-pendulum",
+        "kuka-reach",
+        "laikago-stand",
         "pendulum",
         "r2d2",
         "r2d2-gentle",
+        "r2d2-goto",
         "spinning-wheel",
     ]
-    assert "tutorial" in lines[2]
+    assert "tutorial" in lines[4]
+    assert "closed loop" in lines[6]
 
 
 @pytest.mark.parametrize(
