@@ -18,7 +18,8 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
 
 @pytest.fixture(scope="module")
 def goto():
-    return {b: run("r2d2-goto", b).outcomes for b in ("pybullet", "mujoco")}
+    # the first 12 s of the 20 s scenario (MuJoCo is at every goal by 9.72 s): 60% of the cost
+    return {b: run("r2d2-goto", b, duration=12.0).outcomes for b in ("pybullet", "mujoco")}
 
 
 def test_r2d2_goto_straight_ahead_both_engines_arrive_together(goto):
@@ -35,7 +36,7 @@ def test_r2d2_goto_behind_only_mujoco_reaches_it(goto):
         goto["mujoco"]["goal behind (-1.414, -1.414)"],
     )
     # PyBullet turns r2d2 about three times slower for the same wheel command: it circles the
-    # goal (closest 12.6 cm) and never gets within 5 cm in 20 s; MuJoCo arrives at 9.72 s
+    # goal (closest 12.6 cm in 20 s, never within 5 cm: README); MuJoCo arrives at 9.72 s
     assert a["success"] is False and a["value"] is None and a["closest"] > 0.08
     assert b["success"] is True and 9.3 < b["value"] < 10.2 and b["closest"] <= 0.05
 
@@ -44,8 +45,8 @@ def test_r2d2_goto_the_right_turn_takes_mujoco_half_the_time(goto):
     a, b = goto["pybullet"]["goal right (2, 0)"], goto["mujoco"]["goal right (2, 0)"]
     assert b["success"] is True and 8.2 < b["value"] < 8.9  # measured 8.55 s
     # PyBullet overshoots the turn and orbits: 19.8 s on the nominal run, not reached in most
-    # perturbed runs (see the README); never sooner than 15 s
-    assert a["value"] is None or a["value"] > 15.0
+    # perturbed runs, never sooner than 15.5 s (README)
+    assert a["value"] is None and a["closest"] > 0.05
 
 
 @pytest.mark.parametrize("backend", ["pybullet", "mujoco"])
