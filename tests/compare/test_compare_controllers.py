@@ -448,3 +448,22 @@ def test_a_bad_controller_leaves_no_report_behind(tmp_path, capsys):
         f"controller ctrl.py:Raises in phase 'first' at t = {FIRST_AFTER_50_MS * DT:.6g} s" in err
     )
     assert not out.exists() or list(out.iterdir()) == []
+
+
+def test_compare_takes_a_controller_for_every_run():
+    from simbridge.compare import compare
+
+    c = compare("pendulum", ["pybullet", "mujoco"], ensemble=1, duration=0.1, controller=SpinAt)
+    assert c.scenario.closed_loop
+    for tr in c.runs.values():  # both engines, at dt and dt/2
+        assert tr.body.joint_targets[1:, 0] == pytest.approx(1.0, abs=0)
+
+
+def test_a_controller_error_pickles_with_its_fields(tmp_path):
+    import pickle
+
+    err = _fails(tmp_path, "ctrl.py:Returns")
+    again = pickle.loads(pickle.dumps(err))
+    assert isinstance(again, ControllerError) and str(again) == str(err)
+    assert (again.controller, again.phase, again.time) == (err.controller, "first", 0.0)
+    assert again.trajectory is None  # the recording stays with the original
