@@ -12,6 +12,12 @@ and size: a file rewritten in the meantime is read again), up to 256 files.
   left out, as is a triangle with an index out of range;
 * ``.stl``: binary (when the size matches the triangle count in its header) or ASCII
   (``vertex`` lines); three vertices per triangle, as written, not merged;
+* a file that is not one of its format raises :class:`MeshReadError` naming the file, the line
+  where there is one, and what is wrong: an .obj that is not text or has a ``v`` line without
+  3 numbers, an .stl that is neither binary (its size matches its triangle count) nor ASCII
+  text starting with ``solid``, or with a ``vertex`` line without 3 numbers (PyBullet loads
+  random bytes as a link without a shape, or reads an .obj's bad numbers as uninitialised
+  memory: measured, inertia 1e41);
 * anything else (``.dae``): through trimesh, imported only then (about 1 s), without
   processing (no merging, no repair).
 """
@@ -25,7 +31,17 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["MeshData", "read_mesh", "mesh_vertices"]
+__all__ = ["MeshData", "MeshReadError", "read_mesh", "mesh_vertices"]
+
+
+class MeshReadError(ValueError):
+    """A mesh file that is not one of its format (see the module docstring)."""
+
+    def __init__(self, path: str, detail: str, line: int | None = None) -> None:
+        self.path = path
+        self.line = line
+        self.detail = detail
+        super().__init__(f"{path}{'' if line is None else f':{line}'}: {detail}")
 
 
 class MeshData(NamedTuple):
@@ -39,8 +55,8 @@ class MeshData(NamedTuple):
 
 def read_mesh(path: str | Path) -> MeshData:
     """The vertices and triangles of a mesh file (see the module docstring). Cached per path,
-    modification time and size; raises OSError when the file cannot be read, ValueError or
-    IndexError on an .obj/.stl number that is not one, and trimesh's own errors on a file
+    modification time and size; raises OSError when the file cannot be read, MeshReadError
+    (a ValueError) on an .obj/.stl that is not one, and trimesh's own errors on a file
     trimesh cannot read."""
     name = str(path)
     stat = os.stat(name)
@@ -67,16 +83,28 @@ def _read_cached(path: str, mtime_ns: int, size: int) -> MeshData:
     return mesh
 
 
+def _three(path: str, parts: list[str], number: int, line: str) -> tuple[float, float, float]:
+    """x, y, z from ``v x y z`` or ``vertex x y z`` (line ``number`` of ``path``)."""
+    try:
+        return float(parts[1]), float(parts[2]), float(parts[3])
+    except (IndexError, ValueError):
+        raise MeshReadError(
+            path, f"{parts[0]!r} needs 3 numbers (x y z), got {line.strip()[:60]!r}", number
+        ) from None
+
+
 def _read_obj(path: str) -> MeshData:
     rows = []
     face_lines = []
-    with open(path, encoding="utf-8", errors="replace") as f:
-        for line in f:
-            if line.startswith("v "):
-                parts = line.split()
-                rows.append((float(parts[1]), float(parts[2]), float(parts[3])))
-            elif line.startswith("f "):
-                face_lines.append(line)
+    data = Path(path).read_bytes()
+    if b"\0" in data:
+        raise MeshReadError(path, "not an .obj: binary data (a NUL byte), not text")
+    text = data.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n")
+    for number, line in enumerate(text.split("\n"), 1):  # as a text-mode file's lines
+        if line.startswith("v "):
+            rows.append(_three(path, line.split(), number, line))
+        elif line.startswith("f "):
+            face_lines.append(line)
     vertices = np.array(rows, dtype=float).reshape(-1, 3)
     n = len(vertices)
     tris: list[tuple[int, int, int]] = []
@@ -110,11 +138,22 @@ def _read_stl(path: str) -> MeshData:
             tri = np.frombuffer(data, dtype=rec, count=n, offset=84)
             vertices = tri["v"].reshape(-1, 3).astype(float)
     if vertices is None:
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError:
+            text = ""
+        if not text.lstrip().startswith("solid"):
+            size = "an empty file" if not data else f"{len(data)} bytes"
+            raise MeshReadError(
+                path,
+                f"not an .stl: neither binary (84 bytes + 50 per triangle its header counts) nor "
+                f"ASCII text starting with 'solid' ({size})",
+            )
         rows = []
-        for line in data.decode("utf-8", errors="replace").splitlines():
+        for number, line in enumerate(text.splitlines(), 1):
             parts = line.split()
-            if len(parts) == 4 and parts[0] == "vertex":
-                rows.append((float(parts[1]), float(parts[2]), float(parts[3])))
+            if parts and parts[0] == "vertex":
+                rows.append(_three(path, parts, number, line))
         vertices = np.array(rows, dtype=float).reshape(-1, 3)
     faces = np.arange(len(vertices) // 3 * 3, dtype=np.int64).reshape(-1, 3)
     return MeshData(vertices, faces)

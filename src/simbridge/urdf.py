@@ -30,7 +30,7 @@ from .exceptions import (
     UnsupportedJointError,
     UrdfStructureError,
 )
-from .meshes import mesh_vertices
+from .meshes import MeshReadError, mesh_vertices
 from .urdf_model import Contact, Geometry, Inertial, Joint, Link, UrdfModel, Vec3
 from .urdf_source import (  # noqa: F401 - re-exported: simbridge.urdf is the public module
     UrdfSource,
@@ -225,6 +225,8 @@ def _geometry(
             )
         if path.suffix.lower() == ".dae":
             _check_collada(r, shape, path, uri, f"{where} <mesh>")
+        else:
+            _check_mesh(r, shape, path, uri, f"{where} <mesh>")
         return Geometry("mesh", xyz, rpy, scale, mesh_path=path, mesh_uri=uri, **common)  # type: ignore[arg-type]
     raise r.error(
         shape,
@@ -236,6 +238,19 @@ def _geometry(
 def _sizes(r: _Reader, elem: XmlElement, values: Sequence[float], where: str) -> None:
     if any(v < 0 for v in values):
         raise r.error(elem, where, f"sizes must be >= 0, got {tuple(values)}")
+
+
+def _check_mesh(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:
+    """Read an .obj/.stl before any engine does (the read is cached for the inertia and the
+    MuJoCo model): a file that is not one of its format is refused here (PyBullet loads random
+    bytes as a link without a shape, and an .obj's unreadable numbers as garbage inertia)."""
+    try:
+        mesh_vertices(path)
+    except MeshReadError as exc:
+        at = "" if exc.line is None else f" (line {exc.line})"
+        raise r.error(elem, where, f"{uri!r} cannot be read as a mesh{at}: {exc.detail}") from None
+    except OSError as exc:
+        raise r.error(elem, where, f"{uri!r} cannot be read: {exc.strerror}") from None
 
 
 def _check_collada(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:

@@ -667,3 +667,72 @@ def test_elements_nested_deeper_than_the_engine_reads(make_sim, backend, private
         assert sim.body_name(body) == "deep"
     sim.step()
     assert list(private_tmp.iterdir()) == []
+
+
+# Mesh files that are not meshes: PyBullet loads random bytes as a link without a shape and
+# reads an .obj's missing numbers as uninitialised memory (inertia 1e41, measured); the MuJoCo
+# backend raised a raw IndexError on 'v 1 2'. Each is refused when the URDF is read, naming the
+# URDF, the link, the mesh, its line where it has one, and what is wrong.
+GARBAGE_MESHES = {
+    "random bytes as .stl": (
+        "bad.stl",
+        bytes(range(256)) * 20,
+        r"'bad\.stl' cannot be read as a mesh: not an \.stl: neither binary .* nor ASCII text "
+        r"starting with 'solid' \(5120 bytes\)",
+    ),
+    "an empty .stl": ("bad.stl", b"", r"not an \.stl: .* \(an empty file\)"),
+    "an ASCII .stl with a bad vertex": (
+        "bad.stl",
+        b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\nvertex 0 1 0\n",
+        r"'bad\.stl' cannot be read as a mesh \(line 5\): 'vertex' needs 3 numbers \(x y z\), "
+        r"got 'vertex 1 0'",
+    ),
+    "an .obj vertex with 2 numbers": (
+        "bad.obj",
+        b"v 0 0 0\nv 1 2\nv 0 1 0\nf 1 2 3\n",
+        r"'bad\.obj' cannot be read as a mesh \(line 2\): 'v' needs 3 numbers \(x y z\), got "
+        r"'v 1 2'",
+    ),
+    "an .obj vertex of words": (
+        "bad.obj",
+        b"v 0 0 0\r\nv 1 0 0\r\nv a b c\r\nf 1 2 3\r\n",
+        r"\(line 3\): 'v' needs 3 numbers \(x y z\), got 'v a b c'",
+    ),
+    "binary bytes as .obj": ("bad.obj", b"\x00\x01v 1 2 3\n", r"not an \.obj: binary data"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(GARBAGE_MESHES))
+def test_a_mesh_file_that_is_no_mesh_is_refused(make_sim, private_tmp, tmp_path, case):
+    name, content, message = GARBAGE_MESHES[case]
+    (tmp_path / name).write_bytes(content)
+    urdf = tmp_path / "robot.urdf"
+    urdf.write_text(
+        '<robot name="bad"><link name="a">\n<collision><geometry>'
+        f'<mesh filename="{name}"/></geometry></collision></link></robot>'
+    )
+    sim = make_sim()
+    with pytest.raises(exc.UrdfStructureError, match=r"robot\.urdf:2: link 'a' <collision> #0 "):
+        sim.load_urdf(urdf)
+    with pytest.raises(exc.UrdfStructureError, match=message):
+        sim.load_urdf(urdf)
+    assert sim.bodies() == []
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_the_cli_refuses_a_mesh_that_is_no_mesh(backend, tmp_path, capsys):
+    """`simbridge joints` on a URDF whose .stl is random bytes printed the joint table and
+    exited 0: it exits 1 with the error on stderr and nothing on stdout."""
+    from simbridge.cli import main
+
+    (tmp_path / "bad.stl").write_bytes(bytes(range(256)) * 20)
+    urdf = tmp_path / "robot.urdf"
+    urdf.write_text(
+        '<robot name="bad"><link name="a"><collision><geometry><mesh filename="bad.stl"/>'
+        '</geometry></collision></link><link name="b"/><joint name="j" type="continuous">'
+        '<parent link="a"/><child link="b"/></joint></robot>'
+    )
+    assert main(["joints", str(urdf), "--backend", backend]) == 1
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert "'bad.stl' cannot be read as a mesh: not an .stl" in err
