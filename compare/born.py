@@ -12,19 +12,19 @@ from .events import EngineEvents, find_events, parting
 from .parts import rank_parts
 
 if TYPE_CHECKING:
-    from .pipeline import Comparison
+    from .view import ComparisonView
 
 __all__ = ["engine_events", "where_born"]
 
 
-def engine_events(c: Comparison) -> list[EngineEvents]:
+def engine_events(c: ComparisonView) -> list[EngineEvents]:
     """The followed robot's events in each engine's nominal run at the headline time step."""
     return [
         find_events(c.runs[(slot, c.timestep)], label=label) for slot, label in enumerate(c.labels)
     ]
 
 
-def where_born(c: Comparison) -> dict[str, Any]:
+def where_born(c: ComparisonView) -> dict[str, Any]:
     """``summary.json``'s ``events`` (per engine label), ``parting``, ``parts`` and
     ``departures``."""
     events = engine_events(c)

@@ -37,7 +37,7 @@ from .events import EngineEvents
 from .fmt import fmt_distance
 
 if TYPE_CHECKING:
-    from .pipeline import Comparison
+    from .view import ComparisonView
 
 __all__ = ["GENERAL_CUT", "applicable"]
 
@@ -59,7 +59,7 @@ def _general(key: str, text: str) -> str:
     return text
 
 
-def _urdf_facts(c: Comparison) -> dict[str, Any]:
+def _urdf_facts(c: ComparisonView) -> dict[str, Any]:
     """Per robot: links with collision cylinders, restitution, rolling/spinning friction,
     and joints with a non-unit axis, from the scenario's URDFs (read as ``Sim.load_urdf``
     reads them; the root link is named ``base`` as in the record)."""
@@ -101,7 +101,7 @@ def _urdf_facts(c: Comparison) -> dict[str, Any]:
     return facts
 
 
-def _touched(c: Comparison, slot: int) -> dict[str, list[str]]:
+def _touched(c: ComparisonView, slot: int) -> dict[str, list[str]]:
     """Per body of the run: the links that touched something at some recorded instant."""
     tr = c.runs[(slot, c.timestep)]
     out = {}
@@ -114,7 +114,7 @@ def _touched(c: Comparison, slot: int) -> dict[str, list[str]]:
     return out
 
 
-def applicable(c: Comparison, events: list[EngineEvents]) -> dict[str, dict[str, Any]]:
+def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[str, Any]]:
     """Per engine label: ``apply`` (a list of ``{key, text, why, measured}``: the departure's
     general words, why it applies here, and what this run measured of it, None when nothing)
     and ``left_out`` (the keys that do not apply to this scenario)."""
@@ -140,7 +140,7 @@ def applicable(c: Comparison, events: list[EngineEvents]) -> dict[str, dict[str,
 
 def _judge(
     key: str,
-    c: Comparison,
+    c: ComparisonView,
     facts: dict[str, Any],
     touched: list[dict[str, list[str]]],
     events: list[EngineEvents],
@@ -247,7 +247,7 @@ def _judge(
     return "not checked against this scenario", None
 
 
-def _contact_figures(c: Comparison, events: list[EngineEvents]) -> str:
+def _contact_figures(c: ComparisonView, events: list[EngineEvents]) -> str:
     """This run's own contact figures: the followed robot's base height at the end of the
     first phase, how often its links made or lost contact, its highest hop."""
     phase = c.runs[(0, c.timestep)].phases[0][0]

@@ -1,0 +1,39 @@
+"""What the analyses of a finished comparison read from it: :class:`ComparisonView`.
+
+:class:`simbridge.compare.pipeline.Comparison` satisfies it. The analyses that feed the
+comparison's summary (:mod:`.born`, :mod:`.departures`) take this view instead of importing the
+pipeline, which imports them: no import circle.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from .diff import Divergence
+from .run import Trajectory
+from .scenario import Scenario
+
+__all__ = ["ComparisonView"]
+
+
+class ComparisonView(Protocol):
+    """The nominal runs of two engines on one scenario and their diffs (see ``Comparison``)."""
+
+    scenario: Scenario
+    runs: dict[tuple[int, float], Trajectory]  # (engine slot 0/1, time step) -> run
+    cross: dict[float, Divergence]  # time step -> engine 0 against engine 1
+
+    @property
+    def timestep(self) -> float:
+        """The time step the headline speaks of (s)."""
+        ...
+
+    @property
+    def labels(self) -> tuple[str, str]:
+        """The two engines' names in the report."""
+        ...
+
+    @property
+    def headline_quantity(self) -> str:
+        """The quantity the headline follows (a key of ``diff.QUANTITIES``)."""
+        ...
