@@ -1054,7 +1054,9 @@ r2d2 = _with("r2d2.urdf", fixed=False)
 
 def _busy(call: Callable[[simbridge.Sim, int], object]) -> Callable[[Ctx], object]:
     """``call`` from this thread, again and again, while another thread runs a long step(n):
-    every call that reaches the Sim then must raise SimBusyError."""
+    every call that reaches the Sim then must raise SimBusyError. One call may go through
+    legitimately as the step ends (between its end and the stepping thread's exit): that one
+    is allowed, and a world change (reset, close) it made is not held against the step."""
 
     def run(ctx: Ctx) -> object:
         sim = ctx.sim()
@@ -1073,6 +1075,7 @@ def _busy(call: Callable[[simbridge.Sim, int], object]) -> Callable[[Ctx], objec
         t0 = sim.time
         t.start()
         started.wait()
+        time.sleep(0.01)  # the stepping thread is inside step() (20000 steps: 0.2 s and more)
         went_through = busy = 0
         while t.is_alive():
             try:
@@ -1085,12 +1088,12 @@ def _busy(call: Callable[[simbridge.Sim, int], object]) -> Callable[[Ctx], objec
         t.join()
         if failure:
             raise failure[0]
-        if went_through:
+        if went_through > 1 or not busy:
             raise CaseFailure(
                 f"{went_through} calls went through while another thread stepped the Sim "
                 f"({busy} refused with SimBusyError)"
             )
-        if sim.time - t0 < 20000 * sim.timestep * 0.999:
+        if not went_through and sim.time - t0 < 20000 * sim.timestep * 0.999:
             raise CaseFailure("the stepping thread did not finish its steps")
         return busy
 
@@ -1591,7 +1594,8 @@ def resources() -> None:
 
     def memory(ctx: Ctx) -> object:
         """RSS over the second 100 of 220 load/step/remove cycles (the first ones allocate
-        what is kept for good); measured: MuJoCo within +-3 MB, PyBullet 0.6 MB a cycle."""
+        what is kept for good); measured: MuJoCo within +-3 MB (allocator noise), PyBullet 0.6 MB
+        a cycle: a bound of 15 MB tells them apart."""
         sim = ctx.sim()
         rss = []
         for k in range(220):
@@ -1601,12 +1605,12 @@ def resources() -> None:
             sim.step()
             sim.remove(body)
         grown = (rss[1] - rss[0]) / 1024
-        if grown > 6:
+        if grown > 15:
             raise CaseFailure(f"100 load/step/remove cycles of r2d2 grew RSS by {grown:.1f} MB")
         return grown
 
     case("cycle-memory-r2d2", cat,
-         accepts("100 load/step/remove cycles grow RSS by at most 6 MB"), memory,
+         accepts("100 load/step/remove cycles grow RSS by at most 15 MB"), memory,
          isolate=True, timeout=60)  # fmt: skip
 
 
