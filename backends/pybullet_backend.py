@@ -18,7 +18,7 @@ import sys
 import tempfile
 import threading
 import xml.etree.ElementTree as ET
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any, TypeVar
@@ -49,8 +49,10 @@ from simbridge.types import (
     Quat,
     Vec3,
 )
+from simbridge.scene import SceneBody
 from simbridge.urdf import UrdfModel, resolve_mesh
 
+from .pybullet_scene import Pending, named_table
 from .pybullet_state import Records, Saved, contact_point
 
 __all__ = ["PyBulletBackend"]
@@ -248,6 +250,7 @@ class PyBulletBackend(Backend):
     """`Sim` on PyBullet (DIRECT, or GUI when asked)."""
 
     name = "pybullet"
+    _scene: Pending | None = None  # the MJCF/SDF file load_scene is loading
 
     NATIVE_DEFAULTS = {
         "gravity": (0.0, 0.0, 0.0),
@@ -370,7 +373,10 @@ class PyBulletBackend(Backend):
             # edited since it was first loaded here goes through a fresh temporary name
             or self._file_texts.setdefault(str(src.path), src.text) != src.text
         )
-        if not needs_rewrite:
+        if isinstance(model, SceneBody):  # a body of an MJCF/SDF file: PyBullet's own importer
+            assert self._scene is not None, "a SceneBody loads through load_scene"
+            body = self._scene.body(self, model)
+        elif not needs_rewrite:
             body = self._load_file(
                 str(src.path),
                 src.display_name,
@@ -387,6 +393,8 @@ class PyBulletBackend(Backend):
             self._read_joint_info(body, i)
             for i in range(p.getNumJoints(body, physicsClientId=self._c))
         ]
+        if isinstance(model, SceneBody):
+            table = named_table(table, model)
         dyn = p.getDynamicsInfo(body, -1, physicsClientId=self._c)
         base_mass = dyn[0]
         free = not fixed_base and base_mass > 0
@@ -396,6 +404,16 @@ class PyBulletBackend(Backend):
             info.effort = [j.max_force if j.max_force > 0 else math.inf for j in table]
             self._clamp_brake(body, info, model)
         return body
+
+    def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
+        """``p.loadMJCF``/``p.loadSDF`` on the file itself (backends/pybullet_scene.py); each
+        body then goes through ``load`` as a URDF's does."""
+        self._scene = Pending(bodies, _SELF_COLLISION_FLAGS[options.self_collision])
+        try:
+            return super().load_scene(bodies, options)
+        finally:
+            self._scene.discard_unclaimed(self)
+            self._scene = None
 
     def _clamp_brake(self, body: int, info: _Body, model: UrdfModel) -> None:
         """Under enforce_effort_limit, the default brake too stays within <limit effort>."""

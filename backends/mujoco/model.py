@@ -68,6 +68,11 @@ class GeomContact:
     spinning: float
     restitution: float
     is_plane: bool = False
+    # Bullet's broadphase filter: two geoms collide when group_a & mask_b or group_b & mask_a
+    # (PyBullet's default rule). A URDF link is group 1, mask -1 (all); a fixed base is group 2,
+    # mask -1 ^ 2; an MJCF or SDF link may say otherwise (SceneBody.collision_filters)
+    group: int = 1
+    mask: int = -1
 
 
 @dataclass
@@ -328,6 +333,7 @@ def add_robot(
             vg.rgba = list(g.rgba or DEFAULT_RGBA)
             vg.mass = 0.0
         lateral, rolling, spinning, restitution = _contact_values(link, profile)
+        group, mask = _collision_filter(model, link, fixed)
         for k, g in enumerate(link.collisions):
             if g.kind == "mesh" and not meshes.usable(g):
                 skipped.append(f"{where} <collision> #{k}")
@@ -367,7 +373,16 @@ def add_robot(
             cg.mass = 0.0
             geoms.append(
                 GeomContact(
-                    name, i, static[i + 1], lateral, rolling, spinning, restitution, is_plane
+                    name,
+                    i,
+                    static[i + 1],
+                    lateral,
+                    rolling,
+                    spinning,
+                    restitution,
+                    is_plane,
+                    group,
+                    mask,
                 )
             )
     return RobotSpec(
@@ -383,6 +398,17 @@ def add_robot(
         skipped_shapes=skipped,
         base_offset=offset,
     )
+
+
+def _collision_filter(model: UrdfModel, link: Link, fixed: bool) -> tuple[int, int]:
+    """A link's collision group and mask as PyBullet gives them (see GeomContact)."""
+    static_base = link.index == -1 and fixed
+    group, mask = (2, -1 ^ 2) if static_base else (1, -1)
+    own = getattr(model, "collision_filters", {}).get(link.name)
+    if own is not None:
+        group = own[0] if own[0] is not None else group
+        mask = own[1] if own[1] is not None else mask
+    return group, mask
 
 
 def _set_shape(geom: mujoco.MjsGeom, g: Geometry, meshes: MeshLibrary, file: str, where: str):
@@ -444,6 +470,8 @@ def add_pairs(
 
     def add(a: GeomContact, b: GeomContact) -> None:
         if a.static and b.static:
+            return
+        if not (a.group & b.mask or b.group & a.mask):  # Bullet's filter (PyBullet's OR rule)
             return
         friction, condim = pair_friction(a, b)
         name = f"{a.name}|{b.name}"

@@ -23,6 +23,7 @@ to hand to an engine; copy them into your own buffers). A backend must:
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -43,6 +44,7 @@ from .types import (
 if TYPE_CHECKING:
     from .bound import BoundCommand
     from .load_options import LoadOptions
+    from .scene import SceneBody
     from .urdf import UrdfModel
 
 __all__ = ["Backend"]
@@ -130,6 +132,29 @@ class Backend(ABC):
         link order must then be ``model``'s). Every backend honours ``options.inertia_source``
         and ``options.self_collision`` for this body in place of the profile's entries.
         """
+
+    def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
+        """Add every body of one MJCF or SDF file; return their ids, in ``bodies``' order.
+
+        ``bodies`` are :func:`simbridge.scene.parse_scene`'s, in PyBullet's order, each with its
+        links, joints and numbering, and with ``base_position``/``base_orientation`` placing its
+        root link frame (its base is fixed when the root's mass is 0). ``options`` hold the
+        self-collision mode; the inertia source is ``"collision_aabb"``. The default loads each
+        body through :meth:`load` (removing the ones loaded when one fails); a backend whose
+        engine reads the file itself (PyBullet's ``loadMJCF``/``loadSDF``) overrides it, and its
+        bodies' joint tables must then equal the models' (names included).
+        """
+        ids: list[int] = []
+        try:
+            for body in bodies:
+                ids.append(
+                    self.load(body, body.base_position, body.base_orientation, False, options)
+                )
+        except BaseException:
+            for body_id in reversed(ids):
+                self.remove(body_id)
+            raise
+        return ids
 
     @abstractmethod
     def remove(self, body: int) -> None:

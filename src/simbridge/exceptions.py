@@ -98,18 +98,18 @@ class UrdfError(SimbridgeError, ValueError):
 
 
 class UrdfNotFoundError(UrdfError, FileNotFoundError):
-    def __init__(self, source: str, searched: Iterable[str]):
+    def __init__(self, source: str, searched: Iterable[str], kind: str = "URDF"):
         self.source = source
         super().__init__(
-            f"URDF {source!r} is neither a file, a name on the search path, nor URDF text; "
+            f"{kind} {source!r} is neither a file, a name on the search path, nor {kind} text; "
             f"searched: {_choices(searched)}"
         )
 
 
 class UrdfParseError(UrdfError):
-    def __init__(self, file: str, detail: str):
+    def __init__(self, file: str, detail: str, kind: str = "URDF"):
         self.file = file
-        super().__init__(f"{file}: malformed URDF XML: {detail}")
+        super().__init__(f"{file}: malformed {kind} XML: {detail}")
 
 
 def _at(file: str, line: int | None) -> str:

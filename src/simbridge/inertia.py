@@ -287,6 +287,8 @@ def link_inertial(
                 file_diag = np.zeros(3)
                 orn = ine.origin_quat
         diag = tuple(float(v) for v in file_diag)
+    elif ine.moments is not None:  # computed by the file's reader (an MJCF body's shapes)
+        diag = ine.moments if mass else (0.0, 0.0, 0.0)
     else:
         diag = collision_aabb_inertia(link, mass, (pos, orn), vertices)
     if mass and inertia_scaling != 1.0:

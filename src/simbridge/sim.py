@@ -353,6 +353,88 @@ class Sim:
         )
         return body
 
+    def load_mjcf(
+        self, source: str | os.PathLike[str], *, self_collision: bool | str | None = None
+    ) -> tuple[int, ...]:
+        """Load every body of an MJCF file as ``p.loadMJCF`` does; return their ids.
+
+        One body per top-level ``<worldbody>`` ``<body>`` or ``<geom>``, in the file's order,
+        each with PyBullet's links, joints, numbering and names (a body with several joints
+        gets massless links between them; see :mod:`simbridge.mjcf`). What PyBullet's importer
+        does not read (joint damping and armature, ``<option>``, ``density``, actuators...) is
+        not simulated on any backend; it is listed per body in :meth:`manifest` (``ignored``).
+
+        Args:
+            source: a file path, a name on the search path (``"mjcf/ant.xml"`` is found in
+                pybullet_data) or MJCF text.
+            self_collision: as :meth:`load_urdf`'s (``loadMJCF``'s flags); None: the profile's.
+
+        Returns:
+            The body ids, in PyBullet's order (``p.loadMJCF``'s tuple).
+
+        Raises:
+            UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
+            UnsupportedJointError (``ball`` and nested ``free`` joints): the message names the
+            file, the line and the element.
+        """
+        return self._load_scene(source, "mjcf", self_collision)
+
+    def load_sdf(self, source: str | os.PathLike[str]) -> tuple[int, ...]:
+        """Load every ``<model>`` of an SDF file as ``p.loadSDF`` does; return their ids.
+
+        Each model is one body with PyBullet's links, joints and numbering (see
+        :mod:`simbridge.sdf`), its base at the model's ``<pose>``; ``<static>1</static>`` fixes
+        it. ``loadSDF`` takes no flags: links of one body never collide with each other.
+
+        Args:
+            source: a file path, a name on the search path (``"kuka_iiwa/model.sdf"``) or SDF
+                text.
+
+        Raises:
+            UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
+            UnsupportedJointError: the message names the file, the line and the element.
+        """
+        return self._load_scene(source, "sdf", False)
+
+    def _load_scene(
+        self, source: str | os.PathLike[str], kind: str, self_collision: bool | str | None
+    ) -> tuple[int, ...]:
+        from dataclasses import replace
+
+        from .load_options import load_options
+        from .scene import parse_scene
+
+        options = load_options(self._b.profile, self_collision=self_collision)
+        # PyBullet's MJCF and SDF importers take the collision-box inertia (loadSDF has no flag
+        # for the file's; an MJCF body's file inertia is MuJoCo's to compute)
+        options = replace(options, inertia_source="collision_aabb")
+        bodies = parse_scene(source, kind)
+        self._end_commands(f"load_{kind} changed the world")
+        ids = self._b.load_scene(bodies, options)
+        for body, model in zip(ids, bodies, strict=True):
+            names = [j.name for j in model.joints]
+            links = [j.child for j in model.joints]
+            types = [self._b.joint_info(body, i).type for i in range(len(names))]
+            self._bodies[body] = _Body(
+                model.name,
+                names,
+                links,
+                types,
+                {n: i for i, n in enumerate(names)},
+                {n: i for i, n in enumerate(links)} | {model.base.name: -1},
+                load={
+                    "source": model.source.display_name,
+                    "format": kind,
+                    "body_index": model.body_index,
+                    "base_position": model.base_position,
+                    "base_orientation": model.base_orientation,
+                    "fixed_base": model.base.inertial.mass == 0.0,
+                    **options.as_dict(),
+                    "ignored": list(model.ignored),
+                },
+            )
+        return tuple(ids)
+
     def remove(self, body: int) -> None:
         """Remove a body from the world."""
         self._body(body)

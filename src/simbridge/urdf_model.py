@@ -51,6 +51,9 @@ class Inertial:
     from_file: bool = False  # False when the link had no <inertial> (PyBullet: mass 1)
     origin_quat: Quat = None  # type: ignore[assignment]  # None: from origin_rpy
     line: int = 0
+    # principal moments (kg m^2, in this frame) PyBullet computes itself where its shapes follow
+    # other rules than a URDF's (an MJCF body: simbridge.mjcf); None: from the collision shapes
+    moments: Vec3 | None = None
 
     def __post_init__(self) -> None:
         if self.origin_quat is None:

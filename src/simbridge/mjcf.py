@@ -1,0 +1,892 @@
+"""MJCF as PyBullet 3.2.7's ``loadMJCF`` reads it: one :class:`~simbridge.scene.SceneBody`
+per body it creates, with its links, joints, numbering and names.
+
+Read in bullet3's ``Importers/ImportMJCFDemo/BulletMJCFImporter.cpp`` and
+``ImportURDFDemo/URDF2Bullet.cpp`` and measured on pybullet 3.2.7 (every MJCF file of
+pybullet_data: ``tests/conformance/test_mjcf_sdf.py``). PyBullet's importer is not MuJoCo's:
+
+* **bodies**: every ``<worldbody>`` child ``<body>`` is one PyBullet body, and so is every
+  ``<worldbody>`` child ``<geom>`` (a static body of one link named after the geom, or
+  ``anonymous``); a top-level body with a ``free`` joint (or none) is a free base placed at
+  the body's ``pos``/``quat``, its centre of mass there (not its frame: PyBullet places an
+  MJCF base's inertial frame at the body frame);
+* **links and joints**: each MJCF body is one link named after it (``link<body>_<k>`` when
+  unnamed). A body hangs from its parent by a fixed joint ``jointfix_<n>_<parent link>``;
+  each of its joints adds a massless link ``link<body>_<k>`` between them, so a body with two
+  hinges is three links. A top-level body whose first joint is not ``free`` hangs from a
+  massless root link at the world origin (a fixed base). PyBullet numbers the ``<n>`` of those
+  names with a counter that lives as long as the process (a second load of a file in the same
+  process gets other numbers); simbridge numbers them as a first load in a fresh process does;
+* **joints**: ``hinge`` (revolute when ``limited="true"``, else continuous), ``slide``
+  (prismatic), ``fixed``; ``ball`` and nested ``free`` joints are not read by PyBullet (it
+  drops the body's subtree from its tree): refused here with
+  :class:`~simbridge.exceptions.UnsupportedJointError`. ``limited`` comes from the joint or the
+  top-level ``<default><joint>``, never from a class; an unlimited joint reports the range
+  1..0 (none); hinge ranges are degrees unless ``<compiler angle="radian">``, converted in
+  float32 arithmetic. A joint's ``pos`` moves its frame; a second joint of one body is placed
+  relative to the first joint's frame, as PyBullet does;
+* **numbers**: vectors are read as float32 (``0.1`` is 0.10000000149011612); masses and sphere
+  radii as double;
+* **mass**: an ``<inertial mass>``, else 1000 kg/m³ times the volume of the body's geoms
+  (``density`` is not read); the inertial frame is the ``<inertial>``'s, else the middle of the
+  last geom's ``fromto`` (or the body origin when the last geom has none); the moments are
+  PyBullet's box around the shapes (:func:`bullet_moments`), never ``diaginertia`` or MuJoCo's;
+* **contacts**: each link takes its last geom's ``friction[0]`` as lateral friction (the
+  spinning and rolling values of ``<default><geom friction>`` when ``condim`` > 3 and > 4), and
+  its last geom's ``contype``/``conaffinity`` as its collision group and mask (PyBullet pairs two
+  links when ``group_a & mask_b or group_b & mask_a``);
+* **not read by PyBullet** (listed per body in :attr:`SceneBody.ignored` and in the manifest):
+  ``<option>`` (time step, integrator, gravity), joint ``damping``, ``armature``,
+  ``stiffness``, ``frictionloss``, ``margin``, geom ``density``, ``margin``, ``solref``,
+  ``solimp``, ``euler``/``axisangle`` on bodies, ``<actuator>``, ``<tendon>``, ``<contact>``,
+  ``<equality>``, ``<sensor>``, ``<keyframe>``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from xml.etree.ElementTree import Element
+
+import numpy as np
+
+from .exceptions import MeshNotFoundError, UnsupportedJointError, UrdfStructureError
+from .scene import SceneBody, check_names, f32, find_mesh, line_of, number, numbers, read_scene_xml
+from .transforms import (
+    IDENTITY_QUAT,
+    quat_to_matrix,
+    rpy_from_quat,
+    transform_inverse,
+    transform_multiply,
+)
+from .types import Quat
+from .urdf_model import Contact, Geometry, Inertial, Joint, Link, Vec3
+from .urdf_source import UrdfSource
+
+__all__ = ["parse_mjcf", "bullet_moments", "IGNORED_JOINT_ATTRIBUTES"]
+
+Pose = tuple[Vec3, Quat]
+IDENTITY: Pose = ((0.0, 0.0, 0.0), IDENTITY_QUAT)
+DENSITY = 1000.0  # kg/m^3: PyBullet's, whatever the file's density
+CONVEX_MARGIN = 0.04  # m: Bullet's default margin of a convex shape (a fromto capsule's here)
+MESH_MARGIN = 0.001  # m: the MJCF importer's collision margin of a mesh hull
+_PI32 = np.float32(6.283185307179586232) * np.float32(0.5)  # Bullet3's B3_PI, float
+
+# what PyBullet's MJCF importer leaves unread, by element (reported per body in .ignored)
+IGNORED_JOINT_ATTRIBUTES = (
+    "damping",
+    "armature",
+    "stiffness",
+    "frictionloss",
+    "margin",
+    "springref",
+    "ref",
+    "solreflimit",
+    "solimplimit",
+)
+_IGNORED_GEOM_ATTRIBUTES = ("density", "margin", "solref", "solimp", "euler", "xyaxes", "zaxis")
+_IGNORED_TOP = ("option", "actuator", "tendon", "contact", "equality", "sensor", "keyframe")
+_IGNORED_BODY_ATTRIBUTES = ("euler", "axisangle", "xyaxes", "zaxis")
+
+
+@dataclass
+class _Defaults:
+    """PyBullet's ``MyMJCFDefaults``."""
+
+    group: int = 1
+    mask: int = 1
+    limited: str = ""
+    rgba: str = ""
+    condim: int = 3
+    lateral: float = 0.5
+    spinning: float = 0.0
+    rolling: float = 0.0
+
+
+@dataclass
+class _Shape:
+    """One geom as Bullet builds it (in its link frame ``frame``) and as the core shape."""
+
+    kind: str  # sphere, box, capsule, cylinder, mesh, plane
+    frame: Pose
+    radius: float = 0.0
+    half: Vec3 = (0.0, 0.0, 0.0)  # box half extents
+    height: float = 0.0  # capsule/cylinder: the full length of the axis part
+    fromto: tuple[Vec3, Vec3] | None = None
+    mesh: Path | None = None
+    mesh_uri: str = ""
+    rgba: tuple[float, float, float, float] | None = None
+    name: str = ""
+    line: int = 0
+
+
+@dataclass(eq=False)
+class _Link:
+    name: str
+    line: int
+    index: int = 0  # creation order in its body (PyBullet's link index before reordering)
+    mass: float = 0.0
+    inertial: Pose = IDENTITY
+    shapes: list[_Shape] = field(default_factory=list)
+    transform: Pose = IDENTITY  # m_linkTransformInWorld: the frame in its parent's
+    lateral: float = 0.5
+    spinning: float | None = None
+    rolling: float | None = None
+    filter: tuple[int, int] | None = None
+    file_diag: Vec3 = (0.0, 0.0, 0.0)
+
+
+@dataclass
+class _Joint:
+    name: str
+    type: str  # revolute, continuous, prismatic, fixed
+    parent: str
+    child: str
+    origin: Pose
+    axis: Vec3
+    lower: float
+    upper: float
+    line: int
+
+
+@dataclass
+class _Model:
+    links: list[_Link] = field(default_factory=list)
+    joints: list[_Joint] = field(default_factory=list)
+    ignored: list[str] = field(default_factory=list)
+    line: int = 0
+
+
+def _unit(q: Quat) -> Quat:
+    n = math.sqrt(sum(v * v for v in q))
+    if not n > 0 or not math.isfinite(n):
+        return IDENTITY_QUAT
+    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+
+
+def _shortest_arc(v: np.ndarray) -> Quat:
+    """Bullet's ``shortestArcQuat(z, v)`` for a unit vector ``v``."""
+    d = float(v[2])
+    if d < -1.0 + np.finfo(float).eps:  # btPlaneSpace1(z): half a turn about -y
+        return (0.0, -1.0, 0.0, 0.0)
+    c = np.cross((0.0, 0.0, 1.0), v)
+    s = math.sqrt((1.0 + d) * 2.0)
+    return (float(c[0] / s), float(c[1] / s), float(c[2] / s), s * 0.5)
+
+
+class _Reader:
+    """One MJCF file read as BulletMJCFImporter reads it."""
+
+    def __init__(self, src: UrdfSource) -> None:
+        self.src = src
+        self.file = src.display_name
+        self.uid = 0  # PyBullet's gUid, as in a fresh process
+        self.models: list[_Model] = []
+        self.assets: dict[str, str] = {}
+        self.mesh_dir = ""
+        self.angle = "degree"
+        self.inertia_from_geom = True
+        self.defaults = _Defaults()
+        self.classes: dict[str, _Defaults] = {}
+        self.file_ignored: list[str] = []
+        self.root: Element
+
+    # ------------------------------------------------------------ errors and values
+
+    def error(self, elem: Element, where: str, detail: str) -> UrdfStructureError:
+        return UrdfStructureError(self.file, where, detail, getattr(elem, "line", None))
+
+    def vec3(self, text: str | None, default: Vec3) -> Vec3:
+        """``parseVector3`` (float): the first 3 numbers; fewer leave zero."""
+        if text is None:
+            return default
+        v = numbers(text)
+        if len(v) < 3:
+            return (0.0, 0.0, 0.0)
+        return (f32(v[0]), f32(v[1]), f32(v[2]))
+
+    def quat(self, text: str | None) -> Quat | None:
+        """``quat="w x y z"`` (``parseVector4``: exactly 4 numbers, float), as (x, y, z, w)."""
+        if text is None:
+            return None
+        v = numbers(text)
+        if len(v) != 4:
+            return None
+        w, x, y, z = (f32(a) for a in v)
+        return _unit((x, y, z, w))
+
+    def finite(self, elem: Element, where: str, values: tuple[float, ...]) -> None:
+        if not all(math.isfinite(v) for v in values):
+            raise self.error(elem, where, f"numbers must be finite, got {values}")
+
+    def pose(self, elem: Element, where: str) -> Pose:
+        """A body's ``parseTransform``: ``pos`` and ``quat`` only."""
+        pos: Vec3 = (0.0, 0.0, 0.0)
+        if elem.get("pos") is not None:
+            v = numbers(elem.get("pos"))
+            if len(v) >= 3:
+                pos = (f32(v[0]), f32(v[1]), f32(v[2]))
+        quat = self.quat(elem.get("quat")) or IDENTITY_QUAT
+        self.finite(elem, where, (*pos, *quat))
+        return pos, quat
+
+    # ------------------------------------------------------------ top level
+
+    def read(self) -> list[_Model]:
+        root = self.root = read_scene_xml(self.src, "mjcf")
+        for elem in root.findall("default"):
+            self.parse_defaults(self.defaults, elem)
+        for elem in root.findall("compiler"):
+            self.angle = elem.get("angle") or "degree"
+            inertia = elem.get("inertiafromgeom")
+            if inertia and inertia[0] == "f":
+                self.inertia_from_geom = False
+            if elem.get("meshdir") is not None:
+                self.mesh_dir = elem.get("meshdir", "")
+        for elem in root.findall("asset"):
+            self.parse_assets(elem)
+        for tag in _IGNORED_TOP:
+            for elem in root.findall(tag):
+                self.file_ignored.append(f"line {line_of(elem)}: <{tag}>")
+        for elem in root.findall("body"):  # PyBullet reads a top-level <body>'s children too
+            self.parse_root_level(elem)
+        for elem in root.findall("worldbody"):
+            self.parse_root_level(elem)
+        return self.models
+
+    def parse_defaults(self, defaults: _Defaults, elem: Element) -> None:
+        for child in elem:
+            tag = child.tag
+            if "default" in tag:
+                name = child.get("class")
+                if name:
+                    self.parse_defaults(self.classes.setdefault(name, _Defaults()), child)
+            if tag == "asset":
+                self.parse_assets(child)
+            if tag == "joint" and child.get("limited") is not None:
+                defaults.limited = child.get("limited", "")
+            if tag == "geom":
+                if child.get("contype") is not None:
+                    defaults.group = int(number(child.get("contype")))
+                if child.get("conaffinity") is not None:
+                    defaults.mask = int(number(child.get("conaffinity")))
+                if child.get("rgba") is not None:
+                    defaults.rgba = child.get("rgba", "")
+                if child.get("condim") is not None:
+                    defaults.condim = int(number(child.get("condim")))
+                if child.get("friction") is not None:
+                    f = [f32(v) for v in numbers(child.get("friction"))]
+                    if len(f) > 0:
+                        defaults.lateral = f[0]
+                    if len(f) > 1:
+                        defaults.spinning = f[1]
+                    if len(f) > 2:
+                        defaults.rolling = f[2]
+
+    def parse_assets(self, elem: Element) -> None:
+        for child in elem:
+            if child.tag == "mesh" and child.get("name") and child.get("file"):
+                self.assets[child.get("name", "")] = self.mesh_dir + child.get("file", "")
+
+    def parse_root_level(self, elem: Element) -> None:
+        for child in elem:
+            if child.tag == "body":
+                model = _Model(line=line_of(child))
+                self.models.append(model)
+                self.parse_body(self.defaults, child, model, None)
+            elif child.tag == "geom":
+                model = _Model(line=line_of(child))
+                self.models.append(model)
+                link = _Link(child.get("name") or "anonymous", line_of(child))
+                model.links.append(link)
+                self.parse_geom(self.defaults, child, model, link)
+            elif child.tag not in ("site", "light", "camera"):
+                self.file_ignored.append(f"line {line_of(child)}: <{child.tag}> in <worldbody>")
+
+    # ------------------------------------------------------------ bodies
+
+    def create_link(self, model: _Model, name: str | None, line: int) -> _Link:
+        k = len(model.links)
+        link = _Link(name or f"link{len(self.models) - 1}_{k}", line, k)
+        model.links.append(link)
+        return link
+
+    def parse_body(
+        self, defaults: _Defaults, elem: Element, model: _Model, parent: _Link | None
+    ) -> None:
+        cur = replace(defaults)
+        cls = elem.get("childclass")
+        if cls and cls in self.classes:
+            cur = replace(self.classes[cls])
+        name = elem.get("name")
+        link = self.create_link(model, name, line_of(elem))
+        where = f"<body {name!r}>" if name else "<body>"
+        if not name:
+            self.uid += 1  # "anon%d"
+        for attr in _IGNORED_BODY_ATTRIBUTES:
+            if elem.get(attr) is not None:
+                model.ignored.append(f"line {line_of(elem)}: {where} {attr}")
+        inertial_pos: Vec3 = (0.0, 0.0, 0.0)
+        inertial_quat: Quat = IDENTITY_QUAT
+        link_transform = self.pose(elem, where)
+        mass_defined = False
+        mass = 0.0
+        has_joint = False
+        joint_trans: Pose = IDENTITY
+        new_parent = parent
+        for child in elem:
+            tag = child.tag
+            if tag == "inertial":
+                v = numbers(child.get("pos")) if child.get("pos") is not None else []
+                if len(v) >= 3:
+                    inertial_pos = (f32(v[0]), f32(v[1]), f32(v[2]))
+                q = self.quat(child.get("quat"))
+                if q is not None:
+                    inertial_quat = q
+                if child.get("mass") is not None:
+                    mass = number(child.get("mass"))
+                if child.get("diaginertia") is not None:
+                    link.file_diag = self.vec3(child.get("diaginertia"), (0.0, 0.0, 0.0))
+                mass_defined = True
+                self.finite(child, f"{where} <inertial>", (*inertial_pos, *inertial_quat, mass))
+                if mass < 0:
+                    raise self.error(child, f"{where} <inertial>", f"mass must be >= 0, got {mass}")
+            elif tag == "joint":
+                if not has_joint:
+                    jtype = child.get("type") or ""
+                    if new_parent is not None or jtype != "free":
+                        if new_parent is None:
+                            new_parent = self.create_link(model, None, line_of(child))
+                        dummy = self.create_link(model, None, line_of(child))
+                        joint_trans = self.parse_joint(
+                            child,
+                            model,
+                            new_parent,
+                            dummy,
+                            link_transform,
+                        )
+                        link_transform = transform_inverse(joint_trans)
+                        new_parent = dummy
+                        has_joint = True
+                    else:  # the root's free joint: PyBullet's free base
+                        self.note_joint_attributes(model, child)
+                else:
+                    assert new_parent is not None  # set by the first joint
+                    dummy = self.create_link(model, None, line_of(child))
+                    self.parse_joint(
+                        child,
+                        model,
+                        new_parent,
+                        dummy,
+                        transform_inverse(joint_trans),
+                    )
+                    new_parent = dummy
+            elif tag == "geom":
+                shift = self.parse_geom(cur, child, model, link)
+                if not mass_defined:
+                    inertial_pos = shift
+            elif tag == "body":
+                self.parse_body(cur, child, model, link)
+            elif tag not in ("light", "site", "camera"):
+                model.ignored.append(f"line {line_of(child)}: {where} <{tag}>")
+        link.transform = link_transform
+        if new_parent is not None:
+            model.joints.append(
+                _Joint(
+                    f"jointfix_{self.uid}_{new_parent.index}",
+                    "fixed",
+                    new_parent.name,
+                    link.name,
+                    link_transform,
+                    (1.0, 0.0, 0.0),
+                    0.0,
+                    -1.0,
+                    line_of(elem),
+                )
+            )
+            self.uid += 1
+        if not mass_defined:
+            mass = DENSITY * _volume(link.shapes)
+        link.inertial = (inertial_pos, inertial_quat)
+        link.mass = mass
+
+    def note_joint_attributes(self, model: _Model, elem: Element) -> None:
+        name = elem.get("name")
+        shown = f"<joint {name!r}>" if name else "<joint>"
+        for attr in IGNORED_JOINT_ATTRIBUTES:
+            if elem.get(attr) is not None:
+                model.ignored.append(f"line {line_of(elem)}: {shown} {attr}={elem.get(attr)!r}")
+
+    def parse_joint(
+        self, elem: Element, model: _Model, parent: _Link, child: _Link, parent_to_link: Pose
+    ) -> Pose:
+        """Add the joint from ``parent`` to ``child``; return its own ``pos``/``quat``."""
+        name = elem.get("name")
+        jtype = elem.get("type")
+        shown = f"<joint {name!r}>" if name else "<joint>"
+        self.note_joint_attributes(model, elem)
+        pos: Vec3 = (0.0, 0.0, 0.0)
+        if elem.get("pos") is not None:
+            v = numbers(elem.get("pos"))
+            if len(v) >= 3:
+                pos = (f32(v[0]), f32(v[1]), f32(v[2]))
+        quat: Quat = IDENTITY_QUAT
+        q = numbers(elem.get("quat")) if elem.get("quat") is not None else []
+        if len(q) == 4:  # PyBullet reads a joint's quat in another order than a body's
+            quat = _unit((f32(q[3]), f32(q[0]), f32(q[1]), f32(q[2])))
+        joint_trans: Pose = (pos, quat)
+        axis = self.vec3(elem.get("axis"), (1.0, 0.0, 0.0))
+        limited = elem.get("limited")
+        is_limited = (limited if limited is not None else self.defaults.limited) == "true"
+        kinds = {"fixed": "fixed", "slide": "prismatic", "hinge": "revolute"}
+        if jtype not in kinds:
+            detail = "has no type attribute" if jtype is None else f"joint type {jtype!r}"
+            if jtype in ("ball", "free"):
+                raise UnsupportedJointError(
+                    self.file,
+                    name or "<unnamed>",
+                    jtype,
+                    ["hinge", "slide", "fixed", "free (on a top-level body)"],
+                    line_of(elem),
+                )
+            raise self.error(
+                elem,
+                shown,
+                f"{detail}: PyBullet does not read it and drops the body's subtree; valid: "
+                "hinge, slide, fixed (free on a top-level body)",
+            )
+        kind = kinds[jtype]
+        if kind == "revolute" and not is_limited:
+            kind = "continuous"
+        lower, upper = 1.0, 0.0
+        if is_limited:
+            if elem.get("range") is None:
+                raise self.error(
+                    elem,
+                    shown,
+                    "limited but has no range attribute (PyBullet's importer crashes on it)",
+                )
+            r = numbers(elem.get("range"))
+            if len(r) == 2:
+                lo, hi = np.float32(r[0]), np.float32(r[1])
+                if self.angle == "degree" and kind == "revolute":
+                    lo = lo * _PI32 / np.float32(180)
+                    hi = hi * _PI32 / np.float32(180)
+                lower, upper = float(lo), float(hi)
+            else:
+                model.ignored.append(
+                    f"line {line_of(elem)}: {shown} range={elem.get('range')!r} (not 2 numbers)"
+                )
+        self.finite(elem, shown, (*pos, *quat, *axis, lower, upper))
+        if kind != "fixed" and max(abs(a) for a in axis) < 1e-12:
+            raise self.error(elem, f"{shown} axis", f"axis must not be zero, got {axis}")
+        if name is None:
+            name = f"joint{self.uid}_{child.index}_{len(model.joints)}"
+            self.uid += 1
+        model.joints.append(
+            _Joint(
+                name,
+                kind,
+                parent.name,
+                child.name,
+                transform_multiply(parent_to_link, joint_trans),
+                axis,
+                lower,
+                upper,
+                line_of(elem),
+            )
+        )
+        return joint_trans
+
+    # ------------------------------------------------------------ geoms
+
+    def parse_geom(self, d: _Defaults, elem: Element, model: _Model, link: _Link) -> Vec3:
+        """Add a geom to ``link``; return its inertial shift (a ``fromto``'s middle, else 0)."""
+        name = elem.get("name", "")
+        where = f"<geom {name!r}>" if name else "<geom>"
+        for attr in _IGNORED_GEOM_ATTRIBUTES:
+            if elem.get(attr) is not None:
+                model.ignored.append(f"line {line_of(elem)}: {where} {attr}={elem.get(attr)!r}")
+        condim = int(number(elem.get("condim"))) if elem.get("condim") is not None else d.condim
+        lateral = d.lateral
+        if elem.get("friction") is not None:
+            f = [f32(v) for v in numbers(elem.get("friction"))]
+            if len(f) > 0:
+                lateral = f[0]
+        link.lateral = lateral
+        # PyBullet keeps the defaults' spinning and rolling friction (a geom's own friction[1:]
+        # is read, then overwritten) and applies them once a geom of the link has condim > 3 (> 4)
+        if condim > 3 or link.spinning is not None:
+            link.spinning = d.spinning
+        if condim > 4 or link.rolling is not None:
+            link.rolling = d.rolling
+        pos: Vec3 = (0.0, 0.0, 0.0)
+        if elem.get("pos") is not None:
+            v = numbers(elem.get("pos"))
+            if len(v) >= 3:
+                pos = (f32(v[0]), f32(v[1]), f32(v[2]))
+        quat = self.quat(elem.get("quat")) or IDENTITY_QUAT
+        aa = numbers(elem.get("axisangle")) if elem.get("axisangle") is not None else []
+        if len(aa) == 4:  # axis and angle (radians, whatever <compiler angle>)
+            axis = np.array([f32(aa[0]), f32(aa[1]), f32(aa[2])])
+            norm = float(np.linalg.norm(axis))
+            if not norm > 0:
+                raise self.error(elem, f"{where} axisangle", "the axis must not be zero")
+            s = math.sin(0.5 * f32(aa[3])) / norm
+            quat = (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(0.5 * f32(aa[3])))
+            quat = _unit((float(quat[0]), float(quat[1]), float(quat[2]), float(quat[3])))
+        frame: Pose = (pos, quat)
+        rgba_text = elem.get("rgba") if elem.get("rgba") is not None else d.rgba
+        rgba_v = numbers(rgba_text) if rgba_text else []
+        rgba = (rgba_v[0], rgba_v[1], rgba_v[2], rgba_v[3]) if len(rgba_v) == 4 else None
+        size_text = elem.get("size")
+        gtype = elem.get("type")
+        shift: Vec3 = (0.0, 0.0, 0.0)
+        shape: _Shape | None = None
+        if gtype is None:  # PyBullet: "geom requires type" (MuJoCo's default is a sphere)
+            model.ignored.append(f"line {line_of(elem)}: {where} without type (no shape)")
+            return shift
+        if gtype in ("plane", "box"):
+            size = self.vec3(size_text, (1.0, 1.0, 1.0))
+            shape = _Shape(gtype, frame, half=size)
+        elif gtype == "sphere":
+            radius = 1.0 if size_text is None else number(size_text)  # 1: PyBullet's default
+            shape = _Shape("sphere", frame, radius=radius)
+        elif gtype in ("capsule", "cylinder"):
+            sizes = [f32(v) for v in numbers(size_text)]
+            radius, height = 2.0, 2.0  # PyBullet's "make it visible if something is wrong"
+            if sizes:
+                radius = sizes[0]
+                if len(sizes) > 1:
+                    height = 2.0 * sizes[1]
+            if elem.get("fromto") is not None:
+                v = numbers(elem.get("fromto"))
+                if len(v) >= 6:
+                    a = (f32(v[0]), f32(v[1]), f32(v[2]))
+                    b = (f32(v[3]), f32(v[4]), f32(v[5]))
+                else:
+                    a = b = (0.0, 0.0, 0.0)
+                shift = (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]))
+                length = math.dist(a, b)
+                shape = _Shape(
+                    gtype,
+                    frame,
+                    radius=radius,
+                    height=length,
+                    fromto=(a, b),
+                )
+            elif len(sizes) >= 2:
+                shape = _Shape(gtype, frame, radius=radius, height=height)
+            else:
+                model.ignored.append(
+                    f"line {line_of(elem)}: {where} {gtype} without fromto needs 2 sizes (no shape)"
+                )
+        elif gtype == "mesh":
+            asset = self.assets.get(elem.get("mesh", ""))
+            if asset is not None:
+                path, tried = find_mesh(asset, self.src.base_dir)
+                if not path.is_file():
+                    raise MeshNotFoundError(self.file, where, asset, str(tried[0]), line_of(elem))
+                if path.suffix.lower() not in (".obj", ".stl"):
+                    raise self.error(
+                        elem,
+                        where,
+                        f"mesh {asset!r}: PyBullet's MJCF importer reads .obj and .stl only",
+                    )
+                shape = _Shape("mesh", frame, mesh=path, mesh_uri=asset)
+            else:
+                model.ignored.append(
+                    f"line {line_of(elem)}: {where} mesh asset not found (no shape)"
+                )
+        else:
+            model.ignored.append(f"line {line_of(elem)}: {where} type {gtype!r} (no shape)")
+        if shape is not None:
+            shape.rgba, shape.name, shape.line = rgba, name, line_of(elem)
+            self.finite(
+                elem,
+                where,
+                (*shape.frame[0], *shape.frame[1], shape.radius, *shape.half, shape.height),
+            )
+            if min(shape.radius, *shape.half, shape.height) < 0:
+                raise self.error(elem, f"{where} size", "sizes must be >= 0")
+            link.shapes.append(shape)
+            group = d.group
+            mask = d.mask
+            if elem.get("contype") is not None:
+                group = int(number(elem.get("contype")))
+            if elem.get("conaffinity") is not None:
+                mask = int(number(elem.get("conaffinity")))
+            link.filter = (group, mask)
+        return shift
+
+
+def _volume(shapes: list[_Shape]) -> float:
+    """PyBullet's ``computeVolume``: spheres, boxes, cylinders and capsules (meshes and planes
+    count nothing)."""
+    total = 0.0
+    for s in shapes:
+        if s.kind == "sphere":
+            total += 4.0 / 3.0 * math.pi * s.radius**3
+        elif s.kind == "box":
+            total += (2 * s.half[0]) * (2 * s.half[1]) * (2 * s.half[2])
+        elif s.kind in ("capsule", "cylinder"):
+            r = s.radius
+            if s.kind == "capsule":
+                total += 4.0 / 3.0 * math.pi * r * r * r
+            total += math.pi * r * r * s.height
+    return total
+
+
+# ---------------------------------------------------------------- moments
+
+
+def _box_moments(mass: float, lengths: np.ndarray) -> Vec3:
+    lx, ly, lz = (float(v) for v in lengths)
+    k = mass / 12.0
+    return (k * (ly * ly + lz * lz), k * (lx * lx + lz * lz), k * (lx * lx + ly * ly))
+
+
+def _local_box(s: _Shape) -> tuple[np.ndarray, np.ndarray]:
+    """(centre, half extents) of a shape's box in its geom frame, margins included as Bullet's
+    ``getAabb`` counts them."""
+    if s.kind == "sphere":
+        return np.zeros(3), np.full(3, s.radius)
+    if s.kind in ("box", "plane"):
+        if s.kind == "plane":
+            return np.zeros(3), np.full(3, 1e30)
+        return np.zeros(3), np.asarray(s.half, dtype=float)
+    if s.kind == "mesh":
+        from .inertia import _bullet_hull_points
+        from .meshes import mesh_vertices
+
+        assert s.mesh is not None
+        v = mesh_vertices(s.mesh)
+        v = v[np.isfinite(v).all(axis=1)]
+        grow = 2 * MESH_MARGIN + (MESH_MARGIN if s.mesh.suffix.lower() == ".obj" else 0.0)
+        if len(v) == 0:
+            return np.zeros(3), np.full(3, grow)
+        if s.mesh.suffix.lower() != ".obj":
+            v = _bullet_hull_points(v)
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        return 0.5 * (lo + hi), 0.5 * (hi - lo) + grow
+    r = s.radius
+    if s.fromto is None:
+        if s.kind == "capsule":
+            return np.zeros(3), np.array([r, r, r + 0.5 * s.height])
+        return np.zeros(3), np.array([r, r, 0.5 * s.height])
+    a, b = np.asarray(s.fromto[0]), np.asarray(s.fromto[1])
+    if s.kind == "capsule":  # a btMultiSphereShape: its cached box, then its margin once more
+        lo, hi = np.minimum(a, b) - r, np.maximum(a, b) + r
+        return 0.5 * (lo + hi), 0.5 * (hi - lo) + CONVEX_MARGIN
+    # a cylinder along fromto: a compound (margin 0) of one btCylinderShapeZ, turned
+    mid = 0.5 * (a + b)
+    diff = b - a
+    arc = IDENTITY_QUAT
+    if float(diff @ diff) > np.finfo(float).eps:
+        arc = _shortest_arc(diff / np.linalg.norm(diff))
+    half = np.abs(quat_to_matrix(arc)) @ np.array([r, r, 0.5 * s.height])
+    return mid, half
+
+
+def _alone_moments(s: _Shape, mass: float) -> Vec3:
+    """``calculateLocalInertia`` of the shape itself (it is its link's only shape, in the
+    inertial frame)."""
+    if s.kind == "plane":
+        return (0.0, 0.0, 0.0)
+    if s.kind == "sphere":
+        v = 0.4 * mass * s.radius * s.radius
+        return (v, v, v)
+    if s.kind == "cylinder" and s.fromto is None:  # btCylinderShapeZ's solid cylinder
+        r2 = s.radius * s.radius
+        h2 = s.height * s.height
+        t1 = mass / 12.0 * h2 + mass / 4.0 * r2
+        return (t1, t1, mass / 2.0 * r2)
+    if s.kind == "capsule" and s.fromto is not None:  # the multi-sphere's cached box
+        a, b = np.asarray(s.fromto[0]), np.asarray(s.fromto[1])
+        lo, hi = np.minimum(a, b) - s.radius, np.maximum(a, b) + s.radius
+        return _box_moments(mass, hi - lo)
+    return _box_moments(mass, 2.0 * _local_box(s)[1])
+
+
+def bullet_moments(shapes: list[_Shape], mass: float, inertial: Pose) -> Vec3:
+    """PyBullet's principal moments of an MJCF link of ``mass`` with ``shapes``, in its
+    inertial frame ``inertial`` (``calculateLocalInertia`` of the link's compound shape, whose
+    margin is 0): one shape in that very frame gives its own rule (a solid sphere or cylinder, a
+    box for the rest); otherwise the box inertia of the box around every shape's box turned into
+    the inertial frame (a ``fromto`` capsule's box grown by 4 cm a side, Bullet's default
+    margin of its multi-sphere shape)."""
+    if mass == 0 or not shapes:
+        return (0.0, 0.0, 0.0)
+    inv = transform_inverse(inertial)
+    placed = [(s, transform_multiply(inv, s.frame)) for s in shapes]
+    if len(placed) == 1:
+        s, (pos, quat) = placed[0]
+        if tuple(pos) == (0.0, 0.0, 0.0) and tuple(quat) == IDENTITY_QUAT:
+            return _alone_moments(s, mass)
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for s, (pos, quat) in placed:
+        centre, half = _local_box(s)
+        rot = quat_to_matrix(quat)
+        c = rot @ centre + np.asarray(pos)
+        h = half if s.kind in ("sphere", "plane") else np.abs(rot) @ half
+        lo = np.minimum(lo, c - h)
+        hi = np.maximum(hi, c + h)
+    return _box_moments(mass, hi - lo)
+
+
+# ---------------------------------------------------------------- core model
+
+
+def _geometry(s: _Shape) -> Geometry:
+    """The shape as the core's (and MuJoCo's) geometry: a ``fromto`` capsule or cylinder is
+    one along the segment, in the geom's frame."""
+    pos, quat = s.frame
+    size: tuple[float, ...]
+    if s.kind == "sphere":
+        kind, size = "sphere", (s.radius,)
+    elif s.kind == "box":
+        kind, size = "box", tuple(2.0 * v for v in s.half)
+    elif s.kind == "plane":
+        kind, size = "plane", (0.0, 0.0, 1.0)
+    elif s.kind == "mesh":
+        kind, size = "mesh", (1.0, 1.0, 1.0)
+    else:
+        kind, size = s.kind, (s.radius, s.height)
+        if s.fromto is not None:
+            a, b = np.asarray(s.fromto[0]), np.asarray(s.fromto[1])
+            diff = b - a
+            arc = IDENTITY_QUAT
+            if float(diff @ diff) > np.finfo(float).eps:
+                arc = _shortest_arc(diff / np.linalg.norm(diff))
+            m = 0.5 * (a + b)
+            pos, quat = transform_multiply(
+                (pos, quat), ((float(m[0]), float(m[1]), float(m[2])), arc)
+            )
+    return Geometry(
+        kind,
+        (pos[0], pos[1], pos[2]),
+        rpy_from_quat(quat),
+        size,
+        mesh_path=s.mesh,
+        mesh_uri=s.mesh_uri,
+        rgba=s.rgba,
+        name=s.name,
+        origin_quat=(quat[0], quat[1], quat[2], quat[3]),
+        line=s.line,
+    )
+
+
+def _order(model: _Model, file: str) -> tuple[list[_Link], list[_Joint]]:
+    """PyBullet's order: the root (the first link without a parent), then depth first, each
+    link's children in the order their joints were made."""
+    child_of = {j.child: j for j in model.joints}
+    roots = [link for link in model.links if link.name not in child_of]
+    if len(roots) != 1:  # pragma: no cover - refused joint types make the only orphans
+        raise UrdfStructureError(file, "<body>", f"{len(roots)} roots in one body", model.line)
+    by_name = {link.name: link for link in model.links}
+    children: dict[str, list[_Joint]] = {link.name: [] for link in model.links}
+    for j in model.joints:
+        children[j.parent].append(j)
+    links = [roots[0]]
+    joints: list[_Joint] = []
+    stack = list(reversed(children[roots[0].name]))
+    while stack:
+        j = stack.pop()
+        joints.append(j)
+        links.append(by_name[j.child])
+        stack.extend(reversed(children[j.child]))
+    return links, joints
+
+
+def _scene_body(
+    reader: _Reader, model: _Model, index: int, model_name: str, src: UrdfSource
+) -> SceneBody:
+    file = reader.file
+    check_names(file, "body", [(link.name, link.line) for link in model.links])
+    check_names(file, "joint", [(j.name, j.line) for j in model.joints])
+    ordered_links, ordered_joints = _order(model, file)
+    links: list[Link] = []
+    filters: dict[str, tuple[int | None, int | None]] = {}
+    for k, bl in enumerate(ordered_links):
+        pos, quat = bl.inertial
+        moments = bullet_moments(bl.shapes, bl.mass, bl.inertial)
+        diag = bl.file_diag if not reader.inertia_from_geom else (0.0, 0.0, 0.0)
+        inertial = Inertial(
+            pos,
+            rpy_from_quat(quat),
+            bl.mass,
+            (diag[0], 0.0, 0.0, diag[1], 0.0, diag[2]),
+            True,
+            origin_quat=quat,
+            line=bl.line,
+            moments=moments,
+        )
+        shapes = [_geometry(s) for s in bl.shapes]
+        contact = Contact(
+            lateral_friction=bl.lateral,
+            rolling_friction=bl.rolling,
+            spinning_friction=bl.spinning,
+        )
+        links.append(Link(bl.name, inertial, list(shapes), shapes, contact, k - 1, bl.line))
+        if bl.filter is not None:
+            filters[bl.name] = bl.filter
+    joints: list[Joint] = []
+    for k, bj in enumerate(ordered_joints):
+        (xyz, quat) = bj.origin
+        joints.append(
+            Joint(
+                name=bj.name,
+                type=bj.type,
+                parent=bj.parent,
+                child=bj.child,
+                origin_xyz=xyz,
+                origin_rpy=rpy_from_quat(quat),
+                axis=bj.axis,
+                lower=bj.lower,
+                upper=bj.upper,
+                effort=0.0,
+                velocity=0.0,
+                damping=0.0,
+                friction=0.0,
+                has_limit=bj.type in ("revolute", "prismatic") and bj.lower <= bj.upper,
+                index=k,
+                origin_quat=quat,
+                line=bj.line,
+            )
+        )
+    root = ordered_links[0]
+    # PyBullet puts an MJCF base's inertial frame where the root's frame is
+    base = transform_multiply(root.transform, transform_inverse(root.inertial))
+    return SceneBody(
+        model_name,
+        src,
+        links,
+        joints,
+        [],
+        file_format="mjcf",
+        body_index=index,
+        base_position=base[0],
+        base_orientation=base[1],
+        collision_filters=filters,
+        ignored=reader.file_ignored + model.ignored,
+    )
+
+
+def parse_mjcf(src: UrdfSource) -> list[SceneBody]:
+    """The bodies ``p.loadMJCF`` creates from the file (see the module docstring), in its
+    order. Raises UrdfParseError, UrdfStructureError, MeshNotFoundError or
+    UnsupportedJointError naming the file, the line and the element."""
+    reader = _Reader(src)
+    models = reader.read()
+    root = reader.root
+    model_name = root.get("model", "")
+    if not models:
+        raise UrdfStructureError(
+            reader.file,
+            "<mujoco>",
+            "has no <body> or <geom> in <worldbody>: PyBullet creates no body from it",
+            line_of(root),
+        )
+    return [_scene_body(reader, m, k, model_name, src) for k, m in enumerate(models)]

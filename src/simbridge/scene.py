@@ -1,0 +1,217 @@
+"""MJCF and SDF files: the bodies PyBullet creates from one file, as core models.
+
+``p.loadMJCF`` and ``p.loadSDF`` create several bodies from one file (one per top-level MJCF
+``<body>`` or ``<geom>``, one per SDF ``<model>``), each a multibody with PyBullet's own link and
+joint numbering. :func:`parse_scene` reads a file into one :class:`SceneBody` per body PyBullet
+creates, in its order, with its link and joint numbering and names, so that every backend
+loads them through its ordinary path (:meth:`simbridge.backend.Backend.load_scene`); the
+readers are :mod:`simbridge.mjcf` and :mod:`simbridge.sdf`.
+
+A :class:`SceneBody` is a :class:`~simbridge.urdf_model.UrdfModel` (links, joints, inertials,
+shapes, contact values) plus where PyBullet puts its base: ``base_position`` and
+``base_orientation`` place the root's link frame in the world, as ``load``'s pose does for a
+URDF. Lengths in metres, angles in radians, quaternions (x, y, z, w).
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+import xml.parsers.expat as expat
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .exceptions import UrdfNotFoundError, UrdfParseError, UrdfStructureError
+from .types import Quat
+from .urdf_model import UrdfModel, Vec3
+from .urdf_source import UrdfSource, resolve_mesh, search_path
+from .urdf_xml import XmlElement, c_atof, pybullet_numbers
+
+__all__ = [
+    "SceneBody",
+    "SCENE_FORMATS",
+    "parse_scene",
+    "resolve_scene_source",
+    "read_scene_xml",
+    "f32",
+    "line_of",
+    "numbers",
+]
+
+SCENE_FORMATS = ("mjcf", "sdf")
+_ROOT_TAG = {"mjcf": "mujoco", "sdf": "sdf"}
+_KIND = {"mjcf": "MJCF", "sdf": "SDF"}
+
+
+@dataclass
+class SceneBody(UrdfModel):
+    """One body PyBullet creates from an MJCF or SDF file.
+
+    ``links``/``joints`` follow :class:`~simbridge.urdf_model.UrdfModel`'s conventions
+    (``links[0]`` the root, PyBullet link -1; joint i moves link i). ``base_position`` and
+    ``base_orientation`` (x, y, z, w) place the root link's frame in the world where PyBullet
+    puts it. ``file_format`` is ``"mjcf"`` or ``"sdf"``; ``body_index`` the body's place among
+    the file's bodies (0-based, PyBullet's order); ``collision_filters`` each link's collision
+    group and mask by link name (the file's ``contype``/``conaffinity``, SDF's ``<collision
+    group mask>``; links not listed take PyBullet's defaults); ``ignored`` what the file says that
+    PyBullet's importer does not read, one line each (with the element's line).
+    """
+
+    file_format: str = "mjcf"
+    body_index: int = 0
+    base_position: Vec3 = (0.0, 0.0, 0.0)
+    base_orientation: Quat = (0.0, 0.0, 0.0, 1.0)
+    collision_filters: dict[str, tuple[int | None, int | None]] = field(default_factory=dict)
+    ignored: list[str] = field(default_factory=list)
+
+
+def line_of(elem: ET.Element) -> int:
+    """The source line of an element read by :func:`read_scene_xml` (1-based)."""
+    return int(getattr(elem, "line", 0))
+
+
+def f32(value: float) -> float:
+    """``value`` rounded to float32 (PyBullet's MJCF importer reads vectors into float arrays)."""
+    return float(np.float32(value))
+
+
+def numbers(text: str | None) -> list[float]:
+    """PyBullet's reading of a list of numbers: split at spaces only, each piece through C's
+    ``atof``."""
+    return pybullet_numbers(text or "")[0]
+
+
+def number(text: str | None) -> float:
+    """C's ``atof`` of the whole text (PyBullet's ``urdfLexicalCast``)."""
+    return c_atof(text or "")[0]
+
+
+def resolve_scene_source(source: str | os.PathLike[str], kind: str) -> UrdfSource:
+    """A path, a name on the search path (this package's robots, then pybullet_data, e.g.
+    ``"mjcf/ant.xml"``), or the file's XML text."""
+    label = _KIND[kind]
+    if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
+        return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), f"<{label} text>")
+    if not isinstance(source, (str, os.PathLike)):
+        raise UrdfNotFoundError(repr(source), ["a path, a name or XML text was expected"], label)
+    text_source = str(source)
+    shown = text_source if len(text_source) <= 120 else f"{text_source[:100]}..."
+    candidate = Path(source).expanduser() if "\0" not in text_source else None
+    tried: list[str] = []
+    found: Path | None = None
+    if candidate is not None:
+        if _is_file(candidate):
+            found = candidate
+        else:
+            tried.append(str(candidate.absolute()))
+            if not candidate.is_absolute() and len(text_source) <= 255:
+                for folder in search_path():
+                    path = folder / candidate
+                    if _is_file(path):
+                        found = path
+                        break
+                    tried.append(str(path))
+    if found is None:
+        raise UrdfNotFoundError(shown, tried, label)
+    found = found.resolve()
+    try:
+        data = found.read_bytes()
+    except OSError as exc:
+        raise UrdfParseError(str(found), f"cannot read the file: {exc}", label) from exc
+    text = data.decode("utf-8", errors="surrogateescape")
+    return UrdfSource(text, found, found.parent, str(found))
+
+
+def _is_file(path: Path) -> bool:
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
+    """The file's root element (``<mujoco>`` or ``<sdf>``), every element with its source line.
+    Raises UrdfParseError (line and column) for XML PyBullet's parser refuses too, and
+    UrdfStructureError when the root element is another one (PyBullet: "Cannot find <mujoco>
+    root element", "expected an sdf element")."""
+    data = src.text.encode("utf-8", errors="surrogateescape")
+    parser = expat.ParserCreate()
+    builder = ET.TreeBuilder(element_factory=XmlElement)
+
+    def start(tag: str, attrs: dict[str, str]) -> None:
+        elem = builder.start(tag, attrs)
+        elem.line = parser.CurrentLineNumber  # type: ignore[attr-defined]
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = builder.end
+    parser.CharacterDataHandler = builder.data
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        raise UrdfParseError(
+            src.display_name,
+            f"{expat.ErrorString(exc.code)}: line {exc.lineno}, column {exc.offset} "
+            "(PyBullet's parser refuses it too)",
+            _KIND[kind],
+        ) from None
+    root: XmlElement = builder.close()  # type: ignore[assignment]
+    want = _ROOT_TAG[kind]
+    if root.tag != want:
+        raise UrdfStructureError(
+            src.display_name,
+            f"<{root.tag}>",
+            f"the root element of an {_KIND[kind]} file must be <{want}> (PyBullet refuses it too)",
+            root.line,
+        )
+    return root
+
+
+def parse_scene(source: str | os.PathLike[str], kind: str) -> list[SceneBody]:
+    """The bodies PyBullet creates from an MJCF (``kind="mjcf"``) or SDF (``"sdf"``) file, in
+    its order. See :func:`simbridge.mjcf.parse_mjcf` and :func:`simbridge.sdf.parse_sdf`."""
+    src = resolve_scene_source(source, kind)
+    if kind == "mjcf":
+        from .mjcf import parse_mjcf
+
+        return parse_mjcf(src)
+    from .sdf import parse_sdf
+
+    return parse_sdf(src)
+
+
+def find_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
+    """:func:`~simbridge.urdf_source.resolve_mesh`, and where PyBullet also looks: it joins
+    every folder it tries with the name as written, so ``/meshes/a.stl`` is found as
+    ``meshes/a.stl`` beside the file (bullet3 ``UrdfFindMeshFile.h``; pybullet_data's
+    ``kuka_with_gripper.sdf`` writes its meshes so)."""
+    path, tried = resolve_mesh(uri, base_dir)
+    if path.is_file():
+        return path, tried
+    bare = uri
+    for prefix in ("file://", "model://"):
+        if bare.startswith(prefix):
+            bare = bare[len(prefix) :]
+    if os.path.isabs(bare):
+        again, more = resolve_mesh(bare.lstrip("/\\"), base_dir)
+        if again.is_file():
+            return again, tried + more
+    return path, tried
+
+
+def check_names(file: str, what: str, names: Sequence[tuple[str, int]]) -> None:
+    """Refuse a name used twice in one body: PyBullet keys links and joints by name and keeps
+    only the last of a name (silently dropping the other from its tree)."""
+    seen: dict[str, int] = {}
+    for name, line in names:
+        if name in seen:
+            raise UrdfStructureError(
+                file,
+                f"{what} {name!r}",
+                f"the name is used twice in one body (also line {seen[name]}); PyBullet keeps "
+                "only one of them",
+                line or None,
+            )
+        seen[name] = line
