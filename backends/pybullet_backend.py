@@ -42,6 +42,7 @@ from simbridge.types import (
     DynamicsInfo,
     JointCommands,
     JointInfo,
+    JointStateMultiDof,
     JointStates,
     JointType,
     LinkState,
@@ -76,6 +77,21 @@ _CHECK_EVERY = 8
 # velocity 0 and takes no reset or motor, silently. Such bodies are refused when loaded.
 MAX_BODY_JOINTS = 127
 MAX_BODY_MOVABLE_JOINTS = 121
+
+# PyBullet's spherical joint motor at load (PhysicsServerCommandProcessor::createJointMotors): a
+# btMultiBodySphericalJointMotor holding the identity with kp 0.2 and an impulse of 1000 N·m·s
+# per step per axis (the MuJoCo backend's motors.py reproduces it)
+SPHERICAL_BRAKE_KP = 0.2
+SPHERICAL_BRAKE_IMPULSE = 1000.0
+
+# PyBullet's removeBody keeps the body's collision shapes until the world is reset (r2d2: 0.6 MB
+# per load/step/remove cycle, raw PyBullet alike; resetSimulation frees them, 0.5 ms on an empty
+# world; python bench/soak.py). When remove() empties the world after this many removals since
+# the engine's world was new, and the ids PyBullet would hand out next are a new world's (0, 1,
+# 2, ...: the bodies were removed last-loaded first), the engine's world is made new: nothing
+# the Sim shows changes (ids, time, settings), and the memory stays bounded (r2d2 loaded and
+# removed 1000 times: 20 MB over the first cycles, then flat).
+RECYCLE_AFTER_REMOVALS = 32
 
 # PyBullet's XML reader (tinyxml2) refuses a file whose elements nest deeper than this, <robot>
 # counting 1 (measured: 98 loads, 99 is XML_ELEMENT_DEPTH_EXCEEDED)
@@ -294,6 +310,7 @@ class PyBulletBackend(Backend):
                 self._c = p.connect(p.DIRECT)
         self._dt = profile.timestep
         self._steps = 0
+        self._check_every = _CHECK_EVERY  # bench/divergence.py times other cadences
         self._next_check = _CHECK_EVERY
         self._bodies: dict[int, _Body] = {}
         # the last velocity command sent: (joints, body, target, max_force). PyBullet's motor
@@ -302,6 +319,11 @@ class PyBulletBackend(Backend):
         # load, remove or reset forgets it.
         self._last_velocity: tuple[Any, ...] | None = None
         self._records = Records()  # the commands given and saved states (pybullet_state.py)
+        # PyBullet's pool of body ids: the freed ones (a stack: the last freed is handed out
+        # first), ids below _fresh handed out since the world was new, removals since then
+        self._freed: list[int] = []
+        self._fresh = 0
+        self._removed = 0
         self._configure()
 
     def _configure(self) -> None:
@@ -341,6 +363,9 @@ class PyBulletBackend(Backend):
             )
         with self._idle():
             body = self._load(model, base_position, base_orientation, fixed_base, options)
+            if body in self._freed:  # PyBullet's pool: the last freed id, or a fresh one
+                self._freed.remove(body)
+            self._fresh = max(self._fresh, body + 1)
             self._next_check = self._steps + 1  # a new model: probed after its first step
             return body
 
@@ -422,7 +447,21 @@ class PyBulletBackend(Backend):
             brake = {i: 1.0 / self._dt for i in info.movable}
         else:
             brake = {j.index: j.friction for j in model.joints if j.type != "fixed"}
-        weak = [i for i in info.movable if info.effort[i] < brake[i]]
+        balls = {i for i in info.movable if info.table[i].type == JointType.SPHERICAL}
+        if self.profile.joint_brake == "pybullet":  # PyBullet's spherical motor at load
+            brake.update({i: SPHERICAL_BRAKE_IMPULSE / self._dt for i in balls})
+        weak = [i for i in info.movable if info.effort[i] < brake[i] and i not in balls]
+        weak_balls = [i for i in info.movable if info.effort[i] < brake[i] and i in balls]
+        if weak_balls:  # the same motor (kp 0.2 or the friction brake), within the effort
+            kp = SPHERICAL_BRAKE_KP if self.profile.joint_brake == "pybullet" else 0.0
+            self._spherical_motor(
+                body,
+                weak_balls,
+                [[0.0, 0.0, 0.0, 1.0]] * len(weak_balls),
+                [[info.effort[i]] * 3 for i in weak_balls],
+                [[kp] * 3] * len(weak_balls),
+                [[1.0] * 3] * len(weak_balls),
+            )
         if weak:
             p.setJointMotorControlArray(
                 body,
@@ -530,7 +569,17 @@ class PyBulletBackend(Backend):
                 if j.damping != 0.0:
                     p.changeDynamics(body, j.index, jointDamping=0.0, physicsClientId=c)
         if prof.joint_brake == "urdf_friction":
-            movable = [j for j in model.joints if j.type != "fixed"]
+            balls = [j for j in model.joints if j.type == "spherical"]
+            if balls:  # PyBullet's spherical motor, made a brake with the file's friction
+                self._spherical_motor(
+                    body,
+                    [j.index for j in balls],
+                    [[0.0, 0.0, 0.0, 1.0]] * len(balls),
+                    [[j.friction] * 3 for j in balls],
+                    [[0.0] * 3] * len(balls),
+                    [[1.0] * 3] * len(balls),
+                )
+            movable = [j for j in model.joints if j.type not in ("fixed", "spherical")]
             if movable:
                 p.setJointMotorControlArray(
                     body,
@@ -559,6 +608,25 @@ class PyBulletBackend(Backend):
             p.removeBody(body, physicsClientId=self._c)
             del self._bodies[body]
             self._records.removed(body)
+            self._freed.append(body)
+            self._removed += 1
+            if (
+                not self._bodies
+                and self._removed >= RECYCLE_AFTER_REMOVALS
+                and self._freed == list(range(self._fresh - 1, -1, -1))
+            ):
+                self._renew_world()
+
+    def _renew_world(self) -> None:
+        """An empty world made new (resetSimulation frees what removeBody keeps), with the
+        same settings, time and next body ids; saved states of the old one are dropped."""
+        self._last_velocity = None
+        p.resetSimulation(physicsClientId=self._c)
+        self._configure()
+        self._records.reset()
+        self._freed.clear()
+        self._fresh = 0
+        self._removed = 0
 
     def reset(self) -> None:
         with self._idle():
@@ -571,6 +639,9 @@ class PyBulletBackend(Backend):
         self._configure()
         self._bodies.clear()
         self._records.reset()
+        self._freed.clear()
+        self._fresh = 0
+        self._removed = 0
         self._steps = 0
         self._next_check = _CHECK_EVERY
         self._checked_at = 0.0
@@ -602,7 +673,7 @@ class PyBulletBackend(Backend):
     def _probe(self) -> None:
         """Probe every body for a non-finite state (one engine call per body that can move:
         a free base's pose; a fixed base's movable leaf joints, see _Body)."""
-        self._next_check = self._steps + _CHECK_EVERY
+        self._next_check = self._steps + self._check_every
         c = self._c
         for body, info in self._bodies.items():
             if info.free:
@@ -856,6 +927,92 @@ class PyBulletBackend(Backend):
             body, joints.tolist(), p.TORQUE_CONTROL, forces=torque, physicsClientId=self._c
         )
         self._records.torque(self._steps, body, joints, torque)
+
+    # ---------------------------------------------------------------- spherical joints
+
+    def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        if self._diverged is not None:
+            raise self._diverged
+        lock = self._stepping
+        if not lock.acquire(False):
+            raise SimBusyError()
+        try:
+            rows = p.getJointStatesMultiDof(body, joints.tolist(), physicsClientId=self._c)
+        finally:
+            lock.release()
+        out = [JointStateMultiDof(tuple(r[0]), tuple(r[1]), tuple(r[3])) for r in rows]
+        if not _all_finite(*(x for r in out for x in r)):
+            self._diverge(f"body {body} joint states")
+        return out
+
+    @_exclusive
+    def reset_joint_state_multi_dof(
+        self,
+        body: int,
+        joints: np.ndarray,
+        positions: list[list[float]],
+        velocities: list[list[float]],
+    ) -> None:
+        c = self._c
+        for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
+            p.resetJointStateMultiDof(body, j, q, v, physicsClientId=c)
+        self._next_check = self._steps + 1  # a teleport: probed after the next step
+
+    @_exclusive
+    def set_joint_motor_multi_dof(
+        self,
+        body: int,
+        joints: np.ndarray,
+        mode: MotorMode,
+        targets: list[list[float]],
+        max_force: list[list[float]],
+        kp: list[list[float]],
+        kd: list[list[float]],
+    ) -> None:
+        self._last_velocity = None
+        self._spherical_motor(body, joints.tolist(), targets, max_force, kp, kd)
+
+    def _spherical_motor(
+        self,
+        body: int,
+        joints: list[int],
+        targets: list[list[float]],
+        max_force: list[list[float]],
+        kp: list[list[float]],
+        kd: list[list[float]],
+    ) -> None:
+        """setJointMotorControlMultiDof's POSITION_CONTROL with every gain and force a list of
+        3 (PyBullet takes them per axis only then: a single kp makes force[0] every axis's);
+        ``damping`` is the velocity term the motor reads (velocityGain is read by nothing)."""
+        info = self._bodies.get(body)  # None while loading (the profile's brake)
+        effort = info.effort if info is not None else None
+        for j, q, f, a, b in zip(joints, targets, max_force, kp, kd, strict=True):
+            if effort is not None:
+                f = [min(x, effort[j]) for x in f]
+            p.setJointMotorControlMultiDof(
+                body,
+                j,
+                p.POSITION_CONTROL,
+                targetPosition=q,
+                positionGain=a,
+                velocityGain=[1.0, 1.0, 1.0],
+                force=f,
+                damping=b,
+                physicsClientId=self._c,
+            )
+
+    @_exclusive
+    def set_joint_torque_multi_dof(
+        self, body: int, joints: np.ndarray, torques: list[list[float]]
+    ) -> None:
+        self._last_velocity = None
+        effort = self._bodies[body].effort
+        for j, t in zip(joints.tolist(), torques, strict=True):
+            if effort is not None:  # each command within the effort, as on MuJoCo
+                t = [max(-effort[j], min(x, effort[j])) for x in t]
+            p.setJointMotorControlMultiDof(
+                body, j, p.TORQUE_CONTROL, force=t, physicsClientId=self._c
+            )
 
     # ---------------------------------------------------------------- description
 

@@ -1,0 +1,178 @@
+"""What the divergence check costs a step: raw step, raw step + the check, and the layer's step
+with and without it, side by side in one run.
+
+    python bench/divergence.py                 # r2d2 on the plane, a fixed KUKA iiwa
+    python bench/divergence.py --quick --repeats 3
+
+PyBullet keeps a NaN state and steps on, so the PyBullet backend checks for it itself: every
+state read checks the numbers it returns (a few float additions: no read hands out a NaN), and
+every body is probed with one engine call (a free base's pose, a fixed base's movable leaf
+joints) after every 8th step and after the first step after a load, a teleport or a restore.
+The table gives, per world, medians over repeats (the columns of a repeat run back to back on
+identical worlds, so the machine's load falls on all of them alike):
+
+* raw: ``p.stepSimulation`` alone;
+* raw + probe: the same and the backend's probe after every step (what checking at every step
+  would cost);
+* layer, no check: ``Sim.step()`` with the probe switched off (reads still check themselves);
+* layer: ``Sim.step()`` as shipped (probe every 8th step); the ratio to "no check" is the
+  check's cost (target: at most 1.02);
+* layer, every step: ``Sim.step()`` probing after every step.
+
+MuJoCo needs no probe of the layer's: ``mj_step`` checks positions, velocities and accelerations
+itself (mj_checkPos, mj_checkVel, mj_checkAcc, in raw MuJoCo too: a bad value warns and resets
+the state), and the compiled step loop reads MuJoCo's warning counters once per call, which the
+backend turns into SimulationDivergedError.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import platform
+import statistics
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pybullet as p
+import pybullet_data
+
+import simbridge
+
+DATA = Path(pybullet_data.getDataPath())
+WHEELS = [2, 3, 6, 7]
+
+
+def _raw_world(world: str) -> tuple[int, int, list[int]]:
+    """A raw PyBullet client with the world loaded and settled: (client, body, probe joints;
+    empty for a free base)."""
+    c = p.connect(p.DIRECT)
+    p.setGravity(0, 0, -9.8, physicsClientId=c)
+    p.setTimeStep(1 / 240, physicsClientId=c)
+    if world == "r2d2":
+        p.loadURDF(str(DATA / "plane.urdf"), physicsClientId=c)
+        body = p.loadURDF(str(DATA / "r2d2.urdf"), (0, 0, 0.5), physicsClientId=c)
+        p.setJointMotorControlArray(
+            body,
+            WHEELS,
+            p.VELOCITY_CONTROL,
+            targetVelocities=[-5.0] * 4,
+            forces=[10.0] * 4,
+            physicsClientId=c,
+        )
+        leaves: list[int] = []
+    else:
+        body = p.loadURDF(str(DATA / "kuka_iiwa/model.urdf"), useFixedBase=True, physicsClientId=c)
+        p.setJointMotorControlArray(
+            body,
+            list(range(7)),
+            p.POSITION_CONTROL,
+            targetPositions=[0.3] * 7,
+            forces=[300.0] * 7,
+            physicsClientId=c,
+        )
+        leaves = [6]
+    for _ in range(240):
+        p.stepSimulation(physicsClientId=c)
+    return c, body, leaves
+
+
+def _sim_world(world: str, every: int) -> simbridge.Sim:
+    sim = simbridge.Sim("pybullet")
+    if world == "r2d2":
+        sim.load_urdf("plane.urdf")
+        body = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+        sim.set_joint_velocity(body, WHEELS, -5.0, max_force=10.0)
+    else:
+        body = sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True)
+        sim.set_joint_position(body, list(range(7)), 0.3, max_force=300.0)
+    sim.step(240)
+    sim._b._check_every = every  # type: ignore[attr-defined]
+    sim._b._next_check = sim._b._steps + every  # type: ignore[attr-defined]
+    return sim
+
+
+def columns(world: str, steps: int) -> dict[str, Callable[[], float]]:
+    """The timed loops of one world: each returns seconds per step."""
+    c1, _, _ = _raw_world(world)
+    c2, body2, leaves2 = _raw_world(world)
+    off = _sim_world(world, 10**12)
+    shipped = _sim_world(world, 8)
+    every = _sim_world(world, 1)
+
+    def raw() -> float:
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            p.stepSimulation(physicsClientId=c1)
+        return (time.perf_counter() - t0) / steps
+
+    def raw_probe() -> float:
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            p.stepSimulation(physicsClientId=c2)
+            if leaves2:
+                for r in p.getJointStates(body2, leaves2, c2):
+                    if not math.isfinite(r[0] + r[1] + r[3]):
+                        raise FloatingPointError
+            else:
+                pos, orn = p.getBasePositionAndOrientation(body2, c2)
+                if not math.isfinite(sum(pos) + sum(orn)):
+                    raise FloatingPointError
+        return (time.perf_counter() - t0) / steps
+
+    def layer(sim: simbridge.Sim) -> Callable[[], float]:
+        def run() -> float:
+            t0 = time.perf_counter()
+            for _ in range(steps):
+                sim.step()
+            return (time.perf_counter() - t0) / steps
+
+        return run
+
+    return {
+        "raw": raw,
+        "raw + probe": raw_probe,
+        "layer, no check": layer(off),
+        "layer": layer(shipped),
+        "layer, every step": layer(every),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--repeats", type=int, default=21)
+    parser.add_argument("--steps", type=int, default=480, help="steps per timed block")
+    parser.add_argument("--quick", action="store_true", help="60-step blocks (a smoke run)")
+    args = parser.parse_args(argv)
+    steps = 60 if args.quick else args.steps
+    print(
+        f"# simbridge divergence check: {platform.node()} | Python {platform.python_version()} | "
+        f"pybullet {p.getAPIVersion()} | medians of {args.repeats} repeats of {steps} steps\n"
+    )
+    print(
+        "| world | raw µs | raw + probe µs | ratio | layer, no check µs | layer µs | ratio "
+        "| layer, every step µs | ratio |"
+    )
+    print("|------|------|------|------|------|------|------|------|------|")
+    for world, label in (("r2d2", "r2d2 on the plane, wheels driven"), ("kuka", "KUKA, fixed")):
+        cols = columns(world, steps)
+        times: dict[str, list[float]] = {name: [] for name in cols}
+        for _ in range(args.repeats):
+            for name, run in cols.items():
+                times[name].append(run())
+        m = {name: statistics.median(v) * 1e6 for name, v in times.items()}
+        each = m["layer, every step"]
+        print(
+            f"| {label} | {m['raw']:.2f} | {m['raw + probe']:.2f} "
+            f"| {m['raw + probe'] / m['raw']:.3f} | {m['layer, no check']:.2f} "
+            f"| {m['layer']:.2f} | {m['layer'] / m['layer, no check']:.3f} "
+            f"| {each:.2f} | {each / m['layer, no check']:.3f} |"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,39 @@
+"""Soak, in the suite: many Sim lifetimes and many loads in one Sim, per backend, with memory,
+open files and temporary files flat (bench/soak.py --check; its full run is 1000 cycles per
+row, README "Limits"). Here 250 cycles a row by default (100 of them the warm-up), about 15 s
+on the shared 2-core machine; SIMBRIDGE_SOAK_CYCLES=1000 runs the full count. Marked slow:
+-m "not slow" leaves it out of a quick pass."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.slow
+def test_create_close_and_load_remove_cycles_leave_nothing_behind():
+    cycles = os.environ.get("SIMBRIDGE_SOAK_CYCLES", "250")
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "bench" / "soak.py"),
+            "--cycles",
+            cycles,
+            "--pattern",
+            "create-close",
+            "load-remove",
+            "--check",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=3000,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr[-3000:]
+    rows = [line for line in proc.stdout.splitlines() if line.startswith("| create-close |")]
+    assert len(rows) == 4  # both backends, in both tables
