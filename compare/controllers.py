@@ -350,6 +350,8 @@ _FORBIDDEN = {
     "close": "closes the world",
     "reset": "resets the world",
     "load_urdf": "loads a body",
+    "load_mjcf": "loads bodies",
+    "load_sdf": "loads bodies",
     "remove": "removes a body",
     "set_state": "sets the world's state",
     "reset_base_state": "teleports a base",

@@ -269,12 +269,7 @@ class _World:
         try:
             self.ids: dict[str, int] = {}
             for r in sc.robots:
-                self.ids[r.name] = self.sim.load_urdf(
-                    sc.resolve_urdf(r),
-                    base_position=r.position,
-                    base_orientation=r.orientation,
-                    fixed_base=r.fixed_base,
-                )
+                self.ids[r.name] = sc.load_robot(self.sim, r)
             self.body = self.ids[sc.subject]
             self.joints, self.links = _layout(self.sim, self.body)
         except BaseException:

@@ -336,12 +336,7 @@ def run(
             source = sc.resolve_urdf(r)
             file, digest = urdf_sha256(source)
             hashes[r.name] = {"urdf": r.urdf, "file": file, "sha256": digest}
-            body = sim.load_urdf(
-                source,
-                base_position=r.position,
-                base_orientation=r.orientation,
-                fixed_base=r.fixed_base,
-            )
+            body = sc.load_robot(sim, r)
             ids[r.name] = body
             for joint, q in r.joint_positions:
                 sim.reset_joint_state(body, joint, q)

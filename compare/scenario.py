@@ -19,6 +19,9 @@ A scenario is a TOML file (read with the standard library's ``tomllib``)::
     orientation = [0, 0, 0, 1]    # (x, y, z, w); or rpy = [roll, pitch, yaw] (rad)
     fixed_base = false
     joint_positions = { hinge = 0.5 }   # optional initial joint positions (by name or index)
+    # or, for a robot from an MJCF file (Sim.load_mjcf; the file places it, so no position,
+    # orientation or fixed_base): mjcf = "mjcf/ant.xml", and body = 0 (which of the bodies the
+    # file makes is this robot; the others are loaded too)
 
     [[phases]]
     name = "turn"
@@ -73,7 +76,7 @@ from typing import Any
 
 import simbridge
 from simbridge.exceptions import ScenarioError
-from simbridge.transforms import quat_from_rpy
+from simbridge.transforms import quat_from_rpy, quat_multiply
 
 from .controllers import ControllerSpec, RefError, absolute_ref, load_object
 from .outcomes import KINDS as OUTCOME_KINDS
@@ -146,6 +149,13 @@ class RobotSpec:
     orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)  # x, y, z, w
     fixed_base: bool = False
     joint_positions: tuple[tuple[JointRef, float], ...] = ()
+    kind: str = "urdf"
+    """``"urdf"`` (``Sim.load_urdf``) or ``"mjcf"`` (``Sim.load_mjcf``: ``urdf`` is then the MJCF
+    file, which places the body itself; ``position`` and ``orientation`` then move it from
+    there: a displacement (m, world) and a turn (x, y, z, w, world frame, about its centre of
+    mass), zero from a scenario file, an ensemble's offsets otherwise)."""
+    body: int = 0
+    """An MJCF robot: which of the bodies its file makes (PyBullet's order)."""
 
 
 @dataclass(frozen=True)
@@ -282,6 +292,35 @@ class Scenario:
             if candidate.is_file():
                 return str(candidate)
         return robot.urdf
+
+    def load_robot(self, sim: simbridge.Sim, robot: RobotSpec) -> int:
+        """Load ``robot`` into ``sim`` (``load_urdf`` at its pose, or ``load_mjcf``, whose other
+        bodies are loaded with it) and return its body id."""
+        source = self.resolve_urdf(robot)
+        if robot.kind == "mjcf":
+            ids = sim.load_mjcf(source)
+            if robot.body >= len(ids):
+                raise ScenarioError(
+                    self._where(),
+                    f"robots.{robot.name}.body",
+                    f"{robot.urdf!r} makes {len(ids)} bodies (0 to {len(ids) - 1}), "
+                    f"not {robot.body}",
+                )
+            body = ids[robot.body]
+            if robot.position != (0.0, 0.0, 0.0) or robot.orientation != (0.0, 0.0, 0.0, 1.0):
+                base = sim.base_state(body)  # its centre-of-mass frame, where the file put it
+                sim.reset_base_state(
+                    body,
+                    position=[p + d for p, d in zip(base.position, robot.position, strict=True)],
+                    orientation=quat_multiply(robot.orientation, base.orientation),
+                )
+            return body
+        return sim.load_urdf(
+            source,
+            base_position=robot.position,
+            base_orientation=robot.orientation,
+            fixed_base=robot.fixed_base,
+        )
 
     def _where(self) -> str:
         return str(self.source) if self.source else f"<scenario {self.name}>"
@@ -462,9 +501,33 @@ class _Reader:
         self.keys(
             t,
             path,
-            ("name", "urdf", "position", "orientation", "rpy", "fixed_base", "joint_positions"),
+            (
+                "name",
+                "urdf",
+                "mjcf",
+                "body",
+                "position",
+                "orientation",
+                "rpy",
+                "fixed_base",
+                "joint_positions",
+            ),
         )
-        urdf = self.string(self.require(t, path, "urdf"), [*path, "urdf"])
+        kind = "mjcf" if "mjcf" in t else "urdf"
+        if kind == "mjcf":
+            for key in ("urdf", "position", "orientation", "rpy", "fixed_base"):
+                if key in t:
+                    raise self.error(
+                        [*path, key],
+                        "not with mjcf: an MJCF file places its bodies itself (p.loadMJCF "
+                        "takes no pose)",
+                    )
+        elif "body" in t:
+            raise self.error([*path, "body"], "only for a robot from an MJCF file (mjcf = ...)")
+        urdf = self.string(self.require(t, path, kind), [*path, kind])
+        body = t.get("body", 0)
+        if isinstance(body, bool) or not isinstance(body, int) or body < 0:
+            raise self.error([*path, "body"], f"expected an integer >= 0, got {body!r}")
         name = self.string(t.get("name", Path(urdf).stem), [*path, "name"])
         position = self.vector(t.get("position", [0, 0, 0]), [*path, "position"], 3)
         if "orientation" in t and "rpy" in t:
@@ -493,7 +556,7 @@ class _Reader:
         for k, v in jp.items():
             ref: JointRef = int(k) if k.isascii() and k.isdigit() else k
             joints.append((ref, self.number(v, [*path, "joint_positions", k])))
-        return RobotSpec(name, urdf, position, orientation, fixed, tuple(joints))  # type: ignore[arg-type]
+        return RobotSpec(name, urdf, position, orientation, fixed, tuple(joints), kind, body)  # type: ignore[arg-type]
 
     def command(
         self, t: Any, path: list[str | int], robots: dict[str, RobotSpec], subject: str
@@ -969,10 +1032,13 @@ def _lines(s: Scenario) -> Iterator[str]:
         yield ""
         yield "[[robots]]"
         yield f"name = {_toml_value(r.name)}"
-        yield f"urdf = {_toml_value(r.urdf)}"
-        yield f"position = {_toml_value(r.position)}"
-        yield f"orientation = {_toml_value(r.orientation)}"
-        yield f"fixed_base = {_toml_value(r.fixed_base)}"
+        yield f"{r.kind} = {_toml_value(r.urdf)}"
+        if r.kind == "mjcf":
+            yield f"body = {r.body}"
+        else:
+            yield f"position = {_toml_value(r.position)}"
+            yield f"orientation = {_toml_value(r.orientation)}"
+            yield f"fixed_base = {_toml_value(r.fixed_base)}"
         if r.joint_positions:
             items = ", ".join(
                 f"{_toml_key(str(k))} = {_toml_value(v)}" for k, v in r.joint_positions

@@ -87,6 +87,11 @@ IGNORED_JOINT_ATTRIBUTES = (
 )
 _IGNORED_GEOM_ATTRIBUTES = ("density", "margin", "solref", "solimp", "euler", "xyaxes", "zaxis")
 _IGNORED_TOP = ("option", "actuator", "tendon", "contact", "equality", "sensor", "keyframe")
+# what PyBullet reads of <default>'s <joint> and <geom>
+_DEFAULTS_READ = {
+    "joint": ("limited",),
+    "geom": ("contype", "conaffinity", "rgba", "condim", "friction"),
+}
 _IGNORED_BODY_ATTRIBUTES = ("euler", "axisangle", "xyaxes", "zaxis")
 
 
@@ -264,6 +269,13 @@ class _Reader:
                     self.parse_defaults(self.classes.setdefault(name, _Defaults()), child)
             if tag == "asset":
                 self.parse_assets(child)
+            if tag in ("joint", "geom"):
+                read = _DEFAULTS_READ[tag]
+                for attr, value in child.attrib.items():
+                    if attr not in read:
+                        self.file_ignored.append(
+                            f"line {line_of(child)}: <default><{tag}> {attr}={value!r}"
+                        )
             if tag == "joint" and child.get("limited") is not None:
                 defaults.limited = child.get("limited", "")
             if tag == "geom":

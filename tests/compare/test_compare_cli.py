@@ -15,6 +15,7 @@ def test_scenarios_lists_one_line_each(capsys):
     assert main(["scenarios"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert [line.split()[0] for line in lines] == [
+        "ant-gait",
         "double-pendulum",
         "kuka-reach",
         "laikago-stand",
@@ -24,8 +25,8 @@ def test_scenarios_lists_one_line_each(capsys):
         "r2d2-goto",
         "spinning-wheel",
     ]
-    assert "tutorial" in lines[4]
-    assert "closed loop" in lines[6]
+    assert "tutorial" in lines[5]
+    assert "closed loop" in lines[7]
 
 
 @pytest.mark.parametrize(
@@ -63,7 +64,7 @@ def test_unknown_scenario_is_bad_usage(capsys):
     assert err.count("\n") == 2 and "usage: simbridge" in err
     assert err.splitlines()[1].startswith(
         "simbridge: error: no-such-scenario: no such scenario file, and not a shipped scenario; "
-        "shipped scenarios: double-pendulum, kuka-reach, laikago-stand, pendulum, r2d2,"
+        "shipped scenarios: ant-gait, double-pendulum, kuka-reach, laikago-stand, pendulum,"
     )
 
 

@@ -112,6 +112,7 @@ def test_the_shipped_controllers_are_beside_their_scenarios():
         ("r2d2-goto", "goto.py:GoTo"),
         ("kuka-reach", "reach.py:JointMove"),
         ("laikago-stand", "stand.py:HoldHeight"),
+        ("ant-gait", "gait.py:Trot"),
     ):
         sc = load_scenario(name)
         file, cls = ref.split(":")

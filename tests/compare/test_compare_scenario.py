@@ -17,6 +17,7 @@ from simbridge.compare.scenario import find_key_line
 from simbridge.exceptions import ScenarioError
 
 SHIPPED = [
+    "ant-gait",
     "double-pendulum",
     "kuka-reach",
     "laikago-stand",
@@ -139,7 +140,7 @@ def test_a_user_file_path_loads_and_resolves_urdfs_beside_it(tmp_path):
 
 
 def test_unknown_scenario_lists_the_shipped_ones():
-    with pytest.raises(ScenarioError, match="shipped scenarios: double-pendulum, kuka-reach"):
+    with pytest.raises(ScenarioError, match="shipped scenarios: ant-gait, double-pendulum, kuka"):
         load_scenario("no-such-scenario")
 
 

@@ -1,0 +1,305 @@
+"""MJCF and SDF through ``Sim.load_mjcf``/``Sim.load_sdf``: errors naming the file, the line and
+the element; text sources; PyBullet's collision filter on both engines; removal; the manifest;
+MJCF robots in comparison scenarios. (Every pybullet_data file against raw PyBullet:
+tests/conformance/test_mjcf_sdf.py.)"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+import pytest
+
+import simbridge
+from simbridge import exceptions as exc
+from simbridge.compare.scenario import dumps_scenario, loads_scenario
+from simbridge.exceptions import ScenarioError
+from simbridge.scene import parse_scene
+
+BACKENDS = ("pybullet", "mujoco")
+
+HINGED = """<mujoco model="m">
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <geom type="box" size="0.1 0.1 0.1"/>
+      <body name="b" pos="0 0 -0.3">
+        <joint name="j1" type="hinge" axis="0 1 0"/>
+        <joint name="j2" type="hinge" axis="1 0 0"/>
+        <geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.05"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def mjcf(body: str, top: str = "") -> str:
+    return f'<mujoco model="t">{top}\n<worldbody>\n{body}\n</worldbody>\n</mujoco>\n'
+
+
+# ---------------------------------------------------------------- the reading
+
+
+def test_a_body_with_two_joints_is_three_links():
+    (body,) = parse_scene(HINGED, "mjcf")
+    assert [(j.name, j.type, j.parent, j.child) for j in body.joints] == [
+        ("j1", "continuous", "a", "link0_2"),
+        ("j2", "continuous", "link0_2", "link0_3"),
+        ("jointfix_0_3", "fixed", "link0_3", "b"),
+    ]
+    masses = {link.name: link.inertial.mass for link in body.links}
+    assert masses["link0_2"] == masses["link0_3"] == 0.0  # PyBullet's massless links
+    assert masses["a"] == pytest.approx(1000 * 0.2**3, rel=1e-6)  # density 1000, float32 sizes
+    # the root: a free base at the body's pos (its inertial frame is the body frame)
+    assert body.base_position == (0.0, 0.0, 1.0)
+
+
+@pytest.mark.parametrize(
+    ("text", "error", "message"),
+    [
+        (
+            mjcf(
+                '<body name="a"><geom type="sphere" size="0.1"/>\n<body name="b">\n'
+                '<joint name="ball" type="ball"/><geom type="sphere" size="0.1"/></body></body>'
+            ),
+            exc.UnsupportedJointError,
+            r"<MJCF text>:5: joint 'ball': joint type 'ball' is not supported; supported types: "
+            r"\['hinge', 'slide', 'fixed', 'free \(on a top-level body\)'\]",
+        ),
+        (
+            mjcf(
+                '<body name="a"><geom type="sphere" size="0.1"/>\n<body name="b">\n'
+                '<joint type="free"/><geom type="sphere" size="0.1"/></body></body>'
+            ),
+            exc.UnsupportedJointError,
+            r"<MJCF text>:5: joint '<unnamed>': joint type 'free' is not supported",
+        ),
+        (
+            mjcf(
+                '<body name="a">\n<joint name="j" axis="0 0 1"/><geom type="sphere" size="1"/>'
+                "</body>"
+            ),
+            exc.UrdfStructureError,
+            r"<MJCF text>:4: <joint 'j'>: has no type attribute: PyBullet does not read it",
+        ),
+        (
+            mjcf(
+                '<body name="a">\n<joint name="j" type="hinge" limited="true"/>'
+                '<geom type="sphere" size="1"/></body>'
+            ),
+            exc.UrdfStructureError,
+            r"<MJCF text>:4: <joint 'j'>: limited but has no range attribute \(PyBullet's "
+            r"importer crashes on it\)",
+        ),
+        (
+            mjcf(
+                '<body name="a">\n<joint name="j" type="hinge" axis="0 0"/>'
+                '<geom type="sphere" size="1"/></body>'
+            ),
+            exc.UrdfStructureError,
+            r"<MJCF text>:4: <joint 'j'> axis: axis must not be zero",
+        ),
+        (
+            mjcf(
+                '<body name="a"><geom type="sphere" size="1"/></body>\n'
+                '<body name="a"><geom type="sphere" size="1"/>\n<body name="a"/></body>'
+            ),
+            exc.UrdfStructureError,
+            r"<MJCF text>:5: body 'a': the name is used twice in one body \(also line 4\)",
+        ),
+        (
+            mjcf('<body name="a">\n<geom type="sphere" size="nan"/></body>'),
+            exc.UrdfStructureError,
+            r"<MJCF text>:4: <geom>: numbers must be finite",
+        ),
+        (
+            mjcf("<light/>"),
+            exc.UrdfStructureError,
+            r"<MJCF text>:1: <mujoco>: has no <body> or <geom> in <worldbody>",
+        ),
+        (
+            "<robot name='r'/>",
+            exc.UrdfStructureError,
+            r"<MJCF text>:1: <robot>: the root element of an MJCF file must be <mujoco>",
+        ),
+        (
+            "<mujoco><worldbody><body></worldbody></mujoco>",
+            exc.UrdfParseError,
+            r"<MJCF text>: malformed MJCF XML: mismatched tag: line 1, column 27",
+        ),
+    ],
+)
+def test_mjcf_errors_name_the_file_the_line_and_the_element(text, error, message):
+    with pytest.raises(error, match=message) as info:
+        parse_scene(text, "mjcf")
+    assert "\n" not in str(info.value)
+
+
+SDF_LINK = (
+    '<link name="{0}"><inertial><mass>1</mass><inertia><ixx>1</ixx><iyy>1</iyy>'
+    "<izz>1</izz></inertia></inertial></link>"
+)
+
+
+def sdf(model: str) -> str:
+    return f'<sdf version="1.6"><world name="w">\n<model name="m">\n{model}\n</model></world></sdf>'
+
+
+@pytest.mark.parametrize(
+    ("text", "error", "message"),
+    [
+        (
+            sdf(
+                SDF_LINK.format("a")
+                + SDF_LINK.format("b")
+                + '\n<joint name="s" type="spherical"><parent>a</parent><child>b</child></joint>'
+            ),
+            exc.UnsupportedJointError,
+            r"<SDF text>:4: joint 's': joint type 'spherical' is not supported",
+        ),
+        (
+            sdf(SDF_LINK.format("a") + SDF_LINK.format("b")),
+            exc.UrdfStructureError,
+            r"<SDF text>:2: model 'm': 2 root links \['a', 'b'\]; PyBullet crashes on a model",
+        ),
+        (
+            sdf(
+                SDF_LINK.format("a")
+                + SDF_LINK.format("b")
+                + '\n<joint name="r" type="revolute"><parent>a</parent><child>b</child>'
+                "<axis><xyz>0 0 1</xyz></axis></joint>"
+            ),
+            exc.UrdfStructureError,
+            r"<SDF text>:4: joint 'r': a revolute joint needs <axis><limit>",
+        ),
+        (
+            sdf('<link name="a">\n<pose/></link>'),
+            exc.UrdfStructureError,
+            r"<SDF text>:4: link 'a' <pose>: is empty; a value was expected \(PyBullet's "
+            r"importer crashes on it\)",
+        ),
+        (
+            sdf(
+                '<link name="a"><collision name="c">\n<geometry><mesh><uri>no.stl</uri></mesh>'
+                "</geometry></collision></link>"
+            ),
+            exc.MeshNotFoundError,
+            r"<SDF text>:4: link 'a' <collision> #0 <mesh>: mesh file 'no\.stl' not found",
+        ),
+    ],
+)
+def test_sdf_errors_name_the_file_the_line_and_the_element(text, error, message):
+    with pytest.raises(error, match=message) as info:
+        parse_scene(text, "sdf")
+    assert "\n" not in str(info.value)
+
+
+def test_a_missing_file_is_named_as_mjcf():
+    with pytest.raises(exc.UrdfNotFoundError, match=r"^MJCF 'nosuch\.xml' is neither a file"):
+        parse_scene("nosuch.xml", "mjcf")
+
+
+# ---------------------------------------------------------------- on both engines
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_text_loads_through_a_temporary_file_that_is_removed(backend, tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    with simbridge.Sim(backend) as sim:
+        (body,) = sim.load_mjcf(HINGED)
+        assert [sim.joint_info(body, j).name for j in range(3)] == ["j1", "j2", "jointfix_0_3"]
+        sim.step(10)
+        (box,) = sim.load_sdf(sdf(SDF_LINK.format("a")))
+        assert sim.body_name(box) == "m" and sim.num_joints(box) == 0
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_two_ants_pass_through_each_other_as_in_pybullet(backend):
+    """The ant's geoms are contype 1, conaffinity 0: PyBullet pairs two links when
+    group_a & mask_b or group_b & mask_a, so two ants never touch (both fall through each other
+    onto the plane, which they do touch)."""
+    with simbridge.Sim(backend) as sim:
+        plane = sim.load_urdf("plane.urdf")
+        (a,) = sim.load_mjcf("mjcf/ant.xml")
+        (b,) = sim.load_mjcf("mjcf/ant.xml")
+        sim.step(240)
+        assert sim.contact_points(a, b) == ()
+        assert sim.contact_points(a, plane) and sim.contact_points(b, plane)
+        pa, pb = sim.base_state(a).position, sim.base_state(b).position
+        assert pa == pytest.approx(pb, abs=1e-9) and pa[2] == pytest.approx(0.25, abs=2e-3)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_scene_bodies_are_removed_and_their_ids_reused(backend):
+    with simbridge.Sim(backend) as sim:
+        ids = sim.load_mjcf("mjcf/reacher.xml")
+        assert ids == tuple(range(8))
+        sim.remove(ids[-1])
+        sim.remove(ids[-2])
+        assert sim.load_mjcf("mjcf/hopper.xml") == (6,)  # PyBullet's pool: last freed first
+        sim.step(5)
+        sim.reset()
+        assert sim.load_sdf("kuka_iiwa/model.sdf") == (0,)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_the_manifest_lists_what_pybullet_does_not_read(backend):
+    with simbridge.Sim(backend) as sim:
+        (ant,) = sim.load_mjcf("mjcf/ant.xml")
+        load = sim.manifest()["bodies"][ant]
+        assert load["format"] == "mjcf" and load["body_index"] == 0
+        assert load["inertia_source"] == "collision_aabb" and load["self_collision"] == "off"
+        ignored = "\n".join(load["ignored"])
+        assert "line 3: <option>" in ignored  # integrator RK4, timestep 0.01
+        assert "line 8: <default><joint> damping='1'" in ignored  # and armature='1'
+        assert "line 9: <default><geom> density='5.0'" in ignored  # PyBullet's is 1000
+        assert "<geom 'torso_geom'>" not in ignored
+        assert "line 61: <actuator>" in ignored
+
+
+# ---------------------------------------------------------------- scenarios
+
+SCENARIO = """\
+name = "t"
+[[robots]]
+name = "ant"
+mjcf = "mjcf/ant.xml"
+{extra}
+[[phases]]
+steps = 2
+"""
+
+
+def test_a_scenario_robot_from_an_mjcf_file_round_trips():
+    sc = loads_scenario(SCENARIO.format(extra=""))
+    (ant,) = sc.robots
+    assert (ant.kind, ant.urdf, ant.body) == ("mjcf", "mjcf/ant.xml", 0)
+    assert loads_scenario(dumps_scenario(sc)) == sc
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        ("position = [0, 0, 1]", r"robots\[0\]\.position.*not with mjcf: an MJCF file places"),
+        ('urdf = "r2d2.urdf"', r"robots\[0\]\.urdf.*not with mjcf"),
+        ("body = -1", r"robots\[0\]\.body.*expected an integer >= 0, got -1"),
+    ],
+)
+def test_scenario_mjcf_robot_errors(extra, message):
+    with pytest.raises(ScenarioError, match=message):
+        loads_scenario(SCENARIO.format(extra=extra))
+
+
+def test_body_is_only_for_mjcf_robots():
+    text = '[[robots]]\nurdf = "r2d2.urdf"\nbody = 1\n[[phases]]\nsteps = 1\n'
+    with pytest.raises(ScenarioError, match=r"body.*only for a robot from an MJCF file"):
+        loads_scenario(text)
+
+
+def test_a_body_the_file_does_not_make_is_a_scenario_error():
+    from simbridge.compare import run
+
+    sc = loads_scenario(SCENARIO.format(extra="body = 1"))
+    with pytest.raises(ScenarioError, match=r"'mjcf/ant\.xml' makes 1 bodies \(0 to 0\), not 1"):
+        run(sc, "mujoco")
