@@ -36,6 +36,7 @@ from simbridge.exceptions import (
 )
 from simbridge.load_options import LoadOptions
 from simbridge.profiles import Profile
+from simbridge.scene import SceneBody
 from simbridge.types import (
     BaseState,
     ContactPoint,
@@ -50,7 +51,6 @@ from simbridge.types import (
     Quat,
     Vec3,
 )
-from simbridge.scene import SceneBody
 from simbridge.urdf import UrdfModel, resolve_mesh
 
 from .pybullet_scene import Pending, named_table
@@ -201,6 +201,11 @@ def _pybullet_gui_output(text: str) -> tuple[list[Record], str]:
 register_classifier("pybullet", _pybullet_output)
 with captured("pybullet", "importing"):  # its banner, also where this module is imported first
     import pybullet as p  # noqa: E402
+
+# the probe's engine calls (bound once: a module attribute lookup less per call)
+_base_pose = p.getBasePositionAndOrientation
+_joint_state = p.getJointState
+_joint_states = p.getJointStates
 
 # Sim.load_urdf's self_collision -> loadURDF's flags (URDF_USE_SELF_COLLISION_EXCLUDE_PARENT
 # is not read by PyBullet 3.2.7: excluding the parent is what URDF_USE_SELF_COLLISION does)
@@ -665,27 +670,46 @@ class PyBulletBackend(Backend):
                         done += 1
                 finally:  # Ctrl-C between two steps: the time counts the steps done
                     self._steps += done
+            if self._steps >= self._next_check:
+                self._probe()  # under the lock: no other thread steps between its calls
         finally:
             lock.release()
-        if self._steps >= self._next_check:
-            self._probe()
 
     def _probe(self) -> None:
         """Probe every body for a non-finite state (one engine call per body that can move:
-        a free base's pose; a fixed base's movable leaf joints, see _Body)."""
+        a free base's pose; a fixed base's movable leaf joints, see _Body). The hot path of
+        the check (0.9 µs for one body, measured): a sum of the numbers, which is finite only
+        if each one is; the exact test in _probe_failed."""
         self._next_check = self._steps + self._check_every
         c = self._c
+        isfinite = math.isfinite
         for body, info in self._bodies.items():
             if info.free:
-                pos, orn = p.getBasePositionAndOrientation(body, c)
-                if not math.isfinite(sum(pos) + sum(orn)) and not _all_finite(pos, orn):
-                    self._diverge(f"body {body} base pose")
+                pos, orn = _base_pose(body, c)
+                if not isfinite(pos[0] + pos[1] + pos[2] + orn[0] + orn[1] + orn[2] + orn[3]):
+                    self._probe_failed(body, info)
+            elif len(info.probe_joints) == 1:
+                r = _joint_state(body, info.probe_joints[0], c)
+                if not isfinite(r[0] + r[1] + r[3]):
+                    self._probe_failed(body, info)
             elif info.probe_joints:
-                rows = p.getJointStates(body, info.probe_joints, c)
-                for j, r in zip(info.probe_joints, rows, strict=True):
-                    if not math.isfinite(r[0] + r[1] + r[3]) and not _all_finite(r[:2], r[3:]):
-                        self._diverge(f"body {body} joint {j} state")
-        self._checked_at = self.time
+                for r in _joint_states(body, info.probe_joints, c):
+                    if not isfinite(r[0] + r[1] + r[3]):
+                        self._probe_failed(body, info)
+        self._checked_at = self._steps * self._dt
+
+    def _probe_failed(self, body: int, info: _Body) -> None:
+        """A probe's sum was not finite: diverged, unless every number is finite (a sum of
+        large finite numbers may overflow)."""
+        c = self._c
+        if info.free:
+            pos, orn = _base_pose(body, c)
+            if not _all_finite(pos, orn):
+                self._diverge(f"body {body} base pose")
+            return
+        for j, r in zip(info.probe_joints, _joint_states(body, info.probe_joints, c), strict=True):
+            if not _all_finite(r[:2], r[3:]):
+                self._diverge(f"body {body} joint {j} state")
 
     def _diverge(self, where: str) -> None:
         """The world holds a non-finite value (``where``): it is refused from now on, by every
