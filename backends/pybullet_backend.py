@@ -354,7 +354,12 @@ class PyBulletBackend(Backend):
         options: LoadOptions,
     ) -> int:
         movable = sum(j.type != "fixed" for j in model.joints)
-        if len(model.joints) > MAX_BODY_JOINTS or movable > MAX_BODY_MOVABLE_JOINTS:
+        # the last movable joint's first position coordinate (its qIndex, after the base's 7)
+        # must be under 128: measured, 121 one-coordinate joints load, 31 spherical ones (4
+        # coordinates each: the 32nd's qIndex is 131 and reads nothing)
+        sizes = [4 if j.type == "spherical" else 1 for j in model.joints if j.type != "fixed"]
+        last_q = 7 + sum(sizes[:-1]) if sizes else 0
+        if len(model.joints) > MAX_BODY_JOINTS or last_q > MAX_BODY_MOVABLE_JOINTS + 6:
             raise BackendUnsupportedError(
                 self.name,
                 f"{model.source.display_name}: a body with {len(model.joints)} joints "

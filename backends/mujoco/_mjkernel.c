@@ -127,6 +127,10 @@ typedef struct {
   /* the motor table's commands (bound once per compile, for the command writes) */
   Arr cmd_target, cmd_force, cmd_position;
   Arr pos_target; /* the position rows' targets (MotorTable.position_target), optional */
+  /* spherical position motors (bind_balls, after every bind_motors): rows, index into the
+   * balls' errors, gains; per ball its quaternion's qpos address and target (x, y, z, w) */
+  Arr ball_rows, ball_err_index, ball_gain, ball_qadr, ball_target;
+  double* ball_err; /* 3 per ball */
   /* bound commands (Sim.velocity_command, Sim.position_command): read at every step() */
   struct Bound* bound;
   int n_bound;
@@ -247,7 +251,9 @@ static void release_all(Kernel* self) {
                 &self->tq_dof,   &self->tq,       &self->offset,   &self->pos_rows,
                 &self->pos_qadr, &self->pos_gain, &self->kd_rows,  &self->kd_dof,
                 &self->kd_factor, &self->dof_rows, &self->slack, &self->cmd_target,
-                &self->cmd_force, &self->cmd_position, &self->pos_target};
+                &self->cmd_force, &self->cmd_position, &self->pos_target,
+                &self->ball_rows, &self->ball_err_index, &self->ball_gain, &self->ball_qadr,
+                &self->ball_target};
   for (size_t i = 0; i < sizeof(all) / sizeof(all[0]); i++) arr_release(all[i]);
   for (int i = 0; i < self->n_bound; i++) bound_clear(&self->bound[i]);
   PyMem_Free(self->bound);
@@ -255,6 +261,8 @@ static void release_all(Kernel* self) {
   self->n_bound = 0;
   free_motor_scratch(self);
   self->k = 0;
+  PyMem_Free(self->ball_err);
+  self->ball_err = NULL;
   PyMem_Free(self->cfrc);
   self->cfrc = NULL;
   self->damp_n = 0;
@@ -364,6 +372,87 @@ bad_dof:
   return NULL;
 }
 
+static void release_balls(Kernel* self) {
+  arr_release(&self->ball_rows);
+  arr_release(&self->ball_err_index);
+  arr_release(&self->ball_gain);
+  arr_release(&self->ball_qadr);
+  arr_release(&self->ball_target);
+  PyMem_Free(self->ball_err);
+  self->ball_err = NULL;
+}
+
+/* bind_balls(rows, error_index, gain, qadr, target): the spherical position motors after a
+ * bind_motors (MotorTable.ball_rows, ball_row_error, ball_gain, ball_pos_qadr,
+ * ball_pos_target): row r's offset less gain * error[error_index], the errors of each ball's
+ * quaternion at qpos[qadr..qadr+3] against its target (4 per ball). */
+static PyObject* Kernel_bind_balls(Kernel* self, PyObject* args) {
+  if (refuse_if_busy(self) < 0) return NULL;
+  PyObject *o[5];
+  if (!PyArg_ParseTuple(args, "OOOOO", &o[0], &o[1], &o[2], &o[3], &o[4])) return NULL;
+  release_balls(self);
+  const mjModel* m = self->m;
+  if (arr_take(&self->ball_rows, o[0], 'n', -1, "ball_rows") < 0) return NULL;
+  Py_ssize_t n = arr_len(&self->ball_rows);
+  if (arr_take(&self->ball_err_index, o[1], 'n', n, "ball_row_error") < 0 ||
+      arr_take(&self->ball_gain, o[2], 'd', n, "ball_gain") < 0 ||
+      arr_take(&self->ball_qadr, o[3], 'n', -1, "ball_pos_qadr") < 0)
+    goto fail;
+  Py_ssize_t nb = arr_len(&self->ball_qadr);
+  if (arr_take(&self->ball_target, o[4], 'd', 4 * nb, "ball_pos_target") < 0) goto fail;
+  for (Py_ssize_t i = 0; i < n; i++)
+    if (IP(self->ball_rows)[i] < 0 || IP(self->ball_rows)[i] >= self->k ||
+        IP(self->ball_err_index)[i] < 0 || IP(self->ball_err_index)[i] >= 3 * nb)
+      goto bad;
+  for (Py_ssize_t i = 0; i < nb; i++)
+    if (IP(self->ball_qadr)[i] < 0 || IP(self->ball_qadr)[i] + 4 > m->nq) goto bad;
+  if (nb) {
+    self->ball_err = PyMem_Calloc((size_t)(3 * nb), sizeof(double));
+    if (!self->ball_err) {
+      release_balls(self);
+      return PyErr_NoMemory();
+    }
+  }
+  Py_RETURN_NONE;
+bad:
+  PyErr_SetString(PyExc_ValueError, "a spherical motor's row, error or qpos index out of range");
+fail:
+  release_balls(self);
+  return NULL;
+}
+
+/* motors.spherical_error: Bullet's matrixToEulerXYZ of conj(q) * t, q = (w, x, y, z) as MuJoCo
+ * keeps it, t = (x, y, z, w); the same arithmetic in the same order as the Python. */
+static void spherical_error(const double* q, const double* t, double* e) {
+  double cx = -q[1], cy = -q[2], cz = -q[3], cw = q[0];
+  double tx = t[0], ty = t[1], tz = t[2], tw = t[3];
+  double rx = cw * tx + cx * tw + cy * tz - cz * ty;
+  double ry = cw * ty + cy * tw + cz * tx - cx * tz;
+  double rz = cw * tz + cz * tw + cx * ty - cy * tx;
+  double rw = cw * tw - cx * tx - cy * ty - cz * tz;
+  double s = 2.0 / (rx * rx + ry * ry + rz * rz + rw * rw);
+  double xs = rx * s, ys = ry * s, zs = rz * s;
+  double wx = rw * xs, wy = rw * ys, wz = rw * zs;
+  double xx = rx * xs, xy = rx * ys, xz = rx * zs;
+  double yy = ry * ys, yz = ry * zs, zz = rz * zs;
+  double m20 = xz - wy;
+  if (m20 < 1.0) {
+    if (m20 > -1.0) {
+      e[0] = atan2(-(yz + wx), 1.0 - (xx + yy));
+      e[1] = asin(m20);
+      e[2] = atan2(-(xy + wz), 1.0 - (yy + zz));
+      return;
+    }
+    e[0] = -atan2(xy - wz, 1.0 - (xx + zz));
+    e[1] = -0.5 * 3.141592653589793;
+    e[2] = 0.0;
+    return;
+  }
+  e[0] = atan2(xy - wz, 1.0 - (xx + zz));
+  e[1] = 0.5 * 3.141592653589793;
+  e[2] = 0.0;
+}
+
 /* bind_motors(offset, pos_rows, pos_qadr, pos_gain, kd_rows, kd_dof, kd_factor, dof_rows,
  *             slack[, pos_target[, keep_bound]]): the motor rows after a refresh (k =
  * len(dof_rows)); the position rows' targets are needed by set_position. Unless keep_bound
@@ -381,6 +470,7 @@ static PyObject* Kernel_bind_motors(Kernel* self, PyObject* args) {
   free_motor_scratch(self);
   self->k = 0;
   arr_release(&self->pos_target);
+  release_balls(self);
   for (int i = 0; i < self->n_bound && !keep; i++) {
     self->bound[i].armed = 0;
     self->bound[i].stale = 1;
@@ -739,11 +829,21 @@ static int run_steps(Kernel* self, long n, int pending) {
       const double* off = DP(self->offset);
       double* aref = d->efc_aref;
       Py_ssize_t np_ = arr_len(&self->pos_rows);
-      if (np_) {
-        /* aref += offset - gain q on position rows (aref_offset) */
+      Py_ssize_t nbr = arr_len(&self->ball_rows);
+      if (np_ || nbr) {
+        /* aref += offset - gain q on position rows, - gain e on spherical ones (aref_offset) */
         for (int r = 0; r < k; r++) self->b[r] = off[r];
         for (Py_ssize_t i = 0; i < np_; i++)
           self->b[IP(self->pos_rows)[i]] -= DP(self->pos_gain)[i] * d->qpos[IP(self->pos_qadr)[i]];
+        if (nbr) {
+          Py_ssize_t nb = arr_len(&self->ball_qadr);
+          for (Py_ssize_t i = 0; i < nb; i++)
+            spherical_error(d->qpos + IP(self->ball_qadr)[i], DP(self->ball_target) + 4 * i,
+                            self->ball_err + 3 * i);
+          for (Py_ssize_t i = 0; i < nbr; i++)
+            self->b[IP(self->ball_rows)[i]] -=
+                DP(self->ball_gain)[i] * self->ball_err[IP(self->ball_err_index)[i]];
+        }
         for (int r = 0; r < k; r++) aref[r] += self->b[r];
       } else {
         for (int r = 0; r < k; r++) aref[r] += off[r];
@@ -1287,6 +1387,8 @@ static PyMethodDef Kernel_methods[] = {
      "Bind the motor table's command arrays."},
     {"set_velocity", (PyCFunction)(void (*)(void))Kernel_set_velocity, METH_FASTCALL,
      "set_velocity(index, target, max_force): a velocity command on present rows"},
+    {"bind_balls", (PyCFunction)Kernel_bind_balls, METH_VARARGS,
+     "bind_balls(rows, error_index, gain, qadr, target): the spherical position motors"},
     {"set_position", (PyCFunction)(void (*)(void))Kernel_set_position, METH_FASTCALL,
      "set_position(index, limits, target, max_force): a position command on present rows"},
     {"add_torque", (PyCFunction)(void (*)(void))Kernel_add_torque, METH_FASTCALL,

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from simbridge.profiles import Profile
+from simbridge.types import MotorMode
 
 from .world import Compiled, Robot
 
@@ -222,6 +223,56 @@ class MotorCommands:
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         idx = self._motor_slots(body, joints)
+        c = self._w
+        t = c.motors
+        if self.profile.enforce_effort_limit:
+            c.torque[idx] += np.clip(torque, -t.effort[idx], t.effort[idx])  # each command
+        elif c.kernel is not None:
+            c.kernel.add_torque(idx, torque)  # torque[idx] += torque, in C
+        else:
+            c.torque[idx] += torque  # commands before one step add up, as in PyBullet
+        c.pending_torque = True
+
+    # ---------------------------------------------------------------- spherical joints
+
+    def _ball_slots(self, body: int, joints: np.ndarray) -> tuple[np.ndarray, list[int]]:
+        """The three motor slots of each spherical joint of ``joints`` (n x 3, flattened) and
+        each one's ball index in the table."""
+        robot = self._robots[body]
+        first = dict(zip(robot.movable, robot.motor_index.tolist(), strict=True))
+        starts = [first[j] for j in joints.tolist()]
+        slots = np.array([s + i for s in starts for i in range(3)], dtype=np.intp)
+        return slots, self._w.motors.ball_of[starts].tolist()
+
+    def set_joint_motor_multi_dof(
+        self,
+        body: int,
+        joints: np.ndarray,
+        mode: MotorMode,
+        targets: list[list[float]],
+        max_force: list[list[float]],
+        kp: list[list[float]],
+        kd: list[list[float]],
+    ) -> None:
+        c = self._w
+        t = c.motors
+        slots, balls = self._ball_slots(body, joints)
+        t.target_velocity[slots] = 0.0
+        t.target_position[slots] = 0.0
+        t.kp[slots] = [x for row in kp for x in row] if mode == MotorMode.POSITION else 0.0
+        t.kd[slots] = [x for row in kd for x in row] if mode == MotorMode.POSITION else 1.0
+        t.max_force[slots] = [x for row in max_force for x in row]
+        t.ball_target[balls] = targets
+        c.refresh_motors(slots)
+
+    def set_joint_torque_multi_dof(
+        self, body: int, joints: np.ndarray, torques: list[list[float]]
+    ) -> None:
+        slots, _ = self._ball_slots(body, joints)
+        self.set_joint_torque_slots(slots, [x for row in torques for x in row])
+
+    def set_joint_torque_slots(self, idx: np.ndarray, torque: list[float]) -> None:
+        """Torques on motor slots, for the next step (set_joint_torque's arithmetic)."""
         c = self._w
         t = c.motors
         if self.profile.enforce_effort_limit:

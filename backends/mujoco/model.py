@@ -10,6 +10,11 @@ so the bodies, joints, geoms and inertias are added here one by one:
   revolute/prismatic joints with lower <= upper (PyBullet's rule; lower == upper locks the joint,
   a range one ulp wide here); no damping, friction or
   force range in the model: the backend applies them per step with PyBullet's laws;
+* a ball joint for a spherical joint, at the body origin (the joint origin). Bullet's joint
+  quaternion turns the child's *inertial* frame and its velocity is in that frame, MuJoCo's
+  ball turns the body frame: where a spherical joint's child has a rotated inertial frame, its
+  body frame is the link frame turned by that rotation (``RobotSpec.link_offsets``), so that
+  the ball's quaternion and velocity are PyBullet's as they are;
 * explicit inertia from :func:`simbridge.inertia.model_inertials` (PyBullet's numbers for
   the profile), mass and inertia bounded below for moving bodies (MuJoCo refuses zero);
 * visual geoms (``contype = conaffinity = 0``, group 1) and collision geoms (group 3), also
@@ -38,7 +43,7 @@ from simbridge.transforms import (
     xyzw_to_wxyz,
 )
 from simbridge.types import Quat, Vec3
-from simbridge.urdf import Geometry, Link, UrdfModel
+from simbridge.urdf import Geometry, Joint, Link, UrdfModel
 
 from .motors import LIMIT_ERP, LIMIT_MARGIN, MOTOR_DMAX
 
@@ -94,6 +99,11 @@ class RobotSpec:
     # a free joint at the link frame moves the centre of mass with a first-order error when the
     # base spins): the URDF base link frame in that body's frame, None when they coincide.
     base_offset: tuple[Vec3, Quat] | None = None
+    # link index -> the URDF link frame in its body's frame, for the children of spherical
+    # joints whose inertial frame is rotated (their body frame is turned by it; see add_robot)
+    link_offsets: dict[int, tuple[Vec3, Quat]] = field(default_factory=dict)
+    # spherical joints whose PyBullet limit (swing x, swing y, twist) is not enforced here
+    unlimited_spherical: list[str] = field(default_factory=list)
 
 
 def new_world_spec(profile: Profile) -> mujoco.MjSpec:
@@ -242,10 +252,27 @@ def add_robot(
         if any(ine0.position) or tuple(ine0.orientation) != (0.0, 0.0, 0.0, 1.0):
             offset = transform_inverse((ine0.position, ine0.orientation))
 
+    # the link frame of a spherical joint's child in its body frame, where they differ
+    link_offsets: dict[int, tuple[Vec3, Quat]] = {}
+    for joint in model.joints:
+        orn = inertials[joint.index + 1].orientation
+        if joint.type == "spherical" and tuple(orn) != (0.0, 0.0, 0.0, 1.0):
+            link_offsets[joint.index] = transform_inverse(((0.0, 0.0, 0.0), orn))
+    unlimited: list[str] = []
+
     def placed(xyz: Vec3, quat: Quat, on_base: bool) -> tuple[list[float], list[float]]:
         """A pose given in a link frame, as MuJoCo position and wxyz quaternion in the body"""
         if on_base and offset is not None:
             xyz, quat = transform_multiply(offset, (xyz, quat))
+        return list(xyz), _wxyz(quat)
+
+    def placed_in(link: int, xyz: Vec3, quat: Quat) -> tuple[list[float], list[float]]:
+        """A pose given in link ``link``'s frame, in its body's frame"""
+        if link == -1:
+            return placed(xyz, quat, True)
+        own = link_offsets.get(link)
+        if own is not None:
+            xyz, quat = transform_multiply(own, (xyz, quat))
         return list(xyz), _wxyz(quat)
 
     for link in model.links:
@@ -265,10 +292,25 @@ def add_robot(
             joint = model.joints[i]
             parent = model.parent_index(joint)
             body = bodies[parent + 1].add_body(name=body_names[i + 1])
-            body.pos, body.quat = placed(joint.origin_xyz, joint.origin_quat, parent == -1)
+            frame = (joint.origin_xyz, joint.origin_quat)  # the link frame in the parent's
+            if i in link_offsets:  # the body frame: the link frame turned (see link_offsets)
+                frame = transform_multiply(frame, transform_inverse(link_offsets[i]))
+            body.pos, body.quat = placed_in(parent, frame[0], frame[1])
             static[i + 1] = static[parent + 1] and joint.type == "fixed"
             if joint.type == "fixed":
                 joint_names.append(None)
+            elif joint.type == "spherical":
+                name = prefix + joint.name
+                jnt = body.add_joint(name=name)
+                jnt.type = mujoco.mjtJoint.mjJNT_BALL
+                jnt.frictionloss = 0.0
+                jnt.armature = 0.0
+                jnt.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE
+                jnt.solimp_friction = list(MOTOR_SOLIMP)
+                jnt.limited = mujoco.mjtLimited.mjLIMITED_FALSE
+                if spherical_limited(joint):
+                    unlimited.append(joint.name)
+                joint_names.append(name)
             else:
                 axis = np.asarray(joint.axis, dtype=float)
                 name = prefix + joint.name
@@ -315,8 +357,7 @@ def add_robot(
             body.ipos = [0.0, 0.0, 0.0]
             body.iquat = [1.0, 0.0, 0.0, 0.0]
         else:
-            body.ipos = list(ine.position)
-            body.iquat = _wxyz(ine.orientation)
+            body.ipos, body.iquat = placed_in(i, ine.position, ine.orientation)
 
         where = f"link {link.name!r}"
         for k, g in enumerate(link.visuals):
@@ -327,7 +368,7 @@ def add_robot(
                 continue  # nothing to draw (e.g. laikago_toes' radius-0 spheres)
             vg = body.add_geom(name=f"{body_names[i + 1]}$v{k}")
             _set_shape(vg, g, meshes, file, f"{where} <visual> #{k}")
-            vg.pos, vg.quat = placed(g.origin_xyz, g.origin_quat, i == -1)
+            vg.pos, vg.quat = placed_in(i, g.origin_xyz, g.origin_quat)
             vg.contype = vg.conaffinity = 0
             vg.group = VISUAL_GROUP
             vg.rgba = list(g.rgba or DEFAULT_RGBA)
@@ -355,7 +396,7 @@ def add_robot(
                 turn = transform_multiply(
                     (g.origin_xyz, g.origin_quat), ((0.0, 0.0, 0.0), _z_to(g.size))
                 )
-                cg.pos, cg.quat = placed(turn[0], turn[1], i == -1)
+                cg.pos, cg.quat = placed_in(i, turn[0], turn[1])
                 planes.append(name)
             elif is_plane:
                 cg.type = mujoco.mjtGeom.mjGEOM_PLANE
@@ -366,7 +407,7 @@ def add_robot(
                 if _degenerate(g):  # MuJoCo refuses size 0: a point-like shape instead
                     g = replace(g, size=tuple(max(v, MIN_SIZE) for v in g.size))
                 _set_shape(cg, g, meshes, file, f"{where} <collision> #{k}")
-                cg.pos, cg.quat = placed(g.origin_xyz, g.origin_quat, i == -1)
+                cg.pos, cg.quat = placed_in(i, g.origin_xyz, g.origin_quat)
             cg.contype = cg.conaffinity = 0
             cg.group = COLLISION_GROUP
             cg.rgba = [0.5, 0.5, 0.5, 0.5]
@@ -397,7 +438,16 @@ def add_robot(
         planes,
         skipped_shapes=skipped,
         base_offset=offset,
+        link_offsets=link_offsets,
+        unlimited_spherical=unlimited,
     )
+
+
+def spherical_limited(joint: Joint) -> bool:
+    """Whether PyBullet limits this spherical joint: its importer adds a
+    btMultiBodySphericalJointLimit (swing about x within ``lower``, about y within ``upper``,
+    twist about z within ``twist``) when all four of lower, upper, twist and effort are > 0."""
+    return joint.lower > 0 and joint.upper > 0 and joint.twist > 0 and joint.effort > 0
 
 
 def _collision_filter(model: UrdfModel, link: Link, fixed: bool) -> tuple[int, int]:

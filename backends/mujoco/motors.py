@@ -18,6 +18,19 @@ reference acceleration is ``aref = -B v``. So each motor is that row with
   ``(kd v* + kp (q* - q) / dt) / dt``, plus ``(1 - kd) a_smooth`` when kd != 1, which needs
   ``qacc_smooth`` first (the split path below).
 
+A spherical joint's motor (``btMultiBodySphericalJointMotor::createConstraintRows``) is three
+such rows, one per axis of the child's (inertial) frame, i.e. per dof of MuJoCo's ball joint,
+each asking for
+
+    v_new = v_free - kd v_free - erp kp e / dt,                |impulse| <= max_force dt
+
+where e is Bullet's ``matrixToEulerXYZ`` of the rotation from the joint's quaternion to the
+target, ``conj(q) * q*`` (:func:`spherical_error`), erp the solver's non-contact erp 0.2 and kd
+what PyBullet calls its ``damping`` (its velocity gain and target velocity are read by
+nothing: measured on 3.2.7, and read in the source). Its offset is computed from ``qpos`` at
+every step, like a position row's. PyBullet gives every spherical joint that motor at load:
+target the identity, kp 0.2, an impulse of 1000 N·m·s per step per axis.
+
 The offset is the only per-step Python work of a velocity motor, and it is skipped when every
 target is 0 (the brake). Coupled motors on one body are solved exactly like PyBullet's rows: in
 one solve with the body's mass matrix, by MuJoCo's solver (with the contacts) and a polish, or,
@@ -27,10 +40,16 @@ when the motor rows are the only rows, by the backend's own active-set solve
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = [
     "MotorTable",
+    "spherical_error",
+    "SPHERICAL_ERP",
+    "SPHERICAL_BRAKE_KP",
+    "SPHERICAL_BRAKE_IMPULSE",
     "MOTOR_DMAX",
     "MOTOR_R_SCALE",
     "LIMIT_ERP",
@@ -61,6 +80,44 @@ LIMIT_ERP = 0.2
 LIMIT_DEEP = 0.04
 LIMIT_MARGIN = 1e-12
 
+# PyBullet's spherical joint motor (btMultiBodySphericalJointMotor): its position term is
+# erp kp e / dt with the solver's non-contact erp (btContactSolverInfo::m_erp, 0.2, which
+# PyBullet leaves as it is); the motor every spherical joint gets at load (PhysicsServer-
+# CommandProcessor::createJointMotors): kp 0.2 towards the identity, 1000 N·m·s per step.
+SPHERICAL_ERP = 0.2
+SPHERICAL_BRAKE_KP = 0.2
+SPHERICAL_BRAKE_IMPULSE = 1000.0
+
+
+def spherical_error(
+    qw: float, qx: float, qy: float, qz: float, tx: float, ty: float, tz: float, tw: float
+) -> tuple[float, float, float]:
+    """Bullet's error of a spherical motor: ``matrixToEulerXYZ`` of the rotation
+    ``conj(q) * t`` from the joint quaternion q (MuJoCo's order: w, x, y, z) to the target t
+    (x, y, z, w), with Bullet's quaternion product and matrix (the matrix divides by the
+    squared norm). The compiled loop (_mjkernel.c spherical_error) does the same arithmetic in
+    the same order; math's atan2 and asin are the C library's."""
+    cx, cy, cz, cw = -qx, -qy, -qz, qw
+    rx = cw * tx + cx * tw + cy * tz - cz * ty
+    ry = cw * ty + cy * tw + cz * tx - cx * tz
+    rz = cw * tz + cz * tw + cx * ty - cy * tx
+    rw = cw * tw - cx * tx - cy * ty - cz * tz
+    s = 2.0 / (rx * rx + ry * ry + rz * rz + rw * rw)
+    xs, ys, zs = rx * s, ry * s, rz * s
+    wx, wy, wz = rw * xs, rw * ys, rw * zs
+    xx, xy, xz = rx * xs, rx * ys, rx * zs
+    yy, yz, zz = ry * ys, ry * zs, rz * zs
+    m20 = xz - wy
+    if m20 < 1.0:
+        if m20 > -1.0:
+            return (
+                math.atan2(-(yz + wx), 1.0 - (xx + yy)),
+                math.asin(m20),
+                math.atan2(-(xy + wz), 1.0 - (yy + zz)),
+            )
+        return (-math.atan2(xy - wz, 1.0 - (xx + zz)), -0.5 * math.pi, 0.0)
+    return (math.atan2(xy - wz, 1.0 - (xx + zz)), 0.5 * math.pi, 0.0)
+
 
 _NO_ROWS = np.zeros(0, dtype=np.intp)
 _NO_VALUES = np.zeros(0)
@@ -82,6 +139,13 @@ class MotorTable:
         self.kd = np.ones(n)
         self.max_force = np.zeros(n)
         self.effort = np.full(n, np.inf)  # clamp on max_force when the profile enforces it
+        # spherical joints (set_balls): each one's first slot (its three are consecutive), the
+        # qpos address of its quaternion (w, x, y, z) and its target (x, y, z, w); per slot
+        # the ball it belongs to (-1: none)
+        self.ball = np.zeros(0, dtype=np.intp)
+        self.ball_qadr = np.zeros(0, dtype=np.intp)
+        self.ball_target = np.zeros((0, 4))
+        self.ball_of = np.full(n, -1, dtype=np.intp)
         # derived, refreshed by refresh()
         self.active = np.zeros(0, dtype=np.intp)  # motors with max_force > 0, in row order
         self.row_of = np.full(n, -1, dtype=np.intp)
@@ -92,6 +156,14 @@ class MotorTable:
         self.position_qadr = np.zeros(0, dtype=np.intp)
         self.position_gain = np.zeros(0)  # kp / dt^2 per position row
         self.position_target = np.zeros(0)
+        # rows of spherical position motors: row, index into the balls' errors (3 per ball of
+        # ball_pos_index, axis last) and erp kp / dt^2; the balls whose error is needed
+        self.ball_rows = np.zeros(0, dtype=np.intp)
+        self.ball_row_error = np.zeros(0, dtype=np.intp)
+        self.ball_gain = np.zeros(0)
+        self.ball_pos_index = np.zeros(0, dtype=np.intp)  # into ball
+        self.ball_pos_qadr = np.zeros(0, dtype=np.intp)
+        self.ball_pos_target = np.zeros(0)  # 4 per ball of ball_pos_index, x, y, z, w
         self.kd_rows = np.zeros(0, dtype=np.intp)  # rows with kd != 1 (need qacc_smooth)
         self.kd_dof = np.zeros(0, dtype=np.intp)
         self.kd_factor = np.zeros(0)  # 1 - kd
@@ -105,6 +177,17 @@ class MotorTable:
         # bumped by a refresh that moves rows (the active motors or the position rows change):
         # the command hot paths' caches hold row numbers, and are dropped then
         self.layout = 0
+
+    def set_balls(self, balls: list[tuple[int, int, np.ndarray]]) -> None:
+        """The spherical joints: (first slot, qpos address of the quaternion, target x, y, z,
+        w) each, in slot order."""
+        nb = len(balls)
+        self.ball = np.array([b[0] for b in balls], dtype=np.intp)
+        self.ball_qadr = np.array([b[1] for b in balls], dtype=np.intp)
+        self.ball_target = np.array([b[2] for b in balls], dtype=float).reshape(nb, 4)
+        self.ball_of = np.full(self.n, -1, dtype=np.intp)
+        for b, first in enumerate(self.ball.tolist()):
+            self.ball_of[first : first + 3] = b
 
     def refresh(self, dt: float, force: np.ndarray, nv: int) -> None:
         """Recompute the per-row arrays after a command; ``force`` is the force limit in use
@@ -124,7 +207,8 @@ class MotorTable:
         kd = self.kd[active]
         kp = self.kp[active]
         self.offset_rows = kd * self.target_velocity[active] / dt
-        pos = np.flatnonzero(kp)
+        balls = self.ball_of[active]
+        pos = np.flatnonzero((kp != 0.0) & (balls < 0))
         self.position_rows = pos
         if len(pos):
             at = active[pos]
@@ -137,6 +221,20 @@ class MotorTable:
             self.position_qadr = _NO_ROWS
             self.position_gain = self.position_target = _NO_VALUES
             self.has_offset = bool(self.offset_rows.any())
+        brows = np.flatnonzero((kp != 0.0) & (balls >= 0))
+        self.ball_rows = brows
+        if len(brows):
+            which = balls[brows]
+            used, where = np.unique(which, return_inverse=True)
+            self.ball_pos_index = used
+            self.ball_pos_qadr = self.ball_qadr[used]
+            self.ball_pos_target = self.ball_target[used].ravel().copy()
+            self.ball_row_error = 3 * where + (active[brows] - self.ball[which])
+            self.ball_gain = SPHERICAL_ERP * kp[brows] / (dt * dt)
+            self.has_offset = True
+        else:
+            self.ball_pos_index = self.ball_pos_qadr = self.ball_row_error = _NO_ROWS
+            self.ball_gain = self.ball_pos_target = _NO_VALUES
         kdr = np.flatnonzero(kd != 1.0)
         self.kd_rows = kdr
         if len(kdr):
@@ -162,10 +260,23 @@ class MotorTable:
         self.unit_rows  # noqa: B018 - made together
         return self._minv_rows
 
+    def ball_errors(self, qpos: np.ndarray) -> np.ndarray:
+        """The spherical position motors' errors (:func:`spherical_error`), 3 per ball of
+        ``ball_pos_index``."""
+        out: list[float] = []
+        t = self.ball_pos_target.tolist()
+        for i, a in enumerate(self.ball_pos_qadr.tolist()):
+            q = qpos[a : a + 4].tolist()
+            out.extend(spherical_error(*q, *t[4 * i : 4 * i + 4]))
+        return np.array(out)
+
     def aref_offset(self, qpos: np.ndarray) -> np.ndarray:
         """The per-row offset of this step (without the kd != 1 term)."""
-        if len(self.position_rows) == 0:
+        if len(self.position_rows) == 0 and len(self.ball_rows) == 0:
             return self.offset_rows
         out = self.offset_rows.copy()
-        out[self.position_rows] -= self.position_gain * qpos[self.position_qadr]
+        if len(self.position_rows):
+            out[self.position_rows] -= self.position_gain * qpos[self.position_qadr]
+        if len(self.ball_rows):
+            out[self.ball_rows] -= self.ball_gain * self.ball_errors(qpos)[self.ball_row_error]
         return out

@@ -22,7 +22,17 @@ from simbridge.transforms import (
     transform_multiply,
     xyzw_to_wxyz,
 )
-from simbridge.types import BaseState, DynamicsInfo, JointInfo, JointStates, LinkState, Quat, Vec3
+from simbridge.types import (
+    BaseState,
+    DynamicsInfo,
+    JointInfo,
+    JointStateMultiDof,
+    JointStates,
+    JointType,
+    LinkState,
+    Quat,
+    Vec3,
+)
 
 from . import model as build
 from .world import Compiled, Robot
@@ -145,6 +155,8 @@ class StateAccess:
         frame = ((v[13], v[14], v[15]), (v[16], v[17], v[18], v[19]))
         if link == -1 and robot.spec.base_offset is not None:  # body frame = the COM frame
             frame = transform_multiply(frame, robot.spec.base_offset)
+        elif robot.spec.link_offsets and link in robot.spec.link_offsets:  # a turned body frame
+            frame = transform_multiply(frame, robot.spec.link_offsets[link])
         return LinkState(
             (v[0], v[1], v[2]),
             (v[3], v[4], v[5], v[6]),
@@ -230,6 +242,59 @@ class StateAccess:
         c = self._w
         c.d.qpos[qadr] = positions
         c.d.qvel[dof] = velocities
+        c.stale = True
+        c.motor_force_valid = False
+
+    def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        c = self._w
+        kernel = c.kernel
+        if kernel is not None:
+            kernel.check_idle()
+        elif self._diverged is not None:
+            raise self._diverged
+        robot = self._robots[body]
+        d = c.d
+        rows = c.motors.row_of
+        forces = c.motor_force_valid and c.motor_rows_valid
+        slot_of = dict(zip(robot.movable, robot.motor_index.tolist(), strict=True))
+        out = []
+        for j in joints.tolist():
+            jtype = robot.table[j].type
+            if jtype == JointType.FIXED:
+                out.append(JointStateMultiDof((), (), ()))
+                continue
+            a, v, s = int(robot.qadr[j]), int(robot.dofadr[j]), slot_of[j]
+            n = 3 if jtype == JointType.SPHERICAL else 1
+            torque = tuple(
+                float(d.efc_force[rows[s + i]]) if forces and rows[s + i] >= 0 else 0.0
+                for i in range(n)
+            )
+            if n == 3:  # MuJoCo's ball: w, x, y, z; a is x's address
+                q = d.qpos[a - 1 : a + 3].tolist()
+                position: tuple[float, ...] = (q[1], q[2], q[3], q[0])
+            else:
+                position = (float(d.qpos[a]),)
+            velocity = tuple(d.qvel[v : v + n].tolist())
+            out.append(JointStateMultiDof(position, velocity, torque))
+        return out
+
+    def reset_joint_state_multi_dof(
+        self,
+        body: int,
+        joints: np.ndarray,
+        positions: list[list[float]],
+        velocities: list[list[float]],
+    ) -> None:
+        self._check_idle()
+        robot = self._robots[body]
+        c = self._w
+        for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
+            a, dof = int(robot.qadr[j]), int(robot.dofadr[j])
+            if len(q) == 4:  # (x, y, z, w) into MuJoCo's (w, x, y, z); a is x's address
+                c.d.qpos[a - 1 : a + 3] = (q[3], q[0], q[1], q[2])
+            else:
+                c.d.qpos[a] = q[0]
+            c.d.qvel[dof : dof + len(v)] = v
         c.stale = True
         c.motor_force_valid = False
 

@@ -1,7 +1,8 @@
 """The world's compiled state: the robots by id, and everything derived from one compile.
 
 A :class:`Robot` lives from ``load`` to ``remove`` and keeps what must survive a recompile (its
-motor settings, by movable joint). A :class:`Compiled` is built by :func:`compile_state` after
+motor settings, by motor slot: one per hinge or slide joint, three per ball joint, one per
+axis of the child's frame). A :class:`Compiled` is built by :func:`compile_state` after
 every compile of the world spec and replaced whole by the next one: the model and data, the
 motor table in dof order, the joint damping and link damping to apply per step, the torques
 pending for the next step, the compiled loop bound to this model, and the caches of the hot
@@ -23,7 +24,15 @@ from simbridge.urdf import UrdfModel
 from . import kernel as kernel_loader
 from .damping import LinkDamping
 from .model import RobotSpec
-from .motors import LIMIT_DEEP, LIMIT_ERP, MOTOR_DMAX, MOTOR_R_SCALE, MotorTable
+from .motors import (
+    LIMIT_DEEP,
+    LIMIT_ERP,
+    MOTOR_DMAX,
+    MOTOR_R_SCALE,
+    SPHERICAL_BRAKE_IMPULSE,
+    SPHERICAL_BRAKE_KP,
+    MotorTable,
+)
 
 __all__ = ["MOTOR_FIELDS", "Compiled", "Robot", "compile_state", "default_motors"]
 
@@ -42,7 +51,8 @@ def _no_ids() -> np.ndarray:
 @dataclass(eq=False)
 class Robot:
     """One loaded URDF: its model, what the spec holds of it, its joint table, and its motor
-    settings by movable joint (columns as :class:`MotorTable`, kept across recompiles)."""
+    settings by motor slot (columns as :class:`MotorTable`, kept across recompiles): one slot
+    per movable joint, three per spherical joint (its axes, in order), in joint order."""
 
     id: int
     model: UrdfModel
@@ -51,37 +61,70 @@ class Robot:
     fixed: bool
     movable: list[int]  # joint indices
     motor_state: dict[str, np.ndarray] = field(default_factory=dict)
+    balls: list[int] = field(default_factory=list)  # the spherical joints' indices, in order
     # compiled indices (refreshed by every compile_state)
     body_ids: np.ndarray = field(default_factory=_no_ids)  # (links + 1,) base first
-    qadr: np.ndarray = field(default_factory=_no_ids)  # (joints,) -1 for fixed joints
+    # (joints,) the address of PyBullet's first position coordinate (a ball's quaternion x,
+    # after MuJoCo's w) and velocity; -1 for fixed joints
+    qadr: np.ndarray = field(default_factory=_no_ids)
     dofadr: np.ndarray = field(default_factory=_no_ids)  # (joints,) -1 for fixed joints
-    motor_index: np.ndarray = field(default_factory=_no_ids)  # (movable,) slot in the table
+    motor_index: np.ndarray = field(default_factory=_no_ids)  # (movable,) its first slot
+    slot_index: np.ndarray = field(default_factory=_no_ids)  # (slots,) every slot, in order
     free_qadr: int = -1
     free_dofadr: int = -1
     # joints array id -> (joints, movable mask, qadr, dofadr, motor slots, all movable)
     cache: dict[int, tuple[Any, ...]] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # the robot's own slots (kept across compiles): the joint of each, each movable
+        # joint's first, each spherical joint's first
+        self.slot_joint = slot_joints(self.model, self.movable)
+        first: list[int] = []
+        ball_slots: list[int] = []
+        for k, j in enumerate(self.slot_joint):
+            if k == 0 or self.slot_joint[k - 1] != j:
+                first.append(k)
+                if self.model.joints[j].type == "spherical":
+                    ball_slots.append(k)
+                    self.balls.append(j)
+        self.first_slots = np.asarray(first, dtype=np.intp)
+        self.ball_slots = np.asarray(ball_slots, dtype=np.intp)
+
+
+def slot_joints(model: UrdfModel, movable: list[int]) -> list[int]:
+    """The joint of each motor slot of a robot: one per movable joint, three per spherical."""
+    return [j for j in movable for _ in range(3 if model.joints[j].type == "spherical" else 1)]
+
 
 def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> dict[str, np.ndarray]:
-    """The motor every movable joint starts with: PyBullet's brake (velocity 0, impulse
-    1 N·s per step) or, under joint_brake "urdf_friction", the file's friction."""
-    joints = [model.joints[j] for j in movable]
-    n = len(joints)
+    """The motor every movable joint starts with, per slot: PyBullet's brake (velocity 0,
+    impulse 1 N·s per step; on a spherical joint PyBullet's spherical motor, which holds the
+    joint at the identity quaternion with kp 0.2 and an impulse of 1000 N·m·s per step per
+    axis) or, under joint_brake "urdf_friction", the file's friction (a spherical joint's on
+    each axis). ``ball_target``: each spherical joint's target quaternion (x, y, z, w)."""
+    slots = [model.joints[j] for j in slot_joints(model, movable)]
+    n = len(slots)
+    ball = np.array([j.type == "spherical" for j in slots], dtype=bool)
+    kp = np.zeros(n)
     if profile.joint_brake == "pybullet":
         brake = np.full(n, 1.0 / profile.timestep)
+        brake[ball] = SPHERICAL_BRAKE_IMPULSE / profile.timestep
+        kp[ball] = SPHERICAL_BRAKE_KP
     else:
-        brake = np.array([j.friction for j in joints], dtype=float)
+        brake = np.array([j.friction for j in slots], dtype=float)
     effort = np.full(n, np.inf)
     if profile.enforce_effort_limit:
-        effort = np.array([j.effort if j.effort > 0 else np.inf for j in joints], float)
+        effort = np.array([j.effort if j.effort > 0 else np.inf for j in slots], float)
+    nb = sum(model.joints[j].type == "spherical" for j in movable)
     return {
         "target_velocity": np.zeros(n),
         "target_position": np.zeros(n),
-        "kp": np.zeros(n),
+        "kp": kp,
         "kd": np.ones(n),
         "max_force": brake,
         "effort": effort,
         "torque": np.zeros(n),
+        "ball_target": np.tile([0.0, 0.0, 0.0, 1.0], (nb, 1)),
     }
 
 
@@ -166,6 +209,10 @@ class Compiled:
                 t.position_target,
                 commanded is not None and not moved,  # bound commands keep their rows
             )
+            if len(t.ball) or len(t.ball_rows):
+                self.kernel.bind_balls(
+                    t.ball_rows, t.ball_row_error, t.ball_gain, t.ball_pos_qadr, t.ball_pos_target
+                )
         if len(before) != len(t.active) or (before != t.active).any():
             self.motor_rows_valid = False  # the last solve's rows belong to the old set
 
@@ -174,16 +221,20 @@ class Compiled:
         rebuilds the table)."""
         table = self.motors
         for robot in robots.values():
-            idx = robot.motor_index
-            if len(idx) != len(robot.movable):
+            idx = robot.slot_index
+            if len(robot.motor_index) != len(robot.movable):
                 continue  # compiled before this robot existed
             for key in MOTOR_FIELDS:
                 robot.motor_state[key] = getattr(table, key)[idx].copy()
             robot.motor_state["torque"] = self.torque[idx].copy()  # pending for the next step
+            if robot.balls:
+                first = idx[robot.ball_slots]
+                robot.motor_state["ball_target"] = table.ball_target[table.ball_of[first]].copy()
 
 
 def _index_robots(m: Any, robots: dict[int, Robot]) -> list[tuple[Robot, int, int, int]]:
-    """Refresh every robot's compiled indices; (robot, movable k, dof, qadr) per motor."""
+    """Refresh every robot's compiled indices; (robot, slot k, dof, qadr) per motor slot (a
+    ball's three slots: its three dofs; qadr its quaternion's, w first)."""
     owners: list[tuple[Robot, int, int, int]] = []
     for robot in robots.values():
         names = robot.spec.body_names
@@ -196,15 +247,23 @@ def _index_robots(m: Any, robots: dict[int, Robot]) -> list[tuple[Robot, int, in
             if jname is None:
                 continue
             jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jname)
-            qadr[j] = m.jnt_qposadr[jid]
+            ball = m.jnt_type[jid] == mujoco.mjtJoint.mjJNT_BALL
+            qadr[j] = m.jnt_qposadr[jid] + (1 if ball else 0)  # PyBullet's first: x
             dofadr[j] = m.jnt_dofadr[jid]
         robot.qadr, robot.dofadr = qadr, dofadr
         if robot.spec.free_joint is not None:
             jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, robot.spec.free_joint)
             robot.free_qadr = int(m.jnt_qposadr[jid])
             robot.free_dofadr = int(m.jnt_dofadr[jid])
-        for k, j in enumerate(robot.movable):
-            owners.append((robot, k, int(dofadr[j]), int(qadr[j])))
+        k = 0
+        for j in robot.movable:
+            if robot.model.joints[j].type == "spherical":
+                for axis in range(3):
+                    owners.append((robot, k, int(dofadr[j]) + axis, int(qadr[j]) - 1))
+                    k += 1
+            else:
+                owners.append((robot, k, int(dofadr[j]), int(qadr[j])))
+                k += 1
         robot.cache.clear()
     return owners
 
@@ -252,24 +311,33 @@ def compile_state(
     position_of = np.empty(len(order), np.intp)
     position_of[order] = np.arange(len(order))
     for robot in robots.values():
-        robot.motor_index = np.zeros(len(robot.movable), np.intp)
+        robot.slot_index = np.zeros(len(robot.motor_state["kd"]), np.intp)
     for w, (robot, k, _, _) in enumerate(owners):
         slot = position_of[w]
-        robot.motor_index[k] = slot
+        robot.slot_index[k] = slot
         for key in MOTOR_FIELDS:
             getattr(table, key)[slot] = robot.motor_state[key][k]
+    balls: list[tuple[int, int, np.ndarray]] = []  # (first slot, qpos address, target)
+    for robot in robots.values():
+        robot.motor_index = robot.slot_index[robot.first_slots]
+        targets = robot.motor_state["ball_target"]
+        for b, k in enumerate(robot.ball_slots.tolist()):
+            balls.append(
+                (int(robot.slot_index[k]), int(table.qadr[robot.slot_index[k]]), targets[b])
+            )
+    table.set_balls(balls)
     # joint damping applied explicitly, as PyBullet's server does each step
     damp = np.zeros(len(owners))
     if profile.apply_joint_damping:
         for w, (robot, k, _, _) in enumerate(owners):
-            damp[position_of[w]] = robot.model.joints[robot.movable[k]].damping
+            damp[position_of[w]] = robot.model.joints[robot.slot_joint[k]].damping
     damping = None
     link_damped = profile.linear_damping != 0.0 or profile.angular_damping != 0.0
     if link_damped and robots and m.nbody > 1:
         damping = LinkDamping(m, 1, profile.linear_damping, profile.angular_damping)
     torque = np.zeros(table.n)
     for robot in robots.values():  # torques set before a load or remove still apply
-        torque[robot.motor_index] = robot.motor_state["torque"]
+        torque[robot.slot_index] = robot.motor_state["torque"]
     c = Compiled(
         m=m,
         d=d,

@@ -35,8 +35,10 @@ from .types import (
     DynamicsInfo,
     JointCommands,
     JointInfo,
+    JointStateMultiDof,
     JointStates,
     LinkState,
+    MotorMode,
     Quat,
     Vec3,
 )
@@ -243,6 +245,61 @@ class Backend(ABC):
         """TORQUE_CONTROL: added during the next step only. As in PyBullet it does not remove
         the joint's motor: under the "pybullet" profile the default brake cancels small torques
         until ``set_joint_velocity(..., max_force=0)`` releases it."""
+
+    # ---------------------------------------------------------------- multi-DoF joints
+    # Not abstract: a backend without spherical joints refuses them at load and these calls
+    # (BackendUnsupportedError). The Sim checks and normalises every value (simbridge.multi_dof).
+
+    def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        """Every coordinate of each of ``joints`` (any types): a spherical joint's quaternion
+        (x, y, z, w: the child's inertial frame turned from its zero pose), angular velocity
+        in the child's inertial frame and its motor's torque per axis of that frame; a
+        revolute or prismatic joint's 1-tuples; a fixed joint's empty tuples."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "multi-DoF joint states")
+
+    def reset_joint_state_multi_dof(
+        self,
+        body: int,
+        joints: np.ndarray,
+        positions: list[list[float]],
+        velocities: list[list[float]],
+    ) -> None:
+        """Teleport movable ``joints`` (``p.resetJointStateMultiDof``): per joint its
+        coordinates, a spherical joint's a unit quaternion and 3 angular velocities; commands
+        are kept."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "multi-DoF joint resets")
+
+    def set_joint_motor_multi_dof(
+        self,
+        body: int,
+        joints: np.ndarray,
+        mode: MotorMode,
+        targets: list[list[float]],
+        max_force: list[list[float]],
+        kp: list[list[float]],
+        kd: list[list[float]],
+    ) -> None:
+        """PyBullet's spherical joint motor on spherical ``joints``, per axis of the child's
+        inertial frame (see :mod:`simbridge.multi_dof`): POSITION towards the unit quaternion
+        ``targets[i]`` (x, y, z, w) with gains ``kp``, ``kd`` (PyBullet's ``damping``);
+        VELOCITY brakes (target velocity 0, kp 0, kd 1; ``targets`` the identity, unused).
+        ``max_force[i]`` (N·m, >= 0; 0 releases an axis). Persists until replaced."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "spherical joint motors")
+
+    def set_joint_torque_multi_dof(
+        self, body: int, joints: np.ndarray, torques: list[list[float]]
+    ) -> None:
+        """TORQUE_CONTROL on spherical ``joints``: 3 torques each about the child's inertial
+        frame axes (N·m), added during the next step only (they add up, as 1-DoF torques)."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "spherical joint torques")
 
     # ---------------------------------------------------------------- bound commands
     # Not abstract: the default (the Sim sends a bound command before every step through

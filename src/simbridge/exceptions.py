@@ -149,11 +149,13 @@ class UnsupportedJointError(UrdfError):
         joint_type: str,
         supported: Iterable[str],
         line: int | None = None,
+        reason: str = "",
     ):
         self.line = line
+        why = f" ({reason})" if reason else ""
         super().__init__(
-            f"{_at(file, line)}: joint {joint!r}: joint type {joint_type!r} is not supported; "
-            f"supported types: {_choices(supported)}"
+            f"{_at(file, line)}: joint {joint!r}: joint type {joint_type!r} is not supported"
+            f"{why}; supported types: {_choices(supported)}"
         )
 
 

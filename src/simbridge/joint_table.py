@@ -28,9 +28,11 @@ JOINT_TYPES: dict[str, JointType] = {
     "revolute": JointType.REVOLUTE,
     "continuous": JointType.REVOLUTE,
     "prismatic": JointType.PRISMATIC,
+    "spherical": JointType.SPHERICAL,
     "fixed": JointType.FIXED,
 }
-"""URDF joint type -> PyBullet's joint type (a continuous joint is a revolute one)."""
+"""URDF joint type -> PyBullet's joint type (a continuous joint is a revolute one; the reader
+turns a floating joint into a fixed one, as PyBullet does)."""
 
 
 def joint_table(
@@ -44,10 +46,12 @@ def joint_table(
     :func:`~simbridge.inertia.link_inertial` gives them for the profile's inertia source. Fields:
 
     * ``q_index``/``u_index``: PyBullet's state layout, after 7 position and 6 velocity
-      base coordinates (PyBullet counts them for a fixed base too); -1 for fixed joints;
-    * ``flags``: 1 for revolute and prismatic joints (they carry the default motor), else 0;
+      base coordinates (PyBullet counts them for a fixed base too); -1 for fixed joints; a
+      spherical joint takes 4 positions (its quaternion) and 3 velocities;
+    * ``flags``: 1 for revolute and prismatic joints (they carry the default motor), else 0
+      (a spherical joint's motor is another kind: 0, measured);
     * ``axis``: the URDF axis, as written (not normalised), turned into the child's inertial
-      frame; (0, 0, 0) for fixed joints;
+      frame; (0, 0, 0) for fixed and spherical joints;
     * ``parent_frame_position``: the joint origin in the parent's inertial frame;
     * ``parent_frame_orientation``: Bullet's ``rotParentToThis``, the inverse of the child's
       inertial frame orientation seen from the parent's inertial frame at zero joint angle
@@ -73,6 +77,12 @@ def joint_table(
         if jtype == JointType.FIXED:
             axis: Vec3 = (0.0, 0.0, 0.0)
             qi = ui = -1
+            flags = 0
+        elif jtype == JointType.SPHERICAL:
+            axis = (0.0, 0.0, 0.0)
+            qi, ui = q, u
+            q += 4
+            u += 3
             flags = 0
         else:
             axis = quat_rotate(quat_conjugate(cin.orientation), joint.axis)

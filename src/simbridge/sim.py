@@ -45,9 +45,11 @@ from .types import (
     ContactPoint,
     DynamicsInfo,
     JointInfo,
+    JointStateMultiDof,
     JointStates,
     JointType,
     LinkState,
+    MotorMode,
     WorldState,
 )
 
@@ -179,6 +181,9 @@ class Sim:
         self._commands: list[BoundCommand] = []  # bound commands, in binding order
         self._presend: list[BoundCommand] = []  # ... those the Sim sends before each step
         self._held: dict[int, dict[int, BoundCommand]] = {}  # body -> joint -> its command
+        # id -> joint index arrays (from _joints) holding a spherical joint: the commands take
+        # them to their multi-DoF path (kept alive here, so an id is never reused)
+        self._multi_idx: dict[int, np.ndarray] = {}
         g = _vec(gravity, 3, "gravity")
         try:
             if isinstance(timestep, bool) or not isinstance(timestep, (int, float, np.number)):
@@ -587,6 +592,8 @@ class Sim:
                     )
         arr = np.asarray(idx, dtype=np.intp)
         arr.setflags(write=False)
+        if movable and any(b.joint_types[i] == JointType.SPHERICAL for i in idx):
+            self._multi_idx[id(arr)] = arr
         cache[key] = arr
         return arr
 
@@ -675,8 +682,148 @@ class Sim:
         return self._b.base_state(body)
 
     def joint_states(self, body: int, joints: JointsArg | None = None) -> JointStates:
-        """Positions, velocities and motor forces of ``joints`` (default all), each (n,)."""
+        """Positions, velocities and motor forces of ``joints`` (default all), each (n,).
+
+        A spherical joint reports its first coordinate, as ``p.getJointState`` does (its
+        quaternion's x, its angular velocity's x, its motor torque about x); all of them:
+        :meth:`joint_states_multi_dof`."""
         return self._b.joint_states(body, self._joints(body, joints, False))
+
+    def joint_states_multi_dof(
+        self, body: int, joints: JointsArg | None = None
+    ) -> tuple[JointStateMultiDof, ...]:
+        """Every coordinate of ``joints`` (default all), one
+        :class:`~simbridge.types.JointStateMultiDof` per joint (``p.getJointStatesMultiDof``
+        without the reaction forces): a spherical joint's quaternion (x, y, z, w), angular
+        velocity and motor torques (3, about the child's inertial frame axes); a revolute or
+        prismatic joint's 1-tuples; a fixed joint's empty tuples."""
+        return tuple(self._b.joint_states_multi_dof(body, self._joints(body, joints, False)))
+
+    def reset_joint_state_multi_dof(
+        self, body: int, joints: JointsArg, positions: Any, velocities: Any = None
+    ) -> None:
+        """Teleport joints with all their coordinates (``p.resetJointStateMultiDof``; commands
+        are kept). One joint: ``positions`` its coordinates (a spherical joint's quaternion
+        x, y, z, w, normalised as PyBullet does; a revolute or prismatic joint's one number)
+        and ``velocities`` likewise (3 for a spherical joint, in its child's frame; None:
+        zeros). Several joints: a sequence of such per joint, in the order given.
+
+        Raises:
+            InvalidArgumentError: a fixed joint, a wrong number of coordinates, a value that
+                is not finite, a quaternion of norm 0.
+        """
+        from .multi_dof import Q_SIZE, U_SIZE, quaternions
+
+        idx = self._joints(body, joints, True)
+        b = self._bodies[int(body)]
+        one = isinstance(joints, (int, str, np.integer))
+        given_q = [positions] if one else positions
+        given_v = [velocities] if one else velocities
+        try:
+            if len(given_q) != len(idx) or (given_v is not None and len(given_v) != len(idx)):
+                raise TypeError
+        except TypeError:
+            raise InvalidArgumentError(
+                "positions/velocities", f"expected one entry per joint ({len(idx)}) of {joints!r}"
+            ) from None
+        qs: list[list[float]] = []
+        vs: list[list[float]] = []
+        for k, j in enumerate(idx.tolist()):
+            jtype = int(b.joint_types[j])
+            name = f"positions of joint {b.joint_names[j]!r}"
+            if jtype == JointType.SPHERICAL:
+                q = quaternions(given_q[k], 1, name)[0]
+            else:
+                q = self._checked_state(given_q[k], Q_SIZE[jtype], name)
+            vel = None if given_v is None else given_v[k]
+            vname = f"velocities of joint {b.joint_names[j]!r}"
+            v = (
+                [0.0] * U_SIZE[jtype]
+                if vel is None
+                else self._checked_state(vel, U_SIZE[jtype], vname)
+            )
+            if len(v) != U_SIZE[jtype]:
+                raise InvalidArgumentError(vname, f"expected {U_SIZE[jtype]} numbers, got {vel!r}")
+            qs.append(q)
+            vs.append(v)
+        self._b.reset_joint_state_multi_dof(body, idx, qs, vs)
+
+    def _refuse_spherical_state(self) -> None:
+        """get_state/set_state do not carry spherical joints yet: refused, not half done."""
+        for info in self._bodies.values():
+            if JointType.SPHERICAL in info.joint_types:
+                from .exceptions import BackendUnsupportedError
+
+                raise BackendUnsupportedError(
+                    self.backend,
+                    f"get_state/set_state of body {info.name!r} (it has spherical joints)",
+                    "save its joints with joint_states_multi_dof and put them back with "
+                    "reset_joint_state_multi_dof",
+                )
+
+    def _spherical_only(self, body: int, idx: np.ndarray) -> None:
+        """A multi-DoF command names spherical joints only."""
+        b = self._bodies[int(body)]
+        other = [j for j in idx.tolist() if b.joint_types[j] != JointType.SPHERICAL]
+        if other:
+            raise InvalidArgumentError(
+                "joints",
+                f"joints {[b.joint_names[j] for j in other]} of body {b.name!r} are not "
+                "spherical: command spherical joints apart from the others (their targets "
+                "and forces have 3 or 4 values per joint)",
+            )
+
+    def _refuse_multi_dof(self, body: int, idx: np.ndarray, what: str) -> None:
+        b = self._bodies[int(body)]
+        multi = [b.joint_names[j] for j in idx.tolist() if b.joint_types[j] == JointType.SPHERICAL]
+        if multi:
+            raise InvalidArgumentError(
+                "joints",
+                f"spherical joints {multi} of body {b.name!r} take no {what}: use "
+                "reset_joint_state_multi_dof for a teleport, set_joint_position / "
+                "set_joint_velocity / set_joint_torque for commands",
+            )
+
+    def _multi_dof_motor(
+        self,
+        body: int,
+        idx: np.ndarray,
+        mode: MotorMode,
+        target: Any,
+        max_force: Any,
+        kp: Any,
+        kd: Any,
+    ) -> None:
+        """A velocity or position command on spherical joints (see :mod:`simbridge.multi_dof`)."""
+        from .multi_dof import per_axis, quaternions
+
+        self._spherical_only(body, idx)
+        if self._held:
+            self._refuse_held(body, idx)
+        n = len(idx)
+        if mode == MotorMode.VELOCITY:
+            v = per_axis(target, n, 3, "target")
+            if any(x != 0.0 for row in v for x in row):
+                raise InvalidArgumentError(
+                    "target",
+                    f"a spherical joint takes a velocity target of 0 alone (a brake; "
+                    f"max_force=0 releases it), got {target!r}: PyBullet's spherical motor "
+                    "drives no other velocity (setJointMotorControlMultiDof refuses "
+                    "VELOCITY_CONTROL and its POSITION_CONTROL reads no targetVelocity); use "
+                    "set_joint_torque or a position target",
+                )
+            targets = [[0.0, 0.0, 0.0, 1.0]] * n
+        else:
+            targets = quaternions(target, n, "target")
+        self._b.set_joint_motor_multi_dof(
+            body,
+            idx,
+            mode,
+            targets,
+            per_axis(max_force, n, 3, "max_force", nonneg=True),
+            per_axis(kp, n, 3, "kp", nonneg=True),
+            per_axis(kd, n, 3, "kd", nonneg=True),
+        )
 
     def reset_joint_state(
         self,
@@ -685,8 +832,12 @@ class Sim:
         positions: Any,
         velocities: Any = 0.0,
     ) -> None:
-        """Teleport movable joints to ``positions`` with ``velocities`` (``resetJointState``)."""
+        """Teleport movable joints to ``positions`` with ``velocities`` (``resetJointState``).
+        A spherical joint takes :meth:`reset_joint_state_multi_dof` (PyBullet's
+        ``resetJointState`` leaves one as it is: measured)."""
         idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            self._refuse_multi_dof(body, idx, "reset_joint_state")
         n = len(idx)
         self._b.reset_joint_state(
             body,
@@ -722,8 +873,15 @@ class Sim:
     ) -> None:
         """VELOCITY_CONTROL: drive ``joints`` towards ``target`` (rad/s or m/s) with at most
         ``max_force`` (N·m or N). Persists until replaced; ``max_force=0`` releases the joint
-        (and removes the default brake)."""
+        (and removes the default brake).
+
+        A spherical joint takes only the target 0 (PyBullet's spherical motor brakes; it drives
+        no other velocity), and ``max_force`` per axis of the child's frame: a number, shape
+        (3,), (n, 1) or (n, 3) (see :mod:`simbridge.multi_dof`); spherical joints are commanded
+        apart from other joints."""
         idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            return self._multi_dof_motor(body, idx, MotorMode.VELOCITY, target, max_force, 0, 1)
         if self._held:
             self._refuse_held(body, idx)
         n = len(idx)
@@ -746,8 +904,17 @@ class Sim:
     ) -> None:
         """POSITION_CONTROL with PyBullet's law: each step the motor asks for the velocity
         change ``kp * (target - q) / dt - kd * v`` (so it depends on dt), its force clamped to
-        ``max_force``. Persists until replaced."""
+        ``max_force``. Persists until replaced.
+
+        A spherical joint takes a target quaternion (x, y, z, w; shape (4,) or (n, 4)) and
+        PyBullet's spherical motor law: each axis of the child's frame asks for the velocity
+        ``-kd v + 0.2 kp e / dt`` (e: the turn to the target as Bullet's XYZ Euler angles; kd is
+        what PyBullet's ``setJointMotorControlMultiDof`` calls ``damping``), ``max_force``,
+        ``kp`` and ``kd`` per axis (a number, (3,), (n, 1) or (n, 3)); see
+        :mod:`simbridge.multi_dof`."""
         idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            return self._multi_dof_motor(body, idx, MotorMode.POSITION, target, max_force, kp, kd)
         if self._held:
             self._refuse_held(body, idx)
         n = len(idx)
@@ -788,6 +955,7 @@ class Sim:
             float64 arrays of shape (n,), n the number of joints, in the order given.
         """
         idx = self._joints(body, joints, True)
+        self._refuse_multi_dof(body, idx, "a bound command")
         self._refuse_held(body, idx)
         n = len(idx)
         command = BoundCommand(
@@ -817,6 +985,7 @@ class Sim:
         :meth:`set_joint_position` called just before each step would, bit for bit. Checks,
         ownership and the end of the binding as for :meth:`velocity_command`."""
         idx = self._joints(body, joints, True)
+        self._refuse_multi_dof(body, idx, "a bound command")
         self._refuse_held(body, idx)
         n = len(idx)
         command = BoundCommand(
@@ -887,8 +1056,20 @@ class Sim:
     def set_joint_torque(self, body: int, joints: JointsArg, torque: Any) -> None:
         """TORQUE_CONTROL: add ``torque`` (N·m or N) during the next step only (commands before
         one step add up, as in PyBullet). The joint's motor stays; release the default brake
-        first with ``set_joint_velocity(..., max_force=0)``."""
+        first with ``set_joint_velocity(..., max_force=0)``.
+
+        A spherical joint takes 3 torques about the axes of its child's (inertial) frame:
+        shape (3,) or (n, 3); spherical joints are commanded apart from other joints."""
         idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            self._spherical_only(body, idx)
+            from .multi_dof import per_axis
+
+            n = len(idx)
+            self._b.set_joint_torque_multi_dof(
+                body, idx, per_axis(torque, n, 3, "torque", scalar=False)
+            )
+            return
         self._b.set_joint_torque(body, idx, self._values(torque, len(idx), "torque"))
 
     # ---------------------------------------------------------------- contacts and state
@@ -953,6 +1134,7 @@ class Sim:
             InvalidArgumentError: a bound command holds a bad value (as ``step`` would).
         """
         b = self._b
+        self._refuse_spherical_state()
         for command in self._commands:  # a bound command's values are the ones in force
             command.send()
         native = b.snapshot() if _flag(exact, "exact") else None
@@ -1007,6 +1189,7 @@ class Sim:
         b.time  # noqa: B018 - raises SimClosedError after close()
         from .state import check_state
 
+        self._refuse_spherical_state()
         checked = check_state(state, self._bodies)
         self._end_commands("set_state replaced the commands in force")
         exact = b.restore(state.native if state.backend == self.backend else None)

@@ -23,6 +23,7 @@ __all__ = [
     "LinkState",
     "BaseState",
     "JointStates",
+    "JointStateMultiDof",
     "ContactPoint",
     "MotorMode",
     "JointCommands",
@@ -131,6 +132,10 @@ class JointStates(NamedTuple):
     """Joint positions, velocities and applied motor torques, each a float array of shape (n,)
     in the order the joints were asked for.
 
+    A spherical joint reports its first coordinate, as ``p.getJointState`` does: the quaternion's
+    x, the angular velocity's x, the motor torque about x (all of them:
+    :class:`JointStateMultiDof`).
+
     ``applied_torques`` is the joint motor force of the last step (N·m or N): the velocity or
     position motor's force, or the torque command; PyBullet's ``appliedJointMotorTorque``.
     Fixed joints report 0.
@@ -139,6 +144,23 @@ class JointStates(NamedTuple):
     positions: np.ndarray  # (n,)
     velocities: np.ndarray  # (n,)
     applied_torques: np.ndarray  # (n,)
+
+
+class JointStateMultiDof(NamedTuple):
+    """One joint's state with all its coordinates: ``p.getJointStateMultiDof`` without the
+    reaction forces. Sizes by joint type: revolute and prismatic 1, 1, 1; spherical 4, 3, 3;
+    fixed 0, 0, 0.
+
+    A spherical joint's ``position`` is the rotation of the child link's inertial frame from its
+    pose at the zero position, as a quaternion (x, y, z, w) in that frame (PyBullet's joint
+    quaternion); ``velocity`` is the child's angular velocity relative to the parent, in the
+    child's inertial frame (rad/s); ``applied_torque`` the motor's torque per axis of that frame
+    during the last step (N·m).
+    """
+
+    position: tuple[float, ...]
+    velocity: tuple[float, ...]
+    applied_torque: tuple[float, ...]
 
 
 class ContactPoint(NamedTuple):

@@ -58,8 +58,16 @@ __all__ = [
     "MESH_FORMATS",
 ]
 
-SUPPORTED_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
-_KNOWN_UNSUPPORTED = ("floating", "planar", "spherical")
+SUPPORTED_JOINT_TYPES = ("revolute", "continuous", "prismatic", "spherical", "fixed", "floating")
+_KNOWN_UNSUPPORTED = ("planar",)
+# PyBullet 3.2.7 builds a planar joint (btMultibody setupPlanar) but broken, measured: the
+# child's centre of mass is put at the joint origin, its state reads back 2 of its 3
+# coordinates, and resetJointStateMultiDof leaves it where it is. No engine can be held to that.
+_PLANAR_REFUSED = (
+    "PyBullet's planar joint is broken (measured on 3.2.7: the child's centre of mass is put at "
+    "the joint origin, getJointStateMultiDof reads 2 of its 3 coordinates, resetJointStateMultiDof "
+    "is ignored)"
+)
 MESH_FORMATS = (".obj", ".stl", ".dae")  # what PyBullet's URDF importer reads
 
 # ---------------------------------------------------------------- reading values
@@ -386,7 +394,9 @@ def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> J
         raise r.error(elem, where, "has no type attribute (PyBullet refuses it too)")
     if jtype not in SUPPORTED_JOINT_TYPES:
         if jtype in _KNOWN_UNSUPPORTED:
-            raise UnsupportedJointError(r.file, name, jtype, SUPPORTED_JOINT_TYPES, elem.line)
+            raise UnsupportedJointError(
+                r.file, name, jtype, SUPPORTED_JOINT_TYPES, elem.line, _PLANAR_REFUSED
+            )
         raise r.error(
             elem, where, f"unknown joint type {jtype!r}; valid: {list(SUPPORTED_JOINT_TYPES)}"
         )
@@ -400,9 +410,14 @@ def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> J
     if parent == child:
         raise r.error(elem, where, f"link {child!r} is its own parent (a cycle)")
     xyz, rpy = r.origin(elem, where)
+    if jtype == "floating":  # PyBullet: "joint unsupported, creating a fixed joint instead"
+        r.lenient.add(
+            elem.line, f"{where} type 'floating' read as 'fixed' (PyBullet welds it the same)"
+        )
+        jtype = "fixed"
     axis: tuple[float, ...] = (1.0, 0.0, 0.0)  # PyBullet's axis without an <axis> element
     axis_elem: XmlElement | None = elem.find("axis")  # type: ignore[assignment]
-    if jtype == "fixed":
+    if jtype in ("fixed", "spherical"):
         if axis_elem is not None:  # not read by PyBullet; kept when it reads as 3 numbers
             values, clean = pybullet_numbers(axis_elem.get("xyz", ""))
             if clean and len(values) == 3 and all(math.isfinite(v) for v in values):
@@ -420,7 +435,7 @@ def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> J
                 )
             axis = read
     # The axis is kept as written (PyBullet reports it unnormalised); engines normalise it.
-    if jtype != "fixed" and max(abs(a) for a in axis) < 1e-12:
+    if jtype not in ("fixed", "spherical") and max(abs(a) for a in axis) < 1e-12:
         raise r.error(
             axis_elem if axis_elem is not None else elem,
             f"{where} <axis>",
@@ -468,6 +483,7 @@ def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> J
         friction=friction,
         has_limit=jtype in ("revolute", "prismatic") and has_range and lower <= upper,
         line=elem.line,
+        twist=r.number(limit, "twist", -1.0, f"{where} <limit>"),
     )
 
 

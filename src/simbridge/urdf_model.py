@@ -91,7 +91,7 @@ class Joint:
     or N), velocity (rad/s or m/s), damping and friction as written."""
 
     name: str
-    type: str  # URDF type: revolute, continuous, prismatic, fixed
+    type: str  # URDF type: revolute, continuous, prismatic, spherical, fixed
     parent: str
     child: str
     origin_xyz: Vec3
@@ -107,6 +107,9 @@ class Joint:
     index: int = -1  # PyBullet joint index (= child link index)
     origin_quat: Quat = None  # type: ignore[assignment]  # None: from origin_rpy
     line: int = 0  # source line of the <joint> element
+    # a spherical joint's <limit twist> (rad; -1 when absent, PyBullet's default): with lower,
+    # upper and effort > 0 PyBullet limits its swing about x and y and its twist about z
+    twist: float = -1.0
 
     def __post_init__(self) -> None:
         if self.origin_quat is None:

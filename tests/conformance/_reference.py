@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-TYPE_NUMBER = {"revolute": 0, "continuous": 0, "prismatic": 1, "fixed": 4}
+TYPE_NUMBER = {"revolute": 0, "continuous": 0, "prismatic": 1, "spherical": 2, "fixed": 4}
 
 
 @functools.cache
@@ -212,7 +212,7 @@ def joint_table(robot: Any, fixed_base: bool) -> list[Row]:
         damping = 0.0 if dyn is None or dyn.damping is None else float(dyn.damping)
         friction = 0.0 if dyn is None or dyn.friction is None else float(dyn.friction)
         axis = np.zeros(3)
-        if movable:
+        if movable and jtype != 2:  # PyBullet reports no axis for a spherical joint (measured)
             axis = np.array([1.0, 0.0, 0.0]) if j.axis is None else np.asarray(j.axis, float)
         rows.append(
             Row(
@@ -221,7 +221,7 @@ def joint_table(robot: Any, fixed_base: bool) -> list[Row]:
                 type=jtype,
                 q_index=q if movable else -1,
                 u_index=u if movable else -1,
-                flags=1 if movable else 0,
+                flags=1 if movable and jtype != 2 else 0,  # a spherical joint's motor: 0
                 damping=damping,
                 friction=friction,
                 lower=lower,
@@ -235,9 +235,9 @@ def joint_table(robot: Any, fixed_base: bool) -> list[Row]:
                 axis=axis,
             )
         )
-        if movable:
-            q += 1
-            u += 1
+        if movable:  # a spherical joint: a quaternion and an angular velocity
+            q += 4 if jtype == 2 else 1
+            u += 3 if jtype == 2 else 1
     return rows
 
 

@@ -51,16 +51,11 @@ LOAD_ERRORS = {
         exc.MeshNotFoundError,
         r"<urdf text>:1: link 'a' <collision> #0: mesh file 'no_such_mesh\.stl' not found",
     ),
-    "a floating joint": (
-        _robot('<joint name="float" type="floating"><parent link="a"/><child link="b"/></joint>'),
-        exc.UnsupportedJointError,
-        r"joint 'float': joint type 'floating' is not supported; supported types: "
-        r"\['revolute', 'continuous', 'prismatic', 'fixed'\]",
-    ),
     "a planar joint": (
         _robot('<joint name="plane" type="planar"><parent link="a"/><child link="b"/></joint>'),
         exc.UnsupportedJointError,
-        r"joint 'plane': joint type 'planar' is not supported",
+        r"joint 'plane': joint type 'planar' is not supported \(PyBullet's planar joint is "
+        r"broken",
     ),
     "a robot without a name": (
         '<robot><link name="a"/></robot>',

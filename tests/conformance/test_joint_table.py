@@ -32,22 +32,12 @@ SHIPPED = [
     "free_box.urdf",
 ]
 
-# pybullet_data files simbridge refuses, with the exception and message it raises. The last three
-# raw PyBullet refuses too; the spherical joints wait for their support (issue 14, item 2). Every
-# other file loads, read as PyBullet reads it (test_pybullet_data.py checks the joint tables and
-# link frames against raw PyBullet's, files yourdfpy cannot read included).
+# pybullet_data files simbridge refuses, with the exception and message it raises: raw PyBullet
+# refuses them too. Every other file loads (the spherical joints of humanoid.urdf and
+# spherical_joint_limit.urdf included: test_spherical.py), read as PyBullet reads it
+# (test_pybullet_data.py checks the joint tables and link frames against raw PyBullet's, files
+# yourdfpy cannot read included).
 REFUSED: dict[str, tuple[type[Exception], str, str]] = {
-    "humanoid/humanoid.urdf": (
-        exc.UnsupportedJointError,
-        r"humanoid\.urdf:40: joint 'chest': joint type 'spherical' is not supported",
-        "spherical joints (its trailing NUL byte is read past, as PyBullet does)",
-    ),
-    "spherical_joint_limit.urdf": (
-        exc.UnsupportedJointError,
-        r"spherical_joint_limit\.urdf:28: joint 'neck': joint type 'spherical' is not supported; "
-        r"supported types: \['revolute', 'continuous', 'prismatic', 'fixed'\]",
-        "spherical joints",
-    ),
     "kuka_iiwa/model_for_sdf.urdf": (
         exc.MeshNotFoundError,
         r"model_for_sdf\.urdf:76: link 'lbr_iiwa_link_0' <collision> #0: mesh file "
@@ -73,6 +63,7 @@ YOURDFPY_CANNOT_READ = {
     "biped/biped2d_pybullet.urdf": "blank lines before the XML declaration",
     "husky/husky.urdf": "unexpanded $(optenv ...) arguments where numbers belong",
     "plane_implicit.urdf": "Bullet's <plane> geometry",
+    "humanoid/humanoid.urdf": "Bullet's <capsule> geometry (test_spherical.py checks it)",
 }
 
 # Files one backend cannot load although simbridge's parser accepts them (an engine limit): backend

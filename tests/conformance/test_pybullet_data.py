@@ -35,18 +35,9 @@ ALL = sorted(
 POSE = ((0.1, -0.2, 0.3), (0.0, 0.0, math.sin(0.3), math.cos(0.3)))
 
 # raw PyBullet loads these, simbridge does not (measured reason)
-REFUSED: dict[str, tuple[type[Exception], str, str]] = {
-    "humanoid/humanoid.urdf": (
-        exc.UnsupportedJointError,
-        r"humanoid\.urdf:40: joint 'chest': joint type 'spherical' is not supported",
-        "spherical joints (issue 14, item 2); its trailing NUL byte is read past",
-    ),
-    "spherical_joint_limit.urdf": (
-        exc.UnsupportedJointError,
-        r"spherical_joint_limit\.urdf:28: joint 'neck': joint type 'spherical' is not supported",
-        "a spherical joint (issue 14, item 2)",
-    ),
-}
+REFUSED: dict[str, tuple[type[Exception], str, str]] = {}
+# (humanoid.urdf and spherical_joint_limit.urdf were here for their spherical joints until
+# they were supported: test_spherical.py)
 
 # raw PyBullet refuses these too ("Cannot load URDF file."): simbridge's one-line errors
 PYBULLET_REFUSES: dict[str, tuple[type[Exception], str]] = {
@@ -117,7 +108,8 @@ def test_every_file_is_read_as_raw_pybullet_reads_it(caplog):
         if why:
             failures.append(f"{name}: {why}")
     assert not failures, "\n".join(failures)
-    assert len(LOADABLE) == 1090  # of pybullet_data 3.2.7's 1095 (was 1083 before issue 14)
+    # of pybullet_data 3.2.7's 1095 (was 1083 before issue 14, 1090 before its spherical joints)
+    assert len(LOADABLE) == 1092
 
 
 @pytest.mark.parametrize("name", SAMPLE)
@@ -132,12 +124,11 @@ def test_sim_loads_it_as_raw_pybullet_does(make_sim, name, caplog):
     assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None, name
 
 
-@pytest.mark.parametrize("name", sorted(REFUSED))
-def test_refused_files_fail_as_listed(make_sim, name):
-    _raw.raw_load(os.path.join(DATA, name))  # raw PyBullet loads it
-    error, message, _reason = REFUSED[name]
-    with pytest.raises(error, match=message):
-        make_sim().load_urdf(os.path.join(DATA, name))
+def test_refused_files_fail_as_listed(make_sim):
+    for name, (error, message, _reason) in sorted(REFUSED.items()):
+        _raw.raw_load(os.path.join(DATA, name))  # raw PyBullet loads it
+        with pytest.raises(error, match=message):
+            make_sim().load_urdf(os.path.join(DATA, name))
 
 
 @pytest.mark.parametrize("name", sorted(PYBULLET_REFUSES))
