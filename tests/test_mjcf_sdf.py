@@ -303,3 +303,23 @@ def test_a_body_the_file_does_not_make_is_a_scenario_error():
     sc = loads_scenario(SCENARIO.format(extra="body = 1"))
     with pytest.raises(ScenarioError, match=r"'mjcf/ant\.xml' makes 1 bodies \(0 to 0\), not 1"):
         run(sc, "mujoco")
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_self_collision_is_loadmjcf_s_flag(backend):
+    """Off by default (loadMJCF's flags), on when asked. With ``True`` (exclude the parent only)
+    an MJCF body collides with its MJCF parent body, which the massless links of its joints make
+    a grandparent: the humanoid's overlapping geoms push apart on both engines; with
+    ``"exclude_all_parents"`` (pybullet_envs' choice) they do not."""
+    counts = {}
+    for mode in (None, "exclude_all_parents", True):
+        with simbridge.Sim(backend) as sim:
+            (h,) = sim.load_mjcf("mjcf/humanoid_symmetric_no_ground.xml", self_collision=mode)
+            assert sim.manifest()["bodies"][h]["self_collision"] == {
+                None: "off",
+                "exclude_all_parents": "exclude_all_parents",
+                True: "exclude_parent",
+            }[mode]
+            sim.step(1)
+            counts[mode] = len(sim.contact_points(h, h))
+    assert counts[None] == counts["exclude_all_parents"] == 0 and counts[True] > 0
