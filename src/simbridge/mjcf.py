@@ -300,6 +300,11 @@ class _Reader:
         for child in elem:
             if child.tag == "mesh" and child.get("name") and child.get("file"):
                 self.assets[child.get("name", "")] = self.mesh_dir + child.get("file", "")
+                for attr, value in child.attrib.items():
+                    if attr not in ("name", "file"):  # PyBullet: "todo: parse mesh scale"
+                        self.file_ignored.append(
+                            f"line {line_of(child)}: <asset><mesh> {attr}={value!r}"
+                        )
 
     def parse_root_level(self, elem: Element) -> None:
         for child in elem:
@@ -669,17 +674,16 @@ def _local_box(s: _Shape) -> tuple[np.ndarray, np.ndarray]:
             return np.zeros(3), np.full(3, 1e30)
         return np.zeros(3), np.asarray(s.half, dtype=float)
     if s.kind == "mesh":
-        from .inertia import _bullet_hull_points
         from .meshes import mesh_vertices
 
         assert s.mesh is not None
         v = mesh_vertices(s.mesh)
         v = v[np.isfinite(v).all(axis=1)]
-        grow = 2 * MESH_MARGIN + (MESH_MARGIN if s.mesh.suffix.lower() == ".obj" else 0.0)
+        # an .stl: a hull whose box is cached while its margin is still Bullet's default 4 cm,
+        # then read with the importer's 1 mm; an .obj: a compound (1 mm) of hulls (1 mm, twice)
+        grow = CONVEX_MARGIN + MESH_MARGIN if s.mesh.suffix.lower() == ".stl" else 3 * MESH_MARGIN
         if len(v) == 0:
             return np.zeros(3), np.full(3, grow)
-        if s.mesh.suffix.lower() != ".obj":
-            v = _bullet_hull_points(v)
         lo, hi = v.min(axis=0), v.max(axis=0)
         return 0.5 * (lo + hi), 0.5 * (hi - lo) + grow
     r = s.radius
@@ -718,7 +722,10 @@ def _alone_moments(s: _Shape, mass: float) -> Vec3:
         a, b = np.asarray(s.fromto[0]), np.asarray(s.fromto[1])
         lo, hi = np.minimum(a, b) - s.radius, np.maximum(a, b) + s.radius
         return _box_moments(mass, hi - lo)
-    return _box_moments(mass, 2.0 * _local_box(s)[1])
+    half = _local_box(s)[1]
+    if s.kind == "mesh" and s.mesh is not None and s.mesh.suffix.lower() == ".stl":
+        half = half + MESH_MARGIN  # a hull's own inertia counts its margin once more
+    return _box_moments(mass, 2.0 * half)
 
 
 def bullet_moments(shapes: list[_Shape], mass: float, inertial: Pose) -> Vec3:

@@ -238,3 +238,116 @@ def test_files_pybullet_refuses_fail_with_one_line(make_sim, name):
     with pytest.raises(error, match=message) as info:
         make_sim().load_sdf(os.path.join(DATA, name))
     assert "\n" not in str(info.value)
+
+
+# Hand-written files for the importers' corners pybullet_data does not reach ({data}: its path):
+# compiler angle, <default> limited and geom values, a class's childclass, axisangle, a joint's
+# pos and quat, a body with three joints (one unlimited, one slide), an <inertial> turned, meshes
+# (.stl and .obj, alone and with other shapes, an ignored scale), fromto cylinders and capsules
+# among other shapes, an unhandled geom type, a top-level body whose first joint is a slide; SDF
+# poses of three numbers, collision group and mask, <contact>, an off-diagonal inertia, a
+# continuous joint with a <limit>, a static model.
+CASES = {
+    "corners.xml": """<mujoco model="corners">
+  <compiler angle="radian"/>
+  <default>
+    <joint limited="true"/>
+    <geom contype="2" conaffinity="3" friction="0.7 0.02 0.003" condim="4"/>
+    <default class="soft"><geom friction="0.2" condim="6" contype="4"/></default>
+  </default>
+  <asset>
+    <mesh name="cube" file="{data}/cube.obj" scale="2 2 2"/>
+    <mesh name="link" file="{data}/kuka_iiwa/meshes/link_1.stl"/>
+    <mesh name="duck" file="{data}/duck_vhacd.obj"/>
+  </asset>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 0.1"/>
+    <body name="root" pos="0.1 0.2 1.0" quat="0.9 0.1 0.2 0.3">
+      <joint type="free"/>
+      <geom type="box" size="0.1 0.2 0.3" axisangle="0 0 1 0.5"/>
+      <geom type="mesh" mesh="cube" pos="0.3 0 0"/>
+      <body name="arm" pos="0 0 -0.4" childclass="soft">
+        <joint name="hx" type="hinge" axis="1 0 0" range="-1 1" pos="0.01 0.02 0.03"/>
+        <joint name="hy" type="slide" axis="0 1 0" range="-0.1 0.2" pos="0.04 0 0"/>
+        <joint type="hinge" axis="0 0 1" limited="false"/>
+        <inertial pos="0.01 0 -0.1" quat="0.7 0 0.7 0" mass="2.5" diaginertia="0.1 0.2 0.3"/>
+        <geom type="cylinder" size="0.05 0.2"/>
+        <geom type="mesh" mesh="link" quat="0 1 0 0"/>
+        <body name="tip" pos="0 0 -0.5">
+          <joint name="hq" type="hinge" axis="0 1 0" range="0 1" quat="1 0 0 0"/>
+          <geom type="capsule" fromto="0 0 0 0.1 0.1 -0.2" size="0.03"/>
+          <geom type="sphere" size="0.05" pos="0 0 -0.3"/>
+        </body>
+      </body>
+    </body>
+    <body name="slider" pos="2 0 0.5">
+      <joint name="s1" type="slide" axis="1 0 0" range="-1 1"/>
+      <geom type="capsule" size="0.05 0.1"/>
+      <geom type="cylinder" fromto="0 0 0 0 0.3 0" size="0.04"/>
+    </body>
+    <body name="a" pos="0 0 1"><geom type="mesh" mesh="link"/></body>
+    <body name="c" pos="2 0 1"><inertial mass="3" pos="0 0 0"/>
+      <geom type="mesh" mesh="duck"/></body>
+    <body name="d" pos="3 0 1"><inertial mass="3" pos="0.1 0 0"/>
+      <geom type="mesh" mesh="link"/><geom type="mesh" mesh="duck"/></body>
+    <body name="e" pos="3 0 1">
+      <geom type="cylinder" size="0.1 0.2"/><geom type="ellipsoid" size="0.1 0.2 0.3"/></body>
+  </worldbody>
+</mujoco>
+""",
+    "corners.sdf": """<?xml version="1.0"?>
+<sdf version="1.6">
+ <model name="m1">
+  <pose>1 2 3</pose>
+  <link name="base"><pose>0.1 0 0 0 0 0.3</pose>
+   <inertial><pose>0.01 0.02 0 0.1 0 0</pose><mass>2</mass><inertia><ixx>0.1</ixx>
+    <ixy>0.01</ixy><ixz>0</ixz><iyy>0.2</iyy><iyz>0</iyz><izz>0.3</izz></inertia></inertial>
+   <collision name="c" group="3" mask="5"><geometry><box><size>0.2 0.3 0.4</size></box>
+    </geometry></collision>
+   <contact><lateral_friction>0.9</lateral_friction><rolling_friction>0.01</rolling_friction>
+   </contact>
+  </link>
+  <link name="l1"><pose>0.2 0 0.5 0.5 0 0</pose>
+   <collision name="c"><pose>0 0 0.1 0 0.2 0</pose><geometry><cylinder><radius>0.05</radius>
+    <length>0.3</length></cylinder></geometry></collision>
+   <collision name="m"><geometry><mesh><uri>{data}/cube.obj</uri><scale>0.1 0.1 0.1</scale>
+    </mesh></geometry></collision>
+  </link>
+  <link name="l2"><pose>0.2 0.3 0.5 0 0 0</pose>
+   <inertial><mass>0.5</mass><inertia><ixx>0.01</ixx><iyy>0.01</iyy><izz>0.01</izz></inertia>
+   </inertial>
+   <collision name="c"><geometry><sphere><radius>0.05</radius></sphere></geometry></collision>
+  </link>
+  <joint name="j1" type="revolute"><parent>base</parent><child>l1</child><axis><xyz>0 1 0</xyz>
+   <limit><lower>-1</lower><upper>1</upper><effort>10</effort><velocity>2</velocity></limit>
+   <dynamics><damping>0.3</damping><friction>0.1</friction></dynamics></axis></joint>
+  <joint name="j2" type="continuous"><parent>l1</parent><child>l2</child><axis><xyz>1 0 0</xyz>
+   <limit><lower>-1</lower><upper>1</upper></limit></axis></joint>
+ </model>
+ <model name="m2">
+  <static>1</static>
+  <link name="a"><collision name="c"><geometry><box><size>1 1 0.1</size></box></geometry>
+   </collision></link>
+ </model>
+</sdf>
+""",
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_hand_written_corners_read_as_raw_pybullet_reads_them(make_sim, case, tmp_path, caplog):
+    caplog.set_level(logging.ERROR, logger="simbridge")
+    path = str(tmp_path / case)
+    with open(path, "w") as f:
+        f.write(CASES[case].format(data=DATA))
+    kind = "mjcf" if case.endswith(".xml") else "sdf"
+    raw = raw_scene(path)
+    bodies = parse_scene(path, kind)
+    assert len(bodies) == len(raw) == (7 if kind == "mjcf" else 2)
+    for body, r in zip(bodies, raw, strict=True):
+        assert core_difference(case, body, r) is None, f"{case} body {body.body_index}"
+    sim = make_sim()
+    ids = sim.load_mjcf(path) if kind == "mjcf" else sim.load_sdf(path)
+    for body, r in zip(ids, raw, strict=True):
+        assert _raw.table_difference(_blanked(sim.joints(body)), _blanked(r.table)) is None
+        assert _raw.frames_difference(_raw.sim_frames(sim, body), r.frames) is None
