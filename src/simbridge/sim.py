@@ -561,6 +561,12 @@ class Sim:
         elif isinstance(joints, np.ndarray):
             key = (joints.dtype.char, joints.tobytes())
         else:
+            if isinstance(joints, (set, frozenset, dict)):  # no order: which target is whose?
+                raise InvalidArgumentError(
+                    "joints",
+                    f"expected an index, a name or an ordered sequence of them (list, tuple, "
+                    f"array), got a {type(joints).__name__}: {joints!r}",
+                )
             try:
                 key = tuple(joints)
                 hash(key)

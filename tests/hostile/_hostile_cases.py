@@ -2125,10 +2125,6 @@ KNOWN: dict[str, dict[str, str]] = {
         "(SIGSEGV) on a joint name over 1263 bytes or a link name over 2287 "
         "(measured, PyBullet 3.2.7); simbridge passes them on"
     },
-    "call-joint-set": dict.fromkeys(
-        BACKENDS,
-        "not in issue 15: a set of joints is taken in its iteration order instead of being refused",
-    ),
 }
 
 
