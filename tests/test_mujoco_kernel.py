@@ -181,6 +181,38 @@ def test_kuka_position_motors_torques_and_damping(monkeypatch, profile):
     _agree(monkeypatch, _kuka_position_torque_damping, profile)
 
 
+def _spherical_motors(sim, record) -> None:
+    # spherical joints: PyBullet's motor at load (kp 0.2 to the identity) on a humanoid's eight,
+    # position motors with gains and forces per axis, a brake, torques, and a free swing
+    h = sim.load_urdf("humanoid/humanoid.urdf", base_position=(0, 0, 3), fixed_base=True)
+    b = sim.load_urdf("spherical_pendulum.urdf", base_position=(2, 0, 1), fixed_base=True)
+    tilt = (0.29, -0.21, 0.12, 0.9253)
+    sim.reset_joint_state_multi_dof(b, "ball", tilt, (1.5, -0.7, 2.0))
+    sim.set_joint_position(
+        h,
+        ["neck", "left_hip"],
+        [(0.2, 0.0, 0.0, 0.98), (0.0, 0.4, 0.1, 0.91)],
+        max_force=[50.0, 20.0, 10.0],
+        kp=[0.3, 0.2, 0.1],
+        kd=0.8,
+    )
+    sim.set_joint_position(b, "ball", (0.0, 0.0, 0.0, 1.0), max_force=0.5, kp=0.4)
+    for k in range(30):
+        sim.set_joint_torque(h, "chest", [1.0, -2.0, 0.5 * k])
+        sim.step()
+        record()
+    sim.set_joint_velocity(b, "ball", 0.0, max_force=[0.05, 0.03, 0.0])
+    sim.set_joint_velocity(h, "right_shoulder", 0.0, max_force=0.0)
+    for _ in range(30):
+        sim.step()
+        record()
+
+
+@pytest.mark.parametrize("profile", ["pybullet", "urdf"])
+def test_spherical_motors_and_torques(monkeypatch, profile):
+    _agree(monkeypatch, _spherical_motors, profile)
+
+
 def _speed_clamp(sim, record) -> None:
     # a motor asking 150 rad/s is held to PyBullet's 100 by the clamp in the split step
     wheel = sim.load_urdf("wheel.urdf", fixed_base=True)

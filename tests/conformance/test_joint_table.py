@@ -30,6 +30,7 @@ SHIPPED = [
     "wheel.urdf",
     "slider.urdf",
     "free_box.urdf",
+    "spherical_pendulum.urdf",
 ]
 
 # pybullet_data files simbridge refuses, with the exception and message it raises: raw PyBullet

@@ -1,0 +1,463 @@
+"""Spherical joints on every backend, against raw PyBullet 3.2.7 (issue 14, item 2).
+
+What PyBullet does, measured and read in its source (simbridge/multi_dof.py has the whole
+story): a URDF ``type="spherical"`` joint is ``getJointInfo`` type 2 with 4 position and 3
+velocity coordinates, axis (0, 0, 0) and flags 0; ``getJointState`` reports its first
+coordinate; ``resetJointState`` leaves it as it is; its motor (``btMultiBodySphericalJointMotor``,
+one row per axis of the child's inertial frame) is at load a hold at the identity with kp 0.2
+and 1000 N·m·s per step, and ``setJointMotorControlMultiDof``'s POSITION_CONTROL changes its
+target, kp, damping and force per axis (velocityGain and targetVelocity are read by nothing;
+VELOCITY_CONTROL is refused); TORQUE_CONTROL adds 3 torques for one step.
+
+Each backend is held to raw PyBullet making the same calls on the same robot
+(``robots/spherical_pendulum.urdf``, whose bob's inertial frame is turned, and pybullet_data's
+``humanoid/humanoid.urdf`` and ``spherical_joint_limit.urdf``); the tolerances carry the
+largest difference measured over the run and why it is not zero. The cross-engine agreement on
+the free-swinging pendulum, under both profiles, closes the file.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+from collections.abc import Callable
+from typing import Any
+
+import _raw
+import _reference as ref
+import numpy as np
+import pytest
+
+import simbridge
+from simbridge import exceptions as exc
+from simbridge.transforms import quat_from_rpy
+
+DATA = _raw.DATA
+PENDULUM = ref.robot_path("spherical_pendulum.urdf")
+HUMANOID = os.path.join(DATA, "humanoid", "humanoid.urdf")
+LIMITED = os.path.join(DATA, "spherical_joint_limit.urdf")
+POSE = ((0.1, -0.2, 1.3), (0.0, 0.0, math.sin(0.3), math.cos(0.3)))
+DT = 1.0 / 240.0
+
+
+def _normalised(q: tuple[float, ...]) -> tuple[float, ...]:
+    """As the Sim divides a quaternion by its norm (so raw PyBullet gets the same bits)."""
+    norm = math.sqrt(sum(c * c for c in q))
+    return tuple(c / norm for c in q)
+
+
+Q0 = _normalised(quat_from_rpy((0.6, -0.4, 0.3)))  # the start: 0.7 rad from hanging
+V0 = (1.5, -0.7, 2.0)  # rad/s, in the bob's inertial frame
+TARGET = _normalised(quat_from_rpy((-0.2, 0.4, 0.5)))
+
+
+def _pybullet() -> Any:
+    p, _ = _raw.raw_client()
+    return p
+
+
+# ---------------------------------------------------------------- the joint table and frames
+
+
+@pytest.mark.parametrize("fixed_base", [False, True], ids=["free", "fixed"])
+@pytest.mark.parametrize("path", [PENDULUM, HUMANOID, LIMITED], ids=os.path.basename)
+def test_joint_table_and_link_frames_are_raw_pybullets(make_sim, path, fixed_base):
+    raw = _raw.raw_load(
+        path, base_position=POSE[0], base_orientation=POSE[1], fixed_base=fixed_base
+    )
+    sim = make_sim()
+    body = sim.load_urdf(
+        path, base_position=POSE[0], base_orientation=POSE[1], fixed_base=fixed_base
+    )
+    assert _raw.table_difference(sim.joints(body), raw.table) is None
+    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    spherical = [j for j in sim.joints(body) if j.type == simbridge.JointType.SPHERICAL]
+    assert spherical, "the file has spherical joints"
+    for j in spherical:  # the measured facts, written out
+        assert j.axis == (0.0, 0.0, 0.0) and j.flags == 0
+    qs = [j.q_index for j in sim.joints(body) if j.q_index >= 0]
+    us = [j.u_index for j in sim.joints(body) if j.u_index >= 0]
+    sizes = [4 if j.type == 2 else 1 for j in sim.joints(body) if j.q_index >= 0]
+    assert qs == [7 + sum(sizes[:k]) for k in range(len(qs))]
+    assert us == [6 + sum(3 if s == 4 else 1 for s in sizes[:k]) for k in range(len(us))]
+
+
+def test_a_floating_joint_is_welded_as_pybullet_welds_it(make_sim, caplog):
+    text = (
+        '<robot name="f"><link name="a"><inertial><mass value="1"/><inertia ixx="1" ixy="0" '
+        'ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link><link name="b"><inertial><mass '
+        'value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>'
+        '</link>\n<joint name="j" type="floating"><parent link="a"/><child link="b"/>'
+        '<origin xyz="0 0 1"/><limit lower="-1" upper="1" effort="5" velocity="2"/></joint>'
+        "</robot>"
+    )
+    raw = _raw.raw_load(text)
+    assert raw.table[0][2] == simbridge.JointType.FIXED  # "creating a fixed joint instead"
+    caplog.set_level(logging.WARNING, logger="simbridge.urdf")
+    sim = make_sim()
+    body = sim.load_urdf(text)
+    assert _raw.table_difference(sim.joints(body), raw.table) is None
+    assert "line 2: joint 'j' type 'floating' read as 'fixed'" in caplog.text
+
+
+# ---------------------------------------------------------------- states after resets
+
+
+def _unit(v: np.ndarray) -> list[float]:
+    return (v / np.linalg.norm(v)).tolist()
+
+
+def test_states_after_resets_are_raw_pybullets(make_sim):
+    """Every joint of the humanoid reset to a random state; states and link frames read back."""
+    p, c = _raw.raw_client()
+    raw = _raw.raw_load(
+        HUMANOID, base_position=POSE[0], base_orientation=POSE[1], fixed_base=True, keep=True
+    )
+    try:
+        sim = make_sim()
+        body = sim.load_urdf(
+            HUMANOID, base_position=POSE[0], base_orientation=POSE[1], fixed_base=True
+        )
+        rng = np.random.default_rng(14)
+        movable = [j for j in sim.joints(body) if j.q_index >= 0]
+        qs, vs = [], []
+        for j in movable:
+            if j.type == simbridge.JointType.SPHERICAL:
+                qs.append(_unit(rng.normal(size=4)))
+                vs.append(rng.uniform(-2, 2, 3).tolist())
+            else:
+                qs.append([float(rng.uniform(-1, 0))])  # within the knees' and elbows' limits
+                vs.append([float(rng.uniform(-2, 2))])
+            p.resetJointStateMultiDof(raw.body, j.index, qs[-1], vs[-1], physicsClientId=c)
+        sim.reset_joint_state_multi_dof(body, [j.index for j in movable], qs, vs)
+        everything = list(range(sim.num_joints(body)))
+        got = sim.joint_states_multi_dof(body)
+        want = p.getJointStatesMultiDof(raw.body, everything, physicsClientId=c)
+        for g, w in zip(got, want, strict=True):
+            assert len(g.position) == len(w[0]) and len(g.velocity) == len(w[1])
+            assert _raw.close(g.position, w[0], 1e-15) if w[0] else g.position == ()
+            assert _raw.close(g.velocity, w[1], 0.0) if w[1] else g.velocity == ()
+            assert g.applied_torque == tuple(0.0 for _ in w[3])  # no step yet
+        # getJointStates: the first coordinate of each
+        scalar = sim.joint_states(body)
+        rows = p.getJointStates(raw.body, everything, physicsClientId=c)
+        assert _raw.close(scalar.positions, [r[0] for r in rows], 1e-15)
+        assert _raw.close(scalar.velocities, [r[1] for r in rows], 0.0)
+        frames = [
+            tuple(p.getLinkState(raw.body, i, computeForwardKinematics=1, physicsClientId=c)[4:6])
+            for i in everything
+        ]
+        assert _raw.frames_difference(_raw.sim_frames(sim, body)[1:], frames) is None
+    finally:
+        p.removeBody(raw.body, physicsClientId=c)
+
+
+def test_a_quaternion_is_normalised_as_pybullet_does(make_sim, caplog):
+    sim = make_sim()
+    body = sim.load_urdf(PENDULUM, fixed_base=True)
+    caplog.set_level(logging.WARNING, logger="simbridge.sim")
+    sim.reset_joint_state_multi_dof(body, "ball", [0.0, 0.0, 0.5, 0.5], [0.5, 0.2, 0.1])
+    state = sim.joint_states_multi_dof(body, "ball")[0]
+    # raw PyBullet reads back (0, 0, 0.7071067811865476, 0.7071067811865476) (measured); MuJoCo
+    # one ulp less (the Sim's division by the norm)
+    assert _raw.close(state.position, (0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5)), 2e-16)
+    assert state.velocity == (0.5, 0.2, 0.1)
+    assert "has norm 0.707107: normalised" in caplog.text
+
+
+def test_joint_states_shapes(make_sim):
+    sim = make_sim()
+    body = sim.load_urdf(HUMANOID, fixed_base=True)
+    states = sim.joint_states_multi_dof(body)
+    kinds = {
+        simbridge.JointType.SPHERICAL: (4, 3, 3),
+        simbridge.JointType.REVOLUTE: (1, 1, 1),
+        simbridge.JointType.FIXED: (0, 0, 0),
+    }
+    for info, s in zip(sim.joints(body), states, strict=True):
+        assert tuple(map(len, s)) == kinds[info.type], info.name
+    one = sim.joint_states_multi_dof(body, "chest")
+    assert len(one) == 1 and one[0].position == (0.0, 0.0, 0.0, 1.0)
+    assert sim.joint_states(body).positions.shape == (15,)
+
+
+# ---------------------------------------------------------------- commands against raw PyBullet
+
+RawSetup = Callable[[Any, int, int], None]
+SimSetup = Callable[[simbridge.Sim, int], None]
+
+
+def _raw_run(setup: RawSetup, steps: int) -> np.ndarray:
+    """Raw PyBullet: the pendulum reset to Q0, V0, ``setup``, then ``steps`` steps; each step's
+    quaternion, velocity and motor torques (10 numbers)."""
+    p = _pybullet()
+    c = p.connect(p.DIRECT)
+    try:
+        p.setGravity(0.0, 0.0, -9.8, physicsClientId=c)
+        p.setTimeStep(DT, physicsClientId=c)
+        b = p.loadURDF(PENDULUM, useFixedBase=True, physicsClientId=c)
+        p.resetJointStateMultiDof(b, 0, Q0, V0, physicsClientId=c)
+        setup(p, c, b)
+        out = np.empty((steps, 10))
+        for k in range(steps):
+            p.stepSimulation(physicsClientId=c)
+            s = p.getJointStateMultiDof(b, 0, physicsClientId=c)
+            out[k] = (*s[0], *s[1], *s[3])
+        return out
+    finally:
+        p.disconnect(physicsClientId=c)
+
+
+def _sim_run(sim: simbridge.Sim, setup: SimSetup, steps: int) -> np.ndarray:
+    body = sim.load_urdf(PENDULUM, fixed_base=True)
+    sim.reset_joint_state_multi_dof(body, "ball", Q0, V0)
+    setup(sim, body)
+    out = np.empty((steps, 10))
+    for k in range(steps):
+        sim.step()
+        s = sim.joint_states_multi_dof(body, "ball")[0]
+        out[k] = (*s.position, *s.velocity, *s.applied_torque)
+    return out
+
+
+def _raw_motor(kp: Any, force: Any, damping: Any, target: Any = (0.0, 0.0, 0.0, 1.0)) -> RawSetup:
+    def setup(p: Any, c: int, b: int) -> None:
+        p.setJointMotorControlMultiDof(
+            b,
+            0,
+            p.POSITION_CONTROL,
+            targetPosition=list(target),
+            positionGain=list(kp),
+            velocityGain=[1.0, 1.0, 1.0],
+            force=list(force),
+            damping=list(damping),
+            physicsClientId=c,
+        )
+
+    return setup
+
+
+def _release_then(then: RawSetup | None = None) -> RawSetup:
+    def setup(p: Any, c: int, b: int) -> None:
+        _raw_motor([0.0] * 3, [0.0] * 3, [1.0] * 3)(p, c, b)
+        if then is not None:
+            then(p, c, b)
+
+    return setup
+
+
+# case -> (raw setup, Sim setup, steps, MuJoCo's tolerance on quaternion, velocity, torque).
+# Measured on MuJoCo against raw PyBullet ("pybullet" profile, the whole run): what is left is
+# PyBullet's link damping, which the backend reproduces to 1e-9 relative (the hinge pendulum's
+# figure: docs/mujoco_backend.md), carried through a 3-D swing; under the "urdf" profile the same
+# runs agree to 2e-13 (test_cross_engine_free_swing and bench figures in the docs).
+CASES: dict[str, tuple[RawSetup, SimSetup, int, tuple[float, float, float]]] = {
+    # PyBullet's motor at load holds the identity (kp 0.2, 1000 N·m·s per step): measured 1e-15
+    "default motor": (lambda p, c, b: None, lambda sim, b: None, 240, (1e-13, 1e-12, 1e-7)),
+    # set_joint_velocity(0, max_force=0) releases the joint: a free swing, measured 1.3e-9, 5e-9
+    "released": (
+        _release_then(),
+        lambda sim, b: sim.set_joint_velocity(b, 0, 0, max_force=0),
+        240,
+        (2e-8, 2e-7, 0.0),
+    ),
+    # a brake per axis, saturated: measured 6.6e-10, 1.0e-8, 3.5e-9 (480 steps)
+    "brake": (
+        _raw_motor([0.0] * 3, [0.05, 0.03, 0.02], [1.0] * 3),
+        lambda sim, b: sim.set_joint_velocity(b, 0, [0, 0, 0], max_force=[0.05, 0.03, 0.02]),
+        240,
+        (1e-8, 1e-7, 1e-7),
+    ),
+    # a position motor with gains and forces per axis: measured 6.4e-10, 5.6e-9, 3.3e-7 (480)
+    "position": (
+        _raw_motor([0.3, 0.2, 0.1], [5.0, 2.0, 1.0], [0.8, 1.0, 0.5], TARGET),
+        lambda sim, b: sim.set_joint_position(
+            b, 0, TARGET, max_force=[5, 2, 1], kp=[0.3, 0.2, 0.1], kd=[0.8, 1.0, 0.5]
+        ),
+        240,
+        (1e-8, 1e-7, 1e-5),
+    ),
+    # one force for every axis, saturated: measured 1.1e-9, 8.2e-9, 5.8e-9 (480)
+    "position, saturated": (
+        _raw_motor([0.5] * 3, [0.2] * 3, [1.0] * 3, TARGET),
+        lambda sim, b: sim.set_joint_position(b, 0, TARGET, max_force=0.2, kp=0.5),
+        240,
+        (1e-8, 1e-7, 1e-7),
+    ),
+    # two torques before one step add up and act for that step only: measured 7e-13, 1.3e-10
+    "torque": (
+        _release_then(
+            lambda p, c, b: [
+                p.setJointMotorControlMultiDof(b, 0, p.TORQUE_CONTROL, force=t, physicsClientId=c)
+                for t in ([0.01, 0.0, -0.03], [0.0, 0.02, 0.0])
+            ]
+        ),
+        lambda sim, b: (
+            sim.set_joint_velocity(b, 0, 0, max_force=0),
+            sim.set_joint_torque(b, 0, [0.01, 0.0, -0.03]),
+            sim.set_joint_torque(b, "ball", [[0.0, 0.02, 0.0]]),
+        ),
+        20,
+        (1e-11, 1e-9, 0.0),
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_commands_as_raw_pybullet(make_sim, backend, case):
+    raw_setup, sim_setup, steps, tolerances = CASES[case]
+    want = _raw_run(raw_setup, steps)
+    got = _sim_run(make_sim(), sim_setup, steps)
+    gap = np.abs(got - want)
+    measured = (gap[:, :4].max(), gap[:, 4:7].max(), gap[:, 7:].max())
+    print(
+        f"{backend} {case}: quaternion {measured[0]:.2g}, velocity {measured[1]:.2g}, "
+        f"torque {measured[2]:.2g}"
+    )
+    if backend == "pybullet":  # the same engine calls: the same bits
+        assert measured == (0.0, 0.0, 0.0)
+    else:
+        assert measured[0] <= tolerances[0] and measured[1] <= tolerances[1]
+        assert measured[2] <= tolerances[2]
+    assert np.abs(want[:, 4:7]).max() > 0.5  # the joint moved: nothing was compared at rest
+
+
+def test_the_default_motor_holds_the_humanoid(make_sim):
+    """Every spherical joint of a fixed humanoid held at the identity by PyBullet's motor at
+    load against gravity: measured drift over 1 s, 5.8e-6 on PyBullet (its iterative solver on
+    the coupled rows of a chain), 0 on MuJoCo (rows solved exactly, and asking for 0)."""
+    sim = make_sim()
+    body = sim.load_urdf(HUMANOID, base_position=(0, 0, 3), fixed_base=True)
+    sim.step(240)
+    worst = 0.0
+    for info, s in zip(sim.joints(body), sim.joint_states_multi_dof(body), strict=True):
+        if info.type == simbridge.JointType.SPHERICAL:
+            worst = max(worst, float(np.abs(np.subtract(s.position, (0, 0, 0, 1))).max()))
+            assert max(map(abs, s.applied_torque)) < 1000.0  # held, far below the limit
+    assert worst < 2e-5, worst
+
+
+# ---------------------------------------------------------------- what is refused, and why
+
+
+def test_what_spherical_joints_refuse(make_sim):
+    sim = make_sim()
+    body = sim.load_urdf(HUMANOID, fixed_base=True)
+    with pytest.raises(exc.InvalidArgumentError, match=r"take no reset_joint_state: use "):
+        sim.reset_joint_state(body, "chest", 0.1)  # PyBullet ignores it (measured)
+    with pytest.raises(exc.InvalidArgumentError, match=r"velocity target of 0 alone.*refuses VELOCITY_CONTROL"):
+        sim.set_joint_velocity(body, "chest", [1.0, 0, 0], max_force=5)
+    with pytest.raises(exc.InvalidArgumentError, match=r"\['right_elbow'\] .* are not spherical"):
+        sim.set_joint_position(body, ["chest", "right_elbow"], (0, 0, 0, 1), max_force=5)
+    with pytest.raises(exc.InvalidArgumentError, match=r"target.*shape \(2, 4\), got shape \(3,\)"):
+        sim.set_joint_position(body, ["chest", "neck"], (0, 0, 1), max_force=5)
+    with pytest.raises(exc.InvalidArgumentError, match=r"max_force.*got shape \(2,\)"):
+        sim.set_joint_position(body, "chest", (0, 0, 0, 1), max_force=[1, 2])
+    with pytest.raises(exc.InvalidArgumentError, match=r"'max_force': values must be >= 0"):
+        sim.set_joint_velocity(body, "chest", 0, max_force=[1, -2, 3])
+    with pytest.raises(exc.InvalidArgumentError, match=r"'torque': a spherical joint takes 3"):
+        sim.set_joint_torque(body, "chest", 1.0)
+    with pytest.raises(exc.InvalidArgumentError, match=r"'torque': values must be finite"):
+        sim.set_joint_torque(body, "chest", [1.0, math.nan, 0.0])
+    with pytest.raises(exc.InvalidArgumentError, match=r"a quaternion of norm 0"):
+        sim.set_joint_position(body, "chest", (0, 0, 0, 0), max_force=5)
+    with pytest.raises(exc.InvalidArgumentError, match=r"positions of joint 'chest'"):
+        sim.reset_joint_state_multi_dof(body, "chest", [0.0, 0.0, 1.0])
+    with pytest.raises(exc.InvalidArgumentError, match=r"velocities of joint 'chest'"):
+        sim.reset_joint_state_multi_dof(body, "chest", [0, 0, 0, 1], [1.0, 2.0])
+    with pytest.raises(exc.InvalidArgumentError, match=r"is fixed and takes no command"):
+        sim.reset_joint_state_multi_dof(body, "root", [])
+    with pytest.raises(exc.InvalidArgumentError, match=r"take no a bound command"):
+        sim.position_command(body, "neck", 0.0, max_force=5)
+    with pytest.raises(exc.BackendUnsupportedError, match=r"get_state/set_state of body"):
+        sim.get_state()
+    # nothing refused was half done: the joints are where they were, held as at load
+    sim.step()
+    chest = sim.joint_states_multi_dof(body, "chest")[0].position
+    assert chest == pytest.approx((0, 0, 0, 1), abs=1e-5)  # PyBullet drifts 3e-7 in a step
+
+
+def test_a_planar_joint_is_refused_with_the_measured_reason(make_sim):
+    text = (
+        '<robot name="p"><link name="a"/><link name="b"/><joint name="j" type="planar">'
+        '<parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint></robot>'
+    )
+    _raw.raw_load(text)  # raw PyBullet builds it (broken: see the message)
+    with pytest.raises(exc.UnsupportedJointError, match=r"centre of mass .* 2 of its 3"):
+        make_sim().load_urdf(text)
+
+
+# ---------------------------------------------------------------- PyBullet against MuJoCo
+
+
+def _engines() -> None:
+    from simbridge.exceptions import BackendError
+    from simbridge.registry import load_backend
+
+    for name in ("pybullet", "mujoco"):
+        try:
+            load_backend(name)
+        except BackendError as e:  # pragma: no cover - both engines are test dependencies
+            pytest.skip(f"backend {name!r} unavailable: {e}")
+
+
+def _swing(backend: str, profile: str, steps: int) -> np.ndarray:
+    with simbridge.Sim(backend, profile=profile) as sim:
+        out = _sim_run(sim, lambda s, b: s.set_joint_velocity(b, 0, 0, max_force=0), steps)
+        return out[:, :7]
+
+
+@pytest.mark.parametrize(
+    ("profile", "tol_q", "tol_v"),
+    [
+        # measured over 2 s: 6e-15 in the quaternion, 5e-14 rad/s: round-off
+        ("urdf", 5e-14, 5e-13),
+        # measured over 2 s: 9.5e-9, 8.2e-8 rad/s: PyBullet's link damping, reproduced to 1e-9
+        # relative per step (1.9e-9 on the hinge pendulum), carried through the 3-D swing
+        ("pybullet", 1e-7, 1e-6),
+    ],
+)
+def test_cross_engine_free_swing(profile, tol_q, tol_v):
+    """The free-swinging spherical pendulum (released, 0.7 rad from hanging, spun at 2.6 rad/s)
+    for 2 s on both engines."""
+    _engines()
+    a = _swing("pybullet", profile, 480)
+    b = _swing("mujoco", profile, 480)
+    gap_q, gap_v = np.abs(a[:, :4] - b[:, :4]).max(), np.abs(a[:, 4:] - b[:, 4:]).max()
+    print(f"{profile}: quaternion {gap_q:.2g}, angular velocity {gap_v:.2g} rad/s")
+    assert gap_q <= tol_q and gap_v <= tol_v
+    assert np.abs(a[:, 4:]).max() > 3.0  # it swung
+
+
+COUPLED = """<robot name="coupled"><link name="pivot"><inertial><mass value="1"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+<link name="bob"><inertial><origin xyz="0.1 0.05 -0.5" rpy="0.3 0.2 0.1"/><mass value="1"/>
+<inertia ixx="0.0010416666666666667" ixy="0" ixz="0" iyy="0.0035416666666666665" iyz="0"
+izz="0.004166666666666667"/></inertial></link><joint name="ball" type="spherical">
+<parent link="pivot"/><child link="bob"/></joint></robot>"""
+
+
+def test_coupled_motor_rows_pybullets_solver_falls_short():
+    """Where the child's inertia about the joint is not diagonal in its inertial frame, the
+    spherical motor's three rows are coupled and PyBullet's 50 solver iterations do not reach
+    what they ask for: one step from rest 0.7 rad from the target, measured 2.07 rad/s short of
+    6.68 asked (0.03 at 200 iterations). MuJoCo's rows are solved exactly: the departure
+    ("motors" in the MuJoCo backend's manifest) is PyBullet's solver, not the law."""
+    _engines()
+    from simbridge.backends.mujoco.motors import spherical_error
+
+    e = spherical_error(Q0[3], Q0[0], Q0[1], Q0[2], 0.0, 0.0, 0.0, 1.0)
+    asked = np.array([-0.2 * 0.2 * x / DT for x in e])  # v = -erp kp e / dt from rest
+    short = {}
+    for backend in ("pybullet", "mujoco"):
+        with simbridge.Sim(backend, profile="urdf", gravity=(0, 0, 0)) as sim:
+            body = sim.load_urdf(COUPLED, fixed_base=True)
+            sim.reset_joint_state_multi_dof(body, 0, Q0, [0, 0, 0])
+            sim.set_joint_position(body, 0, (0, 0, 0, 1), max_force=1e5, kp=0.2)
+            sim.step()
+            v = np.array(sim.joint_states_multi_dof(body, 0)[0].velocity)
+            short[backend] = float(np.abs(v - asked).max())
+    print(f"asked {np.abs(asked).max():.3g} rad/s; short by {short}")
+    assert short["mujoco"] < 1e-12
+    assert 1.5 < short["pybullet"] < 2.5
