@@ -15,7 +15,7 @@ from simbridge.exceptions import InvalidArgumentError
 
 from .pybullet_backend import PyBulletBackend
 
-__all__ = ["backend_of", "client_id"]
+__all__ = ["backend_of", "client_id", "set_check_every"]
 
 
 def backend_of(sim: Any) -> PyBulletBackend:
@@ -33,3 +33,15 @@ def client_id(sim: Any) -> int:
     """The PyBullet physics client id of ``sim``'s world (the ``physicsClientId`` argument of
     every raw PyBullet call); it is disconnected when the `Sim` closes."""
     return backend_of(sim)._c
+
+
+def set_check_every(sim: Any, every: int) -> None:
+    """Probe ``sim``'s bodies for a divergence (NaN or inf state) after every ``every``-th step
+    instead of the backend's default cadence, from the next step on; for benchmarks that time
+    the probe (bench/divergence.py). A teleport or a load still asks for a probe after the next
+    step."""
+    if isinstance(every, bool) or not isinstance(every, int) or every < 1:
+        raise InvalidArgumentError("every", f"expected an integer >= 1 (steps), got {every!r}")
+    backend = backend_of(sim)
+    backend._check_every = every
+    backend._next_check = backend._steps + every

@@ -41,6 +41,7 @@ import pybullet as p
 import pybullet_data
 
 import simbridge
+from simbridge.backends.pybullet_inspect import set_check_every
 
 DATA = Path(pybullet_data.getDataPath())
 
@@ -80,8 +81,7 @@ def _sim_world(world: str, every: int) -> simbridge.Sim:
         body = sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True)
         sim.set_joint_position(body, list(range(7)), 0.3, max_force=300.0)
     sim.step(240)
-    sim._b._check_every = every  # type: ignore[attr-defined]
-    sim._b._next_check = sim._b._steps + every  # type: ignore[attr-defined]
+    set_check_every(sim, every)
     return sim
 
 

@@ -17,7 +17,7 @@ import pybullet_data
 import pytest
 
 import simbridge
-from simbridge.backends.pybullet_inspect import client_id
+from simbridge.backends.pybullet_inspect import client_id, set_check_every
 from simbridge.exceptions import DisplayError
 
 WHEELS_RIGHT, WHEELS_LEFT = (2, 3), (6, 7)
@@ -163,6 +163,26 @@ def test_inspect_gives_the_client_of_this_sim_and_refuses_others():
         pytest.raises(simbridge.exceptions.InvalidArgumentError, match="MujocoBackend"),
     ):
         client_id(m)
+
+
+def test_the_probe_cadence_is_set_through_inspect_and_changes_no_state():
+    def drive(every: int) -> np.ndarray:
+        with simbridge.Sim("pybullet") as sim:
+            sim.load_urdf("plane")
+            robot = sim.load_urdf("r2d2", base_position=(0, 0, 0.5))
+            set_check_every(sim, every)
+            sim.set_joint_velocity(robot, list(WHEELS_RIGHT + WHEELS_LEFT), -5.0, max_force=10.0)
+            sim.step(60)
+            state = [*sim.base_state(robot), *sim.joint_states(robot)]
+            return np.concatenate([np.ravel(np.asarray(x, dtype=float)) for x in state])
+
+    every_step = drive(1)
+    assert np.abs(every_step).max() > 0.1  # it moved
+    np.testing.assert_array_equal(every_step, drive(1000))
+    with simbridge.Sim("pybullet") as sim:
+        for bad in (0, -3, 2.5, True, "8"):
+            with pytest.raises(simbridge.exceptions.InvalidArgumentError, match="'every'"):
+                set_check_every(sim, bad)  # type: ignore[arg-type]
 
 
 def test_gui_without_display_is_a_clear_error(monkeypatch):
