@@ -315,11 +315,14 @@ def test_self_collision_is_loadmjcf_s_flag(backend):
     for mode in (None, "exclude_all_parents", True):
         with simbridge.Sim(backend) as sim:
             (h,) = sim.load_mjcf("mjcf/humanoid_symmetric_no_ground.xml", self_collision=mode)
-            assert sim.manifest()["bodies"][h]["self_collision"] == {
-                None: "off",
-                "exclude_all_parents": "exclude_all_parents",
-                True: "exclude_parent",
-            }[mode]
+            assert (
+                sim.manifest()["bodies"][h]["self_collision"]
+                == {
+                    None: "off",
+                    "exclude_all_parents": "exclude_all_parents",
+                    True: "exclude_parent",
+                }[mode]
+            )
             sim.step(1)
             counts[mode] = len(sim.contact_points(h, h))
     assert counts[None] == counts["exclude_all_parents"] == 0 and counts[True] > 0
