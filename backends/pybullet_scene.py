@@ -14,7 +14,7 @@ import os
 import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import pybullet as p
 
@@ -23,8 +23,15 @@ from simbridge.exceptions import UrdfStructureError
 from simbridge.scene import SceneBody, find_mesh
 from simbridge.types import JointInfo
 
-if TYPE_CHECKING:
-    from .pybullet_backend import PyBulletBackend
+
+class PyBulletBackend(Protocol):
+    """What this module uses of :class:`~simbridge.backends.pybullet_backend.PyBulletBackend`
+    (named here, not imported: that module imports this one)."""
+
+    name: str
+    _c: int  # the client id
+    _file_texts: dict[str, str]  # files PyBullet has read, by path: the text it read
+
 
 __all__ = ["Pending", "load_file", "named_table"]
 

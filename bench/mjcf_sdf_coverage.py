@@ -156,7 +156,7 @@ def departures(name: str) -> str:
     import mujoco
 
     from simbridge.inertia import model_inertials
-    from simbridge.scene import parse_scene
+    from simbridge.scene_files import parse_scene
 
     path = os.path.join(DATA, name)
     try:

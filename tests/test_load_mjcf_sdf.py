@@ -14,7 +14,7 @@ import simbridge
 from simbridge import exceptions as exc
 from simbridge.compare.scenario import dumps_scenario, loads_scenario
 from simbridge.exceptions import ScenarioError
-from simbridge.scene import parse_scene
+from simbridge.scene_files import parse_scene
 
 BACKENDS = ("pybullet", "mujoco")
 

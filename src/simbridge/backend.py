@@ -138,9 +138,9 @@ class Backend(ABC):
     def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
         """Add every body of one MJCF or SDF file; return their ids, in ``bodies``' order.
 
-        ``bodies`` are :func:`simbridge.scene.parse_scene`'s, in PyBullet's order, each with its
-        links, joints and numbering, and with ``base_position``/``base_orientation`` placing its
-        root link frame (its base is fixed when the root's mass is 0). ``options`` hold the
+        ``bodies`` are :func:`simbridge.scene_files.parse_scene`'s, in PyBullet's order, each
+        with its links, joints and numbering, and with ``base_position``/``base_orientation``
+        placing its root link frame (its base is fixed when the root's mass is 0). ``options`` hold the
         self-collision mode; the inertia source is ``"collision_aabb"``. The default loads each
         body through :meth:`load` (removing the ones loaded when one fails); a backend whose
         engine reads the file itself (PyBullet's ``loadMJCF``/``loadSDF``) overrides it, and its

@@ -2,10 +2,11 @@
 
 ``p.loadMJCF`` and ``p.loadSDF`` create several bodies from one file (one per top-level MJCF
 ``<body>`` or ``<geom>``, one per SDF ``<model>``), each a multibody with PyBullet's own link and
-joint numbering. :func:`parse_scene` reads a file into one :class:`SceneBody` per body PyBullet
-creates, in its order, with its link and joint numbering and names, so that every backend
-loads them through its ordinary path (:meth:`simbridge.backend.Backend.load_scene`); the
-readers are :mod:`simbridge.mjcf` and :mod:`simbridge.sdf`.
+joint numbering. :func:`simbridge.scene_files.parse_scene` reads a file into one
+:class:`SceneBody` per body PyBullet creates, in its order, with its link and joint numbering
+and names, so that every backend loads them through its ordinary path
+(:meth:`simbridge.backend.Backend.load_scene`); the readers are :mod:`simbridge.mjcf` and
+:mod:`simbridge.sdf`, and this module holds what they share.
 
 A :class:`SceneBody` is a :class:`~simbridge.urdf_model.UrdfModel` (links, joints, inertials,
 shapes, contact values) plus where PyBullet puts its base: ``base_position`` and
@@ -33,7 +34,6 @@ from .urdf_xml import XmlElement, c_atof, pybullet_numbers
 __all__ = [
     "SceneBody",
     "SCENE_FORMATS",
-    "parse_scene",
     "resolve_scene_source",
     "read_scene_xml",
     "f32",
@@ -167,19 +167,6 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
             root.line,
         )
     return root
-
-
-def parse_scene(source: str | os.PathLike[str], kind: str) -> list[SceneBody]:
-    """The bodies PyBullet creates from an MJCF (``kind="mjcf"``) or SDF (``"sdf"``) file, in
-    its order. See :func:`simbridge.mjcf.parse_mjcf` and :func:`simbridge.sdf.parse_sdf`."""
-    src = resolve_scene_source(source, kind)
-    if kind == "mjcf":
-        from .mjcf import parse_mjcf
-
-        return parse_mjcf(src)
-    from .sdf import parse_sdf
-
-    return parse_sdf(src)
 
 
 def find_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:

@@ -407,7 +407,7 @@ class Sim:
         from dataclasses import replace
 
         from .load_options import load_options
-        from .scene import parse_scene
+        from .scene_files import parse_scene
 
         options = load_options(self._b.profile, self_collision=self_collision)
         # PyBullet's MJCF and SDF importers take the collision-box inertia (loadSDF has no flag

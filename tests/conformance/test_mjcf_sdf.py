@@ -2,7 +2,7 @@
 the same bodies, joint tables (the 17 fields), masses, inertial frames, moments, lateral
 friction and base frames; what PyBullet refuses, simbridge refuses with a one-line error.
 
-* every file, cheaply: simbridge's reading (:func:`simbridge.scene.parse_scene`, the joint
+* every file, cheaply: simbridge's reading (:func:`simbridge.scene_files.parse_scene`, the joint
   table and inertials computed without an engine) against raw PyBullet in this process;
 * a full load of every file through ``Sim.load_mjcf``/``load_sdf`` on every backend: joint
   tables and every link's world frame (all of it about 5 s on the shared 2-core machine);
@@ -29,7 +29,8 @@ import pytest
 from simbridge import exceptions as exc
 from simbridge.inertia import is_fixed_base, model_inertials
 from simbridge.joint_table import joint_table
-from simbridge.scene import SceneBody, parse_scene
+from simbridge.scene import SceneBody
+from simbridge.scene_files import parse_scene
 
 DATA = _raw.DATA
 MJCF = sorted(os.path.relpath(f, DATA) for f in glob.glob(os.path.join(DATA, "mjcf", "*.xml")))
