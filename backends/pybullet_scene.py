@@ -14,7 +14,7 @@ import os
 import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 import pybullet as p
 
@@ -28,7 +28,7 @@ class PyBulletBackend(Protocol):
     """What this module uses of :class:`~simbridge.backends.pybullet_backend.PyBulletBackend`
     (named here, not imported: that module imports this one)."""
 
-    name: str
+    name: ClassVar[str]
     _c: int  # the client id
     _file_texts: dict[str, str]  # files PyBullet has read, by path: the text it read
 

@@ -140,11 +140,12 @@ class Backend(ABC):
 
         ``bodies`` are :func:`simbridge.scene_files.parse_scene`'s, in PyBullet's order, each
         with its links, joints and numbering, and with ``base_position``/``base_orientation``
-        placing its root link frame (its base is fixed when the root's mass is 0). ``options`` hold the
-        self-collision mode; the inertia source is ``"collision_aabb"``. The default loads each
-        body through :meth:`load` (removing the ones loaded when one fails); a backend whose
-        engine reads the file itself (PyBullet's ``loadMJCF``/``loadSDF``) overrides it, and its
-        bodies' joint tables must then equal the models' (names included).
+        placing its root link frame (its base is fixed when the root's mass is 0). ``options``
+        hold the self-collision mode; the inertia source is ``"collision_aabb"``. The default
+        loads each body through :meth:`load` (removing the ones loaded when one fails); a
+        backend whose engine reads the file itself (PyBullet's ``loadMJCF``/``loadSDF``)
+        overrides it, and its bodies' joint tables must then equal the models' (names
+        included).
         """
         ids: list[int] = []
         try:
