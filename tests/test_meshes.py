@@ -13,7 +13,7 @@ from simbridge.meshes import MeshData, mesh_vertices, read_mesh
 
 DATA = Path(pybullet_data.getDataPath())
 
-OBJ = """# a quad, a triangle by negative indices, a bad face, an index out of range
+OBJ = """# a quad, a triangle by negative indices, a bad face
 o first
 v 0 0 0
 v 1 0 0 1.0
@@ -24,7 +24,6 @@ vn 0 0 1
 f 1/1/1 2/1/1 3/1/1 4/1/1
 f -3 -2 -1
 f 1 x 3
-f 1 2 9
 v 0 0 1
 """
 
@@ -37,9 +36,19 @@ def test_obj_faces_are_fans_of_every_polygon(tmp_path):
     assert mesh.vertices.dtype == np.float64 and mesh.faces.dtype == np.int64
     assert mesh.vertices.tolist() == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1]]
     # the quad as two triangles around its first corner; negative indices count back from the
-    # last vertex of the file (5 vertices: -3 is vertex 3, index 2); "f 1 x 3" is left out;
-    # "f 1 2 9" names no vertex 9
+    # last vertex of the file (5 vertices: -3 is vertex 3, index 2); "f 1 x 3" is left out
     assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 3], [2, 3, 4]]
+
+
+def test_an_obj_face_past_its_vertices_is_an_error(tmp_path):
+    """A face corner that names no vertex (was: the triangle left out) raises MeshReadError
+    with the file and line (issue 15: garbage meshes)."""
+    from simbridge.meshes import MeshReadError
+
+    path = tmp_path / "past.obj"
+    path.write_text(OBJ + "f 1 2 9\n", encoding="utf-8")
+    with pytest.raises(MeshReadError, match=r"past\.obj:13: a face corner is vertex 9; the file "):
+        read_mesh(path)
 
 
 def test_cached_per_path_and_read_only(tmp_path):

@@ -181,7 +181,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         if depth > MAX_TREE_DEPTH:
             raise BackendUnsupportedError(
                 self.name,
-                f"{model.source.display_name}: joints nested {depth} deep",
+                f"{model.source.display_name}: a kinematic depth of {depth} joints",
                 f"MuJoCo's compiler refuses a body tree deeper than {MAX_TREE_DEPTH + 1} bodies "
                 f"(at most {MAX_TREE_DEPTH} joints from the root to any link)",
             )

@@ -9,22 +9,27 @@ and size: a file rewritten in the meantime is read again), up to 256 files.
 * ``.obj``: ``v`` lines (x y z; any further number is ignored) and ``f`` lines, each polygon a
   fan of triangles around its first corner; ``i/t/n`` corners use ``i``; a negative index
   counts back from the last vertex of the file; a face with a corner that is not an integer is
-  left out, as is a triangle with an index out of range;
+  left out;
 * ``.stl``: binary (when the size matches the triangle count in its header) or ASCII
   (``vertex`` lines); three vertices per triangle, as written, not merged;
 * a file that is not one of its format raises :class:`MeshReadError` naming the file, the line
-  where there is one, and what is wrong: an .obj that is not text or has a ``v`` line without
-  3 numbers, an .stl that is neither binary (its size matches its triangle count) nor ASCII
-  text starting with ``solid``, or with a ``vertex`` line without 3 numbers (PyBullet loads
-  random bytes as a link without a shape, or reads an .obj's bad numbers as uninitialised
-  memory: measured, inertia 1e41);
+  where there is one, and what is wrong: an .obj that is not text, has a ``v`` line without
+  3 numbers or a face corner past its vertices; an .stl that is neither binary (its size
+  matches its triangle count) nor ASCII text starting with ``solid``, or with a ``vertex`` line
+  without 3 numbers; an .obj or .stl without a vertex, or with a vertex that is not finite; a
+  .dae with a number in a ``<float_array>`` that is not finite (trimesh would drop the vertex
+  quietly). PyBullet loads random bytes or NaN vertices as a link without a shape, and reads an
+  .obj's missing numbers as uninitialised memory (measured: inertia 1e41);
 * anything else (``.dae``): through trimesh, imported only then (about 1 s), without
   processing (no merging, no repair).
 """
 
 from __future__ import annotations
 
+import math
 import os
+import re
+from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -70,14 +75,23 @@ def mesh_vertices(path: str | Path) -> np.ndarray:
 
 @lru_cache(maxsize=256)
 def _read_cached(path: str, mtime_ns: int, size: int) -> MeshData:
-    """One version of a file (``mtime_ns`` and ``size`` are the cache's key, not read)."""
+    """One version of a file (``mtime_ns`` and ``size``, in bytes, are the cache's key)."""
     suffix = Path(path).suffix.lower()
     if suffix == ".obj":
-        mesh = _read_obj(path)
+        mesh, rows = _read_obj(path)
     elif suffix == ".stl":
-        mesh = _read_stl(path)
+        mesh, rows = _read_stl(path)
     else:
-        mesh = _read_with_trimesh(path)
+        mesh, rows = _read_with_trimesh(path), None
+    if rows is not None:  # .obj, .stl: vertices, all finite
+        if not len(mesh.vertices):
+            raise MeshReadError(path, "holds no vertex" + (" (an empty file)" if not size else ""))
+        finite = np.isfinite(mesh.vertices).all(axis=1)
+        if not finite.all():
+            k = int(np.flatnonzero(~finite)[0])
+            where, line = rows(k)
+            vertex = ", ".join(f"{v:g}" for v in mesh.vertices[k])
+            raise MeshReadError(path, f"{where} is not finite: ({vertex})", line)
     mesh.vertices.setflags(write=False)
     mesh.faces.setflags(write=False)
     return mesh
@@ -93,8 +107,13 @@ def _three(path: str, parts: list[str], number: int, line: str) -> tuple[float, 
         ) from None
 
 
-def _read_obj(path: str) -> MeshData:
+# where vertex k was read: (what it is, its line or None), for MeshReadError
+_Rows = Callable[[int], tuple[str, int | None]]
+
+
+def _read_obj(path: str) -> tuple[MeshData, _Rows]:
     rows = []
+    lines: list[int] = []
     face_lines = []
     data = Path(path).read_bytes()
     if b"\0" in data:
@@ -103,12 +122,13 @@ def _read_obj(path: str) -> MeshData:
     for number, line in enumerate(text.split("\n"), 1):  # as a text-mode file's lines
         if line.startswith("v "):
             rows.append(_three(path, line.split(), number, line))
+            lines.append(number)
         elif line.startswith("f "):
-            face_lines.append(line)
+            face_lines.append((number, line))
     vertices = np.array(rows, dtype=float).reshape(-1, 3)
     n = len(vertices)
     tris: list[tuple[int, int, int]] = []
-    for line in face_lines:
+    for number, line in face_lines:
         idx: list[int] = []
         for token in line.split()[1:]:
             head = token.split("/", 1)[0]
@@ -119,47 +139,68 @@ def _read_obj(path: str) -> MeshData:
             except ValueError:  # not an index: the face is unusable, as for PyBullet
                 idx = []
                 break
-            idx.append(i - 1 if i > 0 else n + i)
+            k = i - 1 if i > 0 else n + i
+            if not 0 <= k < n:
+                raise MeshReadError(
+                    path, f"a face corner is vertex {i}; the file has {n} vertices", number
+                )
+            idx.append(k)
         for a in range(1, len(idx) - 1):
             tris.append((idx[0], idx[a], idx[a + 1]))
     faces = np.array(tris, dtype=np.int64).reshape(-1, 3)
-    if len(faces) and (faces.min() < 0 or faces.max() >= n):
-        faces = faces[(faces >= 0).all(axis=1) & (faces < n).all(axis=1)]
-    return MeshData(vertices, faces)
+    return MeshData(vertices, faces), lambda k: (f"vertex {k + 1}", lines[k])
 
 
-def _read_stl(path: str) -> MeshData:
+def _read_stl(path: str) -> tuple[MeshData, _Rows]:
     data = Path(path).read_bytes()
-    vertices: np.ndarray | None = None
     if len(data) >= 84:
         n = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
         if 84 + 50 * n == len(data):
             rec = np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
             tri = np.frombuffer(data, dtype=rec, count=n, offset=84)
             vertices = tri["v"].reshape(-1, 3).astype(float)
-    if vertices is None:
-        try:
-            text = data.decode("utf-8")
-        except UnicodeDecodeError:
-            text = ""
-        if not text.lstrip().startswith("solid"):
-            size = "an empty file" if not data else f"{len(data)} bytes"
-            raise MeshReadError(
-                path,
-                f"not an .stl: neither binary (84 bytes + 50 per triangle its header counts) nor "
-                f"ASCII text starting with 'solid' ({size})",
-            )
-        rows = []
-        for number, line in enumerate(text.splitlines(), 1):
-            parts = line.split()
-            if parts and parts[0] == "vertex":
-                rows.append(_three(path, parts, number, line))
-        vertices = np.array(rows, dtype=float).reshape(-1, 3)
-    faces = np.arange(len(vertices) // 3 * 3, dtype=np.int64).reshape(-1, 3)
-    return MeshData(vertices, faces)
+            return _stl(vertices), lambda k: (f"triangle {k // 3 + 1} vertex {k % 3 + 1}", None)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        text = ""
+    if not text.lstrip().startswith("solid"):
+        size = "an empty file" if not data else f"{len(data)} bytes"
+        raise MeshReadError(
+            path,
+            f"not an .stl: neither binary (84 bytes + 50 per triangle its header counts) nor "
+            f"ASCII text starting with 'solid' ({size})",
+        )
+    rows = []
+    lines: list[int] = []
+    for number, line in enumerate(text.splitlines(), 1):
+        parts = line.split()
+        if parts and parts[0] == "vertex":
+            rows.append(_three(path, parts, number, line))
+            lines.append(number)
+    vertices = np.array(rows, dtype=float).reshape(-1, 3)
+    return _stl(vertices), lambda k: (f"vertex {k + 1}", lines[k])
+
+
+def _stl(vertices: np.ndarray) -> MeshData:
+    """Three vertices per triangle, as written."""
+    return MeshData(vertices, np.arange(len(vertices) // 3 * 3, dtype=np.int64).reshape(-1, 3))
 
 
 def _read_with_trimesh(path: str) -> MeshData:
+    if path.lower().endswith(".dae"):  # trimesh drops a non-finite vertex without a word
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+        for m in re.finditer(r"<float_array\b[^>]*>([^<]*)<", text):
+            for token in m.group(1).split():
+                try:
+                    value = float(token)
+                except ValueError:
+                    continue  # trimesh says what it cannot read
+                if not math.isfinite(value):
+                    line = text.count("\n", 0, m.start()) + 1
+                    raise MeshReadError(
+                        path, f"a number of a <float_array> is not finite: {token!r}", line
+                    )
     import trimesh  # ~1 s to import: only for formats read nowhere else (.dae)
 
     loaded: Any = trimesh.load(path, force="mesh", process=False)

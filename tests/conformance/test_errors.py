@@ -664,9 +664,10 @@ def test_elements_nested_deeper_than_the_engine_reads(make_sim, backend, private
     assert list(private_tmp.iterdir()) == []
 
 
-# Mesh files that are not meshes: PyBullet loads random bytes as a link without a shape and
-# reads an .obj's missing numbers as uninitialised memory (inertia 1e41, measured); the MuJoCo
-# backend raised a raw IndexError on 'v 1 2'. Each is refused when the URDF is read, naming the
+# Mesh files that are not meshes: PyBullet loads random bytes, an empty file or NaN vertices as a
+# link without a shape and reads an .obj's missing numbers as uninitialised memory (inertia 1e41,
+# measured); the MuJoCo backend raised a raw IndexError on 'v 1 2'; trimesh drops a .dae's NaN
+# vertex quietly. Each is refused when the URDF is read, naming the
 # URDF, the link, the mesh, its line where it has one, and what is wrong.
 GARBAGE_MESHES = {
     "random bytes as .stl": (
@@ -694,6 +695,41 @@ GARBAGE_MESHES = {
         r"\(line 3\): 'v' needs 3 numbers \(x y z\), got 'v a b c'",
     ),
     "binary bytes as .obj": ("bad.obj", b"\x00\x01v 1 2 3\n", r"not an \.obj: binary data"),
+    "an empty .obj": ("bad.obj", b"", r"'bad\.obj' cannot be read as a mesh: holds no vertex"),
+    "an .obj of comments": ("bad.obj", b"# nothing\n", r"holds no vertex"),
+    "a NaN vertex in an .obj": (
+        "bad.obj",
+        b"v 0 0 0\nv 0.1 0 0\nv 0 nan 0\nv 0 0 0.1\nf 1 2 3\nf 1 3 4\n",
+        r"'bad\.obj' cannot be read as a mesh \(line 3\): vertex 3 is not finite: \(0, nan, 0\)",
+    ),
+    "an infinite vertex in an ASCII .stl": (
+        "bad.stl",
+        b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex inf 0 0\n"
+        b"vertex 0 1 0\nendloop\nendfacet\nendsolid x\n",
+        r"\(line 5\): vertex 2 is not finite: \(inf, 0, 0\)",
+    ),
+    "a NaN vertex in a binary .stl": (
+        "bad.stl",
+        bytes(80)
+        + (1).to_bytes(4, "little")
+        + np.array([0, 0, 1, 0, 0, 0, 1, 0, 0, 0, np.nan, 0], dtype="<f4").tobytes()
+        + bytes(2),
+        r"'bad\.stl' cannot be read as a mesh: triangle 1 vertex 3 is not finite: \(0, nan, 0\)",
+    ),
+    "a face past the vertices of an .obj": (
+        "bad.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 99\n",
+        r"\(line 5\): a face corner is vertex 99; the file has 4 vertices",
+    ),
+    "a NaN in a COLLADA <float_array>": (
+        "bad.dae",
+        b'<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" '
+        b'version="1.4.1"><library_geometries><geometry id="g"><mesh><source id="p">\n'
+        b'<float_array id="a" count="9">0 0 0 0.1 0 0 0 nan 0</float_array></source>'
+        b"</mesh></geometry></library_geometries></COLLADA>",
+        r"'bad\.dae' cannot be read as COLLADA \(MeshReadError: .*bad\.dae:2: a number of a "
+        r"<float_array> is not finite: 'nan'\)",
+    ),
 }
 
 
