@@ -1,0 +1,39 @@
+"""Smoke runs of the fault benchmarks (bench/divergence.py, bench/limits.py): they run and print
+their tables. Timings are never asserted here (they belong to the scripts' full runs, README
+"Limits"); what a row says about refusals is, since it does not depend on the machine."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(*args: str) -> str:
+    proc = subprocess.run(
+        [sys.executable, *args], capture_output=True, text=True, timeout=600, cwd=ROOT
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc.stdout
+
+
+def test_divergence_bench_prints_both_worlds_with_ratios():
+    out = _run("bench/divergence.py", "--quick", "--repeats", "3")
+    rows = [line for line in out.splitlines() if line.startswith(("| r2d2", "| KUKA"))]
+    assert len(rows) == 2, out
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        assert len(cells) == 9, row
+        assert all(float(c.split()[0]) > 0 for c in cells[1:]), row
+
+
+def test_limits_bench_times_what_loads_and_what_is_refused():
+    out = _run("bench/limits.py", "--sizes", "10", "130", "--raw-max", "10", "--timeout", "120")
+    rows = {line.split("|")[1].strip(): line for line in out.splitlines() if line[:3] == "| 1"}
+    assert set(rows) == {"10", "130"}, out
+    pybullet, raw, mujoco, raw_mujoco = (c.strip() for c in rows["130"].strip("|").split("|")[1:])
+    assert pybullet.startswith("refused in") and raw == "not run"
+    assert mujoco.endswith("s") and not mujoco.startswith("refused"), rows["130"]
+    assert "a body with 130 joints" in out  # the reason, printed under the table
