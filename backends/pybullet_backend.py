@@ -49,6 +49,7 @@ from simbridge.types import (
     LinkState,
     MotorMode,
     Quat,
+    SphericalJointState,
     Vec3,
 )
 from simbridge.urdf import UrdfModel, resolve_mesh
@@ -1000,6 +1001,8 @@ class PyBulletBackend(Backend):
     ) -> None:
         self._last_velocity = None
         self._spherical_motor(body, joints.tolist(), targets, max_force, kp, kd)
+        for j, q, f, a, b in zip(joints.tolist(), targets, max_force, kp, kd, strict=True):
+            self._records.spherical_motor(body, j, (int(mode), q, f, a, b))
 
     def _spherical_motor(
         self,
@@ -1042,6 +1045,72 @@ class PyBulletBackend(Backend):
             p.setJointMotorControlMultiDof(
                 body, j, p.TORQUE_CONTROL, force=t, physicsClientId=self._c
             )
+            self._records.spherical_torque(self._steps, body, j, t)
+
+    def _spherical_default(self, body: int, joint: int) -> tuple[Any, ...]:
+        """The motor PyBullet gives a spherical joint at load, under this profile: (mode,
+        target, max_force, kp, kd), the force as asked (before an effort limit)."""
+        if self.profile.joint_brake == "pybullet":
+            force = SPHERICAL_BRAKE_IMPULSE / self._dt
+            return (MotorMode.POSITION, (0.0, 0.0, 0.0, 1.0), [force] * 3, [0.2] * 3, [1.0] * 3)
+        friction = self._bodies[body].table[joint].friction
+        return (MotorMode.VELOCITY, (0.0, 0.0, 0.0, 1.0), [friction] * 3, [0.0] * 3, [1.0] * 3)
+
+    @_exclusive
+    def spherical_states(self, body: int) -> list[SphericalJointState]:
+        info = self._bodies[body]
+        balls = [i for i in info.movable if info.table[i].type == JointType.SPHERICAL]
+        rows = p.getJointStatesMultiDof(body, balls, physicsClientId=self._c)
+        records = self._records.spherical.get(body, {})
+        out = []
+        for j, r in zip(balls, rows, strict=True):
+            mode, target, force, kp, kd = records.get(j) or self._spherical_default(body, j)
+            out.append(
+                SphericalJointState(
+                    j,
+                    tuple(r[0]),
+                    tuple(r[1]),
+                    int(mode),
+                    tuple(target),
+                    tuple(force),
+                    tuple(kp),
+                    tuple(kd),
+                    tuple(self._records.spherical_pending(self._steps, body, j)),  # type: ignore[arg-type]
+                )
+            )
+        return out
+
+    @_exclusive
+    def set_spherical_states(
+        self, body: int, states: list[SphericalJointState], positions: bool
+    ) -> None:
+        """Positions (unless a bit-exact restore put them back), the motors, and the pending
+        torques: those in force cancelled exactly (x + (-x) is 0), the new ones given."""
+        self._last_velocity = None
+        c = self._c
+        records = self._records
+        for e in states:
+            if positions:
+                p.resetJointStateMultiDof(body, e.joint, e.position, e.velocity, physicsClientId=c)
+            motor = (e.motor_mode, e.motor_target, e.motor_max_force, e.motor_kp, e.motor_kd)
+            self._spherical_motor(
+                body,
+                [e.joint],
+                [list(e.motor_target)],
+                [list(e.motor_max_force)],
+                [list(e.motor_kp)],
+                [list(e.motor_kd)],
+            )
+            records.spherical_motor(body, e.joint, motor)
+            now = records.spherical_pending(self._steps, body, e.joint)
+            for torque in ([-x for x in now], list(e.pending_torque)):
+                if any(torque):
+                    p.setJointMotorControlMultiDof(
+                        body, e.joint, p.TORQUE_CONTROL, force=torque, physicsClientId=c
+                    )
+            records.spherical_set_pending(self._steps, body, e.joint, list(e.pending_torque))
+        if positions:
+            self._next_check = self._steps + 1  # a teleport: probed after the next step
 
     # ---------------------------------------------------------------- description
 
@@ -1085,7 +1154,10 @@ class PyBulletBackend(Backend):
         sends none), then cancel the pending torques and give the new ones."""
         c = self._c
         now = self.joint_commands(body)
-        movable = np.asarray(self._bodies[body].movable, dtype=np.intp)
+        info = self._bodies[body]
+        movable = np.asarray(  # spherical joints: set_spherical_states
+            [i for i in info.movable if info.table[i].type != JointType.SPHERICAL], dtype=np.intp
+        )
         differ = np.zeros(len(now.mode), dtype=bool)
         for field in range(5):
             differ |= now[field] != commands[field]

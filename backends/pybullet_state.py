@@ -38,22 +38,31 @@ class Records:
         self.order = itertools.count()
         # torque commands: (step, body, joints, torques); only those of the current step count
         self.torques: list[tuple[int, int, np.ndarray, list[float]]] = []
+        # spherical joints: body -> joint -> (mode, target, max_force, kp, kd), the last motor
+        # command (absent: the motor PyBullet gave it at load); torques (step, body, joint, 3)
+        self.spherical: dict[int, dict[int, tuple[Any, ...]]] = {}
+        self.spherical_torques: list[tuple[int, int, int, list[float]]] = []
         self.generation = 0  # bumped by every reset (saved states die with it)
         self.dead: list[tuple[int, int]] = []  # (generation, state id) of collected snapshots
 
     def loaded(self, body: int) -> None:
         self.motors[body] = {}
         self.baseline.pop(body, None)
+        self.spherical[body] = {}
 
     def removed(self, body: int) -> None:
         self.motors.pop(body, None)
         self.baseline.pop(body, None)
         self.torques = [t for t in self.torques if t[1] != body]
+        self.spherical.pop(body, None)
+        self.spherical_torques = [t for t in self.spherical_torques if t[1] != body]
 
     def reset(self) -> None:
         self.motors.clear()
         self.baseline.clear()
         self.torques.clear()
+        self.spherical.clear()
+        self.spherical_torques.clear()
         self.generation += 1
         self.dead.clear()
 
@@ -120,6 +129,33 @@ class Records:
     def restamp(self, old: int, new: int) -> None:
         """The step counter moved from ``old`` to ``new`` (set_time): pending torques follow."""
         self.torques = [(new, *t[1:]) for t in self.torques if t[0] == old]
+        self.spherical_torques = [(new, *t[1:]) for t in self.spherical_torques if t[0] == old]
+
+    def spherical_motor(self, body: int, joint: int, motor: tuple[Any, ...]) -> None:
+        """A spherical joint's motor command: (mode, target, max_force, kp, kd)."""
+        self.spherical.setdefault(body, {})[joint] = motor
+
+    def spherical_torque(self, step: int, body: int, joint: int, torque: list[float]) -> None:
+        """Torques on a spherical joint given before step ``step`` (as applied)."""
+        log = self.spherical_torques
+        if log and log[0][0] != step:
+            log.clear()  # those of an earlier step acted and are gone
+        log.append((step, body, joint, torque))
+
+    def spherical_pending(self, step: int, body: int, joint: int) -> list[float]:
+        """The torques pending on a spherical joint before step ``step`` (their sum)."""
+        out = [0.0, 0.0, 0.0]
+        for s, b, j, torque in self.spherical_torques:
+            if s == step and b == body and j == joint:
+                out = [x + y for x, y in zip(out, torque, strict=True)]
+        return out
+
+    def spherical_set_pending(self, step: int, body: int, joint: int, torque: list[float]) -> None:
+        """``torque`` is now what is pending on the joint before step ``step``."""
+        self.spherical_torques = [
+            t for t in self.spherical_torques if (t[0], t[1], t[2]) != (step, body, joint)
+        ]
+        self.spherical_torque(step, body, joint, torque)
 
 
 def _first(entry: tuple[Any, ...]) -> Any:

@@ -6,7 +6,9 @@ half): the commands in force from the motor table, and MuJoCo's own data for an 
   POSITION motor towards ``target_position`` (a position command sets ``target_velocity`` to
   0); the torques pending for the next step.
 * ``set_joint_commands``: writes those columns back (a position target clamped to the
-  joint's limits, as ``set_joint_position`` does) and the pending torques.
+  joint's limits, as ``set_joint_position`` does) and the pending torques; spherical joints
+  apart: ``spherical_states``/``set_spherical_states`` read and write their three slots, target
+  quaternion, coordinates and torques.
 * ``snapshot``/``restore``: ``mj_getState``/``mj_setState`` with ``mjSTATE_INTEGRATION``
   (time, qpos, qvel, act, the solver's warm start ``qacc_warmstart``, ctrl and applied
   forces), and the poses of fixed bases (``body_pos``/``body_quat``: a fixed base is moved in
@@ -26,7 +28,7 @@ import mujoco
 import numpy as np
 
 from simbridge.exceptions import EngineError, SimulationDivergedError
-from simbridge.types import JointCommands, MotorMode
+from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointState
 
 from .world import Compiled, Robot
 
@@ -117,8 +119,9 @@ class Snapshots:
         robot = self._robots[body]
         c = self._w
         t = c.motors
-        mv = np.asarray(robot.movable, dtype=np.intp)
-        slots = robot.motor_index
+        keep = [k for k, j in enumerate(robot.movable) if j not in robot.balls]  # not spherical
+        mv = np.asarray(robot.movable, dtype=np.intp)[keep]
+        slots = robot.motor_index[keep]
         position = commands.mode[mv] == MotorMode.POSITION
         target = commands.target[mv]
         joints = robot.model.joints
@@ -134,6 +137,65 @@ class Snapshots:
         c.refresh_motors()
         c.torque[slots] = commands.pending_torque[mv]  # in place: the step loops hold it
         c.pending_torque = bool(c.torque.any())
+
+    def spherical_states(self, body: int) -> list[SphericalJointState]:
+        robot = self._robots[body]
+        c = self._w
+        t = c.motors
+        d = c.d
+        first = dict(zip(robot.movable, robot.motor_index.tolist(), strict=True))
+        out = []
+        for j in robot.balls:
+            s = first[j]
+            axes = slice(s, s + 3)
+            kp, kd = tuple(t.kp[axes].tolist()), tuple(t.kd[axes].tolist())
+            position = any(kp) or kd != (1.0, 1.0, 1.0)
+            a, v = int(robot.qadr[j]), int(robot.dofadr[j])  # a: x's address, after w
+            q = d.qpos[a - 1 : a + 3].tolist()
+            out.append(
+                SphericalJointState(
+                    j,
+                    (q[1], q[2], q[3], q[0]),
+                    tuple(d.qvel[v : v + 3].tolist()),
+                    int(MotorMode.POSITION if position else MotorMode.VELOCITY),
+                    tuple(t.ball_target[t.ball_of[s]].tolist()),
+                    tuple(t.max_force[axes].tolist()),
+                    kp,
+                    kd,
+                    tuple(c.torque[axes].tolist()),
+                )
+            )
+        return out
+
+    def set_spherical_states(
+        self, body: int, states: list[SphericalJointState], positions: bool
+    ) -> None:
+        self._check_idle()
+        robot = self._robots[body]
+        c = self._w
+        t = c.motors
+        first = dict(zip(robot.movable, robot.motor_index.tolist(), strict=True))
+        for e in states:
+            assert robot.table[e.joint].type == JointType.SPHERICAL
+            s = first[e.joint]
+            axes = slice(s, s + 3)
+            t.target_velocity[axes] = 0.0
+            t.target_position[axes] = 0.0
+            t.kp[axes] = e.motor_kp
+            t.kd[axes] = e.motor_kd
+            t.max_force[axes] = e.motor_max_force
+            t.ball_target[t.ball_of[s]] = e.motor_target
+            c.torque[axes] = e.pending_torque  # in place: the step loops hold it
+            if positions:
+                a, v = int(robot.qadr[e.joint]), int(robot.dofadr[e.joint])
+                x, y, z, w = e.position
+                c.d.qpos[a - 1 : a + 3] = (w, x, y, z)
+                c.d.qvel[v : v + 3] = e.velocity
+        c.refresh_motors()
+        c.pending_torque = bool(c.torque.any())
+        if positions:
+            c.stale = True
+            c.motor_force_valid = False
 
     def snapshot(self) -> Any:
         self._check_idle()

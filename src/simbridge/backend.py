@@ -40,6 +40,7 @@ from .types import (
     LinkState,
     MotorMode,
     Quat,
+    SphericalJointState,
     Vec3,
 )
 
@@ -302,6 +303,27 @@ class Backend(ABC):
 
         raise BackendUnsupportedError(self.name, "spherical joint torques")
 
+    def spherical_states(self, body: int) -> list[SphericalJointState]:
+        """Every spherical joint of ``body`` (joint order): its coordinates, the motor in force
+        (a position motor, or a brake read back as VELOCITY) and the torques pending for the
+        next step. ``joint_commands`` reports these joints' first axis only, and
+        ``set_joint_commands`` leaves them as they are: this and :meth:`set_spherical_states`
+        carry them (``Sim.get_state``/``set_state``)."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "the state of spherical joints (get_state)")
+
+    def set_spherical_states(
+        self, body: int, states: list[SphericalJointState], positions: bool
+    ) -> None:
+        """Make each of ``states`` (checked: unit quaternions, finite values, forces and gains
+        >= 0) the motor in force and the pending torques of its joint, replacing both; with
+        ``positions`` also teleport the joint to its position and velocity (False after a
+        bit-exact :meth:`restore`)."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, "setting the state of spherical joints")
+
     # ---------------------------------------------------------------- bound commands
     # Not abstract: the default (the Sim sends a bound command before every step through
     # set_joint_velocity / set_joint_position) is right for every backend; a backend whose
@@ -361,7 +383,8 @@ class Backend(ABC):
         """Make ``commands`` (checked: modes NONE exactly on the fixed joints, finite values,
         forces and gains >= 0) the motors in force and the pending torques of ``body``,
         replacing both (a pending torque is not added to: it is set). Afterwards
-        ``joint_commands(body)`` reads them back."""
+        ``joint_commands(body)`` reads them back. Spherical joints' entries are left alone
+        (:meth:`set_spherical_states` sets them)."""
         from .exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the commands in force (set_state)")

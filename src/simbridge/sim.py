@@ -73,6 +73,10 @@ class _Body:
     movable_cache: dict[Any, np.ndarray] = field(default_factory=dict)
     load: dict[str, Any] = field(default_factory=dict)  # how it was loaded (the manifest's)
 
+    @property
+    def has_spherical(self) -> bool:
+        return JointType.SPHERICAL in self.joint_types
+
 
 class _Closed:
     """Stands in for the backend after close(): any use raises SimClosedError."""
@@ -754,19 +758,6 @@ class Sim:
             vs.append(v)
         self._b.reset_joint_state_multi_dof(body, idx, qs, vs)
 
-    def _refuse_spherical_state(self) -> None:
-        """get_state/set_state do not carry spherical joints yet: refused, not half done."""
-        for info in self._bodies.values():
-            if JointType.SPHERICAL in info.joint_types:
-                from .exceptions import BackendUnsupportedError
-
-                raise BackendUnsupportedError(
-                    self.backend,
-                    f"get_state/set_state of body {info.name!r} (it has spherical joints)",
-                    "save its joints with joint_states_multi_dof and put them back with "
-                    "reset_joint_state_multi_dof",
-                )
-
     def _spherical_only(self, body: int, idx: np.ndarray) -> None:
         """A multi-DoF command names spherical joints only."""
         b = self._bodies[int(body)]
@@ -1126,7 +1117,7 @@ class Sim:
         """Everything :meth:`set_state` needs to put this world back: per body (load order)
         the base's centre-of-mass pose and velocities, every joint's position and velocity,
         the commands in force (motor mode, target, max force, gains) and the torques pending
-        for the next step; the time.
+        for the next step (a spherical joint's in full in ``BodyState.spherical``); the time.
 
         Args:
             exact: also keep the engine's own data (``WorldState.native``: MuJoCo's solver warm
@@ -1140,7 +1131,6 @@ class Sim:
             InvalidArgumentError: a bound command holds a bad value (as ``step`` would).
         """
         b = self._b
-        self._refuse_spherical_state()
         for command in self._commands:  # a bound command's values are the ones in force
             command.send()
         native = b.snapshot() if _flag(exact, "exact") else None
@@ -1149,6 +1139,18 @@ class Sim:
             base = b.base_state(body)
             js = b.joint_states(body, self._joints(body, None, False))
             cmd = b.joint_commands(body)
+            spherical = tuple(b.spherical_states(body)) if info.has_spherical else ()
+            for e in spherical:  # the arrays hold a spherical joint's first coordinate and axis
+                j = e.joint
+                js.positions[j], js.velocities[j] = e.position[0], e.velocity[0]
+                cmd.mode[j] = e.motor_mode
+                cmd.target[j] = e.motor_target[0] if e.motor_mode == MotorMode.POSITION else 0.0
+                cmd.max_force[j], cmd.kp[j], cmd.kd[j] = (
+                    e.motor_max_force[0],
+                    e.motor_kp[0],
+                    e.motor_kd[0],
+                )
+                cmd.pending_torque[j] = e.pending_torque[0]
             bodies.append(
                 BodyState(
                     body,
@@ -1166,6 +1168,7 @@ class Sim:
                     cmd.kp,
                     cmd.kd,
                     cmd.pending_torque,
+                    spherical,
                 )
             )
         return WorldState(self.backend, self._dt, b.time, tuple(bodies), native)
@@ -1195,7 +1198,6 @@ class Sim:
         b.time  # noqa: B018 - raises SimClosedError after close()
         from .state import check_state
 
-        self._refuse_spherical_state()
         checked = check_state(state, self._bodies)
         self._end_commands("set_state replaced the commands in force")
         exact = b.restore(state.native if state.backend == self.backend else None)
@@ -1204,6 +1206,11 @@ class Sim:
                 pos, orn, lin, ang = c.base
                 b.reset_base_state(c.body, pos, orn, lin, ang)  # type: ignore[arg-type]
                 movable = self._joints(c.body, None, True)
+                if c.spherical:  # their own call below (a cached index array: backends key on it)
+                    sph = {e.joint for e in c.spherical}
+                    movable = self._joints(
+                        c.body, [j for j in movable.tolist() if j not in sph], True
+                    )
                 if len(movable):
                     b.reset_joint_state(
                         c.body,
@@ -1212,6 +1219,8 @@ class Sim:
                         c.velocities[movable].tolist(),
                     )
             b.set_joint_commands(c.body, c.commands)
+            if c.spherical:
+                b.set_spherical_states(c.body, c.spherical, not exact)
         b.set_time(float(state.time))
         self._wall_start = None
 

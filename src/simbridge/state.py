@@ -12,7 +12,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .exceptions import InvalidArgumentError
-from .types import BodyState, JointCommands, JointType, MotorMode, WorldState
+from .types import BodyState, JointCommands, JointType, MotorMode, SphericalJointState, WorldState
 
 __all__ = ["CheckedBody", "check_state"]
 
@@ -27,6 +27,7 @@ class CheckedBody(NamedTuple):
     positions: np.ndarray  # (n,) all joints
     velocities: np.ndarray  # (n,)
     commands: JointCommands
+    spherical: list[SphericalJointState]  # every spherical joint, checked, joint order
 
 
 def _vector(value: Any, n: int, where: str) -> tuple[float, ...]:
@@ -109,7 +110,68 @@ def _check_body(bs: BodyState, body: int, types: list[JointType]) -> CheckedBody
         kd,
         _array(bs.pending_torque, n, f"{where} pending_torque"),
     )
-    return CheckedBody(body, (pos, orn, lin, ang), q, v, commands)
+    return CheckedBody(body, (pos, orn, lin, ang), q, v, commands, _spherical(bs, types, where))
+
+
+def _spherical(bs: BodyState, types: list[JointType], where: str) -> list[SphericalJointState]:
+    """The spherical joints' part of ``bs``: one entry per spherical joint, in joint order, each
+    with unit quaternions (to 1e-6), finite values, forces and gains >= 0."""
+    want = [j for j, t in enumerate(types) if t == JointType.SPHERICAL]
+    given = getattr(bs, "spherical", ())
+    try:
+        joints = [int(e[0]) for e in given]
+    except (TypeError, ValueError, IndexError):
+        joints = None
+    if joints != want:
+        raise InvalidArgumentError(
+            "state",
+            f"{where} spherical: expected one SphericalJointState per spherical joint {want}, "
+            f"got {given!r}",
+        )
+    out = []
+    for e in given:
+        at = f"{where} spherical joint {int(e[0])}"
+        if len(e) != len(SphericalJointState._fields):
+            raise InvalidArgumentError("state", f"{at}: expected a SphericalJointState, got {e!r}")
+        quats = [_vector(e[i], 4, f"{at} {SphericalJointState._fields[i]}") for i in (1, 4)]
+        for name, q in zip(("position", "motor_target"), quats, strict=True):
+            norm = math.sqrt(sum(c * c for c in q))
+            if abs(norm - 1.0) > 1e-6:
+                raise InvalidArgumentError(
+                    "state", f"{at} {name}: not a unit quaternion (x, y, z, w): norm {norm!r}"
+                )
+        mode = e[3]
+        if mode not in (MotorMode.VELOCITY, MotorMode.POSITION):
+            raise InvalidArgumentError(
+                "state", f"{at} motor_mode: expected VELOCITY or POSITION, got {mode!r}"
+            )
+        vec = {
+            i: _vector(e[i], 3, f"{at} {SphericalJointState._fields[i]}") for i in (2, 5, 6, 7, 8)
+        }
+        for i in (5, 6, 7):
+            if min(vec[i]) < 0:
+                raise InvalidArgumentError(
+                    "state", f"{at} {SphericalJointState._fields[i]}: values must be >= 0"
+                )
+        velocity_mode = int(mode) == MotorMode.VELOCITY
+        if velocity_mode and (vec[6] != (0.0, 0.0, 0.0) or vec[7] != (1.0, 1.0, 1.0)):
+            raise InvalidArgumentError(
+                "state", f"{at}: a VELOCITY motor (a brake) has kp 0 and kd 1; use POSITION"
+            )
+        out.append(
+            SphericalJointState(
+                int(e[0]),
+                quats[0],  # type: ignore[arg-type]
+                vec[2],  # type: ignore[arg-type]
+                int(mode),
+                quats[1],  # type: ignore[arg-type]
+                vec[5],  # type: ignore[arg-type]
+                vec[6],  # type: ignore[arg-type]
+                vec[7],  # type: ignore[arg-type]
+                vec[8],  # type: ignore[arg-type]
+            )
+        )
+    return out
 
 
 def check_state(state: Any, bodies: Mapping[int, Any]) -> list[CheckedBody]:

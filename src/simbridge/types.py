@@ -27,6 +27,7 @@ __all__ = [
     "ContactPoint",
     "MotorMode",
     "JointCommands",
+    "SphericalJointState",
     "BodyState",
     "WorldState",
 ]
@@ -241,6 +242,29 @@ class JointCommands(NamedTuple):
     pending_torque: np.ndarray  # (n,) N·m or N
 
 
+class SphericalJointState(NamedTuple):
+    """A spherical joint's part of a :class:`BodyState` (whose arrays hold its first
+    coordinate only, as ``joint_states`` does): every coordinate, and its motor per axis of the
+    child's inertial frame (see :mod:`simbridge.multi_dof`)."""
+
+    joint: int
+    """The joint's index."""
+    position: Quat
+    """(x, y, z, w), as ``JointStateMultiDof.position``."""
+    velocity: Vec3
+    """rad/s, in the child's inertial frame."""
+    motor_mode: int
+    """MotorMode.POSITION (towards ``motor_target``) or VELOCITY (a brake: kp 0, kd 1)."""
+    motor_target: Quat
+    motor_max_force: Vec3
+    """N·m per axis (0: that axis released)."""
+    motor_kp: Vec3
+    motor_kd: Vec3
+    """PyBullet's ``damping`` per axis."""
+    pending_torque: Vec3
+    """N·m, the torques given since the last step (they act during the next one)."""
+
+
 class BodyState(NamedTuple):
     """One body's part of a :class:`WorldState`. Arrays are float64 of shape (n,) over all the
     body's joints in index order (fixed joints: 0, mode NONE).
@@ -271,6 +295,9 @@ class BodyState(NamedTuple):
     motor_kd: np.ndarray  # (n,)
     pending_torque: np.ndarray
     """(n,) torque commands given since the last step (they act during the next one)."""
+    spherical: tuple[SphericalJointState, ...] = ()
+    """Every spherical joint's full state and motor, in joint order (its entries in the arrays
+    above are its first coordinate and first axis)."""
 
 
 @dataclass(frozen=True, eq=False)

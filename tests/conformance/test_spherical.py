@@ -338,6 +338,110 @@ def test_the_default_motor_holds_the_humanoid(make_sim):
     assert worst < 2e-5, worst
 
 
+# ---------------------------------------------------------------- get_state and set_state
+
+
+def _spherical_world(sim: simbridge.Sim) -> tuple[int, int]:
+    """A fixed humanoid and the pendulum, mid-run: position motors per axis, a brake, a 1-DoF
+    velocity motor, torques pending on two spherical joints."""
+    h = sim.load_urdf(HUMANOID, base_position=(0, 0, 3), fixed_base=True)
+    b = sim.load_urdf(PENDULUM, base_position=(2, 0, 1), fixed_base=True)
+    sim.reset_joint_state_multi_dof(b, 0, Q0, V0)
+    sim.set_joint_position(
+        h,
+        ["neck", "left_hip"],
+        [quat_from_rpy((0.2, 0.0, 0.0)), quat_from_rpy((0.0, 0.4, 0.1))],
+        max_force=[50.0, 20.0, 10.0],
+        kp=[0.3, 0.2, 0.1],
+        kd=0.8,
+    )
+    sim.set_joint_velocity(b, 0, 0, max_force=[0.05, 0.03, 0.0])
+    sim.set_joint_velocity(h, "right_elbow", 1.0, max_force=5)
+    sim.step(10)
+    sim.set_joint_torque(h, "chest", [1.0, -2.0, 0.5])
+    sim.set_joint_torque(b, 0, [0.01, 0.0, 0.02])
+    return h, b
+
+
+def _record(sim: simbridge.Sim, bodies: tuple[int, int], steps: int = 30) -> np.ndarray:
+    out = []
+    for _ in range(steps):
+        sim.step()
+        out.append([x for b in bodies for s in sim.joint_states_multi_dof(b) for x in s[0] + s[1]])
+    return np.array(out)
+
+
+def test_get_state_and_set_state_carry_spherical_joints(make_sim):
+    sim = make_sim()
+    bodies = _spherical_world(sim)
+    state = sim.get_state()
+    pendulum = state.bodies[1].spherical[0]
+    assert [e.joint for e in state.bodies[0].spherical] == [1, 2, 3, 6, 9, 11, 12, 14]
+    assert pendulum.motor_mode == simbridge.MotorMode.VELOCITY
+    assert pendulum.motor_max_force == (0.05, 0.03, 0.0)
+    assert pendulum.pending_torque == (0.01, 0.0, 0.02)
+    neck = state.bodies[0].spherical[1]
+    assert (neck.motor_mode, neck.motor_kp, neck.motor_kd) == (2, (0.3, 0.2, 0.1), (0.8,) * 3)
+    # PyBullet's motor at load, on the joints no command reached
+    chest = state.bodies[0].spherical[0]
+    assert (chest.motor_mode, chest.motor_kp, chest.motor_max_force) == (
+        2,
+        (0.2,) * 3,
+        (240000.0,) * 3,
+    )
+    assert state.bodies[0].joint_positions[2] == neck.position[0]  # the first coordinate
+    first = _record(sim, bodies)
+    sim.set_state(state)  # into the same world: bit for bit
+    assert np.array_equal(_record(sim, bodies), first)
+    other = make_sim()
+    theirs = _spherical_world(other)
+    other.step(7)
+    other.set_state(state.portable())  # another world: the state, the motors, the torques
+    assert np.abs(_record(other, theirs) - first).max() < 1e-12  # measured 6.7e-16 on PyBullet
+
+
+def test_a_spherical_state_crosses_engines(backend):
+    """A state taken on one engine, set on the other: every spherical field reads back."""
+    other = "mujoco" if backend == "pybullet" else "pybullet"
+    with simbridge.Sim(backend) as a, simbridge.Sim(other) as b:
+        _spherical_world(a)
+        state = a.get_state()
+        b.load_urdf(HUMANOID, base_position=(0, 0, 3), fixed_base=True)
+        b.load_urdf(PENDULUM, base_position=(2, 0, 1), fixed_base=True)
+        b.set_state(state)
+        back = b.get_state()
+        for mine, theirs in zip(state.bodies, back.bodies, strict=True):
+            assert len(mine.spherical) == len(theirs.spherical)
+            for e, f in zip(mine.spherical, theirs.spherical, strict=True):
+                for x, y in zip(e, f, strict=True):
+                    assert _raw.close(x, y, 1e-15), (e.joint, x, y)
+            for field in ("joint_positions", "motor_mode", "motor_max_force", "pending_torque"):
+                assert _raw.close(getattr(mine, field), getattr(theirs, field), 1e-15), field
+
+
+def test_a_bad_spherical_state_is_refused_before_anything_is_set(make_sim):
+    sim = make_sim()
+    _spherical_world(sim)
+    state = sim.get_state()
+    body = state.bodies[1]
+    e = body.spherical[0]
+    bad = {
+        "not a unit quaternion": e._replace(position=(0.0, 0.0, 0.0, 2.0)),
+        "a VELOCITY motor \\(a brake\\) has kp 0": e._replace(motor_kp=(0.1, 0.0, 0.0)),
+        "values must be >= 0": e._replace(motor_max_force=(-1.0, 0.0, 0.0)),
+        "expected 3 finite numbers": e._replace(pending_torque=(math.nan, 0.0, 0.0)),
+    }
+    before = sim.joint_states_multi_dof(1, 0)[0]
+    for message, entry in bad.items():
+        broken = state.bodies[:1] + (body._replace(spherical=(entry,)),)
+        with pytest.raises(exc.InvalidArgumentError, match=message):
+            sim.set_state(type(state)(state.backend, state.timestep, state.time, broken))
+    missing = state.bodies[:1] + (body._replace(spherical=()),)
+    with pytest.raises(exc.InvalidArgumentError, match=r"one SphericalJointState per spherical"):
+        sim.set_state(type(state)(state.backend, state.timestep, state.time, missing))
+    assert sim.joint_states_multi_dof(1, 0)[0] == before
+
+
 # ---------------------------------------------------------------- what is refused, and why
 
 
@@ -372,8 +476,6 @@ def test_what_spherical_joints_refuse(make_sim):
         sim.reset_joint_state_multi_dof(body, "root", [])
     with pytest.raises(exc.InvalidArgumentError, match=r"take no a bound command"):
         sim.position_command(body, "neck", 0.0, max_force=5)
-    with pytest.raises(exc.BackendUnsupportedError, match=r"get_state/set_state of body"):
-        sim.get_state()
     # nothing refused was half done: the joints are where they were, held as at load
     sim.step()
     chest = sim.joint_states_multi_dof(body, "chest")[0].position
