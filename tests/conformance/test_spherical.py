@@ -568,3 +568,27 @@ def test_coupled_motor_rows_pybullets_solver_falls_short():
     print(f"asked {np.abs(asked).max():.3g} rad/s; short by {short}")
     assert short["mujoco"] < 1e-12
     assert 1.5 < short["pybullet"] < 2.5
+
+
+def test_the_swing_twist_limit_holds_on_pybullet_and_is_a_listed_departure_on_mujoco(caplog):
+    """spherical_joint_limit.urdf: its neck's <limit lower="0.2" upper=".8" twist=".3"
+    effort="1000"> makes PyBullet add a btMultiBodySphericalJointLimit. Released and pushed about
+    x (5 N·m for one step) it stops at the 0.2 rad swing on PyBullet (measured 0.2000 rad after
+    1 s); the MuJoCo backend does not enforce it (measured: it falls over, 2.01 rad) and says so
+    at load and in its manifest."""
+    _engines()
+    caplog.set_level(logging.WARNING, logger="simbridge.mujoco")
+    angle = {}
+    for backend in ("pybullet", "mujoco"):
+        with simbridge.Sim(backend) as sim:
+            body = sim.load_urdf(LIMITED, fixed_base=True)
+            sim.set_joint_velocity(body, "neck", 0, max_force=0)
+            sim.set_joint_torque(body, "neck", [5.0, 0.0, 0.0])
+            sim.step(240)
+            x, y, z, w = sim.joint_states_multi_dof(body, "neck")[0].position
+            angle[backend] = 2 * math.atan2(math.sqrt(x * x + y * y + z * z), w)
+            departures = sim.manifest()["departures"]
+            assert ("body 0 spherical joint limits" in departures) == (backend == "mujoco")
+    assert angle["pybullet"] == pytest.approx(0.2, abs=1e-3)
+    assert angle["mujoco"] > 1.0
+    assert "spherical joints ['neck'] have PyBullet's swing/twist limit" in caplog.text
