@@ -115,8 +115,9 @@ def test_every_file_is_read_as_raw_pybullet_reads_it(caplog):
         if why:
             failures.append(f"{name}: {why}")
     assert not failures, "\n".join(failures)
-    # of pybullet_data 3.2.7's 1095 (was 1083 before issue 14, 1090 before its spherical joints)
-    assert len(LOADABLE) == 1092
+    # of pybullet_data 3.2.7's 1095 (was 1083 before issue 14, 1090 before its spherical joints;
+    # 1092 until random_urdfs/168's all-NaN mesh was refused, issue 15)
+    assert len(LOADABLE) == 1091
 
 
 @pytest.mark.parametrize("name", SAMPLE)
