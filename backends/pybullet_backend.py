@@ -129,6 +129,15 @@ def _exclusive(method: _F) -> _F:
     return call  # type: ignore[return-value]
 
 
+def _finite_base(pos: Vec3, orn: Quat, lin: Vec3, ang: Vec3) -> bool:
+    """The reads' quick test of a base state: its sum is finite only if every number is (or
+    the sum overflowed: _all_finite tells). Explicit additions: 0.15 µs, sum() takes 0.3."""
+    return math.isfinite(
+        pos[0] + pos[1] + pos[2] + orn[0] + orn[1] + orn[2] + orn[3]
+        + lin[0] + lin[1] + lin[2] + ang[0] + ang[1] + ang[2]
+    )  # fmt: skip
+
+
 def _all_finite(*groups: Any) -> bool:
     """Whether every number in ``groups`` (sequences of floats) is finite: the exact test
     behind the reads' quick one (a sum overflows where no value is infinite)."""
@@ -788,18 +797,19 @@ class PyBulletBackend(Backend):
                 r = p.getLinkState(
                     body, link, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=c
                 )
-                if not math.isfinite(
-                    sum(r[0]) + sum(r[1]) + sum(r[4]) + sum(r[5]) + sum(r[6]) + sum(r[7])
-                ) and not _all_finite(r[0], r[1], r[4], r[5], r[6], r[7]):
+                p0, o0, p4, o5, v6, w7 = r[0], r[1], r[4], r[5], r[6], r[7]
+                if not math.isfinite(  # explicit sums: 0.2 µs (sum() 0.4)
+                    p0[0] + p0[1] + p0[2] + o0[0] + o0[1] + o0[2] + o0[3]
+                    + p4[0] + p4[1] + p4[2] + o5[0] + o5[1] + o5[2] + o5[3]
+                    + v6[0] + v6[1] + v6[2] + w7[0] + w7[1] + w7[2]
+                ) and not _all_finite(p0, o0, p4, o5, v6, w7):  # fmt: skip
                     self._diverge(f"body {body} link {link} state")
                 return LinkState(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7])
             pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
             lin, ang = p.getBaseVelocity(body, physicsClientId=c)
         finally:
             lock.release()
-        if not math.isfinite(sum(pos) + sum(orn) + sum(lin) + sum(ang)) and not _all_finite(
-            pos, orn, lin, ang
-        ):
+        if not _finite_base(pos, orn, lin, ang) and not _all_finite(pos, orn, lin, ang):
             self._diverge(f"body {body} base state")
         lp, lo = self._bodies[body].base_inertial
         inv_pos, inv_orn = p.invertTransform(lp, lo)
@@ -818,9 +828,7 @@ class PyBulletBackend(Backend):
             lin, ang = p.getBaseVelocity(body, physicsClientId=c)
         finally:
             lock.release()
-        if not math.isfinite(sum(pos) + sum(orn) + sum(lin) + sum(ang)) and not _all_finite(
-            pos, orn, lin, ang
-        ):
+        if not _finite_base(pos, orn, lin, ang) and not _all_finite(pos, orn, lin, ang):
             self._diverge(f"body {body} base state")
         return BaseState(pos, orn, lin, ang)
 
