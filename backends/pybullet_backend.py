@@ -78,6 +78,28 @@ _CHECK_EVERY = 8
 # velocity 0 and takes no reset or motor, silently. Such bodies are refused when loaded.
 MAX_BODY_JOINTS = 127
 MAX_BODY_MOVABLE_JOINTS = 121
+# PyBullet keeps names in 1024-byte buffers (1023 bytes and a NUL) and ends the process
+# (SIGSEGV, measured on 3.2.7) on a joint name over 1263 bytes or a link name over 2287:
+# longer names are refused before PyBullet reads the file.
+MAX_NAME_BYTES = 1023
+
+
+def _refuse_long_names(model: UrdfModel) -> None:
+    """UrdfStructureError for a robot, link or joint name PyBullet cannot hold."""
+    named = [("robot", model.name, None)]
+    named += [("link", link.name, link.line or None) for link in model.links]
+    named += [("joint", joint.name, joint.line or None) for joint in model.joints]
+    for element, name, line in named:
+        size = len(name.encode("utf-8"))
+        if size > MAX_NAME_BYTES:
+            raise UrdfStructureError(
+                model.source.display_name,
+                f"<{element} name={name[:20] + '...'!r}>",
+                f"a name of {size} bytes: PyBullet holds at most {MAX_NAME_BYTES} (longer "
+                "ones crash it); shorten it, or use the 'mujoco' backend",
+                line,
+            )
+
 
 # PyBullet's spherical joint motor at load (PhysicsServerCommandProcessor::createJointMotors): a
 # btMultiBodySphericalJointMotor holding the identity with kp 0.2 and an impulse of 1000 N·m·s
@@ -381,6 +403,7 @@ class PyBulletBackend(Backend):
                 "reads 0 and takes no reset or motor); merge fixed links "
                 "(merge_fixed_links=True), split the robot, or use the 'mujoco' backend",
             )
+        _refuse_long_names(model)
         with self._idle():
             body = self._load(model, base_position, base_orientation, fixed_base, options)
             if body in self._freed:  # PyBullet's pool: the last freed id, or a fresh one

@@ -219,3 +219,24 @@ def test_urdf_profile_uses_file_inertia_and_no_brake():
     with simbridge.Sim("pybullet", profile="pybullet") as sim:
         r = sim.load_urdf("r2d2.urdf", fixed_base=True)
         assert sim.dynamics_info(r, 2).local_inertia_diagonal != (1.0, 1.0, 1.0)
+
+
+def test_a_name_pybullet_cannot_hold_is_refused_before_it_reads_the_file():
+    """Raw PyBullet 3.2.7 ends the process (SIGSEGV) on a joint name over 1263 bytes: the
+    backend refuses names over 1023 bytes (PyBullet's buffer) with the element and its line."""
+    from simbridge.exceptions import UrdfStructureError
+
+    inertial = (
+        '<inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/>'
+        "</inertial>"
+    )
+    name = "j" * 1300
+    text = (
+        f'<robot name="r">\n<link name="a">{inertial}</link>\n<link name="b">{inertial}</link>\n'
+        f'<joint name="{name}" type="fixed"><parent link="a"/><child link="b"/></joint>\n'
+        "</robot>"
+    )
+    with simbridge.Sim("pybullet") as sim:
+        with pytest.raises(UrdfStructureError, match=r":4: <joint name='j.*PyBullet holds at most"):
+            sim.load_urdf(text)
+        assert sim.load_urdf(text.replace(name, "j" * 1023)) == 0  # the longest it holds
