@@ -86,7 +86,7 @@ MAX_NAME_BYTES = 1023
 
 def _refuse_long_names(model: UrdfModel) -> None:
     """UrdfStructureError for a robot, link or joint name PyBullet cannot hold."""
-    named = [("robot", model.name, None)]
+    named: list[tuple[str, str, int | None]] = [("robot", model.name, None)]
     named += [("link", link.name, link.line or None) for link in model.links]
     named += [("joint", joint.name, joint.line or None) for joint in model.joints]
     for element, name, line in named:

@@ -39,6 +39,7 @@ handler on stderr.
 
 from __future__ import annotations
 
+import atexit
 import ctypes
 import logging
 import os
@@ -66,6 +67,15 @@ _open: list[tuple[int, int, IO[bytes]]] = []  # the open window's (fd, its copy,
 # one anonymous file per fd, made on first use and emptied after each window (making two
 # files cost 40 to 400 us a window, measured on a shared machine; reusing them ~5 us)
 _sinks: dict[int, IO[bytes]] = {}
+
+
+@atexit.register
+def _close_sinks() -> None:
+    """Close the anonymous files at exit (they are unnamed: nothing is left on disk either way;
+    closing them keeps Python's ResourceWarning about open files away)."""
+    for sink in _sinks.values():
+        sink.close()
+    _sinks.clear()
 _libc: ctypes.CDLL | None = None
 
 
