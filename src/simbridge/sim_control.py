@@ -1,0 +1,306 @@
+"""The `Sim`'s commands: teleports, velocity, position and torque commands, and bound
+commands (a part of :class:`simbridge.Sim`; the commands themselves are
+:mod:`simbridge.bound`). ``set_joint_velocity`` and ``set_joint_position`` are the hot path of
+every control loop: one joints lookup, one check per argument, one backend call."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .arguments import JointsArg, quat, state_vec
+from .bound import BoundCommand
+from .exceptions import InvalidArgumentError
+from .sim_lookups import _Body, _Closed
+from .types import MotorMode
+
+if TYPE_CHECKING:
+    from .backend import Backend
+
+__all__ = ["Control"]
+
+
+class Control:
+    """Teleports, motor commands and bound commands (a part of :class:`Sim`)."""
+
+    if TYPE_CHECKING:  # provided by simbridge.sim.Sim and its other parts
+        _b: Backend
+        _bodies: dict[int, _Body]
+        _commands: list[BoundCommand]
+        _presend: list[BoundCommand]
+        _held: dict[int, dict[int, BoundCommand]]
+        _multi_idx: dict[int, np.ndarray]
+
+        def _body(self, body: int, argument: str = "body") -> _Body: ...
+
+        def _joints(self, body: int, joints: JointsArg | None, movable: bool) -> np.ndarray: ...
+
+        @staticmethod
+        def _values(value: Any, n: int, argument: str, nonneg: bool = False) -> list[float]: ...
+
+        @staticmethod
+        def _checked_state(value: Any, n: int, argument: str) -> list[float]: ...
+
+        def _spherical_only(self, body: int, idx: np.ndarray) -> None: ...
+
+        def _refuse_multi_dof(self, body: int, idx: np.ndarray, what: str) -> None: ...
+
+        def _multi_dof_motor(
+            self,
+            body: int,
+            idx: np.ndarray,
+            mode: MotorMode,
+            target: Any,
+            max_force: Any,
+            kp: Any,
+            kd: Any,
+        ) -> None: ...
+
+    def reset_joint_state(
+        self,
+        body: int,
+        joints: JointsArg,
+        positions: Any,
+        velocities: Any = 0.0,
+    ) -> None:
+        """Teleport movable joints to ``positions`` with ``velocities`` (``resetJointState``).
+        A spherical joint takes :meth:`reset_joint_state_multi_dof` (PyBullet's
+        ``resetJointState`` leaves one as it is: measured)."""
+        idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            self._refuse_multi_dof(body, idx, "reset_joint_state")
+        n = len(idx)
+        self._b.reset_joint_state(
+            body,
+            idx,
+            self._checked_state(positions, n, "positions"),
+            self._checked_state(velocities, n, "velocities"),
+        )
+
+    def reset_base_state(
+        self,
+        body: int,
+        position: Sequence[float] | None = None,
+        orientation: Sequence[float] | None = None,
+        linear_velocity: Sequence[float] | None = None,
+        angular_velocity: Sequence[float] | None = None,
+    ) -> None:
+        """Teleport the base (centre-of-mass frame, as ``resetBasePositionAndOrientation``).
+        An argument left None keeps its current value: a pose alone keeps the base's velocity
+        (``p.resetBasePositionAndOrientation`` zeroes it; pass zeros for that)."""
+        self._body(body)
+        self._b.reset_base_state(
+            body,
+            None if position is None else state_vec(position, "position"),  # type: ignore[arg-type]
+            None if orientation is None else quat(orientation, "orientation"),
+            None if linear_velocity is None else state_vec(linear_velocity, "linear_velocity"),  # type: ignore[arg-type]
+            None if angular_velocity is None else state_vec(angular_velocity, "angular_velocity"),  # type: ignore[arg-type]
+        )
+
+    # ---------------------------------------------------------------- control
+
+    def set_joint_velocity(
+        self, body: int, joints: JointsArg, target: Any, *, max_force: Any
+    ) -> None:
+        """VELOCITY_CONTROL: drive ``joints`` towards ``target`` (rad/s or m/s) with at most
+        ``max_force`` (N·m or N). Persists until replaced; ``max_force=0`` releases the joint
+        (and removes the default brake).
+
+        A spherical joint takes only the target 0 (PyBullet's spherical motor brakes; it drives
+        no other velocity), and ``max_force`` per axis of the child's frame: a number, shape
+        (3,), (n, 1) or (n, 3) (see :mod:`simbridge.multi_dof`); spherical joints are commanded
+        apart from other joints."""
+        idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            return self._multi_dof_motor(body, idx, MotorMode.VELOCITY, target, max_force, 0, 1)
+        if self._held:
+            self._refuse_held(body, idx)
+        n = len(idx)
+        self._b.set_joint_velocity(
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+        )
+
+    def set_joint_position(
+        self,
+        body: int,
+        joints: JointsArg,
+        target: Any,
+        *,
+        max_force: Any,
+        kp: Any = 0.1,
+        kd: Any = 1.0,
+    ) -> None:
+        """POSITION_CONTROL with PyBullet's law: each step the motor asks for the velocity
+        change ``kp * (target - q) / dt - kd * v`` (so it depends on dt), its force clamped to
+        ``max_force``. Persists until replaced.
+
+        A spherical joint takes a target quaternion (x, y, z, w; shape (4,) or (n, 4)) and
+        PyBullet's spherical motor law: each axis of the child's frame asks for the velocity
+        ``-kd v + 0.2 kp e / dt`` (e: the turn to the target as Bullet's XYZ Euler angles; kd is
+        what PyBullet's ``setJointMotorControlMultiDof`` calls ``damping``), ``max_force``,
+        ``kp`` and ``kd`` per axis (a number, (3,), (n, 1) or (n, 3)); see
+        :mod:`simbridge.multi_dof`."""
+        idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            return self._multi_dof_motor(body, idx, MotorMode.POSITION, target, max_force, kp, kd)
+        if self._held:
+            self._refuse_held(body, idx)
+        n = len(idx)
+        self._b.set_joint_position(
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+            self._values(kp, n, "kp", nonneg=True),
+            self._values(kd, n, "kd", nonneg=True),
+        )
+
+    # ---------------------------------------------------------------- bound commands
+
+    def velocity_command(
+        self, body: int, joints: JointsArg, target: Any, *, max_force: Any
+    ) -> BoundCommand:
+        """A velocity command bound to ``joints``, for a tight control loop: sent now, then
+        at every :meth:`step` from its own arrays, which are written in place::
+
+            cmd = sim.velocity_command(robot, [2, 3, 6, 7], 0.0, max_force=50)
+            for k in range(1000):
+                cmd.targets[:] = policy(observation)   # rad/s or m/s, shape (4,)
+                sim.step()
+
+        Each step gives the results of ``set_joint_velocity(body, joints, cmd.targets,
+        max_force=cmd.max_force)`` called just before it, bit for bit, without its per-call
+        checks: the joints (known, movable, not driven by another bound command) and the
+        arguments' shapes are checked here, once; the values are checked when a step reads
+        them (a non-finite target or a negative or non-finite force raises
+        InvalidArgumentError from ``step`` before any step). While bound, plain velocity and
+        position commands on these joints are refused; :meth:`BoundCommand.release` frees
+        them. ``load_urdf``, ``remove``, ``reset`` and ``close`` end every bound command
+        (StaleCommandError on its next use). See :mod:`simbridge.bound`.
+
+        Returns:
+            a :class:`~simbridge.bound.BoundCommand`: ``targets`` and ``max_force`` are
+            float64 arrays of shape (n,), n the number of joints, in the order given.
+        """
+        idx = self._joints(body, joints, True)
+        self._refuse_multi_dof(body, idx, "a bound command")
+        self._refuse_held(body, idx)
+        n = len(idx)
+        command = BoundCommand(
+            self,
+            "velocity",
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+            [0.0] * n,
+            [1.0] * n,
+        )
+        return self._bind(command)
+
+    def position_command(
+        self,
+        body: int,
+        joints: JointsArg,
+        target: Any,
+        *,
+        max_force: Any,
+        kp: Any = 0.1,
+        kd: Any = 1.0,
+    ) -> BoundCommand:
+        """A position command bound to ``joints`` (rad or m; PyBullet's law with gains ``kp``
+        and ``kd``, fixed here): sent now, then at every :meth:`step` from its own arrays, as
+        :meth:`set_joint_position` called just before each step would, bit for bit. Checks,
+        ownership and the end of the binding as for :meth:`velocity_command`."""
+        idx = self._joints(body, joints, True)
+        self._refuse_multi_dof(body, idx, "a bound command")
+        self._refuse_held(body, idx)
+        n = len(idx)
+        command = BoundCommand(
+            self,
+            "position",
+            body,
+            idx,
+            self._values(target, n, "target"),
+            self._values(max_force, n, "max_force", nonneg=True),
+            self._values(kp, n, "kp", nonneg=True),
+            self._values(kd, n, "kd", nonneg=True),
+        )
+        return self._bind(command)
+
+    def _bind(self, command: BoundCommand) -> BoundCommand:
+        command.send()  # the first command, through the plain path
+        held = self._held.setdefault(command.body, {})
+        for j in command.joints.tolist():
+            held[j] = command
+        self._commands.append(command)
+        try:
+            stepped = self._b.bind_command(command)
+        except BaseException:
+            self._release_command(command)
+            raise
+        if not stepped:
+            self._presend.append(command)
+        return command
+
+    def _refuse_held(self, body: int, idx: np.ndarray) -> None:
+        held = self._held.get(body)
+        if not held:
+            return
+        for j in idx.tolist():
+            command = held.get(j)
+            if command is not None:
+                b = self._bodies[body]
+                raise InvalidArgumentError(
+                    "joints",
+                    f"joint {b.joint_names[j]!r} (index {j}) of body {b.name!r} is driven by a "
+                    f"bound {command.mode} command: write its targets, or release() it first",
+                )
+
+    def _release_command(self, command: BoundCommand) -> None:
+        """Unbind one command (BoundCommand.release)."""
+        if command in self._commands:
+            self._commands.remove(command)
+        if command in self._presend:
+            self._presend.remove(command)
+        held = self._held.get(command.body, {})
+        for j in command.joints.tolist():
+            if held.get(j) is command:
+                del held[j]
+        if not held:
+            self._held.pop(command.body, None)
+        if not isinstance(self._b, _Closed):
+            self._b.unbind_command(command)
+
+    def _end_commands(self, why: str) -> None:
+        """A world change ends every bound command (unbound before the change)."""
+        if not self._commands:
+            return
+        commands = self._commands
+        for command in list(commands):
+            self._release_command(command)
+            command._end(why)
+
+    def set_joint_torque(self, body: int, joints: JointsArg, torque: Any) -> None:
+        """TORQUE_CONTROL: add ``torque`` (N·m or N) during the next step only (commands before
+        one step add up, as in PyBullet). The joint's motor stays; release the default brake
+        first with ``set_joint_velocity(..., max_force=0)``.
+
+        A spherical joint takes 3 torques about the axes of its child's (inertial) frame:
+        shape (3,) or (n, 3); spherical joints are commanded apart from other joints."""
+        idx = self._joints(body, joints, True)
+        if self._multi_idx and id(idx) in self._multi_idx:
+            self._spherical_only(body, idx)
+            from .multi_dof import per_axis
+
+            n = len(idx)
+            self._b.set_joint_torque_multi_dof(
+                body, idx, per_axis(torque, n, 3, "torque", scalar=False)
+            )
+            return
+        self._b.set_joint_torque(body, idx, self._values(torque, len(idx), "torque"))
