@@ -1,0 +1,280 @@
+"""The scenario data: robots, phases, commands and the :class:`Scenario` that holds them,
+with the time-step helpers. Read and written as TOML by :mod:`.scenario_reader` and
+:mod:`.scenario_writer`; :mod:`.scenario` is the public face (see its docstring for the file
+format)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import simbridge
+from simbridge.exceptions import ScenarioError
+from simbridge.transforms import quat_multiply
+
+from .controllers import ControllerSpec
+from .outcomes import Outcome
+
+MAX_STEPS = 1_000_000  # per phase: the recording holds about 0.7 kB per step for r2d2
+MODES = ("velocity", "position", "torque")
+HEADLINE_QUANTITIES = (
+    "base_distance",
+    "link_distance",
+    "heading",
+    "orientation",
+    "joint_position_rms",
+    "joint_velocity_rms",
+)
+"""The quantities of :data:`simbridge.compare.QUANTITIES` a scenario may name as its headline."""
+
+JointRef = int | str
+
+
+@dataclass(frozen=True)
+class Command:
+    """A joint command held during a phase (re-issued before every step)."""
+
+    robot: str
+    joints: tuple[JointRef, ...]
+    mode: str  # "velocity" | "position" | "torque"
+    target: tuple[float, ...]
+    """One value per joint: rad/s or m/s (velocity), rad or m (position), N·m or N (torque)."""
+    max_force: tuple[float, ...] | None = None
+    """One value per joint (N·m or N); None for torque commands."""
+    kp: float | None = None
+    kd: float | None = None
+
+
+@dataclass(frozen=True)
+class Phase:
+    name: str
+    steps: int
+    commands: tuple[Command, ...] = ()
+    controller: ControllerSpec | None = None
+    """A closed-loop controller run during this phase (see
+    :mod:`simbridge.compare.controllers`), or None."""
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    name: str
+    urdf: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)  # x, y, z, w
+    fixed_base: bool = False
+    joint_positions: tuple[tuple[JointRef, float], ...] = ()
+    kind: str = "urdf"
+    """``"urdf"`` (``Sim.load_urdf``) or ``"mjcf"`` (``Sim.load_mjcf``: ``urdf`` is then the MJCF
+    file, which places the body itself; ``position`` and ``orientation`` then move it from
+    there: a displacement (m, world) and a turn (x, y, z, w, world frame, about its centre of
+    mass), zero from a scenario file, an ensemble's offsets otherwise)."""
+    body: int = 0
+    """An MJCF robot: which of the bodies its file makes (PyBullet's order)."""
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A comparison scenario. Compare two with ``==`` (the source file is not compared)."""
+
+    name: str
+    robots: tuple[RobotSpec, ...]
+    phases: tuple[Phase, ...]
+    timestep: float = 1.0 / 240.0
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.8)
+    profile: str = "pybullet"
+    description: str = ""
+    subject: str = ""
+    """Name of the robot the report follows (set to the last robot when the file leaves it out)."""
+    headline: str = ""
+    """The report's headline quantity; "" = ``base_distance`` for a free base, else
+    ``link_distance``."""
+    source: Path | None = field(default=None, compare=False)
+    """The file this scenario was read from (URDF paths are relative to its folder)."""
+    outcomes: tuple[Outcome, ...] = ()
+    """What success means (:mod:`simbridge.compare.outcomes`), measured on every run."""
+
+    @property
+    def closed_loop(self) -> bool:
+        """Whether a phase runs a controller."""
+        return any(p.controller is not None for p in self.phases)
+
+    @property
+    def folder(self) -> Path | None:
+        """The folder file references (URDFs, controllers, functions) are relative to: the
+        source file's, or None (the current folder) for a scenario made in Python."""
+        return self.source.parent if self.source is not None else None
+
+    def with_controller(
+        self,
+        controller: Any,
+        params: dict[str, Any] | None = None,
+        every: int | None = None,
+        *,
+        phases: Sequence[str] | None = None,
+    ) -> Scenario:
+        """The same scenario with ``controller`` driving every phase (or the phases named in
+        ``phases``), in place of their own. ``controller``: a class or factory function
+        defined at the top level of a module or script, a ``"file.py:Name"`` or
+        ``"package.module:Name"`` reference, or a :class:`ControllerSpec`; ``params`` its
+        keyword arguments; ``every`` its period in steps."""
+        spec = ControllerSpec.of(controller, params, every)
+        names = {p.name for p in self.phases}
+        for name in phases or ():
+            if name not in names:
+                raise ScenarioError(
+                    self._where(), "phases", f"no phase {name!r}; phases: {sorted(names)}"
+                )
+        chosen = set(phases) if phases is not None else names
+        return replace(
+            self,
+            phases=tuple(
+                replace(p, controller=spec) if p.name in chosen else p for p in self.phases
+            ),
+        )
+
+    @property
+    def steps(self) -> int:
+        """Total number of steps."""
+        return sum(p.steps for p in self.phases)
+
+    @property
+    def duration(self) -> float:
+        """Simulated time (s)."""
+        return self.steps * self.timestep
+
+    def robot(self, name: str) -> RobotSpec:
+        for r in self.robots:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+    def with_timestep(self, timestep: float) -> Scenario:
+        """The same scenario at another time step: each phase keeps its duration, so its step
+        count is scaled (``1/480`` doubles every phase). Raises :class:`ScenarioError` when a
+        phase does not last a whole number of the new steps."""
+        if not (isinstance(timestep, (int, float)) and math.isfinite(timestep) and timestep > 0):
+            raise ScenarioError(self._where(), "timestep", f"must be > 0, got {timestep!r}")
+        ratio = self.timestep / timestep
+        phases = []
+        for i, p in enumerate(self.phases):
+            steps = p.steps * ratio
+            if abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
+                raise ScenarioError(
+                    self._where(),
+                    f"phases[{i}].steps",
+                    f"phase {p.name!r} lasts {p.steps * self.timestep:.6g} s, which is not a whole "
+                    f"number of {format_timestep(timestep)} s steps ({steps:.6g})",
+                )
+            if round(steps) > MAX_STEPS:
+                raise ScenarioError(
+                    self._where(),
+                    f"phases[{i}].steps",
+                    f"phase {p.name!r} at {format_timestep(timestep)} s would take "
+                    f"{round(steps)} steps; at most {MAX_STEPS} per phase",
+                )
+            ctl = p.controller
+            if ctl is not None:
+                every = ctl.every * ratio
+                if abs(every - round(every)) > 1e-6 * max(1.0, every) or round(every) < 1:
+                    raise ScenarioError(
+                        self._where(),
+                        f"phases[{i}].controller.every",
+                        f"the controller of phase {p.name!r} runs every "
+                        f"{ctl.every * self.timestep:.6g} s, which is not a whole number of "
+                        f"{format_timestep(timestep)} s steps ({every:.6g})",
+                    )
+                ctl = replace(ctl, every=int(round(every)))
+            phases.append(replace(p, steps=int(round(steps)), controller=ctl))
+        return replace(self, timestep=float(timestep), phases=tuple(phases))
+
+    def truncated(self, duration: float) -> Scenario:
+        """The first ``duration`` seconds of the scenario (phases cut or dropped)."""
+        left = int(round(duration / self.timestep))
+        phases = []
+        for p in self.phases:
+            if left <= 0:
+                break
+            phases.append(replace(p, steps=min(p.steps, left)))
+            left -= p.steps
+        return replace(self, phases=tuple(phases))
+
+    def resolve_urdf(self, robot: RobotSpec) -> str:
+        """The URDF argument for ``Sim.load_urdf``: a path next to the scenario file when one
+        exists there, else the name as written (searched on simbridge's path)."""
+        if self.source is not None:
+            candidate = self.source.parent / robot.urdf
+            if candidate.is_file():
+                return str(candidate)
+        return robot.urdf
+
+    def load_robot(self, sim: simbridge.Sim, robot: RobotSpec) -> int:
+        """Load ``robot`` into ``sim`` (``load_urdf`` at its pose, or ``load_mjcf``, whose other
+        bodies are loaded with it) and return its body id."""
+        source = self.resolve_urdf(robot)
+        if robot.kind == "mjcf":
+            ids = sim.load_mjcf(source)
+            if robot.body >= len(ids):
+                raise ScenarioError(
+                    self._where(),
+                    f"robots.{robot.name}.body",
+                    f"{robot.urdf!r} makes {len(ids)} bodies (0 to {len(ids) - 1}), "
+                    f"not {robot.body}",
+                )
+            body = ids[robot.body]
+            if robot.position != (0.0, 0.0, 0.0) or robot.orientation != (0.0, 0.0, 0.0, 1.0):
+                base = sim.base_state(body)  # its centre-of-mass frame, where the file put it
+                sim.reset_base_state(
+                    body,
+                    position=[p + d for p, d in zip(base.position, robot.position, strict=True)],
+                    orientation=quat_multiply(robot.orientation, base.orientation),
+                )
+            return body
+        return sim.load_urdf(
+            source,
+            base_position=robot.position,
+            base_orientation=robot.orientation,
+            fixed_base=robot.fixed_base,
+        )
+
+    def _where(self) -> str:
+        return str(self.source) if self.source else f"<scenario {self.name}>"
+
+
+# ---------------------------------------------------------------- time steps
+
+
+def parse_timestep(value: Any) -> float:
+    """A time step from a number or a string such as ``"1/240"`` or ``"0.002"``."""
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number of seconds or a fraction like '1/240', got {value!r}")
+    if isinstance(value, (int, float)):
+        try:
+            out = float(value)
+        except OverflowError:
+            out = math.inf
+    elif isinstance(value, str):
+        try:
+            out = float(Fraction(value.strip()))
+        except OverflowError:
+            out = math.inf
+        except (ValueError, ZeroDivisionError):
+            raise ValueError(
+                f"expected a number of seconds or a fraction like '1/240', got {value!r}"
+            ) from None
+    else:
+        raise ValueError(f"expected a number of seconds or a fraction like '1/240', got {value!r}")
+    if not math.isfinite(out) or out <= 0:
+        raise ValueError(f"must be a finite number > 0, got {value!r}")
+    return out
+
+
+def format_timestep(dt: float) -> str:
+    """``1/240`` for a time step that is the float of a simple fraction, else ``repr``."""
+    frac = Fraction(dt).limit_denominator(1_000_000)
+    if float(frac) == dt and frac.numerator == 1:
+        return f"1/{frac.denominator}"
+    return repr(dt)
