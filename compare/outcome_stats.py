@@ -1,0 +1,314 @@
+"""Outcomes over an ensemble (:func:`summarize`: success rate with a 95% interval, the
+distribution of each value) and in words for the report. The outcome kinds and their
+evaluation on one run are in :mod:`.outcomes`, which re-exports everything here."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+DEG = math.pi / 180.0
+
+# outcomes' Outcome and scenario's Scenario, by name only: outcomes.py imports this module,
+# and no module here imports one that imports it (tests/test_import_graph.py).
+Outcome = Any
+Scenario = Any
+
+CONFIDENCE = 0.95
+INTERVAL_METHOD = "wilson"
+"""``scipy.stats.binomtest(...).proportion_ci(method=...)``: Wilson's score interval, which
+stays inside [0, 1] and is not degenerate at 0/n or n/n."""
+
+_TITLES = {
+    "reach": "time to reach",
+    "upright": "largest tilt",
+    "track": "RMS error",
+    "final_pose": "final error",
+    "effort": "effort",
+    "function": "value",
+}
+
+
+# ---------------------------------------------------------------- over an ensemble
+
+
+def success_interval(successes: int, runs: int, confidence: float = CONFIDENCE):
+    """``(low, high)``: the ``confidence`` interval of a success rate from ``successes`` of
+    ``runs`` (Wilson's score interval, ``scipy.stats.binomtest(...).proportion_ci``)."""
+    from scipy.stats import binomtest
+
+    ci = binomtest(int(successes), int(runs)).proportion_ci(
+        confidence_level=confidence, method=INTERVAL_METHOD
+    )
+    return float(ci.low), float(ci.high)
+
+
+def _distribution(values: Sequence[float]) -> dict[str, Any] | None:
+    if not values:
+        return None
+    v = np.asarray(values, dtype=np.float64)
+    return {
+        "runs": int(v.size),
+        "mean": float(v.mean()),
+        "std": float(v.std(ddof=1)) if v.size > 1 else 0.0,
+        "min": float(v.min()),
+        "median": float(np.median(v)),
+        "max": float(v.max()),
+    }
+
+
+def summarize(outcome: Outcome, records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """One engine's runs of one outcome (``records``: :func:`evaluate`'s dicts, the nominal
+    run first): ``success`` (``{successes, runs, rate, low, high, confidence, method}``, or
+    None when no run has a success), ``value`` (the distribution over the runs with a value:
+    ``{runs, mean, std, min, median, max}``, std with ddof 1; None without one), ``nominal``
+    (run 0's record) and ``runs`` (every record, run 0 first)."""
+    judged = [r["success"] for r in records if r.get("success") is not None]
+    success = None
+    if judged:
+        k, n = sum(bool(s) for s in judged), len(judged)
+        low, high = success_interval(k, n)
+        success = {
+            "successes": k,
+            "runs": n,
+            "rate": k / n,
+            "low": low,
+            "high": high,
+            "confidence": CONFIDENCE,
+            "method": INTERVAL_METHOD,
+        }
+    values = [float(r["value"]) for r in records if r.get("value") is not None]
+    return {
+        "name": outcome.name,
+        "kind": outcome.kind,
+        "unit": outcome.unit,
+        "success": success,
+        "value": _distribution(values),
+        "nominal": dict(records[0]) if records else None,
+        "runs": [dict(r) for r in records],
+    }
+
+
+def outcomes_summary(
+    scenario: Scenario,
+    labels: Sequence[str],
+    per_engine: Sequence[Sequence[Mapping[str, Any]]],
+    half_timestep: Sequence[Mapping[str, Any]] | None = None,
+) -> dict[str, Any] | None:
+    """``summary.json``'s ``outcomes``: ``declared`` (each outcome's declaration) and
+    ``engines`` (per engine label, per outcome name, :func:`summarize`); ``per_engine[slot]``
+    is the list of every run's ``{name: record}``, nominal first; ``half_timestep[slot]`` the
+    records of the engine's nominal run at half the time step (its own-error run). None when the
+    scenario declares no outcome."""
+    if not scenario.outcomes:
+        return None
+    engines: dict[str, Any] = {}
+    for label, runs in zip(labels, per_engine, strict=True):
+        engines[label] = {
+            o.name: summarize(o, [r[o.name] for r in runs if o.name in r])
+            for o in scenario.outcomes
+        }
+    return {
+        "declared": [o.to_dict() for o in scenario.outcomes],
+        "closed_loop": any(p.controller is not None for p in scenario.phases),
+        "confidence": CONFIDENCE,
+        "method": INTERVAL_METHOD,
+        "engines": engines,
+        "half_timestep": (
+            None
+            if half_timestep is None
+            else {
+                label: {k: dict(v) for k, v in runs.items()}
+                for label, runs in zip(labels, half_timestep, strict=True)
+            }
+        ),
+    }
+
+
+# ---------------------------------------------------------------- in words
+
+
+def _fmt(x: float, unit: str) -> str:
+    """A value for people, as the report writes distances and angles (``fmt.fmt_value``, not
+    imported: fmt imports diff, which imports run, which imports this module): ``4.2 cm``,
+    ``0.83 mm``, ``2.1e-06 m``; angles in degrees; other units as they are."""
+    if unit == "m":
+        a = abs(x)
+        if a >= 1:
+            return f"{x:.2f} m"
+        if a >= 0.01:
+            return f"{x * 100:.1f} cm"
+        if a >= 1e-4:
+            return f"{x * 1000:.2f} mm"
+        return "0 m" if a == 0 else f"{x:.1e} m"
+    if unit == "rad":
+        return f"{x / DEG:.3g}°" if abs(x) < 2 * math.pi else f"{x:.3g} rad"
+    return f"{x:.3g} {unit}".rstrip()
+
+
+def _pm(dist: dict[str, Any] | None, unit: str, runs: int, none: str = "none") -> str:
+    """``mean ± std`` over the runs with a value (``6.6 ± 0.02 s``), the count when some runs
+    have none."""
+    if dist is None:
+        return none
+    if dist["runs"] == 1:
+        return _fmt(dist["mean"], unit) + (f" (1 run of {runs})" if runs > 1 else "")
+    mean, std = dist["mean"], dist["std"]
+    if unit == "m":  # both in the mean's unit: 0.68 ± 0.025 mm
+        steps = ((1.0, 1.0, "m"), (0.01, 100.0, "cm"), (1e-4, 1000.0, "mm"))
+        factor, name = next(((f, n) for lim, f, n in steps if abs(mean) >= lim), (1.0, "m"))
+        text = f"{mean * factor:.3g} ± {std * factor:.2g} {name}"
+    elif unit == "rad":
+        text = f"{mean / DEG:.3g} ± {std / DEG:.2g}°"
+    else:
+        text = f"{mean:.3g} ± {std:.2g} {unit}".rstrip()
+    if dist["runs"] < runs:
+        text += f" ({dist['runs']} runs of {runs})"
+    return text
+
+
+def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
+    """The headline's outcome sentences, one per outcome, from ``summary.json`` alone::
+
+        **goal (0, 2)**: reached in 16/16 runs on pybullet [81%, 100%], 16/16 on mujoco
+        [81%, 100%]; time to reach 6.1 ± 0.01 s against 6.13 ± 0.002 s.
+
+    Empty when the scenario declares no outcome."""
+    out = summary.get("outcomes")
+    if not out:
+        return []
+    labels = list(out["engines"])
+    lines = []
+    for decl in out["declared"]:
+        name, unit = decl["name"], decl["unit"]
+        per = [out["engines"][label][name] for label in labels]
+        parts = []
+        verb = {
+            "reach": "reached",
+            "upright": "upright",
+            "track": "within bound",
+            "final_pose": "within bound",
+            "effort": "within bound",
+            "function": "succeeded",
+        }[decl["kind"]]
+        if all(p["success"] is not None for p in per):
+            cells = []
+            for i, (label, p) in enumerate(zip(labels, per, strict=True)):
+                s = p["success"]
+                ci = f"[{s['low'] * 100:.0f}%, {s['high'] * 100:.0f}%]"
+                head = f"{verb} in " if i == 0 else ""
+                cells.append(f"{head}{s['successes']}/{s['runs']} runs on {label} {ci}")
+            parts.append(", ".join(cells))
+        runs = [len(p["runs"]) for p in per]
+        never = "never" if decl["kind"] == "reach" else "none"
+        values = [_pm(p["value"], unit, n, never) for p, n in zip(per, runs, strict=True)]
+        title = _TITLES[decl["kind"]]
+        if decl["kind"] == "reach" and all(p["value"] is None for p in per):
+            values_text = "no run reached it"
+            closest = [
+                min(r["closest"] for r in p["runs"] if r.get("closest") is not None)
+                for p in per
+                if p["runs"]
+            ]
+            if len(closest) == len(per):
+                values_text += "; closest " + " and ".join(
+                    f"{_fmt(c, 'm')} on {label}" for c, label in zip(closest, labels, strict=True)
+                )
+            parts.append(values_text)
+        elif decl["kind"] == "reach":
+            parts.append(f"{title}: {values[0]} on {labels[0]}, {values[1]} on {labels[1]}")
+        else:
+            parts.append(f"{title} {values[0]} on {labels[0]} against {values[1]} on {labels[1]}")
+        lines.append(f"**{name}**: " + "; ".join(parts) + ".")
+    return lines
+
+
+def _state(record: Mapping[str, Any], unit: str) -> str:
+    ok = {True: "succeeds", False: "fails", None: "has no success"}[record["success"]]
+    v = record.get("value")
+    return ok + ("" if v is None else f" ({_fmt(v, unit)})")
+
+
+def _half_timestep_changes(out: Mapping[str, Any]) -> list[str]:
+    """Outcomes whose success differs between an engine's nominal run and its run at half the
+    time step, in words."""
+    half = out.get("half_timestep") or {}
+    words = []
+    for decl in out["declared"]:
+        name, unit = decl["name"], decl["unit"]
+        for label, records in half.items():
+            nominal = out["engines"][label][name]["nominal"]
+            there = records.get(name)
+            if nominal is None or there is None or nominal["success"] == there["success"]:
+                continue
+            a, b = _state(nominal, unit), _state(there, unit)
+            words.append(f"{name} on {label} {a} at dt, {b} at dt/2")
+    return words
+
+
+def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
+    """The report's ``## Outcomes`` section (markdown lines): per outcome and engine, the
+    success count and rate with its interval, the value's distribution and the nominal run's
+    value. Empty when the scenario declares no outcome."""
+    out = summary.get("outcomes")
+    if not out:
+        return []
+    pct = f"{out['confidence'] * 100:g}%"
+    lines = [
+        "## Outcomes",
+        "",
+        "What the scenario calls success, measured on every run of each engine's ensemble "
+        f"(the nominal run first). Success rates carry {pct} Wilson score intervals "
+        "(`scipy.stats.binomtest`); values are mean ± standard deviation over the runs that "
+        "have one (a goal never reached has no time).",
+        "",
+        "| outcome | engine | success | rate [interval] | value: mean ± std | median | "
+        "min – max | nominal run |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for decl in out["declared"]:
+        name, unit = decl["name"], decl["unit"]
+        for label, per in out["engines"].items():
+            p = per[name]
+            s, v, nom = p["success"], p["value"], p["nominal"]
+            cells = [f"{name} ({_TITLES[decl['kind']]})", label]
+            if s is None:
+                cells += ["n/a", "n/a"]
+            else:
+                cells += [
+                    f"{s['successes']}/{s['runs']}",
+                    f"{s['rate'] * 100:.0f}% [{s['low'] * 100:.0f}%, {s['high'] * 100:.0f}%]",
+                ]
+            if v is None:
+                cells += ["never" if decl["kind"] == "reach" else "none", "", ""]
+            else:
+                cells += [
+                    _pm(v, unit, len(p["runs"])),
+                    _fmt(v["median"], unit),
+                    f"{_fmt(v['min'], unit)} – {_fmt(v['max'], unit)}",
+                ]
+            nv = None if nom is None else nom.get("value")
+            if nv is not None:
+                cells.append(_fmt(nv, unit))
+            elif decl["kind"] == "reach" and nom is not None and nom.get("closest") is not None:
+                cells.append(f"never (closest {_fmt(nom['closest'], 'm')})")
+            else:
+                cells.append("none")
+            lines.append("| " + " | ".join(cells) + " |")
+    lines.append("")
+    changed = _half_timestep_changes(out)
+    if changed:
+        lines += [
+            "At half the time step (each engine's own-error run) the nominal run's outcome "
+            "changes: " + "; ".join(changed) + ".",
+            "",
+        ]
+    for decl in out["declared"]:
+        keys = {k: v for k, v in decl.items() if k not in ("name", "kind", "unit")}
+        words = ", ".join(f"{k} = {v}" for k, v in keys.items())
+        lines.append(f"- `{decl['name']}`: {decl['kind']}" + (f" ({words})" if words else ""))
+    lines.append("")
+    return lines
