@@ -1,6 +1,9 @@
 """The comparison report: ``report.md`` beside its figures, ``summary.json`` for machines, and
 the trajectories (``.npz`` and ``.csv``).
 
+One file of about 650 lines: every section of ``report.md`` is written here from the one
+``summary.json`` dict, so the document's layout reads top to bottom in one place.
+
 The first lines of ``report.md`` give the headline in words: the verdict (``agree``,
 ``differ``, ``chaotic`` naming the engine, or ``unresolved``) with its test and intervals, the
 predictability horizons, then how far apart the nominal runs end, when they part, which quantity
@@ -19,7 +22,7 @@ from .fmt import fmt_distance, fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
 from .parts import parts_words
 from .pipeline import Comparison
-from .resync import plot_resync, resync_lines, resync_section
+from .resync_report import plot_resync, resync_lines, resync_section
 from .scenario import format_timestep
 from .verdict import verdict_lines
 
