@@ -1,5 +1,7 @@
 """The report's figures (PNG, matplotlib's Agg backend: no display needed).
 
+One file of about 650 lines: one function per figure, all sharing the style helpers at the top.
+
 Each function takes a :class:`~simbridge.compare.pipeline.Comparison` and a path, writes one
 PNG and returns the path, or None when the figure has nothing to show.
 

@@ -1,6 +1,9 @@
 """Running a scenario on one backend and recording every step: :func:`run` and
 :class:`Trajectory`.
 
+One file of about 620 lines: :func:`run` and the :class:`Trajectory` it records share the
+recording layout (``_Recorder``).
+
 Only the :class:`simbridge.Sim` interface is used: the same code runs on every backend.
 """
 

@@ -1,6 +1,9 @@
 """The verdict over the whole run: do the engines ``agree``, ``differ``, or is one of them
 ``chaotic`` at the scale of the gap? :func:`judge` and :class:`Verdict`.
 
+One file of about 690 lines: the statistics, the judgement built on them and the verdict's words
+all follow the fields of :class:`Verdict`, kept together so a change to one is seen beside the rest.
+
 Inputs, all at the same recorded instants ``time`` (T,): each engine's ensemble (the
 headline quantity's :func:`~simbridge.compare.diff.features` of N runs started a tiny offset
 apart, member 0 the nominal run) and each engine's own time-step error (the quantity between
