@@ -76,6 +76,8 @@ def _close_sinks() -> None:
     for sink in _sinks.values():
         sink.close()
     _sinks.clear()
+
+
 _libc: ctypes.CDLL | None = None
 
 
