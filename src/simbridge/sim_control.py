@@ -187,21 +187,7 @@ class Control:
             a :class:`~simbridge.bound.BoundCommand`: ``targets`` and ``max_force`` are
             float64 arrays of shape (n,), n the number of joints, in the order given.
         """
-        idx = self._joints(body, joints, True)
-        self._refuse_multi_dof(body, idx, "a bound command")
-        self._refuse_held(body, idx)
-        n = len(idx)
-        command = BoundCommand(
-            self,
-            "velocity",
-            body,
-            idx,
-            self._values(target, n, "target"),
-            self._values(max_force, n, "max_force", nonneg=True),
-            [0.0] * n,
-            [1.0] * n,
-        )
-        return self._bind(command)
+        return self._bound("velocity", body, joints, target, max_force, None, None)
 
     def position_command(
         self,
@@ -217,19 +203,32 @@ class Control:
         and ``kd``, fixed here): sent now, then at every :meth:`step` from its own arrays, as
         :meth:`set_joint_position` called just before each step would, bit for bit. Checks,
         ownership and the end of the binding as for :meth:`velocity_command`."""
+        return self._bound("position", body, joints, target, max_force, kp, kd)
+
+    def _bound(
+        self,
+        mode: str,
+        body: int,
+        joints: JointsArg,
+        target: Any,
+        max_force: Any,
+        kp: Any | None,
+        kd: Any | None,
+    ) -> BoundCommand:
+        """A checked :class:`BoundCommand`, bound (kp, kd None: a velocity command's 0 and 1)."""
         idx = self._joints(body, joints, True)
         self._refuse_multi_dof(body, idx, "a bound command")
         self._refuse_held(body, idx)
         n = len(idx)
         command = BoundCommand(
             self,
-            "position",
+            mode,
             body,
             idx,
             self._values(target, n, "target"),
             self._values(max_force, n, "max_force", nonneg=True),
-            self._values(kp, n, "kp", nonneg=True),
-            self._values(kd, n, "kd", nonneg=True),
+            [0.0] * n if kp is None else self._values(kp, n, "kp", nonneg=True),
+            [1.0] * n if kd is None else self._values(kd, n, "kd", nonneg=True),
         )
         return self._bind(command)
 
