@@ -67,7 +67,8 @@ _PYBULLET_DEFAULT_FRICTION = 0.5
 # its base pose, or its leaf joints for a fixed base) after the first step following a load or
 # a teleport, and after every _CHECK_EVERY-th step: a probe costs 0.6-1.5 µs per body, 5-10 % of
 # a fixed KUKA's 11-16 µs step if taken at every step; one in 8 steps is under 2 % (measured:
-# python bench/divergence.py). A divergence nobody reads is raised by step at most 7 steps late.
+# python bench/divergence.py). A divergence nobody reads is raised by step at most 7 steps late;
+# Sim(divergence_check="every_step") probes after every step, for those who pay for it.
 _CHECK_EVERY = 8
 # What PyBullet 3.2.7 can read and set of one body (measured on chains and trees, fixed or free
 # base): its state reads (getJointState(s), getLinkState, getBasePositionAndOrientation,
@@ -158,7 +159,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
                 self._c = p.connect(p.DIRECT)
         self._dt = profile.timestep
         self._steps = 0
-        self._check_every = _CHECK_EVERY  # bench/divergence.py times other cadences
+        self._check_every = _CHECK_EVERY  # 1 under divergence_check="every_step"
         self._next_check = _CHECK_EVERY
         self._bodies: dict[int, _Body] = {}
         # the last velocity command sent: (joints, body, target, max_force). PyBullet's motor
@@ -491,8 +492,12 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         self._fresh = 0
         self._removed = 0
         self._steps = 0
-        self._next_check = _CHECK_EVERY
+        self._next_check = self._check_every
         self._checked_at = 0.0
+
+    def set_divergence_check(self, every_step: bool) -> None:
+        self._check_every = 1 if every_step else _CHECK_EVERY
+        self._next_check = self._steps + self._check_every
 
     def step(self, n: int) -> None:
         if self._diverged is not None:  # the state is NaN: no step makes it a simulation
@@ -504,15 +509,21 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
             if n == 1:
                 p.stepSimulation(physicsClientId=self._c)
                 self._steps += 1
-            else:
+            else:  # in runs up to each probe: a divergence stops the call at most 7 steps late
                 c = self._c
-                done = 0
-                try:
-                    for _ in range(n):
-                        p.stepSimulation(physicsClientId=c)
-                        done += 1
-                finally:  # Ctrl-C between two steps: the time counts the steps done
-                    self._steps += done
+                left = n
+                while left:
+                    run = min(left, max(1, self._next_check - self._steps))
+                    done = 0
+                    try:
+                        for _ in range(run):
+                            p.stepSimulation(physicsClientId=c)
+                            done += 1
+                    finally:  # Ctrl-C between two steps: the time counts the steps done
+                        self._steps += done
+                    left -= run
+                    if left and self._steps >= self._next_check:
+                        self._probe()
             if self._steps >= self._next_check:
                 self._probe()  # under the lock: no other thread steps between its calls
         finally:

@@ -18,7 +18,8 @@ back on identical worlds, in a rotating order, so the machine's load falls on al
 * layer, no check: ``Sim.step()`` with the probe switched off (reads still check themselves);
 * layer: ``Sim.step()`` as shipped (probe every 8th step); the ratio to "no check" is the
   check's cost (target: at most 1.02);
-* layer, every step: ``Sim.step()`` probing after every step.
+* layer, every step: ``Sim.step()`` under ``Sim(divergence_check="every_step")`` (a probe
+  after every step: the step that diverged raises).
 
 MuJoCo needs no probe of the layer's: ``mj_step`` checks positions, velocities and accelerations
 itself (mj_checkPos, mj_checkVel, mj_checkAcc, in raw MuJoCo too: a bad value warns and resets
@@ -72,8 +73,10 @@ def _raw_world(world: str) -> tuple[int, int, list[int]]:
     return c, body, leaves
 
 
-def _sim_world(world: str, every: int) -> simbridge.Sim:
-    sim = simbridge.Sim("pybullet")
+def _sim_world(world: str, every: int | None) -> simbridge.Sim:
+    """The world in a Sim: probed every ``every``-th step, or under
+    ``divergence_check="every_step"`` (None: the option a user sets)."""
+    sim = simbridge.Sim("pybullet", divergence_check="every_step" if every is None else "periodic")
     if world == "r2d2":
         sim.load_urdf("plane.urdf")
         sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
@@ -81,7 +84,8 @@ def _sim_world(world: str, every: int) -> simbridge.Sim:
         body = sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True)
         sim.set_joint_position(body, list(range(7)), 0.3, max_force=300.0)
     sim.step(240)
-    set_check_every(sim, every)
+    if every is not None:
+        set_check_every(sim, every)
     return sim
 
 
@@ -91,7 +95,7 @@ def columns(world: str, steps: int) -> dict[str, Callable[[], float]]:
     c2, body2, leaves2 = _raw_world(world)
     off = _sim_world(world, 10**12)
     shipped = _sim_world(world, 8)
-    every = _sim_world(world, 1)
+    every = _sim_world(world, None)
 
     def raw() -> float:
         t0 = time.perf_counter()

@@ -266,15 +266,24 @@ def test_torque_of_a_multi_step_call_acts_in_the_first_step_only(monkeypatch):
     _agree(monkeypatch, scenario)
 
 
-def test_divergence_is_reported_by_the_compiled_loop():
+@pytest.mark.parametrize("loop", ["kernel", "python"])
+def test_divergence_is_reported_by_either_loop_at_its_step(monkeypatch, loop):
+    """MuJoCo's warning (a bad speed: it puts the state back to the reference pose) stops
+    either loop after that step: the time is that step's, not the end of the call."""
+    if loop == "kernel" and mujoco_kernel.reason():
+        pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
+    _select_loop(monkeypatch, loop)
     with simbridge.Sim("mujoco") as sim:
         body = sim.load_urdf("wheel.urdf", fixed_base=True)
         sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)
         sim.step(2)
         # a state no command can make: only the loop's check sees it
         compiled(sim).d.qvel[:] = np.inf
+        with pytest.raises(SimulationDivergedError, match=r"t=0\.012500 s: .*velocities"):
+            sim.step(300)
+        assert sim.time == pytest.approx(3 * sim.timestep, abs=1e-12)
         with pytest.raises(SimulationDivergedError, match="velocities"):
-            sim.step(3)
+            sim.joint_states(body)
 
 
 @requires_kernel

@@ -805,8 +805,9 @@ static int warning_count(const mjData* d) {
          d->warning[mjWARN_BADQACC].number;
 }
 
-/* n steps of the loop; 0 ok, 1 a divergence warning was raised, 2 the friction rows are not the
- * motor rows, 3 a singular motor solve */
+/* n steps of the loop; 0 ok, 1 a divergence warning was raised (the loop stops after that
+ * step), 2 the friction rows are not the motor rows, 3 a singular motor solve; self->done: the
+ * steps completed */
 static int run_steps(Kernel* self, long n, int pending) {
   const mjModel* m = self->m;
   mjData* d = self->d;
@@ -911,9 +912,16 @@ static int run_steps(Kernel* self, long n, int pending) {
         tq[i] = 0.0;
       }
     }
+    if (!status && warning_count(d) != before) {
+      /* MuJoCo found a bad position, speed or acceleration in this step and put the state
+       * back to the model's reference pose: the world is not the simulation any more, so
+       * the loop stops after this step (the error then names its time) */
+      status = 1;
+      s++;
+      break;
+    }
   }
   self->done = s;
-  if (!status && warning_count(d) != before) status = 1;
   return status;
 }
 

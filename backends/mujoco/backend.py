@@ -267,6 +267,11 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         self._free_ids.append(body)
         self._recompile("<remove>")
 
+    def set_divergence_check(self, every_step: bool) -> None:
+        """Nothing to set: MuJoCo checks positions, speeds and accelerations at every step
+        itself (mj_checkPos, mj_checkVel, mj_checkAcc), and both step loops stop after the
+        step that raised such a warning."""
+
     def reset(self) -> None:
         self._check_idle()
         self._close_viewer()
@@ -311,9 +316,8 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             if n > 0:
                 self._steps += n
                 c.stale = c.motor_force_valid = c.motor_rows_valid = True
-            if status:
-                if status >= 2:  # a call stopped early: count only the steps that ran
-                    self._steps += kernel.steps_done - n
+            if status:  # the loop stopped early: count only the steps that ran
+                self._steps += kernel.steps_done - n
                 self._kernel_status(status)
             return
         if self._chunking:  # another thread is between two chunks of its step(n)
@@ -346,15 +350,15 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             else:  # a pending torque (first step only) or a viewer to keep in step
                 status = ran = 0
                 for _ in range(n if self._viewer is not None else min(n, 1)):
-                    status = max(status, kernel.step(1, c.pending_torque))
+                    status = kernel.step(1, c.pending_torque)
                     ran += kernel.steps_done
                     c.pending_torque = False
-                    if status >= 2:  # an error, not a warning: the world stops here
+                    if status:  # a divergence or an error: the world stops here
                         break
                     if self._viewer is not None:
                         self._viewer.sync()
-                if self._viewer is None and n > 1 and status < 2:
-                    status = max(status, kernel.step(n - 1, False))
+                if self._viewer is None and n > 1 and not status:
+                    status = kernel.step(n - 1, False)
                     ran += kernel.steps_done
         except BaseException as exc:
             if kernel is not None and kernel.interrupted:
@@ -364,19 +368,20 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         if n > 0:
             self._steps += n
             c.stale = c.motor_force_valid = c.motor_rows_valid = True
-        if status:
-            if status >= 2:  # a call stopped early: count only the steps that ran
+        if status:  # the loop stopped early: count only the steps that ran
+            if kernel is not None:
                 self._steps += (kernel.steps_done if ran is None else ran) - n
             self._kernel_status(status)
 
     def _python_steps(self, c: Compiled, n: int) -> int:
-        """``n`` steps of the Python loop; 1: look at MuJoCo's warnings (it does not count
-        them). MuJoCo's errors, a callback's and Ctrl-C count the steps completed."""
+        """``n`` steps of the Python loop, as the compiled loop's status: 1 when it stopped
+        after a divergence warning (the steps not run are taken off the count the caller adds),
+        else 0. MuJoCo's errors, a callback's and Ctrl-C count the steps completed."""
         d = c.d
         start = d.time
         sync = self._viewer.sync if self._viewer is not None else None
         try:
-            step_python(c, n, sync)
+            done = step_python(c, n, sync)
         except mujoco.FatalError as exc:
             self._steps += round((d.time - start) * c.inv_dt)  # completed
             self._engine_failed(str(exc))
@@ -388,6 +393,9 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             self._steps += round((d.time - start) * c.inv_dt)
             c.stale = True
             raise
+        if done == n:
+            return 0
+        self._steps += done - n  # the caller counts n
         return 1
 
     def _callback_failed(self, exc: BaseException) -> None:
@@ -410,26 +418,29 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         """1: a divergence warning may have been raised; 2, 3: the compiled loop's own errors;
         4: MuJoCo raised an error."""
         if status == 1:
-            self._check_warnings()
+            bad = self._w.bad_warnings()
+            if bad is not None:
+                what = ("positions (qpos)", "velocities (qvel)", "accelerations (qacc)")[bad]
+                self._diverge(f"joint {what}")
             return
         if status == 4:
             self._engine_failed(self._w.kernel.last_error())
-        if status == 2:
-            raise SimulationDivergedError(
-                self.name, self.time, "motor rows (not MuJoCo's first friction rows)"
-            )
-        raise SimulationDivergedError(self.name, self.time, "motor rows (singular solve)")
+        # 2: the step stopped between MuJoCo's two halves; 3: the exact solve failed
+        self._diverge(
+            "motor rows (not MuJoCo's first friction rows)"
+            if status == 2
+            else "motor rows (singular solve)"
+        )
 
-    def _check_warnings(self) -> None:
-        bad = self._w.bad_warnings()
-        if bad is not None:
-            what = ("positions (qpos)", "velocities (qvel)", "accelerations (qacc)")[bad]
-            # MuJoCo has already put the state back to the model's reference pose: that
-            # world is not the simulation's any more, so it refuses steps and reads until
-            # reset() (PyBullet's world stays NaN, which reads as the same error there)
-            self._diverged = SimulationDivergedError(self.name, self.time, f"joint {what}")
-            self._w.kernel = None
-            raise self._diverged
+    def _diverge(self, where: str) -> NoReturn:
+        """The world left the simulation at this step (``where``). After a divergence warning
+        MuJoCo has already put the state back to the model's reference pose; after the loop's
+        own errors the step is half done. Either way it is not the simulation's world any more:
+        every step and read refuses it, with this error, until reset() (PyBullet's world stays
+        NaN, which reads as the same error there)."""
+        self._diverged = SimulationDivergedError(self.name, self.time, where)
+        self._w.kernel = None
+        raise self._diverged
 
     def close(self) -> None:
         if self._closed:

@@ -22,19 +22,24 @@ import numpy as np
 from . import solve
 from .damping import clamp_acceleration
 from .motors import LIMIT_DEEP, MOTOR_R_SCALE
-from .world import Compiled
+from .world import BAD_WARNINGS, Compiled
 
 __all__ = ["step_python"]
 
 
-def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> None:
-    """``n`` steps of the world ``c``; ``sync`` (the viewer's) is called after each."""
+def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> int:
+    """``n`` steps of the world ``c``; ``sync`` (the viewer's) is called after each. Returns
+    the steps completed: it stops after a step in which MuJoCo raised a divergence warning (a
+    bad position, speed or acceleration: MuJoCo has put the state back to the reference pose),
+    as the compiled loop does."""
     m, d = c.m, c.d
     t = c.motors
     damping = c.damping
     step1, step2 = mujoco.mj_step1, mujoco.mj_step2
     k = t.n_rows
-    for _ in range(n):
+    counts = [d.warning[code] for code in BAD_WARNINGS]  # live views of MuJoCo's counters
+    before = sum(w.number for w in counts)
+    for done in range(1, n + 1):
         step1(m, d)
         if k:  # friction rows come first (no equality constraints)
             if t.has_offset:
@@ -68,6 +73,9 @@ def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> 
             c.torque[:] = 0.0
         if sync is not None:
             sync()
+        if sum(w.number for w in counts) != before:
+            return done
+    return n
 
 
 def _step2_split(c: Compiled, m: Any, d: Any, k: int) -> None:

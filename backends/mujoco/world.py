@@ -34,10 +34,10 @@ from .motors import (
     MotorTable,
 )
 
-__all__ = ["MOTOR_FIELDS", "Compiled", "Robot", "compile_state", "default_motors"]
+__all__ = ["BAD_WARNINGS", "MOTOR_FIELDS", "Compiled", "Robot", "compile_state", "default_motors"]
 
 MOTOR_FIELDS = ("target_velocity", "target_position", "kp", "kd", "max_force", "effort")
-_BAD = (
+BAD_WARNINGS = (
     mujoco.mjtWarning.mjWARN_BADQPOS,
     mujoco.mjtWarning.mjWARN_BADQVEL,
     mujoco.mjtWarning.mjWARN_BADQACC,
@@ -162,9 +162,9 @@ class Compiled:
         """The index (0 qpos, 1 qvel, 2 qacc) of a divergence warning raised since the last
         call, or None; the counts are taken afresh either way."""
         w = self.d.warning
-        for i, code in enumerate(_BAD):
+        for i, code in enumerate(BAD_WARNINGS):
             if w[code].number != self.warnings[i]:
-                self.warnings = [w[c].number for c in _BAD]
+                self.warnings = [w[c].number for c in BAD_WARNINGS]
                 return i
         return None
 
@@ -355,5 +355,5 @@ def compile_state(
     if use_kernel:
         c.kernel = _bind_kernel(c)
     c.refresh_motors()
-    c.warnings = [d.warning[w].number for w in _BAD]
+    c.warnings = [d.warning[w].number for w in BAD_WARNINGS]
     return c

@@ -351,6 +351,19 @@ class Backend(ABC):
         """Stop reading ``command``'s arrays; its joints keep the command last sent."""
         return None  # the default binding keeps nothing: the Sim stops sending it
 
+    def set_divergence_check(self, every_step: bool) -> None:
+        """Sim(divergence_check=...): True for "every_step" (``step`` raises
+        SimulationDivergedError after the step that left a non-finite state), False for
+        "periodic" (every read checks what it returns; ``step`` may notice up to 7 steps
+        late). Called once, before anything is loaded. A backend that cannot check every step
+        refuses True."""
+        if every_step:
+            from .exceptions import BackendUnsupportedError
+
+            raise BackendUnsupportedError(
+                self.name, 'divergence_check="every_step"', "valid here: ['periodic']"
+            )
+
     # ---------------------------------------------------------------- description
 
     def manifest(self) -> dict[str, Any]:

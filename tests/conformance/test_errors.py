@@ -246,7 +246,7 @@ def test_closed_sim_refuses_everything(make_sim, private_tmp):
 
 # A state turned NaN or infinite. The trigger must work on every engine; an absurd time step is
 # engine-neutral: free fall reaches g dt^2 ~ 1e401 m, past float64, within one step. Backends
-# probe for divergence periodically (PyBullet backend: every 16 steps), so 32 steps are taken.
+# probe for divergence periodically (PyBullet backend: every 8th step), so 32 steps are taken.
 # A backend that needs another trigger adds it here by name, with the reason.
 DIVERGENCE_TRIGGERS: dict[str, dict[str, float]] = {}
 DEFAULT_TRIGGER = {"timestep": 1e200}
@@ -520,6 +520,65 @@ def test_a_divergence_nobody_reads_is_raised_by_a_step_soon_after(make_sim):
             sim.step()
     with pytest.raises(exc.SimulationDivergedError):
         sim.joint_states(body)
+
+
+def test_every_step_check_raises_at_the_step_that_diverged(make_sim, private_tmp):
+    """divergence_check="every_step": the step after which the state is not finite raises,
+    with that step's time, on every backend; later steps and reads refuse until reset()."""
+    sim = make_sim(profile="urdf", divergence_check="every_step")
+    assert sim.manifest()["divergence_check"] == "every_step"
+    body = sim.load_urdf(_pair(), base_position=(0, 0, 1))
+    sim.step(21)
+    _torque(sim, body)
+    with pytest.raises(exc.SimulationDivergedError, match=r"is not finite") as first:
+        sim.step()
+    assert sim.time == pytest.approx(22 * sim.timestep, abs=1e-12)
+    assert f"diverged at t={sim.time:.6f} s" in str(first.value)
+    for call in (sim.step, lambda: sim.joint_states(body), lambda: sim.base_state(body)):
+        with pytest.raises(exc.SimulationDivergedError):
+            call()
+    sim.reset()
+    body = sim.load_urdf(_pair(), base_position=(0, 0, 1))
+    sim.step(30)
+    assert np.isfinite(sim.joint_states(body).positions).all()
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_a_divergence_inside_one_step_call_stops_it_at_that_step(make_sim):
+    """``step(n)`` stops at the step that diverged (it does not step on from a NaN or, on
+    MuJoCo, from the reference pose MuJoCo put back), so the error and ``sim.time`` name the
+    step where it happened, not the end of the call."""
+    sim = make_sim(profile="urdf", divergence_check="every_step")
+    body = sim.load_urdf(_pair(), base_position=(0, 0, 1))
+    sim.step(5)
+    _torque(sim, body)
+    with pytest.raises(exc.SimulationDivergedError):
+        sim.step(500)
+    assert sim.time == pytest.approx(6 * sim.timestep, abs=1e-12)
+
+
+@pytest.mark.parametrize("check", ["periodic", "every_step"])
+def test_the_divergence_check_changes_no_result(make_sim, check):
+    """The check only reads: r2d2 driven for 200 steps ends bit-identical either way."""
+
+    def drive(mode: str) -> np.ndarray:
+        sim = make_sim(divergence_check=mode)
+        sim.load_urdf("plane.urdf")
+        robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+        sim.set_joint_velocity(robot, [2, 3, 6, 7], -5.0, max_force=10.0)
+        sim.step(200)
+        base = sim.base_state(robot)
+        return np.concatenate([base.position, base.orientation, sim.joint_states(robot).positions])
+
+    np.testing.assert_array_equal(drive(check), drive("periodic"))
+
+
+@pytest.mark.parametrize("bad", ["always", "", None, True, 1])
+def test_an_unknown_divergence_check_names_the_choices(backend, bad):
+    with pytest.raises(
+        exc.InvalidArgumentError, match=r"'divergence_check'.*\['periodic', 'every_step'\]"
+    ):
+        simbridge.Sim(backend, divergence_check=bad)
 
 
 # ---------------------------------------------------------------- switches and ids
