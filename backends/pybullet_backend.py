@@ -28,8 +28,6 @@ from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
-import pybullet as p
-
 from simbridge.backend import Backend
 from simbridge.engine_output import captured
 from simbridge.exceptions import (
@@ -51,7 +49,11 @@ from simbridge.urdf import UrdfModel, resolve_mesh
 
 from .pybullet_commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands
 from .pybullet_common import _all_finite, _Body, _nesting, _refuse_long_names, _x_display_problem
-from .pybullet_output import _pybullet_gui_output, _pybullet_merge_output
+from .pybullet_output import (
+    _pybullet_gui_output,
+    _pybullet_merge_output,
+    p,  # pybullet, imported with its banner captured
+)
 from .pybullet_reads import StateReads
 from .pybullet_scene import Pending, named_table
 from .pybullet_state import Records

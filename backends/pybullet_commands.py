@@ -10,13 +10,13 @@ import threading
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pybullet as p
 
 from simbridge.exceptions import SimBusyError
 from simbridge.profiles import Profile
 from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointState
 
 from .pybullet_common import _Body, _exclusive
+from .pybullet_output import p  # pybullet, imported with its banner captured
 from .pybullet_state import Records
 
 __all__ = ["MotorCommands", "SPHERICAL_BRAKE_IMPULSE", "SPHERICAL_BRAKE_KP"]

@@ -11,7 +11,6 @@ from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
-import pybullet as p
 
 from simbridge.engine_output import captured
 from simbridge.exceptions import SimBusyError, SimulationDivergedError
@@ -29,6 +28,7 @@ from simbridge.types import (
 )
 
 from .pybullet_common import _all_finite, _Body, _exclusive, _finite_base
+from .pybullet_output import p  # pybullet, imported with its banner captured
 from .pybullet_state import Records, Saved, contact_point
 
 __all__ = ["StateReads"]

@@ -16,12 +16,12 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from typing import ClassVar, Protocol
 
-import pybullet as p
-
 from simbridge.engine_output import captured
 from simbridge.exceptions import UrdfStructureError
 from simbridge.scene import SceneBody, find_mesh
 from simbridge.types import JointInfo
+
+from .pybullet_output import p  # pybullet, imported with its banner captured
 
 
 class PyBulletBackend(Protocol):

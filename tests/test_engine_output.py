@@ -69,6 +69,29 @@ def test_the_banner_is_a_debug_record_in_a_fresh_process():
     assert child.stdout.count("\n") == 1
 
 
+@pytest.mark.parametrize(
+    "module",
+    [
+        "pybullet_backend",
+        "pybullet_reads",
+        "pybullet_commands",
+        "pybullet_scene",
+        "pybullet_inspect",
+    ],
+)
+def test_importing_a_backend_module_directly_prints_nothing(module):
+    """Each PyBullet backend module takes pybullet from the one import that captures its banner
+    (a test or a tool importing a module directly printed it)."""
+    child = subprocess.run(
+        [sys.executable, "-c", f"import simbridge.backends.{module}"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert child.returncode == 0, child.stderr
+    assert (child.stdout, child.stderr) == ("", "")
+
+
 def test_no_handler_means_nothing_on_stderr(capfd):
     """A library user who configured no logging sees no engine warning (no last-resort
     handler): the simbridge logger has a NullHandler."""
