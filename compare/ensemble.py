@@ -18,6 +18,7 @@ crosses a process boundary. Only the :class:`simbridge.Sim` interface is used.
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import time as _time
@@ -75,6 +76,10 @@ class Member:
     outcomes: dict[str, dict[str, Any]] = field(default_factory=dict)
     """The scenario's outcomes on this run, by name (:func:`~simbridge.compare.outcomes.evaluate`
     records)."""
+    log: list[tuple[str, int, str]] = field(default_factory=list)
+    """A worker process's ``simbridge`` log records (logger name, level, message), for the
+    parent to show: empty for a member run in the caller's process (its records went out as
+    they came)."""
 
 
 @dataclass
@@ -247,16 +252,59 @@ def _quiet() -> None:
     sys.stderr = sys.stdout
 
 
+class _Collect(logging.Handler):
+    """A worker's ``simbridge`` log records, kept as (logger, level, message)."""
+
+    def __init__(self, level: int) -> None:
+        super().__init__(level)
+        self.records: list[tuple[str, int, str]] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append((record.name, record.levelno, record.getMessage()))
+
+
 def _member_job(
-    scenario: Scenario, backend: str, profile: str, quantity: str, index: int
+    scenario: Scenario,
+    backend: str,
+    profile: str,
+    quantity: str,
+    index: int,
+    log_level: int | None = None,
 ) -> Member | str:
-    """One ensemble member in a worker: the Member, or the failure as text (exceptions of
-    this package need not pickle)."""
+    """One ensemble member: the Member, or the failure as text (exceptions of this package
+    need not pickle). ``log_level`` (in a worker process): the ``simbridge`` log records at
+    that level or above go back to the parent in ``Member.log``, which shows them there."""
+    log = logging.getLogger("simbridge")
+    handler = None
+    if log_level is not None:
+        handler = _Collect(log_level)
+        log.addHandler(handler)
+        log.setLevel(log_level)
     try:
         tr = run(scenario, backend, profile=profile)
-        return member_of(tr, quantity, index)
+        member = member_of(tr, quantity, index)
+        if handler is not None:
+            member.log = handler.records
+        return member
     except BaseException as exc:  # noqa: BLE001 - reported to the parent as text
         return f"{type(exc).__name__}: {exc}"
+    finally:
+        if handler is not None:
+            log.removeHandler(handler)
+
+
+def _show_worker_log(members: Sequence[Member], backend: str) -> None:
+    """The workers' log records, each distinct one once, on its own logger (the caller's
+    handlers decide what shows: ``--verbose`` shows them all), with how many members logged it
+    (15 members loading one URDF would say the same thing 15 times)."""
+    seen: dict[tuple[str, int, str], int] = {}
+    for m in members:
+        for key in dict.fromkeys(m.log):
+            seen[key] = seen.get(key, 0) + 1
+    for (name, level, message), count in seen.items():
+        logging.getLogger(name).log(
+            level, "%s [%d of %d %s ensemble members]", message, count, len(members), backend
+        )
 
 
 MemberProgress = Callable[[str, int], None]
@@ -323,11 +371,12 @@ class EnsembleRunner:
         self.pool = ProcessPoolExecutor(
             max_workers=self.workers, mp_context=ctx, initializer=_quiet
         )
+        level = logging.getLogger("simbridge").getEffectiveLevel()  # what the caller shows
         for slot, k in self.jobs:
             backend, profile = self.engines[slot]
             sc = perturbed(self.scenario, self.dpos[k], self.drot[k])
             self.futures[(slot, k)] = self.pool.submit(
-                _member_job, sc, backend, profile, self.quantity, k
+                _member_job, sc, backend, profile, self.quantity, k, level
             )
 
     def cancel(self) -> None:
@@ -381,6 +430,7 @@ class EnsembleRunner:
             members = [member_of(tr, self.quantity, 0)] + [
                 results[(slot, k)] for k in range(1, self.size)
             ]
+            _show_worker_log(members[1:], backend)
             rows = kept_rows(tr.steps)
             out.append(
                 Ensemble(

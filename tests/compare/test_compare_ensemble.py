@@ -10,6 +10,7 @@ holds it up) and still on the other (the "pybullet" profile's brake holds it).
 from __future__ import annotations
 
 import json
+import logging
 import subprocess
 import sys
 from pathlib import Path
@@ -80,6 +81,25 @@ def test_members_run_in_workers_equal_members_run_here():
     assert 1e-8 < d < 1e-4
     other_seed = run_ensembles(sc, engines[:1], "link_distance", size=3, perturb=1e-6, seed=1)
     assert not np.array_equal(other_seed[0].features, here[0].features)
+
+
+def test_worker_log_records_reach_the_callers_log_once_each(caplog):
+    """Records logged in the worker processes (here PyBullet's import banner, at DEBUG) come
+    back to the caller's ``simbridge`` loggers, each distinct one once with its member count;
+    at the caller's default level (WARNING) the workers send none of them."""
+    sc = load_scenario("pendulum").truncated(0.05)
+    engines = [("pybullet", "pybullet")]
+    with caplog.at_level(logging.DEBUG, logger="simbridge"):
+        run_ensembles(sc, engines, "link_distance", size=3, workers=2)
+    banners = [r for r in caplog.records if "pybullet build time" in r.getMessage()]
+    assert banners and all(r.name == "simbridge.pybullet" for r in banners)
+    from_workers = [r.getMessage() for r in banners if "ensemble members]" in r.getMessage()]
+    assert len(from_workers) == 1, from_workers  # once, however many workers printed it
+    assert from_workers[0].endswith(" of 2 pybullet ensemble members]")
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="simbridge"):
+        run_ensembles(sc, engines, "link_distance", size=3, workers=2)
+    assert not [r for r in caplog.records if "ensemble members]" in r.getMessage()]
 
 
 @pytest.mark.parametrize(
