@@ -194,6 +194,32 @@ def test_sdf_errors_name_the_file_the_line_and_the_element(text, error, message)
     assert "\n" not in str(info.value)
 
 
+def _nested_bodies(depth: int) -> str:
+    body = '<body><joint type="hinge"/><geom type="sphere" size="0.01" mass="1"/>'
+    return "<mujoco><worldbody>" + body * depth + "</body>" * depth + "</worldbody></mujoco>"
+
+
+@pytest.mark.parametrize("depth", [97, 3000])
+def test_bodies_nested_deeper_than_pybullet_reads_are_refused(depth):
+    """Raw PyBullet's loadMJCF refuses elements nested 100 deep (XML_ELEMENT_DEPTH_EXCEEDED;
+    97 bodies with a geom in the last: 100 elements) and loads 99 (measured on 3.2.7); the
+    reader refuses the same on every backend, without recursing (3000 deep was a raw
+    RecursionError)."""
+    with pytest.raises(exc.UrdfStructureError, match=rf"<geom>: elements nested {depth + 3} "
+                       r"deep: PyBullet's XML reader refuses more than 99"):  # fmt: skip
+        parse_scene(_nested_bodies(depth), "mjcf")
+    nested_defaults = (
+        "<mujoco>" + "<default>" * (depth + 2) + "</default>" * (depth + 2) + "</mujoco>"
+    )
+    with pytest.raises(exc.UrdfStructureError, match=r"elements nested \d+ deep"):
+        parse_scene(nested_defaults, "mjcf")
+
+
+def test_bodies_nested_as_deep_as_pybullet_reads_load():
+    (model,) = parse_scene(_nested_bodies(96), "mjcf")  # 99 elements deep
+    assert len(model.joints) == 192  # a hinge and a weld per body
+
+
 def test_a_missing_file_is_named_as_mjcf():
     with pytest.raises(exc.UrdfNotFoundError, match=r"^MJCF 'nosuch\.xml' is neither a file"):
         parse_scene("nosuch.xml", "mjcf")

@@ -646,6 +646,15 @@ def urdf_xml() -> None:
             isolate=depth > 1000,
             timeout=30,
         )
+    body = '<body><joint type="hinge"/><geom type="sphere" size="0.01" mass="1"/>'
+    for depth in (97, 3000):  # raw PyBullet: 96 bodies (99 elements deep) load, 97 do not
+        mjcf = "<mujoco><worldbody>" + body * depth + "</body>" * depth + "</worldbody></mujoco>"
+        case(
+            f"mjcf-nested-{depth}-bodies",
+            cat,
+            raises(exc.UrdfStructureError, rf"elements nested {depth + 3} deep: PyBullet's XML"),
+            lambda ctx, text=mjcf: ctx.sim().load_mjcf(text),
+        )
 
 
 def xml_attr(value: str) -> str:
