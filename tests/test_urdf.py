@@ -113,3 +113,20 @@ def test_limits_follow_pybullets_reporting(jtype, limit, expected):
     with simbridge.Sim("pybullet") as sim:
         info = sim.joint_info(sim.load_urdf(text), 0)
         assert (info.lower_limit, info.upper_limit) == expected
+
+
+def test_a_line_past_pybullets_line_buffer_is_named_as_the_cause(tmp_path):
+    """PyBullet reads a URDF in lines of at most 8191 bytes and breaks a longer one (raw
+    PyBullet 3.2.7 refuses this one-line file: XML_ERROR_PARSING_ATTRIBUTE, measured): the
+    refusal says so, with the line and its length, not only 'invalid token'."""
+    links = "".join(LINK.format(n=f"l{k}") for k in range(60))
+    joints = "".join(_joint(f"j{k}", "l0", f"l{k}") for k in range(1, 60))
+    text = f'<?xml version="1.0"?><robot name="long">{links}{joints}</robot>'
+    path = tmp_path / "long.urdf"
+    path.write_text(text)
+    with pytest.raises(exc.UrdfParseError) as info:
+        parse_urdf(resolve_source(path))
+    assert f"line 1 is {len(text)} bytes long" in str(info.value)
+    assert "lines of at most 8191 bytes" in str(info.value)
+    # the same robot one element per line loads
+    parse_urdf(resolve_source(text.replace("><", ">\n<")))

@@ -419,6 +419,22 @@ def _first_robot(data: bytes, line_of: Sequence[int], file: str, lenient: Lenien
     )
 
 
+def _long_line(raw: bytes) -> str:
+    """Why a file with a line over :data:`LINE_BYTES` may be malformed for PyBullet ("" when
+    every line fits)."""
+    if _longest_line(raw) <= LINE_BYTES:
+        return ""
+    for number, line in enumerate(re.split(rb"[\n\0]", raw), 1):
+        if len(line) > LINE_BYTES:
+            return (
+                f"; line {number} is {len(line)} bytes long: PyBullet reads a URDF in lines of "
+                f"at most {LINE_BYTES} bytes (its file reader's line buffer) and breaks a longer "
+                "one there, which is likely what broke the XML here (raw PyBullet refuses such a "
+                "file too); break the line between elements"
+            )
+    return ""  # pragma: no cover - _longest_line found one
+
+
 def read_urdf_xml(text: str, file: str, lenient: Leniency) -> UrdfXml:
     """The ``<robot>`` element of ``text`` as PyBullet reads it (see the module docstring),
     every element with its source line; notes on ``lenient`` for what a strict reading would
@@ -451,7 +467,7 @@ def read_urdf_xml(text: str, file: str, lenient: Leniency) -> UrdfXml:
     except _XmlError as exc:
         # top-level text or elements besides the root: TinyXML-2 takes them
         if exc.code != _JUNK_AFTER_ROOT and (exc.code != _SYNTAX or exc.started):
-            raise UrdfParseError(file, exc.detail) from None
+            raise UrdfParseError(file, exc.detail + _long_line(raw)) from None
         data = _first_robot(data, line_of, file, lenient)
         view = data.decode("utf-8")
         try:

@@ -646,6 +646,20 @@ def urdf_xml() -> None:
             isolate=depth > 1000,
             timeout=30,
         )
+    # 22 kB on one line, broken by PyBullet's line reader inside a tag (raw PyBullet 3.2.7:
+    # XML_ERROR_PARSING_ATTRIBUTE, measured)
+    one_line = robot_xml(
+        "".join(link_xml(f"l{k}") for k in range(60)),
+        "".join(joint_xml(f"j{k}", "l0", f"l{k}") for k in range(1, 60)),
+        name="r",
+    ).replace("\n", "")
+    case(
+        "xml-line-past-8191-bytes",
+        cat,
+        raises(exc.UrdfParseError, r"line 1 is \d+ bytes long: PyBullet reads a URDF in lines of "
+               r"at most 8191 bytes"),
+        _load_file("one-line.urdf", one_line),
+    )  # fmt: skip
     body = '<body><joint type="hinge"/><geom type="sphere" size="0.01" mass="1"/>'
     for depth in (97, 3000):  # raw PyBullet: 96 bodies (99 elements deep) load, 97 do not
         mjcf = "<mujoco><worldbody>" + body * depth + "</body>" * depth + "</worldbody></mujoco>"
