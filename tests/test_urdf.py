@@ -130,3 +130,35 @@ def test_a_line_past_pybullets_line_buffer_is_named_as_the_cause(tmp_path):
     assert "lines of at most 8191 bytes" in str(info.value)
     # the same robot one element per line loads
     parse_urdf(resolve_source(text.replace("><", ">\n<")))
+
+
+@pytest.mark.parametrize("scale", ["2", "2 2"])
+def test_a_mesh_scale_of_fewer_than_three_numbers_warns_as_pybullet_reads_it(
+    scale, tmp_path, caplog
+):
+    """Raw PyBullet 3.2.7 warns "Scale should be a vector3, not single scalar. Workaround
+    activated." and scales by the first number on all three axes (measured: '2' and '2 2'
+    give the inertia of '2 2 2'); simbridge reads the same and says so in one warning naming
+    the file and the line."""
+    import logging
+
+    (tmp_path / "m.obj").write_text(
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n"
+    )
+    text = (
+        '<robot name="r">\n<link name="a">'
+        f'<collision><geometry><mesh filename="m.obj" scale="{scale}"/></geometry></collision>'
+        "</link>\n</robot>\n"
+    )
+    path = tmp_path / "scale.urdf"
+    path.write_text(text)
+    caplog.set_level(logging.WARNING, logger="simbridge.urdf")
+    model = parse_urdf(resolve_source(path))
+    assert model.base.collisions[0].size == (2.0, 2.0, 2.0)
+    records = [r for r in caplog.records if r.name == "simbridge.urdf"]
+    assert len(records) == 1
+    assert records[0].getMessage() == (
+        f"{path}: read as PyBullet reads it: line 2: link 'a' <collision> #0 <mesh scale> "
+        f"{scale!r} read as (2, 2, 2): fewer than 3 numbers, PyBullet's workaround uses the "
+        "first for all three"
+    )

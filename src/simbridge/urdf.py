@@ -218,7 +218,9 @@ def _geometry(
                 s = c_atof(shape.get("scale", ""))[0]
                 read = (s, s, s)
                 r.lenient.add(
-                    line, f"{where} <mesh scale> {shape.get('scale')!r} read as {_fmt(read)}"
+                    line,
+                    f"{where} <mesh scale> {shape.get('scale')!r} read as {_fmt(read)}: fewer "
+                    "than 3 numbers, PyBullet's workaround uses the first for all three",
                 )
                 r._finite(shape, f"{where} <mesh scale>", read, shape.get("scale", ""))
             scale = read

@@ -972,6 +972,14 @@ def meshes() -> None:
         _mesh_case("s.obj", obj_text(TETRA, TETRA_FACES), scale="1e300 1e300 1e300"),
         isolate=True,
     )
+    for label, scale in (("one", "2"), ("two", "2 2")):
+        case(
+            f"mesh-scale-{label}-number",
+            cat,
+            accepts("PyBullet's workaround: the first number on all three axes (one warning)"),
+            _mesh_case(f"s{label}.obj", obj_text(TETRA, TETRA_FACES), scale=scale),
+            isolate=True,
+        )
     case("mesh-nan-scale", cat, raises(exc.UrdfStructureError, NOT_FINITE),
          _mesh_case("n.obj", obj_text(TETRA, TETRA_FACES), scale="1 nan 1"))  # fmt: skip
     case(
