@@ -214,3 +214,47 @@ def test_bad_file_inertia_becomes_zero_as_in_pybullet():
     assert math.isclose(
         model_inertials(model, False, "collision_aabb")[0].diagonal[0], 2 * 0.002**2 / 12
     )
+
+
+BAD_TENSORS = {
+    # izz > ixx + iyy: the triangle inequality broken
+    "triangle": ('ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="1"', "triangle inequality"),
+    # positive diagonal, principal moments -0.99, 1.01, 0.01
+    "not-positive": ('ixx="0.01" ixy="1" ixz="0" iyy="0.01" iyz="0" izz="0.01"', "negative"),
+}
+
+
+@pytest.mark.parametrize("backend", ["pybullet", "mujoco"])
+@pytest.mark.parametrize("case", sorted(BAD_TENSORS))
+def test_bad_file_inertia_is_zero_with_one_warning_on_both_backends(
+    client, backend, case, tmp_path, caplog
+):
+    """Raw PyBullet with URDF_USE_INERTIA_FROM_FILE zeroes both tensors ("Bad inertia tensor
+    properties, setting inertia to zero for link: b", measured); both backends simulate the
+    same zero inertia and simbridge says so in one warning naming the file, line, link and
+    why (MuJoCo zeroed it silently)."""
+    import logging
+
+    import simbridge
+
+    tensor, why = BAD_TENSORS[case]
+    text = (
+        '<robot name="r">\n<link name="a"/>\n<link name="b"><inertial><mass value="1"/>\n'
+        f"<inertia {tensor}/></inertial>"
+        '<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>\n'
+        '<joint name="j" type="revolute"><parent link="a"/><child link="b"/>'
+        '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="5"/></joint>\n'
+        "</robot>\n"
+    )
+    path = tmp_path / "bad_inertia.urdf"
+    path.write_text(text)
+    _, dyn = _pybullet(client, text, False, p.URDF_USE_INERTIA_FROM_FILE)
+    assert dyn[1][2] == (0.0, 0.0, 0.0)  # PyBullet's own reading
+    caplog.set_level(logging.WARNING, logger="simbridge")
+    with simbridge.Sim(backend, profile="urdf") as sim:
+        body = sim.load_urdf(path)
+        assert sim.dynamics_info(body, 0).local_inertia_diagonal == (0.0, 0.0, 0.0)
+    ours = [r.getMessage() for r in caplog.records if r.name == "simbridge.urdf"]
+    assert len(ours) == 1, ours
+    assert ours[0].startswith(f"{path}:4: link 'b' <inertia>: principal moments (")
+    assert why in ours[0] and "simulated with zero inertia, as PyBullet does" in ours[0]

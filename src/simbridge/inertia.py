@@ -46,7 +46,7 @@ from .transforms import (
     transform_multiply,
 )
 from .types import Quat, Vec3
-from .urdf import Geometry, Link, UrdfModel
+from .urdf_model import Geometry, Inertial, Link, UrdfModel
 
 __all__ = [
     "LinkInertial",
@@ -57,6 +57,7 @@ __all__ = [
     "inertia_scalings",
     "URDF_COLLISION_MARGIN",
     "jacobi_principal",
+    "file_principal",
 ]
 
 URDF_COLLISION_MARGIN = 0.001  # PyBullet's collision margin of shapes loaded from a URDF (m)
@@ -230,6 +231,31 @@ def jacobi_principal(
     return np.diag(a).copy(), rot
 
 
+def file_principal(ine: Inertial) -> tuple[np.ndarray, Quat, str | None]:
+    """The principal moments (kg m²) and the principal frame's orientation in the link frame
+    (x, y, z, w) PyBullet makes of an ``<inertia>`` tensor under ``URDF_USE_INERTIA_FROM_FILE``
+    (diagonalised as Bullet does), and why it zeroes them, or None: moments that are negative
+    or break the triangle inequality become zero (and the frame the ``<inertial>``'s), as in
+    PyBullet ("Bad inertia tensor properties, setting inertia to zero")."""
+    ixx, ixy, ixz, iyy, iyz, izz = ine.inertia
+    orn = ine.origin_quat
+    if ixy == 0.0 and ixz == 0.0 and iyz == 0.0:
+        diag = np.array([ixx, iyy, izz], dtype=float)
+    else:
+        tensor = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
+        diag, axes = jacobi_principal(tensor)
+        orn = quat_from_matrix(quat_to_matrix(orn) @ axes)
+    x, y, z = (float(v) for v in diag)
+    reason = None
+    if min(x, y, z) < 0:
+        reason = "a principal moment is negative (the tensor is not positive semi-definite)"
+    elif x > y + z or y > x + z or z > x + y:
+        reason = "they break the triangle inequality (each must be at most the sum of the others)"
+    if reason is not None:
+        return np.zeros(3), ine.origin_quat, f"principal moments ({x:g}, {y:g}, {z:g}): {reason}"
+    return diag, orn, None
+
+
 def is_fixed_base(model: UrdfModel, fixed_base: bool) -> bool:
     """PyBullet welds the root to the world when asked, or when the root's mass is 0 (a root
     named ``world`` without ``<inertial>`` has mass 0)."""
@@ -275,17 +301,7 @@ def link_inertial(
         return LinkInertial(0.0, (0.0, 0.0, 0.0), pos, orn)
     if inertia_source == "file":
         if ine.from_file:
-            ixx, ixy, ixz, iyy, iyz, izz = ine.inertia
-            if ixy == 0.0 and ixz == 0.0 and iyz == 0.0:
-                file_diag = np.array([ixx, iyy, izz], dtype=float)
-            else:
-                tensor = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
-                file_diag, axes = jacobi_principal(tensor)
-                orn = quat_from_matrix(quat_to_matrix(orn) @ axes)
-            x, y, z = file_diag
-            if min(x, y, z) < 0 or x > y + z or y > x + z or z > x + y:
-                file_diag = np.zeros(3)
-                orn = ine.origin_quat
+            file_diag, orn, _ = file_principal(ine)
         diag = tuple(float(v) for v in file_diag)
     elif ine.moments is not None:  # computed by the file's reader (an MJCF body's shapes)
         diag = ine.moments if mass else (0.0, 0.0, 0.0)

@@ -30,6 +30,7 @@ from .exceptions import (
     UnsupportedJointError,
     UrdfStructureError,
 )
+from .inertia import file_principal
 from .meshes import MeshReadError, mesh_vertices
 from .urdf_model import Contact, Geometry, Inertial, Joint, Link, UrdfModel, Vec3
 from .urdf_source import (  # noqa: F401 - re-exported: simbridge.urdf is the public module
@@ -39,7 +40,7 @@ from .urdf_source import (  # noqa: F401 - re-exported: simbridge.urdf is the pu
     resolve_source,
     search_path,
 )
-from .urdf_xml import Leniency, XmlElement, c_atof, pybullet_numbers, read_urdf_xml
+from .urdf_xml import LOGGER, Leniency, XmlElement, c_atof, pybullet_numbers, read_urdf_xml
 
 __all__ = [
     "UrdfSource",
@@ -376,7 +377,10 @@ def _visual_color(
 def check_file_inertia(model: UrdfModel) -> None:
     """Under a profile that simulates the file's <inertia> (inertia_source "file"), a negative
     moment of inertia is an error (PyBullet zeroes it, MuJoCo cannot take it); under the
-    "pybullet" profile the file's inertia is not used and such a file loads, as in PyBullet."""
+    "pybullet" profile the file's inertia is not used and such a file loads, as in PyBullet.
+    A tensor whose principal moments PyBullet zeroes (negative, or breaking the triangle
+    inequality) is simulated so on every backend, with one warning per link on the
+    ``simbridge.urdf`` logger naming the file, the line, the link and why."""
     file = model.source.display_name
     for link in model.links:
         i = link.inertial.inertia
@@ -386,6 +390,19 @@ def check_file_inertia(model: UrdfModel) -> None:
                 f"link {link.name!r} <inertia>",
                 f"ixx, iyy and izz must be >= 0 to be simulated, got {i[0]}, {i[3]}, {i[5]}",
                 link.inertial.line or None,
+            )
+    for link in model.links:
+        if not link.inertial.from_file:
+            continue
+        reason = file_principal(link.inertial)[2]
+        if reason is not None:
+            at = f"{file}:{link.inertial.line}" if link.inertial.line else file
+            LOGGER.warning(
+                "%s: link %r <inertia>: %s; simulated with zero inertia, as PyBullet does "
+                "('Bad inertia tensor properties, setting inertia to zero')",
+                at,
+                link.name,
+                reason,
             )
 
 
