@@ -352,3 +352,14 @@ def test_self_collision_is_loadmjcf_s_flag(backend):
             sim.step(1)
             counts[mode] = len(sim.contact_points(h, h))
     assert counts[None] == counts["exclude_all_parents"] == 0 and counts[True] > 0
+
+
+def test_an_mjcf_mesh_that_is_a_directory_says_so(tmp_path):
+    (tmp_path / "m.stl").mkdir()
+    text = (
+        f'<mujoco><asset><mesh name="m" file="{tmp_path}/m.stl"/></asset><worldbody>\n'
+        '<body><geom type="mesh" mesh="m"/></body></worldbody></mujoco>'
+    )
+    with pytest.raises(exc.UrdfStructureError, match=r"<MJCF text>:2: <geom>: mesh file .*m\.stl"
+                       r"'.* is a directory, not a regular file"):  # fmt: skip
+        parse_scene(text, "mjcf")

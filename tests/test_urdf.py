@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 import simbridge
@@ -161,4 +163,32 @@ def test_a_mesh_scale_of_fewer_than_three_numbers_warns_as_pybullet_reads_it(
         f"{path}: read as PyBullet reads it: line 2: link 'a' <collision> #0 <mesh scale> "
         f"{scale!r} read as (2, 2, 2): fewer than 3 numbers, PyBullet's workaround uses the "
         "first for all three"
+    )
+
+
+@pytest.mark.parametrize(
+    ("make", "kind"),
+    [
+        (lambda path: os.mkfifo(path), "a FIFO"),
+        (lambda path: os.symlink("/dev/zero", path), "a character device"),
+        (lambda path: path.mkdir(), "a directory"),
+    ],
+    ids=["fifo", "dev-zero", "directory"],
+)
+def test_a_mesh_path_that_is_not_a_regular_file_says_so(tmp_path, make, kind):
+    """Raw PyBullet 3.2.7 waits forever on a FIFO mesh, ends the process on a directory
+    (std::bad_alloc) and loads /dev/zero as a link without a shape (measured); simbridge
+    refuses all three, saying what the path is (it said 'not found')."""
+    make(tmp_path / "m.stl")
+    text = (
+        '<robot name="r">\n<link name="a">\n'
+        '<collision><geometry><mesh filename="m.stl"/></geometry></collision></link></robot>'
+    )
+    path = tmp_path / "r.urdf"
+    path.write_text(text)
+    with pytest.raises(exc.UrdfStructureError) as info:
+        parse_urdf(resolve_source(path))
+    assert str(info.value) == (
+        f"{path}:3: link 'a' <collision> #0 <mesh>: mesh file 'm.stl': "
+        f"'{tmp_path / 'm.stl'}' is {kind}, not a regular file"
     )

@@ -23,7 +23,7 @@ from .transforms import (
 )
 from .types import Quat
 from .urdf_model import Vec3
-from .urdf_source import UrdfSource
+from .urdf_source import UrdfSource, not_a_regular_file
 
 Pose = tuple[Vec3, Quat]
 IDENTITY: Pose = ((0.0, 0.0, 0.0), IDENTITY_QUAT)
@@ -586,6 +586,9 @@ class _Reader:
             if asset is not None:
                 path, tried = find_mesh(asset, self.src.base_dir)
                 if not path.is_file():
+                    odd = not_a_regular_file(tried)
+                    if odd is not None:
+                        raise self.error(elem, where, f"mesh file {asset!r}: {odd}")
                     raise MeshNotFoundError(self.file, where, asset, str(tried[0]), line_of(elem))
                 if path.suffix.lower() not in (".obj", ".stl"):
                     raise self.error(

@@ -44,7 +44,7 @@ from .transforms import (
 from .types import Quat
 from .urdf import MESH_FORMATS, pybullet_order
 from .urdf_model import Contact, Geometry, Inertial, Joint, Link, Vec3
-from .urdf_source import UrdfSource
+from .urdf_source import UrdfSource, not_a_regular_file
 
 __all__ = ["parse_sdf"]
 
@@ -155,6 +155,9 @@ class _Reader:
                 scale = self.vec3(scale_elem, f"{shown} <scale>") or (0.0, 0.0, 0.0)
             path, tried = find_mesh(uri, self.src.base_dir)
             if not path.is_file():
+                odd = not_a_regular_file(tried)
+                if odd is not None:
+                    raise self.error(shape, shown, f"mesh file {uri!r}: {odd}")
                 raise MeshNotFoundError(self.file, shown, uri, str(tried[0]), line_of(shape))
             if path.suffix.lower() not in MESH_FORMATS:
                 raise self.error(

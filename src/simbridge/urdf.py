@@ -36,6 +36,7 @@ from .urdf_model import Contact, Geometry, Inertial, Joint, Link, UrdfModel, Vec
 from .urdf_source import (  # noqa: F401 - re-exported: simbridge.urdf is the public module
     UrdfSource,
     _robots_dir,
+    not_a_regular_file,
     resolve_mesh,
     resolve_source,
     search_path,
@@ -227,6 +228,9 @@ def _geometry(
             scale = read
         path, tried = resolve_mesh(uri, src.base_dir)
         if not path.is_file():
+            odd = not_a_regular_file(tried)
+            if odd is not None:
+                raise r.error(shape, f"{where} <mesh>", f"mesh file {uri!r}: {odd}")
             raise MeshNotFoundError(file, where, uri, str(tried[0]), line)
         if path.suffix.lower() not in MESH_FORMATS:
             raise r.error(

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import stat
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from .exceptions import UrdfNotFoundError, UrdfParseError
 
-__all__ = ["UrdfSource", "resolve_source", "resolve_mesh", "search_path"]
+__all__ = ["UrdfSource", "resolve_source", "resolve_mesh", "search_path", "not_a_regular_file"]
 
 
 @dataclass(frozen=True)
@@ -151,3 +152,30 @@ def resolve_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
     relative = not uri.startswith("package://") and not os.path.isabs(path)
     primary = base_dir / path if relative else tried[0]
     return primary, [primary, *(c for c in tried if c != primary)]
+
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def not_a_regular_file(tried: list[Path]) -> str | None:
+    """Why a mesh path that exists is not read: "PATH is a directory (not a regular file)"
+    for the first of ``tried`` (as :func:`resolve_mesh` lists them) that exists but is not a
+    regular file (symbolic links followed); None when none exists. Raw PyBullet 3.2.7 waits
+    forever on a FIFO, ends the process on a directory (std::bad_alloc) and reads a device
+    such as /dev/zero as a link without a shape (measured): such a path is refused."""
+    for path in tried:
+        try:
+            mode = os.stat(path).st_mode
+        except (OSError, ValueError):
+            continue
+        if stat.S_ISREG(mode):
+            return None
+        kind = next((what for test, what in _KINDS if test(mode)), "no regular file")
+        return f"{str(path)!r} is {kind}, not a regular file"
+    return None

@@ -1057,14 +1057,21 @@ def meshes() -> None:
         isolate=True,
         timeout=60,
     )
-    case(
-        "mesh-directory-named-stl",
-        cat,
-        raises(exc.MeshNotFoundError, r"not found", (exc.UrdfStructureError, r"<mesh")),
-        lambda ctx: (
-            (ctx.work / "dir.stl").mkdir() or ctx.load_step(mesh_robot(ctx.work / "dir.stl"), 1)
-        ),
-    )
+    # raw PyBullet: a directory ends the process (std::bad_alloc), a FIFO hangs it, /dev/zero
+    # is a link without a shape (measured on 3.2.7)
+    for label, make, kind in (
+        ("directory", lambda path: path.mkdir(), "a directory"),
+        ("fifo", os.mkfifo, "a FIFO"),
+        ("dev-zero-link", lambda path: os.symlink("/dev/zero", path), "a character device"),
+    ):
+
+        def run(ctx: Ctx, make: Callable[[Path], object] = make, label: str = label) -> object:
+            make(ctx.work / f"{label}.stl")
+            return ctx.load_step(mesh_robot(ctx.work / f"{label}.stl"), 1)
+
+        case(f"mesh-{label}-named-stl", cat,
+             raises(exc.UrdfStructureError, rf"<mesh>: mesh file .* is {kind}, not a regular file"),
+             run)  # fmt: skip
     case(
         "mesh-unsupported-format",
         cat,
