@@ -9,7 +9,7 @@ import numpy as np
 import pybullet_data
 import pytest
 
-from simbridge.meshes import MeshData, mesh_vertices, read_mesh
+from simbridge.meshes import MeshData, MeshReadError, mesh_vertices, read_mesh
 
 DATA = Path(pybullet_data.getDataPath())
 
@@ -117,3 +117,23 @@ def test_collada_through_trimesh():
 def test_a_missing_file_is_an_os_error(tmp_path):
     with pytest.raises(OSError):
         read_mesh(tmp_path / "missing.obj")
+
+
+def test_a_collada_index_past_its_vertices_is_named(tmp_path):
+    """A <triangles> <p> indexing vertex 7 of 3: trimesh drops the mesh quietly (simbridge
+    said 'holds no geometry (no vertices)') and raw PyBullet 3.2.7 crashes on it (SIGSEGV,
+    measured); the reader names the index and the vertex count."""
+    path = tmp_path / "past.dae"
+    path.write_text(
+        '<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" '
+        'version="1.4.1"><library_geometries><geometry id="g"><mesh><source id="p">'
+        '<float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array><technique_common>'
+        '<accessor source="#pa" count="3" stride="3"><param name="X" type="float"/>'
+        '<param name="Y" type="float"/><param name="Z" type="float"/></accessor>'
+        '</technique_common></source><vertices id="v"><input semantic="POSITION" source="#p"/>'
+        '</vertices><triangles count="2"><input semantic="VERTEX" source="#v" offset="0"/>'
+        "<p>0 1 2 0 7 99</p></triangles></mesh></geometry></library_geometries></COLLADA>"
+    )
+    with pytest.raises(MeshReadError, match=r"<triangles> indexes vertex 7 \(of 2 indices out "
+                       r"of range\); its <vertices> 'v' hold 3"):  # fmt: skip
+        read_mesh(path)

@@ -18,8 +18,9 @@ and size: a file rewritten in the meantime is read again), up to 256 files.
   matches its triangle count) nor ASCII text starting with ``solid``, or with a ``vertex`` line
   without 3 numbers; an .obj or .stl without a vertex, or with a vertex that is not finite; a
   .dae with a number in a ``<float_array>`` that is not finite (trimesh would drop the vertex
-  quietly). PyBullet loads random bytes or NaN vertices as a link without a shape, and reads an
-  .obj's missing numbers as uninitialised memory (measured: inertia 1e41);
+  quietly) or a primitive whose ``<p>`` indices run past its vertices (trimesh drops the
+  mesh, raw PyBullet crashes). PyBullet loads random bytes or NaN vertices as a link without a
+  shape, and reads an .obj's missing numbers as uninitialised memory (measured: inertia 1e41);
 * anything else (``.dae``): through trimesh, imported only then (about 1 s), without
   processing (no merging, no repair).
 """
@@ -201,9 +202,71 @@ def _read_with_trimesh(path: str) -> MeshData:
                     raise MeshReadError(
                         path, f"a number of a <float_array> is not finite: {token!r}", line
                     )
+        _collada_indices(path, text)
     import trimesh  # ~1 s to import: only for formats read nowhere else (.dae)
 
     loaded: Any = trimesh.load(path, force="mesh", process=False)
     vertices = np.asarray(loaded.vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(loaded.faces, dtype=np.int64).reshape(-1, 3)
     return MeshData(vertices, faces)
+
+
+_PRIMITIVES = ("triangles", "polylist", "polygons", "lines", "linestrips", "trifans", "tristrips")
+
+
+def _collada_indices(path: str, text: str) -> None:
+    """MeshReadError for a COLLADA primitive whose ``<p>`` indexes a vertex past its
+    ``<vertices>``' position source (trimesh drops such a mesh quietly; raw PyBullet 3.2.7
+    crashes on it, measured). A file this cannot follow is left to trimesh."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError:
+        return  # trimesh says what it cannot read
+    local = {e: e.tag.rsplit("}", 1)[-1] for e in root.iter() if isinstance(e.tag, str)}
+    for mesh in (e for e, tag in local.items() if tag == "mesh"):
+        counts: dict[str, int] = {}  # source id -> number of points
+        positions: dict[str, str] = {}  # vertices id -> source id
+        for child in mesh:
+            tag = local.get(child, "")
+            if tag == "source":
+                for acc in (e for e in child.iter() if local.get(e) == "accessor"):
+                    try:
+                        counts[child.get("id", "")] = int(acc.get("count", ""))
+                    except ValueError:
+                        pass
+            elif tag == "vertices":
+                for inp in child:
+                    if local.get(inp) == "input" and inp.get("semantic") == "POSITION":
+                        positions[child.get("id", "")] = inp.get("source", "").lstrip("#")
+        for prim in (e for e in mesh if local.get(e) in _PRIMITIVES):
+            inputs = [e for e in prim if local.get(e) == "input"]
+            try:
+                offsets = [int(e.get("offset", "0")) for e in inputs]
+            except ValueError:
+                continue
+            vertex = [
+                (off, e.get("source", "").lstrip("#"))
+                for off, e in zip(offsets, inputs, strict=True)
+                if e.get("semantic") == "VERTEX"
+            ]
+            if not vertex or vertex[0][1] not in positions:
+                continue
+            offset, vid = vertex[0]
+            n = counts.get(positions[vid])
+            if n is None:
+                continue
+            stride = max(offsets) + 1
+            for p in (e for e in prim if local.get(e) == "p"):
+                try:
+                    values = [int(v) for v in (p.text or "").split()]
+                except ValueError:
+                    continue
+                bad = [v for v in values[offset::stride] if not 0 <= v < n]
+                if bad:
+                    raise MeshReadError(
+                        path,
+                        f"<{local[prim]}> indexes vertex {bad[0]} (of {len(bad)} indices out of "
+                        f"range); its <vertices> {vid!r} hold {n}",
+                    )

@@ -958,6 +958,10 @@ def meshes() -> None:
     case("mesh-nan-vertex-tetra.dae", cat, raises(exc.UrdfStructureError, finite),
          _mesh_case("nan4.dae", dae_text(positions, 12, "0 2 1 0 1 3 0 3 2 1 2 3")),
          isolate=True)  # fmt: skip
+    case("mesh-dae-index-past-vertices", cat,
+         raises(exc.UrdfStructureError, r"<triangles> indexes vertex 7 .*hold 3"),
+         _mesh_case("past.dae", dae_text("0 0 0 0.1 0 0 0 0.1 0", 9, "0 1 2 0 7 99")),
+         isolate=True)  # fmt: skip
     case(
         "mesh-huge-vertices.obj",
         cat,
