@@ -192,3 +192,18 @@ def test_a_mesh_path_that_is_not_a_regular_file_says_so(tmp_path, make, kind):
         f"{path}:3: link 'a' <collision> #0 <mesh>: mesh file 'm.stl': "
         f"'{tmp_path / 'm.stl'}' is {kind}, not a regular file"
     )
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be", "utf-32"])
+def test_a_utf16_urdf_names_its_encoding(tmp_path, encoding):
+    """Raw PyBullet 3.2.7 refuses a UTF-16 URDF, with or without a byte-order mark
+    (XML_ERROR_PARSING, measured), and loads one with a UTF-8 byte-order mark: the refusal says
+    it is the encoding (it said 'invalid token: line 1, column 0')."""
+    text = '<robot name="r">\n' + LINK.format(n="a") + "\n</robot>\n"
+    path = tmp_path / "wide.urdf"
+    path.write_bytes(text.encode(encoding))
+    with pytest.raises(exc.UrdfParseError, match=r"wide\.urdf: malformed URDF XML: the file is "
+                       r"UTF-(16|32) text .*: PyBullet reads a URDF as UTF-8"):  # fmt: skip
+        parse_urdf(resolve_source(path))
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert parse_urdf(resolve_source(path)).name == "r"

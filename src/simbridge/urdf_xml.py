@@ -435,6 +435,21 @@ def _long_line(raw: bytes) -> str:
     return ""  # pragma: no cover - _longest_line found one
 
 
+def _utf16(raw: bytes) -> str:
+    """What a file in UTF-16 or UTF-32 looks like at its start ("" for anything else)."""
+    for bom, name in (
+        (b"\xff\xfe\0\0", "UTF-32 text (byte-order mark FF FE 00 00)"),
+        (b"\0\0\xfe\xff", "UTF-32 text (byte-order mark 00 00 FE FF)"),
+        (b"\xff\xfe", "UTF-16 text (byte-order mark FF FE)"),
+        (b"\xfe\xff", "UTF-16 text (byte-order mark FE FF)"),
+    ):
+        if raw.startswith(bom):
+            return name
+    if raw[:2] in (b"<\0", b"\0<"):
+        return "UTF-16 text (a NUL byte beside its first '<')"
+    return ""
+
+
 def read_urdf_xml(text: str, file: str, lenient: Leniency) -> UrdfXml:
     """The ``<robot>`` element of ``text`` as PyBullet reads it (see the module docstring),
     every element with its source line; notes on ``lenient`` for what a strict reading would
@@ -445,6 +460,13 @@ def read_urdf_xml(text: str, file: str, lenient: Leniency) -> UrdfXml:
     except UnicodeEncodeError:  # text with a lone surrogate of its own
         lenient.add(None, "a lone surrogate in the text written as '?'")
         raw = text.encode("utf-8", errors="replace")
+    wide = _utf16(raw)
+    if wide:
+        raise UrdfParseError(
+            file,
+            f"the file is {wide}: PyBullet reads a URDF as UTF-8 (ASCII included) and refuses "
+            "it too (XML_ERROR_PARSING, measured); save it as UTF-8",
+        )
     data, line_of = _pybullet_lines(raw, lenient)
     try:
         view = data.decode("utf-8")

@@ -557,6 +557,9 @@ def urdf_xml() -> None:
                accept="PyBullet reads bytes: a byte that is not UTF-8 is read leniently"),
         _load_file("latin.urdf", b'<robot name="\xff"><link name="a"/></robot>'),
     )  # fmt: skip
+    case("xml-utf16-file", cat,
+         raises(exc.UrdfParseError, r"the file is UTF-16 text .*PyBullet reads a URDF as UTF-8"),
+         _load_file("wide.urdf", template().encode("utf-16")))  # fmt: skip
     case("xml-empty-file", cat, Expect(errors=URDF_ERROR), _load_file("empty.urdf", b""))
     case("xml-whitespace-file", cat, Expect(errors=URDF_ERROR),
          _load_file("blank.urdf", b"\n \t\n"))  # fmt: skip
