@@ -363,3 +363,23 @@ def test_an_mjcf_mesh_that_is_a_directory_says_so(tmp_path):
     with pytest.raises(exc.UrdfStructureError, match=r"<MJCF text>:2: <geom>: mesh file .*m\.stl"
                        r"'.* is a directory, not a regular file"):  # fmt: skip
         parse_scene(text, "mjcf")
+
+
+def test_an_mjcf_include_is_not_read_and_says_so(caplog):
+    """PyBullet's MJCF importer does not read <include> (raw PyBullet 3.2.7 loads the file
+    without a word about it); simbridge logs one warning naming the file and every line."""
+    import logging
+
+    text = (
+        '<mujoco>\n<include file="parts.xml"/>\n<worldbody>\n<include file="more.xml"/>\n'
+        '<body><geom type="sphere" size="0.1"/></body></worldbody></mujoco>'
+    )
+    caplog.set_level(logging.WARNING, logger="simbridge")
+    (model,) = parse_scene(text, "mjcf")
+    records = [r.getMessage() for r in caplog.records if r.name == "simbridge.mjcf"]
+    assert records == [
+        "<MJCF text>: <include> not read (PyBullet's MJCF importer does not read it; the "
+        "included file's elements are not loaded): line 2 file='parts.xml'; line 4 "
+        "file='more.xml'"
+    ]
+    assert "line 2: <include> file='parts.xml'" in model.ignored

@@ -39,7 +39,8 @@ pybullet_data: ``tests/conformance/test_mjcf_sdf.py``). PyBullet's importer is n
   ``<option>`` (time step, integrator, gravity), joint ``damping``, ``armature``,
   ``stiffness``, ``frictionloss``, ``margin``, geom ``density``, ``margin``, ``solref``,
   ``solimp``, ``euler``/``axisangle`` on bodies, ``<actuator>``, ``<tendon>``, ``<contact>``,
-  ``<equality>``, ``<sensor>``, ``<keyframe>``.
+  ``<equality>``, ``<sensor>``, ``<keyframe>``; ``<include>`` (the included file is not
+  loaded; one warning on the ``simbridge.mjcf`` logger names the file and the lines).
 """
 
 from __future__ import annotations

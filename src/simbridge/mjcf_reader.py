@@ -7,6 +7,7 @@ over the file; its methods share the file's defaults and the model being built."
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -53,6 +54,7 @@ _IGNORED_BODY_ATTRIBUTES = ("euler", "axisangle", "xyaxes", "zaxis")
 # PyBullet's XML reader (TinyXML-2) refuses an MJCF file whose elements nest deeper than this,
 # <mujoco> counting 1 (measured on 3.2.7: 99 loads, 100 is XML_ELEMENT_DEPTH_EXCEEDED)
 MAX_XML_DEPTH = 99
+LOGGER = logging.getLogger("simbridge.mjcf")
 
 
 @dataclass
@@ -215,6 +217,16 @@ class _Reader:
         for tag in _IGNORED_TOP:
             for elem in root.findall(tag):
                 self.file_ignored.append(f"line {line_of(elem)}: <{tag}>")
+        for elem in root.findall("include"):
+            self.file_ignored.append(f"line {line_of(elem)}: <include> file={elem.get('file')!r}")
+        included = [f"line {line_of(e)} file={e.get('file')!r}" for e in root.iter("include")]
+        if included:
+            LOGGER.warning(
+                "%s: <include> not read (PyBullet's MJCF importer does not read it; the "
+                "included file's elements are not loaded): %s",
+                self.file,
+                "; ".join(included),
+            )
         for elem in root.findall("body"):  # PyBullet reads a top-level <body>'s children too
             self.parse_root_level(elem)
         for elem in root.findall("worldbody"):
