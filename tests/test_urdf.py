@@ -207,3 +207,22 @@ def test_a_utf16_urdf_names_its_encoding(tmp_path, encoding):
         parse_urdf(resolve_source(path))
     path.write_bytes(b"\xef\xbb\xbf" + text.encode())
     assert parse_urdf(resolve_source(path)).name == "r"
+
+
+@pytest.mark.parametrize("axis", ["1e300 1e300 0", "0 0 2e154"])
+def test_an_axis_too_long_to_normalise_is_refused_on_both_backends(axis):
+    """Raw PyBullet 3.2.7 loads <axis xyz="1e300 1e300 0">, reports it as written, and the
+    joint never moves (its normalised axis is zero: a velocity motor at 1 rad/s leaves it at 0,
+    measured); MuJoCo refused it with 'axis too small'. Both backends refuse it, saying why."""
+    text = (
+        '<robot name="r">' + LINK.format(n="a") + LINK.format(n="b") + "\n"
+        '<joint name="j" type="revolute"><parent link="a"/><child link="b"/>'
+        f'<axis xyz="{axis}"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        "</robot>"
+    )
+    refused = r":2: joint 'j' <axis>: axis \(.*\) is too long to normalise"
+    for backend in ("pybullet", "mujoco"):
+        with simbridge.Sim(backend) as sim, pytest.raises(exc.UrdfStructureError, match=refused):
+            sim.load_urdf(text)
+    # a long axis whose squared length is finite loads, normalised by the engines
+    assert parse_urdf(resolve_source(text.replace(axis, "0 0 1e150"))).joints[0].axis[2] == 1e150

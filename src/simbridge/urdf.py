@@ -464,6 +464,14 @@ def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> J
             f"{where} <axis>",
             f"axis must not be zero, got {_fmt(axis)}",
         )
+    if jtype not in ("fixed", "spherical") and not math.isfinite(sum(a * a for a in axis)):
+        raise r.error(
+            axis_elem if axis_elem is not None else elem,
+            f"{where} <axis>",
+            f"axis {_fmt(axis)} is too long to normalise: its squared length overflows a "
+            "double, and PyBullet then turns the joint about a zero axis, so that it never "
+            "moves (measured); write it shorter, a unit axis",
+        )
     limit: XmlElement | None = elem.find("limit")  # type: ignore[assignment]
     dynamics: XmlElement | None = elem.find("dynamics")  # type: ignore[assignment]
     if jtype in ("revolute", "prismatic") and limit is None:

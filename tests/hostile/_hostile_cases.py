@@ -423,6 +423,9 @@ def urdf_values() -> None:
              _load_text(spliced(slot, value)))  # fmt: skip
     case("urdf-zero-axis", cat, raises(exc.UrdfStructureError, r"axis must not be zero"),
          _load_text(template(axis="0 0 0")))  # fmt: skip
+    case("urdf-axis-too-long-to-normalise", cat,
+         raises(exc.UrdfStructureError, r"<axis>: axis .* is too long to normalise"),
+         _load_text(template(axis="1e300 1e300 0")))  # fmt: skip
     for slot in ("mass", "mass2", "box", "sphere", "cylinder_radius", "ixx", "effort",
                  "velocity"):  # fmt: skip
         case(
