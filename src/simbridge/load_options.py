@@ -83,7 +83,10 @@ def load_options(
         raise InvalidArgumentError(
             "global_scaling", f"must be a finite number > 0, got {global_scaling!r}"
         )
-    scale = float(global_scaling)
+    try:
+        scale = float(global_scaling)
+    except OverflowError:  # an int past float's range
+        scale = math.inf
     if not math.isfinite(scale) or scale <= 0:
         raise InvalidArgumentError(
             "global_scaling", f"must be a finite number > 0, got {global_scaling!r}"

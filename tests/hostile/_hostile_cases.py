@@ -1478,6 +1478,37 @@ def api_misuse() -> None:
          accepts("a Sim per thread: the same results as stepped alone"), _two_threads)  # fmt: skip
 
 
+def huge_ints() -> None:
+    """An int past float's range (10**400) wherever a number is taken: raw OverflowError
+    before (int too large to convert to float); now InvalidArgumentError naming the argument."""
+    cat = "api"
+    ia = exc.InvalidArgumentError
+    big = 10**400
+    calls: dict[str, tuple[Callable[[Ctx], object], str]] = {
+        "sim-gravity": (lambda ctx: ctx.sim(gravity=(big, 0, 0)), "gravity"),
+        "sim-timestep": (lambda ctx: ctx.sim(timestep=big), "timestep"),
+        "load-position": (lambda ctx: ctx.sim().load_urdf(
+            "pendulum.urdf", base_position=(0, big, 0)), "base_position"),
+        "load-scaling": (lambda ctx: ctx.sim().load_urdf(
+            "pendulum.urdf", global_scaling=big), "global_scaling"),
+    }  # fmt: skip
+    on_body: dict[str, tuple[Callable[[simbridge.Sim, int], object], str]] = {
+        "velocity-target": (lambda s, b: s.set_joint_velocity(b, 0, big, max_force=1), "target"),
+        "velocity-force": (lambda s, b: s.set_joint_velocity(b, 0, 1, max_force=big), "max_force"),
+        "velocity-list": (lambda s, b: s.set_joint_velocity(b, [0], [big], max_force=1), "target"),
+        "position-kp": (lambda s, b: s.set_joint_position(b, 0, 0.1, max_force=1, kp=big), "kp"),
+        "torque": (lambda s, b: s.set_joint_torque(b, 0, big), "torque"),
+        "torque-array": (lambda s, b: s.set_joint_torque(b, [0], np.array([big], dtype=object)),
+                         "torque"),
+        "reset-joint": (lambda s, b: s.reset_joint_state(b, 0, big), "positions"),
+        "reset-base": (lambda s, b: s.reset_base_state(b, position=(big, 0, 0)), "position"),
+    }  # fmt: skip
+    for name, (run, argument) in calls.items():
+        case(f"int-1e400-{name}", cat, raises(ia, rf"'{argument}'"), run)
+    for name, (call, argument) in on_body.items():
+        case(f"int-1e400-{name}", cat, raises(ia, rf"'{argument}'"), _with()(call))
+
+
 # ---------------------------------------------------------------- numerical blow-ups
 
 
@@ -2105,7 +2136,7 @@ def scenarios() -> None:
 
 
 for _generate in (urdf_numbers, urdf_values, urdf_xml, urdf_structure, meshes, api_misuse,
-                  numerics, resources, determinism, cli, scenarios):  # fmt: skip
+                  huge_ints, numerics, resources, determinism, cli, scenarios):  # fmt: skip
     _generate()
 
 CASES: dict[str, Case] = {c.name: c for c in _CASES}
