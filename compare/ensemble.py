@@ -239,9 +239,10 @@ def _main_importable() -> bool:
     return path is None or os.path.isfile(path)
 
 
-def _quiet() -> None:
+def _quiet(parent: int) -> None:
     """Worker initialiser: file descriptors 1 and 2 to os.devnull, so that nothing an engine
-    prints from C (or Python) reaches the parent's terminal."""
+    prints from C (or Python) reaches the parent's terminal; and a watch on the parent, so
+    that a worker never outlives it."""
     import sys
 
     null = os.open(os.devnull, os.O_WRONLY)
@@ -250,6 +251,29 @@ def _quiet() -> None:
     os.close(null)
     sys.stdout = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115
     sys.stderr = sys.stdout
+    _watch_parent(parent)
+
+
+PARENT_POLL_S = 0.5
+
+
+def _watch_parent(parent: int) -> None:
+    """End this worker once its parent is gone. A parent stopped by SIGTERM or SIGKILL runs no
+    clean-up, and its pool's workers would wait on their queue for ever, each holding its
+    engines' memory (measured: two 100-125 MB workers left idle after `kill -TERM` of
+    `simbridge compare`). The worker is then re-parented, so its parent's pid changes; a
+    daemon thread looks every PARENT_POLL_S s and ends the process at once (its run's results
+    have nobody to go to). ``parent``: the pid the parent passed (this worker's own start may
+    outlast it: the first look is at once)."""
+    import threading
+
+    def watch() -> None:
+        while True:
+            if os.getppid() != parent:
+                os._exit(3)
+            _time.sleep(PARENT_POLL_S)
+
+    threading.Thread(target=watch, name="simbridge-parent-watch", daemon=True).start()
 
 
 class _Collect(logging.Handler):
@@ -369,7 +393,7 @@ class EnsembleRunner:
 
         ctx = multiprocessing.get_context("spawn")
         self.pool = ProcessPoolExecutor(
-            max_workers=self.workers, mp_context=ctx, initializer=_quiet
+            max_workers=self.workers, mp_context=ctx, initializer=_quiet, initargs=(os.getpid(),)
         )
         level = logging.getLogger("simbridge").getEffectiveLevel()  # what the caller shows
         for slot, k in self.jobs:
