@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -116,6 +117,7 @@ def run_one(pattern: str, backend: str, cycles: int) -> dict[str, Any]:
             peak = max(peak, _rss_mb())
     rss1, fds1 = _rss_mb(), _fds()
     left = sorted(os.listdir(folder))
+    shutil.rmtree(folder, ignore_errors=True)  # the private folder itself (measured: empty)
     return {
         "pattern": pattern,
         "backend": backend,

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.slow
-def test_create_close_and_load_remove_cycles_leave_nothing_behind():
+def test_create_close_and_load_remove_cycles_leave_nothing_behind(tmp_path):
     cycles = os.environ.get("SIMBRIDGE_SOAK_CYCLES", "1000")
     proc = subprocess.run(
         [
@@ -33,7 +33,9 @@ def test_create_close_and_load_remove_cycles_leave_nothing_behind():
         capture_output=True,
         text=True,
         timeout=3000,
+        env={**os.environ, "TMPDIR": str(tmp_path)},
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr[-3000:]
+    assert list(tmp_path.iterdir()) == []  # the rows' private folders too (7 were left a run)
     rows = [line for line in proc.stdout.splitlines() if line.startswith("| create-close |")]
     assert len(rows) == 4  # both backends, in both tables
