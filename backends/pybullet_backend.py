@@ -48,7 +48,14 @@ from simbridge.types import (
 from simbridge.urdf import UrdfModel, resolve_mesh
 
 from .pybullet_commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands
-from .pybullet_common import _all_finite, _Body, _nesting, _refuse_long_names, _x_display_problem
+from .pybullet_common import (
+    BUSY_WAIT_S,
+    _all_finite,
+    _Body,
+    _nesting,
+    _refuse_long_names,
+    _x_display_problem,
+)
 from .pybullet_output import (
     _pybullet_gui_output,
     _pybullet_merge_output,
@@ -446,7 +453,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         """Changing the world while another thread steps it would end that thread's loop with
         a raw pybullet.error (measured: close() from another thread mid-step): the change
         holds the stepping lock, or is refused."""
-        if not self._stepping.acquire(blocking=False):
+        if not self._stepping.acquire(False) and not self._stepping.acquire(True, BUSY_WAIT_S):
             raise SimBusyError()
         try:
             yield
@@ -505,7 +512,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         if self._diverged is not None:  # the state is NaN: no step makes it a simulation
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False):
+        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
             raise SimBusyError()
         try:
             if n == 1:

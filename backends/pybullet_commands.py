@@ -15,7 +15,7 @@ from simbridge.exceptions import SimBusyError
 from simbridge.profiles import Profile
 from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointState
 
-from .pybullet_common import _Body, _exclusive
+from .pybullet_common import BUSY_WAIT_S, _Body, _exclusive
 from .pybullet_output import p  # pybullet, imported with its banner captured
 from .pybullet_state import Records
 
@@ -48,7 +48,7 @@ class MotorCommands:
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
         lock = self._stepping
-        if not lock.acquire(False):
+        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
             raise SimBusyError()
         try:
             last = self._last_velocity

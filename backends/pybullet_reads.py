@@ -27,7 +27,7 @@ from simbridge.types import (
     Vec3,
 )
 
-from .pybullet_common import _all_finite, _Body, _exclusive, _finite_base
+from .pybullet_common import BUSY_WAIT_S, _all_finite, _Body, _exclusive, _finite_base
 from .pybullet_output import p  # pybullet, imported with its banner captured
 from .pybullet_state import Records, Saved, contact_point
 
@@ -97,7 +97,7 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False):
+        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
             raise SimBusyError()
         try:
             c = self._c
@@ -128,7 +128,7 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False):
+        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
             raise SimBusyError()
         try:
             c = self._c
@@ -144,7 +144,7 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False):
+        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
             raise SimBusyError()
         try:
             rows = p.getJointStates(body, joints.tolist(), physicsClientId=self._c)
@@ -211,7 +211,7 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False):
+        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
             raise SimBusyError()
         try:
             rows = p.getJointStatesMultiDof(body, joints.tolist(), physicsClientId=self._c)

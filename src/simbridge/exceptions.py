@@ -223,15 +223,16 @@ class EngineError(BackendError, RuntimeError):
 
 
 class SimBusyError(SimbridgeError, RuntimeError):
-    """A call reached a Sim while it was stepping in another thread. A Sim takes one call at
-    a time; Sims in different threads step in parallel (MuJoCo's compiled loop releases the
-    GIL)."""
+    """A call reached a Sim while it was stepping in another thread (or, on PyBullet, held by
+    another thread's call for over a millisecond: shorter ones are waited for). A Sim takes one
+    call at a time; Sims in different threads step in parallel (MuJoCo's compiled loop releases
+    the GIL)."""
 
     def __init__(self, detail: str | None = None) -> None:
         super().__init__(
             detail
-            or "this Sim is stepping in another thread; a Sim takes one call at a time (give "
-            "each thread its own Sim)"
+            or "this Sim is busy in another thread (stepping); a Sim takes one call at a time "
+            "(give each thread its own Sim)"
         )
 
 
