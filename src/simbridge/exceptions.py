@@ -32,6 +32,7 @@ __all__ = [
     "EngineError",
     "SimBusyError",
     "SimClosedError",
+    "SimNotCopyableError",
     "StaleCommandError",
     "ScenarioError",
     "SlowStepWarning",
@@ -239,6 +240,19 @@ class SimBusyError(SimbridgeError, RuntimeError):
 class SimClosedError(SimbridgeError, RuntimeError):
     def __init__(self) -> None:
         super().__init__("this Sim is closed; create a new one")
+
+
+class SimNotCopyableError(SimbridgeError, TypeError):
+    """``copy.copy``, ``copy.deepcopy`` or ``pickle`` of a Sim: it holds an engine connection,
+    which neither copies nor pickles (a shallow copy shared it: closing the copy broke the
+    original)."""
+
+    def __init__(self) -> None:
+        super().__init__(
+            "a Sim holds an engine connection and cannot be copied or pickled: carry a world "
+            "with sim.get_state() (a WorldState, which pickles) into another Sim loaded alike "
+            "(sim.set_state()), or build a new Sim"
+        )
 
 
 class StaleCommandError(SimbridgeError, RuntimeError):

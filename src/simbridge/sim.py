@@ -34,7 +34,7 @@ from ._version import __version__
 from .arguments import flag, quat, vec, within
 from .backend import Backend
 from .bound import BoundCommand
-from .exceptions import InvalidArgumentError, SimBusyError
+from .exceptions import InvalidArgumentError, SimBusyError, SimNotCopyableError
 from .profiles import Profile, get_profile
 from .registry import available_backends, load_backend
 from .sim_control import Control
@@ -121,6 +121,10 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
         self._wall_start: float | None = None
 
     # ---------------------------------------------------------------- lifecycle
+
+    def __reduce_ex__(self, protocol: Any) -> Any:
+        """copy.copy, copy.deepcopy and pickle all come here: refused (SimNotCopyableError)."""
+        raise SimNotCopyableError()
 
     def close(self) -> None:
         """Release the engine. Safe to call twice; any later use raises SimClosedError.
