@@ -306,9 +306,10 @@ def compare(
             dts.append(dt)
     scaled = {}
     for dt in dts:
-        for d in (dt, dt / 2):
-            s = sc.with_timestep(d)  # raises on a step that does not divide a phase
-            scaled[d] = s.truncated(duration) if duration is not None else s
+        s = sc.with_timestep(dt)  # raises on a step that does not divide a phase
+        scaled[dt] = s.truncated(duration) if duration is not None else s
+    for dt in dts:  # the half step covers the same steps' time (cut at dt, then halved)
+        scaled.setdefault(dt / 2, scaled[dt].with_timestep(dt / 2))
     todo = [(slot, d) for slot in (0, 1) for dt in dts for d in (dt, dt / 2)]
     todo = list(dict.fromkeys(todo))
     quantity = _headline_quantity(sc)

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import simbridge
-from simbridge.exceptions import ScenarioError
+from simbridge.exceptions import InvalidArgumentError, ScenarioError
 from simbridge.transforms import quat_multiply
 
 from .controllers import ControllerSpec
@@ -192,8 +192,20 @@ class Scenario:
         return replace(self, timestep=float(timestep), phases=tuple(phases))
 
     def truncated(self, duration: float) -> Scenario:
-        """The first ``duration`` seconds of the scenario (phases cut or dropped)."""
+        """The first ``duration`` seconds of the scenario (phases cut or dropped), rounded to
+        whole steps. Raises InvalidArgumentError for a duration that is not a finite number of
+        seconds > 0, or so short that no step would run (a run of nothing "agreed")."""
+        if isinstance(duration, bool) or not isinstance(duration, (int, float)):
+            raise InvalidArgumentError("duration", f"expected seconds, got {duration!r}")
+        if not (duration > 0 and math.isfinite(duration)):
+            raise InvalidArgumentError("duration", f"must be a finite number > 0, got {duration!r}")
         left = int(round(duration / self.timestep))
+        if left < 1:
+            raise InvalidArgumentError(
+                "duration",
+                f"{duration:g} s is less than half of scenario {self.name!r}'s time step "
+                f"({self.timestep:g} s): no step would run",
+            )
         phases = []
         for p in self.phases:
             if left <= 0:

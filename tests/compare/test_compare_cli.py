@@ -173,3 +173,25 @@ def test_an_out_path_that_is_no_folder_fails_before_the_engines_run(tmp_path, ca
     assert main(["compare", "pendulum", "--out", str(blocker)]) == 1
     err = capsys.readouterr().err
     assert err == f"simbridge: error: report folder {str(blocker)!r} exists and is not a folder\n"
+
+
+def test_a_duration_shorter_than_a_step_is_refused_not_agreed(capsys, tmp_path):
+    """--duration 1e-300 ran no step and reported "agree"."""
+    argv = ["compare", "pendulum", "--duration", "1e-300", "--no-plots", "--out", str(tmp_path)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "argument 'duration'" in err and "no step would run" in err
+    assert not (tmp_path / "report.md").exists()
+
+
+@pytest.mark.parametrize("duration", ["0.003", "0.0063"])
+def test_a_duration_between_whole_steps_runs(capsys, tmp_path, duration):
+    """A duration that rounds to another count of half steps than twice the steps (0.0063 s:
+    2 steps of 1/240 s, 3 of 1/480 s) ended in a raw IndexError: the half-step run now covers
+    the same steps' time."""
+    argv = ["compare", "pendulum", "--duration", duration, "--ensemble", "1", "--no-plots",
+            "--out", str(tmp_path)]  # fmt: skip
+    assert main(argv) == 0, capsys.readouterr().err
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    steps = round(float(duration) * 240)  # whole steps of 1/240 s, the half step alike
+    assert summary["duration"] == pytest.approx(steps / 240)
