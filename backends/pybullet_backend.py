@@ -33,7 +33,6 @@ from simbridge.engine_output import captured
 from simbridge.exceptions import (
     BackendUnsupportedError,
     DisplayError,
-    SimBusyError,
     SimulationDivergedError,
     UrdfStructureError,
 )
@@ -49,12 +48,12 @@ from simbridge.urdf import UrdfModel, resolve_mesh
 
 from .pybullet_commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands
 from .pybullet_common import (
-    BUSY_WAIT_S,
     _all_finite,
     _Body,
     _nesting,
     _refuse_long_names,
     _x_display_problem,
+    wait_for_lock,
 )
 from .pybullet_output import (
     _pybullet_gui_output,
@@ -144,8 +143,10 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         super().__init__(profile, gui)
         self._c = -1
         # held by step() and by every call that touches the world (re-entrant: a call's own
-        # nested calls pass); a call from another thread meanwhile raises SimBusyError
+        # nested calls pass); a call from another thread meanwhile waits for it, or raises
+        # SimBusyError if it is a step (_in_step): pybullet_common.wait_for_lock
         self._stepping = threading.RLock()
+        self._in_step = False
         self._file_texts: dict[str, str] = {}  # URDF files loaded by path: their first text
         self._diverged: SimulationDivergedError | None = None  # raised again until reset()
         self._checked_at = 0.0  # the time of the last probe that found every body finite
@@ -453,8 +454,8 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         """Changing the world while another thread steps it would end that thread's loop with
         a raw pybullet.error (measured: close() from another thread mid-step): the change
         holds the stepping lock, or is refused."""
-        if not self._stepping.acquire(False) and not self._stepping.acquire(True, BUSY_WAIT_S):
-            raise SimBusyError()
+        if not self._stepping.acquire(False):
+            wait_for_lock(self)
         try:
             yield
         finally:
@@ -512,8 +513,9 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         if self._diverged is not None:  # the state is NaN: no step makes it a simulation
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
-            raise SimBusyError()
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        self._in_step = True  # a call from another thread meanwhile is refused, not waited
         try:
             if n == 1:
                 p.stepSimulation(physicsClientId=self._c)
@@ -536,6 +538,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
             if self._steps >= self._next_check:
                 self._probe()  # under the lock: no other thread steps between its calls
         finally:
+            self._in_step = False
             lock.release()
 
     def _probe(self) -> None:

@@ -11,11 +11,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from simbridge.exceptions import SimBusyError
 from simbridge.profiles import Profile
 from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointState
 
-from .pybullet_common import BUSY_WAIT_S, _Body, _exclusive
+from .pybullet_common import _Body, _exclusive, wait_for_lock
 from .pybullet_output import p  # pybullet, imported with its banner captured
 from .pybullet_state import Records
 
@@ -48,8 +47,8 @@ class MotorCommands:
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
         lock = self._stepping
-        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
-            raise SimBusyError()
+        if not lock.acquire(False):
+            wait_for_lock(self)
         try:
             last = self._last_velocity
             # joints: Sim's cached read-only index array: the same object, the same joints

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from simbridge.engine_output import captured
-from simbridge.exceptions import SimBusyError, SimulationDivergedError
+from simbridge.exceptions import SimulationDivergedError
 from simbridge.types import (
     BaseState,
     ContactPoint,
@@ -27,7 +27,7 @@ from simbridge.types import (
     Vec3,
 )
 
-from .pybullet_common import BUSY_WAIT_S, _all_finite, _Body, _exclusive, _finite_base
+from .pybullet_common import _all_finite, _Body, _exclusive, _finite_base, wait_for_lock
 from .pybullet_output import p  # pybullet, imported with its banner captured
 from .pybullet_state import Records, Saved, contact_point
 
@@ -97,8 +97,8 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
-            raise SimBusyError()
+        if not lock.acquire(False):
+            wait_for_lock(self)
         try:
             c = self._c
             if link >= 0:
@@ -128,8 +128,8 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
-            raise SimBusyError()
+        if not lock.acquire(False):
+            wait_for_lock(self)
         try:
             c = self._c
             pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
@@ -144,8 +144,8 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
-            raise SimBusyError()
+        if not lock.acquire(False):
+            wait_for_lock(self)
         try:
             rows = p.getJointStates(body, joints.tolist(), physicsClientId=self._c)
         finally:
@@ -211,8 +211,8 @@ class StateReads:
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
-        if not lock.acquire(False) and not lock.acquire(True, BUSY_WAIT_S):
-            raise SimBusyError()
+        if not lock.acquire(False):
+            wait_for_lock(self)
         try:
             rows = p.getJointStatesMultiDof(body, joints.tolist(), physicsClientId=self._c)
         finally:
