@@ -305,11 +305,11 @@ def compare(
         if dt not in dts:
             dts.append(dt)
     scaled = {}
-    for dt in dts:
-        s = sc.with_timestep(dt)  # raises on a step that does not divide a phase
-        scaled[dt] = s.truncated(duration) if duration is not None else s
-    for dt in dts:  # the half step covers the same steps' time (cut at dt, then halved)
-        scaled.setdefault(dt / 2, scaled[dt].with_timestep(dt / 2))
+    for dt in sorted(dts, reverse=True):  # coarsest first: a half step covers the same time
+        if dt not in scaled:  # (one that is a coarser step's half is that step's run)
+            s = sc.with_timestep(dt)  # raises on a step that does not divide a phase
+            scaled[dt] = s.truncated(duration) if duration is not None else s
+        scaled[dt / 2] = scaled[dt].with_timestep(dt / 2)  # cut at dt, then halved
     todo = [(slot, d) for slot in (0, 1) for dt in dts for d in (dt, dt / 2)]
     todo = list(dict.fromkeys(todo))
     quantity = _headline_quantity(sc)

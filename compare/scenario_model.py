@@ -6,6 +6,7 @@ format)."""
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
@@ -195,8 +196,9 @@ class Scenario:
         """The first ``duration`` seconds of the scenario (phases cut or dropped), rounded to
         whole steps. Raises InvalidArgumentError for a duration that is not a finite number of
         seconds > 0, or so short that no step would run (a run of nothing "agreed")."""
-        if isinstance(duration, bool) or not isinstance(duration, (int, float)):
+        if isinstance(duration, bool) or not isinstance(duration, numbers.Real):
             raise InvalidArgumentError("duration", f"expected seconds, got {duration!r}")
+        duration = float(duration)
         if not (duration > 0 and math.isfinite(duration)):
             raise InvalidArgumentError("duration", f"must be a finite number > 0, got {duration!r}")
         left = int(round(duration / self.timestep))

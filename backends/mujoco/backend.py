@@ -374,9 +374,10 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             self._kernel_status(status)
 
     def _python_steps(self, c: Compiled, n: int) -> int:
-        """``n`` steps of the Python loop, as the compiled loop's status: 1 when it stopped
-        after a divergence warning (the steps not run are taken off the count the caller adds),
-        else 0. MuJoCo's errors, a callback's and Ctrl-C count the steps completed."""
+        """``n`` steps of the Python loop, as the compiled loop's status: always 1, so that the
+        caller looks at MuJoCo's warning counters (a warning in the last step ends the loop
+        with all ``n`` done); the steps not run are taken off the count the caller adds.
+        MuJoCo's errors, a callback's and Ctrl-C count the steps completed."""
         d = c.d
         start = d.time
         sync = self._viewer.sync if self._viewer is not None else None
@@ -393,8 +394,6 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             self._steps += round((d.time - start) * c.inv_dt)
             c.stale = True
             raise
-        if done == n:
-            return 0
         self._steps += done - n  # the caller counts n
         return 1
 
@@ -422,7 +421,9 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             if bad is not None:
                 what = ("positions (qpos)", "velocities (qvel)", "accelerations (qacc)")[bad]
                 self._diverge(f"joint {what}")
-            return
+            if self._w.kernel is not None:  # the compiled loop saw a count move: never unsaid
+                self._diverge("joint positions, velocities or accelerations")
+            return  # the Python loop asks after every call: nothing was raised
         if status == 4:
             self._engine_failed(self._w.kernel.last_error())
         # 2: the step stopped between MuJoCo's two halves; 3: the exact solve failed

@@ -184,14 +184,20 @@ def test_a_duration_shorter_than_a_step_is_refused_not_agreed(capsys, tmp_path):
     assert not (tmp_path / "report.md").exists()
 
 
-@pytest.mark.parametrize("duration", ["0.003", "0.0063"])
-def test_a_duration_between_whole_steps_runs(capsys, tmp_path, duration):
+@pytest.mark.parametrize(
+    "duration, timesteps",
+    [("0.003", []), ("0.0063", []), ("0.0063", ["1/240", "1/480"]), ("0.0063", ["1/480", "1/240"])],
+)
+def test_a_duration_between_whole_steps_runs(capsys, tmp_path, duration, timesteps):
     """A duration that rounds to another count of half steps than twice the steps (0.0063 s:
     2 steps of 1/240 s, 3 of 1/480 s) ended in a raw IndexError: the half-step run now covers
-    the same steps' time."""
+    the same steps' time, also where the sweep holds a step and its half."""
     argv = ["compare", "pendulum", "--duration", duration, "--ensemble", "1", "--no-plots",
             "--out", str(tmp_path)]  # fmt: skip
+    if timesteps:
+        argv += ["--timestep", *timesteps]
     assert main(argv) == 0, capsys.readouterr().err
     summary = json.loads((tmp_path / "summary.json").read_text())
-    steps = round(float(duration) * 240)  # whole steps of 1/240 s, the half step alike
+    # whole steps of the sweep's coarsest step (1/240 s), its half and 1/480 s alike
+    steps = round(float(duration) * 240)
     assert summary["duration"] == pytest.approx(steps / 240)

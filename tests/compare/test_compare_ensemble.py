@@ -286,9 +286,10 @@ def test_workers_end_when_the_command_is_killed(tmp_path, when):
             time.sleep(0.2)
             workers = [c for c in _children(proc.pid) if _alive(c)]
         assert len(workers) >= 2, "the workers did not start"
-        while when == "running" and time.monotonic() < deadline:
+        while when == "running":
             if sum(_cpu_s(w) > 2.0 for w in workers) >= 2:  # past their imports, stepping
                 break
+            assert time.monotonic() < deadline, "the workers never got to stepping"
             time.sleep(0.2)
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
