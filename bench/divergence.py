@@ -19,7 +19,9 @@ back on identical worlds, in a rotating order, so the machine's load falls on al
 * layer: ``Sim.step()`` as shipped (probe every 8th step); the ratio to "no check" is the
   check's cost (target: at most 1.02);
 * layer, every step: ``Sim.step()`` under ``Sim(divergence_check="every_step")`` (a probe
-  after every step: the step that diverged raises).
+  after every step: the step that diverged raises);
+* step(n): one ``Sim.step(n)`` call per block, without the probe and as shipped (it probes
+  inside the call every 8th step).
 
 MuJoCo needs no probe of the layer's: ``mj_step`` checks positions, velocities and accelerations
 itself (mj_checkPos, mj_checkVel, mj_checkAcc, in raw MuJoCo too: a bad value warns and resets
@@ -126,12 +128,22 @@ def columns(world: str, steps: int) -> dict[str, Callable[[], float]]:
 
         return run
 
+    def layer_n(sim: simbridge.Sim) -> Callable[[], float]:
+        def run() -> float:
+            t0 = time.perf_counter()
+            sim.step(steps)
+            return (time.perf_counter() - t0) / steps
+
+        return run
+
     return {
         "raw": raw,
         "raw + probe": raw_probe,
         "layer, no check": layer(off),
         "layer": layer(shipped),
         "layer, every step": layer(every),
+        "step(n), no check": layer_n(off),
+        "step(n)": layer_n(shipped),
     }
 
 
@@ -159,9 +171,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(
         "| world | raw µs | raw + probe µs | ratio | layer, no check µs | layer µs | ratio "
-        "| layer, every step µs | ratio |"
+        "| layer, every step µs | ratio | step(n), no check µs | step(n) µs | ratio |"
     )
-    print("|------|------|------|------|------|------|------|------|------|")
+    print("|------|------|------|------|------|------|------|------|------|------|------|------|")
     for world, label in (("r2d2", "r2d2 resting on the plane"), ("kuka", "KUKA, fixed")):
         cols = columns(world, steps)
         times: dict[str, list[float]] = {name: [] for name in cols}
@@ -175,7 +187,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"| {label} | {cell('raw')} | {cell('raw + probe', 'raw')} "
             f"| {cell('layer, no check')} | {cell('layer', 'layer, no check')} "
-            f"| {cell('layer, every step', 'layer, no check')} |"
+            f"| {cell('layer, every step', 'layer, no check')} "
+            f"| {cell('step(n), no check')} | {cell('step(n)', 'step(n), no check')} |"
         )
     return 0
 

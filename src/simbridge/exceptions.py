@@ -224,10 +224,9 @@ class EngineError(BackendError, RuntimeError):
 
 
 class SimBusyError(SimbridgeError, RuntimeError):
-    """A call reached a Sim while it was stepping in another thread (or, on PyBullet, held by
-    another thread's call for over a millisecond: shorter ones are waited for). A Sim takes one
-    call at a time; Sims in different threads step in parallel (MuJoCo's compiled loop releases
-    the GIL)."""
+    """A call reached a Sim while it was stepping in another thread (another thread's call
+    that is not a step is waited for). A Sim takes one call at a time; Sims in different
+    threads step in parallel (MuJoCo's compiled loop releases the GIL)."""
 
     def __init__(self, detail: str | None = None) -> None:
         super().__init__(

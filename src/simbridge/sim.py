@@ -64,7 +64,7 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
             world after every 8th step at most (MuJoCo: after every step, free); a divergence
             nobody reads is raised by ``step`` at most 7 steps late. ``"every_step"``: the
             step that made the state non-finite raises; on PyBullet it costs one engine read
-            per body per step (1.03-1.08x a step: ``python bench/divergence.py``). Either way
+            per body per step (1.01-1.09x a step: ``python bench/divergence.py``). Either way
             :class:`~simbridge.exceptions.SimulationDivergedError`, and every read and step
             refuses the world until ``reset()``.
 
