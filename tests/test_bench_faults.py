@@ -25,7 +25,7 @@ def test_divergence_bench_prints_both_worlds_with_ratios():
     assert len(rows) == 2, out
     for row in rows:
         cells = [c.strip() for c in row.strip("|").split("|")]
-        assert len(cells) == 9, row
+        assert len(cells) == 12, row  # world, then 11 timings and ratios
         assert all(float(c.split()[0]) > 0 for c in cells[1:]), row
 
 
