@@ -144,6 +144,7 @@ typedef struct {
   int busy; /* step() runs without the GIL: no other call may touch the kernel meanwhile */
   long done; /* steps completed by the last step() call (fewer than asked after an error) */
   int interrupted; /* the last step() raised a Python callback's exception mid-step */
+  unsigned long started; /* step() calls begun: a read that saw it change was torn */
 } Kernel;
 
 /* step() releases the GIL while it runs, so another thread may call in meanwhile: refuse, with
@@ -982,6 +983,7 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
   if (self->n_bound && send_bound(self) < 0) return NULL; /* no step ran */
   int status;
   self->busy = 1;
+  self->started++;
   self->interrupted = 0;
   Py_BEGIN_ALLOW_THREADS
   status = guarded(self, 0, n, pending);
@@ -996,10 +998,26 @@ static PyObject* Kernel_step(Kernel* self, PyObject* const* args, Py_ssize_t nar
   return PyLong_FromLong(status);
 }
 
-/* check_idle(): raises the busy error while another thread steps this kernel */
+/* check_idle() -> mark: raises the busy error while another thread steps this kernel; the
+ * mark (step() calls begun) is for check_since() at the end of a read of several parts */
 static PyObject* Kernel_check_idle(Kernel* self, PyObject* unused) {
   (void)unused;
   if (refuse_if_busy(self) < 0) return NULL;
+  return PyLong_FromUnsignedLong(self->started);
+}
+
+/* check_since(mark): the busy error if a step() began since check_idle() gave ``mark`` (in
+ * another thread, between two parts of a read: the parts would be of different steps) */
+static PyObject* Kernel_check_since(Kernel* self, PyObject* mark) {
+  unsigned long then = PyLong_AsUnsignedLong(mark);
+  if (then == (unsigned long)-1 && PyErr_Occurred()) return NULL;
+  if (refuse_if_busy(self) < 0) return NULL;
+  if (then != self->started) {
+    PyErr_SetString(busy_error ? busy_error : PyExc_RuntimeError,
+                    "this Sim stepped in another thread while it was being read; a Sim takes "
+                    "one call at a time (give each thread its own Sim)");
+    return NULL;
+  }
   Py_RETURN_NONE;
 }
 
@@ -1390,7 +1408,9 @@ static PyMethodDef Kernel_methods[] = {
     {"step", (PyCFunction)(void (*)(void))Kernel_step, METH_FASTCALL, "step(n, pending_torque)"},
     {"last_error", (PyCFunction)Kernel_last_error, METH_NOARGS, "the last MuJoCo error's text"},
     {"check_idle", (PyCFunction)Kernel_check_idle, METH_NOARGS,
-     "raise the busy error while another thread steps this kernel"},
+     "raise the busy error while another thread steps this kernel; else the step mark"},
+    {"check_since", (PyCFunction)Kernel_check_since, METH_O,
+     "raise the busy error if a step began since check_idle() gave this mark"},
     {"bind_commands", (PyCFunction)Kernel_bind_commands, METH_VARARGS,
      "Bind the motor table's command arrays."},
     {"set_velocity", (PyCFunction)(void (*)(void))Kernel_set_velocity, METH_FASTCALL,

@@ -67,9 +67,10 @@ class ContactReads:
 
     def contact_points(self) -> list[ContactPoint]:
         c = self._w
-        if c.kernel is not None:
-            c.kernel.check_idle()  # no torn reads of a world stepping in another thread
-        elif self._diverged is not None:
+        mark = None
+        if c.kernel is not None:  # no torn reads of a world stepping in another thread:
+            mark = c.kernel.check_idle()  # refused while it steps, and if a step began
+        elif self._diverged is not None:  # between the parts read below (check_since)
             raise self._diverged
         m, d = c.m, c.d
         n = d.ncon
@@ -86,6 +87,9 @@ class ContactReads:
         for i in range(n):
             if adr[i] >= 0:
                 mujoco.mj_contactForce(m, d, i, force[i])
+        geom, pos, frame = geom.copy(), pos.copy(), frame.copy()  # views into d: taken now
+        if c.kernel is not None:
+            c.kernel.check_since(mark)
         normal = frame[:, 0:3]
         on_a = pos - normal * (0.5 * dist)[:, None]
         on_b = pos + normal * (0.5 * dist)[:, None]

@@ -75,6 +75,9 @@ def _load() -> None:
             f"this is MuJoCo {mujoco.__version__}: {_REBUILD}"
         )
         return
+    if not hasattr(_mjkernel.Kernel, "check_since"):  # built from an older source
+        _state["reason"] = f"the compiled step loop is older than this simbridge: {_REBUILD}"
+        return
     folder = os.path.dirname(mujoco.__file__)
     files = sorted(
         glob.glob(os.path.join(folder, "libmujoco.so*"))

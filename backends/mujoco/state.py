@@ -210,8 +210,11 @@ class StateAccess:
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
         c = self._w
         kernel = c.kernel
+        mark = None
         if kernel is not None:
-            kernel.check_idle()  # no torn reads of a world stepping in another thread
+            # no torn reads of a world stepping in another thread: refused while it steps,
+            # and if a step began between the parts read below (the loop runs without the GIL)
+            mark = kernel.check_idle()
         elif self._diverged is not None:
             raise self._diverged
         robot = self._robots[body]
@@ -226,11 +229,14 @@ class StateAccess:
         else:
             torque = np.zeros(n)
         if all_movable:
-            return JointStates(d.qpos[qadr], d.qvel[dof], torque)
-        pos = np.zeros(n)
-        vel = np.zeros(n)
-        pos[movable] = d.qpos[qadr]
-        vel[movable] = d.qvel[dof]
+            pos, vel = d.qpos[qadr], d.qvel[dof]
+        else:
+            pos = np.zeros(n)
+            vel = np.zeros(n)
+            pos[movable] = d.qpos[qadr]
+            vel[movable] = d.qvel[dof]
+        if kernel is not None:
+            kernel.check_since(mark)
         return JointStates(pos, vel, torque)
 
     def reset_joint_state(
@@ -248,8 +254,9 @@ class StateAccess:
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
         c = self._w
         kernel = c.kernel
+        mark = None
         if kernel is not None:
-            kernel.check_idle()
+            mark = kernel.check_idle()  # and check_since below: as joint_states
         elif self._diverged is not None:
             raise self._diverged
         robot = self._robots[body]
@@ -276,6 +283,8 @@ class StateAccess:
                 position = (float(d.qpos[a]),)
             velocity = tuple(d.qvel[v : v + n].tolist())
             out.append(JointStateMultiDof(position, velocity, torque))
+        if kernel is not None:
+            kernel.check_since(mark)
         return out
 
     def reset_joint_state_multi_dof(

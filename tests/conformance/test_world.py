@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import pytest
 
+import simbridge
+
 
 def test_body_ids_follow_pybullets_pool(make_sim):
     sim = make_sim()
@@ -213,6 +215,61 @@ def test_reads_from_several_threads_at_once_are_not_refused(make_sim):
     for t in threads:
         t.join()
     assert errors == [] and answers == []
+
+
+def test_a_read_racing_a_step_in_another_thread_is_whole_or_refused(make_sim):
+    """A read while another thread steps one step at a time answers with the state after some
+    whole step, or raises SimBusyError; never positions of one step with speeds of the next
+    (MuJoCo's compiled loop runs without the GIL: a read in parts could straddle a step that
+    began between them)."""
+    import sys
+    import threading
+    import time
+
+    from simbridge.exceptions import SimBusyError
+
+    def world() -> tuple[simbridge.Sim, int]:
+        sim = make_sim(profile="urdf")
+        body = sim.load_urdf("double_pendulum.urdf", fixed_base=True)
+        sim.reset_joint_state(body, [0, 1], [1.0, -0.5])
+        return sim, body
+
+    n = 3000
+    sim, body = world()
+    whole = set()
+    for _ in range(n + 1):
+        js = sim.joint_states(body)
+        whole.add((*js.positions.tolist(), *js.velocities.tolist()))
+        sim.step()
+    sim, body = world()
+    done = threading.Event()
+    seen: list[tuple[float, ...]] = []
+    refused = 0
+
+    def stepper() -> None:
+        for k in range(n):
+            sim.step()
+            if k % 2:
+                time.sleep(0)  # the reader gets in between steps too
+        done.set()
+
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)  # threads take turns often: more reads land near a step
+    try:
+        worker = threading.Thread(target=stepper)
+        worker.start()
+        while not done.is_set():
+            try:
+                js = sim.joint_states(body)
+            except SimBusyError:
+                refused += 1
+                continue
+            seen.append((*js.positions.tolist(), *js.velocities.tolist()))
+        worker.join()
+    finally:
+        sys.setswitchinterval(switch)
+    torn = [s for s in seen if s not in whole]
+    assert seen and not torn, f"{len(torn)} of {len(seen)} reads were not of a whole step"
 
 
 def test_body_ids_follow_pybullets_pool_through_many_removals(make_sim):
