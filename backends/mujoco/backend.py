@@ -13,6 +13,7 @@ Poses and velocities are recomputed lazily on the first read after a step (``mj_
 from __future__ import annotations
 
 import logging
+import threading
 from typing import Any, NoReturn
 
 import mujoco
@@ -120,6 +121,10 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         self._viewer: Viewer | None = None
         self._robots: dict[int, Robot] = {}
         self._chunking = False  # a step(n) in chunks is under way (another thread's, maybe)
+        # the Python loop's stepping, as the compiled loop's busy flag and step mark: MuJoCo's
+        # functions release the GIL, so another thread's call could land inside a step
+        self._py_stepping = threading.Lock()
+        self._py_started = 0
         self._next_id = 0
         self._free_ids: list[int] = []  # removed ids, reused last-freed first (as PyBullet)
         self._steps = 0
@@ -161,12 +166,26 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     # ---------------------------------------------------------------- world
 
     def _check_idle(self) -> None:
-        """Changing the world while another thread steps it would race the compiled loop."""
-        if self._chunking:
+        """Changing the world while another thread steps it would race the step loop."""
+        if self._chunking or self._py_stepping.locked():
             raise SimBusyError()
         kernel = self._c.kernel if self._c is not None else None
         if kernel is not None:
             kernel.check_idle()  # SimBusyError while it steps
+
+    def _py_mark(self) -> int:
+        """The Python loop's check_idle(): SimBusyError while it steps, else its step mark."""
+        if self._py_stepping.locked():
+            raise SimBusyError()
+        return self._py_started
+
+    def _py_since(self, mark: int) -> None:
+        """The Python loop's check_since(): SimBusyError if a step began since ``mark``."""
+        if self._py_stepping.locked() or self._py_started != mark:
+            raise SimBusyError(
+                "this Sim stepped in another thread while it was being read; a Sim takes "
+                "one call at a time (give each thread its own Sim)"
+            )
 
     def load(
         self,
@@ -381,6 +400,9 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         d = c.d
         start = d.time
         sync = self._viewer.sync if self._viewer is not None else None
+        if not self._py_stepping.acquire(False):  # another thread's Python loop
+            raise SimBusyError()
+        self._py_started += 1
         try:
             done = step_python(c, n, sync)
         except mujoco.FatalError as exc:
@@ -394,6 +416,8 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             self._steps += round((d.time - start) * c.inv_dt)
             c.stale = True
             raise
+        finally:
+            self._py_stepping.release()
         self._steps += done - n  # the caller counts n
         return 1
 

@@ -78,6 +78,8 @@ class MotorCommands:
 
         def _joint_cache(self, robot: Robot, joints: np.ndarray) -> tuple[Any, ...]: ...
 
+        def _py_mark(self) -> int: ...
+
     # ---------------------------------------------------------------- control
 
     def _motor_slots(self, body: int, joints: np.ndarray) -> np.ndarray:
@@ -87,6 +89,8 @@ class MotorCommands:
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
         c = self._w
+        if c.kernel is None:
+            self._py_mark()  # SimBusyError while the Python loop steps in another thread
         t = c.motors
         fast = c.fast.get(id(joints))
         if fast is not None and fast.joints is joints and fast.body == body:
@@ -138,6 +142,8 @@ class MotorCommands:
         kd: list[float],
     ) -> None:
         c = self._w
+        if c.kernel is None:
+            self._py_mark()  # as set_joint_velocity
         t = c.motors
         fast = c.fast_position.get(id(joints))
         if (
@@ -224,6 +230,8 @@ class MotorCommands:
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         idx = self._motor_slots(body, joints)
         c = self._w
+        if c.kernel is None:
+            self._py_mark()  # as set_joint_velocity
         t = c.motors
         if self.profile.enforce_effort_limit:
             c.torque[idx] += np.clip(torque, -t.effort[idx], t.effort[idx])  # each command
@@ -255,6 +263,8 @@ class MotorCommands:
         kd: list[list[float]],
     ) -> None:
         c = self._w
+        if c.kernel is None:
+            self._py_mark()  # as set_joint_velocity
         t = c.motors
         slots, balls = self._ball_slots(body, joints)
         t.target_velocity[slots] = 0.0
@@ -274,6 +284,8 @@ class MotorCommands:
     def set_joint_torque_slots(self, idx: np.ndarray, torque: list[float]) -> None:
         """Torques on motor slots, for the next step (set_joint_torque's arithmetic)."""
         c = self._w
+        if c.kernel is None:
+            self._py_mark()  # as set_joint_velocity
         t = c.motors
         if self.profile.enforce_effort_limit:
             c.torque[idx] += np.clip(torque, -t.effort[idx], t.effort[idx])  # each command

@@ -43,6 +43,10 @@ class ContactReads:
 
         def _engine_failed(self, detail: str) -> NoReturn: ...
 
+        def _py_mark(self) -> int: ...
+
+        def _py_since(self, mark: int) -> None: ...
+
     # (compile, owner body id per geom, link per geom): rebuilt when the world is recompiled
     _geom_owner_cache: tuple[Compiled, np.ndarray, np.ndarray] | None = None
 
@@ -67,11 +71,12 @@ class ContactReads:
 
     def contact_points(self) -> list[ContactPoint]:
         c = self._w
-        mark = None
         if c.kernel is not None:  # no torn reads of a world stepping in another thread:
             mark = c.kernel.check_idle()  # refused while it steps, and if a step began
         elif self._diverged is not None:  # between the parts read below (check_since)
             raise self._diverged
+        else:
+            mark = self._py_mark()
         m, d = c.m, c.d
         n = d.ncon
         if n == 0:
@@ -90,6 +95,8 @@ class ContactReads:
         geom, pos, frame = geom.copy(), pos.copy(), frame.copy()  # views into d: taken now
         if c.kernel is not None:
             c.kernel.check_since(mark)
+        else:
+            self._py_since(mark)
         normal = frame[:, 0:3]
         on_a = pos - normal * (0.5 * dist)[:, None]
         on_b = pos + normal * (0.5 * dist)[:, None]

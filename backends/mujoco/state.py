@@ -59,6 +59,10 @@ class StateAccess:
 
         def _check_idle(self) -> None: ...
 
+        def _py_mark(self) -> int: ...
+
+        def _py_since(self, mark: int) -> None: ...
+
         def refuse_fixed_base_velocity(
             self, body: int, linear: Vec3 | None, angular: Vec3 | None
         ) -> None: ...
@@ -128,12 +132,14 @@ class StateAccess:
             return c.state_out.tolist()
         if self._diverged is not None:
             raise self._diverged
+        mark = self._py_mark()  # the Python loop: no read straddles a step (as joint_states)
         self._fresh()
         d = c.d
         self._check_finite(d.xipos[bid], body)
         com_pos, com_orn, lin, ang = self._com_pose_velocity(bid)
         fp = d.xpos[bid]
         fq = d.xquat[bid]
+        self._py_since(mark)
         return [
             *com_pos,
             *com_orn,
@@ -210,13 +216,14 @@ class StateAccess:
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
         c = self._w
         kernel = c.kernel
-        mark = None
         if kernel is not None:
             # no torn reads of a world stepping in another thread: refused while it steps,
             # and if a step began between the parts read below (the loop runs without the GIL)
             mark = kernel.check_idle()
         elif self._diverged is not None:
             raise self._diverged
+        else:
+            mark = self._py_mark()
         robot = self._robots[body]
         _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
         d = c.d
@@ -237,6 +244,8 @@ class StateAccess:
             vel[movable] = d.qvel[dof]
         if kernel is not None:
             kernel.check_since(mark)
+        else:
+            self._py_since(mark)
         return JointStates(pos, vel, torque)
 
     def reset_joint_state(
@@ -254,11 +263,12 @@ class StateAccess:
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
         c = self._w
         kernel = c.kernel
-        mark = None
         if kernel is not None:
             mark = kernel.check_idle()  # and check_since below: as joint_states
         elif self._diverged is not None:
             raise self._diverged
+        else:
+            mark = self._py_mark()
         robot = self._robots[body]
         d = c.d
         rows = c.motors.row_of
@@ -285,6 +295,8 @@ class StateAccess:
             out.append(JointStateMultiDof(position, velocity, torque))
         if kernel is not None:
             kernel.check_since(mark)
+        else:
+            self._py_since(mark)
         return out
 
     def reset_joint_state_multi_dof(
