@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 import sysconfig
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -648,43 +650,24 @@ def test_a_step_begun_since_a_reads_mark_refuses_the_read():
 
 def test_the_python_loop_refuses_calls_from_another_thread_while_it_steps(monkeypatch):
     """MuJoCo's functions release the GIL, so the Python loop is raced as the compiled one
-    would be: commands, teleports and reads from another thread during its step(n) raise
-    SimBusyError (they went through: a set_joint_velocity, a reset_base_state...)."""
-    import threading
-    import time
+    would be: the conformance suite's check (commands, teleports, reads, a second step from
+    another thread during a step(n) raise SimBusyError and change nothing) on the Python
+    loop, where they went through (a set_joint_velocity, a reset_base_state...)."""
+    sys.path.insert(0, str(Path(__file__).parent / "conformance"))
+    from test_world import (
+        test_every_call_that_touches_the_world_is_refused_while_another_thread_steps as check,
+    )
 
     _select_loop(monkeypatch, "python")
-    with simbridge.Sim("mujoco") as sim:
-        robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
-        sim.load_urdf("plane.urdf")
-        assert compiled(sim).kernel is None
-        calls = {
-            "set_joint_velocity": lambda: sim.set_joint_velocity(robot, 2, 1.0, max_force=10),
-            "set_joint_position": lambda: sim.set_joint_position(robot, 2, 1.0, max_force=10),
-            "set_joint_torque": lambda: sim.set_joint_torque(robot, 2, 1.0),
-            "reset_base_state": lambda: sim.reset_base_state(robot, position=(1, 2, 3)),
-            "base_state": lambda: sim.base_state(robot),
-            "joint_states": lambda: sim.joint_states(robot),
-            "contact_points": sim.contact_points,
-            "step": lambda: sim.step(1),
-        }
-        worker = threading.Thread(target=sim.step, args=(3000,))
-        worker.start()
-        deadline = time.monotonic() + 10.0
-        while time.monotonic() < deadline:  # until the worker is seen stepping
-            try:
-                sim.step(0)
-            except SimBusyError:
-                break
-        slipped = []
-        for name, call in calls.items():
-            try:
-                call()
-            except SimBusyError:
-                continue
-            slipped.append(name)
-        alive = worker.is_alive()
-        worker.join()
-        assert alive, "the step ended before every call was tried: raise n"
-        assert slipped == []
-        assert sim.time == pytest.approx(3000 / 240)
+    sims: list[simbridge.Sim] = []
+
+    def make(**kwargs: object) -> simbridge.Sim:
+        sims.append(simbridge.Sim("mujoco", **kwargs))  # type: ignore[arg-type]
+        assert compiled(sims[-1]).kernel is None
+        return sims[-1]
+
+    try:
+        check(make)
+    finally:
+        for sim in sims:
+            sim.close()
