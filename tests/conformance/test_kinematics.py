@@ -14,7 +14,7 @@ import _reference as ref
 import numpy as np
 import pybullet_data
 import pytest
-from conftest import gap
+from _gaps import gap
 
 DATA = Path(pybullet_data.getDataPath())
 TOL = 1e-9
