@@ -17,6 +17,9 @@ __all__ = ["_pybullet_gui_output", "_pybullet_merge_output", "_pybullet_output",
 _B3_MARKER = re.compile(r"b3(Warning|Error|Printf)\[[^\]\n]*\]:\n?")
 _B3_LEVEL = {"Warning": logging.WARNING, "Error": logging.ERROR, "Printf": logging.INFO}
 _BANNER = re.compile(r"^pybullet build time: [^\n]*\n?", re.MULTILINE)
+# PyBullet's warnings that simbridge's URDF reader already gives, on every backend, with the
+# file and line (inertia.py): kept at DEBUG, so that a user reads each once
+_SAID_BY_THE_READER = ("Bad inertia tensor properties",)
 
 
 def _pybullet_output(text: str) -> tuple[list[Record], str]:
@@ -47,6 +50,8 @@ def _pybullet_output(text: str) -> tuple[list[Record], str]:
             # name ("No inertial data for link, ...", "base_footprint"): one record
             records[-1] = (level, f"{records[-1][1].rstrip(':')}: {message}")
         else:
+            if level == logging.WARNING and message.startswith(_SAID_BY_THE_READER):
+                level = logging.DEBUG
             records.append((level, message))
     rest.append(text[at:])
     left = "".join(rest)
