@@ -205,7 +205,7 @@ def test_bodies_nested_deeper_than_pybullet_reads_are_refused(depth):
     97 bodies with a geom in the last: 100 elements) and loads 99 (measured on 3.2.7); the
     reader refuses the same on every backend, without recursing (3000 deep was a raw
     RecursionError)."""
-    with pytest.raises(exc.UrdfStructureError, match=rf"<geom>: elements nested {depth + 3} "
+    with pytest.raises(exc.UrdfStructureError, match=rf"<joint>: elements nested {depth + 3} "
                        r"deep: PyBullet's XML reader refuses more than 99"):  # fmt: skip
         parse_scene(_nested_bodies(depth), "mjcf")
     nested_defaults = (
@@ -213,6 +213,28 @@ def test_bodies_nested_deeper_than_pybullet_reads_are_refused(depth):
     )
     with pytest.raises(exc.UrdfStructureError, match=r"elements nested \d+ deep"):
         parse_scene(nested_defaults, "mjcf")
+
+
+def _nested_sdf(depth: int) -> str:
+    """An SDF model whose link holds elements nested to ``depth`` (<sdf> counting 1)."""
+    inertia = "".join(
+        f"<{k}>{v}</{k}>"
+        for k, v in zip(("ixx", "iyy", "izz", "ixy", "ixz", "iyz"), (1, 1, 1, 0, 0, 0), strict=True)
+    )
+    inner = "<x>" * (depth - 3) + "</x>" * (depth - 3)
+    return (f'<sdf version="1.6"><model name="m"><link name="a"><inertial><mass>1</mass>'
+            f"<inertia>{inertia}</inertia></inertial>{inner}</link></model></sdf>")  # fmt: skip
+
+
+@pytest.mark.parametrize("depth", [100, 5000])
+def test_sdf_nested_deeper_than_pybullet_reads_is_refused(depth):
+    """Raw PyBullet's loadSDF refuses elements nested that deep (XML_ELEMENT_DEPTH_EXCEEDED,
+    measured on 3.2.7); the SDF reader had no check (a very deep file reached the PyBullet
+    backend's recursive writer)."""
+    with pytest.raises(exc.UrdfStructureError, match=rf"<x>: elements nested {depth} deep: "
+                       r"PyBullet's XML reader refuses more than 99.*an SDF file"):  # fmt: skip
+        parse_scene(_nested_sdf(depth), "sdf")
+    (body,) = parse_scene(_nested_sdf(98), "sdf")  # as deep as raw PyBullet loads it
 
 
 def test_bodies_nested_as_deep_as_pybullet_reads_load():

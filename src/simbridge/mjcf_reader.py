@@ -51,9 +51,6 @@ _DEFAULTS_READ = {
     "geom": ("contype", "conaffinity", "rgba", "condim", "friction"),
 }
 _IGNORED_BODY_ATTRIBUTES = ("euler", "axisangle", "xyaxes", "zaxis")
-# PyBullet's XML reader (TinyXML-2) refuses an MJCF file whose elements nest deeper than this,
-# <mujoco> counting 1 (measured on 3.2.7: 99 loads, 100 is XML_ELEMENT_DEPTH_EXCEEDED)
-MAX_XML_DEPTH = 99
 LOGGER = logging.getLogger("simbridge.mjcf")
 
 
@@ -202,7 +199,6 @@ class _Reader:
 
     def read(self) -> list[_Model]:
         root = self.root = read_scene_xml(self.src, "mjcf")
-        self.check_depth(root)
         for elem in root.findall("default"):
             self.parse_defaults(self.defaults, elem)
         for elem in root.findall("compiler"):
@@ -232,27 +228,6 @@ class _Reader:
         for elem in root.findall("worldbody"):
             self.parse_root_level(elem)
         return self.models
-
-    def check_depth(self, root: Element) -> None:
-        """Refuse elements nested deeper than PyBullet's XML reader takes (it refuses the
-        file); measured without recursion, as the reader's own recursion through bodies and
-        defaults would run past Python's limit on a file nested thousands deep."""
-        deepest, depth = root, 1
-        stack = [(root, 1)]
-        while stack:
-            elem, level = stack.pop()
-            if level > depth:
-                deepest, depth = elem, level
-            stack.extend((child, level + 1) for child in elem)
-        if depth > MAX_XML_DEPTH:
-            raise self.error(
-                deepest,
-                f"<{deepest.tag}>",
-                f"elements nested {depth} deep: PyBullet's XML reader refuses more than "
-                f"{MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED), and an MJCF file is read as "
-                "PyBullet reads it, on every backend (bodies nested that deep are past "
-                "PyBullet's 127 joints per body too once they have joints)",
-            )
 
     def parse_defaults(self, defaults: _Defaults, elem: Element) -> None:
         for child in elem:

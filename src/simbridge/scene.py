@@ -22,6 +22,7 @@ import xml.parsers.expat as expat
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -132,6 +133,13 @@ def _is_file(path: Path) -> bool:
         return False
 
 
+# PyBullet's XML reader (TinyXML-2) refuses a file whose elements nest deeper than this, the
+# root counting 1 (measured on 3.2.7, MJCF and SDF alike: a leaf written <x/> at depth 99
+# loads, one written <x></x> is XML_ELEMENT_DEPTH_EXCEEDED; the parser here cannot tell the two
+# apart and takes 99)
+MAX_XML_DEPTH = 99
+
+
 def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
     """The file's root element (``<mujoco>`` or ``<sdf>``), every element with its source line.
     Raises UrdfParseError (line and column) for XML PyBullet's parser refuses too, and
@@ -140,13 +148,23 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
     data = src.text.encode("utf-8", errors="surrogateescape")
     parser = expat.ParserCreate()
     builder = ET.TreeBuilder(element_factory=XmlElement)
+    depth = [0, 0]  # now, deepest
+    deepest: list[Any] = [None]  # the first element at the deepest level
 
     def start(tag: str, attrs: dict[str, str]) -> None:
         elem = builder.start(tag, attrs)
         elem.line = parser.CurrentLineNumber  # type: ignore[attr-defined]
+        depth[0] += 1
+        if depth[0] > depth[1]:
+            depth[1] = depth[0]
+            deepest[0] = elem
+
+    def end(tag: str) -> None:
+        builder.end(tag)
+        depth[0] -= 1
 
     parser.StartElementHandler = start
-    parser.EndElementHandler = builder.end
+    parser.EndElementHandler = end
     parser.CharacterDataHandler = builder.data
     try:
         parser.Parse(data, True)
@@ -158,6 +176,15 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
             _KIND[kind],
         ) from None
     root: XmlElement = builder.close()  # type: ignore[assignment]
+    if depth[1] > MAX_XML_DEPTH:  # counted as parsed: a reader's recursion could not
+        raise UrdfStructureError(
+            src.display_name,
+            f"<{deepest[0].tag}>",
+            f"elements nested {depth[1]} deep: PyBullet's XML reader refuses more than "
+            f"{MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED), and an {_KIND[kind]} file is read "
+            "as PyBullet reads it, on every backend",
+            deepest[0].line,
+        )
     want = _ROOT_TAG[kind]
     if root.tag != want:
         raise UrdfStructureError(
