@@ -405,3 +405,21 @@ def test_an_mjcf_include_is_not_read_and_says_so(caplog):
         "file='more.xml'"
     ]
     assert "line 2: <include> file='parts.xml'" in model.ignored
+
+
+def test_an_sdf_include_is_not_read_and_says_so(caplog):
+    """PyBullet's SDF importer does not read <include> either: one warning naming the file
+    and every line (it was only listed in the manifest's ``ignored``)."""
+    import logging
+
+    text = _nested_sdf(4).replace(
+        '<model name="m">', '<model name="m">\n<include><uri>model://table</uri></include>\n'
+    )
+    caplog.set_level(logging.WARNING, logger="simbridge")
+    (body,) = parse_scene(text, "sdf")
+    records = [r.getMessage() for r in caplog.records if r.name == "simbridge.sdf"]
+    assert records == [
+        "<SDF text>: <include> not read (PyBullet's SDF importer does not read it; the "
+        "included model is not loaded): line 2 uri='model://table'"
+    ]
+    assert any("<include> in <model>" in item for item in body.ignored)

@@ -29,6 +29,7 @@ element text instead of attributes:
 
 from __future__ import annotations
 
+import logging
 import math
 from xml.etree.ElementTree import Element
 
@@ -435,9 +436,18 @@ class _Reader:
 def parse_sdf(src: UrdfSource) -> list[SceneBody]:
     """The bodies ``p.loadSDF`` creates from the file (see the module docstring), in its
     order. Raises UrdfParseError, UrdfStructureError, MeshNotFoundError or
-    UnsupportedJointError naming the file, the line and the element."""
+    UnsupportedJointError naming the file, the line and the element. An ``<include>``, which
+    PyBullet does not read, is one warning on the ``simbridge.sdf`` logger."""
     root = read_scene_xml(src, "sdf")
     reader = _Reader(src)
+    included = [f"line {line_of(e)} uri={e.findtext('uri')!r}" for e in root.iter("include")]
+    if included:
+        logging.getLogger("simbridge.sdf").warning(
+            "%s: <include> not read (PyBullet's SDF importer does not read it; the included "
+            "model is not loaded): %s",
+            reader.file,
+            "; ".join(included),
+        )
     world = root.find("world")
     holder = world if world is not None else root
     models = holder.findall("model")
