@@ -77,7 +77,10 @@ def test_calls_table_times_every_call_on_both_engines():
     assert len(calls) == 2 * len(names)  # each call on both robots
     for line in calls:
         cells = [c.strip() for c in line.strip("|").split("|")]
-        assert float(cells[1]) > 0 and float(cells[2]) > 0 and float(cells[3].split()[0]) > 0
+        # a call within the noise of the timing loop's own cost reads "<0.01", with no ratio
+        floor = "<0.01" in cells[1:3]
+        assert all(c == "<0.01" or float(c) > 0 for c in cells[1:3]), line
+        assert (cells[3] == "") if floor else float(cells[3].split()[0]) > 0, line
     assert any("position_command targets" in line for line in lines)
     drive = [line for line in lines if line.startswith(("| pybullet |", "| mujoco |"))]
     assert len(drive) == 2 and all(float(line.split("|")[6]) > 0 for line in drive)
