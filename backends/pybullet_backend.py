@@ -505,6 +505,17 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         self._next_check = self._check_every
         self._checked_at = 0.0
 
+    @contextmanager
+    def reading(self) -> Iterator[None]:
+        """Hold the Sim's lock for a read of several calls (re-entrant: its calls pass)."""
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            yield
+        finally:
+            lock.release()
+
     def set_divergence_check(self, every_step: bool) -> None:
         self._check_every = 1 if every_step else _CHECK_EVERY
         self._next_check = self._steps + self._check_every

@@ -38,17 +38,25 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 # (four threads reading one Sim that nobody stepped were refused 8,456 times when no call
 # waited; a wait of 1 ms still refused some across the GIL's 5 ms switch interval).
 WAIT_SLICE_S = 0.005
+# ... and gives up after this long (a call that holds the Sim longer than any load or read
+# takes: a thread stopped while holding it, say): SimBusyError, never a hang
+WAIT_LIMIT_S = 10.0
 
 
 def wait_for_lock(backend: Any) -> None:
     """Take ``backend._stepping`` (its non-blocking acquire just failed: another thread holds
-    it), or raise SimBusyError once the holder is seen stepping (``backend._in_step``)."""
+    it), or raise SimBusyError once the holder is seen stepping (``backend._in_step``) or
+    after WAIT_LIMIT_S."""
     lock = backend._stepping
-    while True:
+    for _ in range(int(WAIT_LIMIT_S / WAIT_SLICE_S)):
         if backend._in_step:
             raise SimBusyError()
         if lock.acquire(True, WAIT_SLICE_S):
             return
+    raise SimBusyError(
+        f"a call in another thread has held this Sim for over {WAIT_LIMIT_S:g} s; a Sim takes "
+        "one call at a time (give each thread its own Sim)"
+    )
 
 
 def _exclusive(method: _F) -> _F:

@@ -403,7 +403,6 @@ def test_an_engine_error_raises_instead_of_ending_the_process(tmp_path, loop):
     world must refuse to go on until reset(), and no MUJOCO_LOG.TXT may be left behind. Run in
     a child process: a regression would end the process, not fail a test."""
     import subprocess
-    import sys
 
     if loop == "kernel" and mujoco_kernel.reason():
         pytest.skip(f"no compiled loop: {mujoco_kernel.reason()}")
@@ -653,7 +652,7 @@ def test_the_python_loop_refuses_calls_from_another_thread_while_it_steps(monkey
     would be: the conformance suite's check (commands, teleports, reads, a second step from
     another thread during a step(n) raise SimBusyError and change nothing) on the Python
     loop, where they went through (a set_joint_velocity, a reset_base_state...)."""
-    sys.path.insert(0, str(Path(__file__).parent / "conformance"))
+    monkeypatch.syspath_prepend(str(Path(__file__).parent / "conformance"))
     from test_world import (
         test_every_call_that_touches_the_world_is_refused_while_another_thread_steps as check,
     )

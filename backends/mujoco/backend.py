@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import logging
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any, NoReturn
 
 import mujoco
@@ -50,6 +52,13 @@ from .world import Compiled, Robot, compile_state, default_motors
 __all__ = ["MujocoBackend"]
 
 _log = logging.getLogger("simbridge.mujoco")
+
+
+# as the compiled loop's busy error says it (_mjkernel.c refuse_if_busy)
+_PY_BUSY = (
+    "this Sim is stepping in another thread (or in a MuJoCo callback of its own step); a Sim "
+    "takes one call at a time (give each thread its own Sim)"
+)
 
 
 def _mujoco_warning(message: str) -> None:
@@ -168,7 +177,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     def _check_idle(self) -> None:
         """Changing the world while another thread steps it would race the step loop."""
         if self._chunking or self._py_stepping.locked():
-            raise SimBusyError()
+            raise SimBusyError(_PY_BUSY)
         kernel = self._c.kernel if self._c is not None else None
         if kernel is not None:
             kernel.check_idle()  # SimBusyError while it steps
@@ -176,7 +185,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     def _py_mark(self) -> int:
         """The Python loop's check_idle(): SimBusyError while it steps, else its step mark."""
         if self._py_stepping.locked():
-            raise SimBusyError()
+            raise SimBusyError(_PY_BUSY)
         return self._py_started
 
     def _py_since(self, mark: int) -> None:
@@ -285,6 +294,22 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         self._drop_from_spec(robot.spec.prefix)
         self._free_ids.append(body)
         self._recompile("<remove>")
+
+    @contextmanager
+    def reading(self) -> Iterator[None]:
+        """A read of several calls takes the loop's step mark first and checks it last (as
+        joint_states does for its own parts): a step begun in another thread meanwhile (the
+        loops run without the GIL) makes it SimBusyError."""
+        kernel = self._w.kernel
+        if kernel is not None:
+            mark = kernel.check_idle()
+            yield
+            if self._w.kernel is kernel:
+                kernel.check_since(mark)
+        else:
+            mark = self._py_mark()
+            yield
+            self._py_since(mark)
 
     def set_divergence_check(self, every_step: bool) -> None:
         """Nothing to set: MuJoCo checks positions, speeds and accelerations at every step
@@ -401,9 +426,9 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         start = d.time
         sync = self._viewer.sync if self._viewer is not None else None
         if not self._py_stepping.acquire(False):  # another thread's Python loop
-            raise SimBusyError()
-        self._py_started += 1
+            raise SimBusyError(_PY_BUSY)
         try:
+            self._py_started += 1
             done = step_python(c, n, sync)
         except mujoco.FatalError as exc:
             self._steps += round((d.time - start) * c.inv_dt)  # completed

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
+from contextlib import AbstractContextManager, nullcontext
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -350,6 +351,13 @@ class Backend(ABC):
     def unbind_command(self, command: BoundCommand) -> None:
         """Stop reading ``command``'s arrays; its joints keep the command last sent."""
         return None  # the default binding keeps nothing: the Sim stops sending it
+
+    def reading(self) -> AbstractContextManager[None]:
+        """A read made of several calls (``Sim.get_state``) runs inside this: a step that
+        another thread begins meanwhile must make it raise SimBusyError, or wait for its end,
+        never let the parts come from two steps. The default holds nothing: a backend whose
+        step cannot run while a read does (no step releases the GIL) needs nothing more."""
+        return nullcontext()
 
     def set_divergence_check(self, every_step: bool) -> None:
         """Sim(divergence_check=...): True for "every_step" (``step`` raises

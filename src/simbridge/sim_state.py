@@ -101,7 +101,12 @@ class WorldStates:
         b = self._b
         for command in self._commands:  # a bound command's values are the ones in force
             command.send()
-        native = b.snapshot() if flag(exact, "exact") else None
+        exact = flag(exact, "exact")
+        with b.reading():  # one world: no step in another thread between its parts
+            return self._state(b, exact)
+
+    def _state(self, b: Backend, exact: bool) -> WorldState:
+        native = b.snapshot() if exact else None
         bodies = []
         for body, info in self._bodies.items():
             base = b.base_state(body)
