@@ -201,12 +201,12 @@ def _nested_bodies(depth: int) -> str:
 
 @pytest.mark.parametrize("depth", [97, 3000])
 def test_bodies_nested_deeper_than_pybullet_reads_are_refused(depth):
-    """Raw PyBullet's loadMJCF refuses elements nested 100 deep (XML_ELEMENT_DEPTH_EXCEEDED;
-    97 bodies with a geom in the last: 100 elements) and loads 99 (measured on 3.2.7); the
-    reader refuses the same on every backend, without recursing (3000 deep was a raw
-    RecursionError)."""
-    with pytest.raises(exc.UrdfStructureError, match=rf"<joint>: elements nested {depth + 3} "
-                       r"deep: PyBullet's XML reader refuses more than 99"):  # fmt: skip
+    """Raw PyBullet's loadMJCF refuses 97 bodies nested with a geom in the last
+    (XML_ELEMENT_DEPTH_EXCEEDED: the last body, holding elements, at depth 99) and loads 96
+    (measured on 3.2.7); the reader refuses the same on every backend, without recursing (3000
+    deep was a raw RecursionError)."""
+    with pytest.raises(exc.UrdfStructureError, match=rf"<joint>: elements nested {depth + 2} "
+                       r"deep: PyBullet's XML reader refuses more than 98"):  # fmt: skip
         parse_scene(_nested_bodies(depth), "mjcf")
     nested_defaults = (
         "<mujoco>" + "<default>" * (depth + 2) + "</default>" * (depth + 2) + "</mujoco>"
@@ -232,9 +232,11 @@ def test_sdf_nested_deeper_than_pybullet_reads_is_refused(depth):
     measured on 3.2.7); the SDF reader had no check (a very deep file reached the PyBullet
     backend's recursive writer)."""
     with pytest.raises(exc.UrdfStructureError, match=rf"<x>: elements nested {depth} deep: "
-                       r"PyBullet's XML reader refuses more than 99.*an SDF file"):  # fmt: skip
+                       r"PyBullet's XML reader refuses more than 98.*an SDF file"):  # fmt: skip
         parse_scene(_nested_sdf(depth), "sdf")
     (body,) = parse_scene(_nested_sdf(98), "sdf")  # as deep as raw PyBullet loads it
+    # an empty-element tag counts as its parent, as PyBullet counts it (<x/> at 99 loads there)
+    (body,) = parse_scene(_nested_sdf(98).replace("<x></x>", "<x><x/></x>"), "sdf")
 
 
 def test_bodies_nested_as_deep_as_pybullet_reads_load():

@@ -191,6 +191,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     def _py_since(self, mark: int) -> None:
         """The Python loop's check_since(): SimBusyError if a step began since ``mark``."""
         if self._py_stepping.locked() or self._py_started != mark:
+            self._w.stale = True  # this read's refresh may have been of a step in between
             raise SimBusyError(
                 "this Sim stepped in another thread while it was being read; a Sim takes "
                 "one call at a time (give each thread its own Sim)"
@@ -441,7 +442,8 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             self._steps += round((d.time - start) * c.inv_dt)
             c.stale = True
             raise
-        finally:
+        finally:  # stale before another thread can read: a read that overlapped this step
+            c.stale = True  # must not leave the kinematics marked fresh
             self._py_stepping.release()
         self._steps += done - n  # the caller counts n
         return 1

@@ -134,10 +134,10 @@ def _is_file(path: Path) -> bool:
 
 
 # PyBullet's XML reader (TinyXML-2) refuses a file whose elements nest deeper than this, the
-# root counting 1 (measured on 3.2.7, MJCF and SDF alike: a leaf written <x/> at depth 99
-# loads, one written <x></x> is XML_ELEMENT_DEPTH_EXCEEDED; the parser here cannot tell the two
-# apart and takes 99)
-MAX_XML_DEPTH = 99
+# root counting 1 and an empty-element tag <x/> counting as its parent (measured on 3.2.7, MJCF
+# and SDF alike: <x></x> at depth 98 loads, at 99 is XML_ELEMENT_DEPTH_EXCEEDED; <x/> at 99
+# loads, at 100 refused)
+MAX_XML_DEPTH = 98
 
 
 def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
@@ -148,24 +148,36 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
     data = src.text.encode("utf-8", errors="surrogateescape")
     parser = expat.ParserCreate()
     builder = ET.TreeBuilder(element_factory=XmlElement)
-    depth = [0, 0]  # now, deepest
-    deepest: list[Any] = [None]  # the first element at the deepest level
+    # the nesting depth as PyBullet's reader counts it: an element written with an end tag
+    # (<x></x>, <x>1</x>) at its depth, an empty-element tag (<x/>) at its parent's (expat
+    # reports the end of an empty-element tag just past its "/>", of any other at its "</")
+    opened: list[list[Any]] = []  # [element, has content] from the root down
+    deepest: list[Any] = [0, None]  # depth, the first element counted at it
 
     def start(tag: str, attrs: dict[str, str]) -> None:
         elem = builder.start(tag, attrs)
         elem.line = parser.CurrentLineNumber  # type: ignore[attr-defined]
-        depth[0] += 1
-        if depth[0] > depth[1]:
-            depth[1] = depth[0]
-            deepest[0] = elem
+        if opened:
+            opened[-1][1] = True
+        opened.append([elem, False])
+
+    def text(chunk: str) -> None:
+        if opened:
+            opened[-1][1] = True
+        builder.data(chunk)
 
     def end(tag: str) -> None:
-        builder.end(tag)
-        depth[0] -= 1
+        elem = builder.end(tag)
+        had_content = opened.pop()[1]
+        at = parser.CurrentByteIndex
+        empty_tag = not had_content and data[at - 2 : at] == b"/>"
+        level = len(opened) + (not empty_tag)
+        if level > deepest[0]:
+            deepest[0], deepest[1] = level, elem
 
     parser.StartElementHandler = start
     parser.EndElementHandler = end
-    parser.CharacterDataHandler = builder.data
+    parser.CharacterDataHandler = text
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
@@ -176,14 +188,15 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
             _KIND[kind],
         ) from None
     root: XmlElement = builder.close()  # type: ignore[assignment]
-    if depth[1] > MAX_XML_DEPTH:  # counted as parsed: a reader's recursion could not
+    if deepest[0] > MAX_XML_DEPTH:  # counted as parsed: a reader's recursion could not
         raise UrdfStructureError(
             src.display_name,
-            f"<{deepest[0].tag}>",
-            f"elements nested {depth[1]} deep: PyBullet's XML reader refuses more than "
-            f"{MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED), and an {_KIND[kind]} file is read "
-            "as PyBullet reads it, on every backend",
-            deepest[0].line,
+            f"<{deepest[1].tag}>",
+            f"elements nested {deepest[0]} deep: PyBullet's XML reader refuses more than "
+            f"{MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED; an empty-element tag <x/> counts "
+            f"as its parent), and an {_KIND[kind]} file is read as PyBullet reads it, on every "
+            "backend",
+            deepest[1].line,
         )
     want = _ROOT_TAG[kind]
     if root.tag != want:

@@ -672,7 +672,7 @@ def urdf_xml() -> None:
         case(
             f"mjcf-nested-{depth}-bodies",
             cat,
-            raises(exc.UrdfStructureError, rf"elements nested {depth + 3} deep: PyBullet's XML"),
+            raises(exc.UrdfStructureError, rf"elements nested {depth + 2} deep: PyBullet's XML"),
             lambda ctx, text=mjcf: ctx.sim().load_mjcf(text),
         )
 
