@@ -228,18 +228,7 @@ class MotorCommands:
         t.has_offset = True
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
-        idx = self._motor_slots(body, joints)
-        c = self._w
-        if c.kernel is None:
-            self._py_mark()  # as set_joint_velocity
-        t = c.motors
-        if self.profile.enforce_effort_limit:
-            c.torque[idx] += np.clip(torque, -t.effort[idx], t.effort[idx])  # each command
-        elif c.kernel is not None:
-            c.kernel.add_torque(idx, torque)  # torque[idx] += torque, in C
-        else:
-            c.torque[idx] += torque  # commands before one step add up, as in PyBullet
-        c.pending_torque = True
+        self.set_joint_torque_slots(self._motor_slots(body, joints), torque)
 
     # ---------------------------------------------------------------- spherical joints
 
@@ -282,7 +271,8 @@ class MotorCommands:
         self.set_joint_torque_slots(slots, [x for row in torques for x in row])
 
     def set_joint_torque_slots(self, idx: np.ndarray, torque: list[float]) -> None:
-        """Torques on motor slots, for the next step (set_joint_torque's arithmetic)."""
+        """Torques on motor slots, for the next step: commands before one step add up, as
+        in PyBullet (the effort limit, where the profile enforces it, clips each command)."""
         c = self._w
         if c.kernel is None:
             self._py_mark()  # as set_joint_velocity

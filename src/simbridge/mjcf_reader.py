@@ -184,13 +184,15 @@ class _Reader:
         if not all(math.isfinite(v) for v in values):
             raise self.error(elem, where, f"numbers must be finite, got {values}")
 
+    @staticmethod
+    def pos(elem: Element) -> Vec3:
+        """``pos``: its first three numbers as float32, PyBullet's reading; none: the origin."""
+        v = numbers(elem.get("pos")) if elem.get("pos") is not None else []
+        return (f32(v[0]), f32(v[1]), f32(v[2])) if len(v) >= 3 else (0.0, 0.0, 0.0)
+
     def pose(self, elem: Element, where: str) -> Pose:
         """A body's ``parseTransform``: ``pos`` and ``quat`` only."""
-        pos: Vec3 = (0.0, 0.0, 0.0)
-        if elem.get("pos") is not None:
-            v = numbers(elem.get("pos"))
-            if len(v) >= 3:
-                pos = (f32(v[0]), f32(v[1]), f32(v[2]))
+        pos = self.pos(elem)
         quat = self.quat(elem.get("quat")) or IDENTITY_QUAT
         self.finite(elem, where, (*pos, *quat))
         return pos, quat
@@ -507,11 +509,7 @@ class _Reader:
             link.spinning = d.spinning
         if condim > 4 or link.rolling is not None:
             link.rolling = d.rolling
-        pos: Vec3 = (0.0, 0.0, 0.0)
-        if elem.get("pos") is not None:
-            v = numbers(elem.get("pos"))
-            if len(v) >= 3:
-                pos = (f32(v[0]), f32(v[1]), f32(v[2]))
+        pos = self.pos(elem)
         quat = self.quat(elem.get("quat")) or IDENTITY_QUAT
         aa = numbers(elem.get("axisangle")) if elem.get("axisangle") is not None else []
         if len(aa) == 4:  # axis and angle (radians, whatever <compiler angle>)

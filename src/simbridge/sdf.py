@@ -44,7 +44,7 @@ from .transforms import (
 )
 from .types import Quat
 from .urdf import MESH_FORMATS, pybullet_order
-from .urdf_model import Contact, Geometry, Inertial, Joint, Link, Vec3
+from .urdf_model import CONTACT_TAGS, Contact, Geometry, Inertial, Joint, Link, Vec3
 from .urdf_source import UrdfSource, not_a_regular_file
 
 __all__ = ["parse_sdf"]
@@ -52,15 +52,6 @@ __all__ = ["parse_sdf"]
 Pose = tuple[Vec3, Quat]
 _JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 _UNSUPPORTED = ("spherical", "planar", "floating")
-_CONTACT = (
-    "lateral_friction",
-    "rolling_friction",
-    "spinning_friction",
-    "restitution",
-    "stiffness",
-    "damping",
-    "inertia_scaling",
-)
 
 
 class _Reader:
@@ -219,7 +210,7 @@ class _Reader:
         if elem is None:
             return Contact()
         values = {}
-        for tag in _CONTACT:
+        for tag in CONTACT_TAGS:
             if elem.find(tag) is not None:
                 values[tag] = self.value(elem, tag, f"{where} <contact>", 0.0)
         return Contact(**values)

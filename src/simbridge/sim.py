@@ -26,7 +26,7 @@ import math
 import os
 import time as _time
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -41,6 +41,9 @@ from .sim_control import Control
 from .sim_lookups import Lookups, _Body, _Closed
 from .sim_multi_dof import MultiDof
 from .sim_state import WorldStates
+
+if TYPE_CHECKING:
+    from .urdf_model import UrdfModel
 
 __all__ = ["DIVERGENCE_CHECKS", "Sim"]
 
@@ -262,6 +265,22 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
         model = apply_load_options(model, options, bool(fixed_base))
         self._end_commands("load_urdf changed the world")
         body = self._b.load(model, pos, orn, bool(fixed_base), options)  # type: ignore[arg-type]
+        self._record(
+            body,
+            model,
+            {
+                "source": model.source.display_name,
+                "base_position": pos,
+                "base_orientation": orn,
+                "fixed_base": bool(fixed_base),
+                **options.as_dict(),
+            },
+        )
+        return body
+
+    def _record(self, body: int, model: UrdfModel, load: dict[str, Any]) -> None:
+        """Keep a loaded body's names and indices (from the backend's joint table) and how it
+        was loaded (``load``: the manifest's entry)."""
         names = [j.name for j in model.joints]
         links = [j.child for j in model.joints]
         types = [self._b.joint_info(body, i).type for i in range(len(names))]
@@ -272,15 +291,8 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
             types,
             {n: i for i, n in enumerate(names)},
             {n: i for i, n in enumerate(links)} | {model.base.name: -1},
-            load={
-                "source": model.source.display_name,
-                "base_position": pos,
-                "base_orientation": orn,
-                "fixed_base": bool(fixed_base),
-                **options.as_dict(),
-            },
+            load=load,
         )
-        return body
 
     def load_mjcf(
         self, source: str | os.PathLike[str], *, self_collision: bool | str | None = None
@@ -341,17 +353,10 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
         self._end_commands(f"load_{kind} changed the world")
         ids = self._b.load_scene(bodies, options)
         for body, model in zip(ids, bodies, strict=True):
-            names = [j.name for j in model.joints]
-            links = [j.child for j in model.joints]
-            types = [self._b.joint_info(body, i).type for i in range(len(names))]
-            self._bodies[body] = _Body(
-                model.name,
-                names,
-                links,
-                types,
-                {n: i for i, n in enumerate(names)},
-                {n: i for i, n in enumerate(links)} | {model.base.name: -1},
-                load={
+            self._record(
+                body,
+                model,
+                {
                     "source": model.source.display_name,
                     "format": kind,
                     "body_index": model.body_index,

@@ -32,7 +32,7 @@ from .exceptions import (
 )
 from .inertia import file_principal
 from .meshes import MeshReadError, mesh_vertices
-from .urdf_model import Contact, Geometry, Inertial, Joint, Link, UrdfModel, Vec3
+from .urdf_model import CONTACT_TAGS, Contact, Geometry, Inertial, Joint, Link, UrdfModel, Vec3
 from .urdf_source import (  # noqa: F401 - re-exported: simbridge.urdf is the public module
     UrdfSource,
     _robots_dir,
@@ -314,22 +314,11 @@ def _inertial(r: _Reader, elem: XmlElement | None, where: str) -> Inertial:
     return Inertial(xyz, rpy, mass, inertia, True, line=ie.line)  # type: ignore[arg-type]
 
 
-_CONTACT = (
-    "lateral_friction",
-    "rolling_friction",
-    "spinning_friction",
-    "restitution",
-    "stiffness",
-    "damping",
-    "inertia_scaling",
-)
-
-
 def _contact(r: _Reader, elem: XmlElement | None, where: str) -> Contact:
     if elem is None:
         return Contact()
     values: dict[str, float] = {}
-    for tag in _CONTACT:
+    for tag in CONTACT_TAGS:
         child: XmlElement | None = elem.find(tag)  # type: ignore[assignment]
         if child is not None:
             values[tag] = r.number(child, "value", 0.0, f"{where} <contact><{tag}>", required=True)

@@ -4,14 +4,23 @@ in radians, quaternions (x, y, z, w)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from .transforms import quat_from_rpy
 from .types import Quat
 from .urdf_source import UrdfSource
 
-__all__ = ["UrdfModel", "Link", "Joint", "Geometry", "Inertial", "Contact", "Vec3"]
+__all__ = [
+    "CONTACT_TAGS",
+    "UrdfModel",
+    "Link",
+    "Joint",
+    "Geometry",
+    "Inertial",
+    "Contact",
+    "Vec3",
+]
 
 Vec3 = tuple[float, float, float]
 
@@ -71,6 +80,10 @@ class Contact:
     stiffness: float | None = None
     damping: float | None = None
     inertia_scaling: float | None = None  # multiplies the link's moments of inertia
+
+
+CONTACT_TAGS = tuple(f.name for f in fields(Contact))
+"""The ``<contact>`` children read (URDF and SDF alike), one per :class:`Contact` field."""
 
 
 @dataclass
