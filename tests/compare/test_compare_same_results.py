@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import gzip
 import json
+import math
 import platform
 import re
 import sys
@@ -156,7 +157,7 @@ def _record() -> None:
 
 
 def _diff(expected: Any, got: Any, where: str = "") -> list[str]:
-    """Where two JSON values differ (exactly: floats too)."""
+    """Where two JSON values differ (exactly: floats too; NaN equals NaN)."""
     if isinstance(expected, dict) and isinstance(got, dict):
         out = [f"{where}/{k}: missing" for k in expected if k not in got]
         out += [f"{where}/{k}: not recorded" for k in got if k not in expected]
@@ -167,18 +168,13 @@ def _diff(expected: Any, got: Any, where: str = "") -> list[str]:
     if isinstance(expected, list) and isinstance(got, list):
         if len(expected) != len(got):
             return [f"{where}: {len(got)} items, recorded {len(expected)}"]
-        return [
-            d for k, (e, g) in enumerate(zip(expected, got)) for d in _diff(e, g, f"{where}[{k}]")
-        ]
-    same = expected == got or (
-        isinstance(expected, float)
-        and isinstance(got, float)
-        and expected != expected
-        and got != got
-    )
-    return (
-        [] if same and type(expected) is type(got) else [f"{where}: {got!r}, recorded {expected!r}"]
-    )
+        pairs = enumerate(zip(expected, got, strict=True))
+        return [d for k, (e, g) in pairs for d in _diff(e, g, f"{where}[{k}]")]
+    nan = isinstance(expected, float) and math.isnan(expected)
+    same = (math.isnan(got) if isinstance(got, float) else False) if nan else expected == got
+    if same and type(expected) is type(got):
+        return []
+    return [f"{where}: {got!r}, recorded {expected!r}"]
 
 
 @pytest.mark.slow
