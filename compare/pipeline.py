@@ -13,20 +13,19 @@ from typing import Any
 
 from simbridge.exceptions import InvalidArgumentError, ScenarioError
 
-from .born import where_born
-from .diff import QUANTITIES, Divergence, diff
-from .ensemble import (
+from .analysis.diff import Divergence, diff
+from .analysis.verdict import Verdict, judge
+from .run.ensemble import (
     DEFAULT_ENSEMBLE,
     DEFAULT_PERTURB,
     DEFAULT_SEED,
     Ensemble,
     EnsembleRunner,
 )
-from .resync import Resync, default_every
-from .resync import resync as one_step_resync
-from .run import Trajectory, run
+from .run.resync import Resync, default_every
+from .run.resync import resync as one_step_resync
+from .run.trajectory import Trajectory, run
 from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
-from .verdict import Verdict, judge
 
 __all__ = ["Comparison", "compare", "ProgressCallback"]
 
@@ -43,7 +42,7 @@ class Comparison:
     ``cross[dt]`` diffs the two engines at ``dt``; ``own[(slot, dt)]`` diffs an engine at ``dt``
     against itself at ``dt / 2``. ``timesteps[0]`` is the one the headline speaks of.
     ``ensembles`` holds each engine's runs from perturbed spawn poses at that time step, and
-    ``verdict`` the judgement over the whole run (:mod:`simbridge.compare.verdict`)."""
+    ``verdict`` the judgement over the whole run (:mod:`simbridge.compare.analysis.verdict`)."""
 
     scenario: Scenario
     backends: tuple[str, str]
@@ -58,7 +57,7 @@ class Comparison:
     verdict: Verdict | None = None
     resync: Resync | None = None
     """The one-step error from each other's states and each engine's floor
-    (:mod:`simbridge.compare.resync`); None with ``resync_every=0``."""
+    (:mod:`simbridge.compare.run.resync`); None with ``resync_every=0``."""
     ensemble_settings: dict[str, Any] = field(default_factory=dict)
     """size, perturbation (position m, orientation rad), seed, workers, wall_time (s)."""
 
@@ -83,150 +82,6 @@ class Comparison:
         """The scenario's ``headline``, else ``base_distance`` for a free-moving subject and
         ``link_distance`` for a fixed base."""
         return _headline_quantity(self.scenario)
-
-    def summary(self) -> dict[str, Any]:
-        """Every headline figure, JSON-ready (SI units: m, rad, s)."""
-        q = self.headline_quantity
-        dt = self.timestep
-        cross = self.cross[dt]
-        gap = cross.final[q]
-        first = cross.first_to_diverge()
-        floor = self.verdict.floor if self.verdict is not None else 0.0
-        own = {}
-        for slot, label in enumerate(self.labels):
-            d = self.own[(slot, dt)]
-            err = d.final[q]
-            own[label] = {
-                "timestep": dt,
-                "half_timestep": dt / 2,
-                "final": err,
-                "max": d.maximum[q],
-                "gap_ratio": _ratio(gap, max(err, floor)),
-                "gap_exceeds": bool(gap > max(err, floor)),
-            }
-        sweep = []
-        for t in self.timesteps:
-            row: dict[str, Any] = {
-                "timestep": t,
-                "gap_final": self.cross[t].final[q],
-                "gap_max": self.cross[t].maximum[q],
-                "engines": {},
-            }
-            for slot, label in enumerate(self.labels):
-                tr = self.runs[(slot, t)]
-                row["engines"][label] = {
-                    "wall_per_sim_second": tr.wall_per_sim_second(),
-                    "wall_time": tr.wall_time,
-                    "own_error_final": self.own[(slot, t)].final[q],
-                    "own_error_max": self.own[(slot, t)].maximum[q],
-                }
-            sweep.append(row)
-        manifests = {
-            label: self.runs[(slot, dt)].manifest for slot, label in enumerate(self.labels)
-        }
-        return {
-            "scenario": self.scenario.name,
-            "description": self.scenario.description,
-            "scenario_file": str(self.scenario.source) if self.scenario.source else None,
-            "subject": self.scenario.subject,
-            "backends": list(self.backends),
-            "labels": list(self.labels),
-            "profiles": list(self.profiles),
-            "timestep": dt,
-            "timestep_text": format_timestep(dt),
-            "duration": float(cross.time[-1]),
-            "headline_quantity": q,
-            "headline": {
-                "quantity": q,
-                "title": QUANTITIES[q].title,
-                "unit": QUANTITIES[q].unit,
-                "final": gap,
-                "max": cross.maximum[q],
-                "crossings": [
-                    {"threshold": thr, "time": cross.first_crossing(q, thr)}
-                    for thr in QUANTITIES[q].thresholds
-                ],
-                "first_to_diverge": (
-                    None
-                    if first is None
-                    else {"quantity": first[0], "threshold": first[1], "time": first[2]}
-                ),
-                "own_error": own,
-                "gap_exceeds_all_own_errors": all(v["gap_exceeds"] for v in own.values()),
-            },
-            "cross": cross.to_dict(),
-            "own": {
-                label: self.own[(slot, dt)].to_dict() for slot, label in enumerate(self.labels)
-            },
-            "sweep": sweep,
-            "verdict": None if self.verdict is None else self.verdict.to_dict(),
-            "ensemble": self._ensemble_summary(),
-            "resync": None if self.resync is None else self.resync.to_dict(),
-            "outcomes": self._outcomes_summary(),
-            **where_born(self),
-            "wall_time": self.wall_time,
-            "manifest": {
-                "simbridge_version": _version(),
-                "command_line": self.command_line,
-                "engines": manifests,
-            },
-        }
-
-    def _outcomes_summary(self) -> dict[str, Any] | None:
-        """The scenario's outcomes over each engine's runs (the ensemble's, else the nominal
-        run alone): :func:`simbridge.compare.outcomes.outcomes_summary`."""
-        from .outcomes import outcomes_summary
-
-        if self.ensembles:
-            runs = [e.outcomes for e in self.ensembles]
-        else:
-            runs = [[self.runs[(slot, self.timestep)].outcomes] for slot in (0, 1)]
-        half = [self.runs.get((slot, self.timestep / 2)) for slot in (0, 1)]
-        return outcomes_summary(
-            self.scenario,
-            self.labels,
-            runs,
-            None if None in half else [tr.outcomes for tr in half if tr is not None],
-        )
-
-    def _ensemble_summary(self) -> dict[str, Any] | None:
-        if not self.ensembles:
-            return None
-        s = self.ensemble_settings
-        v = self.verdict
-        engines = {}
-        for slot, e in enumerate(self.ensembles):
-            fig = v.per_engine[slot] if v is not None else None
-            engines[e.label] = {
-                "backend": e.backend,
-                "profile": e.profile,
-                "spread_end": fig.spread_end.to_dict() if fig else float(e.spread[-1]),
-                "spread_max": float(e.spread.max()),
-                "horizons": [{"threshold": t, "time": h} for t, h in e.horizons()],
-                "end_points": e.end_points.tolist(),
-                "wall_time": e.wall_time,
-            }
-        return {
-            "size": s["size"],
-            "perturbation": {"position": s["perturb"][0], "orientation": s["perturb"][1]},
-            "seed": s["seed"],
-            "workers": s["workers"],
-            "quantity": self.ensembles[0].quantity,
-            "instants": len(self.ensembles[0].time),
-            "wall_time": s.get("wall_time", 0.0),
-            "engines": engines,
-        }
-
-
-def _ratio(gap: float, err: float) -> float | None:
-    """gap / err; None when the engine's own error is zero (JSON has no infinity)."""
-    return gap / err if err > 0 else None
-
-
-def _version() -> str:
-    from simbridge import __version__
-
-    return __version__
 
 
 def compare(

@@ -125,7 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
     p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    from simbridge.compare.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
+    from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
 
     p.add_argument(
         "--ensemble",
@@ -198,7 +198,7 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 def _compare(args: argparse.Namespace) -> int:
     from simbridge.compare import compare, load_scenario, report
-    from simbridge.compare.progress import ProgressBar
+    from simbridge.compare.report.progress import ProgressBar
     from simbridge.exceptions import ScenarioError
 
     if args.profile is not None and len(args.profile) > 2:
@@ -228,9 +228,9 @@ def _compare(args: argparse.Namespace) -> int:
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots)
-    from simbridge.compare.report import headline
+    from simbridge.compare.report import headline, summary
 
-    print("\n".join(line.replace("**", "") for line in headline(result.summary())))
+    print("\n".join(line.replace("**", "") for line in headline(summary(result))))
     print(f"report: {path}")
     return 0
 

@@ -10,17 +10,11 @@ import pytest
 from _synthetic import quat_x, quat_z, trajectory
 
 from simbridge.compare import diff
-from simbridge.compare.diff import DEG, tilt_from
-from simbridge.compare.events import (
-    KINDS,
-    EngineEvents,
-    Event,
-    event_words,
-    find_events,
-    parting,
-    parting_words,
-)
-from simbridge.compare.parts import THRESHOLDS, parts_words, rank_parts
+from simbridge.compare.analysis.events import KINDS, EngineEvents, Event, find_events, parting
+from simbridge.compare.analysis.parts import THRESHOLDS, rank_parts
+from simbridge.compare.report.events import event_words, parting_words
+from simbridge.compare.report.parts import parts_words
+from simbridge.compare.run.quantities import DEG, tilt_from
 
 DT = 0.01  # bridge: ceil(0.05 / 0.01) = 5 rows
 
@@ -181,7 +175,7 @@ def test_motor_saturated_at_max_force():
     assert (sat.kind, sat.part, sat.row) == ("motor_saturated", "j1", 20)
     assert sat.end == pytest.approx(0.29)
     assert sat.figures == {"max_force": 10.0, "duration": pytest.approx(0.10)}
-    assert "j1 motor saturated at its max_force 10" in sat.words("A")
+    assert "j1 motor saturated at its max_force 10" in event_words(sat.to_dict(), "A")
 
 
 # ---------------------------------------------------------------- parting
@@ -339,7 +333,7 @@ def test_parts_that_never_part_rank_by_their_gap_over_the_threshold():
 
 
 def test_held_commands_carry_velocity_and_position_targets_until_replaced():
-    from simbridge.compare.plots import held_commands
+    from simbridge.compare.report.plots import held_commands
 
     modes = np.array([0, 0, 2, 2, 0, 0, 3, 0, 1, 0])
     targets = np.array([np.nan, np.nan, 1, 2, np.nan, np.nan, 5, np.nan, 7, np.nan])

@@ -11,14 +11,9 @@ import pytest
 from _synthetic import quat_x, quat_z, trajectory
 
 from simbridge.compare import Outcome, loads_scenario
-from simbridge.compare.outcomes import (
-    evaluate,
-    outcome_lines,
-    outcomes_section,
-    success_interval,
-    summarize,
-    tilt,
-)
+from simbridge.compare.analysis.outcomes import success_interval, summarize
+from simbridge.compare.report.outcomes import outcome_lines, outcomes_section
+from simbridge.compare.run.outcomes import evaluate, tilt
 from simbridge.compare.scenario import dumps_scenario
 from simbridge.exceptions import ScenarioError
 

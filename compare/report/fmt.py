@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from .diff import DEG
+from ..run.quantities import DEG
 
 __all__ = ["fmt_distance", "fmt_time", "fmt_value", "fmt_threshold"]
 

@@ -16,9 +16,8 @@ from typing import Any
 import numpy as np
 
 from .diff import DEG, Divergence
-from .fmt import fmt_threshold, fmt_time, fmt_value
 
-__all__ = ["THRESHOLDS", "Part", "rank_parts", "parts_words"]
+__all__ = ["THRESHOLDS", "Part", "rank_parts"]
 
 THRESHOLDS = {"rad": 1 * DEG, "m": 0.01}
 """The gap at which a joint (rad or m) or a link (m) parts."""
@@ -89,31 +88,3 @@ def rank_parts(d: Divergence) -> list[Part]:
         return (p.first is None, p.first if p.first is not None else 0.0, -p.ratio)
 
     return sorted(parts, key=key)
-
-
-def parts_words(parts: list[dict[str, Any]], n: int = 3) -> str:
-    """The ranking's head in one sentence, from ``summary.json``'s ``parts``."""
-    if not parts:
-        return ""
-    parted = [p for p in parts if p["first"] is not None]
-
-    def one(p: dict[str, Any]) -> str:
-        return (
-            f"{p['kind']} `{p['name']}` ({fmt_threshold(p['threshold'], p['unit'])} apart at "
-            f"t = {fmt_time(p['first'])}, largest {fmt_value(p['largest'], p['unit'])})"
-        )
-
-    if not parted:
-        top = parts[0]
-        return (
-            "No joint or link comes 1° or 1 cm apart; the nearest to it is "
-            f"{top['kind']} `{top['name']}` (largest gap {fmt_value(top['largest'], top['unit'])}"
-            f" at t = {fmt_time(top['largest_at'])})."
-        )
-    words = "The first part to come apart is " + one(parted[0])
-    if len(parted) > 1:
-        words += ", then " + ", ".join(one(p) for p in parted[1:n])
-    rest = len(parted) - min(n, len(parted))
-    if rest:
-        words += f", and {rest} more"
-    return words + f" (of {len(parts)} joints and links)."

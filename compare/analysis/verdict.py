@@ -1,8 +1,8 @@
 """The verdict over the whole run: do the engines ``agree``, ``differ``, or is one of them
 ``chaotic`` at the scale of the gap? :func:`judge` and :class:`Verdict`.
 
-One file of about 690 lines: the statistics, the judgement built on them and the verdict's words
-all follow the fields of :class:`Verdict`, kept together so a change to one is seen beside the rest.
+The statistics and the judgement built on them follow the fields of :class:`Verdict`; the
+verdict in words is the report's (:mod:`simbridge.compare.report.verdict`).
 
 Inputs, all at the same recorded instants ``time`` (T,): each engine's ensemble (the
 headline quantity's :func:`~simbridge.compare.diff.features` of N runs started a tiny offset
@@ -45,9 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from .diff import QUANTITIES, distance
-from .ensemble import SPREAD_PERCENTILE, horizons, pairwise_spread
-from .fmt import fmt_threshold, fmt_time, fmt_value
+from ..run.ensemble import SPREAD_PERCENTILE, horizons, pairwise_spread
+from ..run.quantities import QUANTITIES, distance
 
 __all__ = [
     "VERDICTS",
@@ -62,7 +61,7 @@ __all__ = [
     "judge",
     "precision_floor",
     "energy_test",
-    "verdict_lines",
+    "Marginal",
 ]
 
 VERDICTS = ("agree", "differ", "chaotic", "unresolved")
@@ -80,6 +79,18 @@ FLOOR_RELATIVE = 1e-12
 """The precision floor is this times the largest recorded magnitude (at least 1)."""
 
 _CODES = {"agree": 0, "chaotic": 1, "unresolved": 2, "differ": 3}
+
+
+@dataclass(frozen=True)
+class Marginal:
+    """Why a verdict is marginal: its deciding ratio near 1 (:data:`MARGINAL`). ``what`` is
+    ``tolerance`` (``agree``: the largest gap over the tolerance), ``spread`` (``chaotic``: the
+    gap over engine ``label``'s spread) or ``own_error`` (``unresolved``: over its own time-step
+    error)."""
+
+    what: str
+    ratio: float
+    label: str | None = None
 
 
 @dataclass
@@ -160,7 +171,7 @@ class Verdict:
     engines: list[str]  # chaotic: whose spread covers the gap; unresolved: whose own error does
     reason: str  # a short machine-readable cause (see docs/compare.md)
     marginal: bool
-    marginal_reasons: list[str]
+    marginal_reasons: list[Marginal]
     quantity: str
     unit: str
     tolerance: float
@@ -210,7 +221,7 @@ class Verdict:
             "engines": list(self.engines),
             "reason": self.reason,
             "marginal": self.marginal,
-            "marginal_reasons": list(self.marginal_reasons),
+            "marginal_reasons": [vars(m) for m in self.marginal_reasons],
             "quantity": self.quantity,
             "unit": self.unit,
             "tolerance": self.tolerance,
@@ -430,13 +441,13 @@ def judge(
         )
 
     test = None
-    marginal: list[str] = []
+    marginal: list[Marginal] = []
     lo_m = MARGINAL[0]
     if np.all(gap < tol):
         verdict, engines, reason = "agree", [], "below tolerance"
         ratio = float(np.max(gap)) / tol
         if ratio >= lo_m:
-            marginal.append(f"the largest gap is {ratio:.3g}x the tolerance")
+            marginal.append(Marginal("tolerance", ratio))
     else:
         if na >= 2 and nb >= 2:
             both = np.concatenate([fa[:, j], fb[:, j]])
@@ -447,7 +458,7 @@ def judge(
             verdict, engines, reason = "chaotic", [e.label for e in covering], "within spread"
             for e in covering:
                 if e.gap_over_spread >= lo_m:
-                    marginal.append(f"the gap is {e.gap_over_spread:.3g}x {e.label}'s spread")
+                    marginal.append(Marginal("spread", e.gap_over_spread, e.label))
         else:
             own_cover = [e for e in per_engine if e.gap_over_own_error <= within]
             if own_cover:
@@ -458,10 +469,7 @@ def judge(
                 )
                 for e in own_cover:
                     if e.gap_over_own_error >= lo_m:
-                        marginal.append(
-                            f"the gap is {e.gap_over_own_error:.3g}x {e.label}'s own time-step "
-                            "error"
-                        )
+                        marginal.append(Marginal("own_error", e.gap_over_own_error, e.label))
             elif test is None:
                 verdict, engines, reason = "unresolved", [], "single run"
             elif test.p_value >= ALPHA:
@@ -494,202 +502,3 @@ def judge(
         own_errors=own,
         classes=classes,
     )
-
-
-# ---------------------------------------------------------------- words
-
-
-def _iv(x: dict[str, Any], unit: str, *, inner: bool = False) -> str:
-    """``7.2 cm (95% interval 7.1 cm to 7.3 cm)`` (``inner``: ``7.2 cm, 95% interval ...``, for
-    use inside parentheses); the value alone without an interval."""
-    v = fmt_value(x["value"], unit)
-    if x.get("low") is None:
-        return v
-    lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
-    if x["low"] == x["high"]:
-        return v
-    if len({lo, v, hi}) < 3:  # too close for the report's rounding: 4 significant digits
-        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
-    return f"{v}, 95% interval {lo} to {hi}" if inner else f"{v} (95% interval {lo} to {hi})"
-
-
-def _x(r: float) -> str:
-    """A ratio: ``1.04x``, ``33x``, ``670x``, ``3.1e7x``."""
-    if r < 10:
-        return f"{r:.3g}x"
-    if r < 10_000:
-        return f"{r:.3g}x" if r < 100 else f"{round(r, -1):.0f}x"
-    return f"{r:.1e}x".replace("e+0", "e").replace("e+", "e")
-
-
-def _p(test: dict[str, Any]) -> str:
-    """``p = 0.029``; ``p < 0.001`` from random splits below that (their p-value cannot go
-    under 1 / (splits + 1): it bounds the true one)."""
-    p = test["p_value"]
-    if not test["exact"] and p < 0.001:
-        return "p < 0.001"
-    return f"p = {p:.2g}"
-
-
-def _perturbation(ensemble: dict[str, Any] | None) -> str:
-    if not ensemble:
-        return "runs"
-    pm = ensemble["perturbation"]["position"]
-    pr = ensemble["perturbation"]["orientation"]
-    return f"runs started {pm:g} m / {pr:g} rad apart"
-
-
-def verdict_lines(summary: dict[str, Any]) -> list[str]:
-    """The verdict in words, from ``summary.json``'s ``verdict`` and ``ensemble`` alone."""
-    v = summary["verdict"]
-    ens = summary.get("ensemble")
-    unit = v["unit"]
-    a, b = v["labels"]
-    figs = v["engine_figures"]
-    n = figs[a]["size"]
-    started = _perturbation(ens)
-    at_end = v["judged_at"]["why"] == "end"
-    when = "end" if at_end else f"are, at t = {fmt_time(v['judged_at']['time'])},"
-    marg = ""
-    if v["marginal"]:
-        marg = " (marginal: " + "; ".join(v["marginal_reasons"]) + ")"
-    tol = fmt_threshold(v["tolerance"], unit)
-    lines: list[str] = []
-    if v["verdict"] == "agree":
-        mg = v["max_gap"]
-        spreads = " and ".join(
-            f"{fmt_value(f['spread_max'], unit)} ({lab})" for lab, f in figs.items()
-        )
-        lines.append(
-            f"**{a} and {b} agree on this scenario**{marg}: the gap between them stays below "
-            f"{tol} all along (largest {fmt_value(mg['value'], unit)}, at t = "
-            f"{fmt_time(mg['time'])})."
-            + (f" Each engine's {n} {started} spread by at most {spreads}." if n > 1 else "")
-        )
-    elif v["verdict"] == "chaotic":
-        names = v["engines"]
-        who = " and ".join(names)
-        verb = "is" if len(names) == 1 else "are"
-        first = figs[names[0]]
-        others = [lab for lab in (a, b) if lab not in names]
-        spread_words = (
-            f"**{who} {verb} chaotic on this scenario**{marg}: {first['size']} {started} "
-            f"{when} up to {fmt_value(first['largest_pair'], unit)} apart (spread "
-            f"{_iv(first['spread'], unit, inner=True)})"
-        )
-        if others:
-            o = figs[others[0]]
-            spread_words += (
-                f"; {others[0]}'s {o['size']} runs {when} within "
-                f"{fmt_value(o['largest_pair'], unit)} of each other"
-            )
-        lines.append(spread_words + ".")
-        ratio = " and ".join(f"{_x(figs[lab]['gap_over_spread'])} {lab}'s" for lab in names)
-        near = ""
-        if others:
-            near = (
-                f"; {others[0]}'s runs {when} a median "
-                f"{fmt_value(first['other_to_nearest'], unit)} from the nearest {names[0]} run"
-            )
-        also = [lab for lab in (a, b) if figs[lab]["gap_over_own_error"] <= v["marginal_range"][1]]
-        also_words = ""
-        if also:
-            also_words = (
-                " It lies within "
-                + " and ".join(
-                    f"{lab}'s own time-step error ({fmt_value(figs[lab]['own_error'], unit)} "
-                    "between dt and dt/2)"
-                    for lab in also
-                )
-                + " as well."
-            )
-        lines.append(
-            f"The two engines' runs {when} a median {_iv(v['gap'], unit)} apart, {ratio} own "
-            f"spread{near}: at this scale {who}'s outcome is not predictable, and the gap says "
-            "nothing about the engines' physics." + also_words
-        )
-        t = v["test"]
-        if t is not None:
-            told = "tells" if t["p_value"] < ALPHA else "does not tell"
-            lines[-1] += (
-                f" (A permutation test on the energy distance {told} the two sets of runs apart, "
-                f"{_p(t)}: "
-                + (
-                    "they are distributed differently, but within the spread of "
-                    f"{names[0]}'s own runs.)"
-                    if t["p_value"] < ALPHA
-                    else "one engine's runs could be the other's.)"
-                )
-            )
-    elif v["verdict"] == "differ":
-        t = v["test"]
-        parts = "; ".join(
-            f"{_x(f['gap_over_spread'])} {lab}'s own spread "
-            f"({fmt_value(f['spread']['value'], unit)}) and {_x(f['gap_over_own_error'])} its "
-            "time-step error"
-            for lab, f in figs.items()
-        )
-        lines.append(
-            f"**{a} and {b} differ on this scenario**{marg}: their runs {when} a median "
-            f"{_iv(v['gap'], unit)} apart; that is {parts}."
-        )
-        lines.append(
-            f"A permutation test on the energy distance separates the two sets of {n} "
-            f"{started} ({_p(t)}): the gap is the engines', not chaos or the "
-            "time step."
-        )
-    else:
-        reason = v["reason"]
-        if reason == "within own time-step error":
-            who = " and ".join(v["engines"])
-            errs = ", ".join(
-                f"{lab} {fmt_value(figs[lab]['own_error'], unit)}" for lab in v["engines"]
-            )
-            why = (
-                f"which lies within {who}'s own time-step error (dt against dt/2: {errs}): at "
-                "this time step the comparison cannot tell the engines apart; rerun with a "
-                "smaller --timestep"
-            )
-        elif reason == "single run":
-            why = (
-                "and with one run per engine chaos cannot be told from an engine difference; "
-                "rerun with --ensemble 8 or more"
-            )
-        else:
-            t = v["test"]
-            why = (
-                f"but the permutation test does not separate the two sets of {n} {started} "
-                f"({_p(t)}); a larger --ensemble may"
-            )
-        lines.append(
-            f"**Unresolved**{marg}: the engines' runs {when} a median {_iv(v['gap'], unit)} "
-            f"apart, {why}."
-        )
-    lines += _horizon_lines(v, unit) if v["verdict"] != "agree" else []
-    return lines
-
-
-def _horizon_lines(v: dict[str, Any], unit: str) -> list[str]:
-    parts = []
-    for lab, f in v["engine_figures"].items():
-        if f["size"] < 2:
-            continue
-        hs = f["horizons"]
-        reached = [h for h in hs if h["time"] is not None]
-        if not reached:
-            parts.append(f"{lab}'s spread never reaches {fmt_threshold(hs[0]['threshold'], unit)}")
-        else:
-            parts.append(
-                f"{lab}'s reaches "
-                + ", ".join(
-                    f"{fmt_threshold(h['threshold'], unit)} at t = {fmt_time(h['time'])}"
-                    for h in reached
-                )
-            )
-    if not parts:
-        return []
-    return [
-        "Predictability horizon (when the runs of one engine first spread that far): "
-        + "; ".join(parts)
-        + "."
-    ]

@@ -21,7 +21,7 @@ Both target Sims step once per resync point and keep what their engine keeps bet
 (PyBullet's contact caches from the previous resync point): a cross-engine step and the floor
 step are taken alike, so the floor is the honest yardstick of the cross error.
 
-The result in words and as a figure: :mod:`.resync_report`.
+The result in words and as a figure: :mod:`simbridge.compare.report.resync`.
 """
 
 from __future__ import annotations
@@ -38,10 +38,10 @@ import simbridge
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 from simbridge.types import JointType
 
-from .diff import FEATURE_SOURCES, QUANTITIES, distance, features, rotation_angle
+from ..scenario import Scenario, load_scenario
 from .events import find_events, phase_at
-from .run import Trajectory, run
-from .scenario import Scenario, load_scenario
+from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features, rotation_angle
+from .trajectory import Trajectory, run
 
 __all__ = [
     "DEFAULT_POINTS",
@@ -448,7 +448,7 @@ def _worst(d: Direction, tr: Trajectory, n: int = WORST) -> list[dict[str, Any]]
                 "error": float(d.error[k]),
                 "floor": None if not np.isfinite(d.floor[k]) else float(d.floor[k]),
                 "parts": {key: float(v[k]) for key, v in d.parts.items()},
-                "events": [{**e.to_dict(), "words": e.words(d.source)} for e in near[:4]],
+                "events": [e.to_dict() for e in near[:4]],
             }
         )
     return out

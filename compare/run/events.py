@@ -1,6 +1,7 @@
-"""Where the gap is born: what happens to the followed robot in each engine's run, found in its
-recorded contacts, pose, joints and motors (:func:`find_events`), and which event the gap
-between the engines first crossed its threshold after (:func:`parting`).
+"""What happens to the followed robot in one engine's run, found in its recorded contacts, pose,
+joints and motors (:func:`find_events`). Which event the gap between two engines first crossed
+its threshold after is the analysis's (:func:`simbridge.compare.analysis.events.parting`), the
+events in words the report's (:mod:`simbridge.compare.report.events`).
 
 Kinds of :class:`Event` (:data:`KINDS`), each at the first recorded instant it holds:
 
@@ -39,9 +40,8 @@ from typing import Any
 
 import numpy as np
 
-from .diff import DEG, tilt_from, up_of
-from .fmt import fmt_distance, fmt_time
-from .run import BodyTrajectory, Trajectory
+from .quantities import DEG, tilt_from, up_of
+from .trajectory import BodyTrajectory, Trajectory
 
 __all__ = [
     "KINDS",
@@ -52,8 +52,9 @@ __all__ = [
     "Event",
     "EngineEvents",
     "find_events",
-    "parting",
     "phase_at",
+    "PARTING_WINDOW",
+    "INTERVAL_KINDS",
 ]
 
 KINDS = (
@@ -81,7 +82,7 @@ CHATTER_LOSSES = 3
 PARTING_WINDOW = 0.1
 """s: an event this shortly before the gap reaches its threshold is the one it parted after."""
 
-_INTERVAL_KINDS = ("airborne", "tipped_over", "contact_chatter", "joint_limit", "motor_saturated")
+INTERVAL_KINDS = ("airborne", "tipped_over", "contact_chatter", "joint_limit", "motor_saturated")
 
 
 @dataclass(frozen=True)
@@ -127,45 +128,6 @@ class Event:
             "side": self.side,
             "figures": dict(self.figures),
         }
-
-    def words(self, label: str) -> str:
-        """The event in words, e.g. ``pybullet's r2d2 lost contact with plane at
-        right_back_wheel``."""
-        return event_words(self.to_dict(), label)
-
-
-def event_words(e: dict[str, Any], label: str) -> str:
-    """An event's dict (:meth:`Event.to_dict`, as ``summary.json`` holds it) in words."""
-    who = f"{label}'s {e['body']}"
-    others = " and ".join(e["others"]) if e["others"] else "another of its own links"
-    f = e["figures"]
-    kind = e["kind"]
-    if kind == "contact_made":
-        return f"{who} touched {others} with {e['part']}"
-    if kind == "contact_lost":
-        return f"{who} lost contact with {others} at {e['part']}"
-    if kind == "contact_chatter":
-        return (
-            f"{who}'s {e['part']} chattered on {others} (lost and regained contact "
-            f"{f['losses']:.0f} times in {f['duration']:.3g} s)"
-        )
-    if kind == "airborne":
-        return f"{who} left the ground (airborne for {f['duration']:.3g} s)"
-    if kind == "peak_height":
-        return (
-            f"{who} peaked at a height of {fmt_distance(f['height'])} "
-            f"({fmt_distance(f['rise'])} above where it left the ground)"
-        )
-    if kind == "tipped_over":
-        return (
-            f"{who} tipped over (more than {TIP_ANGLE / DEG:g}° from its spawn orientation, "
-            f"up to {f['tilt'] / DEG:.0f}°)"
-        )
-    if kind == "joint_limit":
-        return f"{who} reached the {e['side']} limit of {e['part']} ({f['limit']:.4g})"
-    if kind == "motor_saturated":
-        return f"{who}'s {e['part']} motor saturated at its max_force {f['max_force']:g}"
-    return f"{who}: {kind}"
 
 
 @dataclass
@@ -458,122 +420,3 @@ def _saturation_events(
                     },
                 )
             )
-
-
-# ---------------------------------------------------------------- where the gap is born
-
-
-def parting(
-    time: float | None,
-    threshold: float,
-    quantity: str,
-    phases: list[tuple[str, float, float]],
-    engines: list[EngineEvents],
-    step: float = 0.0,
-) -> dict[str, Any]:
-    """Where the gap is born: the phase and the event during which it first reached
-    ``threshold`` (at ``time``, None: never).
-
-    ``phases`` are ``(name, start, end)`` in s; the phase is the one whose steps led to
-    ``time``. The event, of either engine (``peak_height`` aside), is the first found of:
-
-    1. ``after``: the latest event that began within :data:`PARTING_WINDOW` (0.1 s) before
-       ``time`` (up to ``time`` + ``step``: a contact lost in the very step that parts them
-       counts);
-    2. ``during``: the interval event (``airborne``, ``tipped_over``, ``contact_chatter``,
-       ``joint_limit``, ``motor_saturated``) going on at ``time`` that began last;
-    3. ``after``: the latest event that began before ``time``, however long before.
-
-    Ties go in :data:`KINDS` order, then engine order. With no event before ``time``, the
-    robot's contacts from its first step (``initial_contacts``) are what it parts during, when
-    it has some.
-
-    Returns ``{quantity, threshold, time, step, body, phase, event, relation, since, ongoing,
-    initial_contacts}`` (``step``: the recorded step, s; ``body``: the followed robot):
-    ``event`` is the event's dict with ``label`` (the engine) added, or None (no event before
-    ``time``); ``relation`` ``after`` or ``during`` (None: no event);
-    ``since`` (s) how long before ``time`` it began (negative: in the same step, just after);
-    ``ongoing`` every interval event going on at ``time``; ``initial_contacts`` per engine
-    label, the links touching from the first step (only when no event came before).
-    """
-    out: dict[str, Any] = {
-        "quantity": quantity,
-        "threshold": threshold,
-        "time": time,
-        "step": step,
-        "body": engines[0].body if engines else None,
-        "phase": None,
-        "event": None,
-        "relation": None,
-        "since": None,
-        "ongoing": [],
-        "initial_contacts": {},
-    }
-    if time is None:
-        return out
-    for name, start, end in phases:
-        if start - 1e-12 <= time <= end + 1e-12:
-            out["phase"] = name
-            if time > start + 1e-12:  # at a boundary: the phase that led to it
-                break
-    order = {k: i for i, k in enumerate(KINDS)}
-    began: list[tuple[tuple[float, int, int], Event, str]] = []
-    going: list[tuple[tuple[float, int, int], Event, str]] = []
-    for slot, e in enumerate(engines):
-        for event in e.events:
-            if event.kind == "peak_height" or event.time > time + step + 1e-12:
-                continue
-            key = (event.time, -order[event.kind], -slot)
-            began.append((key, event, e.label))
-            if event.kind in _INTERVAL_KINDS and (event.end is None or event.end >= time - 1e-12):
-                going.append((key, event, e.label))
-                out["ongoing"].append({"label": e.label, **event.to_dict()})
-    recent = [x for x in began if x[1].time >= time - PARTING_WINDOW - 1e-12]
-    for pool, relation in ((recent, "after"), (going, "during"), (began, "after")):
-        if pool:
-            _, event, label = max(pool, key=lambda x: x[0])
-            out["event"] = {"label": label, **event.to_dict()}
-            out["relation"] = relation
-            out["since"] = time - event.time
-            break
-    else:
-        out["initial_contacts"] = {
-            e.label: e.initial_contacts for e in engines if e.initial_contacts
-        }
-    return out
-
-
-def with_start(words: str, time: float) -> str:
-    """``words`` with ``from t = ...`` in its closing parenthesis (or a new one)."""
-    start = f"from t = {fmt_time(time)}"
-    return words[:-1] + f", {start})" if words.endswith(")") else f"{words} ({start})"
-
-
-def parting_words(p: dict[str, Any]) -> str:
-    """``during 'turn', 0.021 s after pybullet's r2d2 lost contact with plane at
-    right_back_wheel`` (empty when they never part)."""
-    if p.get("time") is None:
-        return ""
-    words = f"during '{p['phase']}'" if p.get("phase") else ""
-    e = p.get("event")
-    sep = ", " if words else ""
-    if e is None:
-        touching = p.get("initial_contacts") or {}
-        if not touching:
-            return words + sep + "before any event of either engine"
-        links = sorted({k for v in touching.values() for k in v})
-        shown = ", ".join(links[:4]) + (f" and {len(links) - 4} more" if len(links) > 4 else "")
-        first = p["time"] <= p.get("step", 0.0) + 1e-12
-        return (
-            words
-            + sep
-            + ("in the first step" if first else "before any event")
-            + f", with {p.get('body') or 'the robot'} touching something from its first step at "
-            + f"{shown} ({' and '.join(touching)})"
-        )
-    what = event_words(e, e["label"])
-    if p["relation"] == "during":
-        return words + sep + f"while {with_start(what, e['time'])}"
-    since = p["since"]
-    when = "in the same step as" if since <= 0 else f"{fmt_time(since)} after"
-    return words + sep + f"{when} {what}"

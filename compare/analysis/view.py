@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from typing import Protocol
 
+from ..run.trajectory import Trajectory
+from ..scenario import Scenario
 from .diff import Divergence
-from .run import Trajectory
-from .scenario import Scenario
 
 __all__ = ["ComparisonView"]
 

@@ -26,8 +26,8 @@ import simbridge
 from simbridge.exceptions import ScenarioError
 from simbridge.types import JointType
 
-from .controllers import PhaseControl
-from .scenario import Scenario, load_scenario, parse_timestep
+from ..scenario import Scenario, load_scenario, parse_timestep
+from ..scenario.controllers import PhaseControl
 
 __all__ = ["BodyTrajectory", "Trajectory", "run", "urdf_sha256"]
 
@@ -135,7 +135,7 @@ class Trajectory:
 
     @property
     def label(self) -> str:
-        from .scenario import format_timestep
+        from ..scenario import format_timestep
 
         return f"{self.backend} @ {format_timestep(self.timestep)} s"
 

@@ -31,9 +31,9 @@ import numpy as np
 
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 
-from .diff import FEATURE_SOURCES, QUANTITIES, distance, features
-from .run import BodyTrajectory, Trajectory, run
-from .scenario import Scenario
+from ..scenario import Scenario
+from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features
+from .trajectory import BodyTrajectory, Trajectory, run
 
 __all__ = [
     "DEFAULT_ENSEMBLE",

@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from .diff import FEATURE_SOURCES, QUANTITIES
+from ..run.quantities import FEATURE_SOURCES, QUANTITIES
+from ..run.resync import PARTS, WORST, Direction, Resync
 from .fmt import fmt_time, fmt_value
-from .resync import PARTS, WORST, Direction, Resync
 
 __all__ = ["resync_lines", "resync_section", "plot_resync"]
 

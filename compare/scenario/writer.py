@@ -7,7 +7,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from .scenario_model import Scenario, format_timestep
+from .model import Scenario, format_timestep
 
 
 def _toml_value(v: Any) -> str:

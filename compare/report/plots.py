@@ -18,12 +18,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .diff import DEG, QUANTITIES, yaw
+from ..analysis.diff import DEG, QUANTITIES, yaw
+from ..scenario import format_timestep
 from .fmt import fmt_threshold
-from .scenario import format_timestep
 
 if TYPE_CHECKING:
-    from .pipeline import Comparison
+    from ..pipeline import Comparison
 
 __all__ = [
     "paths",
@@ -434,7 +434,7 @@ def height(c: Comparison, path: Path) -> Path:
     """Height over time (along the world's up, against gravity): the base link frame of a
     mobile subject, the last link's centre of mass of a fixed one; both engines, with the
     instant the gap first reaches its threshold."""
-    from .diff import up_of
+    from ..run.quantities import up_of
 
     plt = _plt()
     fixed = c.scenario.robot(c.scenario.subject).fixed_base
@@ -483,7 +483,7 @@ def events(c: Comparison, path: Path) -> Path | None:
     """A timeline of both engines' events (:mod:`.events`), one lane per engine and kind:
     intervals as bars, instants as markers; the instant the gap first reaches its threshold
     as a vertical line. None when neither engine has an event."""
-    from .born import engine_events
+    from ..analysis.events import engine_events
 
     found = engine_events(c)
     lanes = [

@@ -33,11 +33,11 @@ import numpy as np
 
 from simbridge.exceptions import SimbridgeError
 
-from .events import EngineEvents
+from ..run.events import EngineEvents
 from .fmt import fmt_distance
 
 if TYPE_CHECKING:
-    from .view import ComparisonView
+    from ..analysis.view import ComparisonView
 
 __all__ = ["GENERAL_CUT", "applicable"]
 

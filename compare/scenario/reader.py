@@ -18,9 +18,7 @@ from simbridge.exceptions import ScenarioError
 from simbridge.transforms import quat_from_rpy
 
 from .controllers import ControllerSpec, RefError, absolute_ref, load_object
-from .outcomes import KINDS as OUTCOME_KINDS
-from .outcomes import Outcome
-from .scenario_model import (
+from .model import (
     HEADLINE_QUANTITIES,
     MAX_STEPS,
     MODES,
@@ -31,6 +29,8 @@ from .scenario_model import (
     Scenario,
     parse_timestep,
 )
+from .outcomes import KINDS as OUTCOME_KINDS
+from .outcomes import Outcome
 
 # ---------------------------------------------------------------- finding a key's line
 

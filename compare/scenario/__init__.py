@@ -70,10 +70,9 @@ from pathlib import Path
 from simbridge.exceptions import ScenarioError
 
 from .controllers import ControllerSpec
-from .outcomes import Outcome
 
 # re-exported: callers import these from here
-from .scenario_model import (  # noqa: F401
+from .model import (  # noqa: F401
     HEADLINE_QUANTITIES,
     MAX_STEPS,
     MODES,
@@ -85,8 +84,9 @@ from .scenario_model import (  # noqa: F401
     format_timestep,
     parse_timestep,
 )
-from .scenario_reader import find_key_line, loads_scenario
-from .scenario_writer import dumps_scenario, save_scenario
+from .outcomes import Outcome
+from .reader import find_key_line, loads_scenario
+from .writer import dumps_scenario, save_scenario
 
 __all__ = [
     "Command",
@@ -106,7 +106,7 @@ __all__ = [
     "find_key_line",
 ]
 
-SCENARIOS_DIR = Path(__file__).resolve().parent / "scenarios"
+SCENARIOS_DIR = Path(__file__).resolve().parent.parent / "scenarios"
 
 
 def _shipped() -> dict[str, Path]:

@@ -1,8 +1,5 @@
-"""The comparison report: ``report.md`` beside its figures, ``summary.json`` for machines, and
-the trajectories (``.npz`` and ``.csv``).
-
-One file of about 650 lines: every section of ``report.md`` is written here from the one
-``summary.json`` dict, so the document's layout reads top to bottom in one place.
+"""``report.md``: every section written here from the one ``summary.json`` dict
+(:func:`markdown`), so the document's layout reads top to bottom in one place.
 
 The first lines of ``report.md`` give the headline in words: the verdict (``agree``,
 ``differ``, ``chaotic`` naming the engine, or ``unresolved``) with its test and intervals, the
@@ -12,21 +9,21 @@ goes first, and what halving the time step changes in each engine.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
-from .diff import DEG, QUANTITIES
-from .events import KINDS, TIP_ANGLE, event_words, parting_words, with_start
-from .fmt import fmt_distance, fmt_threshold, fmt_time, fmt_value
+from ..analysis.diff import DEG, QUANTITIES
+from ..pipeline import Comparison
+from ..run.events import KINDS, TIP_ANGLE
+from ..scenario import format_timestep
+from .events import event_words, parting_words, with_start
+from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
 from .parts import parts_words
-from .pipeline import Comparison
-from .resync_report import plot_resync, resync_lines, resync_section
-from .scenario import format_timestep
+from .resync import resync_lines, resync_section
 from .verdict import verdict_lines
 
-__all__ = ["report", "headline", "fmt_distance", "fmt_time", "fmt_value"]
+__all__ = ["headline", "markdown"]
 
 
 def headline(summary: dict[str, Any]) -> list[str]:
@@ -100,7 +97,7 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
     return out
 
 
-def _markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: list[str]) -> str:
+def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: list[str]) -> str:
     a, b = s["labels"]
     cross = c.cross[c.timestep]
     lines = [f"# {s['scenario']}: {a} against {b}", ""]
@@ -597,60 +594,3 @@ def _verdict_section(s: dict[str, Any]) -> list[str]:
     if v["marginal_reasons"]:
         lines += ["Marginal: " + "; ".join(v["marginal_reasons"]) + ".", ""]
     return lines
-
-
-# ---------------------------------------------------------------- entry point
-
-
-def report(
-    comparison: Comparison,
-    out: str | Path,
-    *,
-    plots: bool = True,
-    trajectories: bool = True,
-) -> Path:
-    """Write the report of ``comparison`` into folder ``out`` (created if needed).
-
-    Writes ``report.md`` (the file a person opens), ``summary.json`` (every headline figure
-    plus the manifests), the PNG figures beside them, and with ``trajectories`` the two
-    headline runs as ``trajectories/<engine>.npz`` and ``.csv``. Returns the path of
-    ``report.md``."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    summary = comparison.summary()
-    files = ["summary.json"]
-    if trajectories:
-        folder = out / "trajectories"
-        folder.mkdir(exist_ok=True)
-        for slot, label in enumerate(comparison.labels):
-            tr = comparison.runs[(slot, comparison.timestep)]
-            stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in label)
-            tr.save(folder / f"{stem}.npz")
-            tr.save_csv(folder / f"{stem}.csv")
-            files += [f"trajectories/{stem}.npz", f"trajectories/{stem}.csv"]
-    images = {}
-    if plots:
-        from .plots import all_plots
-
-        images = all_plots(comparison, out)
-        if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
-            images["resync"] = out / "resync.png"
-    summary["files"] = files + [p.name for p in images.values()]
-    summary["headline"]["text"] = headline(summary)
-    (out / "summary.json").write_text(
-        json.dumps(summary, indent=2, default=_json_default, allow_nan=True) + "\n",
-        encoding="utf-8",
-    )
-    path = out / "report.md"
-    path.write_text(_markdown(comparison, summary, images, files), encoding="utf-8")
-    return path
-
-
-def _json_default(obj: Any) -> Any:
-    import numpy as np
-
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (np.integer, np.floating, np.bool_)):
-        return obj.item()
-    return str(obj)
