@@ -17,10 +17,11 @@ __all__ = ["ComparisonView"]
 
 
 class ComparisonView(Protocol):
-    """The nominal runs of two engines on one scenario and their diffs (see ``Comparison``)."""
+    """The nominal runs of two or more engines on one scenario and the first pair's diffs (see
+    ``Comparison``)."""
 
     scenario: Scenario
-    runs: dict[tuple[int, float], Trajectory]  # (engine slot 0/1, time step) -> run
+    runs: dict[tuple[int, float], Trajectory]  # (engine slot, time step) -> run
     cross: dict[float, Divergence]  # time step -> engine 0 against engine 1
 
     @property
@@ -29,8 +30,8 @@ class ComparisonView(Protocol):
         ...
 
     @property
-    def labels(self) -> tuple[str, str]:
-        """The two engines' names in the report."""
+    def labels(self) -> tuple[str, ...]:
+        """The engines' names in the report, in slot order."""
         ...
 
     @property

@@ -119,7 +119,7 @@ def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[
     general words, why it applies here, and what this run measured of it, None when nothing)
     and ``left_out`` (the keys that do not apply to this scenario)."""
     facts = _urdf_facts(c)
-    touched = [_touched(c, slot) for slot in (0, 1)]
+    touched = [_touched(c, slot) for slot in range(len(c.labels))]
     labels = c.labels
     out: dict[str, dict[str, Any]] = {}
     for slot, label in enumerate(labels):

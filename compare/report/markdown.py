@@ -30,7 +30,6 @@ def headline(summary: dict[str, Any]) -> list[str]:
     """The report's opening sentences, from ``summary.json``'s figures alone: the verdict
     (:func:`~simbridge.compare.verdict.verdict_lines`), then the nominal runs' figures."""
     h = summary["headline"]
-    a, b = summary["labels"]
     unit = h["unit"]
     subject = summary["subject"]
     lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
@@ -85,6 +84,55 @@ def headline(summary: dict[str, Any]) -> list[str]:
     parts = [f"moves {label}'s end by {fmt_value(e['final'], unit)}" for label, e in own.items()]
     lines.append("Halving the time step " + "; it ".join(parts) + ".")
     lines += resync_lines(summary)  # one step from the same state: the model error
+    lines += pairs_lines(summary)  # more than two engines: every pair's verdict
+    return lines
+
+
+def pairs_lines(summary: dict[str, Any]) -> list[str]:
+    """With more than two engines, every pair's verdict in one sentence (the lines above speak
+    of the first pair); empty with two."""
+    pairs = summary.get("pairs") or []
+    if len(summary["labels"]) <= 2 or not pairs:
+        return []
+    unit = summary["headline"]["unit"]
+    words = []
+    for p in pairs:
+        a, b = p["labels"]
+        v = p["verdict"]
+        what = v["verdict"] if v else "not judged"
+        if v and v["engines"]:
+            what += " (" + " and ".join(v["engines"]) + ")"
+        gap = fmt_value(p["headline"]["final"], unit)
+        words.append(f"{a} and {b} {what}, {gap} apart at the end")
+    return [f"Every pair of the {len(summary['labels'])} engines: " + "; ".join(words) + "."]
+
+
+def pairs_section(s: dict[str, Any]) -> list[str]:
+    """With more than two engines, the engine-by-engine verdict table: row engine against column
+    engine, each cell the pair's verdict and its nominal runs' gap at the end; empty with two."""
+    pairs = s.get("pairs") or []
+    labels = s["labels"]
+    if len(labels) <= 2 or not pairs:
+        return []
+    unit = s["headline"]["unit"]
+    cell: dict[tuple[str, str], str] = {}
+    for p in pairs:
+        a, b = p["labels"]
+        v = p["verdict"]
+        what = v["verdict"] + (" (marginal)" if v["marginal"] else "") if v else "not judged"
+        if v and v["engines"]:
+            what += ": " + ", ".join(v["engines"])
+        cell[(a, b)] = cell[(b, a)] = f"{what}; {fmt_value(p['headline']['final'], unit)}"
+    rows = [[x] + [cell.get((x, y), "") for y in labels] for x in labels]
+    lines = ["## Every pair of engines", ""]
+    lines += [
+        f"Each pair is judged as the first pair above is ({s['headline']['title']}: the verdict, "
+        "the engines it names, the nominal runs' gap at the end); every figure is in "
+        "`summary.json` under `pairs`.",
+        "",
+    ]
+    lines += _table(["engine"] + labels, rows)
+    lines += [""]
     return lines
 
 
@@ -98,15 +146,20 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
 
 
 def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: list[str]) -> str:
-    a, b = s["labels"]
+    a, b = s["labels"][:2]
     cross = c.cross[c.timestep]
-    lines = [f"# {s['scenario']}: {a} against {b}", ""]
+    if len(s["labels"]) > 2:
+        title = ", ".join(s["labels"][:-1]) + f" and {s['labels'][-1]}"
+    else:
+        title = f"{a} against {b}"
+    lines = [f"# {s['scenario']}: {title}", ""]
     lines += headline(s)
     lines += [""]
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
     # -- verdict
     lines += outcomes_section(s)
+    lines += pairs_section(s)
     if s.get("verdict"):
         lines += _verdict_section(s)
     # -- setup

@@ -101,9 +101,15 @@ def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
                 )
             parts.append(values_text)
         elif decl["kind"] == "reach":
-            parts.append(f"{title}: {values[0]} on {labels[0]}, {values[1]} on {labels[1]}")
+            parts.append(
+                f"{title}: "
+                + ", ".join(f"{v} on {lab}" for v, lab in zip(values, labels, strict=True))
+            )
         else:
-            parts.append(f"{title} {values[0]} on {labels[0]} against {values[1]} on {labels[1]}")
+            parts.append(
+                f"{title} "
+                + " against ".join(f"{v} on {lab}" for v, lab in zip(values, labels, strict=True))
+            )
         lines.append(f"**{name}**: " + "; ".join(parts) + ".")
     return lines
 

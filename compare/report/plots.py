@@ -39,9 +39,10 @@ __all__ = [
     "JOINT_PLOTS",
 ]
 
-COLORS = ("tab:blue", "tab:orange")
-LINES = ("-", (0, (5, 3)))  # solid, dashed
-MARKERS = ("o", "s")
+COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+LINES = ("-", (0, (5, 3)), (0, (1, 2)), "-.", (0, (3, 1, 1, 1)), (0, (5, 1)))
+MARKERS = ("o", "s", "^", "D", "v", "P")
+"""Engine slot -> its colour, line and marker (a comparison of more engines than this cycles)."""
 JOINT_PLOTS = {1: "velocity", 2: "position", 3: "torque"}
 """Command mode code -> the name of its figure (``joints_<name>.png``)."""
 
@@ -52,12 +53,12 @@ def _style(slot: int, n: int) -> dict[str, Any]:
     the two engines' markers alternate)."""
     every = max(1, n // 12)
     return {
-        "color": COLORS[slot],
-        "ls": LINES[slot],
+        "color": COLORS[slot % len(COLORS)],
+        "ls": LINES[slot % len(LINES)],
         "lw": 2.0 if slot == 0 else 1.3,  # the wider solid line shows under the dashed one
-        "marker": MARKERS[slot],
+        "marker": MARKERS[slot % len(MARKERS)],
         "ms": 4,
-        "mfc": "none" if slot == 0 else COLORS[slot],
+        "mfc": "none" if slot == 0 else COLORS[slot % len(COLORS)],
         "markevery": (slot * every // 2, every),
         "zorder": 2 + slot,
     }
@@ -128,8 +129,14 @@ def paths(c: Comparison, path: Path) -> Path:
         xy = body.link_positions[:, -1, :][:, [0, 2]] if fixed else body.base_position[:, :2]
         ax.plot(xy[:, 0], xy[:, 1], label=label, **_style(slot, len(xy)))
         for k, (_name, first, _) in enumerate(tr.phases):
-            ax.plot(*xy[first], markers[k % len(markers)], color=COLORS[slot], ms=7, mfc="none")
-        ax.plot(*xy[-1], "x", color=COLORS[slot], ms=9, mew=2)
+            ax.plot(
+                *xy[first],
+                markers[k % len(markers)],
+                color=COLORS[slot % len(COLORS)],
+                ms=7,
+                mfc="none",
+            )
+        ax.plot(*xy[-1], "x", color=COLORS[slot % len(COLORS)], ms=9, mew=2)
     for k, (name, _, _) in enumerate(c.runs[(0, c.timestep)].phases):
         ax.plot([], [], markers[k % len(markers)], color="0.3", mfc="none", label=f"start: {name}")
     ax.plot([], [], "x", color="0.3", mew=2, label="end")
@@ -168,7 +175,7 @@ def distance(c: Comparison, path: Path) -> Path:
         ax.semilogy(
             own.time,
             np.maximum(own.series[q], floor),
-            color=COLORS[slot],
+            color=COLORS[slot % len(COLORS)],
             lw=2.2 if slot == 0 else 1.2,
             ls="--" if slot == 0 else (0, (3, 2)),
             label=f"{label}: own error (dt vs dt/2)",
@@ -182,15 +189,16 @@ def distance(c: Comparison, path: Path) -> Path:
             label="median gap over every pair of runs (judged)",
         )
         for slot, e in enumerate(c.ensembles):
+            spread = v.spreads[slot] if slot < 2 else e.spread  # the first pair's, the others'
             ax.semilogy(
                 v.time,
-                np.maximum(v.spreads[slot], floor),
-                color=COLORS[slot],
+                np.maximum(spread, floor),
+                color=COLORS[slot % len(COLORS)],
                 lw=2.4 if slot == 0 else 1.3,
                 ls=":",
                 label=f"{e.label}: spread of {e.size} perturbed runs",
             )
-            positive = v.spreads[slot][v.spreads[slot] > 0]
+            positive = spread[spread > 0]
             if positive.size:
                 lowest.append(float(positive.min()) / 2)
     for thr in QUANTITIES[q].thresholds:
@@ -206,7 +214,9 @@ def distance(c: Comparison, path: Path) -> Path:
             fontsize=8,
             color="tab:red",
         )
-    highest = max(float(np.max(x.series[q])) for x in [d] + [c.own[(k, dt)] for k in (0, 1)])
+    highest = max(
+        float(np.max(x.series[q])) for x in [d] + [c.own[(k, dt)] for k in range(len(c.labels))]
+    )
     top = max(QUANTITIES[q].thresholds[-1] * 1.5, highest * 2)
     ax.set_ylim(max(min(lowest), floor), top)
     _phase_lines(ax, c)
@@ -270,7 +280,7 @@ def _joint_columns(c: Comparison, mode: int) -> list[int]:
     """The subject's joints commanded in ``mode`` (1 velocity, 2 position, 3 torque) at some
     step, by either engine's record."""
     cols: set[int] = set()
-    for slot in (0, 1):
+    for slot in range(len(c.labels)):
         modes = c.runs[(slot, c.timestep)].body.joint_modes
         cols |= {j for j in range(modes.shape[1]) if np.any(modes[:, j] == mode)}
     return sorted(cols)
@@ -512,18 +522,18 @@ def events(c: Comparison, path: Path) -> Path | None:
                 ax.broken_barh(
                     [(x.time, max(stop - x.time, c.timestep))],
                     (y - 0.3, 0.6),
-                    facecolors=COLORS[slot],
+                    facecolors=COLORS[slot % len(COLORS)],
                     alpha=0.55,
-                    edgecolor=COLORS[slot],
+                    edgecolor=COLORS[slot % len(COLORS)],
                 )
             else:
                 ax.plot(
                     x.time,
                     y,
                     {"contact_made": "v", "contact_lost": "^", "peak_height": "*"}[kind],
-                    color=COLORS[slot],
+                    color=COLORS[slot % len(COLORS)],
                     ms=6,
-                    mfc="none" if kind == "contact_lost" else COLORS[slot],
+                    mfc="none" if kind == "contact_lost" else COLORS[slot % len(COLORS)],
                 )
     ax.set_yticks(range(len(lanes)))
     ax.set_yticklabels([f"{c.labels[s]}: {k.replace('_', ' ')}" for s, k in lanes], fontsize=8)
@@ -567,7 +577,7 @@ def sweep(c: Comparison, path: Path) -> Path | None:
     for slot, label in enumerate(c.labels):
         speed = [c.runs[(slot, t)].wall_per_sim_second() for t in c.timesteps]
         err = [max(c.own[(slot, t)].final[q], floor) for t in c.timesteps]
-        ax.loglog(speed, err, "o-", color=COLORS[slot], label=label)
+        ax.loglog(speed, err, "o-", color=COLORS[slot % len(COLORS)], label=label)
         for s, e, t in zip(speed, err, c.timesteps, strict=True):
             ax.annotate(
                 format_timestep(t), (s, e), xytext=(4, 4), textcoords="offset points", fontsize=8
@@ -597,7 +607,7 @@ def ensemble(c: Comparison, path: Path) -> Path | None:
         return None
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.9))
-    markers = ("o", "x")
+    markers = ("o", "x", "+", "^", "D", "v")
     fixed = c.scenario.robot(c.scenario.subject).fixed_base
     for ax, (i, j, names) in zip(axes, ((0, 1, "xy"), (0, 2, "xz")), strict=True):
         for slot, e in enumerate(c.ensembles):
@@ -605,10 +615,10 @@ def ensemble(c: Comparison, path: Path) -> Path | None:
             ax.plot(
                 pts[:, i],
                 pts[:, j],
-                markers[slot],
-                color=COLORS[slot],
+                markers[slot % len(markers)],
+                color=COLORS[slot % len(COLORS)],
                 ms=6,
-                mfc="none" if markers[slot] == "o" else COLORS[slot],
+                mfc="none" if slot % len(markers) == 0 else COLORS[slot % len(COLORS)],
                 alpha=0.8,
                 label=f"{e.label}: {e.size} runs",
             )
@@ -616,7 +626,7 @@ def ensemble(c: Comparison, path: Path) -> Path | None:
                 pts[0, i],
                 pts[0, j],
                 "s",
-                color=COLORS[slot],
+                color=COLORS[slot % len(COLORS)],
                 ms=11,
                 mfc="none",
                 mew=1.2,

@@ -10,7 +10,8 @@ from ..analysis.events import engine_events, parting
 from ..analysis.outcomes import outcomes_summary
 from ..analysis.parts import rank_parts
 from ..analysis.verdict import Verdict
-from ..pipeline import Comparison
+from ..pipeline import Comparison, Pair
+from ..run.events import EngineEvents
 from ..run.resync import Resync
 from ..scenario import format_timestep
 from .departures import applicable
@@ -21,25 +22,13 @@ __all__ = ["summary", "verdict_dict"]
 
 
 def summary(c: Comparison) -> dict[str, Any]:
-    """``summary.json``: every headline figure of ``c``, JSON-ready (SI units: m, rad, s)."""
+    """``summary.json``: every figure of ``c``, JSON-ready (SI units: m, rad, s). Per engine:
+    ``own``, ``sweep``'s ``engines``, ``ensemble``, ``events``, ``departures``, ``outcomes``,
+    ``manifest``; per pair of engines, ``pairs``; the keys of one pair (``headline``, ``cross``,
+    ``verdict``, ``parting``, ``parts``, ``resync``) are the first pair's (docs/compare.md)."""
     q = c.headline_quantity
     dt = c.timestep
     cross = c.cross[dt]
-    gap = cross.final[q]
-    first = cross.first_to_diverge()
-    floor = c.verdict.floor if c.verdict is not None else 0.0
-    own = {}
-    for slot, label in enumerate(c.labels):
-        d = c.own[(slot, dt)]
-        err = d.final[q]
-        own[label] = {
-            "timestep": dt,
-            "half_timestep": dt / 2,
-            "final": err,
-            "max": d.maximum[q],
-            "gap_ratio": _ratio(gap, max(err, floor)),
-            "gap_exceeds": bool(gap > max(err, floor)),
-        }
     sweep = []
     for t in c.timesteps:
         row: dict[str, Any] = {
@@ -58,6 +47,9 @@ def summary(c: Comparison) -> dict[str, Any]:
             }
         sweep.append(row)
     manifests = {label: c.runs[(slot, dt)].manifest for slot, label in enumerate(c.labels)}
+    events = engine_events(c)
+    pairs = [_pair_summary(c, p, events) for p in _pairs_of(c)]
+    first = pairs[0]
     return {
         "scenario": c.scenario.name,
         "description": c.scenario.description,
@@ -70,6 +62,60 @@ def summary(c: Comparison) -> dict[str, Any]:
         "timestep_text": format_timestep(dt),
         "duration": float(cross.time[-1]),
         "headline_quantity": q,
+        "headline": first["headline"],
+        "cross": first["cross"],
+        "own": {label: c.own[(slot, dt)].to_dict() for slot, label in enumerate(c.labels)},
+        "sweep": sweep,
+        "verdict": first["verdict"],
+        "ensemble": _ensemble_summary(c),
+        "resync": None if c.resync is None else _resync(c.resync),
+        "outcomes": _outcomes_summary(c),
+        "events": {e.label: e.to_dict() for e in events},
+        "parting": first["parting"],
+        "parts": first["parts"],
+        "departures": applicable(c, events),
+        "pairs": pairs,
+        "wall_time": c.wall_time,
+        "manifest": {
+            "simbridge_version": _version(),
+            "command_line": c.command_line,
+            "engines": manifests,
+        },
+    }
+
+
+def _pairs_of(c: Comparison) -> list[Pair]:
+    """Every pair of ``c`` (a Comparison made by hand without ``pairs``: its ``cross`` and
+    ``verdict``, engines 0 and 1)."""
+    return c.pairs or [Pair(0, 1, c.cross, c.verdict)]
+
+
+def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[str, Any]:
+    """``pairs[k]``: engines ``p.a`` and ``p.b``, their headline, cross diff, verdict, where the
+    gap is born and which part parts first."""
+    q = c.headline_quantity
+    dt = c.timestep
+    cross = p.cross[dt]
+    gap = cross.final[q]
+    first = cross.first_to_diverge()
+    floor = p.verdict.floor if p.verdict is not None else 0.0
+    own = {}
+    for slot in (p.a, p.b):
+        d = c.own[(slot, dt)]
+        err = d.final[q]
+        own[c.labels[slot]] = {
+            "timestep": dt,
+            "half_timestep": dt / 2,
+            "final": err,
+            "max": d.maximum[q],
+            "gap_ratio": _ratio(gap, max(err, floor)),
+            "gap_exceeds": bool(gap > max(err, floor)),
+        }
+    thr = QUANTITIES[q].thresholds[0]
+    tr = c.runs[(p.a, dt)]
+    phases = [(name, float(tr.time[a]), float(tr.time[b])) for name, a, b in tr.phases]
+    return {
+        "labels": [c.labels[p.a], c.labels[p.b]],
         "headline": {
             "quantity": q,
             "title": QUANTITIES[q].title,
@@ -77,8 +123,8 @@ def summary(c: Comparison) -> dict[str, Any]:
             "final": gap,
             "max": cross.maximum[q],
             "crossings": [
-                {"threshold": thr, "time": cross.first_crossing(q, thr)}
-                for thr in QUANTITIES[q].thresholds
+                {"threshold": t, "time": cross.first_crossing(q, t)}
+                for t in QUANTITIES[q].thresholds
             ],
             "first_to_diverge": (
                 None
@@ -89,19 +135,16 @@ def summary(c: Comparison) -> dict[str, Any]:
             "gap_exceeds_all_own_errors": all(v["gap_exceeds"] for v in own.values()),
         },
         "cross": cross.to_dict(),
-        "own": {label: c.own[(slot, dt)].to_dict() for slot, label in enumerate(c.labels)},
-        "sweep": sweep,
-        "verdict": None if c.verdict is None else verdict_dict(c.verdict),
-        "ensemble": _ensemble_summary(c),
-        "resync": None if c.resync is None else _resync(c.resync),
-        "outcomes": _outcomes_summary(c),
-        **where_born(c),
-        "wall_time": c.wall_time,
-        "manifest": {
-            "simbridge_version": _version(),
-            "command_line": c.command_line,
-            "engines": manifests,
-        },
+        "verdict": None if p.verdict is None else verdict_dict(p.verdict),
+        "parting": parting(
+            cross.first_crossing(q, thr),
+            thr,
+            q,
+            phases,
+            [events[p.a], events[p.b]],
+            c.timestep,
+        ),
+        "parts": [part.to_dict() for part in rank_parts(cross)],
     }
 
 
@@ -111,8 +154,8 @@ def _outcomes_summary(c: Comparison) -> dict[str, Any] | None:
     if c.ensembles:
         runs = [e.outcomes for e in c.ensembles]
     else:
-        runs = [[c.runs[(slot, c.timestep)].outcomes] for slot in (0, 1)]
-    half = [c.runs.get((slot, c.timestep / 2)) for slot in (0, 1)]
+        runs = [[c.runs[(slot, c.timestep)].outcomes] for slot in range(len(c.labels))]
+    half = [c.runs.get((slot, c.timestep / 2)) for slot in range(len(c.labels))]
     return outcomes_summary(
         c.scenario,
         c.labels,
@@ -125,10 +168,13 @@ def _ensemble_summary(c: Comparison) -> dict[str, Any] | None:
     if not c.ensembles:
         return None
     s = c.ensemble_settings
-    v = c.verdict
+    judged = {}  # slot -> its figures in the first pair that holds it
+    for p in reversed(_pairs_of(c)):
+        if p.verdict is not None:
+            judged[p.a], judged[p.b] = p.verdict.per_engine
     engines = {}
     for slot, e in enumerate(c.ensembles):
-        fig = v.per_engine[slot] if v is not None else None
+        fig = judged.get(slot)
         engines[e.label] = {
             "backend": e.backend,
             "profile": e.profile,
@@ -174,20 +220,3 @@ def _resync(r: Resync) -> dict[str, Any]:
         for w in d["worst"]:
             w["events"] = [{**e, "words": event_words(e, d["source"])} for e in w["events"]]
     return out
-
-
-def where_born(c: Comparison) -> dict[str, Any]:
-    """``summary.json``'s ``events`` (per engine label), ``parting``, ``parts`` and
-    ``departures``."""
-    events = engine_events(c)
-    cross = c.cross[c.timestep]
-    q = c.headline_quantity
-    thr = QUANTITIES[q].thresholds[0]
-    tr = c.runs[(0, c.timestep)]
-    phases = [(name, float(tr.time[a]), float(tr.time[b])) for name, a, b in tr.phases]
-    return {
-        "events": {e.label: e.to_dict() for e in events},
-        "parting": parting(cross.first_crossing(q, thr), thr, q, phases, events, c.timestep),
-        "parts": [p.to_dict() for p in rank_parts(cross)],
-        "departures": applicable(c, events),
-    }

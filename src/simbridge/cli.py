@@ -94,25 +94,27 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser(
         "compare",
-        help="run a scenario on two engines and write a divergence report",
-        description="Run SCENARIO on two engines (and each at half its time step), diff the "
-        "trajectories and write report.md, summary.json, figures and trajectories.",
+        help="run a scenario on two or more engines and write a divergence report",
+        description="Run SCENARIO on two or more engines (and each at half its time step), diff "
+        "the trajectories of every pair and write report.md, summary.json, figures and "
+        "trajectories.",
     )
     p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
     p.add_argument(
         "--backends",
-        nargs=2,
-        metavar=("A", "B"),
+        nargs="+",
+        metavar="NAME",
         default=["pybullet", "mujoco"],
         choices=backends,
-        help=f"the two backends (default: pybullet mujoco; registered: {', '.join(backends)})",
+        help="two or more backends, every pair judged, the first two in the headline (default: "
+        f"pybullet mujoco; registered: {', '.join(backends)})",
     )
     p.add_argument(
         "--profile",
         nargs="+",
         metavar="PROFILE",
         choices=sorted(PROFILES),
-        help="profile for both backends, or one per backend (default: the scenario's)",
+        help="profile for every backend, or one per backend (default: the scenario's)",
     )
     p.add_argument(
         "--timestep",
@@ -201,8 +203,12 @@ def _compare(args: argparse.Namespace) -> int:
     from simbridge.compare.report.progress import ProgressBar
     from simbridge.exceptions import ScenarioError
 
-    if args.profile is not None and len(args.profile) > 2:
-        raise _Usage("--profile takes one profile, or one per backend (two)")
+    if len(args.backends) < 2:
+        raise _Usage("--backends takes two or more backends")
+    n = len(args.backends)
+    if args.profile is not None and len(args.profile) not in (1, n):
+        many = "two" if n == 2 else str(n)
+        raise _Usage(f"--profile takes one profile, or one per backend ({many})")
     try:
         scenario = load_scenario(args.scenario)
     except ScenarioError as exc:
