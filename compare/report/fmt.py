@@ -37,7 +37,7 @@ def fmt_value(x: float, unit: str) -> str:
         return fmt_distance(x)
     if unit == "rad":
         return f"{x / DEG:.3g}°" if abs(x) < 2 * math.pi else f"{x:.3g} rad"
-    return f"{x:.3g} {unit}"
+    return f"{x:.3g} {unit}".rstrip()  # a function outcome's value may have no unit
 
 
 def fmt_threshold(x: float, unit: str) -> str:

@@ -3,32 +3,14 @@ report's section (:func:`outcomes_section`), from ``summary.json``'s ``outcomes`
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
 from ..run.quantities import DEG
 from ..scenario.outcomes import _TITLES
+from .fmt import fmt_value
 
 __all__ = ["outcome_lines", "outcomes_section"]
-
-
-def _fmt(x: float, unit: str) -> str:
-    """A value for people, as the report writes distances and angles (``fmt.fmt_value``, not
-    imported: fmt imports diff, which imports run, which imports this module): ``4.2 cm``,
-    ``0.83 mm``, ``2.1e-06 m``; angles in degrees; other units as they are."""
-    if unit == "m":
-        a = abs(x)
-        if a >= 1:
-            return f"{x:.2f} m"
-        if a >= 0.01:
-            return f"{x * 100:.1f} cm"
-        if a >= 1e-4:
-            return f"{x * 1000:.2f} mm"
-        return "0 m" if a == 0 else f"{x:.1e} m"
-    if unit == "rad":
-        return f"{x / DEG:.3g}°" if abs(x) < 2 * math.pi else f"{x:.3g} rad"
-    return f"{x:.3g} {unit}".rstrip()
 
 
 def _pm(dist: dict[str, Any] | None, unit: str, runs: int, none: str = "none") -> str:
@@ -37,7 +19,7 @@ def _pm(dist: dict[str, Any] | None, unit: str, runs: int, none: str = "none") -
     if dist is None:
         return none
     if dist["runs"] == 1:
-        return _fmt(dist["mean"], unit) + (f" (1 run of {runs})" if runs > 1 else "")
+        return fmt_value(dist["mean"], unit) + (f" (1 run of {runs})" if runs > 1 else "")
     mean, std = dist["mean"], dist["std"]
     if unit == "m":  # both in the mean's unit: 0.68 ± 0.025 mm
         steps = ((1.0, 1.0, "m"), (0.01, 100.0, "cm"), (1e-4, 1000.0, "mm"))
@@ -97,7 +79,8 @@ def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
             ]
             if len(closest) == len(per):
                 values_text += "; closest " + " and ".join(
-                    f"{_fmt(c, 'm')} on {label}" for c, label in zip(closest, labels, strict=True)
+                    f"{fmt_value(c, 'm')} on {label}"
+                    for c, label in zip(closest, labels, strict=True)
                 )
             parts.append(values_text)
         elif decl["kind"] == "reach":
@@ -117,7 +100,7 @@ def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
 def _state(record: Mapping[str, Any], unit: str) -> str:
     ok = {True: "succeeds", False: "fails", None: "has no success"}[record["success"]]
     v = record.get("value")
-    return ok + ("" if v is None else f" ({_fmt(v, unit)})")
+    return ok + ("" if v is None else f" ({fmt_value(v, unit)})")
 
 
 def _half_timestep_changes(out: Mapping[str, Any]) -> list[str]:
@@ -175,14 +158,14 @@ def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
             else:
                 cells += [
                     _pm(v, unit, len(p["runs"])),
-                    _fmt(v["median"], unit),
-                    f"{_fmt(v['min'], unit)} – {_fmt(v['max'], unit)}",
+                    fmt_value(v["median"], unit),
+                    f"{fmt_value(v['min'], unit)} – {fmt_value(v['max'], unit)}",
                 ]
             nv = None if nom is None else nom.get("value")
             if nv is not None:
-                cells.append(_fmt(nv, unit))
+                cells.append(fmt_value(nv, unit))
             elif decl["kind"] == "reach" and nom is not None and nom.get("closest") is not None:
-                cells.append(f"never (closest {_fmt(nom['closest'], 'm')})")
+                cells.append(f"never (closest {fmt_value(nom['closest'], 'm')})")
             else:
                 cells.append("none")
             lines.append("| " + " | ".join(cells) + " |")

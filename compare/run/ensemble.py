@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
+from simbridge.transforms import quat_multiply
 
 from ..scenario import Scenario
 from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features
@@ -168,18 +169,6 @@ def offsets(
     return dpos, drot
 
 
-def _quat_mul(a: Sequence[float], b: Sequence[float]) -> tuple[float, float, float, float]:
-    """a * b, quaternions (x, y, z, w)."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    )
-
-
 def perturbed(scenario: Scenario, dpos: np.ndarray, drot: np.ndarray) -> Scenario:
     """``scenario`` with robot r's spawn position moved by ``dpos[r]`` (m, world) and its
     orientation turned by the rotation vector ``drot[r]`` (rad, world frame, applied after the
@@ -191,7 +180,7 @@ def perturbed(scenario: Scenario, dpos: np.ndarray, drot: np.ndarray) -> Scenari
             axis = drot[r] / angle
             s = math.sin(angle / 2)
             dq = (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(angle / 2))
-            orientation = _quat_mul(dq, spec.orientation)
+            orientation = quat_multiply(dq, spec.orientation)
         else:
             orientation = tuple(spec.orientation)  # type: ignore[assignment]
         x, y, z = (float(p + d) for p, d in zip(spec.position, dpos[r], strict=True))
