@@ -1,4 +1,4 @@
-"""simbridge.compare: run one scenario on two engines and report where and when they part.
+"""simbridge.compare: run one scenario on two or more engines and report where and when they part.
 
 A pipeline of stages, each importing only those before it (tests/test_import_graph.py):
 :mod:`.scenario` (reading and writing scenarios, controllers, declared outcomes), :mod:`.run`

@@ -4,6 +4,7 @@ event the gap between two engines first crossed its threshold after (:func:`part
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from ..run.events import (
@@ -28,6 +29,7 @@ __all__ = [
     "find_events",
     "phase_at",
     "engine_events",
+    "Parting",
     "parting",
 ]
 
@@ -39,6 +41,49 @@ def engine_events(c: ComparisonView) -> list[EngineEvents]:
     ]
 
 
+@dataclass
+class Parting:
+    """Where the gap between two engines is born (:func:`parting`): the phase and the event
+    during or after which it first reached ``threshold`` (at ``time``, None: never).
+
+    ``event`` is the event (of the engine labelled ``event_label``) or None (no event before
+    ``time``); ``relation`` ``after`` or ``during`` (None: no event); ``since`` (s) how long
+    before ``time`` it began (negative: in the same step, just after); ``ongoing`` every
+    interval event going on at ``time``, with its engine's label; ``initial_contacts`` per
+    engine label, the links touching from the first step (only when no event came before).
+    :meth:`to_dict` is ``summary.json``'s ``parting``."""
+
+    quantity: str
+    threshold: float
+    time: float | None
+    step: float
+    body: str | None
+    phase: str | None = None
+    event: Event | None = None
+    event_label: str | None = None
+    relation: str | None = None
+    since: float | None = None
+    ongoing: list[tuple[str, Event]] = field(default_factory=list)
+    initial_contacts: dict[str, list[str]] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "quantity": self.quantity,
+            "threshold": self.threshold,
+            "time": self.time,
+            "step": self.step,
+            "body": self.body,
+            "phase": self.phase,
+            "event": (
+                None if self.event is None else {"label": self.event_label, **self.event.to_dict()}
+            ),
+            "relation": self.relation,
+            "since": self.since,
+            "ongoing": [{"label": label, **e.to_dict()} for label, e in self.ongoing],
+            "initial_contacts": dict(self.initial_contacts),
+        }
+
+
 def parting(
     time: float | None,
     threshold: float,
@@ -46,7 +91,7 @@ def parting(
     phases: list[tuple[str, float, float]],
     engines: list[EngineEvents],
     step: float = 0.0,
-) -> dict[str, Any]:
+) -> Parting:
     """Where the gap is born: the phase and the event during which it first reached
     ``threshold`` (at ``time``, None: never).
 
@@ -64,32 +109,20 @@ def parting(
     robot's contacts from its first step (``initial_contacts``) are what it parts during, when
     it has some.
 
-    Returns ``{quantity, threshold, time, step, body, phase, event, relation, since, ongoing,
-    initial_contacts}`` (``step``: the recorded step, s; ``body``: the followed robot):
-    ``event`` is the event's dict with ``label`` (the engine) added, or None (no event before
-    ``time``); ``relation`` ``after`` or ``during`` (None: no event);
-    ``since`` (s) how long before ``time`` it began (negative: in the same step, just after);
-    ``ongoing`` every interval event going on at ``time``; ``initial_contacts`` per engine
-    label, the links touching from the first step (only when no event came before).
+    Returns a :class:`Parting` (``step``: the recorded step, s; ``body``: the followed robot).
     """
-    out: dict[str, Any] = {
-        "quantity": quantity,
-        "threshold": threshold,
-        "time": time,
-        "step": step,
-        "body": engines[0].body if engines else None,
-        "phase": None,
-        "event": None,
-        "relation": None,
-        "since": None,
-        "ongoing": [],
-        "initial_contacts": {},
-    }
+    out = Parting(
+        quantity=quantity,
+        threshold=threshold,
+        time=time,
+        step=step,
+        body=engines[0].body if engines else None,
+    )
     if time is None:
         return out
     for name, start, end in phases:
         if start - 1e-12 <= time <= end + 1e-12:
-            out["phase"] = name
+            out.phase = name
             if time > start + 1e-12:  # at a boundary: the phase that led to it
                 break
     order = {k: i for i, k in enumerate(KINDS)}
@@ -103,17 +136,15 @@ def parting(
             began.append((key, event, e.label))
             if event.kind in INTERVAL_KINDS and (event.end is None or event.end >= time - 1e-12):
                 going.append((key, event, e.label))
-                out["ongoing"].append({"label": e.label, **event.to_dict()})
+                out.ongoing.append((e.label, event))
     recent = [x for x in began if x[1].time >= time - PARTING_WINDOW - 1e-12]
     for pool, relation in ((recent, "after"), (going, "during"), (began, "after")):
         if pool:
             _, event, label = max(pool, key=lambda x: x[0])
-            out["event"] = {"label": label, **event.to_dict()}
-            out["relation"] = relation
-            out["since"] = time - event.time
+            out.event, out.event_label = event, label
+            out.relation = relation
+            out.since = time - event.time
             break
     else:
-        out["initial_contacts"] = {
-            e.label: e.initial_contacts for e in engines if e.initial_contacts
-        }
+        out.initial_contacts = {e.label: e.initial_contacts for e in engines if e.initial_contacts}
     return out

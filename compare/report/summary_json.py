@@ -3,17 +3,18 @@ documented in docs/compare.md."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..analysis.diff import QUANTITIES
 from ..analysis.events import engine_events, parting
-from ..analysis.outcomes import outcomes_summary
+from ..analysis.outcomes import CONFIDENCE, INTERVAL_METHOD, summarize
 from ..analysis.parts import rank_parts
 from ..analysis.verdict import Verdict
 from ..pipeline import Comparison, Pair
 from ..run.events import EngineEvents
 from ..run.resync import Resync
-from ..scenario import format_timestep
+from ..scenario import Scenario, format_timestep
 from .departures import applicable
 from .events import event_words
 from .verdict import marginal_words
@@ -143,14 +144,14 @@ def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[st
             phases,
             [events[p.a], events[p.b]],
             c.timestep,
-        ),
+        ).to_dict(),
         "parts": [part.to_dict() for part in rank_parts(cross)],
     }
 
 
 def _outcomes_summary(c: Comparison) -> dict[str, Any] | None:
     """The scenario's outcomes over each engine's runs (the ensemble's, else the nominal
-    run alone): :func:`simbridge.compare.outcomes.outcomes_summary`."""
+    run alone): :func:`outcomes_summary`."""
     if c.ensembles:
         runs = [e.outcomes for e in c.ensembles]
     else:
@@ -220,3 +221,39 @@ def _resync(r: Resync) -> dict[str, Any]:
         for w in d["worst"]:
             w["events"] = [{**e, "words": event_words(e, d["source"])} for e in w["events"]]
     return out
+
+
+def outcomes_summary(
+    scenario: Scenario,
+    labels: Sequence[str],
+    per_engine: Sequence[Sequence[Mapping[str, Any]]],
+    half_timestep: Sequence[Mapping[str, Any]] | None = None,
+) -> dict[str, Any] | None:
+    """``summary.json``'s ``outcomes``: ``declared`` (each outcome's declaration) and
+    ``engines`` (per engine label, per outcome name, :func:`summarize`); ``per_engine[slot]``
+    is the list of every run's ``{name: record}``, nominal first; ``half_timestep[slot]`` the
+    records of the engine's nominal run at half the time step (its own-error run). None when the
+    scenario declares no outcome."""
+    if not scenario.outcomes:
+        return None
+    engines: dict[str, Any] = {}
+    for label, runs in zip(labels, per_engine, strict=True):
+        engines[label] = {
+            o.name: summarize(o, [r[o.name] for r in runs if o.name in r]).to_dict()
+            for o in scenario.outcomes
+        }
+    return {
+        "declared": [o.to_dict() for o in scenario.outcomes],
+        "closed_loop": any(p.controller is not None for p in scenario.phases),
+        "confidence": CONFIDENCE,
+        "method": INTERVAL_METHOD,
+        "engines": engines,
+        "half_timestep": (
+            None
+            if half_timestep is None
+            else {
+                label: {k: dict(v) for k, v in runs.items()}
+                for label, runs in zip(labels, half_timestep, strict=True)
+            }
+        ),
+    }
