@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from simbridge.compare.fmt import fmt_time, fmt_value
-from simbridge.compare.resync import resync
+from simbridge.compare.report.fmt import fmt_time, fmt_value
+from simbridge.compare.run.resync import resync
 from simbridge.compare.scenario import list_scenarios, load_scenario
 
 

@@ -1,4 +1,10 @@
-"""simbridge.compare: run one scenario on two engines and report where and when they part.
+"""simbridge.compare: run one scenario on two or more engines and report where and when they part.
+
+A pipeline of stages, each importing only those before it (tests/test_import_graph.py):
+:mod:`.scenario` (reading and writing scenarios, controllers, declared outcomes), :mod:`.run`
+(one scenario on one engine, ensembles, the one-step resync), :mod:`.analysis` (diff, verdict,
+events, parts, outcome statistics: figures, no words), :mod:`.pipeline` (:func:`compare`, the
+whole comparison) and :mod:`.report` (``summary.json``, ``report.md``, figures, the terminal).
 
 ::
 
@@ -11,6 +17,7 @@
 
     c = compare.compare("r2d2", ["pybullet", "mujoco"], timesteps=["1/240", "1/480"])
     c.verdict.verdict, c.verdict.engines           # "chaotic", ["pybullet"]
+    compare.summary(c)["headline"]["final"]        # summary.json's figures
     c.ensembles[0].spread, c.ensembles[0].horizons()   # 16 runs per engine, judged
     compare.run("r2d2-goto", "mujoco").outcomes    # closed loop: goals reached, and when
     compare.run("r2d2-gentle", "pybullet", controller="my_ctrl.py:Drive")   # your controller
@@ -21,13 +28,13 @@ Only the :class:`simbridge.Sim` interface is used: no engine is imported here.
 
 from __future__ import annotations
 
-from .controllers import ControllerError, ControllerSpec
-from .diff import QUANTITIES, Divergence, PhaseRow, Quantity, diff
-from .ensemble import Ensemble, run_ensembles
-from .outcomes import Outcome
+from .analysis.diff import Divergence, PhaseRow, diff
+from .analysis.verdict import Verdict, judge
 from .pipeline import Comparison, compare
-from .report import headline, report
-from .run import BodyTrajectory, Trajectory, run
+from .report import headline, report, summary
+from .run.ensemble import Ensemble, run_ensembles
+from .run.quantities import QUANTITIES, Quantity
+from .run.trajectory import BodyTrajectory, Trajectory, run
 from .scenario import (
     Command,
     Phase,
@@ -39,7 +46,8 @@ from .scenario import (
     loads_scenario,
     save_scenario,
 )
-from .verdict import Verdict, judge
+from .scenario.controllers import ControllerError, ControllerSpec
+from .scenario.outcomes import Outcome
 
 __all__ = [
     "run",
@@ -47,6 +55,7 @@ __all__ = [
     "compare",
     "report",
     "headline",
+    "summary",
     "Trajectory",
     "BodyTrajectory",
     "Divergence",

@@ -1,5 +1,5 @@
-"""The whole comparison: both engines, each at its time step and half of it, over a sweep of
-time steps: :func:`compare` and :class:`Comparison`."""
+"""The whole comparison: two or more engines, each at its time step and half of it, over a sweep
+of time steps, every pair of them judged: :func:`compare` and :class:`Comparison`."""
 
 from __future__ import annotations
 
@@ -13,41 +13,53 @@ from typing import Any
 
 from simbridge.exceptions import InvalidArgumentError, ScenarioError
 
-from .born import where_born
-from .diff import QUANTITIES, Divergence, diff
-from .ensemble import (
+from .analysis.diff import Divergence, diff
+from .analysis.verdict import Verdict, judge
+from .run.ensemble import (
     DEFAULT_ENSEMBLE,
     DEFAULT_PERTURB,
     DEFAULT_SEED,
     Ensemble,
     EnsembleRunner,
 )
-from .resync import Resync, default_every
-from .resync import resync as one_step_resync
-from .run import Trajectory, run
+from .run.resync import Resync, default_every
+from .run.resync import resync as one_step_resync
+from .run.trajectory import Trajectory, run
 from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
-from .verdict import Verdict, judge
 
-__all__ = ["Comparison", "compare", "ProgressCallback"]
+__all__ = ["Comparison", "Pair", "compare", "ProgressCallback"]
 
 ProgressCallback = Callable[[str, int, int], None]
 """progress(what, steps_done_overall, steps_total_overall)."""
 
 
 @dataclass
-class Comparison:
-    """Two engines on one scenario.
+class Pair:
+    """Two engines of a comparison, ``a`` before ``b`` (slots into :attr:`Comparison.labels`):
+    ``cross[dt]`` diffs their runs at every time step, ``verdict`` judges their ensembles at the
+    headline time step (None for a comparison made without one)."""
 
-    ``runs[(slot, dt)]`` is engine ``slot`` (0 or 1) run at time step ``dt``; every ``dt`` of
-    ``timesteps`` is run, and so is ``dt / 2`` for the engine's own time-step error.
-    ``cross[dt]`` diffs the two engines at ``dt``; ``own[(slot, dt)]`` diffs an engine at ``dt``
-    against itself at ``dt / 2``. ``timesteps[0]`` is the one the headline speaks of.
-    ``ensembles`` holds each engine's runs from perturbed spawn poses at that time step, and
-    ``verdict`` the judgement over the whole run (:mod:`simbridge.compare.verdict`)."""
+    a: int
+    b: int
+    cross: dict[float, Divergence]
+    verdict: Verdict | None = None
+
+
+@dataclass
+class Comparison:
+    """Two or more engines on one scenario, every pair judged.
+
+    ``runs[(slot, dt)]`` is engine ``slot`` (0 to N-1, in ``backends`` order) run at time step
+    ``dt``; every ``dt`` of ``timesteps`` is run, and so is ``dt / 2`` for the engine's own
+    time-step error. ``own[(slot, dt)]`` diffs an engine at ``dt`` against itself at ``dt / 2``.
+    ``timesteps[0]`` is the one the headline speaks of. ``ensembles`` holds each engine's runs
+    from perturbed spawn poses at that time step. ``pairs`` holds every pair of engines (0, 1),
+    (0, 2), ..., (1, 2), ...: its cross diff and verdict; ``cross`` and ``verdict`` are the
+    first pair's (:mod:`simbridge.compare.analysis.verdict`)."""
 
     scenario: Scenario
-    backends: tuple[str, str]
-    profiles: tuple[str, str]
+    backends: tuple[str, ...]
+    profiles: tuple[str, ...]
     timesteps: list[float]
     runs: dict[tuple[int, float], Trajectory]
     cross: dict[float, Divergence]
@@ -57,26 +69,29 @@ class Comparison:
     ensembles: list[Ensemble] = field(default_factory=list)
     verdict: Verdict | None = None
     resync: Resync | None = None
-    """The one-step error from each other's states and each engine's floor
-    (:mod:`simbridge.compare.resync`); None with ``resync_every=0``."""
+    """The one-step error from each other's states and each engine's floor, between the first
+    pair's engines (:mod:`simbridge.compare.run.resync`); None with ``resync_every=0``."""
     ensemble_settings: dict[str, Any] = field(default_factory=dict)
     """size, perturbation (position m, orientation rad), seed, workers, wall_time (s)."""
+    pairs: list[Pair] = field(default_factory=list)
+    """Every pair of engines, in order; the first is (0, 1), whose ``cross`` and ``verdict``
+    these are."""
 
     @property
     def timestep(self) -> float:
         return self.timesteps[0]
 
     @property
-    def labels(self) -> tuple[str, str]:
-        """Engine names for the report (``pybullet``, ``mujoco``; with different profiles each
-        name carries its profile, ``pybullet (urdf)``; a backend compared with itself under the
-        same profile gets a suffix)."""
-        a, b = self.backends
-        if self.profiles[0] != self.profiles[1]:
-            return f"{a} ({self.profiles[0]})", f"{b} ({self.profiles[1]})"
-        if a != b:
-            return a, b
-        return a, f"{b} (2)"
+    def labels(self) -> tuple[str, ...]:
+        """Engine names for the report (``pybullet``, ``mujoco``; when the profiles are not all
+        the same each name carries its profile, ``pybullet (urdf)``; an engine named twice gets
+        a suffix from its second time on, ``mujoco (2)``)."""
+        return engine_labels(self.backends, self.profiles)
+
+    @property
+    def engine_pairs(self) -> list[tuple[int, int]]:
+        """Every pair of engine slots, (0, 1) first."""
+        return [(p.a, p.b) for p in self.pairs] or _pairs(len(self.backends))
 
     @property
     def headline_quantity(self) -> str:
@@ -84,149 +99,22 @@ class Comparison:
         ``link_distance`` for a fixed base."""
         return _headline_quantity(self.scenario)
 
-    def summary(self) -> dict[str, Any]:
-        """Every headline figure, JSON-ready (SI units: m, rad, s)."""
-        q = self.headline_quantity
-        dt = self.timestep
-        cross = self.cross[dt]
-        gap = cross.final[q]
-        first = cross.first_to_diverge()
-        floor = self.verdict.floor if self.verdict is not None else 0.0
-        own = {}
-        for slot, label in enumerate(self.labels):
-            d = self.own[(slot, dt)]
-            err = d.final[q]
-            own[label] = {
-                "timestep": dt,
-                "half_timestep": dt / 2,
-                "final": err,
-                "max": d.maximum[q],
-                "gap_ratio": _ratio(gap, max(err, floor)),
-                "gap_exceeds": bool(gap > max(err, floor)),
-            }
-        sweep = []
-        for t in self.timesteps:
-            row: dict[str, Any] = {
-                "timestep": t,
-                "gap_final": self.cross[t].final[q],
-                "gap_max": self.cross[t].maximum[q],
-                "engines": {},
-            }
-            for slot, label in enumerate(self.labels):
-                tr = self.runs[(slot, t)]
-                row["engines"][label] = {
-                    "wall_per_sim_second": tr.wall_per_sim_second(),
-                    "wall_time": tr.wall_time,
-                    "own_error_final": self.own[(slot, t)].final[q],
-                    "own_error_max": self.own[(slot, t)].maximum[q],
-                }
-            sweep.append(row)
-        manifests = {
-            label: self.runs[(slot, dt)].manifest for slot, label in enumerate(self.labels)
-        }
-        return {
-            "scenario": self.scenario.name,
-            "description": self.scenario.description,
-            "scenario_file": str(self.scenario.source) if self.scenario.source else None,
-            "subject": self.scenario.subject,
-            "backends": list(self.backends),
-            "labels": list(self.labels),
-            "profiles": list(self.profiles),
-            "timestep": dt,
-            "timestep_text": format_timestep(dt),
-            "duration": float(cross.time[-1]),
-            "headline_quantity": q,
-            "headline": {
-                "quantity": q,
-                "title": QUANTITIES[q].title,
-                "unit": QUANTITIES[q].unit,
-                "final": gap,
-                "max": cross.maximum[q],
-                "crossings": [
-                    {"threshold": thr, "time": cross.first_crossing(q, thr)}
-                    for thr in QUANTITIES[q].thresholds
-                ],
-                "first_to_diverge": (
-                    None
-                    if first is None
-                    else {"quantity": first[0], "threshold": first[1], "time": first[2]}
-                ),
-                "own_error": own,
-                "gap_exceeds_all_own_errors": all(v["gap_exceeds"] for v in own.values()),
-            },
-            "cross": cross.to_dict(),
-            "own": {
-                label: self.own[(slot, dt)].to_dict() for slot, label in enumerate(self.labels)
-            },
-            "sweep": sweep,
-            "verdict": None if self.verdict is None else self.verdict.to_dict(),
-            "ensemble": self._ensemble_summary(),
-            "resync": None if self.resync is None else self.resync.to_dict(),
-            "outcomes": self._outcomes_summary(),
-            **where_born(self),
-            "wall_time": self.wall_time,
-            "manifest": {
-                "simbridge_version": _version(),
-                "command_line": self.command_line,
-                "engines": manifests,
-            },
-        }
 
-    def _outcomes_summary(self) -> dict[str, Any] | None:
-        """The scenario's outcomes over each engine's runs (the ensemble's, else the nominal
-        run alone): :func:`simbridge.compare.outcomes.outcomes_summary`."""
-        from .outcomes import outcomes_summary
-
-        if self.ensembles:
-            runs = [e.outcomes for e in self.ensembles]
-        else:
-            runs = [[self.runs[(slot, self.timestep)].outcomes] for slot in (0, 1)]
-        half = [self.runs.get((slot, self.timestep / 2)) for slot in (0, 1)]
-        return outcomes_summary(
-            self.scenario,
-            self.labels,
-            runs,
-            None if None in half else [tr.outcomes for tr in half if tr is not None],
-        )
-
-    def _ensemble_summary(self) -> dict[str, Any] | None:
-        if not self.ensembles:
-            return None
-        s = self.ensemble_settings
-        v = self.verdict
-        engines = {}
-        for slot, e in enumerate(self.ensembles):
-            fig = v.per_engine[slot] if v is not None else None
-            engines[e.label] = {
-                "backend": e.backend,
-                "profile": e.profile,
-                "spread_end": fig.spread_end.to_dict() if fig else float(e.spread[-1]),
-                "spread_max": float(e.spread.max()),
-                "horizons": [{"threshold": t, "time": h} for t, h in e.horizons()],
-                "end_points": e.end_points.tolist(),
-                "wall_time": e.wall_time,
-            }
-        return {
-            "size": s["size"],
-            "perturbation": {"position": s["perturb"][0], "orientation": s["perturb"][1]},
-            "seed": s["seed"],
-            "workers": s["workers"],
-            "quantity": self.ensembles[0].quantity,
-            "instants": len(self.ensembles[0].time),
-            "wall_time": s.get("wall_time", 0.0),
-            "engines": engines,
-        }
+def engine_labels(backends: Sequence[str], profiles: Sequence[str]) -> tuple[str, ...]:
+    """:attr:`Comparison.labels` of ``backends`` run under ``profiles``."""
+    if len(set(profiles)) > 1:
+        names = [f"{b} ({p})" for b, p in zip(backends, profiles, strict=True)]
+    else:
+        names = list(backends)
+    out: list[str] = []
+    for name in names:
+        seen = names[: len(out)].count(name)
+        out.append(name if seen == 0 else f"{name} ({seen + 1})")
+    return tuple(out)
 
 
-def _ratio(gap: float, err: float) -> float | None:
-    """gap / err; None when the engine's own error is zero (JSON has no infinity)."""
-    return gap / err if err > 0 else None
-
-
-def _version() -> str:
-    from simbridge import __version__
-
-    return __version__
+def _pairs(n: int) -> list[tuple[int, int]]:
+    return [(i, j) for i in range(n) for j in range(i + 1, n)]
 
 
 def compare(
@@ -246,13 +134,14 @@ def compare(
     controller: Any = None,
     resync_every: int | None = None,
 ) -> Comparison:
-    """Run ``scenario`` on two backends at every time step of ``timesteps`` and at half of each,
-    run each engine's ensemble at the first time step, diff and judge them.
+    """Run ``scenario`` on two or more backends at every time step of ``timesteps`` and at half
+    of each, run each engine's ensemble at the first time step, diff and judge every pair.
 
     Args:
         scenario: a shipped scenario name, a TOML path or a :class:`Scenario`.
-        backends: two registered backend names (the same one twice compares it with itself).
-        profile: one profile name for both, or one per backend; default the scenario's.
+        backends: two or more registered backend names (the same one twice compares it with
+            itself); every pair is judged, the first two make the headline.
+        profile: one profile name for all, or one per backend; default the scenario's.
         timesteps: time steps (s or ``"1/480"``), the first one being the headline's; default
             the scenario's. Every phase keeps its duration.
         duration: only the first ``duration`` seconds of the scenario.
@@ -285,17 +174,21 @@ def compare(
     sc = load_scenario(scenario)
     if controller is not None:
         sc = sc.with_controller(controller)
-    if len(backends) != 2:
-        raise InvalidArgumentError("backends", f"expected two backend names, got {backends!r}")
-    pair = (backends[0], backends[1])
+    if isinstance(backends, str) or len(backends) < 2:
+        raise InvalidArgumentError(
+            "backends", f"expected two or more backend names, got {backends!r}"
+        )
+    names = tuple(backends)
+    n = len(names)
     if profile is None:
-        profiles = (sc.profile, sc.profile)
+        profiles = (sc.profile,) * n
     elif isinstance(profile, str):
-        profiles = (profile, profile)
+        profiles = (profile,) * n
     else:
-        if len(profile) not in (1, 2):
-            raise InvalidArgumentError("profile", f"expected one or two names, got {profile!r}")
-        profiles = (profile[0], profile[-1])
+        if len(profile) not in (1, n):
+            many = "two" if n == 2 else f"one per backend ({n})"
+            raise InvalidArgumentError("profile", f"expected one or {many} names, got {profile!r}")
+        profiles = tuple(profile) if len(profile) == n else (profile[0],) * n
     dts: list[float] = []
     for t in timesteps or [sc.timestep]:
         try:
@@ -310,7 +203,7 @@ def compare(
             s = sc.with_timestep(dt)  # raises on a step that does not divide a phase
             scaled[dt] = s.truncated(duration) if duration is not None else s
         scaled[dt / 2] = scaled[dt].with_timestep(dt / 2)  # cut at dt, then halved
-    todo = [(slot, d) for slot in (0, 1) for dt in dts for d in (dt, dt / 2)]
+    todo = [(slot, d) for slot in range(n) for dt in dts for d in (dt, dt / 2)]
     todo = list(dict.fromkeys(todo))
     quantity = _headline_quantity(sc)
     if tolerance is not None and (
@@ -328,7 +221,7 @@ def compare(
     resync_total = 2 * scaled[dts[0]].steps if resync_every else 0
     runner = EnsembleRunner(
         scaled[dts[0]],
-        [(pair[0], profiles[0]), (pair[1], profiles[1])],
+        list(zip(names, profiles, strict=True)),
         quantity,
         size=ensemble,
         perturb=perturb,
@@ -343,16 +236,16 @@ def compare(
     runner.submit()  # the workers run the perturbed members meanwhile
     try:
         for slot, d in todo:
-            key = (pair[slot], profiles[slot], d)
+            key = (names[slot], profiles[slot], d)
             if key not in cache:
-                what = f"{pair[slot]} @ {format_timestep(d)} s"
+                what = f"{names[slot]} @ {format_timestep(d)} s"
                 base = done
 
                 def tick(n: int, _total: int, _what: str = what, _base: int = base) -> None:
                     if progress is not None:
                         progress(_what, _base + n, total)
 
-                cache[key] = run(scaled[d], pair[slot], profile=profiles[slot], progress=tick)
+                cache[key] = run(scaled[d], names[slot], profile=profiles[slot], progress=tick)
             runs[(slot, d)] = cache[key]
             done += scaled[d].steps
     except BaseException:
@@ -360,7 +253,7 @@ def compare(
         raise
     pending = Comparison(
         scenario=sc,
-        backends=pair,
+        backends=names,
         profiles=profiles,
         timesteps=dts,
         runs=runs,
@@ -377,9 +270,9 @@ def compare(
         if resync_every:
             resynced = one_step_resync(
                 scaled[dts[0]],
-                pair,
-                profiles=profiles,
-                labels=pending.labels,
+                names[:2],
+                profiles=profiles[:2],
+                labels=pending.labels[:2],
                 every=resync_every,
                 quantity=quantity,
                 tolerance=tolerance,
@@ -393,33 +286,35 @@ def compare(
         if progress is not None:
             progress(what, nominal_total + resync_total + n, total)
 
-    ensembles = runner.collect([runs[(0, dts[0])], runs[(1, dts[0])]], pending.labels, ens_tick)
-    cross = {dt: diff(runs[(0, dt)], runs[(1, dt)]) for dt in dts}
-    own = {
-        (slot, dt): diff(runs[(slot, dt)], runs[(slot, dt / 2)]) for slot in (0, 1) for dt in dts
-    }
+    ensembles = runner.collect([runs[(k, dts[0])] for k in range(n)], pending.labels, ens_tick)
+    own = {(k, dt): diff(runs[(k, dt)], runs[(k, dt / 2)]) for k in range(n) for dt in dts}
     rows = ensembles[0].rows
-    verdict = judge(
-        ensembles[0].time,
-        quantity,
-        pending.labels,
-        [e.features for e in ensembles],
-        [own[(slot, dts[0])].series[quantity][rows] for slot in (0, 1)],
-        tolerance=tolerance,
-        seed=runner.seed,
-    )
+    labels = pending.labels
+    pairs = []
+    for a, b in _pairs(n):
+        verdict = judge(
+            ensembles[0].time,
+            quantity,
+            (labels[a], labels[b]),
+            [ensembles[a].features, ensembles[b].features],
+            [own[(k, dts[0])].series[quantity][rows] for k in (a, b)],
+            tolerance=tolerance,
+            seed=runner.seed,
+        )
+        cross = {dt: diff(runs[(a, dt)], runs[(b, dt)]) for dt in dts}
+        pairs.append(Pair(a, b, cross, verdict))
     return Comparison(
         scenario=sc,
-        backends=pair,
+        backends=names,
         profiles=profiles,
         timesteps=dts,
         runs=runs,
-        cross=cross,
+        cross=pairs[0].cross,
         own=own,
         command_line=list(sys.argv if command_line is None else command_line),
         wall_time=_time.perf_counter() - start,
         ensembles=ensembles,
-        verdict=verdict,
+        verdict=pairs[0].verdict,
         resync=resynced,
         ensemble_settings={
             "size": runner.size,
@@ -428,6 +323,7 @@ def compare(
             "workers": runner.workers,
             "wall_time": runner.wall_time,
         },
+        pairs=pairs,
     )
 
 

@@ -104,7 +104,7 @@ def main(argv=None):
     ).with_controller(GoToGoal, {"goal": [x, y]}, every=args.every)
     result = compare.compare(scenario, ["pybullet", "mujoco"], ensemble=args.ensemble)
     path = compare.report(result, args.out)
-    summary = result.summary()
+    summary = compare.summary(result)
     for line in compare.headline(summary)[: len(scenario.outcomes) + 1]:
         print(line.replace("**", ""))
     print(f"report: {path}")

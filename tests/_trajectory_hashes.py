@@ -18,7 +18,7 @@ import sys
 
 import numpy as np
 
-from simbridge.compare.run import _BODY_ARRAYS, Trajectory, run
+from simbridge.compare.run.trajectory import _BODY_ARRAYS, Trajectory, run
 from simbridge.compare.scenario import list_scenarios
 
 

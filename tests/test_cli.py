@@ -182,7 +182,7 @@ def test_a_log_record_clears_the_progress_bar_line_first(capsys):
     import logging
 
     from simbridge.cli import _StderrLog
-    from simbridge.compare.progress import ProgressBar
+    from simbridge.compare.report.progress import ProgressBar
 
     stream = io.StringIO()
     bar = ProgressBar(stream, enabled=True, delay=0.0)

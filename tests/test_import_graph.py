@@ -249,3 +249,98 @@ def test_the_checker_sees_lazy_and_type_checking_circles(tmp_path, sources, circ
     graph = _edges(modules)
     circles = _cycles(graph)
     assert circles == ([circle] if circle else [])
+
+
+# ---------------------------------------------------------------- compare/'s stages
+
+STAGES = ("scenario", "run", "analysis", "pipeline", "report")
+"""simbridge.compare's stages, in pipeline order: a module imports only modules of its own stage
+and of the stages before it (the package itself, above them all, imports any)."""
+
+
+def _stage(module: str) -> int | None:
+    """The index of ``module``'s stage in :data:`STAGES`; None for simbridge.compare itself."""
+    parts = module.split(".")
+    if parts[:2] != ["simbridge", "compare"]:
+        raise ValueError(module)
+    if len(parts) == 2:
+        return None
+    return STAGES.index(parts[2]) if parts[2] in STAGES else -1
+
+
+def _stage_breaches(graph: dict[str, dict[str, int]]) -> list[str]:
+    out = []
+    for module, targets in sorted(graph.items()):
+        if not module.startswith("simbridge.compare."):
+            continue
+        own = _stage(module)
+        if own == -1:
+            out.append(f"{module} is in no stage of {STAGES}")
+            continue
+        for target, line in targets.items():
+            if not (target == "simbridge.compare" or target.startswith("simbridge.compare.")):
+                continue
+            theirs = _stage(target)
+            if theirs is None or (own is not None and theirs is not None and theirs > own):
+                where = "the package" if theirs is None else STAGES[theirs]
+                out.append(
+                    f"{module} (stage {STAGES[own]}, line {line}) imports {target} ({where})"
+                )
+    return out
+
+
+def test_compare_stages_import_only_the_stages_before_them():
+    """scenario < run < analysis < pipeline < report: each stage of simbridge.compare imports
+    only its own stage and those before it, never the package's __init__ (which imports every
+    stage), and every module of compare/ is in a stage."""
+    modules = _modules()
+    assert {f"simbridge.compare.{s}" for s in STAGES} <= set(modules)
+    breaches = _stage_breaches(_edges(modules))
+    assert not breaches, "\n".join(breaches)
+
+
+def test_the_stage_checker_sees_a_backward_import():
+    graph = {
+        "simbridge.compare.run.ensemble": {"simbridge.compare.analysis.verdict": 3},
+        "simbridge.compare.analysis.verdict": {"simbridge.compare.run.quantities": 5},
+        "simbridge.compare.report.fmt": {"simbridge.compare": 7},
+        "simbridge.compare.extra": {},
+    }
+    assert _stage_breaches(graph) == [
+        "simbridge.compare.extra is in no stage of "
+        "('scenario', 'run', 'analysis', 'pipeline', 'report')",
+        "simbridge.compare.report.fmt (stage report, line 7) imports simbridge.compare "
+        "(the package)",
+        "simbridge.compare.run.ensemble (stage run, line 3) imports "
+        "simbridge.compare.analysis.verdict (analysis)",
+    ]
+
+
+def _formatted_strings(tree: ast.Module) -> list[int]:
+    """Lines of the f-strings of a module that are not in an exception raised, a warning or a
+    log record: text built from figures, which is the report stage's to write."""
+    allowed: set[int] = set()
+    for node in ast.walk(tree):
+        carrier = isinstance(node, ast.Raise)
+        if isinstance(node, ast.Call):
+            f = node.func
+            name = f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", "")
+            carrier = name in {"warn", "debug", "info", "warning", "error", "exception"} or (
+                name.endswith("Error") or name.endswith("Exception")
+            )
+        if carrier:
+            allowed.update(id(n) for n in ast.walk(node))
+    return [
+        n.lineno for n in ast.walk(tree) if isinstance(n, ast.JoinedStr) and id(n) not in allowed
+    ]
+
+
+def test_the_analysis_stage_writes_no_sentence():
+    """No module of compare/analysis/ formats a string from its figures (an error message
+    aside): what it finds goes out as typed results, and the report stage words them."""
+    found = []
+    for name, (path, _) in sorted(_modules().items()):
+        if name.startswith("simbridge.compare.analysis"):
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            found += [f"{path.name}:{line}" for line in _formatted_strings(tree)]
+    assert not found, "formatted strings in the analysis stage: " + ", ".join(found)

@@ -35,6 +35,11 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/backends/mujoco/backend.py",
         "simbridge/backends/mujoco/loop.py",
         "simbridge/compare/__init__.py",
+        "simbridge/compare/pipeline.py",
+        "simbridge/compare/scenario/reader.py",  # every stage of the pipeline
+        "simbridge/compare/run/trajectory.py",
+        "simbridge/compare/analysis/verdict.py",
+        "simbridge/compare/report/markdown.py",
         "simbridge/compare/scenarios/r2d2-goto.toml",
         "simbridge/compare/scenarios/goto.py",  # a shipped scenario's controller, beside it
         "simbridge/robots/r2d2.urdf",

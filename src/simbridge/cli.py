@@ -94,25 +94,27 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser(
         "compare",
-        help="run a scenario on two engines and write a divergence report",
-        description="Run SCENARIO on two engines (and each at half its time step), diff the "
-        "trajectories and write report.md, summary.json, figures and trajectories.",
+        help="run a scenario on two or more engines and write a divergence report",
+        description="Run SCENARIO on two or more engines (and each at half its time step), diff "
+        "the trajectories of every pair and write report.md, summary.json, figures and "
+        "trajectories.",
     )
     p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
     p.add_argument(
         "--backends",
-        nargs=2,
-        metavar=("A", "B"),
+        nargs="+",
+        metavar="NAME",
         default=["pybullet", "mujoco"],
         choices=backends,
-        help=f"the two backends (default: pybullet mujoco; registered: {', '.join(backends)})",
+        help="two or more backends, every pair judged, the first two in the headline (default: "
+        f"pybullet mujoco; registered: {', '.join(backends)})",
     )
     p.add_argument(
         "--profile",
         nargs="+",
         metavar="PROFILE",
         choices=sorted(PROFILES),
-        help="profile for both backends, or one per backend (default: the scenario's)",
+        help="profile for every backend, or one per backend (default: the scenario's)",
     )
     p.add_argument(
         "--timestep",
@@ -125,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
     p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    from simbridge.compare.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
+    from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
 
     p.add_argument(
         "--ensemble",
@@ -198,11 +200,15 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 def _compare(args: argparse.Namespace) -> int:
     from simbridge.compare import compare, load_scenario, report
-    from simbridge.compare.progress import ProgressBar
+    from simbridge.compare.report.progress import ProgressBar
     from simbridge.exceptions import ScenarioError
 
-    if args.profile is not None and len(args.profile) > 2:
-        raise _Usage("--profile takes one profile, or one per backend (two)")
+    if len(args.backends) < 2:
+        raise _Usage("--backends takes two or more backends")
+    n = len(args.backends)
+    if args.profile is not None and len(args.profile) not in (1, n):
+        many = "two" if n == 2 else str(n)
+        raise _Usage(f"--profile takes one profile, or one per backend ({many})")
     try:
         scenario = load_scenario(args.scenario)
     except ScenarioError as exc:
@@ -228,9 +234,9 @@ def _compare(args: argparse.Namespace) -> int:
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots)
-    from simbridge.compare.report import headline
+    from simbridge.compare.report import headline, summary
 
-    print("\n".join(line.replace("**", "") for line in headline(result.summary())))
+    print("\n".join(line.replace("**", "") for line in headline(summary(result))))
     print(f"report: {path}")
     return 0
 

@@ -18,9 +18,10 @@ from pathlib import Path
 import pytest
 
 from simbridge.compare import compare, report
-from simbridge.compare.diff import DEG
-from simbridge.compare.events import KINDS
-from simbridge.compare.parts import parts_words
+from simbridge.compare.analysis.events import KINDS
+from simbridge.compare.report import summary as compare_summary
+from simbridge.compare.report.parts import parts_words
+from simbridge.compare.run.quantities import DEG
 
 DATA = Path(__file__).parent / "data"
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
@@ -173,7 +174,7 @@ def test_y_up_quadruped_departures_apply_with_its_own_figures(laikago):
 
 def test_r2d2_gentle_parts_while_mujoco_chatters_in_the_turn():
     c = compare("r2d2-gentle", PAIR, ensemble=1, resync_every=0)
-    s = c.summary()
+    s = compare_summary(c)
     p = s["parting"]
     assert p["phase"] == "turn" and p["relation"] == "during"
     e = p["event"]

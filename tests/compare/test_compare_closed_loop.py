@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from simbridge.compare import compare, load_scenario, report, run
-from simbridge.compare.outcomes import success_interval
+from simbridge.compare.analysis.outcomes import success_interval
+from simbridge.compare.report import summary as compare_summary
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
 
@@ -61,7 +62,7 @@ def test_laikago_holds_its_height_upright(backend):
 
 def test_kuka_reach_through_compare_with_a_small_ensemble(tmp_path):
     c = compare("kuka-reach", ensemble=3, workers=2)
-    s = c.summary()
+    s = compare_summary(c)
     out = s["outcomes"]
     assert out["closed_loop"] is True and out["confidence"] == 0.95
     assert [d["name"] for d in out["declared"]] == [o.name for o in c.scenario.outcomes]
@@ -93,7 +94,7 @@ def test_kuka_reach_through_compare_with_a_small_ensemble(tmp_path):
 
 def test_every_outcomes_summary_field_is_described_in_the_docs():
     c = compare("kuka-reach", ensemble=1, duration=0.5)
-    out = c.summary()["outcomes"]
+    out = compare_summary(c)["outcomes"]
     keys = {"outcomes"} | set(out)
     for d in out["declared"]:
         keys |= set(d)

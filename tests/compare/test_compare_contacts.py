@@ -8,7 +8,7 @@ import csv
 import numpy as np
 
 from simbridge.compare import Trajectory, run
-from simbridge.compare.run import _BODY_ARRAYS, _CONTACT_ARRAYS
+from simbridge.compare.run.trajectory import _BODY_ARRAYS, _CONTACT_ARRAYS
 
 WHEELS = ["right_front_wheel", "right_back_wheel", "left_front_wheel", "left_back_wheel"]
 

@@ -21,7 +21,7 @@ from simbridge.compare import (
     loads_scenario,
     run,
 )
-from simbridge.compare.ensemble import run_ensembles
+from simbridge.compare.run.ensemble import run_ensembles
 from simbridge.compare.scenario import dumps_scenario
 from simbridge.exceptions import InvalidArgumentError, ScenarioError
 
@@ -154,7 +154,7 @@ def write(
 
 
 def made(tmp_path: Path) -> list:
-    from simbridge.compare.controllers import load_object
+    from simbridge.compare.scenario.controllers import load_object
 
     return load_object(f"{tmp_path / 'ctrl.py'}:made")
 

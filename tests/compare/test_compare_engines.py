@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from simbridge.compare import QUANTITIES, Trajectory, compare, diff, report
-from simbridge.compare.fmt import fmt_value
+from simbridge.compare.report.fmt import fmt_value
 
 CONTACT_FREE = ["pendulum", "double-pendulum", "spinning-wheel"]
 

@@ -21,7 +21,8 @@ import pytest
 
 from simbridge.cli import main
 from simbridge.compare import compare, report
-from simbridge.compare.ensemble import run_ensembles
+from simbridge.compare.report import summary as compare_summary
+from simbridge.compare.run.ensemble import run_ensembles
 from simbridge.compare.scenario import load_scenario
 from simbridge.exceptions import InvalidArgumentError
 
@@ -142,7 +143,7 @@ def test_report_carries_the_ensemble_and_its_plot(tmp_path):
 
 def test_every_summary_field_is_described_in_the_docs():
     c = compare("r2d2-gentle", ["pybullet", "pybullet"], ensemble=2, duration=0.1)
-    s = c.summary()
+    s = compare_summary(c)
     docs = DOCS.read_text()
     keys = set(s["verdict"]) | set(s["ensemble"]) | {"verdict", "ensemble"}
     keys |= set(s["verdict"]["engine_figures"]["pybullet"])

@@ -10,17 +10,11 @@ import pytest
 from _synthetic import quat_x, quat_z, trajectory
 
 from simbridge.compare import diff
-from simbridge.compare.diff import DEG, tilt_from
-from simbridge.compare.events import (
-    KINDS,
-    EngineEvents,
-    Event,
-    event_words,
-    find_events,
-    parting,
-    parting_words,
-)
-from simbridge.compare.parts import THRESHOLDS, parts_words, rank_parts
+from simbridge.compare.analysis.events import KINDS, EngineEvents, Event, find_events, parting
+from simbridge.compare.analysis.parts import THRESHOLDS, rank_parts
+from simbridge.compare.report.events import event_words, parting_words
+from simbridge.compare.report.parts import parts_words
+from simbridge.compare.run.quantities import DEG, tilt_from
 
 DT = 0.01  # bridge: ceil(0.05 / 0.01) = 5 rows
 
@@ -181,7 +175,7 @@ def test_motor_saturated_at_max_force():
     assert (sat.kind, sat.part, sat.row) == ("motor_saturated", "j1", 20)
     assert sat.end == pytest.approx(0.29)
     assert sat.figures == {"max_force": 10.0, "duration": pytest.approx(0.10)}
-    assert "j1 motor saturated at its max_force 10" in sat.words("A")
+    assert "j1 motor saturated at its max_force 10" in event_words(sat.to_dict(), "A")
 
 
 # ---------------------------------------------------------------- parting
@@ -216,7 +210,7 @@ def test_parting_names_the_recent_event_then_the_ongoing_one_then_the_last_one()
         figures={"max_force": 5.0, "duration": 0.01},
     )
     a, b = _engine("A", old, lost), _engine("B", air)
-    p = parting(1.25, 0.01, "base_distance", PHASES, [a, b], step=0.01)
+    p = parting(1.25, 0.01, "base_distance", PHASES, [a, b], step=0.01).to_dict()
     assert p["phase"] == "turn" and p["relation"] == "after"
     assert p["event"]["label"] == "A" and p["event"]["kind"] == "contact_lost"
     assert p["since"] == pytest.approx(0.05)
@@ -225,35 +219,37 @@ def test_parting_names_the_recent_event_then_the_ongoing_one_then_the_last_one()
         "during 'turn', 0.050 s after A's bot lost contact with plane at wheel"
     )
     # 0.3 s later the contact loss is no longer recent: the flight going on is named
-    p = parting(1.55, 0.01, "base_distance", PHASES, [a, b], step=0.01)
+    p = parting(1.55, 0.01, "base_distance", PHASES, [a, b], step=0.01).to_dict()
     assert p["relation"] == "during" and p["event"]["kind"] == "airborne"
     assert parting_words(p) == (
         "during 'turn', while B's bot left the ground (airborne for 2 s, from t = 0.500 s)"
     )
     # without the flight: the latest event, however old
-    p = parting(1.55, 0.01, "base_distance", PHASES, [a], step=0.01)
+    p = parting(1.55, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
     assert p["relation"] == "after" and p["event"]["kind"] == "contact_lost"
     assert p["since"] == pytest.approx(0.35)
     # an event in the very step that parts them counts; one after it does not
-    p = parting(1.195, 0.01, "base_distance", PHASES, [a], step=0.01)
+    p = parting(1.195, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
     assert p["event"]["kind"] == "contact_lost" and p["since"] < 0
     assert parting_words(p).startswith("during 'turn', in the same step as A's bot lost")
-    p = parting(1.0, 0.01, "base_distance", PHASES, [a], step=0.01)
+    p = parting(1.0, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
     assert p["phase"] == "settle"  # at the boundary: the phase that led to it
     assert p["event"]["kind"] == "motor_saturated"
 
 
 def test_parting_never_and_before_any_event():
-    assert parting(None, 0.01, "base_distance", PHASES, [_engine("A")])["phase"] is None
-    assert parting_words(parting(None, 0.01, "base_distance", PHASES, [_engine("A")])) == ""
+    assert parting(None, 0.01, "base_distance", PHASES, [_engine("A")]).to_dict()["phase"] is None
+    assert (
+        parting_words(parting(None, 0.01, "base_distance", PHASES, [_engine("A")]).to_dict()) == ""
+    )
     e = _engine("A")
-    p = parting(0.5, 0.01, "base_distance", PHASES, [e])
+    p = parting(0.5, 0.01, "base_distance", PHASES, [e]).to_dict()
     assert (
         p["event"] is None
         and parting_words(p) == "during 'settle', before any event of either engine"
     )
     e.initial_contacts = ["base", "wheel"]
-    p = parting(0.01, 0.01, "base_distance", PHASES, [e], step=0.01)
+    p = parting(0.01, 0.01, "base_distance", PHASES, [e], step=0.01).to_dict()
     assert p["initial_contacts"] == {"A": ["base", "wheel"]}
     assert parting_words(p) == (
         "during 'settle', in the first step, with bot touching something from its first step "
@@ -339,7 +335,7 @@ def test_parts_that_never_part_rank_by_their_gap_over_the_threshold():
 
 
 def test_held_commands_carry_velocity_and_position_targets_until_replaced():
-    from simbridge.compare.plots import held_commands
+    from simbridge.compare.report.plots import held_commands
 
     modes = np.array([0, 0, 2, 2, 0, 0, 3, 0, 1, 0])
     targets = np.array([np.nan, np.nan, 1, 2, np.nan, np.nan, 5, np.nan, 7, np.nan])

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from simbridge.compare import QUANTITIES, Trajectory, compare, diff, report
-from simbridge.compare.fmt import fmt_threshold, fmt_time, fmt_value
-from simbridge.compare.progress import ProgressBar
 from simbridge.compare.report import headline
+from simbridge.compare.report.fmt import fmt_threshold, fmt_time, fmt_value
+from simbridge.compare.report.progress import ProgressBar
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

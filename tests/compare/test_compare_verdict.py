@@ -8,17 +8,18 @@ import math
 import numpy as np
 import pytest
 
-from simbridge.compare.diff import rotation_angle
-from simbridge.compare.ensemble import horizons, offsets, pairwise_spread, perturbed
-from simbridge.compare.scenario import load_scenario
-from simbridge.compare.verdict import (
+from simbridge.compare.analysis.verdict import (
     FLOOR_RELATIVE,
     Verdict,
     energy_test,
     judge,
     precision_floor,
-    verdict_lines,
 )
+from simbridge.compare.report.summary_json import verdict_dict
+from simbridge.compare.report.verdict import marginal_words, verdict_lines
+from simbridge.compare.run.ensemble import horizons, offsets, pairwise_spread, perturbed
+from simbridge.compare.run.quantities import rotation_angle
+from simbridge.compare.scenario import load_scenario
 
 T = 3
 TIME = np.array([0.0, 0.5, 1.0])
@@ -42,7 +43,7 @@ def verdict(a, b, own_a=1e-3, own_b=1e-3, **kw) -> Verdict:
 
 def summary_of(v: Verdict, size: int) -> dict:
     return {
-        "verdict": v.to_dict(),
+        "verdict": verdict_dict(v),
         "ensemble": {"perturbation": {"position": 1e-9, "orientation": 1e-9}, "size": size},
     }
 
@@ -104,7 +105,9 @@ def test_agree_when_the_gap_stays_below_the_tolerance():
     assert v.max_gap[0] == pytest.approx(2e-3)
     close = verdict(cloud([0.0]), cloud([6e-3]))
     assert close.verdict == "agree" and close.marginal
-    assert close.marginal_reasons == ["the largest gap is 0.6x the tolerance"]
+    assert [marginal_words(m) for m in close.marginal_reasons] == [
+        "the largest gap is 0.6x the tolerance"
+    ]
     assert verdict_lines(summary_of(v, 2))[0].startswith("**A and B agree on this scenario**")
 
 
@@ -153,7 +156,7 @@ def test_a_gap_up_to_twice_a_spread_is_chaotic_and_marginal():
     # cross distances: 15 of 1.5, 10 of 0.5: median 1.5 = 1.5x A's spread
     assert v.gap.value == pytest.approx(1.5)
     assert v.verdict == "chaotic" and v.engines == ["A"] and v.marginal
-    assert v.marginal_reasons == ["the gap is 1.5x A's spread"]
+    assert [marginal_words(m) for m in v.marginal_reasons] == ["the gap is 1.5x A's spread"]
 
 
 def test_unresolved_when_the_gap_lies_within_an_own_time_step_error():

@@ -1,0 +1,157 @@
+"""Outcomes over an ensemble (:func:`summarize`: success rate with a 95% interval, the
+distribution of each value: :class:`OutcomeStats`). The outcome kinds are the scenario's
+(:mod:`simbridge.compare.scenario.outcomes`), their evaluation on one run the run's
+(:mod:`simbridge.compare.run.outcomes`), their words the report's
+(:mod:`simbridge.compare.report.outcomes`)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..scenario.outcomes import Outcome
+
+__all__ = [
+    "CONFIDENCE",
+    "INTERVAL_METHOD",
+    "SuccessRate",
+    "Distribution",
+    "OutcomeStats",
+    "success_interval",
+    "summarize",
+]
+
+CONFIDENCE = 0.95
+INTERVAL_METHOD = "wilson"
+"""``scipy.stats.binomtest(...).proportion_ci(method=...)``: Wilson's score interval, which
+stays inside [0, 1] and is not degenerate at 0/n or n/n."""
+
+
+# ---------------------------------------------------------------- over an ensemble
+
+
+def success_interval(successes: int, runs: int, confidence: float = CONFIDENCE):
+    """``(low, high)``: the ``confidence`` interval of a success rate from ``successes`` of
+    ``runs`` (Wilson's score interval, ``scipy.stats.binomtest(...).proportion_ci``)."""
+    from scipy.stats import binomtest
+
+    ci = binomtest(int(successes), int(runs)).proportion_ci(
+        confidence_level=confidence, method=INTERVAL_METHOD
+    )
+    return float(ci.low), float(ci.high)
+
+
+@dataclass(frozen=True)
+class SuccessRate:
+    """How many of the runs that judge success succeeded, with Wilson's interval at
+    :data:`CONFIDENCE`."""
+
+    successes: int
+    runs: int
+    low: float
+    high: float
+
+    @property
+    def rate(self) -> float:
+        return self.successes / self.runs
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "successes": self.successes,
+            "runs": self.runs,
+            "rate": self.rate,
+            "low": self.low,
+            "high": self.high,
+            "confidence": CONFIDENCE,
+            "method": INTERVAL_METHOD,
+        }
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """An outcome's value over the runs that have one (``std`` with ddof 1; 0 for one run)."""
+
+    runs: int
+    mean: float
+    std: float
+    min: float
+    median: float
+    max: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "runs": self.runs,
+            "mean": self.mean,
+            "std": self.std,
+            "min": self.min,
+            "median": self.median,
+            "max": self.max,
+        }
+
+
+@dataclass(frozen=True)
+class OutcomeStats:
+    """One outcome over one engine's runs (:func:`summarize`): ``success`` (None when no run
+    judges it), ``value`` (None when no run has one), ``records`` every run's record
+    (:func:`simbridge.compare.run.outcomes.evaluate`), the nominal run first."""
+
+    name: str
+    kind: str
+    unit: str
+    success: SuccessRate | None
+    value: Distribution | None
+    records: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def nominal(self) -> dict[str, Any] | None:
+        return self.records[0] if self.records else None
+
+    def to_dict(self) -> dict[str, Any]:
+        """``summary.json``'s ``outcomes.engines.<engine>.<outcome>``."""
+        return {
+            "name": self.name,
+            "kind": self.kind,
+            "unit": self.unit,
+            "success": None if self.success is None else self.success.to_dict(),
+            "value": None if self.value is None else self.value.to_dict(),
+            "nominal": None if self.nominal is None else dict(self.nominal),
+            "runs": [dict(r) for r in self.records],
+        }
+
+
+def _distribution(values: Sequence[float]) -> Distribution | None:
+    if not values:
+        return None
+    v = np.asarray(values, dtype=np.float64)
+    return Distribution(
+        runs=int(v.size),
+        mean=float(v.mean()),
+        std=float(v.std(ddof=1)) if v.size > 1 else 0.0,
+        min=float(v.min()),
+        median=float(np.median(v)),
+        max=float(v.max()),
+    )
+
+
+def summarize(outcome: Outcome, records: Sequence[Mapping[str, Any]]) -> OutcomeStats:
+    """One engine's runs of one outcome (``records``: :func:`evaluate`'s dicts, the nominal
+    run first): the success rate over the runs that judge it, the distribution of the value
+    over the runs that have one, and every record."""
+    judged = [r["success"] for r in records if r.get("success") is not None]
+    success = None
+    if judged:
+        k, n = sum(bool(s) for s in judged), len(judged)
+        low, high = success_interval(k, n)
+        success = SuccessRate(k, n, low, high)
+    values = [float(r["value"]) for r in records if r.get("value") is not None]
+    return OutcomeStats(
+        name=outcome.name,
+        kind=outcome.kind,
+        unit=outcome.unit,
+        success=success,
+        value=_distribution(values),
+        records=[dict(r) for r in records],
+    )

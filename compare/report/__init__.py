@@ -1,0 +1,71 @@
+"""The report stage: ``report.md`` (:mod:`.markdown`), ``summary.json`` (:mod:`.summary_json`), the
+figures (:mod:`.plots`), the terminal's headline and progress bar, from a
+:class:`~simbridge.compare.pipeline.Comparison`: :func:`report` writes them all."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from ..pipeline import Comparison
+from .fmt import fmt_distance, fmt_time, fmt_value
+from .markdown import headline, markdown
+from .resync import plot_resync
+from .summary_json import summary
+
+__all__ = ["report", "headline", "summary", "fmt_distance", "fmt_time", "fmt_value"]
+
+
+def report(
+    comparison: Comparison,
+    out: str | Path,
+    *,
+    plots: bool = True,
+    trajectories: bool = True,
+) -> Path:
+    """Write the report of ``comparison`` into folder ``out`` (created if needed).
+
+    Writes ``report.md`` (the file a person opens), ``summary.json`` (every headline figure
+    plus the manifests), the PNG figures beside them, and with ``trajectories`` the two
+    headline runs as ``trajectories/<engine>.npz`` and ``.csv``. Returns the path of
+    ``report.md``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    figures = summary(comparison)
+    files = ["summary.json"]
+    if trajectories:
+        folder = out / "trajectories"
+        folder.mkdir(exist_ok=True)
+        for slot, label in enumerate(comparison.labels):
+            tr = comparison.runs[(slot, comparison.timestep)]
+            stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in label)
+            tr.save(folder / f"{stem}.npz")
+            tr.save_csv(folder / f"{stem}.csv")
+            files += [f"trajectories/{stem}.npz", f"trajectories/{stem}.csv"]
+    images = {}
+    if plots:
+        from .plots import all_plots
+
+        images = all_plots(comparison, out)
+        if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
+            images["resync"] = out / "resync.png"
+    figures["files"] = files + [p.name for p in images.values()]
+    figures["headline"]["text"] = headline(figures)
+    (out / "summary.json").write_text(
+        json.dumps(figures, indent=2, default=_json_default, allow_nan=True) + "\n",
+        encoding="utf-8",
+    )
+    path = out / "report.md"
+    path.write_text(markdown(comparison, figures, images, files), encoding="utf-8")
+    return path
+
+
+def _json_default(obj: Any) -> Any:
+    import numpy as np
+
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.integer, np.floating, np.bool_)):
+        return obj.item()
+    return str(obj)

@@ -1,0 +1,271 @@
+"""Which of a backend's profile departures (``manifest()["departures"]``) apply to this scenario,
+and what this run measured of each (:func:`applicable`).
+
+A backend lists, once for every scenario, where it cannot reproduce the profile exactly; some
+of its sentences quote figures measured on one robot (r2d2's resting height...). The report
+lists a departure only where it applies here, in its general words (the backend's text cut
+before the figures of another robot, :data:`GENERAL_CUT`), with figures measured in this run
+or none:
+
+====================== ===============================================================
+``contact``            some body touched something in either engine's run
+``cylinder``           a link with a collision cylinder touched something
+``restitution``        a link with a nonzero ``<contact><restitution>`` touched something
+``rolling/spinning     a link with a nonzero ``<contact>`` rolling or spinning friction
+friction``             touched something
+``joint limits``       a joint reached its limit in either run (a ``joint_limit`` event)
+``motors``             a velocity or position command drove a joint of the followed robot
+``speed clamp``        a joint speed or the base's speed reached 99 % of the profile's
+                       ``max_joint_velocity``
+``joint axis``         a movable joint's ``<axis>`` is not of length 1 (by more than 1e-6)
+====================== ===============================================================
+
+A departure naming a body of this world (``body 1 mass bound``) applies as the backend wrote
+it; any other is listed as the backend wrote it, marked as not checked against the scenario.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from simbridge.exceptions import SimbridgeError
+
+from ..run.events import EngineEvents
+from .fmt import fmt_distance
+
+if TYPE_CHECKING:
+    from ..analysis.view import ComparisonView
+
+__all__ = ["GENERAL_CUT", "applicable"]
+
+GENERAL_CUT = {
+    "contact": ": ",
+    "joint limits": ": ",
+    "motors": "; ",
+    "joint axis": " (",
+}
+"""Where a known departure's text stops being general: what follows quotes another robot."""
+
+SPEED_CLAMP_FRACTION = 0.99
+
+
+def _general(key: str, text: str) -> str:
+    cut = GENERAL_CUT.get(key)
+    if cut and cut in text:
+        return text.split(cut, 1)[0]
+    return text
+
+
+def _urdf_facts(c: ComparisonView) -> dict[str, Any]:
+    """Per robot: links with collision cylinders, restitution, rolling/spinning friction,
+    and joints with a non-unit axis, from the scenario's URDFs (read as ``Sim.load_urdf``
+    reads them; the root link is named ``base`` as in the record)."""
+    from simbridge.urdf import parse_urdf, resolve_source
+
+    log = logging.getLogger("simbridge.urdf")
+    facts: dict[str, Any] = {}
+    for r in c.scenario.robots:
+        was = log.disabled
+        log.disabled = True  # the run already logged what was read leniently
+        try:
+            model = parse_urdf(resolve_source(c.scenario.resolve_urdf(r)))
+        except SimbridgeError:
+            continue
+        finally:
+            log.disabled = was
+
+        def name(link: Any) -> str:
+            return "base" if link.index == -1 else str(link.name)
+
+        facts[r.name] = {
+            "cylinder": [
+                name(k) for k in model.links if any(g.kind == "cylinder" for g in k.collisions)
+            ],
+            "restitution": {
+                name(k): k.contact.restitution for k in model.links if k.contact.restitution
+            },
+            "rolling/spinning friction": {
+                name(k): (k.contact.rolling_friction or 0.0, k.contact.spinning_friction or 0.0)
+                for k in model.links
+                if k.contact.rolling_friction or k.contact.spinning_friction
+            },
+            "joint axis": {
+                j.name: float(np.linalg.norm(j.axis))
+                for j in model.joints
+                if j.type != "fixed" and abs(float(np.linalg.norm(j.axis)) - 1.0) > 1e-6
+            },
+        }
+    return facts
+
+
+def _touched(c: ComparisonView, slot: int) -> dict[str, list[str]]:
+    """Per body of the run: the links that touched something at some recorded instant."""
+    tr = c.runs[(slot, c.timestep)]
+    out = {}
+    for name, b in tr.bodies.items():
+        if b.contact_counts is None:
+            continue
+        links = [b.link_names[k] for k in np.flatnonzero((b.contact_counts > 0).any(axis=0))]
+        if links:
+            out[name] = links
+    return out
+
+
+def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[str, Any]]:
+    """Per engine label: ``apply`` (a list of ``{key, text, why, measured}``: the departure's
+    general words, why it applies here, and what this run measured of it, None when nothing)
+    and ``left_out`` (the keys that do not apply to this scenario)."""
+    facts = _urdf_facts(c)
+    touched = [_touched(c, slot) for slot in range(len(c.labels))]
+    labels = c.labels
+    out: dict[str, dict[str, Any]] = {}
+    for slot, label in enumerate(labels):
+        tr = c.runs[(slot, c.timestep)]
+        deps = tr.manifest.get("departures") or {}
+        apply, left = [], []
+        for key, text in deps.items():
+            why, measured = _judge(key, c, facts, touched, events)
+            if why is None:
+                left.append(key)
+            else:
+                apply.append(
+                    {"key": key, "text": _general(key, str(text)), "why": why, "measured": measured}
+                )
+        out[label] = {"apply": apply, "left_out": left}
+    return out
+
+
+def _judge(
+    key: str,
+    c: ComparisonView,
+    facts: dict[str, Any],
+    touched: list[dict[str, list[str]]],
+    events: list[EngineEvents],
+) -> tuple[str | None, str | None]:
+    """(why it applies, measured) or (None, None) when it does not apply."""
+    labels = c.labels
+    subject = c.scenario.subject
+    any_touch = any(touched)
+
+    def touching_with(kind: str) -> list[str]:
+        hits = []
+        for robot, f in facts.items():
+            links = f[kind] if isinstance(f[kind], list) else list(f[kind])
+            for link in links:
+                if any(link in t.get(robot, []) for t in touched):
+                    hits.append(f"{robot}'s {link}")
+        return hits
+
+    if key == "contact":
+        if not any_touch:
+            return None, None
+        bodies = sorted({b for t in touched for b in t})
+        why = "contacts in this run (" + ", ".join(bodies) + ")"
+        return why, _contact_figures(c, events)
+    if key in ("cylinder", "restitution", "rolling/spinning friction"):
+        hits = touching_with(key)
+        if not hits:
+            return None, None
+        what = {
+            "cylinder": "collision cylinders",
+            "restitution": "nonzero restitution",
+            "rolling/spinning friction": "rolling or spinning friction",
+        }[key]
+        return f"links with {what} touched something: " + ", ".join(hits), None
+    if key == "joint limits":
+        per = []
+        for e in events:
+            reached = [x for x in e.events if x.kind == "joint_limit"]
+            words: list[str] = []
+            if e.initial_limits:
+                words.append(
+                    "from the start "
+                    + ", ".join(f"{x['joint']} ({x['side']})" for x in e.initial_limits)
+                )
+            if reached:
+                first = reached[0]
+                words.append(
+                    f"reached {len(reached)} time(s), first {first.part} ({first.side}) at "
+                    f"t = {first.time:.3f} s"
+                )
+            if words:
+                per.append(f"{e.label}: " + "; ".join(words))
+        if not per:
+            return None, None
+        return "joints at their limits in this run", "; ".join(per)
+    if key == "motors":
+        tr = c.runs[(0, c.timestep)]
+        mf = tr.body.joint_max_forces
+        driven = (
+            np.any(tr.body.joint_modes[1:] != 0, axis=0)
+            if mf is None
+            else np.any(np.isfinite(mf), axis=0)
+        )
+        names = [tr.body.joint_names[j] for j in np.flatnonzero(driven)]
+        if not names:
+            return None, None
+        sat = [f"{e.label} {sum(x.kind == 'motor_saturated' for x in e.events)}" for e in events]
+        return (
+            f"velocity or position motors drive {subject}'s " + ", ".join(names),
+            "motor saturations (force at max_force): " + ", ".join(sat),
+        )
+    if key == "speed clamp":
+        rows = []
+        hit = False
+        for slot, label in enumerate(labels):
+            tr = c.runs[(slot, c.timestep)]
+            clamp = (tr.manifest.get("profile") or {}).get("max_joint_velocity")
+            if not clamp:
+                continue
+            b = tr.body
+            joint = float(np.abs(b.joint_velocities).max()) if b.joint_velocities.size else 0.0
+            base = float(np.linalg.norm(b.base_linear_velocity, axis=1).max())
+            spin = float(np.linalg.norm(b.base_angular_velocity, axis=1).max())
+            top = max(joint, base, spin)
+            hit |= top >= SPEED_CLAMP_FRACTION * clamp
+            rows.append(
+                f"{label}: largest joint speed {joint:.3g}, base {base:.3g} m/s and "
+                f"{spin:.3g} rad/s against the clamp {clamp:g}"
+            )
+        if not hit:
+            return None, None
+        return "a speed reached the profile's max_joint_velocity", "; ".join(rows)
+    if key == "joint axis":
+        hits = [
+            f"{robot}'s {j} (|axis| {n:.6g})"
+            for robot, f in facts.items()
+            for j, n in f["joint axis"].items()
+        ]
+        if not hits:
+            return None, None
+        return "joints with an axis not of length 1: " + ", ".join(hits), None
+    if key.startswith("body "):
+        return "it names a body of this world", None
+    return "not checked against this scenario", None
+
+
+def _contact_figures(c: ComparisonView, events: list[EngineEvents]) -> str:
+    """This run's own contact figures: the followed robot's base height at the end of the
+    first phase, how often its links made or lost contact, its highest hop."""
+    phase = c.runs[(0, c.timestep)].phases[0][0]
+    heights, changes, hops = [], [], []
+    for slot, e in enumerate(events):
+        tr = c.runs[(slot, c.timestep)]
+        row = tr.phases[0][2]
+        h = float(tr.body.base_position[row] @ e.up)
+        heights.append(f"{fmt_distance(h)} ({e.label})")
+        n = sum(x.kind in ("contact_made", "contact_lost") for x in e.events)
+        changes.append(f"{n} ({e.label})")
+        peaks = [x.figures["rise"] for x in e.events if x.kind == "peak_height"]
+        hops.append(f"{fmt_distance(max(peaks)) if peaks else 'none'} ({e.label})")
+    return (
+        f"{c.scenario.subject}'s base at the end of '{phase}' at height "
+        + " and ".join(heights)
+        + "; contacts made or lost "
+        + " and ".join(changes)
+        + " times; highest rise while airborne "
+        + " and ".join(hops)
+    )

@@ -1,0 +1,649 @@
+"""``report.md``: every section written here from the one ``summary.json`` dict
+(:func:`markdown`), so the document's layout reads top to bottom in one place.
+
+The first lines of ``report.md`` give the headline in words: the verdict (``agree``,
+``differ``, ``chaotic`` naming the engine, or ``unresolved``) with its test and intervals, the
+predictability horizons, then how far apart the nominal runs end, when they part, which quantity
+goes first, and what halving the time step changes in each engine.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ..analysis.diff import DEG, QUANTITIES
+from ..pipeline import Comparison
+from ..run.events import KINDS, TIP_ANGLE
+from ..scenario import format_timestep
+from .events import event_words, parting_words, with_start
+from .fmt import fmt_threshold, fmt_time, fmt_value
+from .outcomes import outcome_lines, outcomes_section
+from .parts import parts_words
+from .resync import resync_lines, resync_section
+from .verdict import verdict_lines
+
+__all__ = ["headline", "markdown"]
+
+
+def headline(summary: dict[str, Any]) -> list[str]:
+    """The report's opening sentences, from ``summary.json``'s figures alone: the verdict
+    (:func:`~simbridge.compare.verdict.verdict_lines`), then the nominal runs' figures."""
+    h = summary["headline"]
+    unit = h["unit"]
+    subject = summary["subject"]
+    lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
+    if summary.get("verdict"):
+        lines += verdict_lines(summary)
+    if h["quantity"] == "base_distance":
+        apart = f"{fmt_value(h['final'], unit)} apart ({subject}'s base position"
+    elif h["quantity"] == "link_distance":
+        apart = (
+            f"{fmt_value(h['final'], unit)} apart ({subject}'s links' centres of mass, the "
+            "farthest pair"
+        )
+    else:
+        apart = f"{fmt_value(h['final'], unit)} apart (the {h['title']} of {subject}"
+    lines += [
+        f"The nominal runs (no offset) end {apart}, after {summary['duration']:.3g} s of "
+        f"simulated time at dt = {summary['timestep_text']} s; the largest gap on the way was "
+        f"{fmt_value(h['max'], unit)})."
+    ]
+    crossings = [(c["threshold"], c["time"]) for c in h["crossings"]]
+    (t1, c1), (t2, c2) = crossings[0], crossings[1]
+    if c1 is None:
+        lines.append(f"They never come {fmt_threshold(t1, unit)} apart.")
+    elif c2 is None:
+        lines.append(
+            f"They part at t = {fmt_time(c1)} (first {fmt_threshold(t1, unit)} apart) and never "
+            f"reach {fmt_threshold(t2, unit)}."
+        )
+    else:
+        more = ""
+        if len(crossings) > 2 and crossings[2][1] is not None:
+            more = f", {fmt_threshold(crossings[2][0], unit)} from t = {fmt_time(crossings[2][1])}"
+        lines.append(
+            f"They part at t = {fmt_time(c1)} (first {fmt_threshold(t1, unit)} apart) and are "
+            f"{fmt_threshold(t2, unit)} apart from t = {fmt_time(c2)}{more}."
+        )
+    born = parting_words(summary.get("parting") or {})
+    if born:
+        lines[-1] += f" The gap is born {born}."
+    first = h["first_to_diverge"]
+    if first is None:
+        lines.append("No quantity reaches its first threshold (1 cm, 1°, 0.1 rad/s).")
+    else:
+        qq = QUANTITIES[first["quantity"]]
+        lines.append(
+            f"The first quantity to diverge is the {qq.title}: it reaches "
+            f"{fmt_threshold(first['threshold'], qq.unit)} at t = {fmt_time(first['time'])}."
+        )
+    if summary.get("parts"):
+        lines.append(parts_words(summary["parts"]))
+    own = h["own_error"]
+    parts = [f"moves {label}'s end by {fmt_value(e['final'], unit)}" for label, e in own.items()]
+    lines.append("Halving the time step " + "; it ".join(parts) + ".")
+    lines += resync_lines(summary)  # one step from the same state: the model error
+    lines += pairs_lines(summary)  # more than two engines: every pair's verdict
+    return lines
+
+
+def pairs_lines(summary: dict[str, Any]) -> list[str]:
+    """With more than two engines, every pair's verdict in one sentence (the lines above speak
+    of the first pair); empty with two."""
+    pairs = summary.get("pairs") or []
+    if len(summary["labels"]) <= 2 or not pairs:
+        return []
+    unit = summary["headline"]["unit"]
+    words = []
+    for p in pairs:
+        a, b = p["labels"]
+        v = p["verdict"]
+        what = v["verdict"] if v else "not judged"
+        if v and v["engines"]:
+            what += " (" + " and ".join(v["engines"]) + ")"
+        gap = fmt_value(p["headline"]["final"], unit)
+        words.append(f"{a} and {b} {what}, {gap} apart at the end")
+    return [f"Every pair of the {len(summary['labels'])} engines: " + "; ".join(words) + "."]
+
+
+def pairs_section(s: dict[str, Any]) -> list[str]:
+    """With more than two engines, the engine-by-engine verdict table: row engine against column
+    engine, each cell the pair's verdict and its nominal runs' gap at the end; empty with two."""
+    pairs = s.get("pairs") or []
+    labels = s["labels"]
+    if len(labels) <= 2 or not pairs:
+        return []
+    unit = s["headline"]["unit"]
+    cell: dict[tuple[str, str], str] = {}
+    for p in pairs:
+        a, b = p["labels"]
+        v = p["verdict"]
+        what = v["verdict"] + (" (marginal)" if v["marginal"] else "") if v else "not judged"
+        if v and v["engines"]:
+            what += ": " + ", ".join(v["engines"])
+        cell[(a, b)] = cell[(b, a)] = f"{what}; {fmt_value(p['headline']['final'], unit)}"
+    rows = [[x] + [cell.get((x, y), "") for y in labels] for x in labels]
+    lines = ["## Every pair of engines", ""]
+    lines += [
+        f"Each pair is judged as the first pair above is ({s['headline']['title']}: the verdict, "
+        "the engines it names, the nominal runs' gap at the end); every figure is in "
+        "`summary.json` under `pairs`.",
+        "",
+    ]
+    lines += _table(["engine"] + labels, rows)
+    lines += [""]
+    return lines
+
+
+# ---------------------------------------------------------------- markdown
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(r) + " |" for r in rows]
+    return out
+
+
+def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: list[str]) -> str:
+    a, b = s["labels"][:2]
+    cross = c.cross[c.timestep]
+    if len(s["labels"]) > 2:
+        title = ", ".join(s["labels"][:-1]) + f" and {s['labels'][-1]}"
+    else:
+        title = f"{a} against {b}"
+    lines = [f"# {s['scenario']}: {title}", ""]
+    lines += headline(s)
+    lines += [""]
+    if s["description"]:
+        lines += [f"*Scenario:* {s['description']}", ""]
+    # -- verdict
+    lines += outcomes_section(s)
+    lines += pairs_section(s)
+    if s.get("verdict"):
+        lines += _verdict_section(s)
+    # -- setup
+    lines += ["## Setup", ""]
+    rows = []
+    for slot, label in enumerate(s["labels"]):
+        m = c.runs[(slot, c.timestep)].manifest
+        rows.append(
+            [
+                label,
+                str(m.get("engine_version", "?")),
+                c.profiles[slot],
+                f"{format_timestep(c.timestep)} s",
+                str(c.runs[(slot, c.timestep)].steps),
+                f"{c.runs[(slot, c.timestep)].wall_per_sim_second() * 1000:.1f} ms",
+                _departure_count(s, label, m),
+            ]
+        )
+    lines += _table(
+        [
+            "engine",
+            "version",
+            "profile",
+            "time step",
+            "steps",
+            "wall per sim. second",
+            "profile departures here",
+        ],
+        rows,
+    )
+    lines += ["", f"Scenario file: `{s['scenario_file']}`. Followed robot: `{s['subject']}`.", ""]
+    # -- over time
+    lines += ["## When each quantity parts", ""]
+    rows = []
+    for key, q in QUANTITIES.items():
+        if key not in cross.series:
+            continue
+        cells = [q.title]
+        cells += [
+            f"{fmt_threshold(thr, q.unit)}: {fmt_time(cross.crossings[key][thr])}"
+            for thr in q.thresholds
+        ]
+        cells += [""] * (3 - len(q.thresholds))
+        cells += [fmt_value(cross.final[key], q.unit), fmt_value(cross.maximum[key], q.unit)]
+        rows.append(cells)
+    lines += _table(["quantity", "first crossing", "", "", "at the end", "largest"], rows)
+    lines += [
+        "",
+        "A threshold is crossed at the first recorded step whose value reaches it. Joint RMS "
+        "is over the subject's movable joints (angles unwrapped: a wheel a turn ahead counts "
+        "2π). Heading is meaningful while the robot is upright.",
+        "",
+    ]
+    # -- phases
+    lines += ["## Per phase", ""]
+    rows = []
+    keys = [k for k in QUANTITIES if k in cross.series]
+    for p in cross.phases:
+        rows.append(
+            [p.name, f"{p.start:.3f} – {p.end:.3f} s"]
+            + [
+                f"{fmt_value(p.at_end[k], QUANTITIES[k].unit)} "
+                f"(max {fmt_value(p.max[k], QUANTITIES[k].unit)})"
+                for k in keys
+            ]
+        )
+    lines += _table(["phase", "time"] + [QUANTITIES[k].title + " at end" for k in keys], rows)
+    lines += [""]
+    # -- where the gap is born, which part
+    lines += _born_section(s)
+    lines += _parts_section(s)
+    lines += resync_section(s, images.pop("resync", None))  # its figure here, not in Figures
+    # -- final poses
+    lines += ["## Final poses", ""]
+    pa, pb = cross.final_pose["a"], cross.final_pose["b"]
+
+    def xyz(v: list[float]) -> str:
+        return "(" + ", ".join(f"{x:.4f}" for x in v) + ")"
+
+    rows = [
+        ["base position (m)", xyz(pa["position"]), xyz(pb["position"])],
+        ["base orientation (x, y, z, w)", xyz(pa["orientation"]), xyz(pb["orientation"])],
+        ["heading (yaw)", f"{pa['yaw'] / DEG:.2f}°", f"{pb['yaw'] / DEG:.2f}°"],
+        [
+            "tilt from its spawn orientation",
+            _tilt_cell(pa),
+            _tilt_cell(pb),
+        ],
+    ]
+    for j, name in enumerate(pa["joint_names"]):
+        rows.append(
+            [
+                f"joint `{name}`: position, velocity",
+                f"{pa['joint_positions'][j]:.4g}, {pa['joint_velocities'][j]:.4g}",
+                f"{pb['joint_positions'][j]:.4g}, {pb['joint_velocities'][j]:.4g}",
+            ]
+        )
+    lines += _table([f"at t = {cross.time[-1]:.3f} s", a, b], rows)
+    lines += [""]
+    # -- own error
+    q = s["headline_quantity"]
+    unit = QUANTITIES[q].unit
+    lines += [
+        "## Each engine against itself at half the time step",
+        "",
+        f"Each engine reran the scenario at dt = {format_timestep(c.timestep / 2)} s (same "
+        "simulated time, every phase twice as many steps). What it changes by itself bounds "
+        "what its time step alone explains.",
+        "",
+    ]
+    rows = []
+    for label, e in s["headline"]["own_error"].items():
+        rows.append(
+            [
+                label,
+                fmt_value(e["final"], unit),
+                fmt_value(e["max"], unit),
+                "n/a" if e["gap_ratio"] is None else f"{e['gap_ratio']:.3g}",
+                "yes" if e["gap_exceeds"] else "**no**",
+            ]
+        )
+    rows.append(
+        [
+            f"{a} vs {b}",
+            fmt_value(s["headline"]["final"], unit),
+            fmt_value(s["headline"]["max"], unit),
+            "",
+            "",
+        ]
+    )
+    lines += _table(
+        ["", f"{QUANTITIES[q].title}: end", "largest", "cross-engine gap / this", "gap larger?"],
+        rows,
+    )
+    lines += [""]
+    # -- sweep
+    if len(c.timesteps) > 1:
+        lines += ["## Time-step sweep", ""]
+        header = ["time step"]
+        for label in s["labels"]:
+            header += [f"{label}: wall per sim. s", f"{label}: own error (end)"]
+        header += ["cross-engine gap (end)", "largest gap"]
+        rows = []
+        for r in s["sweep"]:
+            cells = [f"{format_timestep(r['timestep'])} s"]
+            for label in s["labels"]:
+                e = r["engines"][label]
+                cells += [
+                    f"{e['wall_per_sim_second'] * 1000:.1f} ms",
+                    fmt_value(e["own_error_final"], unit),
+                ]
+            cells += [fmt_value(r["gap_final"], unit), fmt_value(r["gap_max"], unit)]
+            rows.append(cells)
+        lines += _table(header, rows)
+        lines += [
+            "",
+            "Wall time counts commands and steps only (recording excluded), on this machine, "
+            "in one process; compare ratios, not absolute times.",
+            "",
+        ]
+    # -- figures
+    captions = {
+        "paths": "Paths of both engines (phase starts marked, x = end).",
+        "distance": "Distance over time (log scale) with the 1 cm / 10 cm / 1 m thresholds; "
+        "dashed: each engine against itself at half the time step; dotted: the spread of each "
+        "engine's perturbed runs.",
+        "ensemble": "Where every run of each engine's ensemble ends (top and side views); the "
+        "squares ring the nominal runs.",
+        "height": "Height of the followed robot over time (against gravity; a fixed base's last "
+        "link), with the instant the gap first reaches its threshold.",
+        "heading": "Heading of each engine and their difference.",
+        "events": "Each engine's events: bars last as long as the condition, markers are "
+        "instants; the dash-dotted line is where the gap first reaches its threshold.",
+        "joints_velocity": "Velocity-commanded joints: speed against the target.",
+        "joints_position": "Position-commanded joints: position against the target.",
+        "joints_torque": "Torque-commanded joints: speed under the commanded torque (dotted, "
+        "right axis).",
+        "motors": "Velocity- and position-commanded joints: motor force against its max_force.",
+        "sweep": "Speed against self-consistency, and the cross-engine gap against the time step.",
+    }
+    if images:
+        lines += ["## Figures", ""]
+        for key, path in images.items():
+            lines += [f"![{key}]({path.name})", "", captions.get(key, ""), ""]
+    # -- departures
+    lines += _departures_section(s)
+    # -- manifest
+    lines += ["## Reproduce", ""]
+    lines += [
+        "```",
+        " ".join(s["manifest"]["command_line"]) or "(library call)",
+        "```",
+        "",
+        f"simbridge {s['manifest']['simbridge_version']}.",
+        "",
+    ]
+    rows = []
+    for slot, label in enumerate(s["labels"]):
+        m = c.runs[(slot, c.timestep)].manifest
+        for robot, u in (m.get("urdf") or {}).items():
+            rows.append([label, robot, f"`{u['urdf']}`", f"`{u['sha256'][:16]}…`"])
+    lines += _table(["engine", "robot", "URDF", "sha256"], rows)
+    lines += [
+        "",
+        "Full manifests (engine versions, profile entries, native defaults, departures, URDF "
+        "hashes) are in `summary.json` under `manifest`.",
+        "",
+        "Files: " + ", ".join(f"`{f}`" for f in files),
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _tilt_cell(pose: dict[str, Any]) -> str:
+    t = pose.get("tilt_from_spawn", pose["tilt"])
+    return f"{t / DEG:.1f}°" + (" (tipped over)" if t > TIP_ANGLE else "")
+
+
+def _departure_count(s: dict[str, Any], label: str, manifest: dict[str, Any]) -> str:
+    total = len(manifest.get("departures", {}) or {})
+    deps = (s.get("departures") or {}).get(label)
+    if deps is None:
+        return str(total)
+    return f"{len(deps['apply'])} of {total}"
+
+
+MAX_EVENT_ROWS = 40
+MAX_PART_ROWS = 15
+
+
+def _born_section(s: dict[str, Any]) -> list[str]:
+    """Each engine's events, the one the gap parted after, and the counts of each kind."""
+    events = s.get("events")
+    if not events:
+        return []
+    labels = list(events)
+    p = s.get("parting") or {}
+    q = QUANTITIES[s["headline_quantity"]]
+    lines = ["## Where the gap is born", ""]
+    if p.get("time") is not None:
+        lines += [
+            f"The {q.title} first reaches {fmt_threshold(p['threshold'], q.unit)} at "
+            f"t = {fmt_time(p['time'])}, {parting_words(p)}.",
+            "",
+        ]
+        if p["ongoing"]:
+            shown = [with_start(event_words(o, o["label"]), o["time"]) for o in p["ongoing"][:6]]
+            more = len(p["ongoing"]) - len(shown)
+            lines += [
+                "Going on at that instant: "
+                + "; ".join(shown)
+                + (f"; and {more} more" if more > 0 else "")
+                + ".",
+                "",
+            ]
+    else:
+        lines += [f"The {q.title} never reaches {fmt_threshold(q.thresholds[0], q.unit)}.", ""]
+    rows = [
+        [kind.replace("_", " ")] + [str(events[lab]["counts"][kind]) for lab in labels]
+        for kind in KINDS
+    ]
+    rows.append(
+        ["touching from the first step"]
+        + [", ".join(events[lab]["initial_contacts"]) or "nothing" for lab in labels]
+    )
+    rows.append(
+        ["at a joint limit from the start"]
+        + [
+            ", ".join(f"{x['joint']} ({x['side']})" for x in events[lab]["initial_limits"])
+            or "none"
+            for lab in labels
+        ]
+    )
+    lines += _table(["events of " + s["subject"]] + labels, rows)
+    lines += [
+        "",
+        "Contacts are per link (with the other bodies touching anything at that instant); a "
+        "contact or condition interrupted for less than 0.05 s counts as going on; tilt is "
+        "measured from the spawn orientation, about the world's up (against gravity).",
+        "",
+    ]
+    merged = sorted(
+        ((e["time"], k, lab, e) for k, lab in enumerate(labels) for e in events[lab]["events"]),
+        key=lambda x: (x[0], x[1]),
+    )
+    if merged:
+        chosen = merged
+        t = p.get("time")
+        if len(merged) > MAX_EVENT_ROWS:
+            if t is None:
+                chosen = merged[:MAX_EVENT_ROWS]
+            else:
+                before = [x for x in merged if x[0] <= t][-MAX_EVENT_ROWS // 2 :]
+                after = [x for x in merged if x[0] > t]
+                chosen = before + after[: MAX_EVENT_ROWS - len(before)]
+        mark = p.get("event")
+        rows = []
+        for time, _, lab, e in chosen:
+            words = event_words(e, lab)
+            if mark and mark["label"] == lab and {**e, "label": lab} == mark:
+                words = f"**{words}** (the gap parts {p['relation']} this)"
+            until = (
+                ""
+                if e["end"] is None
+                and e["kind"]
+                not in (
+                    "airborne",
+                    "tipped_over",
+                    "contact_chatter",
+                    "joint_limit",
+                    "motor_saturated",
+                )
+                else ("the end" if e["end"] is None else fmt_time(e["end"]))
+            )
+            rows.append([fmt_time(time), e["phase"], lab, words, until])
+        total = sum(events[lab]["total"] for lab in labels)
+        lines += _table(["t", "phase", "engine", "event", "until"], rows)
+        lines += [""]
+        if len(chosen) < total:
+            lines += [
+                f"{len(chosen)} of {total} events shown (those around the parting); every one "
+                "is in `summary.json` under `events`.",
+                "",
+            ]
+    return lines
+
+
+def _parts_section(s: dict[str, Any]) -> list[str]:
+    """Joints and links ranked by when the engines part there, and how far."""
+    parts = s.get("parts")
+    if not parts:
+        return []
+    lines = ["## Which part parts first", ""]
+    lines += [parts_words(parts), ""]
+    rows = []
+    for k, p in enumerate(parts[:MAX_PART_ROWS]):
+        rows.append(
+            [
+                str(k + 1),
+                f"{p['kind']} `{p['name']}`",
+                f"{fmt_threshold(p['threshold'], p['unit'])}: {fmt_time(p['first'])}",
+                f"{fmt_value(p['largest'], p['unit'])} at {fmt_time(p['largest_at'])}",
+                fmt_value(p["at_end"], p["unit"]),
+            ]
+        )
+    lines += _table(["rank", "part", "apart by", "largest gap", "at the end"], rows)
+    lines += [
+        "",
+        "A joint's gap is the difference of its positions (angles unwrapped), a link's the "
+        "distance between its centres of mass; parts that come apart rank first, earliest "
+        "first, then the rest by their largest gap over the threshold.",
+        "",
+    ]
+    if len(parts) > MAX_PART_ROWS:
+        lines += [
+            f"{MAX_PART_ROWS} of {len(parts)} shown; all in `summary.json` under `parts`.",
+            "",
+        ]
+    return lines
+
+
+def _departures_section(s: dict[str, Any]) -> list[str]:
+    """The profile departures that apply to this scenario, with this run's figures."""
+    deps = s.get("departures")
+    if not deps:
+        return []
+    lines = ["## Profile departures that apply here", ""]
+    for label, d in deps.items():
+        if not d["apply"] and not d["left_out"]:
+            lines += [f"{label}: none (it reproduces the profile).", ""]
+            continue
+        if d["apply"]:
+            rows = [
+                [f"`{x['key']}`", x["text"], x["why"], x["measured"] or "none"] for x in d["apply"]
+            ]
+            lines += [f"{label}:", ""]
+            lines += _table(
+                ["departure", "what", "why it applies here", "measured in this run"], rows
+            )
+            lines += [""]
+        else:
+            lines += [f"{label}: none of its departures applies here.", ""]
+        if d["left_out"]:
+            lines += [
+                f"Left out for {label} (they do not apply to this scenario): "
+                + ", ".join(f"`{k}`" for k in d["left_out"])
+                + ".",
+                "",
+            ]
+    return lines
+
+
+def _verdict_section(s: dict[str, Any]) -> list[str]:
+    """The judgement in a table: each engine's spread, own error and their ratios to the gap,
+    the test, the instants of each kind, the horizons."""
+    v = s["verdict"]
+    e = s.get("ensemble") or {}
+    unit = v["unit"]
+    q = QUANTITIES[v["quantity"]]
+    t = v["judged_at"]
+    where = "at the end" if t["why"] == "end" else f"at t = {fmt_time(t['time'])} (largest gap)"
+
+    def iv(x: dict[str, Any]) -> str:
+        if x.get("low") is None:
+            return fmt_value(x["value"], unit)
+        return (
+            f"{fmt_value(x['value'], unit)} [{fmt_value(x['low'], unit)}, "
+            f"{fmt_value(x['high'], unit)}]"
+        )
+
+    lines = [
+        f"## Verdict: {v['verdict']}" + (" (marginal)" if v["marginal"] else ""),
+        "",
+    ]
+    if e:
+        pert = e["perturbation"]
+        lines += [
+            f"Each engine ran the scenario {e['size']} times: the nominal run and "
+            f"{e['size'] - 1} with every spawn pose moved by {pert['position']:g} m and turned "
+            f"by {pert['orientation']:g} rad in random directions (seed {e['seed']}). The "
+            f"{q.title} is judged at every one of {v['instants']['total']} recorded instants "
+            f"against each engine's own spread (the {v['spread_percentile']:g}th percentile of "
+            "the distances between its runs) and its own time-step error (dt against dt/2); "
+            f"figures below are {where}, with 95% bootstrap intervals in brackets.",
+            "",
+        ]
+    rows = []
+    for label, f in v["engine_figures"].items():
+        hz = ", ".join(
+            f"{fmt_threshold(h['threshold'], unit)}: {fmt_time(h['time'])}" for h in f["horizons"]
+        )
+        rows.append(
+            [
+                label,
+                str(f["size"]),
+                iv(f["spread"]),
+                iv(f["spread_end"]),
+                fmt_value(f["largest_pair"], unit),
+                f"{f['gap_over_spread']:.3g}",
+                fmt_value(f["own_error"], unit),
+                f"{f['gap_over_own_error']:.3g}",
+                hz,
+            ]
+        )
+    lines += _table(
+        [
+            "engine",
+            "runs",
+            "spread",
+            "spread at the end",
+            "farthest pair",
+            "gap / spread",
+            "own error",
+            "gap / own error",
+            "spread first reaches",
+        ],
+        rows,
+    )
+    test = v["test"]
+    test_words = (
+        "not run (the gap stays below the tolerance, or one run per engine)"
+        if test is None
+        else f"{test['name']}: statistic {test['statistic']:.3g}, p = {test['p_value']:.3g} "
+        f"({'every split' if test['exact'] else str(test['resamples']) + ' random splits'}; "
+        f"alpha {test['alpha']:g})"
+    )
+    n = v["instants"]
+    lines += [
+        "",
+        f"Gap between the engines (median over every pair of runs, one of each engine): "
+        f"{iv(v['gap'])}; the nominal runs' gap: {fmt_value(v['nominal_gap'], unit)}; largest "
+        f"on the way {fmt_value(v['max_gap']['value'], unit)} at t = "
+        f"{fmt_time(v['max_gap']['time'])}. Tolerance for `agree`: "
+        f"{fmt_threshold(v['tolerance'], unit)}; precision floor {v['floor']:.2g} {unit}.",
+        "",
+        f"Two-sample test on the runs' states {where}: {test_words}.",
+        "",
+        f"Instants: {n['agree']} below the tolerance, {n['chaotic']} within an engine's spread, "
+        f"{n['unresolved']} within an engine's own time-step error, {n['differ']} beyond every "
+        f"one of them (of {n['total']}). A ratio between {v['marginal_range'][0]:g} and "
+        f"{v['marginal_range'][1]:g} is near 1: the gap is not clearly larger, and the verdict "
+        "says marginal.",
+        "",
+    ]
+    if v["marginal_reasons"]:
+        lines += ["Marginal: " + "; ".join(v["marginal_reasons"]) + ".", ""]
+    return lines

@@ -1,0 +1,216 @@
+"""The verdict in words (:func:`verdict_lines`), from ``summary.json``'s ``verdict`` and
+``ensemble`` alone, and the reasons a verdict is marginal (:func:`marginal_words`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..analysis.verdict import ALPHA, Marginal
+from .fmt import fmt_threshold, fmt_time, fmt_value
+
+__all__ = ["verdict_lines", "marginal_words"]
+
+
+def marginal_words(m: Marginal) -> str:
+    """``the gap is 1.1x mujoco's own time-step error``."""
+    if m.what == "tolerance":
+        return f"the largest gap is {m.ratio:.3g}x the tolerance"
+    if m.what == "spread":
+        return f"the gap is {m.ratio:.3g}x {m.label}'s spread"
+    return f"the gap is {m.ratio:.3g}x {m.label}'s own time-step error"
+
+
+def _iv(x: dict[str, Any], unit: str, *, inner: bool = False) -> str:
+    """``7.2 cm (95% interval 7.1 cm to 7.3 cm)`` (``inner``: ``7.2 cm, 95% interval ...``, for
+    use inside parentheses); the value alone without an interval."""
+    v = fmt_value(x["value"], unit)
+    if x.get("low") is None:
+        return v
+    lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
+    if x["low"] == x["high"]:
+        return v
+    if len({lo, v, hi}) < 3:  # too close for the report's rounding: 4 significant digits
+        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
+    return f"{v}, 95% interval {lo} to {hi}" if inner else f"{v} (95% interval {lo} to {hi})"
+
+
+def _x(r: float) -> str:
+    """A ratio: ``1.04x``, ``33x``, ``670x``, ``3.1e7x``."""
+    if r < 10:
+        return f"{r:.3g}x"
+    if r < 10_000:
+        return f"{r:.3g}x" if r < 100 else f"{round(r, -1):.0f}x"
+    return f"{r:.1e}x".replace("e+0", "e").replace("e+", "e")
+
+
+def _p(test: dict[str, Any]) -> str:
+    """``p = 0.029``; ``p < 0.001`` from random splits below that (their p-value cannot go
+    under 1 / (splits + 1): it bounds the true one)."""
+    p = test["p_value"]
+    if not test["exact"] and p < 0.001:
+        return "p < 0.001"
+    return f"p = {p:.2g}"
+
+
+def _perturbation(ensemble: dict[str, Any] | None) -> str:
+    if not ensemble:
+        return "runs"
+    pm = ensemble["perturbation"]["position"]
+    pr = ensemble["perturbation"]["orientation"]
+    return f"runs started {pm:g} m / {pr:g} rad apart"
+
+
+def verdict_lines(summary: dict[str, Any]) -> list[str]:
+    """The verdict in words, from ``summary.json``'s ``verdict`` and ``ensemble`` alone."""
+    v = summary["verdict"]
+    ens = summary.get("ensemble")
+    unit = v["unit"]
+    a, b = v["labels"]
+    figs = v["engine_figures"]
+    n = figs[a]["size"]
+    started = _perturbation(ens)
+    at_end = v["judged_at"]["why"] == "end"
+    when = "end" if at_end else f"are, at t = {fmt_time(v['judged_at']['time'])},"
+    marg = ""
+    if v["marginal"]:
+        marg = " (marginal: " + "; ".join(v["marginal_reasons"]) + ")"
+    tol = fmt_threshold(v["tolerance"], unit)
+    lines: list[str] = []
+    if v["verdict"] == "agree":
+        mg = v["max_gap"]
+        spreads = " and ".join(
+            f"{fmt_value(f['spread_max'], unit)} ({lab})" for lab, f in figs.items()
+        )
+        lines.append(
+            f"**{a} and {b} agree on this scenario**{marg}: the gap between them stays below "
+            f"{tol} all along (largest {fmt_value(mg['value'], unit)}, at t = "
+            f"{fmt_time(mg['time'])})."
+            + (f" Each engine's {n} {started} spread by at most {spreads}." if n > 1 else "")
+        )
+    elif v["verdict"] == "chaotic":
+        names = v["engines"]
+        who = " and ".join(names)
+        verb = "is" if len(names) == 1 else "are"
+        first = figs[names[0]]
+        others = [lab for lab in (a, b) if lab not in names]
+        spread_words = (
+            f"**{who} {verb} chaotic on this scenario**{marg}: {first['size']} {started} "
+            f"{when} up to {fmt_value(first['largest_pair'], unit)} apart (spread "
+            f"{_iv(first['spread'], unit, inner=True)})"
+        )
+        if others:
+            o = figs[others[0]]
+            spread_words += (
+                f"; {others[0]}'s {o['size']} runs {when} within "
+                f"{fmt_value(o['largest_pair'], unit)} of each other"
+            )
+        lines.append(spread_words + ".")
+        ratio = " and ".join(f"{_x(figs[lab]['gap_over_spread'])} {lab}'s" for lab in names)
+        near = ""
+        if others:
+            near = (
+                f"; {others[0]}'s runs {when} a median "
+                f"{fmt_value(first['other_to_nearest'], unit)} from the nearest {names[0]} run"
+            )
+        also = [lab for lab in (a, b) if figs[lab]["gap_over_own_error"] <= v["marginal_range"][1]]
+        also_words = ""
+        if also:
+            also_words = (
+                " It lies within "
+                + " and ".join(
+                    f"{lab}'s own time-step error ({fmt_value(figs[lab]['own_error'], unit)} "
+                    "between dt and dt/2)"
+                    for lab in also
+                )
+                + " as well."
+            )
+        lines.append(
+            f"The two engines' runs {when} a median {_iv(v['gap'], unit)} apart, {ratio} own "
+            f"spread{near}: at this scale {who}'s outcome is not predictable, and the gap says "
+            "nothing about the engines' physics." + also_words
+        )
+        t = v["test"]
+        if t is not None:
+            told = "tells" if t["p_value"] < ALPHA else "does not tell"
+            lines[-1] += (
+                f" (A permutation test on the energy distance {told} the two sets of runs apart, "
+                f"{_p(t)}: "
+                + (
+                    "they are distributed differently, but within the spread of "
+                    f"{names[0]}'s own runs.)"
+                    if t["p_value"] < ALPHA
+                    else "one engine's runs could be the other's.)"
+                )
+            )
+    elif v["verdict"] == "differ":
+        t = v["test"]
+        parts = "; ".join(
+            f"{_x(f['gap_over_spread'])} {lab}'s own spread "
+            f"({fmt_value(f['spread']['value'], unit)}) and {_x(f['gap_over_own_error'])} its "
+            "time-step error"
+            for lab, f in figs.items()
+        )
+        lines.append(
+            f"**{a} and {b} differ on this scenario**{marg}: their runs {when} a median "
+            f"{_iv(v['gap'], unit)} apart; that is {parts}."
+        )
+        lines.append(
+            f"A permutation test on the energy distance separates the two sets of {n} "
+            f"{started} ({_p(t)}): the gap is the engines', not chaos or the "
+            "time step."
+        )
+    else:
+        reason = v["reason"]
+        if reason == "within own time-step error":
+            who = " and ".join(v["engines"])
+            errs = ", ".join(
+                f"{lab} {fmt_value(figs[lab]['own_error'], unit)}" for lab in v["engines"]
+            )
+            why = (
+                f"which lies within {who}'s own time-step error (dt against dt/2: {errs}): at "
+                "this time step the comparison cannot tell the engines apart; rerun with a "
+                "smaller --timestep"
+            )
+        elif reason == "single run":
+            why = (
+                "and with one run per engine chaos cannot be told from an engine difference; "
+                "rerun with --ensemble 8 or more"
+            )
+        else:
+            t = v["test"]
+            why = (
+                f"but the permutation test does not separate the two sets of {n} {started} "
+                f"({_p(t)}); a larger --ensemble may"
+            )
+        lines.append(
+            f"**Unresolved**{marg}: the engines' runs {when} a median {_iv(v['gap'], unit)} "
+            f"apart, {why}."
+        )
+    lines += _horizon_lines(v, unit) if v["verdict"] != "agree" else []
+    return lines
+
+
+def _horizon_lines(v: dict[str, Any], unit: str) -> list[str]:
+    parts = []
+    for lab, f in v["engine_figures"].items():
+        if f["size"] < 2:
+            continue
+        hs = f["horizons"]
+        reached = [h for h in hs if h["time"] is not None]
+        if not reached:
+            parts.append(f"{lab}'s spread never reaches {fmt_threshold(hs[0]['threshold'], unit)}")
+        else:
+            parts.append(
+                f"{lab}'s reaches "
+                + ", ".join(
+                    f"{fmt_threshold(h['threshold'], unit)} at t = {fmt_time(h['time'])}"
+                    for h in reached
+                )
+            )
+    if not parts:
+        return []
+    return [
+        "Predictability horizon (when the runs of one engine first spread that far): "
+        + "; ".join(parts)
+        + "."
+    ]

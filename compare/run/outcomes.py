@@ -1,0 +1,318 @@
+"""Outcomes measured on one run (:func:`evaluate`, :func:`evaluate_all`): the declarations
+(:class:`~simbridge.compare.scenario.outcomes.Outcome`) are the scenario's, the statistics over
+an ensemble the analysis's (:mod:`simbridge.compare.analysis.outcomes`).
+
+Every evaluation is a plain dict (JSON-ready, picklable): ``name``, ``kind``, ``unit``,
+``value``, ``success`` (True, False, or None where the outcome declares no bound) and the kind's
+own figures (see :func:`evaluate`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from simbridge.exceptions import ScenarioError
+
+from ..scenario.outcomes import KINDS, JointRef, Outcome
+
+if TYPE_CHECKING:
+    from ..scenario import Scenario
+
+# .trajectory's Trajectory and BodyTrajectory by name only: its run() imports this module, and
+# no module here imports one that imports it (tests/test_import_graph.py), not even for types
+Trajectory = Any
+BodyTrajectory = Any
+
+__all__ = ["evaluate", "evaluate_all", "tilt"]
+
+
+# ---------------------------------------------------------------- evaluation
+
+
+def _fail(outcome: Outcome, index: int | None, key: str, detail: str, file: str) -> ScenarioError:
+    where = f"outcomes[{index}].{key}" if index is not None else f"outcome {outcome.name!r}.{key}"
+    return ScenarioError(file, where, detail)
+
+
+def _window(outcome: Outcome, tr: Trajectory) -> tuple[int, int] | None:
+    if not outcome.phase:
+        return 0, len(tr.time) - 1
+    for name, a, b in tr.phases:
+        if name == outcome.phase:
+            return a, b
+    return None
+
+
+def _link_column(body: BodyTrajectory, link: JointRef) -> int | None:
+    """Column of ``body.link_positions`` for ``link`` (None: the base frame)."""
+    if link == "base" or link == -1:
+        return None
+    if isinstance(link, int):
+        if 0 <= link < len(body.link_names) - 1:
+            return link + 1
+        raise KeyError(link)
+    if link in body.link_names[1:]:
+        return body.link_names.index(link, 1)
+    raise KeyError(link)
+
+
+def _joint_columns(body: BodyTrajectory, joints: Sequence[JointRef]) -> list[int]:
+    cols = []
+    indices = [int(j) for j in body.joint_indices]
+    for j in joints:
+        if isinstance(j, str):
+            if j not in body.joint_names:
+                raise KeyError(j)
+            cols.append(body.joint_names.index(j))
+        else:
+            if j not in indices:
+                raise KeyError(j)
+            cols.append(indices.index(j))
+    return cols
+
+
+def _positions(body: BodyTrajectory, link: JointRef) -> np.ndarray:
+    col = _link_column(body, link)
+    return body.base_position if col is None else body.link_positions[:, col, :]
+
+
+def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Quaternions q (T, 4) (x, y, z, w) applied to the vector v (3,): (T, 3)."""
+    u = q[:, :3]
+    w = q[:, 3:4]
+    t = 2.0 * np.cross(u, np.broadcast_to(v, u.shape))
+    return v + w * t + np.cross(u, t)
+
+
+def tilt(orientation: np.ndarray) -> np.ndarray:
+    """(T,) rad: the angle between the world z axis and the body axis that pointed along it at
+    the first instant (orientations (T, 4), x, y, z, w)."""
+    q0 = orientation[0]
+    conj = np.array([-q0[0], -q0[1], -q0[2], q0[3]])
+    up_body = _rotate(conj[None, :], np.array([0.0, 0.0, 1.0]))[0]
+    up = _rotate(orientation, up_body)
+    up /= np.linalg.norm(up, axis=1, keepdims=True)
+    return np.arccos(np.clip(up[:, 2], -1.0, 1.0))
+
+
+def _record(outcome: Outcome, value: float | None, success: bool | None, **extra: Any):
+    out: dict[str, Any] = {
+        "name": outcome.name,
+        "kind": outcome.kind,
+        "unit": outcome.unit,
+        "value": value,
+        "success": success,
+    }
+    out.update(extra)
+    return out
+
+
+def evaluate(
+    outcome: Outcome,
+    tr: Trajectory,
+    *,
+    base: Path | None = None,
+    file: str = "<scenario>",
+    index: int | None = None,
+) -> dict[str, Any]:
+    """Measure ``outcome`` on the recorded run ``tr``.
+
+    Returns a dict: ``name``, ``kind``, ``unit``, ``value`` (float or None), ``success`` (bool,
+    or None where no bound is declared or the window was not run), and per kind:
+    ``reach``: ``closest`` (m, smallest distance), ``final_distance`` (m); ``upright``:
+    ``exceeded_at`` (s, first instant over the bound, None: never), ``final_tilt`` (rad);
+    ``track``: ``samples`` (instants counted), ``max_error``; ``final_pose``: nothing more;
+    ``effort``: nothing more. A phase the run did not reach (a shortened run) gives value and
+    success None and ``note``.
+
+    Raises:
+        ScenarioError: an unknown robot, link or joint (naming the outcome and the valid
+            names), or a function that fails.
+    """
+    if outcome.kind == "function":
+        return _evaluate_function(outcome, tr, base, file, index)
+    robot = outcome.robot or tr.subject
+    if robot not in tr.bodies:
+        raise _fail(
+            outcome, index, "robot", f"no robot {robot!r}; robots: {sorted(tr.bodies)}", file
+        )
+    body = tr.bodies[robot]
+    window = _window(outcome, tr)
+    if window is None:
+        return _record(outcome, None, None, note=f"phase {outcome.phase!r} was not run")
+    a, b = window
+    t = tr.time[a : b + 1] - tr.time[a]
+    try:
+        if outcome.kind == "reach":
+            return _reach(outcome, body, a, b, t)
+        if outcome.kind == "upright":
+            angles = tilt(body.base_orientation[a : b + 1])
+            assert outcome.max_tilt is not None
+            over = np.flatnonzero(angles >= outcome.max_tilt)
+            worst = float(angles.max())
+            return _record(
+                outcome,
+                worst,
+                bool(over.size == 0),
+                exceeded_at=float(t[over[0]]) if over.size else None,
+                final_tilt=float(angles[-1]),
+            )
+        if outcome.kind == "track":
+            return _track(outcome, body, a, b, t)
+        if outcome.kind == "final_pose":
+            if outcome.point is not None:
+                n = len(outcome.point)
+                pos = _positions(body, outcome.link)[b, :n]
+                err = float(np.linalg.norm(pos - np.asarray(outcome.point)))
+            elif outcome.orientation is not None:
+                q = body.base_orientation[b]
+                target = np.asarray(outcome.orientation)
+                dot = abs(float(np.dot(q, target))) / float(
+                    np.linalg.norm(q) * np.linalg.norm(target)
+                )
+                err = 2.0 * math.acos(min(1.0, dot))
+            else:
+                cols = _joint_columns(body, outcome.joints)
+                q = body.joint_positions[b, cols]
+                err = float(np.sqrt(np.mean((q - np.asarray(outcome.targets)) ** 2)))
+            ok = None if outcome.within is None else bool(err <= outcome.within)
+            return _record(outcome, err, ok)
+        if outcome.kind == "effort":
+            cols = (
+                _joint_columns(body, outcome.joints)
+                if outcome.joints
+                else list(range(len(body.joint_names)))
+            )
+            power = np.abs(
+                body.joint_forces[a + 1 : b + 1, cols] * body.joint_velocities[a + 1 : b + 1, cols]
+            )
+            work = float(power.sum() * tr.timestep)
+            ok = None if outcome.max is None else bool(work <= outcome.max)
+            return _record(outcome, work, ok)
+    except KeyError as exc:
+        (missing,) = exc.args
+        if outcome.kind in ("track", "final_pose", "effort") and outcome.joints:
+            valid = ", ".join(body.joint_names)
+            if missing in outcome.joints:
+                raise _fail(
+                    outcome,
+                    index,
+                    "joints",
+                    f"robot {robot!r} has no movable joint {missing!r}; movable joints: {valid}",
+                    file,
+                ) from None
+        valid = ", ".join(["base", *body.link_names[1:]])
+        raise _fail(
+            outcome, index, "link", f"robot {robot!r} has no link {missing!r}; links: {valid}", file
+        ) from None
+    raise _fail(outcome, index, "kind", f"unknown kind {outcome.kind!r}; kinds: {KINDS}", file)
+
+
+def _reach(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray):
+    assert outcome.point is not None and outcome.within is not None
+    n = len(outcome.point)
+    pos = _positions(body, outcome.link)[a : b + 1, :n]
+    d = np.linalg.norm(pos - np.asarray(outcome.point), axis=1)
+    inside = d <= outcome.within
+    if outcome.hold:
+        outside = np.flatnonzero(~inside)
+        first = 0 if outside.size == 0 else int(outside[-1]) + 1
+        row = first if first < len(d) else None
+    else:
+        hits = np.flatnonzero(inside)
+        row = int(hits[0]) if hits.size else None
+    when = None if row is None else float(t[row])
+    ok = when is not None and (outcome.by is None or when <= outcome.by)
+    return _record(outcome, when, bool(ok), closest=float(d.min()), final_distance=float(d[-1]))
+
+
+def _track(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray):
+    if outcome.points:
+        pos = _positions(body, outcome.link)[a : b + 1]
+        pts = np.asarray(outcome.points, dtype=np.float64)
+        n = pts.shape[1] - 1
+        k = np.searchsorted(pts[:, 0], t, side="right") - 1  # the last point at or before t
+        use = k >= 0
+        if not use.any():
+            return _record(outcome, None, None, samples=0, max_error=None)
+        err = np.linalg.norm(pos[use, :n] - pts[k[use], 1:], axis=1)
+    else:
+        cols = (
+            _joint_columns(body, outcome.joints)
+            if outcome.joints
+            else list(range(len(body.joint_names)))
+        )
+        source = body.joint_velocities if outcome.quantity == "velocity" else body.joint_positions
+        actual = source[a : b + 1, cols]
+        if outcome.targets:
+            target = np.broadcast_to(np.asarray(outcome.targets), actual.shape)
+            mask = np.ones(actual.shape, dtype=bool)
+        else:
+            code = 1 if outcome.quantity == "velocity" else 2
+            target = body.joint_targets[a : b + 1, cols]
+            mask = (body.joint_modes[a : b + 1, cols] == code) & np.isfinite(target)
+            if not outcome.joints:  # all joints: those commanded in this mode at some instant
+                keep = mask.any(axis=0)
+                actual, target, mask = actual[:, keep], target[:, keep], mask[:, keep]
+        if not mask.any():
+            return _record(outcome, None, None, samples=0, max_error=None)
+        err = np.abs(actual - target)[mask]
+    rms = float(np.sqrt(np.mean(err**2)))
+    ok = None if outcome.max is None else bool(rms <= outcome.max)
+    return _record(outcome, rms, ok, samples=int(err.size), max_error=float(err.max()))
+
+
+def _evaluate_function(
+    outcome: Outcome, tr: Trajectory, base: Path | None, file: str, index: int | None
+) -> dict[str, Any]:
+    from ..scenario.controllers import RefError, load_object
+
+    try:
+        fn = load_object(outcome.function, base)
+    except RefError as exc:
+        raise _fail(outcome, index, "function", str(exc), file) from None
+    try:
+        out = fn(tr, **outcome.params)
+    except Exception as exc:
+        raise _fail(
+            outcome,
+            index,
+            "function",
+            f"{outcome.function}(trajectory) raised {type(exc).__name__}: {exc}",
+            file,
+        ) from exc
+    if out is None:
+        return _record(outcome, None, None)
+    if isinstance(out, (bool, np.bool_)):
+        return _record(outcome, float(bool(out)), bool(out))
+    if isinstance(out, (int, float, np.integer, np.floating)) and math.isfinite(float(out)):
+        v = float(out)
+        ok: bool | None = None
+        if outcome.max is not None or outcome.min is not None:
+            ok = (outcome.max is None or v <= outcome.max) and (
+                outcome.min is None or v >= outcome.min
+            )
+        return _record(outcome, v, ok)
+    raise _fail(
+        outcome,
+        index,
+        "function",
+        f"{outcome.function}(trajectory) returned {out!r}; expected a finite number, a bool or "
+        "None",
+        file,
+    )
+
+
+def evaluate_all(scenario: Scenario, tr: Trajectory) -> dict[str, dict[str, Any]]:
+    """Every outcome the scenario declares, measured on ``tr``: ``{name: record}``."""
+    base = scenario.source.parent if scenario.source is not None else None
+    file = str(scenario.source) if scenario.source is not None else f"<scenario {scenario.name}>"
+    return {
+        o.name: evaluate(o, tr, base=base, file=file, index=i)
+        for i, o in enumerate(scenario.outcomes)
+    }
