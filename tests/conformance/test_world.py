@@ -261,7 +261,7 @@ def test_a_read_racing_a_step_in_another_thread_is_whole_or_refused(make_sim, re
                 break
             try:
                 sim.step()
-            except SimBusyError:  # the reader held the Sim: MuJoCo refuses, PyBullet waits
+            except SimBusyError:  # a step waits for a read, 10 s at most
                 continue
             if k % 2:
                 time.sleep(0)  # the reader gets in between steps too
