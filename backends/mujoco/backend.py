@@ -46,7 +46,7 @@ from .commands import MotorCommands
 from .contacts import ContactReads
 from .loop import step_python
 from .snapshot import Snapshots
-from .state import StateAccess
+from .state import _PY_BUSY, StateAccess
 from .viewer import Viewer, check_display
 from .world import Compiled, Robot, compile_state, default_motors
 
@@ -56,13 +56,6 @@ if TYPE_CHECKING:
 __all__ = ["MujocoBackend"]
 
 _log = logging.getLogger("simbridge.mujoco")
-
-
-# as the compiled loop's busy error says it (_mjkernel.c refuse_if_busy)
-_PY_BUSY = (
-    "this Sim is stepping in another thread (or in a MuJoCo callback of its own step); a Sim "
-    "takes one call at a time (give each thread its own Sim)"
-)
 
 
 def _mujoco_warning(message: str) -> None:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, NoReturn
 import mujoco
 import numpy as np
 
-from simbridge.exceptions import SimulationDivergedError
+from simbridge.exceptions import SimBusyError, SimulationDivergedError
 from simbridge.profiles import Profile
 from simbridge.transforms import (
     quat_conjugate,
@@ -41,6 +41,12 @@ from .world import Compiled, Robot
 
 __all__ = ["StateAccess"]
 
+# as the compiled loop's busy error says it (_mjkernel.c refuse_if_busy)
+_PY_BUSY = (
+    "this Sim is stepping in another thread (or in a MuJoCo callback of its own step); a Sim "
+    "takes one call at a time (give each thread its own Sim)"
+)
+
 
 class StateAccess:
     """The ``Backend`` methods that read or set state (a part of :class:`MujocoBackend`)."""
@@ -64,6 +70,7 @@ class StateAccess:
         def _py_mark(self) -> None: ...
 
         _stepping: threading.RLock
+        _in_step: bool
 
         def refuse_fixed_base_velocity(
             self, body: int, linear: Vec3 | None, angular: Vec3 | None
@@ -232,14 +239,11 @@ class StateAccess:
         if not lock.acquire(False):
             wait_for_lock(self)
         try:
+            if self._in_step:  # a MuJoCo callback inside this thread's own step
+                raise SimBusyError(_PY_BUSY)
             c = self._w
-            kernel = c.kernel
-            if kernel is not None:
-                kernel.check_idle()  # refused from a MuJoCo callback inside the step
-            elif self._diverged is not None:
+            if c.kernel is None and self._diverged is not None:
                 raise self._diverged
-            else:
-                self._py_mark()
             robot = self._robots[body]
             _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
             d = c.d
