@@ -177,14 +177,11 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     # ---------------------------------------------------------------- world
 
     def _check_idle(self) -> None:
-        """Under the Sim's lock (which keeps other threads' steps out), a call from inside
-        this Sim's own step (a MuJoCo callback of its thread) is refused: the world is
-        half-computed there."""
-        if self._py_stepping.locked():
+        """Under the Sim's lock (which keeps other threads' steps out), a change from inside
+        this Sim's own step (a MuJoCo callback of its thread, which the re-entrant lock lets
+        through) is refused: the world is half-computed there."""
+        if self._in_step:
             raise SimBusyError(_PY_BUSY)
-        kernel = self._c.kernel if self._c is not None else None
-        if kernel is not None:
-            kernel.check_idle()  # SimBusyError while it steps
 
     def _py_mark(self) -> None:
         """The Python loop's check_idle(): SimBusyError from inside its own step."""

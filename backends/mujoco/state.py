@@ -84,7 +84,6 @@ class StateAccess:
     def num_joints(self, body: int) -> int:
         return len(self._robots[body].table)
 
-    @exclusive
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
         robot = self._robots[body]
         ine = robot.spec.inertials[link + 1]
@@ -194,9 +193,13 @@ class StateAccess:
         if not lock.acquire(False):
             wait_for_lock(self)
         try:
-            v = self._state_of(int(self._robots[body].body_ids[0]), body)
+            return self._base_state(body)
         finally:
             lock.release()
+
+    def _base_state(self, body: int) -> BaseState:
+        """base_state under the Sim's lock."""
+        v = self._state_of(int(self._robots[body].body_ids[0]), body)
         return BaseState(
             (v[0], v[1], v[2]), (v[3], v[4], v[5], v[6]), (v[7], v[8], v[9]), (v[10], v[11], v[12])
         )
@@ -266,18 +269,23 @@ class StateAccess:
         finally:
             lock.release()
 
-    @exclusive
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
-        self._check_idle()
-        robot = self._robots[body]
-        _, _, qadr, dof, _, _ = self._joint_cache(robot, joints)
-        c = self._w
-        c.d.qpos[qadr] = positions
-        c.d.qvel[dof] = velocities
-        c.stale = True
-        c.motor_force_valid = False
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            self._check_idle()
+            robot = self._robots[body]
+            _, _, qadr, dof, _, _ = self._joint_cache(robot, joints)
+            c = self._w
+            c.d.qpos[qadr] = positions
+            c.d.qvel[dof] = velocities
+            c.stale = True
+            c.motor_force_valid = False
+        finally:
+            lock.release()
 
     @exclusive
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
@@ -336,7 +344,6 @@ class StateAccess:
         c.stale = True
         c.motor_force_valid = False
 
-    @exclusive
     def reset_base_state(
         self,
         body: int,
@@ -345,10 +352,27 @@ class StateAccess:
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            self._reset_base_state(body, position, orientation, linear_velocity, angular_velocity)
+        finally:
+            lock.release()
+
+    def _reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        """reset_base_state under the Sim's lock."""
         robot = self._robots[body]
         if robot.free_qadr < 0:
             self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
-        cur = self.base_state(body)
+        cur = self._base_state(body)
         pos = cur.position if position is None else position
         orn = cur.orientation if orientation is None else orientation
         lin = cur.linear_velocity if linear_velocity is None else linear_velocity
