@@ -55,8 +55,9 @@ def run(tree: Path, options: list[str]) -> dict[tuple[str, str], float]:
         cwd=tree,
         capture_output=True,
         text=True,
-        check=True,
     )
+    if done.returncode:
+        raise SystemExit(f"bench/calls.py failed in {tree}:\n{done.stderr[-2000:]}")
     return tables(done.stdout)
 
 
