@@ -1,7 +1,8 @@
 """Hashes of every shipped scenario's recorded trajectories, per backend and MuJoCo step loop.
 
-``python tests/_trajectory_hashes.py > tests/data/trajectory_hashes.json`` records them (both
-step loops: it runs itself again under ``SIMBRIDGE_MUJOCO_STEP=python``);
+``python tests/_trajectory_hashes.py > tests/data/trajectory_hashes.json`` records them (it runs
+itself again under ``SIMBRIDGE_MUJOCO_STEP=python`` and refuses to record unless the Python
+step loop gives the compiled loop's bits);
 tests/test_same_results.py checks the tree still produces them bit for bit. They were
 recorded before the MuJoCo backend became the ``backends/mujoco/`` package (issue 11): a
 change that only moves code must leave every number of every step as it was.
@@ -83,22 +84,42 @@ def engine_versions() -> dict[str, str]:
     return {"mujoco": mujoco.__version__, "pybullet_api": str(pybullet.getAPIVersion())}
 
 
+def python_loop_hashes() -> dict[str, str]:
+    """The MuJoCo scenarios' hashes on the Python step loop (chosen for the Sims made here)."""
+    saved = os.environ.get("SIMBRIDGE_MUJOCO_STEP")
+    os.environ["SIMBRIDGE_MUJOCO_STEP"] = "python"
+    try:
+        return {**all_hashes(("mujoco",)), **all_extras(("mujoco",))}
+    finally:
+        if saved is None:
+            del os.environ["SIMBRIDGE_MUJOCO_STEP"]
+        else:
+            os.environ["SIMBRIDGE_MUJOCO_STEP"] = saved
+
+
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--mujoco-only"]:
+    if sys.argv[1:] == ["--mujoco-only"]:  # the loop SIMBRIDGE_MUJOCO_STEP chooses
         json.dump({**all_hashes(("mujoco",)), **all_extras(("mujoco",))}, sys.stdout)
         sys.exit(0)
-    env = dict(os.environ, SIMBRIDGE_MUJOCO_STEP="python")
+    if sys.argv[1:] == ["--both-loops"]:  # what tests/test_same_results.py checks in a child
+        both = {
+            "compiled": {**all_hashes(), **all_extras()},
+            "python_loop_mujoco": python_loop_hashes(),
+        }
+        json.dump(both, sys.stdout)
+        sys.exit(0)
+    # the record: the Python loop must give the compiled loop's bits (it is checked, not
+    # recorded: tests/test_same_results.py)
     python_loop = subprocess.run(
         [sys.executable, __file__, "--mujoco-only"],
-        env=env,
+        env=dict(os.environ, SIMBRIDGE_MUJOCO_STEP="python"),
         check=True,
         capture_output=True,
         text=True,
     ).stdout
-    record = {
-        "engines": engine_versions(),
-        "compiled": {**all_hashes(), **all_extras()},
-        "python_loop_mujoco": json.loads(python_loop),
-    }
-    json.dump(record, sys.stdout, indent=2)
+    compiled = {**all_hashes(), **all_extras()}
+    differ = {k for k, v in json.loads(python_loop).items() if compiled[k] != v}
+    if differ:
+        sys.exit(f"the Python step loop differs from the compiled loop on {sorted(differ)}")
+    json.dump({"engines": engine_versions(), "compiled": compiled}, sys.stdout, indent=2)
     print()

@@ -2,7 +2,16 @@
 and on both MuJoCo step loops, hash to what they did before the MuJoCo backend became the
 ``backends/mujoco/`` package (tests/data/trajectory_hashes.json, written by
 tests/_trajectory_hashes.py). A deliberate change of behaviour records them again, in its own
-commit, saying why."""
+commit, saying why.
+
+The hashes are the same on every x86-64 processor: PyBullet and the compiled step loop are
+plain C arithmetic, and the Python step loop does the compiled loop's arithmetic in the same
+order without BLAS or LAPACK (backends/mujoco/solve.py, damping.py), so it gives the compiled
+loop's bits. :func:`test_the_same_bits_whatever_the_kernels` proves it in child processes under
+other OpenBLAS kernels and with numpy's SIMD dispatch turned off; before, the Python loop's
+``np.linalg.solve`` and ``@`` moved 7 of its 10 hashes on an AVX-512 machine (SkylakeX
+kernels) and 7 here under ``OPENBLAS_CORETYPE=Sandybridge``.
+"""
 
 from __future__ import annotations
 
@@ -18,6 +27,8 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _trajectory_hashes import all_extras, all_hashes, engine_versions  # noqa: E402
 
 RECORD = json.loads((Path(__file__).parent / "data" / "trajectory_hashes.json").read_text())
+SCRIPT = Path(__file__).parent / "_trajectory_hashes.py"
+MUJOCO = {k: v for k, v in RECORD["compiled"].items() if k.endswith("/mujoco")}
 
 pytestmark = pytest.mark.skipif(
     engine_versions() != RECORD["engines"],
@@ -36,15 +47,88 @@ def test_compiled_loop_and_pybullet_bit_identical() -> None:
     assert _mismatches(RECORD["compiled"], got) == []
 
 
-def test_python_step_loop_bit_identical() -> None:
-    script = Path(__file__).parent / "_trajectory_hashes.py"
-    env = dict(os.environ, SIMBRIDGE_MUJOCO_STEP="python")
+def test_python_step_loop_gives_the_compiled_loops_bits() -> None:
     out = subprocess.run(
-        [sys.executable, str(script), "--mujoco-only"],
-        env=env,
+        [sys.executable, str(SCRIPT), "--mujoco-only"],
+        env=dict(os.environ, SIMBRIDGE_MUJOCO_STEP="python"),
         check=True,
         capture_output=True,
         text=True,
     ).stdout
     got = json.loads(out)
-    assert _mismatches(RECORD["python_loop_mujoco"], got) == []
+    assert sorted(got) == sorted(MUJOCO)
+    assert _mismatches(MUJOCO, got) == []
+
+
+def _cpu() -> dict[str, list[str]]:
+    """The processor's flags, and numpy's SIMD targets dispatched at run time that it has."""
+    flags: list[str] = []
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("flags"):
+                flags = line.split(":", 1)[1].split()
+                break
+    except OSError:
+        pass
+    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+
+    dispatched = [f for f in __cpu_dispatch__ if __cpu_features__.get(f)]
+    return {"flags": flags, "dispatched": dispatched}
+
+
+def _variants() -> list[tuple[str, dict[str, str]]]:
+    """Kernel choices unlike this machine's defaults, each a child's environment: OpenBLAS's
+    Haswell kernels (AVX2; the default on AVX2 machines, not on AVX-512 ones), its Sandybridge
+    kernels (AVX; other last bits than Haswell's for a 7x7 ``solve`` and a 7-vector ``@``,
+    measured), SkylakeX's (AVX-512) where the processor has them (elsewhere they are illegal
+    instructions), and numpy with every run-time SIMD target turned off."""
+    import platform
+
+    if platform.machine() not in ("x86_64", "AMD64"):
+        return []
+    cpu = _cpu()
+    out = [
+        ("OPENBLAS_CORETYPE=Haswell", {"OPENBLAS_CORETYPE": "Haswell"}),
+        ("OPENBLAS_CORETYPE=Sandybridge", {"OPENBLAS_CORETYPE": "Sandybridge"}),
+    ]
+    if "avx512f" in cpu["flags"]:
+        out.append(("OPENBLAS_CORETYPE=SkylakeX", {"OPENBLAS_CORETYPE": "SkylakeX"}))
+    if cpu["dispatched"]:
+        off = " ".join(cpu["dispatched"])
+        out.append((f"NPY_DISABLE_CPU_FEATURES={off}", {"NPY_DISABLE_CPU_FEATURES": off}))
+    return out
+
+
+def test_the_same_bits_whatever_the_kernels() -> None:
+    """Both loops and PyBullet, every scenario, in one child process per kernel choice (run
+    side by side): every hash is the record's. The children set the variables before numpy
+    loads, the only time OpenBLAS and numpy read them."""
+    variants = _variants()
+    if not variants:
+        pytest.skip("the kernel variants are x86-64's")
+    children = []
+    for name, extra in variants:
+        env = dict(os.environ, **extra)
+        env.pop("SIMBRIDGE_MUJOCO_STEP", None)
+        if "NPY_DISABLE_CPU_FEATURES" not in extra:
+            env.pop("NPY_DISABLE_CPU_FEATURES", None)
+        proc = subprocess.Popen(
+            [sys.executable, str(SCRIPT), "--both-loops"],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        children.append((name, proc))
+    failures = []
+    for name, proc in children:
+        out, err = proc.communicate(timeout=900)
+        if proc.returncode != 0:
+            failures.append(f"{name}: exit {proc.returncode}: {err[-2000:]}")
+            continue
+        got = json.loads(out)
+        compiled = _mismatches(RECORD["compiled"], got["compiled"])
+        python = _mismatches(MUJOCO, got["python_loop_mujoco"])
+        if compiled or python:
+            failures.append(f"{name}: compiled/PyBullet {compiled}, Python loop {python}")
+    assert failures == [], "\n".join(failures)

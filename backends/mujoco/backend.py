@@ -418,9 +418,10 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             self._kernel_status(status)
 
     def _python_steps(self, c: Compiled, n: int) -> int:
-        """``n`` steps of the Python loop, as the compiled loop's status: always 1, so that the
-        caller looks at MuJoCo's warning counters (a warning in the last step ends the loop
-        with all ``n`` done); the steps not run are taken off the count the caller adds.
+        """``n`` steps of the Python loop, as the compiled loop's status: 3 after a singular
+        motor solve, else 1, so that the caller looks at MuJoCo's warning counters (a warning
+        in the last step ends the loop with all ``n`` done); the steps not run are taken off
+        the count the caller adds.
         MuJoCo's errors, a callback's and Ctrl-C count the steps completed."""
         d = c.d
         start = d.time
@@ -428,7 +429,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         if not self._py_stepping.acquire(False):  # a MuJoCo callback of this very step
             raise SimBusyError(_PY_BUSY)
         try:
-            done = step_python(c, n, sync)
+            done, singular = step_python(c, n, sync)
         except mujoco.FatalError as exc:
             self._steps += round((d.time - start) * c.inv_dt)  # completed
             self._engine_failed(str(exc))
@@ -444,7 +445,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             c.stale = True
             self._py_stepping.release()
         self._steps += done - n  # the caller counts n
-        return 1
+        return 3 if singular else 1
 
     def _callback_failed(self, exc: BaseException) -> None:
         """A MuJoCo callback (``mjcb_*``, set by the user) raised mid-step: MuJoCo's data is

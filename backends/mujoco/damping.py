@@ -51,35 +51,50 @@ class LinkDamping:
         self.lin_gain = -k_lin * m.body_mass[self.rows].copy()  # (n,)
         self.ang_gain = np.ascontiguousarray(-k_ang * m.body_inertia[self.rows])  # (n, 3)
         self.root = m.body_rootid[self.rows].copy()
-        # subtree[j, i]: body first + i lies in the subtree of dof j's body (dof j moves it)
-        parent = m.body_parentid
-        inside = np.zeros((m.nbody, n), bool)
-        for i in range(n):
-            b = first + i
-            while b > 0:
-                inside[b, i] = True
-                b = parent[b]
-        self.subtree = inside[m.dof_bodyid].astype(float)  # (nv, n)
+        self.parent = m.body_parentid.copy()
+        self.nbody = m.nbody
+        self.dof_body = m.dof_bodyid.copy()
 
     def apply(self, d: Any) -> None:
         """Add the damping forces to ``d.qfrc_passive`` as generalised forces (after
-        ``mj_step1``, which computes both)."""
+        ``mj_step1``, which computes both). Element-wise arithmetic only, each sum term by term
+        in the compiled loop's order (no einsum or BLAS product, whose sums depend on the
+        processor's kernels): the same bits as ``link_damping`` in _mjkernel.c."""
         rows = self.rows
         cvel = d.cvel[rows]  # [w, v at the tree's centre of mass], world axes
         w = cvel[:, :3]
         r = d.xipos[rows] - d.subtree_com[self.root]
-        v = cvel[:, 3:] - np.cross(r, w)  # velocity of each body's centre of mass
-        sv = np.sqrt(np.einsum("ij,ij->i", v, v))
-        sw = np.sqrt(np.einsum("ij,ij->i", w, w))
+        # velocity of each body's centre of mass: cvel's linear part moved to xipos
+        v = cvel[:, 3:] - (r[:, _Y] * w[:, _Z] - r[:, _Z] * w[:, _Y])
+        sv = np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+        sw = np.sqrt(w[:, 0] * w[:, 0] + w[:, 1] * w[:, 1] + w[:, 2] * w[:, 2])
         force = v * (self.lin_gain * (sv + 1.0))[:, None]
-        rot = d.ximat[rows].reshape(self.n, 3, 3)
-        tl = np.einsum("bji,bj->bi", rot, w)  # w in the principal axes
+        rot = d.ximat[rows].reshape(self.n, 3, 3)  # world = rot local
+        # w in the principal axes (rot^T w), damped there, turned back (rot tl)
+        tl = rot[:, 0, :] * w[:, 0:1] + rot[:, 1, :] * w[:, 1:2] + rot[:, 2, :] * w[:, 2:3]
         tl *= self.ang_gain
         tl *= (sw + 1.0)[:, None]
-        torque = np.einsum("bij,bj->bi", rot, tl)
-        # the spatial force about the tree's centre of mass, summed over each dof's subtree
-        spatial = np.concatenate([torque + np.cross(r, force), force], axis=1)
-        d.qfrc_passive += np.einsum("jk,jk->j", d.cdof, self.subtree @ spatial)
+        torque = rot[:, :, 0] * tl[:, 0:1] + rot[:, :, 1] * tl[:, 1:2] + rot[:, :, 2] * tl[:, 2:3]
+        # each body's spatial force about its tree's centre of mass, summed up the tree
+        # (children after their parents in MuJoCo's order, so a reverse pass collects them)
+        cf = np.zeros((self.nbody, 6))
+        cf[rows, :3] = torque + r[:, _Y] * force[:, _Z] - r[:, _Z] * force[:, _Y]
+        cf[rows, 3:] = force
+        parent = self.parent
+        for b in range(self.nbody - 1, 0, -1):
+            if parent[b] > 0:
+                cf[parent[b]] += cf[b]
+        s = cf[self.dof_body]
+        cd = d.cdof
+        gen = cd[:, 0] * s[:, 0]
+        for i in range(1, 6):
+            gen = gen + cd[:, i] * s[:, i]
+        d.qfrc_passive += gen
+
+
+# the cross product's index pattern: (a x b)_i = a[_Y] b[_Z] - a[_Z] b[_Y], as written in C
+_Y = [1, 2, 0]
+_Z = [2, 0, 1]
 
 
 def clamp_acceleration(d: Any, dt: float, limit: float) -> None:

@@ -27,11 +27,12 @@ from .world import BAD_WARNINGS, Compiled
 __all__ = ["step_python"]
 
 
-def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> int:
+def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> tuple[int, bool]:
     """``n`` steps of the world ``c``; ``sync`` (the viewer's) is called after each. Returns
-    the steps completed: it stops after a step in which MuJoCo raised a divergence warning (a
-    bad position, speed or acceleration: MuJoCo has put the state back to the reference pose),
-    as the compiled loop does."""
+    the steps completed and whether the motor rows' solve was singular: it stops after a step
+    in which MuJoCo raised a divergence warning (a bad position, speed or acceleration: MuJoCo
+    has put the state back to the reference pose) or the polish found the free motor rows
+    singular, as the compiled loop does (its status 1 and 3)."""
     m, d = c.m, c.d
     t = c.motors
     damping = c.damping
@@ -63,8 +64,9 @@ def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> 
             d.qfrc_applied[c.damp_dof] = c.damp_coef * d.qvel[c.damp_dof]
         if c.pending_torque:
             d.qfrc_applied[t.dof] += c.torque
+        singular = False
         if k or c.clamp is not None:
-            _step2_split(c, m, d, k)
+            singular = not _step2_split(c, m, d, k)
         else:
             step2(m, d)
         if c.pending_torque:
@@ -73,24 +75,29 @@ def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> 
             c.torque[:] = 0.0
         if sync is not None:
             sync()
+        if singular:
+            return done, True
         if sum(w.number for w in counts) != before:
-            return done
-    return n
+            return done, False
+    return n, False
 
 
-def _step2_split(c: Compiled, m: Any, d: Any, k: int) -> None:
+def _step2_split(c: Compiled, m: Any, d: Any, k: int) -> bool:
     """``mj_step2`` in pieces: the kd != 1 term needs ``qacc_smooth``; after the solve the
-    motor rows are made exact (solve.polish) and the speeds clamped."""
+    motor rows are made exact (solve.polish) and the speeds clamped. False: the polish found
+    the free motor rows singular (the step is still completed, as in the compiled loop)."""
     mujoco.mj_fwdActuation(m, d)
     mujoco.mj_fwdAcceleration(m, d)
     t = c.motors
     if len(t.kd_rows):
         d.efc_aref[t.kd_rows] += t.kd_factor * d.qacc_smooth[t.kd_dof]
+    ok = True
     if not (k and solve.exact_motors(m, d, t, k)):
         mujoco.mj_fwdConstraint(m, d)
         if k:
-            solve.polish(m, d, t, k)
+            ok = solve.polish(m, d, t, k)
     if c.clamp is not None:  # PyBullet clamps every dof's speed at every step
         clamp_acceleration(d, c.dt, c.clamp)
     mujoco.mj_checkAcc(m, d)
     mujoco.mj_Euler(m, d)
+    return ok

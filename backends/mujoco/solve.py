@@ -4,6 +4,13 @@ MuJoCo's keep a regulariser.
 :func:`exact_motors` solves the rows directly when they are the only constraint rows (no
 contact), :func:`polish` removes the shortfall MuJoCo's solver leaves on the motor rows
 otherwise. The compiled loop (_mjkernel.c) does the same arithmetic in the same order.
+
+No BLAS or LAPACK: ``np.linalg.solve`` and ``@`` give other last bits on other OpenBLAS kernels
+(Haswell against SkylakeX, measured: 7 of the 10 recorded Python-loop trajectories moved on an
+AVX-512 machine). Every product and solve here is written as element-wise numpy operations or
+scalar arithmetic, each sum taken term by term in the compiled loop's order, so the Python loop
+gives the same bits on every processor, and the compiled loop's bits
+(tests/test_same_results.py).
 """
 
 from __future__ import annotations
@@ -18,6 +25,51 @@ from .motors import MotorTable
 __all__ = ["exact_motors", "polish"]
 
 _LIMIT_JOINT = int(mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT)
+
+
+def lu_solve(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """``x`` with ``a x = b`` (n x n) by LU with partial pivoting, or None for a singular
+    matrix: the compiled loop's ``lu_solve`` step for step (the first largest pivot, the row
+    updates element by element, the back substitution summed left to right), so the bits are
+    the same on every processor."""
+    a = np.array(a, dtype=np.float64)  # copies: both are overwritten
+    x = np.array(b, dtype=np.float64)
+    n = len(x)
+    for c in range(n):
+        p, best = c, abs(float(a[c, c]))
+        for r in range(c + 1, n):
+            v = abs(float(a[r, c]))
+            if v > best:
+                p, best = r, v
+        if not best > 0.0:
+            return None
+        if p != c:
+            a[[c, p]] = a[[p, c]]
+            x[c], x[p] = x[p], x[c]
+        f = a[c + 1 :, c] / a[c, c]
+        rows = np.flatnonzero(f != 0.0)
+        if len(rows):
+            fr = f[rows]
+            a[c + 1 + rows, c + 1 :] -= fr[:, None] * a[c, c + 1 :]
+            x[c + 1 + rows] -= fr * x[c]
+    u = a.tolist()
+    xs = x.tolist()
+    for r in range(n - 1, -1, -1):
+        s = xs[r]
+        row = u[r]
+        for j in range(r + 1, n):
+            s -= row[j] * xs[j]
+        xs[r] = s / row[r]
+    return np.array(xs)
+
+
+def _combine(start: np.ndarray, coef: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``start + sum_i coef[i] rows[i]``, the terms added one by one in the order of i (the
+    compiled loop's order; a BLAS product sums in its own)."""
+    out = np.array(start, dtype=np.float64)
+    for i in range(len(coef)):
+        out += coef[i] * rows[i]
+    return out
 
 
 def _jac_entry(m: Any, d: Any, r: int, dof: int) -> float:
@@ -70,11 +122,13 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
         free = side == 0
         x = np.where(side > 0, hi, np.where(side < 0, lo, 0.0))
         if free.any():
-            rhs = b[free] - am[np.ix_(free, ~free)] @ x[~free]
-            try:
-                x[free] = np.linalg.solve(am[np.ix_(free, free)], rhs)
-            except np.linalg.LinAlgError:
+            rhs = b[free]  # a copy: b[free] - A_FC x_C, term by term in column order
+            for col in np.flatnonzero(~free):
+                rhs -= am[free, col] * x[col]
+            solved = lu_solve(am[np.ix_(free, free)], rhs)
+            if solved is None:
                 return False
+            x[free] = solved
         with np.errstate(invalid="ignore"):
             up = np.where(free, (x - hi) / scale_over, 0.0)
             down = np.where(free, (lo - x) / scale_over, 0.0)
@@ -84,11 +138,15 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
             side[worst] = 1.0 if up[worst] > down[worst] else -1.0
             continue
         smooth = sign * d.qacc_smooth[dofs]
-        acc = smooth + am @ x
+        acc = smooth.copy()
+        terms = np.abs(aref) + np.abs(smooth)  # what round-off in acc scales with
+        for j in range(n):
+            term = am[:, j] * x[j]
+            acc += term
+            terms += np.abs(term)
         scale = np.abs(b) + np.abs(np.diag(am)) * np.abs(x)
         # a limit row at zero force is freed only past round-off: a joint resting at its
         # limit under a holding motor leaves it at zero (freeing it there is degenerate)
-        terms = np.abs(aref) + np.abs(smooth) + np.abs(am * x[None, :]).sum(axis=1)
         tol = np.concatenate([1e-12 * scale[:k], 1e-9 * terms[k:]])
         over_aref = side * (acc - aref)  # > 0: a row at a bound overshoots its aref
         overshoot = np.where(~free & (over_aref > tol), over_aref, 0.0)
@@ -110,7 +168,7 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
     else:
         return False
     qacc = d.qacc
-    qacc[:] = d.qacc_smooth + (x * sign) @ y
+    qacc[:] = _combine(d.qacc_smooth, x * sign, y)
     free_motor = side[:k] == 0
     qacc[dofs[:k][free_motor]] = aref[:k][free_motor]  # their own accelerations, exactly
     d.efc_force[:n] = x
@@ -119,13 +177,14 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
     return True
 
 
-def polish(m: Any, d: Any, t: MotorTable, k: int) -> None:
+def polish(m: Any, d: Any, t: MotorTable, k: int) -> bool:
     """Make every motor row that is not at its force limit reach exactly the acceleration
     it asks for (``efc_aref``), as PyBullet's motor row does: MuJoCo's rows keep a
     regulariser R > 0, so its solution falls short by about R/(A+R) of the change. The
     shortfall r of the free rows is removed with the forces A^-1 r through M^-1 (A the
     rows' inverse inertia); rows at their force limit stay there. The contacts do not
-    see this last correction (it is 1e-6 of the motor force)."""
+    see this last correction (it is 1e-6 of the motor force). False: the free rows' block is
+    singular (nothing is changed; the compiled loop's status 3)."""
     y = t.minv_rows
     mujoco.mj_solveM(m, d, y, t.unit_rows)  # rows of M^-1 for the motor dofs
     force = d.efc_force[:k]
@@ -133,15 +192,14 @@ def polish(m: Any, d: Any, t: MotorTable, k: int) -> None:
     dofs = t.dof_rows
     short = d.efc_aref[:k] - qacc[dofs]
     free = np.abs(force) < t.force_rows_slack
-    if free.all():
-        delta = np.linalg.solve(y[:, dofs], short)
-        qacc += delta @ y
-        qacc[dofs] = d.efc_aref[:k]  # the rows' own accelerations, without round-off
-        force += delta
-    elif free.any():
-        rows = np.flatnonzero(free)
-        sub = y[rows]
-        delta = np.linalg.solve(sub[:, dofs[rows]], short[rows])
-        qacc += delta @ sub
-        qacc[dofs[rows]] = d.efc_aref[:k][rows]
-        force[rows] += delta
+    if not free.any():
+        return True
+    rows = np.flatnonzero(free)
+    sub = y[rows]
+    delta = lu_solve(sub[:, dofs[rows]], short[rows])
+    if delta is None:
+        return False
+    qacc += _combine(np.zeros(m.nv), delta, sub)
+    qacc[dofs[rows]] = d.efc_aref[:k][rows]  # the rows' own accelerations, without round-off
+    force[rows] += delta
+    return True
