@@ -5,19 +5,20 @@ PyBullet can hold, XML nesting depth, the X display)."""
 
 from __future__ import annotations
 
-import functools
 import math
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any
 
-from simbridge.exceptions import SimBusyError, UrdfStructureError
+from simbridge.exceptions import UrdfStructureError
 from simbridge.types import JointInfo, JointType, Quat, Vec3
 from simbridge.urdf import UrdfModel
 
+from .locking import WAIT_LIMIT_S, WAIT_SLICE_S, exclusive, wait_for_lock
+
 __all__ = [
     "MAX_NAME_BYTES",
+    "WAIT_LIMIT_S",
     "WAIT_SLICE_S",
     "_Body",
     "_all_finite",
@@ -29,51 +30,10 @@ __all__ = [
     "wait_for_lock",
 ]
 
-_F = TypeVar("_F", bound=Callable[..., Any])
-
 # Every call that touches the world holds the Sim's lock (PyBullet's client is one state
-# machine). A call that finds it taken by another thread waits for that thread's call to end,
-# unless that call is a step: a step(n) runs for as long as n says, so the call is refused
-# (SimBusyError) and nothing waits for it. The wait looks at the holder every WAIT_SLICE_S
-# (four threads reading one Sim that nobody stepped were refused 8,456 times when no call
-# waited; a wait of 1 ms still refused some across the GIL's 5 ms switch interval).
-WAIT_SLICE_S = 0.005
-# ... and gives up after this long (a call that holds the Sim longer than any load or read
-# takes: a thread stopped while holding it, say): SimBusyError, never a hang
-WAIT_LIMIT_S = 10.0
-
-
-def wait_for_lock(backend: Any) -> None:
-    """Take ``backend._stepping`` (its non-blocking acquire just failed: another thread holds
-    it), or raise SimBusyError once the holder is seen stepping (``backend._in_step``) or
-    after WAIT_LIMIT_S."""
-    lock = backend._stepping
-    for _ in range(int(WAIT_LIMIT_S / WAIT_SLICE_S)):
-        if backend._in_step:
-            raise SimBusyError()
-        if lock.acquire(True, WAIT_SLICE_S):
-            return
-    raise SimBusyError(
-        f"a call in another thread has held this Sim for over {WAIT_LIMIT_S:g} s; a Sim takes "
-        "one call at a time (give each thread its own Sim)"
-    )
-
-
-def _exclusive(method: _F) -> _F:
-    """A call that touches the world: refused with SimBusyError while another thread steps
-    it (the stepping lock is re-entrant: the stepping thread's own nested calls pass)."""
-
-    @functools.wraps(method)
-    def call(self: Any, *args: Any, **kwargs: Any) -> Any:
-        lock = self._stepping
-        if not lock.acquire(False):
-            wait_for_lock(self)
-        try:
-            return method(self, *args, **kwargs)
-        finally:
-            lock.release()
-
-    return call  # type: ignore[return-value]
+# machine): the rules (a call waits for another thread's call, a step is refused, never
+# waited for) are backends/locking.py's, shared with the MuJoCo backend.
+_exclusive = exclusive
 
 
 def _finite_base(pos: Vec3, orn: Quat, lin: Vec3, ang: Vec3) -> bool:

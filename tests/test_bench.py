@@ -86,6 +86,44 @@ def test_calls_table_times_every_call_on_both_engines():
     assert len(drive) == 2 and all(float(line.split("|")[6]) > 0 for line in drive)
 
 
+def test_calls_on_one_engine_and_the_before_after_table_of_two_trees(tmp_path):
+    """bench/calls.py --backends mujoco --stat min times MuJoCo alone (no PyBullet figure);
+    bench/ab.py, given this interpreter's environment as both trees' .venv,
+    tables each MuJoCo row's figure per tree and their ratio."""
+    (tmp_path / "tree").mkdir()
+    (tmp_path / "tree" / ".venv").symlink_to(sys.prefix)  # this interpreter's environment
+    assert (tmp_path / "tree" / ".venv" / "bin" / "python").exists()
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "bench" / "ab.py"),
+            str(tmp_path / "tree"),
+            str(tmp_path / "tree"),
+            "--rounds",
+            "1",
+            "--",
+            "--quick",
+            "--repeats",
+            "1",
+            "--backends",
+            "mujoco",
+            "--stat",
+            "min",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = [line for line in proc.stdout.splitlines() if line.startswith(("| r2d2: ", "| kuka: "))]
+    assert any("link_state(link)" in line for line in rows), proc.stdout
+    for line in rows:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert cells[1] == "MuJoCo µs", line  # no PyBullet column was timed
+        assert float(cells[2]) > 0 and float(cells[3]) > 0 and float(cells[4]) > 0, line
+    assert any(line.startswith("| mujoco | bound µs") for line in proc.stdout.splitlines())
+
+
 def test_kernel_phases_runs_and_accounts_for_the_step():
     """bench/kernel_phases.py builds the timed kernel in a temporary folder and its phases add
     up to the timed step (they are timed inside it), which is all a smoke run can check."""

@@ -670,3 +670,27 @@ def test_the_python_loop_refuses_calls_from_another_thread_while_it_steps(monkey
     finally:
         for sim in sims:
             sim.close()
+
+
+def test_the_python_loop_takes_racing_commands_and_teleports_whole(monkeypatch):
+    """The conformance suite's race (one thread stepping, three commanding, giving torques and
+    teleporting) on the Python loop, whose MuJoCo calls release the GIL mid-step: every call
+    lands between two steps or is refused, no torque is lost."""
+    monkeypatch.syspath_prepend(str(Path(__file__).parent / "conformance"))
+    from test_world import (
+        test_commands_and_teleports_racing_a_stepping_thread_land_whole as check,
+    )
+
+    _select_loop(monkeypatch, "python")
+    sims: list[simbridge.Sim] = []
+
+    def make(**kwargs: object) -> simbridge.Sim:
+        sims.append(simbridge.Sim("mujoco", **kwargs))  # type: ignore[arg-type]
+        assert compiled(sims[-1]).kernel is None
+        return sims[-1]
+
+    try:
+        check(make)
+    finally:
+        for sim in sims:
+            sim.close()

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import mujoco
 
@@ -39,26 +39,23 @@ from simbridge.types import (
 )
 from simbridge.urdf import UrdfModel
 
+from ..locking import exclusive, wait_for_lock
 from . import kernel as kernel_loader
 from . import model as build
 from .commands import MotorCommands
 from .contacts import ContactReads
 from .loop import step_python
 from .snapshot import Snapshots
-from .state import StateAccess
+from .state import _PY_BUSY, StateAccess
 from .viewer import Viewer, check_display
 from .world import Compiled, Robot, compile_state, default_motors
+
+if TYPE_CHECKING:
+    from simbridge.scene import SceneBody
 
 __all__ = ["MujocoBackend"]
 
 _log = logging.getLogger("simbridge.mujoco")
-
-
-# as the compiled loop's busy error says it (_mjkernel.c refuse_if_busy)
-_PY_BUSY = (
-    "this Sim is stepping in another thread (or in a MuJoCo callback of its own step); a Sim "
-    "takes one call at a time (give each thread its own Sim)"
-)
 
 
 def _mujoco_warning(message: str) -> None:
@@ -129,11 +126,16 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         self._dt = profile.timestep
         self._viewer: Viewer | None = None
         self._robots: dict[int, Robot] = {}
-        self._chunking = False  # a step(n) in chunks is under way (another thread's, maybe)
-        # the Python loop's stepping, as the compiled loop's busy flag and step mark: MuJoCo's
-        # functions release the GIL, so another thread's call could land inside a step
+        # held by step() and by every call that touches the world (re-entrant: a call's own
+        # nested calls pass, and so do a bound command's sends from inside step()); a call
+        # from another thread meanwhile waits for it, or raises SimBusyError if it is a step
+        # (_in_step): backends/locking.py, PyBullet's rules. The step loops run without the
+        # GIL while they hold it: Sims in different threads still step in parallel.
+        self._stepping = threading.RLock()
+        self._in_step = False
+        # the Python loop's mid-step mark, as the compiled loop's busy flag: a MuJoCo callback
+        # of the step's own thread that calls the Sim is refused (the lock lets it through)
         self._py_stepping = threading.Lock()
-        self._py_started = 0
         self._next_id = 0
         self._free_ids: list[int] = []  # removed ids, reused last-freed first (as PyBullet)
         self._steps = 0
@@ -175,28 +177,18 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     # ---------------------------------------------------------------- world
 
     def _check_idle(self) -> None:
-        """Changing the world while another thread steps it would race the step loop."""
-        if self._chunking or self._py_stepping.locked():
+        """Under the Sim's lock (which keeps other threads' steps out), a change from inside
+        this Sim's own step (a MuJoCo callback of its thread, which the re-entrant lock lets
+        through) is refused: the world is half-computed there."""
+        if self._in_step:
             raise SimBusyError(_PY_BUSY)
-        kernel = self._c.kernel if self._c is not None else None
-        if kernel is not None:
-            kernel.check_idle()  # SimBusyError while it steps
 
-    def _py_mark(self) -> int:
-        """The Python loop's check_idle(): SimBusyError while it steps, else its step mark."""
+    def _py_mark(self) -> None:
+        """The Python loop's check_idle(): SimBusyError from inside its own step."""
         if self._py_stepping.locked():
             raise SimBusyError(_PY_BUSY)
-        return self._py_started
 
-    def _py_since(self, mark: int) -> None:
-        """The Python loop's check_since(): SimBusyError if a step began since ``mark``."""
-        if self._py_stepping.locked() or self._py_started != mark:
-            self._w.stale = True  # this read's refresh may have been of a step in between
-            raise SimBusyError(
-                "this Sim stepped in another thread while it was being read; a Sim takes "
-                "one call at a time (give each thread its own Sim)"
-            )
-
+    @exclusive
     def load(
         self,
         model: UrdfModel,
@@ -269,6 +261,11 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             )
         return body
 
+    @exclusive
+    def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
+        """Every body of the file under one hold of the Sim's lock."""
+        return super().load_scene(bodies, options)
+
     def _drop_from_spec(self, prefix: str) -> None:
         spec = self._spec
         for pair in list(spec.pairs):
@@ -288,6 +285,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         self._robots.clear()
         self._new_world()
 
+    @exclusive
     def remove(self, body: int) -> None:
         self._check_idle()
         robot = self._robots.pop(body)
@@ -298,25 +296,22 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
 
     @contextmanager
     def reading(self) -> Iterator[None]:
-        """A read of several calls takes the loop's step mark first and checks it last (as
-        joint_states does for its own parts): a step begun in another thread meanwhile (the
-        loops run without the GIL) makes it SimBusyError."""
-        kernel = self._w.kernel
-        if kernel is not None:
-            mark = kernel.check_idle()
+        """Hold the Sim's lock for a read (or a write) of several calls (re-entrant: its
+        calls pass): no step in another thread lands between its parts."""
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
             yield
-            if self._w.kernel is kernel:
-                kernel.check_since(mark)
-        else:
-            mark = self._py_mark()
-            yield
-            self._py_since(mark)
+        finally:
+            lock.release()
 
     def set_divergence_check(self, every_step: bool) -> None:
         """Nothing to set: MuJoCo checks positions, speeds and accelerations at every step
         itself (mj_checkPos, mj_checkVel, mj_checkAcc), and both step loops stop after the
         step that raised such a warning."""
 
+    @exclusive
     def reset(self) -> None:
         self._check_idle()
         self._close_viewer()
@@ -342,42 +337,46 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     # ---------------------------------------------------------------- stepping
 
     def step(self, n: int) -> None:
-        c = self._w
-        kernel = c.kernel
-        if (
-            n <= _STEP_CHUNK
-            and kernel is not None
-            and self._viewer is None
-            and not c.pending_torque
-            and not self._chunking
-        ):  # the hot path: one call into the compiled loop (_steps_of does the same, slower)
-            try:
-                status = kernel.step(n, False)
-            except BaseException as exc:
-                if kernel.interrupted:
-                    self._steps += kernel.steps_done
-                    self._callback_failed(exc)
-                raise
-            if n > 0:
-                self._steps += n
-                c.stale = c.motor_force_valid = c.motor_rows_valid = True
-            if status:  # the loop stopped early: count only the steps that ran
-                self._steps += kernel.steps_done - n
-                self._kernel_status(status)
-            return
-        if self._chunking:  # another thread is between two chunks of its step(n)
-            raise SimBusyError()
-        if n <= _STEP_CHUNK:
-            self._steps_of(n)
-            return
-        self._chunking = True  # in chunks: Ctrl-C is seen between them, time counts them,
-        try:  # and the world stays refused to other threads between them
-            while n > 0:
-                chunk = min(n, _STEP_CHUNK)
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)  # another thread's call: waited for; its step: SimBusyError
+        if self._in_step:  # this thread's own step, from a MuJoCo callback inside it
+            lock.release()
+            raise SimBusyError(_PY_BUSY)
+        self._in_step = True  # a call from another thread meanwhile is refused, not waited
+        try:
+            c = self._w
+            kernel = c.kernel
+            if (
+                n <= _STEP_CHUNK
+                and kernel is not None
+                and self._viewer is None
+                and not c.pending_torque
+            ):  # the hot path: one call into the compiled loop (_steps_of does the same)
+                try:
+                    status = kernel.step(n, False)
+                except BaseException as exc:
+                    if kernel.interrupted:
+                        self._steps += kernel.steps_done
+                        self._callback_failed(exc)
+                    raise
+                if n > 0:
+                    self._steps += n
+                    c.stale = c.motor_force_valid = c.motor_rows_valid = True
+                if status:  # the loop stopped early: count only the steps that ran
+                    self._steps += kernel.steps_done - n
+                    self._kernel_status(status)
+                return
+            if n <= _STEP_CHUNK:
+                self._steps_of(n)
+                return
+            while n > 0:  # in chunks: Ctrl-C is seen between them, time counts them, and
+                chunk = min(n, _STEP_CHUNK)  # the lock keeps other threads out throughout
                 self._steps_of(chunk)
                 n -= chunk
         finally:
-            self._chunking = False
+            self._in_step = False
+            lock.release()
 
     def _steps_of(self, n: int) -> None:
         c = self._w
@@ -427,10 +426,9 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         d = c.d
         start = d.time
         sync = self._viewer.sync if self._viewer is not None else None
-        if not self._py_stepping.acquire(False):  # another thread's Python loop
+        if not self._py_stepping.acquire(False):  # a MuJoCo callback of this very step
             raise SimBusyError(_PY_BUSY)
         try:
-            self._py_started += 1
             done, singular = step_python(c, n, sync)
         except mujoco.FatalError as exc:
             self._steps += round((d.time - start) * c.inv_dt)  # completed
@@ -443,8 +441,8 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
             self._steps += round((d.time - start) * c.inv_dt)
             c.stale = True
             raise
-        finally:  # stale before another thread can read: a read that overlapped this step
-            c.stale = True  # must not leave the kinematics marked fresh
+        finally:
+            c.stale = True
             self._py_stepping.release()
         self._steps += done - n  # the caller counts n
         return 3 if singular else 1
@@ -495,6 +493,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         self._w.kernel = None
         raise self._diverged
 
+    @exclusive
     def close(self) -> None:
         if self._closed:
             return

@@ -17,6 +17,7 @@ sent through :meth:`set_joint_velocity` / :meth:`set_joint_position`, which chec
 
 from __future__ import annotations
 
+import threading
 import weakref
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -25,6 +26,7 @@ import numpy as np
 from simbridge.profiles import Profile
 from simbridge.types import MotorMode
 
+from ..locking import exclusive, wait_for_lock
 from .world import Compiled, Robot
 
 if TYPE_CHECKING:
@@ -78,7 +80,9 @@ class MotorCommands:
 
         def _joint_cache(self, robot: Robot, joints: np.ndarray) -> tuple[Any, ...]: ...
 
-        def _py_mark(self) -> int: ...
+        def _py_mark(self) -> None: ...
+
+        _stepping: threading.RLock
 
     # ---------------------------------------------------------------- control
 
@@ -88,49 +92,55 @@ class MotorCommands:
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
-        c = self._w
-        if c.kernel is None:
-            self._py_mark()  # SimBusyError while the Python loop steps in another thread
-        t = c.motors
-        fast = c.fast.get(id(joints))
-        if fast is not None and fast.joints is joints and fast.body == body:
-            # Hot path: the same joints, still velocity motors with kd 1, all rows present.
-            if target == fast.target and max_force == fast.max_force:
-                return  # the command in force already
-            if min(max_force) > 0.0:
-                kernel = c.kernel
-                if kernel is not None:  # the same writes in C (_mjkernel.c write_velocity)
-                    kernel.set_velocity(fast.packed, target, max_force)
-                else:  # MotorTable.refresh's arithmetic: kd v / dt with kd 1
-                    rows, dt = fast.rows, c.dt
-                    t.target_velocity[fast.slots] = target
-                    t.max_force[fast.slots] = max_force
-                    c.m.dof_frictionloss[fast.dofs] = max_force
-                    t.offset_rows[rows] = [v / dt for v in target]
-                    t.force_rows_slack[rows] = [f * (1.0 - 1e-9) for f in max_force]
-                t.has_offset = True
-                c.fast[id(joints)] = fast._replace(target=target, max_force=max_force)
-                return
-        idx = self._motor_slots(body, joints)
-        t.target_velocity[idx] = target
-        t.max_force[idx] = max_force
-        t.kp[idx] = 0.0
-        t.kd[idx] = 1.0
-        c.refresh_motors(idx)
-        rows = t.row_of[idx]
-        if not self.profile.enforce_effort_limit and (rows >= 0).all():
-            dofs = t.dof[idx]
-            c.fast[id(joints)] = VelocityPath(
-                joints,
-                body,
-                idx,
-                rows,
-                dofs,
-                frozenset(idx.tolist()),
-                list(target),
-                list(max_force),
-                np.ascontiguousarray(np.stack([idx, rows, dofs]), dtype=np.intp),
-            )
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            c = self._w
+            if c.kernel is None:
+                self._py_mark()  # SimBusyError from a MuJoCo callback inside the Python loop's step
+            t = c.motors
+            fast = c.fast.get(id(joints))
+            if fast is not None and fast.joints is joints and fast.body == body:
+                # Hot path: the same joints, still velocity motors with kd 1, all rows present.
+                if target == fast.target and max_force == fast.max_force:
+                    return  # the command in force already
+                if min(max_force) > 0.0:
+                    kernel = c.kernel
+                    if kernel is not None:  # the same writes in C (_mjkernel.c write_velocity)
+                        kernel.set_velocity(fast.packed, target, max_force)
+                    else:  # MotorTable.refresh's arithmetic: kd v / dt with kd 1
+                        rows, dt = fast.rows, c.dt
+                        t.target_velocity[fast.slots] = target
+                        t.max_force[fast.slots] = max_force
+                        c.m.dof_frictionloss[fast.dofs] = max_force
+                        t.offset_rows[rows] = [v / dt for v in target]
+                        t.force_rows_slack[rows] = [f * (1.0 - 1e-9) for f in max_force]
+                    t.has_offset = True
+                    c.fast[id(joints)] = fast._replace(target=target, max_force=max_force)
+                    return
+            idx = self._motor_slots(body, joints)
+            t.target_velocity[idx] = target
+            t.max_force[idx] = max_force
+            t.kp[idx] = 0.0
+            t.kd[idx] = 1.0
+            c.refresh_motors(idx)
+            rows = t.row_of[idx]
+            if not self.profile.enforce_effort_limit and (rows >= 0).all():
+                dofs = t.dof[idx]
+                c.fast[id(joints)] = VelocityPath(
+                    joints,
+                    body,
+                    idx,
+                    rows,
+                    dofs,
+                    frozenset(idx.tolist()),
+                    list(target),
+                    list(max_force),
+                    np.ascontiguousarray(np.stack([idx, rows, dofs]), dtype=np.intp),
+                )
+        finally:
+            lock.release()
 
     def set_joint_position(
         self,
@@ -141,39 +151,45 @@ class MotorCommands:
         kp: list[float],
         kd: list[float],
     ) -> None:
-        c = self._w
-        if c.kernel is None:
-            self._py_mark()  # as set_joint_velocity
-        t = c.motors
-        fast = c.fast_position.get(id(joints))
-        if (
-            fast is not None
-            and fast.joints is joints
-            and fast.body == body
-            and kp == fast.kp
-            and kd == fast.kd
-            and min(max_force) > 0.0
-        ):  # Hot path: position motors with the same gains, all rows present and staying.
-            kernel = c.kernel
-            if kernel is not None:  # _mjkernel.c write_position: the same arithmetic
-                kernel.set_position(fast.packed, fast.limits, target, max_force)
-            else:
-                self._write_position(c, fast, target, max_force)
-            return
-        idx = self._motor_slots(body, joints)
-        lower, upper = self._limits(body, joints)
-        target = [  # PyBullet clamps a position target to the joint's limits (measured)
-            min(max(q, lo), hi) for q, lo, hi in zip(target, lower, upper, strict=True)
-        ]
-        t.target_velocity[idx] = 0.0
-        t.target_position[idx] = target
-        t.max_force[idx] = max_force
-        t.kp[idx] = kp
-        t.kd[idx] = kd
-        c.refresh_motors(idx)
-        path = self._position_path(c, body, joints, idx, kp, kd)
-        if path is not None:
-            c.fast_position[id(joints)] = path
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            c = self._w
+            if c.kernel is None:
+                self._py_mark()  # as set_joint_velocity
+            t = c.motors
+            fast = c.fast_position.get(id(joints))
+            if (
+                fast is not None
+                and fast.joints is joints
+                and fast.body == body
+                and kp == fast.kp
+                and kd == fast.kd
+                and min(max_force) > 0.0
+            ):  # Hot path: position motors with the same gains, all rows present and staying.
+                kernel = c.kernel
+                if kernel is not None:  # _mjkernel.c write_position: the same arithmetic
+                    kernel.set_position(fast.packed, fast.limits, target, max_force)
+                else:
+                    self._write_position(c, fast, target, max_force)
+                return
+            idx = self._motor_slots(body, joints)
+            lower, upper = self._limits(body, joints)
+            target = [  # PyBullet clamps a position target to the joint's limits (measured)
+                min(max(q, lo), hi) for q, lo, hi in zip(target, lower, upper, strict=True)
+            ]
+            t.target_velocity[idx] = 0.0
+            t.target_position[idx] = target
+            t.max_force[idx] = max_force
+            t.kp[idx] = kp
+            t.kd[idx] = kd
+            c.refresh_motors(idx)
+            path = self._position_path(c, body, joints, idx, kp, kd)
+            if path is not None:
+                c.fast_position[id(joints)] = path
+        finally:
+            lock.release()
 
     def _limits(self, body: int, joints: np.ndarray) -> tuple[list[float], list[float]]:
         """Each joint's position limits, (-inf, inf) where it has none."""
@@ -228,7 +244,13 @@ class MotorCommands:
         t.has_offset = True
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
-        self.set_joint_torque_slots(self._motor_slots(body, joints), torque)
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            self._add_torque(self._motor_slots(body, joints), torque)
+        finally:
+            lock.release()
 
     # ---------------------------------------------------------------- spherical joints
 
@@ -241,6 +263,7 @@ class MotorCommands:
         slots = np.array([s + i for s in starts for i in range(3)], dtype=np.intp)
         return slots, self._w.motors.ball_of[starts].tolist()
 
+    @exclusive
     def set_joint_motor_multi_dof(
         self,
         body: int,
@@ -264,15 +287,17 @@ class MotorCommands:
         t.ball_target[balls] = targets
         c.refresh_motors(slots)
 
+    @exclusive
     def set_joint_torque_multi_dof(
         self, body: int, joints: np.ndarray, torques: list[list[float]]
     ) -> None:
         slots, _ = self._ball_slots(body, joints)
-        self.set_joint_torque_slots(slots, [x for row in torques for x in row])
+        self._add_torque(slots, [x for row in torques for x in row])
 
-    def set_joint_torque_slots(self, idx: np.ndarray, torque: list[float]) -> None:
-        """Torques on motor slots, for the next step: commands before one step add up, as
-        in PyBullet (the effort limit, where the profile enforces it, clips each command)."""
+    def _add_torque(self, idx: np.ndarray, torque: list[float]) -> None:
+        """Torques on motor slots, for the next step (under the Sim's lock): commands before
+        one step add up, as in PyBullet (the effort limit, where the profile enforces it,
+        clips each command)."""
         c = self._w
         if c.kernel is None:
             self._py_mark()  # as set_joint_velocity
@@ -287,6 +312,7 @@ class MotorCommands:
 
     # ---------------------------------------------------------------- bound commands
 
+    @exclusive
     def bind_command(self, command: BoundCommand) -> bool:
         """Hand ``command`` to the compiled loop, which reads its arrays at every step (True);
         False without the compiled loop: the Sim sends it before every step."""
@@ -367,6 +393,7 @@ class MotorCommands:
         index = np.ascontiguousarray(np.stack([idx, rows, t.dof[idx]]), dtype=np.intp)
         kernel.arm_command(handle, index, None)
 
+    @exclusive
     def unbind_command(self, command: BoundCommand) -> None:
         """Stop reading ``command``'s arrays (the motors keep the command last sent)."""
         bound = command.backend_handle

@@ -26,6 +26,7 @@ import numpy as np
 from simbridge.exceptions import SimulationDivergedError
 from simbridge.types import ContactPoint
 
+from ..locking import exclusive
 from .world import Compiled, Robot
 
 __all__ = ["ContactReads"]
@@ -43,9 +44,7 @@ class ContactReads:
 
         def _engine_failed(self, detail: str) -> NoReturn: ...
 
-        def _py_mark(self) -> int: ...
-
-        def _py_since(self, mark: int) -> None: ...
+        def _py_mark(self) -> None: ...
 
     # (compile, owner body id per geom, link per geom): rebuilt when the world is recompiled
     _geom_owner_cache: tuple[Compiled, np.ndarray, np.ndarray] | None = None
@@ -69,14 +68,15 @@ class ContactReads:
         self._geom_owner_cache = (c, owner, link)
         return owner, link
 
+    @exclusive
     def contact_points(self) -> list[ContactPoint]:
         c = self._w
-        if c.kernel is not None:  # no torn reads of a world stepping in another thread:
-            mark = c.kernel.check_idle()  # refused while it steps, and if a step began
-        elif self._diverged is not None:  # between the parts read below (check_since)
+        if c.kernel is not None:  # refused from a MuJoCo callback inside the step
+            c.kernel.check_idle()
+        elif self._diverged is not None:
             raise self._diverged
         else:
-            mark = self._py_mark()
+            self._py_mark()
         m, d = c.m, c.d
         n = d.ncon
         if n == 0:
@@ -93,10 +93,6 @@ class ContactReads:
             if adr[i] >= 0:
                 mujoco.mj_contactForce(m, d, i, force[i])
         geom, pos, frame = geom.copy(), pos.copy(), frame.copy()  # views into d: taken now
-        if c.kernel is not None:
-            c.kernel.check_since(mark)
-        else:
-            self._py_since(mark)
         normal = frame[:, 0:3]
         on_a = pos - normal * (0.5 * dist)[:, None]
         on_b = pos + normal * (0.5 * dist)[:, None]

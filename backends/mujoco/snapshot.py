@@ -30,6 +30,7 @@ import numpy as np
 from simbridge.exceptions import EngineError, SimulationDivergedError
 from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointState
 
+from ..locking import exclusive
 from .world import Compiled, Robot
 
 __all__ = ["Snapshots"]
@@ -94,6 +95,7 @@ class Snapshots:
         if self._engine_error is not None:
             raise EngineError(self.name, self.time, self._engine_error)
 
+    @exclusive
     def joint_commands(self, body: int) -> JointCommands:
         robot = self._robots[body]
         c = self._w
@@ -114,6 +116,7 @@ class Snapshots:
         out[4][mv] = c.torque[slots]
         return JointCommands(mode, *out)
 
+    @exclusive
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
         self._check_idle()
         robot = self._robots[body]
@@ -138,6 +141,7 @@ class Snapshots:
         c.torque[slots] = commands.pending_torque[mv]  # in place: the step loops hold it
         c.pending_torque = bool(c.torque.any())
 
+    @exclusive
     def spherical_states(self, body: int) -> list[SphericalJointState]:
         robot = self._robots[body]
         c = self._w
@@ -167,6 +171,7 @@ class Snapshots:
             )
         return out
 
+    @exclusive
     def set_spherical_states(
         self, body: int, states: list[SphericalJointState], positions: bool
     ) -> None:
@@ -197,6 +202,7 @@ class Snapshots:
             c.stale = True
             c.motor_force_valid = False
 
+    @exclusive
     def snapshot(self) -> Any:
         self._check_idle()
         self._refuse_broken()
@@ -211,6 +217,7 @@ class Snapshots:
                 fixed.append((robot.id, m.body_pos[bid].copy(), m.body_quat[bid].copy()))
         return _Native(self._layout(), state, tuple(fixed), self._steps)
 
+    @exclusive
     def restore(self, native: Any) -> bool:
         self._check_idle()
         self._refuse_broken()
@@ -233,6 +240,7 @@ class Snapshots:
         c.motor_force_valid = False
         return True
 
+    @exclusive
     def set_time(self, time: float) -> None:
         self._check_idle()
         steps = round(time / self._dt)

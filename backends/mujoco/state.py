@@ -8,12 +8,13 @@ frame is its centre-of-mass frame (model.py), turned back into the URDF link fra
 
 from __future__ import annotations
 
+import threading
 from typing import TYPE_CHECKING, Any, ClassVar, NoReturn
 
 import mujoco
 import numpy as np
 
-from simbridge.exceptions import SimulationDivergedError
+from simbridge.exceptions import SimBusyError, SimulationDivergedError
 from simbridge.profiles import Profile
 from simbridge.transforms import (
     quat_conjugate,
@@ -34,10 +35,17 @@ from simbridge.types import (
     Vec3,
 )
 
+from ..locking import exclusive, wait_for_lock
 from . import model as build
 from .world import Compiled, Robot
 
 __all__ = ["StateAccess"]
+
+# as the compiled loop's busy error says it (_mjkernel.c refuse_if_busy)
+_PY_BUSY = (
+    "this Sim is stepping in another thread (or in a MuJoCo callback of its own step); a Sim "
+    "takes one call at a time (give each thread its own Sim)"
+)
 
 
 class StateAccess:
@@ -59,9 +67,10 @@ class StateAccess:
 
         def _check_idle(self) -> None: ...
 
-        def _py_mark(self) -> int: ...
+        def _py_mark(self) -> None: ...
 
-        def _py_since(self, mark: int) -> None: ...
+        _stepping: threading.RLock
+        _in_step: bool
 
         def refuse_fixed_base_velocity(
             self, body: int, linear: Vec3 | None, angular: Vec3 | None
@@ -119,7 +128,7 @@ class StateAccess:
 
     def _state_of(self, bid: int, body: int) -> list[float]:
         """Centre-of-mass pose and velocity, then link-frame pose, of MuJoCo body ``bid``
-        (20 floats, quaternions x, y, z, w), after the lazy refresh."""
+        (20 floats, quaternions x, y, z, w), after the lazy refresh (under the Sim's lock)."""
         c = self._w
         kernel = c.kernel
         if kernel is not None:
@@ -132,14 +141,13 @@ class StateAccess:
             return c.state_out.tolist()
         if self._diverged is not None:
             raise self._diverged
-        mark = self._py_mark()  # the Python loop: no read straddles a step (as joint_states)
+        self._py_mark()  # refused from a MuJoCo callback inside the Python loop's step
         self._fresh()
         d = c.d
         self._check_finite(d.xipos[bid], body)
         com_pos, com_orn, lin, ang = self._com_pose_velocity(bid)
         fp = d.xpos[bid]
         fq = d.xquat[bid]
-        self._py_since(mark)
         return [
             *com_pos,
             *com_orn,
@@ -155,8 +163,14 @@ class StateAccess:
         ]
 
     def link_state(self, body: int, link: int) -> LinkState:
-        robot = self._robots[body]
-        v = self._state_of(int(robot.body_ids[link + 1]), body)
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            robot = self._robots[body]
+            v = self._state_of(int(robot.body_ids[link + 1]), body)
+        finally:
+            lock.release()
         ine = robot.spec.inertials[link + 1]
         frame = ((v[13], v[14], v[15]), (v[16], v[17], v[18], v[19]))
         if link == -1 and robot.spec.base_offset is not None:  # body frame = the COM frame
@@ -175,6 +189,16 @@ class StateAccess:
         )
 
     def base_state(self, body: int) -> BaseState:
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            return self._base_state(body)
+        finally:
+            lock.release()
+
+    def _base_state(self, body: int) -> BaseState:
+        """base_state under the Sim's lock."""
         v = self._state_of(int(self._robots[body].body_ids[0]), body)
         return BaseState(
             (v[0], v[1], v[2]), (v[3], v[4], v[5], v[6]), (v[7], v[8], v[9]), (v[10], v[11], v[12])
@@ -214,61 +238,65 @@ class StateAccess:
         return entry[2:]
 
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
-        c = self._w
-        kernel = c.kernel
-        if kernel is not None:
-            # no torn reads of a world stepping in another thread: refused while it steps,
-            # and if a step began between the parts read below (the loop runs without the GIL)
-            mark = kernel.check_idle()
-        elif self._diverged is not None:
-            raise self._diverged
-        else:
-            mark = self._py_mark()
-        robot = self._robots[body]
-        _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
-        d = c.d
-        n = len(joints)
-        if c.motor_force_valid and c.motor_rows_valid:
-            rows, where, full = self._torque_rows(joints, movable, motor)
-            torque = d.efc_force[rows] if full else np.zeros(n)
-            if not full:
-                torque[where] = d.efc_force[rows]
-        else:
-            torque = np.zeros(n)
-        if all_movable:
-            pos, vel = d.qpos[qadr], d.qvel[dof]
-        else:
-            pos = np.zeros(n)
-            vel = np.zeros(n)
-            pos[movable] = d.qpos[qadr]
-            vel[movable] = d.qvel[dof]
-        if kernel is not None:
-            kernel.check_since(mark)
-        else:
-            self._py_since(mark)
-        return JointStates(pos, vel, torque)
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            if self._in_step:  # a MuJoCo callback inside this thread's own step
+                raise SimBusyError(_PY_BUSY)
+            c = self._w
+            if c.kernel is None and self._diverged is not None:
+                raise self._diverged
+            robot = self._robots[body]
+            _, movable, qadr, dof, motor, all_movable = self._joint_cache(robot, joints)
+            d = c.d
+            n = len(joints)
+            if c.motor_force_valid and c.motor_rows_valid:
+                rows, where, full = self._torque_rows(joints, movable, motor)
+                torque = d.efc_force[rows] if full else np.zeros(n)
+                if not full:
+                    torque[where] = d.efc_force[rows]
+            else:
+                torque = np.zeros(n)
+            if all_movable:
+                pos, vel = d.qpos[qadr], d.qvel[dof]
+            else:
+                pos = np.zeros(n)
+                vel = np.zeros(n)
+                pos[movable] = d.qpos[qadr]
+                vel[movable] = d.qvel[dof]
+            return JointStates(pos, vel, torque)
+        finally:
+            lock.release()
 
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
-        self._check_idle()
-        robot = self._robots[body]
-        _, _, qadr, dof, _, _ = self._joint_cache(robot, joints)
-        c = self._w
-        c.d.qpos[qadr] = positions
-        c.d.qvel[dof] = velocities
-        c.stale = True
-        c.motor_force_valid = False
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            self._check_idle()
+            robot = self._robots[body]
+            _, _, qadr, dof, _, _ = self._joint_cache(robot, joints)
+            c = self._w
+            c.d.qpos[qadr] = positions
+            c.d.qvel[dof] = velocities
+            c.stale = True
+            c.motor_force_valid = False
+        finally:
+            lock.release()
 
+    @exclusive
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
         c = self._w
         kernel = c.kernel
         if kernel is not None:
-            mark = kernel.check_idle()  # and check_since below: as joint_states
+            kernel.check_idle()  # as joint_states
         elif self._diverged is not None:
             raise self._diverged
         else:
-            mark = self._py_mark()
+            self._py_mark()
         robot = self._robots[body]
         d = c.d
         rows = c.motors.row_of
@@ -293,12 +321,9 @@ class StateAccess:
                 position = (float(d.qpos[a]),)
             velocity = tuple(d.qvel[v : v + n].tolist())
             out.append(JointStateMultiDof(position, velocity, torque))
-        if kernel is not None:
-            kernel.check_since(mark)
-        else:
-            self._py_since(mark)
         return out
 
+    @exclusive
     def reset_joint_state_multi_dof(
         self,
         body: int,
@@ -327,10 +352,27 @@ class StateAccess:
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            self._reset_base_state(body, position, orientation, linear_velocity, angular_velocity)
+        finally:
+            lock.release()
+
+    def _reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        """reset_base_state under the Sim's lock."""
         robot = self._robots[body]
         if robot.free_qadr < 0:
             self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
-        cur = self.base_state(body)
+        cur = self._base_state(body)
         pos = cur.position if position is None else position
         orn = cur.orientation if orientation is None else orientation
         lin = cur.linear_velocity if linear_velocity is None else linear_velocity

@@ -353,9 +353,10 @@ class Backend(ABC):
         return None  # the default binding keeps nothing: the Sim stops sending it
 
     def reading(self) -> AbstractContextManager[None]:
-        """A read made of several calls (``Sim.get_state``) runs inside this: a step that
-        another thread begins meanwhile must make it raise SimBusyError, or wait for its end,
-        never let the parts come from two steps. The default holds nothing: a backend whose
+        """A read or a write made of several calls (``Sim.get_state``, ``Sim.set_state``)
+        runs inside this: a step that another thread begins meanwhile must make it raise
+        SimBusyError, or wait for its end, never let the parts come from two steps (the
+        built-in backends hold the Sim's lock). The default holds nothing: a backend whose
         step cannot run while a read does (no step releases the GIL) needs nothing more."""
         return nullcontext()
 

@@ -173,25 +173,27 @@ class WorldStates:
 
         checked = check_state(state, self._bodies)
         self._end_commands("set_state replaced the commands in force")
-        exact = b.restore(state.native if state.backend == self.backend else None)
-        for c in checked:
-            if not exact:
-                pos, orn, lin, ang = c.base
-                b.reset_base_state(c.body, pos, orn, lin, ang)  # type: ignore[arg-type]
-                movable = self._joints(c.body, None, True)
-                if c.spherical:  # their own call below (a cached index array: backends key on it)
-                    sph = {e.joint for e in c.spherical}
-                    movable = self._joints(
-                        c.body, [j for j in movable.tolist() if j not in sph], True
-                    )
-                if len(movable):
-                    b.reset_joint_state(
-                        c.body,
-                        movable,
-                        c.positions[movable].tolist(),
-                        c.velocities[movable].tolist(),
-                    )
-            b.set_joint_commands(c.body, c.commands)
-            if c.spherical:
-                b.set_spherical_states(c.body, c.spherical, not exact)
-        b.set_time(float(state.time))
+        with b.reading():  # one world: no step in another thread between its parts
+            exact = b.restore(state.native if state.backend == self.backend else None)
+            for c in checked:
+                if not exact:
+                    pos, orn, lin, ang = c.base
+                    b.reset_base_state(c.body, pos, orn, lin, ang)  # type: ignore[arg-type]
+                    movable = self._joints(c.body, None, True)
+                    if c.spherical:  # their own call below (a cached index array: backends
+                        # key on it)
+                        sph = {e.joint for e in c.spherical}
+                        movable = self._joints(
+                            c.body, [j for j in movable.tolist() if j not in sph], True
+                        )
+                    if len(movable):
+                        b.reset_joint_state(
+                            c.body,
+                            movable,
+                            c.positions[movable].tolist(),
+                            c.velocities[movable].tolist(),
+                        )
+                b.set_joint_commands(c.body, c.commands)
+                if c.spherical:
+                    b.set_spherical_states(c.body, c.spherical, not exact)
+            b.set_time(float(state.time))

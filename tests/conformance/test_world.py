@@ -261,7 +261,7 @@ def test_a_read_racing_a_step_in_another_thread_is_whole_or_refused(make_sim, re
                 break
             try:
                 sim.step()
-            except SimBusyError:  # the reader held the Sim: MuJoCo refuses, PyBullet waits
+            except SimBusyError:  # a step waits for a read, 10 s at most
                 continue
             if k % 2:
                 time.sleep(0)  # the reader gets in between steps too
@@ -287,6 +287,133 @@ def test_a_read_racing_a_step_in_another_thread_is_whole_or_refused(make_sim, re
         sys.setswitchinterval(switch)
     torn = [s for s in seen if s not in whole]
     assert seen and not torn, f"{len(torn)} of {len(seen)} reads were not of a whole step"
+
+
+def test_commands_and_teleports_racing_a_stepping_thread_land_whole(make_sim):
+    """One thread steps r2d2 (fixed base, in the air) one step at a time while three others
+    command and teleport it as fast as they can: every call lands whole between two steps or
+    is refused (SimBusyError), never inside one. Each step is checked in the stepping thread:
+
+    - a wheel alternately under a velocity motor (target +1000, 1e-3 N m) and a position
+      motor (target -1000, 2e-3 N m), both held at their force limit: each step changes its
+      speed by one of the two motors' pulls, never by one motor's force in the other's
+      direction (a command torn across its writes: the model's force limit written, the
+      rows not yet);
+    - a free wheel given 1e-3 N m torques: each step adds a whole number of torques' worth of
+      speed, and at the end exactly as many as were accepted (none lost);
+    - a free wheel and the cube teleported to position 0 with speed 2 or 3: the position is
+      always a whole number of steps at the speed read (a teleport torn between its position
+      and its speed: a step of the old speed from the new position).
+
+    Without the MuJoCo backend's lock (it checked that no step ran, then acted holding
+    nothing) every run tore commands (tens to hundreds a second) and most tore teleports."""
+    import sys
+    import threading
+    import time
+
+    from simbridge.exceptions import SimBusyError
+
+    sim = make_sim(profile="urdf")  # no brakes, no damping: each pull and torque adds up
+    robot = sim.load_urdf("r2d2.urdf", fixed_base=True, base_position=(0, 0, 1))
+    cube = sim.load_urdf("cube_small.urdf", base_position=(0, 5, 5))
+    motor, spun, torqued = 2, 3, 6  # wheels: each a leaf of the fixed base, alone on its dof
+    wheels = [motor, spun, torqued]
+    vel_cmd, pos_cmd = (1000.0, 1e-3), (-1000.0, 2e-3)  # (target, force): never reached
+    dt = sim.timestep
+
+    def speeds() -> list[float]:
+        return sim.joint_states(robot, wheels).velocities.tolist()  # type: ignore[no-any-return]
+
+    # each motor's pull and one torque's worth of speed, measured alone
+    sim.set_joint_velocity(robot, motor, vel_cmd[0], max_force=vel_cmd[1])
+    sim.set_joint_torque(robot, torqued, 1e-3)
+    before = speeds()
+    sim.step()
+    after = speeds()
+    pull_vel, per_torque = after[0] - before[0], after[2] - before[2]
+    sim.set_joint_position(robot, motor, pos_cmd[0], max_force=pos_cmd[1])
+    sim.step()
+    pull_pos = speeds()[0] - after[0]
+    assert pull_vel > 0 > pull_pos and per_torque > 0
+    sim.reset_joint_state(robot, wheels, [0.0] * 3, [0.0, 2.0, 0.0])
+    sim.reset_base_state(cube, (0, 5, 5), (0, 0, 0, 1), (2, 0, 0), (0, 0, 0))
+
+    stop = threading.Event()
+    errors: list[BaseException] = []
+    torn: list[str] = []
+    accepted = {"commands": 0, "torques": 0, "teleports": 0, "steps": 0}
+
+    def forever(name: str, calls: list) -> None:  # type: ignore[type-arg]
+        k = 0
+        while not stop.is_set():
+            try:
+                calls[k % len(calls)](k)
+            except SimBusyError:
+                continue  # a step was running: refused, nothing changed
+            accepted[name] += 1
+            k += 1
+
+    def whole_steps(position: float, speed: float) -> bool:
+        n = position / (speed * dt)
+        return speed in (2.0, 3.0) and abs(n - round(n)) < 1e-6
+
+    def stepper() -> None:
+        deadline = time.monotonic() + 1.0
+        last = speeds()
+        while time.monotonic() < deadline:
+            sim.step()
+            accepted["steps"] += 1
+            now = speeds()
+            pull = now[0] - last[0]
+            if abs(pull - pull_vel) > 1e-9 * pull_vel and abs(pull - pull_pos) > -1e-9 * pull_pos:
+                torn.append(f"command: a pull of {pull / pull_vel:.3f} velocity pulls")
+            torques = (now[2] - last[2]) / per_torque
+            if abs(torques - round(torques)) > 1e-6:
+                torn.append(f"torque: {torques:.6f} torques' worth in one step")
+            if not whole_steps(sim.joint_states(robot, [spun]).positions[0], now[1]):
+                torn.append("teleport: reset_joint_state")
+            base = sim.base_state(cube)
+            if not whole_steps(base.position[0], base.linear_velocity[0]):
+                torn.append("teleport: reset_base_state")
+            last = now
+            time.sleep(0)  # the others get in between steps too
+
+    def run(target, *args) -> None:  # type: ignore[no-untyped-def]
+        try:
+            target(*args)
+        except BaseException as error:  # noqa: BLE001 - reported below
+            errors.append(error)
+        finally:
+            stop.set()
+
+    commands = [
+        lambda k: sim.set_joint_velocity(robot, motor, vel_cmd[0], max_force=vel_cmd[1]),
+        lambda k: sim.set_joint_position(robot, motor, pos_cmd[0], max_force=pos_cmd[1]),
+    ]
+    torques = [lambda k: sim.set_joint_torque(robot, torqued, 1e-3)]
+    teleports = [
+        lambda k: sim.reset_base_state(cube, (0, 5, 5), (0, 0, 0, 1), (2 + k % 2, 0, 0), (0, 0, 0)),
+        lambda k: sim.reset_joint_state(robot, spun, 0.0, 2.0 + k % 2),
+    ]
+    threads = [threading.Thread(target=run, args=(stepper,))] + [
+        threading.Thread(target=run, args=(forever, name, calls))
+        for name, calls in (("commands", commands), ("torques", torques), ("teleports", teleports))
+    ]
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)  # threads take turns often: calls land near and in steps
+    try:
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        sys.setswitchinterval(switch)
+    assert errors == []
+    sim.step()  # the torques still pending
+    total = (speeds()[2] - 0.0) / per_torque
+    assert torn == [], f"{len(torn)} of {accepted['steps']} steps: {sorted(set(torn))}"
+    assert total == pytest.approx(accepted["torques"], abs=1e-6), "torques lost"
+    assert min(accepted.values()) > 0, accepted  # every kind of call raced the steps
 
 
 def test_body_ids_follow_pybullets_pool_through_many_removals(make_sim):
