@@ -771,16 +771,29 @@ static int exact_motors(Kernel* self) {
       if (v > tol && v > most) most = v, freed = r;
     }
     if (freed >= 0) {
+      const int was = side[freed];
       side[freed] = 0;
       /* a limit row needed on the dof of a free motor row: both would ask for the same dof's
-       * acceleration (a singular block), so the motor cannot hold its target against the
-       * limit and goes to the bound its force pushes towards */
+       * acceleration (a singular block), so the motor cannot reach its target past the limit
+       * and pushes into the limit at its force bound (the bound opposite the limit's push: the
+       * only consistent one; the sign of its free force is not it where the motor brakes a
+       * joint that gravity drives into the limit, and that cycled) */
       for (int r = 0; freed >= k && r < k; r++)
-        if (!side[r] && rdof[r] == rdof[freed]) side[r] = x[r] > 0.0 ? 1 : -1;
-      /* and a motor row freed on the dof of a free limit row takes the dof over: the limit
-       * row goes back to zero force (it is freed again if still needed) */
+        if (!side[r] && rdof[r] == rdof[freed]) side[r] = sg[freed] > 0.0 ? -1 : 1;
+      /* a motor row freed on the dof of a free limit row: pushing the way its limit pushes
+       * and asking for less, it goes to the other bound (the limit holds the dof's
+       * acceleration: the only consistent one; freed, it went back to this one and cycled);
+       * pushing into its limit and asking to leave it, it takes the dof over and the limit row
+       * goes back to zero force (freed again if still needed) */
+      int held = -1;
       for (int r = k; freed < k && r < n; r++)
-        if (!side[r] && rdof[r] == rdof[freed]) side[r] = -1;
+        if (!side[r] && rdof[r] == rdof[freed] && held < 0) held = r;
+      if (held >= 0 && was == (sg[held] > 0.0 ? 1 : -1)) {
+        side[freed] = -was;
+      } else {
+        for (int r = k; freed < k && r < n; r++)
+          if (!side[r] && rdof[r] == rdof[freed]) side[r] = -1;
+      }
       continue;
     }
     done = 1;

@@ -152,17 +152,27 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
         overshoot = np.where(~free & (over_aref > tol), over_aref, 0.0)
         freed = int(np.argmax(overshoot))
         if overshoot[freed] > 0.0:
+            was = side[freed]
             side[freed] = 0.0
             same = dofs == dofs[freed]
             if freed >= k:  # a limit row needed on the dof of a free motor row: both would
                 # ask for the same dof's acceleration (a singular block), so the motor
-                # cannot hold its target against the limit and goes to the bound its force
-                # pushes towards
+                # cannot reach its target past the limit and pushes into the limit at its
+                # force bound (the bound opposite the limit's push: the only consistent one;
+                # the sign of its free force is not it where the motor brakes a joint that
+                # gravity drives into the limit, and that cycled)
                 for r in np.flatnonzero(same[:k] & (side[:k] == 0)):
-                    side[r] = 1.0 if x[r] > 0.0 else -1.0
-            else:  # a motor row freed on the dof of a free limit row takes the dof over:
-                # the limit row goes back to zero force (freed again if still needed)
-                side[k:][same[k:] & (side[k:] == 0)] = -1.0
+                    side[r] = -1.0 if sign[freed] > 0.0 else 1.0
+            else:
+                held = same[k:] & (side[k:] == 0)  # free limit rows on the motor's dof
+                if held.any() and was == sign[k:][held][0]:
+                    # a motor pushing the way its limit pushes, asking for less: the limit
+                    # holds the dof's acceleration, so only the other bound is consistent
+                    # (freed, it went back to this one and cycled)
+                    side[freed] = -was
+                else:  # a motor pushing into its limit, asking to leave it, takes the dof
+                    # over: the limit row goes back to zero force (freed again if needed)
+                    side[k:][held] = -1.0
             continue
         break
     else:
