@@ -755,6 +755,7 @@ static int exact_motors(Kernel* self) {
     }
     int freed = -1;
     double most = 0.0;
+    int nover = 0; /* the limit rows that overshoot, in fr (the free list is used up) */
     for (int r = 0; r < n; r++) { /* a row at a bound whose acceleration overshoots its aref */
       if (!side[r]) continue;
       double acc = sg[r] * d->qacc_smooth[rdof[r]], scale = fabs(aref[r] - acc);
@@ -769,17 +770,24 @@ static int exact_motors(Kernel* self) {
        * under a holding motor leaves it at zero (freeing it there is degenerate) */
       double tol = r < k ? 1e-12 * scale : 1e-9 * terms;
       if (v > tol && v > most) most = v, freed = r;
+      if (v > tol && r >= k) fr[nover++] = r;
     }
     if (freed >= 0) {
       const int was = side[freed];
       side[freed] = 0;
-      /* a limit row needed on the dof of a free motor row: both would ask for the same dof's
-       * acceleration (a singular block), so the motor cannot reach its target past the limit
-       * and pushes into the limit at its force bound (the bound opposite the limit's push: the
-       * only consistent one; the sign of its free force is not it where the motor brakes a
-       * joint that gravity drives into the limit, and that cycled) */
-      for (int r = 0; freed >= k && r < k; r++)
-        if (!side[r] && rdof[r] == rdof[freed]) side[r] = sg[freed] > 0.0 ? -1 : 1;
+      /* a limit row is freed with every other limit row that overshoots (one solve for the
+       * joints that reach their limits together, not one each); a limit row needed on the dof
+       * of a free motor row: both would ask for the same dof's acceleration (a singular
+       * block), so the motor cannot reach its target past the limit and pushes into the limit
+       * at its force bound (the bound opposite the limit's push: the only consistent one; the
+       * sign of its free force is not it where the motor brakes a joint that gravity drives
+       * into the limit, and that cycled) */
+      for (int i = 0; freed >= k && i < nover; i++) {
+        const int l = fr[i];
+        side[l] = 0;
+        for (int r = 0; r < k; r++)
+          if (!side[r] && rdof[r] == rdof[l]) side[r] = sg[l] > 0.0 ? -1 : 1;
+      }
       /* a motor row freed on the dof of a free limit row: pushing the way its limit pushes
        * and asking for less, it goes to the other bound (the limit holds the dof's
        * acceleration: the only consistent one; freed, it went back to this one and cycled);

@@ -155,14 +155,18 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
             was = side[freed]
             side[freed] = 0.0
             same = dofs == dofs[freed]
-            if freed >= k:  # a limit row needed on the dof of a free motor row: both would
-                # ask for the same dof's acceleration (a singular block), so the motor
-                # cannot reach its target past the limit and pushes into the limit at its
-                # force bound (the bound opposite the limit's push: the only consistent one;
-                # the sign of its free force is not it where the motor brakes a joint that
-                # gravity drives into the limit, and that cycled)
-                for r in np.flatnonzero(same[:k] & (side[:k] == 0)):
-                    side[r] = -1.0 if sign[freed] > 0.0 else 1.0
+            if freed >= k:  # freed with every other limit row that overshoots (one solve
+                # for the joints that reach their limits together, not one each); a limit
+                # row needed on the dof of a free motor row: both would ask for the same
+                # dof's acceleration (a singular block), so the motor cannot reach its target
+                # past the limit and pushes into the limit at its force bound (the bound
+                # opposite the limit's push: the only consistent one; the sign of its free
+                # force is not it where the motor brakes a joint that gravity drives into the
+                # limit, and that cycled)
+                for lim in (np.flatnonzero(overshoot[k:] > 0.0) + k).tolist():
+                    side[lim] = 0.0
+                    on_dof = (dofs[:k] == dofs[lim]) & (side[:k] == 0)
+                    side[:k][on_dof] = -1.0 if sign[lim] > 0.0 else 1.0
             else:
                 held = same[k:] & (side[k:] == 0)  # free limit rows on the motor's dof
                 if held.any() and was == sign[k:][held][0]:
