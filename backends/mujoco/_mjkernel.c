@@ -719,6 +719,23 @@ static int exact_motors(Kernel* self) {
      * holding motor is then solved by the motor alone (both free would be singular) */
     side[r] = r < k ? 0 : -1;
   }
+  /* a limit row the first round would free starts free, the motor row on its dof at the bound
+   * pushing into the limit (one solve less a step for a joint held on its limit): with the
+   * motor row free at the start, the dof accelerates at the motor's aref, so the limit row's
+   * need is known before any solve; it must pass the loop's freeing tolerance taken with every
+   * motor at its force bound (what round-off in its acceleration scales with, at most) */
+  for (int r = k; r < n; r++) {
+    int mr = -1;
+    for (int c = 0; c < k && mr < 0; c++)
+      if (rdof[c] == rdof[r]) mr = c;
+    if (mr < 0) continue;
+    double terms = fabs(aref[r]) + fabs(sg[r] * d->qacc_smooth[rdof[r]]);
+    for (int c = 0; c < k; c++) terms += fabs(AM[r * n + c]) * hi[c];
+    if (aref[r] - sg[r] * aref[mr] > 1e-9 * terms) {
+      side[r] = 0;
+      side[mr] = sg[r] > 0.0 ? -1 : 1;
+    }
+  }
   int done = 0;
   for (int it = 0; it < 4 * n + 4 && !done; it++) {
     int nf = 0;

@@ -117,6 +117,22 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
     b = aref - sign * d.qacc_smooth[dofs]
     scale_over = np.concatenate([hi[:k], np.abs(b[k:]) / np.diag(am)[k:] + 1e-300])
     side = np.concatenate([np.zeros(k), -np.ones(n - k)])
+    # a limit row the first round would free starts free, the motor row on its dof at the
+    # bound pushing into the limit (one solve less a step for a joint held on its limit): with
+    # the motor row free at the start, the dof accelerates at the motor's aref, so the limit
+    # row's need is known before any solve; it must pass the loop's freeing tolerance taken
+    # with every motor at its force bound (what round-off in its acceleration scales with)
+    if n > k:
+        motor_of = np.full(m.nv, -1, dtype=np.intp)
+        motor_of[dofs[:k][::-1]] = np.arange(k - 1, -1, -1)  # the first motor row per dof
+        mr = motor_of[dofs[k:]]
+        has = mr >= 0
+        bound = np.abs(aref[k:]) + np.abs(sign[k:] * d.qacc_smooth[dofs[k:]])
+        for c in range(k):  # summed in the compiled loop's order
+            bound += np.abs(am[k:, c]) * hi[c]
+        need = has & (aref[k:] - sign[k:] * aref[np.where(has, mr, 0)] > 1e-9 * bound)
+        side[k:][need] = 0.0
+        side[mr[need]] = np.where(sign[k:][need] > 0.0, -1.0, 1.0)
     x = np.zeros(n)
     for _ in range(4 * n + 4):
         free = side == 0
