@@ -22,7 +22,7 @@ point.
 ``--joint-limits`` times something else: robots whose joints rest on their limits against the
 same robots off them (no slow step at a limit, issue 19)::
 
-    python bench/limits.py --joint-limits [--repeats 3] [--inner 5]
+    python bench/limits.py --joint-limits [--repeats 3] [--inner 5] [--quick]
 
 Each case is one robot under position motors (100 N m, kp 0.1, kd 1), fixed base, no ground,
 stepped 480 times from its command; the first 240 steps (the drive there) and the next 240
@@ -156,9 +156,11 @@ def _robot_path(robot: str) -> str | None:
     return str(path) if path.is_file() else None
 
 
-def limit_run(backend: str, urdf: str, how: str, on: bool, inner: int) -> tuple[float, float, int]:
+def limit_run(
+    backend: str, urdf: str, how: str, on: bool, inner: int, least: float = 0.5
+) -> tuple[float, float, int]:
     """One run: (s per step over the first window, over the second, each the fastest of at
-    least ``inner`` runs of it (and 0.5 s of runs) from its start state (``get_state``/
+    least ``inner`` runs of it (and ``least`` s of runs) from its start state (``get_state``/
     ``set_state``), and the joints within 1e-3 of a limit at the end)."""
     import numpy as np
 
@@ -186,7 +188,7 @@ def limit_run(backend: str, urdf: str, how: str, on: bool, inner: int) -> tuple[
             fastest, spent, runs = math.inf, 0.0, 0
             # at least `inner` runs and 0.5 s of them: a window of a small robot takes 2 ms,
             # which one preemption on a shared machine makes 10 times longer
-            while runs < inner or (spent < 0.5 and runs < 200):
+            while runs < inner or (spent < least and runs < 200):
                 sim.set_state(start)
                 t0 = time.thread_time()  # CPU time: a shared machine's waits are not counted
                 sim.step(LIMIT_STEPS)
@@ -198,11 +200,13 @@ def limit_run(backend: str, urdf: str, how: str, on: bool, inner: int) -> tuple[
     return best[0], best[1], at
 
 
-def joint_limits(repeats: int, inner: int) -> int:
+def joint_limits(repeats: int, inner: int, quick: bool = False) -> int:
     """The --joint-limits table (module docstring)."""
     import statistics
 
     cases = [(name, _robot_path(robot), how) for name, robot, how in JOINT_LIMIT_CASES]
+    if quick:
+        cases = [c for c in cases if c[0].startswith(("KUKA", "Panda"))]
     missing = [name for name, path, _ in cases if path is None]
     cases = [(name, path, how) for name, path, how in cases if path is not None]
     runs = [(be, on) for be in ("mujoco", "pybullet") for on in (True, False)]
@@ -212,7 +216,7 @@ def joint_limits(repeats: int, inner: int) -> int:
         for name, path, how in cases:
             assert path is not None
             for be, on in runs:
-                first, second, n_at = limit_run(be, path, how, on, inner)
+                first, second, n_at = limit_run(be, path, how, on, inner, 0.0 if quick else 0.5)
                 times.setdefault((name, be, on, 0), []).append(first)
                 times.setdefault((name, be, on, 1), []).append(second)
                 at[name, be, on] = n_at
@@ -266,11 +270,16 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--repeats", type=int, default=3, help="with --joint-limits")
     parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="with --joint-limits: the KUKA and the Panda only, no 0.5 s of runs (a smoke run)",
+    )
+    parser.add_argument(
         "--inner", type=int, default=5, help="with --joint-limits: runs of each window"
     )
     args = parser.parse_args(argv)
     if args.joint_limits:
-        return joint_limits(args.repeats, args.inner)
+        return joint_limits(args.repeats, args.inner, args.quick)
     if args.one:
         print(json.dumps(measure(args.one[0], int(args.one[1]))))
         return 0
