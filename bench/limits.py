@@ -18,12 +18,33 @@ BackendUnsupportedError from ``load_urdf``, timed too:
 
 Timings on the shared machine are rough (seconds, one run each); their growth with N is the
 point.
+
+``--joint-limits`` times something else: robots whose joints rest on their limits against the
+same robots off them (no slow step at a limit, issue 19)::
+
+    python bench/limits.py --joint-limits [--repeats 3] [--inner 5] [--quick]
+
+Each case is one robot under position motors (100 N m, kp 0.1, kd 1), fixed base, no ground,
+stepped 480 times from its command; the first 240 steps (the drive there) and the next 240
+(resting) are timed apart, per step, in CPU time of the stepping thread (the machine is
+shared: wall time counts other processes' turns), each window run again from its saved state
+(``get_state``/``set_state``), the fastest of at least ``--inner`` runs and 0.5 s. *On its
+limits*: talos_full_v2 held at its default pose (its 14 gripper joints and 2 knees rest on a
+limit there, two shoulder targets lie past one), the arms and legs driven with every joint's
+target past a limit (upper, lower, upper...: the motor clamps it to the limit). *Off*: the same
+robot held at the middle of every joint's range (talos, reset there), or driven to a quarter
+and three quarters of each range. MuJoCo on-limit against off-limit, and MuJoCo against
+PyBullet on-limit, are taken in the same run, the cases interleaved, medians of the repeats;
+the machine is shared, so compare the ratios. talos, ur5 and solo12 come from the PyPI package
+``example-robot-data`` (``pip install example-robot-data``; skipped without it), the KUKA iiwa
+and the Panda from pybullet_data.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import subprocess
 import sys
 import tempfile
@@ -105,6 +126,127 @@ def measure(how: str, n: int) -> dict[str, object]:
     return {"load": t1 - t0, "step": time.perf_counter() - t1}
 
 
+# --joint-limits: (name, robot, how): a robot name in example-robot-data's robots/ folder
+# ("erd:") or on simbridge's search path; "hold": held at its default pose on its limits
+# against held mid-range; "drive": driven past every limit against driven inside the range
+JOINT_LIMIT_CASES = (
+    ("talos_full_v2, hold", "erd:talos_data/robots/talos_full_v2.urdf", "hold"),
+    ("KUKA iiwa, driven", "kuka_iiwa/model.urdf", "drive"),
+    ("Panda, driven", "franka_panda/panda.urdf", "drive"),
+    ("ur5, driven", "erd:ur_description/urdf/ur5_robot.urdf", "drive"),
+    ("solo12, driven", "erd:solo_description/robots/solo12.urdf", "drive"),
+    ("talos_full_v2, driven", "erd:talos_data/robots/talos_full_v2.urdf", "drive"),
+)
+LIMIT_STEPS = 240  # per timed window
+
+
+def _robot_path(robot: str) -> str | None:
+    """A case's URDF: a path into example-robot-data's robots (None without the package), or
+    the name as it is (found on simbridge's search path)."""
+    if not robot.startswith("erd:"):
+        return robot
+    from importlib import metadata
+
+    try:
+        dist = metadata.distribution("example-robot-data")
+    except metadata.PackageNotFoundError:
+        return None
+    path = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
+    path = path / robot[4:]
+    return str(path) if path.is_file() else None
+
+
+def limit_run(
+    backend: str, urdf: str, how: str, on: bool, inner: int, least: float = 0.5
+) -> tuple[float, float, int]:
+    """One run: (s per step over the first window, over the second, each the fastest of at
+    least ``inner`` runs of it (and ``least`` s of runs) from its start state (``get_state``/
+    ``set_state``), and the joints within 1e-3 of a limit at the end)."""
+    import numpy as np
+
+    import simbridge
+
+    with simbridge.Sim(backend) as sim:
+        body = sim.load_urdf(urdf, fixed_base=True)
+        table = [t for t in sim.joints(body) if t.type in (0, 1) and t.upper_limit > t.lower_limit]
+        joints = [t.index for t in table]
+        lo = np.array([t.lower_limit for t in table])
+        hi = np.array([t.upper_limit for t in table])
+        even = np.arange(len(table)) % 2 == 0
+        if how == "hold":
+            target = np.zeros(len(table)) if on else 0.5 * (lo + hi)
+            if not on:
+                sim.reset_joint_state(body, joints, target)
+        elif on:
+            target = np.where(even, hi + 0.2, lo - 0.2)
+        else:
+            target = np.where(even, lo + 0.75 * (hi - lo), lo + 0.25 * (hi - lo))
+        sim.set_joint_position(body, joints, target, max_force=100.0)
+        best = []
+        for _ in range(2):  # each window from its start state, fastest of `inner`
+            start = sim.get_state()
+            fastest, spent, runs = math.inf, 0.0, 0
+            # at least `inner` runs and 0.5 s of them: a window of a small robot takes 2 ms,
+            # which one preemption on a shared machine makes 10 times longer
+            while runs < inner or (spent < least and runs < 200):
+                sim.set_state(start)
+                t0 = time.thread_time()  # CPU time: a shared machine's waits are not counted
+                sim.step(LIMIT_STEPS)
+                took = time.thread_time() - t0
+                fastest, spent, runs = min(fastest, took), spent + took, runs + 1
+            best.append(fastest / LIMIT_STEPS)
+        q = sim.joint_states(body, joints).positions
+        at = int((np.minimum(np.abs(q - lo), np.abs(q - hi)) < 1e-3).sum())
+    return best[0], best[1], at
+
+
+def joint_limits(repeats: int, inner: int, quick: bool = False) -> int:
+    """The --joint-limits table (module docstring)."""
+    import statistics
+
+    cases = [(name, _robot_path(robot), how) for name, robot, how in JOINT_LIMIT_CASES]
+    if quick:
+        cases = [c for c in cases if c[0].startswith(("KUKA", "Panda"))]
+    missing = [name for name, path, _ in cases if path is None]
+    cases = [(name, path, how) for name, path, how in cases if path is not None]
+    runs = [(be, on) for be in ("mujoco", "pybullet") for on in (True, False)]
+    times: dict[tuple[str, str, bool, int], list[float]] = {}
+    at: dict[tuple[str, str, bool], int] = {}
+    for _ in range(repeats):
+        for name, path, how in cases:
+            assert path is not None
+            for be, on in runs:
+                first, second, n_at = limit_run(be, path, how, on, inner, 0.0 if quick else 0.5)
+                times.setdefault((name, be, on, 0), []).append(first)
+                times.setdefault((name, be, on, 1), []).append(second)
+                at[name, be, on] = n_at
+    print(
+        f"# Joints on their limits: ms (CPU) per step, medians of {repeats} of the fastest of "
+        f"{inner}+ runs; steps 1-{LIMIT_STEPS} (the drive there) and {LIMIT_STEPS + 1}-"
+        f"{2 * LIMIT_STEPS} (resting)\n"
+    )
+    print(
+        "| robot | steps | MuJoCo on limits | MuJoCo off | on/off | PyBullet on limits | "
+        "PyBullet off | MuJoCo/PyBullet on limits | joints at a limit (MuJoCo, PyBullet) |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, _, _ in cases:
+        for w, steps in enumerate((f"1-{LIMIT_STEPS}", f"{LIMIT_STEPS + 1}-{2 * LIMIT_STEPS}")):
+            med = {(be, on): statistics.median(times[name, be, on, w]) * 1e3 for be, on in runs}
+            print(
+                f"| {name} | {steps} | {med['mujoco', True]:.3f} | {med['mujoco', False]:.3f} | "
+                f"{med['mujoco', True] / med['mujoco', False]:.2f} | "
+                f"{med['pybullet', True]:.3f} | {med['pybullet', False]:.3f} | "
+                f"{med['mujoco', True] / med['pybullet', True]:.2f} | "
+                f"{at[name, 'mujoco', True]}, {at[name, 'pybullet', True]} (off: "
+                f"{at[name, 'mujoco', False]}, {at[name, 'pybullet', False]}) |",
+                flush=True,
+            )
+    for name in missing:
+        print(f"\n{name}: skipped, example-robot-data is not installed")
+    return 0
+
+
 def _cell(r: dict[str, object] | None) -> str:
     if r is None:
         return "not run"
@@ -123,7 +265,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--raw-max", type=int, default=500, help="largest raw PyBullet chain")
     parser.add_argument("--timeout", type=float, default=300.0, help="per measurement, s")
     parser.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--joint-limits", action="store_true", help="time robots resting on their joint limits"
+    )
+    parser.add_argument("--repeats", type=int, default=3, help="with --joint-limits")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="with --joint-limits: the KUKA and the Panda only, no 0.5 s of runs (a smoke run)",
+    )
+    parser.add_argument(
+        "--inner", type=int, default=5, help="with --joint-limits: runs of each window"
+    )
     args = parser.parse_args(argv)
+    if args.joint_limits:
+        return joint_limits(args.repeats, args.inner, args.quick)
     if args.one:
         print(json.dumps(measure(args.one[0], int(args.one[1]))))
         return 0

@@ -37,3 +37,17 @@ def test_limits_bench_times_what_loads_and_what_is_refused():
     assert pybullet.startswith("refused in") and raw == "not run"
     assert mujoco.endswith("s") and not mujoco.startswith("refused"), rows["130"]
     assert "a body with 130 joints" in out  # the reason, printed under the table
+
+
+def test_joint_limits_bench_prints_on_and_off_limits_for_both_engines():
+    out = _run("bench/limits.py", "--joint-limits", "--quick", "--repeats", "1", "--inner", "1")
+    rows = [line for line in out.splitlines() if line.startswith(("| KUKA", "| Panda"))]
+    assert len(rows) == 4, out  # two robots, two windows each
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        assert len(cells) == 9, row
+        assert all(float(c) > 0 for c in cells[2:8]), row
+    # every movable joint ends on a limit on both engines when driven there, none off them
+    last = {row.split("|")[1].strip(): row.split("|")[-2].strip() for row in rows}
+    assert last["KUKA iiwa, driven"] == "7, 7 (off: 0, 0)", last
+    assert last["Panda, driven"] == "9, 9 (off: 0, 0)", last

@@ -590,6 +590,41 @@ def test_arms_pressing_on_their_limits(monkeypatch):
     _agree(monkeypatch, _arms_pressing_on_their_limits)
 
 
+def _arms_driven_to_their_limits(sim, record) -> None:
+    # a KUKA and a Panda with every joint driven to a limit (targets past it, which the motor
+    # clamps to it; 100 N m), gravity driving some joints into theirs while their motors brake:
+    # the exact solve's active set cycled there (a motor sent to the bound its free force
+    # pointed to, or freed, and back) and fell back to MuJoCo's solver in 146 (KUKA alone) and
+    # 140 (Panda alone) of 240 steps
+    arms = [
+        sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True),
+        sim.load_urdf("franka_panda/panda.urdf", fixed_base=True, base_position=(2, 0, 0)),
+    ]
+    moved = []
+    for arm in arms:
+        table = [t for t in sim.joints(arm) if t.type in (0, 1) and t.upper_limit > t.lower_limit]
+        joints = [t.index for t in table]
+        past = [
+            t.upper_limit + 0.2 if i % 2 == 0 else t.lower_limit - 0.2 for i, t in enumerate(table)
+        ]
+        inside = [0.5 * (t.lower_limit + t.upper_limit) for t in table]
+        sim.set_joint_position(arm, joints, past, max_force=100.0)
+        moved.append((arm, joints, inside))
+    d = compiled(sim).d
+    d.solver_niter[:] = 0
+    for k in range(240):
+        if k == 180:  # and then driven back off the limits
+            for arm, joints, inside in moved:
+                sim.set_joint_position(arm, joints, inside, max_force=100.0)
+        sim.step()
+        record()
+    assert d.solver_niter.max() == 0  # MuJoCo's solver never ran: the exact solve took every step
+
+
+def test_arms_driven_to_their_limits(monkeypatch):
+    _agree(monkeypatch, _arms_driven_to_their_limits)
+
+
 def test_a_lost_compiled_loop_warns_once_naming_both_versions(monkeypatch):
     """A compiled loop built against another MuJoCo is not used (kernel.reason() says so): the
     first MuJoCo Sim of the process warns once, naming both versions and what to run, and the

@@ -719,6 +719,23 @@ static int exact_motors(Kernel* self) {
      * holding motor is then solved by the motor alone (both free would be singular) */
     side[r] = r < k ? 0 : -1;
   }
+  /* a limit row the first round would free starts free, the motor row on its dof at the bound
+   * pushing into the limit (one solve less a step for a joint held on its limit): with the
+   * motor row free at the start, the dof accelerates at the motor's aref, so the limit row's
+   * need is known before any solve; it must pass the loop's freeing tolerance taken with every
+   * motor at its force bound (what round-off in its acceleration scales with, at most) */
+  for (int r = k; r < n; r++) {
+    int mr = -1;
+    for (int c = 0; c < k && mr < 0; c++)
+      if (rdof[c] == rdof[r]) mr = c;
+    if (mr < 0) continue;
+    double terms = fabs(aref[r]) + fabs(sg[r] * d->qacc_smooth[rdof[r]]);
+    for (int c = 0; c < k; c++) terms += fabs(AM[r * n + c]) * hi[c];
+    if (aref[r] - sg[r] * aref[mr] > 1e-9 * terms) {
+      side[r] = 0;
+      side[mr] = sg[r] > 0.0 ? -1 : 1;
+    }
+  }
   int done = 0;
   for (int it = 0; it < 4 * n + 4 && !done; it++) {
     int nf = 0;
@@ -755,6 +772,7 @@ static int exact_motors(Kernel* self) {
     }
     int freed = -1;
     double most = 0.0;
+    int nover = 0; /* the limit rows that overshoot, in fr (the free list is used up) */
     for (int r = 0; r < n; r++) { /* a row at a bound whose acceleration overshoots its aref */
       if (!side[r]) continue;
       double acc = sg[r] * d->qacc_smooth[rdof[r]], scale = fabs(aref[r] - acc);
@@ -769,18 +787,38 @@ static int exact_motors(Kernel* self) {
        * under a holding motor leaves it at zero (freeing it there is degenerate) */
       double tol = r < k ? 1e-12 * scale : 1e-9 * terms;
       if (v > tol && v > most) most = v, freed = r;
+      if (v > tol && r >= k) fr[nover++] = r;
     }
     if (freed >= 0) {
+      const int was = side[freed];
       side[freed] = 0;
-      /* a limit row needed on the dof of a free motor row: both would ask for the same dof's
-       * acceleration (a singular block), so the motor cannot hold its target against the
-       * limit and goes to the bound its force pushes towards */
-      for (int r = 0; freed >= k && r < k; r++)
-        if (!side[r] && rdof[r] == rdof[freed]) side[r] = x[r] > 0.0 ? 1 : -1;
-      /* and a motor row freed on the dof of a free limit row takes the dof over: the limit
-       * row goes back to zero force (it is freed again if still needed) */
+      /* a limit row is freed with every other limit row that overshoots (one solve for the
+       * joints that reach their limits together, not one each); a limit row needed on the dof
+       * of a free motor row: both would ask for the same dof's acceleration (a singular
+       * block), so the motor cannot reach its target past the limit and pushes into the limit
+       * at its force bound (the bound opposite the limit's push: the only consistent one; the
+       * sign of its free force is not it where the motor brakes a joint that gravity drives
+       * into the limit, and that cycled) */
+      for (int i = 0; freed >= k && i < nover; i++) {
+        const int l = fr[i];
+        side[l] = 0;
+        for (int r = 0; r < k; r++)
+          if (!side[r] && rdof[r] == rdof[l]) side[r] = sg[l] > 0.0 ? -1 : 1;
+      }
+      /* a motor row freed on the dof of a free limit row: pushing the way its limit pushes
+       * and asking for less, it goes to the other bound (the limit holds the dof's
+       * acceleration: the only consistent one; freed, it went back to this one and cycled);
+       * pushing into its limit and asking to leave it, it takes the dof over and the limit row
+       * goes back to zero force (freed again if still needed) */
+      int held = -1;
       for (int r = k; freed < k && r < n; r++)
-        if (!side[r] && rdof[r] == rdof[freed]) side[r] = -1;
+        if (!side[r] && rdof[r] == rdof[freed] && held < 0) held = r;
+      if (held >= 0 && was == (sg[held] > 0.0 ? 1 : -1)) {
+        side[freed] = -was;
+      } else {
+        for (int r = k; freed < k && r < n; r++)
+          if (!side[r] && rdof[r] == rdof[freed]) side[r] = -1;
+      }
       continue;
     }
     done = 1;

@@ -117,6 +117,22 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
     b = aref - sign * d.qacc_smooth[dofs]
     scale_over = np.concatenate([hi[:k], np.abs(b[k:]) / np.diag(am)[k:] + 1e-300])
     side = np.concatenate([np.zeros(k), -np.ones(n - k)])
+    # a limit row the first round would free starts free, the motor row on its dof at the
+    # bound pushing into the limit (one solve less a step for a joint held on its limit): with
+    # the motor row free at the start, the dof accelerates at the motor's aref, so the limit
+    # row's need is known before any solve; it must pass the loop's freeing tolerance taken
+    # with every motor at its force bound (what round-off in its acceleration scales with)
+    if n > k:
+        motor_of = np.full(m.nv, -1, dtype=np.intp)
+        motor_of[dofs[:k][::-1]] = np.arange(k - 1, -1, -1)  # the first motor row per dof
+        mr = motor_of[dofs[k:]]
+        has = mr >= 0
+        bound = np.abs(aref[k:]) + np.abs(sign[k:] * d.qacc_smooth[dofs[k:]])
+        for c in range(k):  # summed in the compiled loop's order
+            bound += np.abs(am[k:, c]) * hi[c]
+        need = has & (aref[k:] - sign[k:] * aref[np.where(has, mr, 0)] > 1e-9 * bound)
+        side[k:][need] = 0.0
+        side[mr[need]] = np.where(sign[k:][need] > 0.0, -1.0, 1.0)
     x = np.zeros(n)
     for _ in range(4 * n + 4):
         free = side == 0
@@ -152,17 +168,31 @@ def exact_motors(m: Any, d: Any, t: MotorTable, k: int) -> bool:
         overshoot = np.where(~free & (over_aref > tol), over_aref, 0.0)
         freed = int(np.argmax(overshoot))
         if overshoot[freed] > 0.0:
+            was = side[freed]
             side[freed] = 0.0
             same = dofs == dofs[freed]
-            if freed >= k:  # a limit row needed on the dof of a free motor row: both would
-                # ask for the same dof's acceleration (a singular block), so the motor
-                # cannot hold its target against the limit and goes to the bound its force
-                # pushes towards
-                for r in np.flatnonzero(same[:k] & (side[:k] == 0)):
-                    side[r] = 1.0 if x[r] > 0.0 else -1.0
-            else:  # a motor row freed on the dof of a free limit row takes the dof over:
-                # the limit row goes back to zero force (freed again if still needed)
-                side[k:][same[k:] & (side[k:] == 0)] = -1.0
+            if freed >= k:  # freed with every other limit row that overshoots (one solve
+                # for the joints that reach their limits together, not one each); a limit
+                # row needed on the dof of a free motor row: both would ask for the same
+                # dof's acceleration (a singular block), so the motor cannot reach its target
+                # past the limit and pushes into the limit at its force bound (the bound
+                # opposite the limit's push: the only consistent one; the sign of its free
+                # force is not it where the motor brakes a joint that gravity drives into the
+                # limit, and that cycled)
+                for lim in (np.flatnonzero(overshoot[k:] > 0.0) + k).tolist():
+                    side[lim] = 0.0
+                    on_dof = (dofs[:k] == dofs[lim]) & (side[:k] == 0)
+                    side[:k][on_dof] = -1.0 if sign[lim] > 0.0 else 1.0
+            else:
+                held = same[k:] & (side[k:] == 0)  # free limit rows on the motor's dof
+                if held.any() and was == sign[k:][held][0]:
+                    # a motor pushing the way its limit pushes, asking for less: the limit
+                    # holds the dof's acceleration, so only the other bound is consistent
+                    # (freed, it went back to this one and cycled)
+                    side[freed] = -was
+                else:  # a motor pushing into its limit, asking to leave it, takes the dof
+                    # over: the limit row goes back to zero force (freed again if needed)
+                    side[k:][held] = -1.0
             continue
         break
     else:
