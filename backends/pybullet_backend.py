@@ -385,7 +385,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         for mesh in root.iter("mesh"):
             uri = mesh.get("filename")
             if uri:
-                mesh.set("filename", str(resolve_mesh(uri, model.source.base_dir)[0]))
+                mesh.set("filename", str(resolve_mesh(uri, model.source.mesh_from)[0]))
         fd, path = tempfile.mkstemp(prefix="simbridge_", suffix=".urdf")
         try:
             with os.fdopen(fd, "wb") as f:
