@@ -84,22 +84,78 @@ def layer_load(backend: str, urdf: str) -> str:
 # (what, where the URDF is, its mesh filename, the path given to loadURDF, the working
 # directory), paths relative to a/b; every case measured on raw PyBullet 3.2.7 (loads: True)
 CASES = [
-    ("package, copied URDF, run from the package's parent", "out/r.urdf", PKG, "ABS", "share", True),
-    ("package, run from the package's meshes (../../)", "out/r.urdf", PKG, "ABS", "share/mypkg/meshes", True),
+    (
+        "package, copied URDF, run from the package's parent",
+        "out/r.urdf",
+        PKG,
+        "ABS",
+        "share",
+        True,
+    ),
+    (
+        "package, run from the package's meshes (../../)",
+        "out/r.urdf",
+        PKG,
+        "ABS",
+        "share/mypkg/meshes",
+        True,
+    ),
     ("package, run from inside the package (../)", "out/r.urdf", PKG, "ABS", "share/mypkg", True),
     ("package, URDF beside the package", "share/r.urdf", PKG, "ABS", "/", True),
     ("package, URDF inside its package", "share/mypkg/r.urdf", PKG, "ABS", "/", True),
-    ("package://meshes/ (no package name)", "share/mypkg/r.urdf", "package://meshes/m.obj", "ABS", "/", True),
+    (
+        "package://meshes/ (no package name)",
+        "share/mypkg/r.urdf",
+        "package://meshes/m.obj",
+        "ABS",
+        "/",
+        True,
+    ),
     ("model://", "share/r.urdf", "model://mypkg/meshes/m.obj", "ABS", "/", True),
     ("file:// relative", "share/mypkg/r.urdf", "file://meshes/m.obj", "ABS", "/", True),
-    ("a name from the root, found beside the file", "share/mypkg/r.urdf", "/meshes/m.obj", "ABS", "/", True),
-    ("relative, from the working directory", "out/r.urdf", "meshes/m.obj", "ABS", "share/mypkg", True),
-    ("relative, from a folder above the URDF", "out/deep/r.urdf", "b/share/mypkg/meshes/m.obj", "ABS", "/", True),
-    ("relative URDF path: ../../ of the working directory", "out/deep/r.urdf", "b/share/mypkg/meshes/m.obj", "deep/r.urdf", "out", True),
+    (
+        "a name from the root, found beside the file",
+        "share/mypkg/r.urdf",
+        "/meshes/m.obj",
+        "ABS",
+        "/",
+        True,
+    ),
+    (
+        "relative, from the working directory",
+        "out/r.urdf",
+        "meshes/m.obj",
+        "ABS",
+        "share/mypkg",
+        True,
+    ),
+    (
+        "relative, from a folder above the URDF",
+        "out/deep/r.urdf",
+        "b/share/mypkg/meshes/m.obj",
+        "ABS",
+        "/",
+        True,
+    ),
+    (
+        "relative URDF path: ../../ of the working directory",
+        "out/deep/r.urdf",
+        "b/share/mypkg/meshes/m.obj",
+        "deep/r.urdf",
+        "out",
+        True,
+    ),
     ("package, copied URDF, run from elsewhere", "out/r.urdf", PKG, "ABS", ".", False),
     ("relative, nowhere PyBullet looks", "out/r.urdf", "meshes/m.obj", "ABS", "/", False),
-    ("relative URDF path: folders above it not written", "out/deep/r.urdf", "b/share/mypkg/meshes/m.obj", "r.urdf", "out/deep", False),
-]  # fmt: skip
+    (
+        "relative URDF path: folders above it not written",
+        "out/deep/r.urdf",
+        "b/share/mypkg/meshes/m.obj",
+        "r.urdf",
+        "out/deep",
+        False,
+    ),
+]
 
 
 @pytest.mark.parametrize(
@@ -107,7 +163,9 @@ CASES = [
     [case[1:] for case in CASES],
     ids=[case[0] for case in CASES],
 )
-def test_mesh_found_where_raw_pybullet_finds_it(tree, monkeypatch, where, filename, given, cwd, loads):
+def test_mesh_found_where_raw_pybullet_finds_it(
+    tree, monkeypatch, where, filename, given, cwd, loads
+):
     path = write(tree, where, filename)
     urdf = str(path) if given == "ABS" else given
     folder = tree / cwd if cwd != "/" else Path("/")
@@ -154,9 +212,8 @@ def test_missing_mesh_lists_every_path_tried_in_pybullets_order(tree, monkeypatc
     ]
     expected = [Path(os.fspath(p).replace("//", "/")) for p in expected]
     for backend in BACKENDS:
-        with pytest.raises(exc.MeshNotFoundError) as info:
-            with simbridge.Sim(backend) as sim:
-                sim.load_urdf(str(path))
+        with pytest.raises(exc.MeshNotFoundError) as info, simbridge.Sim(backend) as sim:
+            sim.load_urdf(str(path))
         tried = [Path(t.replace("//", "/")) for t in info.value.tried]
         assert tried == expected
         message = str(info.value)

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import warnings
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
@@ -37,7 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["MeshData", "MeshReadError", "read_mesh", "mesh_vertices"]
+__all__ = ["MeshData", "MeshReadError", "read_mesh", "mesh_vertices", "clear_cache"]
 
 
 class MeshReadError(ValueError):
@@ -72,6 +73,11 @@ def read_mesh(path: str | Path) -> MeshData:
 def mesh_vertices(path: str | Path) -> np.ndarray:
     """The (n, 3) vertex positions of :func:`read_mesh`, unscaled, read-only."""
     return read_mesh(path).vertices
+
+
+def clear_cache() -> None:
+    """Forget every mesh read so far (the next read of each file reads it again)."""
+    _read_cached.cache_clear()
 
 
 @lru_cache(maxsize=256)
@@ -192,6 +198,9 @@ def _read_with_trimesh(path: str) -> MeshData:
     if path.lower().endswith(".dae"):  # trimesh drops a non-finite vertex without a word
         text = Path(path).read_text(encoding="utf-8", errors="replace")
         for m in re.finditer(r"<float_array\b[^>]*>([^<]*)<", text):
+            quick = _numbers(m.group(1), np.float64)
+            if quick is not None and np.isfinite(quick).all():
+                continue
             for token in m.group(1).split():
                 try:
                     value = float(token)
@@ -205,10 +214,26 @@ def _read_with_trimesh(path: str) -> MeshData:
         _collada_indices(path, text)
     import trimesh  # ~1 s to import: only for formats read nowhere else (.dae)
 
-    loaded: Any = trimesh.load(path, force="mesh", process=False)
+    # texture images are never read: an empty resolver finds none (reading and packing them
+    # took most of the time; the vertices and faces are bit for bit the same, compared on the
+    # 298 .dae files of pybullet_data and example-robot-data)
+    loaded: Any = trimesh.load(path, force="mesh", process=False, resolver={})
     vertices = np.asarray(loaded.vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(loaded.faces, dtype=np.int64).reshape(-1, 3)
     return MeshData(vertices, faces)
+
+
+def _numbers(text: str, dtype: type) -> np.ndarray | None:
+    """The whitespace-separated numbers of ``text`` read by numpy (the fast path of the
+    COLLADA checks); None where numpy does not read every token (the checks then read them
+    one by one, as Python's ``float``/``int``)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # older numpy warns where it stops short
+            values: np.ndarray = np.fromstring(text, dtype=dtype, sep=" ")
+    except ValueError:  # numpy 2: a token it cannot read
+        return None
+    return values if values.size == len(text.split()) else None
 
 
 _PRIMITIVES = ("triangles", "polylist", "polygons", "lines", "linestrips", "trifans", "tristrips")
@@ -259,6 +284,11 @@ def _collada_indices(path: str, text: str) -> None:
                 continue
             stride = max(offsets) + 1
             for p in (e for e in prim if local.get(e) == "p"):
+                quick = _numbers(p.text or "", np.int64)
+                if quick is not None:
+                    picked = quick[offset::stride]
+                    if ((picked >= 0) & (picked < n)).all():
+                        continue
                 try:
                     values = [int(v) for v in (p.text or "").split()]
                 except ValueError:
