@@ -382,10 +382,18 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
                 f"elements nested {depth} deep: PyBullet's XML reader refuses more than "
                 f"{_MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED)",
             )
+        # the files the reader found (in this same call: the working directory is the same)
+        found = {
+            g.mesh_uri: g.mesh_path
+            for link in model.links
+            for g in (*link.visuals, *link.collisions)
+            if g.mesh_path is not None
+        }
         for mesh in root.iter("mesh"):
             uri = mesh.get("filename")
             if uri:
-                mesh.set("filename", str(resolve_mesh(uri, model.source.mesh_from)[0]))
+                path = found.get(uri) or resolve_mesh(uri, model.source.mesh_from)[0]
+                mesh.set("filename", str(path))
         fd, path = tempfile.mkstemp(prefix="simbridge_", suffix=".urdf")
         try:
             with os.fdopen(fd, "wb") as f:

@@ -162,13 +162,15 @@ def resolve_mesh(uri: str, folder: str | Path) -> tuple[Path, list[Path]]:
     the working directory; where none is found, the first attempt and every attempt."""
     base = folder if isinstance(folder, str) else os.path.join(os.path.abspath(folder), "")
     cwd = os.getcwd()
-    tried: list[Path] = []
+    tried: list[str] = []
+    found = None
     for candidate in _mesh_candidates(uri, base):
-        shown = candidate if os.path.isabs(candidate) else os.path.join(cwd, candidate)
-        tried.append(Path(shown))
-        if _is_file(Path(candidate)):
-            return Path(os.path.realpath(candidate)), tried
-    return tried[0], tried
+        tried.append(candidate if os.path.isabs(candidate) else os.path.join(cwd, candidate))
+        if os.path.isfile(candidate):  # False for a name no file system takes
+            found = Path(os.path.realpath(candidate))
+            break
+    paths = [Path(t) for t in tried]
+    return (paths[0] if found is None else found), paths
 
 
 _KINDS = (
