@@ -149,7 +149,7 @@ def _best(runs: list[dict[str, Any]], key: str) -> float | None:
 
 
 def _ms(value: float | None) -> str:
-    return "-" if value is None else f"{value * 1e3:.0f}"
+    return "-" if value is None else f"{value * 1e3:.1f}"
 
 
 def _ratio(value: float | None, raw: float | None) -> str:
