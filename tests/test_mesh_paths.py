@@ -220,3 +220,24 @@ def test_missing_mesh_lists_every_path_tried_in_pybullets_order(tree, monkeypatc
         assert f"tried {len(expected)} paths" in message
         for t in info.value.tried:
             assert repr(t) in message
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_one_relative_name_two_files_in_one_sim(tmp_path, monkeypatch, backend):
+    """PyBullet is given the URDF's path as written and caches files by name: the same
+    relative name read from another working directory is the other file."""
+    link = '<link name="{n}"/>'
+    joint = '<joint name="j{n}" type="fixed"><parent link="a"/><child link="{n}"/></joint>'
+    for folder, children in (("one", "b"), ("two", "bc")):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "r.urdf").write_text(
+            '<robot name="r"><link name="a"/>'
+            + "".join(link.format(n=c) + joint.format(n=c) for c in children)
+            + "</robot>"
+        )
+    with simbridge.Sim(backend) as sim:
+        monkeypatch.chdir(tmp_path / "one")
+        first = sim.load_urdf("r.urdf")
+        monkeypatch.chdir(tmp_path / "two")
+        second = sim.load_urdf("r.urdf")
+        assert (sim.num_joints(first), sim.num_joints(second)) == (1, 2)

@@ -29,7 +29,7 @@ import numpy as np
 from .exceptions import UrdfNotFoundError, UrdfParseError, UrdfStructureError
 from .types import Quat
 from .urdf_model import UrdfModel, Vec3
-from .urdf_source import UrdfSource, mesh_folder, resolve_mesh, search_path
+from .urdf_source import UrdfSource, resolve_mesh, search_path
 from .urdf_xml import XmlElement, c_atof, pybullet_numbers
 
 __all__ = [
@@ -118,7 +118,7 @@ def resolve_scene_source(source: str | os.PathLike[str], kind: str) -> UrdfSourc
     if found is None:
         raise UrdfNotFoundError(shown, tried, label)
     # the path as PyBullet would be given it: the caller's text, or the search folder's file
-    as_given = mesh_folder(os.path.expanduser(text_source) if found is candidate else found)
+    as_given = os.path.expanduser(text_source) if found is candidate else str(found)
     found = found.resolve()
     try:
         data = found.read_bytes()
@@ -211,7 +211,7 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
     return root
 
 
-def find_mesh(uri: str, folder: str | Path) -> tuple[Path, list[Path]]:
+def find_mesh(uri: str, folder: str | Path) -> tuple[Path, list[str]]:
     """:func:`~simbridge.urdf_source.resolve_mesh`: PyBullet's MJCF and SDF importers look
     where its URDF importer does (bullet3 ``UrdfFindMeshFile.h``). Every folder tried is
     joined to the name as written, so ``/meshes/a.stl`` is also found as ``meshes/a.stl``

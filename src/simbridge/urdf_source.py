@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import stat
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,14 +36,15 @@ class UrdfSource:
     path: Path | None
     base_dir: Path
     display_name: str
-    mesh_base: str | None = None
-    """The folder meshes are looked up from, as PyBullet would be given the file's path
-    (:func:`mesh_folder`: relative where the path was, symbolic links kept); None: ``base_dir``."""
+    given: str | None = None
+    """The file's path as raw PyBullet would be given it (the caller's path, relative where
+    it was, symbolic links kept; a search folder's file), None for text: meshes are looked up
+    from its folders, as PyBullet looks them up."""
 
     @property
     def mesh_from(self) -> str | Path:
         """What :func:`resolve_mesh` takes for this file's meshes."""
-        return self.base_dir if self.mesh_base is None else self.mesh_base
+        return self.base_dir if self.given is None else mesh_folder(self.given)
 
 
 def _robots_dir() -> Path:
@@ -107,7 +109,7 @@ def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
     if found is None:
         raise UrdfNotFoundError(shown, tried)
     # the path as PyBullet would be given it: the caller's text, or the search folder's file
-    as_given = mesh_folder(os.path.expanduser(os.fspath(source)) if found is candidate else found)
+    as_given = os.path.expanduser(os.fspath(source)) if found is candidate else str(found)
     found = found.resolve()
     try:
         data = found.read_bytes()
@@ -142,7 +144,7 @@ def mesh_folder(path: str | os.PathLike[str]) -> str:
     return text[: cut + 1]
 
 
-def resolve_mesh(uri: str, folder: str | Path) -> tuple[Path, list[Path]]:
+def resolve_mesh(uri: str, folder: str | Path) -> tuple[Path, list[str]]:
     """Resolve a mesh filename where PyBullet does (bullet3 ``UrdfFindMeshFile.h``, measured
     on PyBullet 3.2.7 with strace).
 
@@ -163,14 +165,11 @@ def resolve_mesh(uri: str, folder: str | Path) -> tuple[Path, list[Path]]:
     base = folder if isinstance(folder, str) else os.path.join(os.path.abspath(folder), "")
     cwd = os.getcwd()
     tried: list[str] = []
-    found = None
     for candidate in _mesh_candidates(uri, base):
         tried.append(candidate if os.path.isabs(candidate) else os.path.join(cwd, candidate))
         if os.path.isfile(candidate):  # False for a name no file system takes
-            found = Path(os.path.realpath(candidate))
-            break
-    paths = [Path(t) for t in tried]
-    return (paths[0] if found is None else found), paths
+            return Path(os.path.realpath(candidate)), tried
+    return Path(tried[0]), tried
 
 
 _KINDS = (
@@ -182,7 +181,7 @@ _KINDS = (
 )
 
 
-def not_a_regular_file(tried: list[Path]) -> str | None:
+def not_a_regular_file(tried: Sequence[str | Path]) -> str | None:
     """Why a mesh path that exists is not read: "PATH is a directory (not a regular file)"
     for the first of ``tried`` (as :func:`resolve_mesh` lists them) that exists but is not a
     regular file (symbolic links followed); None when none exists. Raw PyBullet 3.2.7 waits
