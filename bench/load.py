@@ -9,7 +9,10 @@ the imports and one small load on every engine come first (not timed), then
 * ``pybullet``: ``Sim("pybullet").load_urdf(path)`` on a fresh Sim;
 * ``mujoco``: ``Sim("mujoco").load_urdf(path)``, simbridge's mesh cache emptied before;
 * ``again``: the same three once more in the same process (raw: a new connection; the
-  backends: a new Sim, their meshes now in the process's cache).
+  backends: a new Sim, their meshes now in the process's cache);
+* ``meshes``: simbridge reading the robot's mesh files alone (its cache emptied), the part
+  of a first load that no engine does (its checks, the inertia rules and the MuJoCo model
+  read the vertices).
 
 The columns are milliseconds (the best of ``--repeats`` child processes) and the ratios to
 raw; the totals are over the robots every engine loads. Robots raw PyBullet refuses are left
@@ -127,6 +130,20 @@ def measure(path: str) -> dict[str, Any]:
             out[rnd + backend] = times[0] if err is None else None
             if err is not None:
                 out[backend + "_error"] = err
+    # the part of a first load no engine does: reading the robot's mesh files in Python
+    from simbridge.urdf import parse_urdf, resolve_source
+
+    try:
+        model = parse_urdf(resolve_source(path))
+    except Exception:  # noqa: BLE001 - a backend's refusal, reported above
+        out["meshes"] = None
+        return out
+    files = {g.mesh_path for link in model.links for g in (*link.visuals, *link.collisions)}
+    meshes.clear_cache()
+    start = time.perf_counter()
+    for file in files - {None}:
+        meshes.read_mesh(file)  # type: ignore[arg-type]
+    out["meshes"] = time.perf_counter() - start
     return out
 
 
@@ -173,12 +190,13 @@ def main(argv: list[str] | None = None) -> int:
     print(f"load_urdf against raw loadURDF, {len(names)} robots from {root or 'the command line'}")
     print(f"best of {args.repeats} child process(es) per robot; ms; ratio = layer / raw\n")
     cols = ("raw", "pybullet", "mujoco")
+    keys = (*cols, *(f"again_{c}" for c in cols), "meshes")
     print(
         "| robot | raw | pybullet | ratio | mujoco | ratio "
-        "| raw again | pybullet again | ratio | mujoco again | ratio |"
+        "| raw again | pybullet again | ratio | mujoco again | ratio | meshes | ratio |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    totals = dict.fromkeys((*cols, *(f"again_{c}" for c in cols)), 0.0)
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    totals = dict.fromkeys(keys, 0.0)
     skipped: list[str] = []
     refused: list[str] = []
     counted = 0
@@ -201,7 +219,8 @@ def main(argv: list[str] | None = None) -> int:
             f"| {_ratio(best['mujoco'], best['raw'])} | {_ms(best['again_raw'])} "
             f"| {_ms(best['again_pybullet'])} "
             f"| {_ratio(best['again_pybullet'], best['again_raw'])} "
-            f"| {_ms(best['again_mujoco'])} | {_ratio(best['again_mujoco'], best['again_raw'])} |",
+            f"| {_ms(best['again_mujoco'])} | {_ratio(best['again_mujoco'], best['again_raw'])} "
+            f"| {_ms(best['meshes'])} | {_ratio(best['meshes'], best['raw'])} |",
             flush=True,
         )
         if all(v is not None for v in best.values()):
@@ -214,7 +233,8 @@ def main(argv: list[str] | None = None) -> int:
         f"| {_ratio(totals['mujoco'], totals['raw'])} | {_ms(totals['again_raw'])} "
         f"| {_ms(totals['again_pybullet'])} "
         f"| {_ratio(totals['again_pybullet'], totals['again_raw'])} "
-        f"| {_ms(totals['again_mujoco'])} | {_ratio(totals['again_mujoco'], totals['again_raw'])} |"
+        f"| {_ms(totals['again_mujoco'])} | {_ratio(totals['again_mujoco'], totals['again_raw'])} "
+        f"| {_ms(totals['meshes'])} | {_ratio(totals['meshes'], totals['raw'])} |"
     )
     for title, rows in (("raw PyBullet refuses (left out)", skipped), ("refused", refused)):
         if rows:

@@ -109,7 +109,7 @@ def test_kernel_phases_runs_and_accounts_for_the_step():
 
 def test_load_table_times_raw_and_both_backends_side_by_side():
     """bench/load.py on one robot: a row with raw PyBullet's load, each backend's and their
-    ratios (first load and again), and the total."""
+    ratios (first load and again), simbridge's mesh reading, and the total."""
     r2d2 = str(Path(simbridge.__file__).parent.parent.parent / "robots" / "r2d2.urdf")
     proc = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "load.py"), r2d2],
@@ -123,8 +123,9 @@ def test_load_table_times_raw_and_both_backends_side_by_side():
     total = next(line for line in rows if "total, 1 robots" in line)
     for line in (robot, total):
         cells = [c.strip() for c in line.strip("|").split("|")]
-        assert len(cells) == 11, line
-        times = [float(cells[i]) for i in (1, 2, 4, 6, 7, 9)]
+        assert len(cells) == 13, line
+        times = [float(cells[i]) for i in (1, 2, 4, 6, 7, 9, 11)]
         ratios = [float(cells[i]) for i in (3, 5, 8, 10)]
         assert all(t > 0 for t in times) and all(r > 0 for r in ratios), line
+        assert float(cells[12]) >= 0, line  # the meshes' share: 0.00 for r2d2's small ones
         assert float(cells[3]) == pytest.approx(float(cells[2]) / float(cells[1]), rel=0.05)

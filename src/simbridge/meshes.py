@@ -21,8 +21,9 @@ and size: a file rewritten in the meantime is read again), up to 256 files.
   quietly) or a primitive whose ``<p>`` indices run past its vertices (trimesh drops the
   mesh, raw PyBullet crashes). PyBullet loads random bytes or NaN vertices as a link without a
   shape, and reads an .obj's missing numbers as uninitialised memory (measured: inertia 1e41);
-* anything else (``.dae``): through trimesh, imported only then (about 1 s), without
-  processing (no merging, no repair).
+* anything else (``.dae``): through trimesh, imported only then (about 1 s): each geometry
+  as its scene loader makes it (repeated vertices merged, no repair), placed by its node's
+  transform; texture images are not read.
 """
 
 from __future__ import annotations
