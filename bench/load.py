@@ -184,8 +184,11 @@ def main(argv: list[str] | None = None) -> int:
         print("\n" + MARK + json.dumps(measure(args.one)), flush=True)
         return 0
     root, names = robots(args.files)
+    corpus = os.path.join(corpus_root() or os.sep * 2, "")  # files named: shown from there
+    full = {name: os.path.abspath(os.path.join(root, name)) for name in names}
     shown = {
-        name: os.path.relpath(os.path.join(root, name)) if not root else name for name in names
+        name: path[len(corpus) :] if path.startswith(corpus) else os.path.relpath(path)
+        for name, path in full.items()
     }
     print(f"load_urdf against raw loadURDF, {len(names)} robots from {root or 'the command line'}")
     print(f"best of {args.repeats} child process(es) per robot; ms; ratio = layer / raw\n")
