@@ -127,6 +127,9 @@ def _read_obj(path: str) -> tuple[MeshData, _Rows]:
     if b"\0" in data:
         raise MeshReadError(path, "not an .obj: binary data (a NUL byte), not text")
     text = data.decode("utf-8", errors="replace").replace("\r\n", "\n").replace("\r", "\n")
+    quick = _read_obj_quickly(text)
+    if quick is not None:
+        return quick, lambda k: (f"vertex {k + 1}", None)  # all finite: never called
     for number, line in enumerate(text.split("\n"), 1):  # as a text-mode file's lines
         if line.startswith("v "):
             rows.append(_three(path, line.split(), number, line))
@@ -157,6 +160,41 @@ def _read_obj(path: str) -> tuple[MeshData, _Rows]:
             tris.append((idx[0], idx[a], idx[a + 1]))
     faces = np.array(tris, dtype=np.int64).reshape(-1, 3)
     return MeshData(vertices, faces), lambda k: (f"vertex {k + 1}", lines[k])
+
+
+def _read_obj_quickly(text: str) -> MeshData | None:
+    """:func:`_read_obj`'s result read with numpy, for the common file: every ``v`` line with
+    3 numbers or more, all finite, every ``f`` line the same number of corners (3 or more),
+    each an index within the file's vertices. None for any other file (the line by line
+    reading then says what is wrong). The same arrays, bit for bit (compared on the 1,199
+    .obj files of pybullet_data, example-robot-data and this project)."""
+    lines = text.split("\n")
+    parts = [line.split() for line in lines if line.startswith("v ")]
+    if any(len(p) < 4 for p in parts):
+        return None
+    try:
+        vertices = np.array([p[1:4] for p in parts], dtype=np.float64).reshape(-1, 3)
+    except ValueError:
+        return None
+    if not np.isfinite(vertices).all():
+        return None
+    faces = [line.split()[1:] for line in lines if line.startswith("f ")]
+    corners = len(faces[0]) if faces else 3
+    if corners < 3 or any(len(f) != corners for f in faces):
+        return None
+    try:  # a corner is its index before any "/"; an empty or other one: the slow reading
+        index = np.array([c.partition("/")[0] for f in faces for c in f], dtype=np.int64).reshape(
+            -1, corners
+        )
+    except ValueError:
+        return None
+    n = len(vertices)
+    if ((index == 0) | (index > n) | (index < -n)).any():
+        return None
+    index = np.where(index > 0, index - 1, index + n)
+    # each polygon a fan of triangles around its first corner, in the file's order
+    fan = [index[:, [0, a, a + 1]] for a in range(1, corners - 1)]
+    return MeshData(vertices, np.stack(fan, axis=1).reshape(-1, 3))
 
 
 def _read_stl(path: str) -> tuple[MeshData, _Rows]:
