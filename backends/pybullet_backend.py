@@ -252,23 +252,19 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
             flags |= p.URDF_MERGE_FIXED_LINKS
         scale = options.global_scaling
         src = model.source
-        needs_rewrite = (
-            src.path is None
-            or any(
-                g.mesh_uri.startswith(("package://", "file://"))
-                for link in model.links
-                for g in (*link.visuals, *link.collisions)
-            )
-            # PyBullet caches a file's contents by name for the connection's life: a file
-            # edited since it was first loaded here goes through a fresh temporary name
-            or self._file_texts.setdefault(str(src.path), src.text) != src.text
-        )
+        # PyBullet is given the file as the caller named it: it then finds the meshes where
+        # the reader found them (the same rules from the same working directory). PyBullet
+        # caches a file's contents by name for the connection's life: a name whose text
+        # changed since it was first loaded here (a file edited, or another file under the
+        # same relative name) goes through a fresh temporary name, its meshes made absolute
+        given = src.given if src.given is not None else str(src.path)
+        needs_rewrite = src.path is None or self._file_texts.setdefault(given, src.text) != src.text
         if isinstance(model, SceneBody):  # a body of an MJCF/SDF file: PyBullet's own importer
             assert self._scene is not None, "a SceneBody loads through load_scene"
             body = self._scene.body(self, model)
         elif not needs_rewrite:
             body = self._load_file(
-                str(src.path),
+                given,
                 src.display_name,
                 base_position,
                 base_orientation,
@@ -382,10 +378,18 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
                 f"elements nested {depth} deep: PyBullet's XML reader refuses more than "
                 f"{_MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED)",
             )
+        # the files the reader found (in this same call: the working directory is the same)
+        found = {
+            g.mesh_uri: g.mesh_path
+            for link in model.links
+            for g in (*link.visuals, *link.collisions)
+            if g.mesh_path is not None
+        }
         for mesh in root.iter("mesh"):
             uri = mesh.get("filename")
             if uri:
-                mesh.set("filename", str(resolve_mesh(uri, model.source.base_dir)[0]))
+                mesh_path = found.get(uri) or resolve_mesh(uri, model.source.mesh_from)[0]
+                mesh.set("filename", str(mesh_path))
         fd, path = tempfile.mkstemp(prefix="simbridge_", suffix=".urdf")
         try:
             with os.fdopen(fd, "wb") as f:

@@ -71,12 +71,12 @@ def _rewritten(bodies: Sequence[SceneBody]) -> bytes:
             mesh_dir = compiler.attrib.pop("meshdir", mesh_dir)
         for mesh in root.iter("mesh"):
             if mesh.get("file"):
-                path = find_mesh(mesh_dir + mesh.get("file", ""), src.base_dir)[0]
+                path = find_mesh(mesh_dir + mesh.get("file", ""), src.mesh_from)[0]
                 mesh.set("file", str(path))
     else:
         for uri in root.iter("uri"):
             if uri.text and uri.text.strip():
-                uri.text = str(find_mesh(uri.text.strip(), src.base_dir)[0])
+                uri.text = str(find_mesh(uri.text.strip(), src.mesh_from)[0])
     return ET.tostring(root, encoding="utf-8")
 
 

@@ -143,3 +143,27 @@ def test_kernel_phases_runs_and_accounts_for_the_step():
     )
     assert rows["sum of phases"] > 0 and rows["raw mj_step, velocity actuators"] > 0
     assert rows["sum of phases"] <= rows["Sim.step(980), timed build"] * 1.001
+
+
+def test_load_table_times_raw_and_both_backends_side_by_side():
+    """bench/load.py on one robot: a row with raw PyBullet's load, each backend's and their
+    ratios (first load and again), simbridge's mesh reading, and the total."""
+    r2d2 = str(Path(simbridge.__file__).parent.parent.parent / "robots" / "r2d2.urdf")
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "bench" / "load.py"), r2d2],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = [line for line in proc.stdout.splitlines() if line.startswith("| ")]
+    robot = next(line for line in rows if "r2d2.urdf" in line)
+    total = next(line for line in rows if "total, 1 robots" in line)
+    for line in (robot, total):
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert len(cells) == 13, line
+        times = [float(cells[i]) for i in (1, 2, 4, 6, 7, 9, 11)]
+        ratios = [float(cells[i]) for i in (3, 5, 8, 10)]
+        assert all(t > 0 for t in times) and all(r > 0 for r in ratios), line
+        assert float(cells[12]) >= 0, line  # the meshes' share: 0.00 for r2d2's small ones
+        assert float(cells[3]) == pytest.approx(float(cells[2]) / float(cells[1]), rel=0.05)

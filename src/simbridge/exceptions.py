@@ -8,7 +8,8 @@ wrong and what would have been right. Subclasses also derive from the matching b
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import os
+from collections.abc import Iterable, Sequence
 
 __all__ = [
     "SimbridgeError",
@@ -130,15 +131,27 @@ class UrdfStructureError(UrdfError):
 
 
 class MeshNotFoundError(UrdfError, FileNotFoundError):
+    """A mesh file found nowhere PyBullet looks; ``tried``: every path tried, in PyBullet's
+    order (see :func:`simbridge.urdf_source.resolve_mesh`), made absolute from the working
+    directory."""
+
     def __init__(
-        self, file: str, element: str, filename: str, resolved: str, line: int | None = None
+        self,
+        file: str,
+        element: str,
+        filename: str,
+        tried: Sequence[str | os.PathLike[str]],
+        line: int | None = None,
     ):
         self.file = file
         self.mesh_uri = filename
         self.line = line
+        self.tried = [os.fspath(t) for t in tried]
         super().__init__(
-            f"{_at(file, line)}: {element}: mesh file {filename!r} not found "
-            f"(resolved to {resolved!r})"
+            f"{_at(file, line)}: {element}: mesh file {filename!r} not found; tried "
+            f"{len(self.tried)} paths, in PyBullet's order (the name as written from the "
+            f"working directory, the file's folder and those above it, ./ ../ ../../): "
+            f"{_choices(self.tried)}"
         )
 
 

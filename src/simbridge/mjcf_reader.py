@@ -569,12 +569,12 @@ class _Reader:
         elif gtype == "mesh":
             asset = self.assets.get(elem.get("mesh", ""))
             if asset is not None:
-                path, tried = find_mesh(asset, self.src.base_dir)
+                path, tried = find_mesh(asset, self.src.mesh_from)
                 if not path.is_file():
                     odd = not_a_regular_file(tried)
                     if odd is not None:
                         raise self.error(elem, where, f"mesh file {asset!r}: {odd}")
-                    raise MeshNotFoundError(self.file, where, asset, str(tried[0]), line_of(elem))
+                    raise MeshNotFoundError(self.file, where, asset, tried, line_of(elem))
                 if path.suffix.lower() not in (".obj", ".stl"):
                     raise self.error(
                         elem,

@@ -117,13 +117,15 @@ def resolve_scene_source(source: str | os.PathLike[str], kind: str) -> UrdfSourc
                     tried.append(str(path))
     if found is None:
         raise UrdfNotFoundError(shown, tried, label)
+    # the path as PyBullet would be given it: the caller's text, or the search folder's file
+    as_given = os.path.expanduser(text_source) if found is candidate else str(found)
     found = found.resolve()
     try:
         data = found.read_bytes()
     except OSError as exc:
         raise UrdfParseError(str(found), f"cannot read the file: {exc}", label) from exc
     text = data.decode("utf-8", errors="surrogateescape")
-    return UrdfSource(text, found, found.parent, str(found))
+    return UrdfSource(text, found, found.parent, str(found), as_given)
 
 
 def _is_file(path: Path) -> bool:
@@ -209,23 +211,12 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
     return root
 
 
-def find_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
-    """:func:`~simbridge.urdf_source.resolve_mesh`, and where PyBullet also looks: it joins
-    every folder it tries with the name as written, so ``/meshes/a.stl`` is found as
-    ``meshes/a.stl`` beside the file (bullet3 ``UrdfFindMeshFile.h``; pybullet_data's
-    ``kuka_with_gripper.sdf`` writes its meshes so)."""
-    path, tried = resolve_mesh(uri, base_dir)
-    if path.is_file():
-        return path, tried
-    bare = uri
-    for prefix in ("file://", "model://"):
-        if bare.startswith(prefix):
-            bare = bare[len(prefix) :]
-    if os.path.isabs(bare):
-        again, more = resolve_mesh(bare.lstrip("/\\"), base_dir)
-        if again.is_file():
-            return again, tried + more
-    return path, tried
+def find_mesh(uri: str, folder: str | Path) -> tuple[Path, list[str]]:
+    """:func:`~simbridge.urdf_source.resolve_mesh`: PyBullet's MJCF and SDF importers look
+    where its URDF importer does (bullet3 ``UrdfFindMeshFile.h``). Every folder tried is
+    joined to the name as written, so ``/meshes/a.stl`` is also found as ``meshes/a.stl``
+    beside the file (pybullet_data's ``kuka_with_gripper.sdf`` writes its meshes so)."""
+    return resolve_mesh(uri, folder)
 
 
 def check_names(file: str, what: str, names: Sequence[tuple[str, int]]) -> None:

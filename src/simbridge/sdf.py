@@ -145,12 +145,12 @@ class _Reader:
             scale_elem: Element | None = shape.find("scale")
             if scale_elem is not None:
                 scale = self.vec3(scale_elem, f"{shown} <scale>") or (0.0, 0.0, 0.0)
-            path, tried = find_mesh(uri, self.src.base_dir)
+            path, tried = find_mesh(uri, self.src.mesh_from)
             if not path.is_file():
                 odd = not_a_regular_file(tried)
                 if odd is not None:
                     raise self.error(shape, shown, f"mesh file {uri!r}: {odd}")
-                raise MeshNotFoundError(self.file, shown, uri, str(tried[0]), line_of(shape))
+                raise MeshNotFoundError(self.file, shown, uri, tried, line_of(shape))
             if path.suffix.lower() not in MESH_FORMATS:
                 raise self.error(
                     shape, shown, f"{uri!r}: unsupported mesh format; valid: {MESH_FORMATS}"

@@ -226,12 +226,12 @@ def _geometry(
                 )
                 r._finite(shape, f"{where} <mesh scale>", read, shape.get("scale", ""))
             scale = read
-        path, tried = resolve_mesh(uri, src.base_dir)
+        path, tried = resolve_mesh(uri, src.mesh_from)
         if not path.is_file():
             odd = not_a_regular_file(tried)
             if odd is not None:
                 raise r.error(shape, f"{where} <mesh>", f"mesh file {uri!r}: {odd}")
-            raise MeshNotFoundError(file, where, uri, str(tried[0]), line)
+            raise MeshNotFoundError(file, where, uri, tried, line)
         if path.suffix.lower() not in MESH_FORMATS:
             raise r.error(
                 shape,

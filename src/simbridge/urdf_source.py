@@ -10,13 +10,20 @@ from __future__ import annotations
 import importlib.util
 import os
 import stat
-from collections.abc import Iterator
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from .exceptions import UrdfNotFoundError, UrdfParseError
 
-__all__ = ["UrdfSource", "resolve_source", "resolve_mesh", "search_path", "not_a_regular_file"]
+__all__ = [
+    "UrdfSource",
+    "resolve_source",
+    "resolve_mesh",
+    "mesh_folder",
+    "search_path",
+    "not_a_regular_file",
+]
 
 
 @dataclass(frozen=True)
@@ -29,6 +36,15 @@ class UrdfSource:
     path: Path | None
     base_dir: Path
     display_name: str
+    given: str | None = None
+    """The file's path as raw PyBullet would be given it (the caller's path, relative where
+    it was, symbolic links kept; a search folder's file), None for text: meshes are looked up
+    from its folders, as PyBullet looks them up."""
+
+    @property
+    def mesh_from(self) -> str | Path:
+        """What :func:`resolve_mesh` takes for this file's meshes."""
+        return self.base_dir if self.given is None else mesh_folder(self.given)
 
 
 def _robots_dir() -> Path:
@@ -92,6 +108,8 @@ def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
                     break
     if found is None:
         raise UrdfNotFoundError(shown, tried)
+    # the path as PyBullet would be given it: the caller's text, or the search folder's file
+    as_given = os.path.expanduser(os.fspath(source)) if found is candidate else str(found)
     found = found.resolve()
     try:
         data = found.read_bytes()
@@ -100,58 +118,58 @@ def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
     # bytes that are not UTF-8 are kept (as surrogates) for the reader to judge: PyBullet's
     # parser takes them (a Latin-1 comment, say)
     text = data.decode("utf-8", errors="surrogateescape")
-    return UrdfSource(text, found, found.parent, str(found))
+    return UrdfSource(text, found, found.parent, str(found), as_given)
 
 
-def _mesh_candidates(uri: str, base_dir: Path) -> Iterator[str]:
-    """Where :func:`resolve_mesh` looks, in order."""
-    join = os.path.join
-    folders = [str(base_dir), *map(str, base_dir.parents)]
-    if uri.startswith("package://"):
-        rest = uri[len("package://") :]
-        package, _, sub = rest.partition("/")
-        for ancestor in folders:
-            if os.path.basename(ancestor) == package:
-                yield join(ancestor, sub)
-            yield join(ancestor, package, sub)
-        yield join(folders[0], sub)
-        yield join(folders[0], rest)
-        return
-    path = uri
-    for prefix in ("file://", "model://"):
-        if path.startswith(prefix):
-            path = path[len(prefix) :]
-    if os.path.isabs(path):
-        yield path
-        return
+def _mesh_candidates(uri: str, folder: str) -> list[str]:
+    """Where :func:`resolve_mesh` looks, in order: bullet3 ``UrdfFindMeshFile.h``'s
+    attempts, each a prefix joined to the name as strings."""
+    name = uri
+    if name.startswith("file://"):
+        name = name[len("file://") :]
+    if name.startswith("package://"):
+        name = name[len("package://") :]
+    elif name.startswith("model://"):
+        name = name[len("model://") :]
+    # every leading part of the URDF's path that ends at a separator, longest first
+    leading = [folder[:i] + "/" for i, ch in enumerate(folder) if ch in "/\\"]
+    return [prefix + name for prefix in ("", *reversed(leading), "./", "../", "../../")]
+
+
+def mesh_folder(path: str | os.PathLike[str]) -> str:
+    """The folder part of a file's path as written (up to and with its last separator; ""
+    for a bare name): what :func:`resolve_mesh` takes for a file read from ``path``."""
+    text = os.fspath(path)
+    cut = max(text.rfind("/"), text.rfind("\\"))
+    return text[: cut + 1]
+
+
+def resolve_mesh(uri: str, folder: str | Path) -> tuple[Path, list[str]]:
+    """Resolve a mesh filename where PyBullet does (bullet3 ``UrdfFindMeshFile.h``, measured
+    on PyBullet 3.2.7 with strace).
+
+    ``file://`` is dropped, then ``package://`` or ``model://`` (the package's name stays:
+    ``package://pkg/m.stl`` is looked for as ``pkg/m.stl``). The name is tried as written
+    (from the working directory), then after every leading part of the URDF's path up to a
+    separator, longest first (its own folder, then each folder above it that the path names:
+    all of them for an absolute path, only those written for a relative one), then after
+    ``./``, ``../`` and ``../../`` (from the working directory). Each attempt is a prefix and
+    the name joined as strings, so ``/meshes/m.stl`` is also found as ``meshes/m.stl`` beside
+    the file. PyBullet's additional search path is not searched (it finds the URDF, whose path
+    then gives the folders).
+
+    ``folder``: the URDF's folder as PyBullet is given it (:func:`mesh_folder` of its path, a
+    relative one included), or a folder as a Path (treated as absolute). Returns the first
+    regular file found (its real path) and the attempts made so far, each made absolute from
+    the working directory; where none is found, the first attempt and every attempt."""
+    base = folder if isinstance(folder, str) else os.path.join(os.path.abspath(folder), "")
     cwd = os.getcwd()
-    yield join(cwd, path)
-    for folder in folders:
-        yield join(folder, path)
-    for up in (".", "..", join("..", "..")):
-        yield join(cwd, up, path)
-
-
-def resolve_mesh(uri: str, base_dir: Path) -> tuple[Path, list[Path]]:
-    """Resolve a mesh filename as PyBullet does (bullet3 ``UrdfFindMeshFile.h``).
-
-    ``file://`` and ``model://`` are dropped; a relative path is then tried as it stands (from
-    the working directory), then in ``base_dir`` (the URDF's folder) and each of its ancestors,
-    nearest first, then as ``./``, ``../`` and ``../../`` of it. ``package://NAME/rest`` is
-    looked up in every ancestor of ``base_dir`` (a folder that is, or contains, NAME), then as
-    ``rest`` and ``NAME/rest`` relative to ``base_dir``. Returns the first existing candidate
-    and the candidates tried so far; when none exists, the one in ``base_dir`` (the first for
-    ``package://`` and absolute paths) and every candidate, that one first.
-    """
-    tried: list[Path] = []
-    for candidate in _mesh_candidates(uri, base_dir):
-        tried.append(Path(candidate))
-        if os.path.isfile(candidate):
+    tried: list[str] = []
+    for candidate in _mesh_candidates(uri, base):
+        tried.append(candidate if os.path.isabs(candidate) else os.path.join(cwd, candidate))
+        if os.path.isfile(candidate):  # False for a name no file system takes
             return Path(os.path.realpath(candidate)), tried
-    path = uri.split("://", 1)[1] if uri.startswith(("file://", "model://")) else uri
-    relative = not uri.startswith("package://") and not os.path.isabs(path)
-    primary = base_dir / path if relative else tried[0]
-    return primary, [primary, *(c for c in tried if c != primary)]
+    return Path(tried[0]), tried
 
 
 _KINDS = (
@@ -163,7 +181,7 @@ _KINDS = (
 )
 
 
-def not_a_regular_file(tried: list[Path]) -> str | None:
+def not_a_regular_file(tried: Sequence[str | Path]) -> str | None:
     """Why a mesh path that exists is not read: "PATH is a directory (not a regular file)"
     for the first of ``tried`` (as :func:`resolve_mesh` lists them) that exists but is not a
     regular file (symbolic links followed); None when none exists. Raw PyBullet 3.2.7 waits
