@@ -37,7 +37,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["MeshData", "MeshReadError", "read_mesh", "mesh_vertices"]
+__all__ = ["MeshData", "MeshReadError", "read_mesh", "mesh_vertices", "pybullet_reads_stl"]
 
 
 class MeshReadError(ValueError):
@@ -150,6 +150,20 @@ def _read_obj(path: str) -> tuple[MeshData, _Rows]:
             tris.append((idx[0], idx[a], idx[a + 1]))
     faces = np.array(tris, dtype=np.int64).reshape(-1, 3)
     return MeshData(vertices, faces), lambda k: (f"vertex {k + 1}", lines[k])
+
+
+def pybullet_reads_stl(path: str | Path) -> bool:
+    """Whether PyBullet's STL reader (bullet3 ``LoadMeshFromSTL``) takes the file: binary
+    only, its header's triangle count (a signed 32-bit integer at byte 80) not 0 and the size
+    84 bytes + 50 per triangle. PyBullet leaves any other .stl out of the link (an ASCII STL,
+    which :func:`read_mesh` reads, among them) and warns "cannot extract mesh from"."""
+    with open(path, "rb") as f:
+        head = f.read(84)
+        size = os.fstat(f.fileno()).st_size
+    if len(head) < 84:
+        return False
+    n = int(np.frombuffer(head, dtype="<i4", count=1, offset=80)[0])
+    return n != 0 and 84 + 50 * n == size
 
 
 def _read_stl(path: str) -> tuple[MeshData, _Rows]:
