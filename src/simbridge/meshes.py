@@ -220,9 +220,32 @@ def _read_with_trimesh(path: str) -> MeshData:
     import trimesh  # ~1 s to import: only for formats read nowhere else (.dae)
 
     loaded: Any = trimesh.load(path, force="mesh", process=False)
+    if path.lower().endswith(".dae") and not len(loaded.vertices):
+        loaded = _collada_without_materials(path, trimesh)
     vertices = np.asarray(loaded.vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(loaded.faces, dtype=np.int64).reshape(-1, 3)
     return MeshData(vertices, faces)
+
+
+_LOOKS = ("library_effects", "library_materials", "library_images", "bind_material")
+
+
+def _collada_without_materials(path: str, trimesh: Any) -> Any:
+    """The geometry of a COLLADA file read again without its materials, effects and images.
+    A material that names a missing texture surface (example-robot-data's anymal_foot.dae:
+    "Missing surface carbon_uv_texture_jpg_001-surface") makes pycollada drop the effect, and
+    trimesh then every mesh that uses it: an empty scene. PyBullet's COLLADA reader reads the
+    geometry and its node transforms alone; so does this second reading."""
+    import io
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    for parent in list(root.iter()):
+        for child in list(parent):
+            if isinstance(child.tag, str) and child.tag.rsplit("}", 1)[-1] in _LOOKS:
+                parent.remove(child)
+    data = io.BytesIO(ET.tostring(root))
+    return trimesh.load(data, file_type="dae", force="mesh", process=False)
 
 
 _PRIMITIVES = ("triangles", "polylist", "polygons", "lines", "linestrips", "trifans", "tristrips")
