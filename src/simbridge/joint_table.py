@@ -9,6 +9,7 @@ angles in radians.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from .inertia import LinkInertial
@@ -117,9 +118,12 @@ def _rot_parent_to_this(parent_inertial: Quat, joint_origin: Quat, child_inertia
     ``offsetInB = childInertial^-1`` and ``offsetInA^-1 = (parentInertial^-1 * joint)^-1``
     becomes a quaternion through ``btMatrix3x3::getRotation`` before their product. Going
     through the matrices makes the result independent of the input quaternions' signs."""
-    parent = matrix_from_quat_bullet(parent_inertial)
-    joint = matrix_from_quat_bullet(joint_origin)
-    child = matrix_from_quat_bullet(child_inertial)
+    # Bullet's URDF parser normalises each <origin>'s quaternion (btQuaternion::normalize:
+    # times 1 / its length) before it makes a matrix of it: the same bits here, where a turn of
+    # half a revolution leaves the sign to round-off (pybullet_data's microtaur, joint 9)
+    parent = matrix_from_quat_bullet(_normalised(parent_inertial))
+    joint = matrix_from_quat_bullet(_normalised(joint_origin))
+    child = matrix_from_quat_bullet(_normalised(child_inertial))
     # offsetInA's basis parent^T joint, summed in Bullet's order (btMatrix3x3::operator*), and
     # transposed (inverse()); offsetInB's, child^T. Plain floats: no BLAS, the same bits on
     # every processor.
@@ -127,3 +131,10 @@ def _rot_parent_to_this(parent_inertial: Quat, joint_origin: Quat, child_inertia
     in_a_inverse = [[in_a[j][i] for j in range(3)] for i in range(3)]
     in_b = [[child[j][i] for j in range(3)] for i in range(3)]
     return quat_multiply(quat_from_matrix_bullet(in_b), quat_from_matrix_bullet(in_a_inverse))
+
+
+def _normalised(q: Quat) -> Quat:
+    """``btQuaternion::normalize``: each component times 1 / sqrt(x x + y y + z z + w w)."""
+    x, y, z, w = q
+    inv = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
+    return (x * inv, y * inv, z * inv, w * inv)
