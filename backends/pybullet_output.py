@@ -18,8 +18,20 @@ _B3_MARKER = re.compile(r"b3(Warning|Error|Printf)\[[^\]\n]*\]:\n?")
 _B3_LEVEL = {"Warning": logging.WARNING, "Error": logging.ERROR, "Printf": logging.INFO}
 _BANNER = re.compile(r"^pybullet build time: [^\n]*\n?", re.MULTILINE)
 # PyBullet's warnings that simbridge's URDF reader already gives, on every backend, with the
-# file and line (inertia.py): kept at DEBUG, so that a user reads each once
-_SAID_BY_THE_READER = ("Bad inertia tensor properties",)
+# file and line (urdf.py: check_file_inertia, warn_missing_inertials): kept at DEBUG, so that
+# a user reads each once
+_SAID_BY_THE_READER = ("Bad inertia tensor properties", "No inertial data for link")
+# ... and its two lines about an .stl it cannot read (the collision and the visual converter's):
+# the reader refuses a file that is no STL and leaves out, with one warning, an ASCII STL
+# (urdf.py: _without_unread_stl), so every such line is one the reader has said
+_STL_SAID_BY_THE_READER = re.compile(
+    r"(: cannot extract mesh from '|^issue extracting mesh from COLLADA/STL file ).*\.stl'?$",
+    re.IGNORECASE,
+)
+
+
+def _said_by_the_reader(message: str) -> bool:
+    return message.startswith(_SAID_BY_THE_READER) or bool(_STL_SAID_BY_THE_READER.search(message))
 
 
 def _pybullet_output(text: str) -> tuple[list[Record], str]:
@@ -50,9 +62,11 @@ def _pybullet_output(text: str) -> tuple[list[Record], str]:
             # name ("No inertial data for link, ...", "base_footprint"): one record
             records[-1] = (level, f"{records[-1][1].rstrip(':')}: {message}")
         else:
-            if level == logging.WARNING and message.startswith(_SAID_BY_THE_READER):
-                level = logging.DEBUG
             records.append((level, message))
+    records = [
+        (logging.DEBUG if lv == logging.WARNING and _said_by_the_reader(msg) else lv, msg)
+        for lv, msg in records
+    ]
     rest.append(text[at:])
     left = "".join(rest)
     for m in _BANNER.finditer(left):

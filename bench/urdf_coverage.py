@@ -96,8 +96,9 @@ def _quat_close(a: Any, b: Any, tol: float) -> bool:
     return _close(a, b, tol) or _close(a, [-v for v in b], tol)
 
 
-def compare(raw: dict[str, Any], got: dict[str, Any]) -> str | None:
-    """None when ``got`` matches ``raw``, else what differs first."""
+def compare(raw: dict[str, Any], got: dict[str, Any], *, quat_sign: bool = False) -> str | None:
+    """None when ``got`` matches ``raw``, else what differs first. The joint table's quaternion
+    (field 15) is compared up to sign unless ``quat_sign``."""
     if raw["n"] != got["n"]:
         return f"{got['n']} joints, raw PyBullet {raw['n']}"
     for k, (r, g) in enumerate(zip(raw["table"], got["table"], strict=True)):
@@ -109,7 +110,7 @@ def compare(raw: dict[str, Any], got: dict[str, Any]) -> str | None:
             return f"joint {k} parent index {g[16]}, raw {r[16]}"
         if not _close(r[13], g[13], TOL) or not _close(r[14], g[14], TOL):
             return f"joint {k} axis/parent frame position: {g[13]}, {g[14]}; raw {r[13]}, {r[14]}"
-        if not _quat_close(r[15], g[15], TOL):
+        if not (_close(r[15], g[15], TOL) if quat_sign else _quat_close(r[15], g[15], TOL)):
             return f"joint {k} parent frame orientation {g[15]}, raw {r[15]}"
     for k, (r, g) in enumerate(zip(raw["frames"], got["frames"], strict=True)):
         scale = FRAME_REL * max(1.0, max(abs(v) for v in r[0]))

@@ -137,3 +137,25 @@ def test_a_collada_index_past_its_vertices_is_named(tmp_path):
     with pytest.raises(MeshReadError, match=r"<triangles> indexes vertex 7 \(of 2 indices out "
                        r"of range\); its <vertices> 'v' hold 3"):  # fmt: skip
         read_mesh(path)
+
+
+def test_a_collada_material_with_a_missing_texture_keeps_its_geometry(tmp_path):
+    """A material whose sampler names a surface the file lacks (example-robot-data's
+    anymal_foot.dae): trimesh alone returns an empty scene (pycollada drops the effect, then
+    the meshes that use it); PyBullet reads the geometry, and so does read_mesh."""
+    import trimesh
+
+    text = (DATA / "racecar" / "meshes" / "cone.dae").read_text()
+    broken = text.replace(
+        "<profile_COMMON>",
+        '<profile_COMMON><newparam sid="s"><sampler2D><source>no-such-surface</source>'
+        "</sampler2D></newparam>",
+        1,
+    )
+    assert broken != text
+    path = tmp_path / "broken_texture.dae"
+    path.write_text(broken)
+    assert len(trimesh.load(path, force="mesh", process=False).vertices) == 0
+    mesh, whole = read_mesh(path), read_mesh(DATA / "racecar" / "meshes" / "cone.dae")
+    assert np.array_equal(mesh.vertices, whole.vertices)
+    assert np.array_equal(mesh.faces, whole.faces)

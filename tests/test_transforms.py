@@ -40,6 +40,28 @@ def test_quaternion_helpers_agree_with_pybullet():
     assert T.wxyz_to_xyzw(T.xyzw_to_wxyz((1, 2, 3, 4))) == (1, 2, 3, 4)
 
 
+def test_quat_from_matrix_bullet_gives_bullets_sign():
+    """Bullet's ``getRotation`` (what the joint table's field 15 goes through) against PyBullet's
+    own: ``p.invertTransform`` turns a quaternion into a matrix, transposes it and calls it.
+    Random turns and the half turns and three-quarter turns whose sign a w >= 0 rule gets wrong
+    (bravo7's joint1: (0, 0, 0, -1) in PyBullet's table)."""
+    rng = np.random.default_rng(3)
+    turns = [tuple(q / np.linalg.norm(q)) for q in rng.normal(size=(40, 4))]
+    for axis in np.eye(3):
+        # (not a turn of 120 degrees: trace 0, its sign is round-off, and these helpers of
+        # PyBullet's round in float32 where the joint table's Bullet computes in double)
+        for angle in (np.pi / 2, np.pi, 1.5 * np.pi, -np.pi, -np.pi / 2):
+            turns.append((*(np.sin(angle / 2) * axis), np.cos(angle / 2)))
+    for q in turns:
+        want = p.invertTransform((0, 0, 0), q)[1]
+        m = T.matrix_from_quat_bullet(q)
+        assert np.array(m) == pytest.approx(T.quat_to_matrix(q), abs=1e-15)
+        got = T.quat_from_matrix_bullet(np.array(m).T)
+        # PyBullet's transform helpers compute in float32 (3e-8 apart, measured): 1e-6, far
+        # below the 2 between a quaternion's component and its negation
+        assert got == pytest.approx(want, abs=1e-6), q
+
+
 def test_rpy_from_quat_agrees_with_pybullet_and_scalars_match_scenarios():
     rng = np.random.default_rng(2)
     for _ in range(20):

@@ -9,17 +9,20 @@ angles in radians.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from .inertia import LinkInertial
 from .transforms import (
+    matrix_from_quat_bullet,
     quat_conjugate,
+    quat_from_matrix_bullet,
     quat_multiply,
     quat_rotate,
     transform_inverse,
     transform_multiply,
 )
-from .types import JointInfo, JointType, Vec3
+from .types import JointInfo, JointType, Quat, Vec3
 from .urdf import UrdfModel
 
 __all__ = ["JOINT_TYPES", "joint_table"]
@@ -55,7 +58,8 @@ def joint_table(
     * ``parent_frame_position``: the joint origin in the parent's inertial frame;
     * ``parent_frame_orientation``: Bullet's ``rotParentToThis``, the inverse of the child's
       inertial frame orientation seen from the parent's inertial frame at zero joint angle
-      (measured: this, not the joint frame's orientation, is what ``getJointInfo`` reports).
+      (measured: this, not the joint frame's orientation, is what ``getJointInfo`` reports),
+      with Bullet's sign (:func:`_rot_parent_to_this`).
     """
     del fixed_base  # PyBullet counts 7 and 6 base coordinates even for a fixed base
     q, u = 7, 6
@@ -66,14 +70,8 @@ def joint_table(
         pin = inertials[parent + 1]
         cin = inertials[joint.index + 1]
         inv_parent = transform_inverse((pin.position, pin.orientation))
-        fpos, jorn = transform_multiply(inv_parent, (joint.origin_xyz, joint.origin_quat))
-        # Bullet's rotParentToThis: child inertial frame relative to the joint frame seen
-        # from the parent's inertial frame, inverted (what getJointInfo reports).
-        forn = quat_conjugate(quat_multiply(jorn, cin.orientation))
-        if abs(forn[3]) < 1e-6 and max(forn[:3], key=abs) < 0:
-            # w ~ 0: Bullet's sign is round-off; measured (kuka_iiwa, minitaur): its largest
-            # component comes out positive
-            forn = (-forn[0], -forn[1], -forn[2], -forn[3])
+        fpos = transform_multiply(inv_parent, (joint.origin_xyz, joint.origin_quat))[0]
+        forn = _rot_parent_to_this(pin.orientation, joint.origin_quat, cin.orientation)
         if jtype == JointType.FIXED:
             axis: Vec3 = (0.0, 0.0, 0.0)
             qi = ui = -1
@@ -112,3 +110,31 @@ def joint_table(
             )
         )
     return rows
+
+
+def _rot_parent_to_this(parent_inertial: Quat, joint_origin: Quat, child_inertial: Quat) -> Quat:
+    """Bullet's ``parentRotToThis`` as ``ConvertURDF2BulletInternal`` (URDF2Bullet.cpp) makes
+    it, sign included: the frames are rotation matrices there (``btTransform``), and each of
+    ``offsetInB = childInertial^-1`` and ``offsetInA^-1 = (parentInertial^-1 * joint)^-1``
+    becomes a quaternion through ``btMatrix3x3::getRotation`` before their product. Going
+    through the matrices makes the result independent of the input quaternions' signs."""
+    # Bullet's URDF parser normalises each <origin>'s quaternion (btQuaternion::normalize:
+    # times 1 / its length) before it makes a matrix of it: the same bits here, where a turn of
+    # half a revolution leaves the sign to round-off (pybullet_data's microtaur, joint 9)
+    parent = matrix_from_quat_bullet(_normalised(parent_inertial))
+    joint = matrix_from_quat_bullet(_normalised(joint_origin))
+    child = matrix_from_quat_bullet(_normalised(child_inertial))
+    # offsetInA's basis parent^T joint, summed in Bullet's order (btMatrix3x3::operator*), and
+    # transposed (inverse()); offsetInB's, child^T. Plain floats: no BLAS, the same bits on
+    # every processor.
+    in_a = [[sum(parent[k][i] * joint[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    in_a_inverse = [[in_a[j][i] for j in range(3)] for i in range(3)]
+    in_b = [[child[j][i] for j in range(3)] for i in range(3)]
+    return quat_multiply(quat_from_matrix_bullet(in_b), quat_from_matrix_bullet(in_a_inverse))
+
+
+def _normalised(q: Quat) -> Quat:
+    """``btQuaternion::normalize``: each component times 1 / sqrt(x x + y y + z z + w w)."""
+    x, y, z, w = q
+    inv = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
+    return (x * inv, y * inv, z * inv, w * inv)

@@ -39,7 +39,14 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["MeshData", "MeshReadError", "read_mesh", "mesh_vertices", "clear_cache"]
+__all__ = [
+    "MeshData",
+    "MeshReadError",
+    "read_mesh",
+    "mesh_vertices",
+    "clear_cache",
+    "pybullet_reads_stl",
+]
 
 
 class MeshReadError(ValueError):
@@ -197,6 +204,20 @@ def _read_obj_quickly(text: str) -> MeshData | None:
     return MeshData(vertices, np.stack(fan, axis=1).reshape(-1, 3))
 
 
+def pybullet_reads_stl(path: str | Path) -> bool:
+    """Whether PyBullet's STL reader (bullet3 ``LoadMeshFromSTL``) takes the file: binary
+    only, its header's triangle count (a signed 32-bit integer at byte 80) not 0 and the size
+    84 bytes + 50 per triangle. PyBullet leaves any other .stl out of the link (an ASCII STL,
+    which :func:`read_mesh` reads, among them) and warns "cannot extract mesh from"."""
+    with open(path, "rb") as f:
+        head = f.read(84)
+        size = os.fstat(f.fileno()).st_size
+    if len(head) < 84:
+        return False
+    n = int(np.frombuffer(head, dtype="<i4", count=1, offset=80)[0])
+    return n != 0 and 84 + 50 * n == size
+
+
 def _read_stl(path: str) -> tuple[MeshData, _Rows]:
     data = Path(path).read_bytes()
     if len(data) >= 84:
@@ -257,6 +278,8 @@ def _read_with_trimesh(path: str) -> MeshData:
     # took most of the time; the vertices and faces are bit for bit the same, compared on the
     # 298 .dae files of pybullet_data and example-robot-data)
     loaded: Any = trimesh.load(path, force="mesh", process=False, resolver={})
+    if path.lower().endswith(".dae") and not len(loaded.vertices):
+        loaded = _collada_without_materials(path, trimesh)
     vertices = np.asarray(loaded.vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(loaded.faces, dtype=np.int64).reshape(-1, 3)
     return MeshData(vertices, faces)
@@ -273,6 +296,27 @@ def _numbers(text: str, dtype: type) -> np.ndarray | None:
     except ValueError:  # numpy 2: a token it cannot read
         return None
     return values if values.size == len(text.split()) else None
+
+
+_LOOKS = ("library_effects", "library_materials", "library_images", "bind_material")
+
+
+def _collada_without_materials(path: str, trimesh: Any) -> Any:
+    """The geometry of a COLLADA file read again without its materials, effects and images.
+    A material that names a missing texture surface (example-robot-data's anymal_foot.dae:
+    "Missing surface carbon_uv_texture_jpg_001-surface") makes pycollada drop the effect, and
+    trimesh then every mesh that uses it: an empty scene. PyBullet's COLLADA reader reads the
+    geometry and its node transforms alone; so does this second reading."""
+    import io
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    for parent in list(root.iter()):
+        for child in list(parent):
+            if isinstance(child.tag, str) and child.tag.rsplit("}", 1)[-1] in _LOOKS:
+                parent.remove(child)
+    data = io.BytesIO(ET.tostring(root))
+    return trimesh.load(data, file_type="dae", force="mesh", process=False)
 
 
 _PRIMITIVES = ("triangles", "polylist", "polygons", "lines", "linestrips", "trifans", "tristrips")

@@ -250,7 +250,7 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
         fixed_base = flag(fixed_base, "fixed_base")
         # loaded on first use
         from .load_options import apply_load_options, load_options
-        from .urdf import check_file_inertia, parse_urdf, resolve_source
+        from .urdf import check_file_inertia, parse_urdf, resolve_source, warn_missing_inertials
 
         options = load_options(
             self._b.profile,
@@ -260,6 +260,7 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
             merge_fixed_links=merge_fixed_links,
         )
         model = parse_urdf(resolve_source(source))
+        warn_missing_inertials(model)
         if options.inertia_source == "file":
             check_file_inertia(model)
         model = apply_load_options(model, options, bool(fixed_base))

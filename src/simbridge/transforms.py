@@ -24,6 +24,8 @@ __all__ = [
     "quat_rotate",
     "quat_to_matrix",
     "quat_from_matrix",
+    "quat_from_matrix_bullet",
+    "matrix_from_quat_bullet",
     "transform_multiply",
     "transform_inverse",
     "xyzw_to_wxyz",
@@ -129,6 +131,53 @@ def quat_from_matrix(m: np.ndarray) -> Quat:
     n = math.sqrt(sum(c * c for c in q))
     sign = -1.0 if q[3] < 0 else 1.0
     return (sign * q[0] / n, sign * q[1] / n, sign * q[2] / n, sign * q[3] / n)
+
+
+def matrix_from_quat_bullet(q: Sequence[float]) -> list[list[float]]:
+    """The rotation matrix Bullet's ``btMatrix3x3::setRotation`` makes of a quaternion (x, y, z,
+    w), operation for operation (double precision, no SIMD: PyBullet's build), as nested lists;
+    with :func:`quat_from_matrix_bullet` it repeats Bullet's own round-off where that decides
+    a sign (a turn of 120 degrees has trace 0)."""
+    x, y, z, w = (float(c) for c in q)
+    s = 2.0 / (x * x + y * y + z * z + w * w)
+    xs, ys, zs = x * s, y * s, z * s
+    wx, wy, wz = w * xs, w * ys, w * zs
+    xx, xy, xz = x * xs, x * ys, x * zs
+    yy, yz, zz = y * ys, y * zs, z * zs
+    return [
+        [1.0 - (yy + zz), xy - wz, xz + wy],
+        [xy + wz, 1.0 - (xx + zz), yz - wx],
+        [xz - wy, yz + wx, 1.0 - (xx + yy)],
+    ]
+
+
+def quat_from_matrix_bullet(m: Sequence[Sequence[float]] | np.ndarray) -> Quat:
+    """The quaternion (x, y, z, w) Bullet's ``btMatrix3x3::getRotation`` gives for a rotation
+    matrix, its sign included: w > 0 where the trace is positive, else the component of the
+    largest diagonal entry positive (the first of equal ones, in Bullet's order of tests).
+    Bullet turns every rotation it composes into a quaternion this way, so this sign, not
+    :func:`quat_from_matrix`'s w >= 0, is the one PyBullet reports (``getJointInfo``)."""
+    m = np.asarray(m, dtype=float)
+    trace = m[0, 0] + m[1, 1] + m[2, 2]  # Bullet's order: (m00 + m11) + m22
+    q = [0.0, 0.0, 0.0, 0.0]
+    if trace > 0.0:
+        s = math.sqrt(trace + 1.0)
+        q[3] = s * 0.5
+        s = 0.5 / s
+        q[0] = (m[2, 1] - m[1, 2]) * s
+        q[1] = (m[0, 2] - m[2, 0]) * s
+        q[2] = (m[1, 0] - m[0, 1]) * s
+    else:
+        big = m[1, 1] if m[0, 0] < m[1, 1] else m[0, 0]
+        i = 2 if big < m[2, 2] else (1 if m[0, 0] < m[1, 1] else 0)
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = math.sqrt(m[i, i] - m[j, j] - m[k, k] + 1.0)
+        q[i] = s * 0.5
+        s = 0.5 / s
+        q[3] = (m[k, j] - m[j, k]) * s
+        q[j] = (m[j, i] + m[i, j]) * s
+        q[k] = (m[k, i] + m[i, k]) * s
+    return (q[0], q[1], q[2], q[3])
 
 
 def transform_multiply(

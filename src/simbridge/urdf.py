@@ -31,7 +31,7 @@ from .exceptions import (
     UrdfStructureError,
 )
 from .inertia import file_principal
-from .meshes import MeshReadError, mesh_vertices
+from .meshes import MeshReadError, mesh_vertices, pybullet_reads_stl
 from .urdf_model import CONTACT_TAGS, Contact, Geometry, Inertial, Joint, Link, UrdfModel, Vec3
 from .urdf_source import (  # noqa: F401 - re-exported: simbridge.urdf is the public module
     UrdfSource,
@@ -56,6 +56,7 @@ __all__ = [
     "parse_urdf",
     "search_path",
     "check_file_inertia",
+    "warn_missing_inertials",
     "SUPPORTED_JOINT_TYPES",
     "MESH_FORMATS",
 ]
@@ -268,6 +269,35 @@ def _check_mesh(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) 
         raise r.error(elem, where, f"{uri!r} cannot be read: {exc.strerror}") from None
 
 
+def _without_unread_stl(file: str, shapes: list[Geometry], where: str) -> list[Geometry]:
+    """``shapes`` less the .stl meshes PyBullet does not read (an ASCII STL: PyBullet reads
+    binary ones only, :func:`~simbridge.meshes.pybullet_reads_stl`): PyBullet loads the link
+    without that shape and warns ("cannot extract mesh from"); every backend leaves it out
+    (its inertia, its collisions and its looks), with one warning per shape on the
+    ``simbridge.urdf`` logger naming the file, the line and the element."""
+    kept = []
+    for k, g in enumerate(shapes):
+        drop = (
+            g.kind == "mesh"
+            and g.mesh_path is not None
+            and g.mesh_path.suffix.lower() == ".stl"
+            and not pybullet_reads_stl(g.mesh_path)
+        )
+        if not drop:
+            kept.append(g)
+            continue
+        at = f"{file}:{g.line}" if g.line else file
+        LOGGER.warning(
+            "%s: %s #%d <mesh>: %r is not a binary STL, which PyBullet alone reads: the shape "
+            "is left out, as PyBullet leaves it out ('cannot extract mesh from')",
+            at,
+            where,
+            k,
+            g.mesh_uri,
+        )
+    return kept
+
+
 def _check_collada(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:
     """Read a .dae before any engine does: PyBullet's COLLADA reader ends the process on some
     malformed files (an empty <scene>), and MuJoCo's backend converts .dae through trimesh."""
@@ -365,6 +395,24 @@ def _visual_color(
 
 
 # ---------------------------------------------------------------- parse
+
+
+def warn_missing_inertials(model: UrdfModel) -> None:
+    """PyBullet's parser gives a link without ``<inertial>`` (but one named ``world``) mass 1 at
+    the link's own frame, and says so ("No inertial data for link, using mass=1, ..."): every
+    backend simulates that link so, and this says it once per link, on every backend, on the
+    ``simbridge.urdf`` logger, naming the file, the line and the link."""
+    file = model.source.display_name
+    for link in model.links:
+        if link.inertial.from_file or link.name == "world":
+            continue
+        at = f"{file}:{link.line}" if link.line else file
+        LOGGER.warning(
+            "%s: link %r has no <inertial>: simulated with mass 1 kg, its centre of mass at the "
+            "link frame, as PyBullet does ('No inertial data for link, using mass=1')",
+            at,
+            link.name,
+        )
 
 
 def check_file_inertia(model: UrdfModel) -> None:
@@ -548,6 +596,8 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
             _geometry(r, c, f"{where} <collision> #{i}", src, None)  # type: ignore[arg-type]
             for i, c in enumerate(elem.findall("collision"))
         ]
+        visuals = _without_unread_stl(r.file, visuals, f"{where} <visual>")
+        collisions = _without_unread_stl(r.file, collisions, f"{where} <collision>")
         links[name] = Link(
             name,
             inertial,

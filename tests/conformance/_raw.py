@@ -115,7 +115,8 @@ def same_quat(a: Any, b: Any, tol: float) -> bool:
 
 def table_difference(got: list[Any], raw: list[tuple[Any, ...]]) -> str | None:
     """None when the 17 fields of every row agree (floats to 1e-9, the parent frame's
-    quaternion up to sign), else the first difference."""
+    quaternion with its sign: Bullet's ``getRotation`` picks it, and so does the joint table),
+    else the first difference."""
     if len(got) != len(raw):
         return f"{len(got)} joints, raw PyBullet {len(raw)}"
     for k, (g, r) in enumerate(zip(got, raw, strict=True)):
@@ -131,7 +132,7 @@ def table_difference(got: list[Any], raw: list[tuple[Any, ...]]) -> str | None:
             return f"joint {k} parent {g[16]}, raw {r[16]}"
         if not close(g[13], r[13], TABLE_TOL) or not close(g[14], r[14], TABLE_TOL):
             return f"joint {k} axis, parent frame position {g[13]}, {g[14]}; raw {r[13]}, {r[14]}"
-        if not same_quat(g[15], r[15], TABLE_TOL):
+        if not close(g[15], r[15], TABLE_TOL):
             return f"joint {k} parent frame orientation {g[15]}, raw {r[15]}"
     return None
 

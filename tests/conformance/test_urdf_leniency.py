@@ -317,3 +317,60 @@ def test_plane_geometry_is_an_infinite_plane_on_every_backend(make_sim):
     sim.step(480)
     z = sim.base_state(box).position[2]
     assert 0.024 < z < 0.026  # cube_small is 5 cm: its centre rests 2.5 cm up
+
+
+def _ascii_stl(side: float) -> str:
+    """A cube of ``side`` metres as an ASCII STL (12 facets)."""
+    h = side / 2
+    corners = [(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)]
+    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1)]
+    faces += [(2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+    lines = ["solid cube"]
+    for face in faces:
+        lines += ["facet normal 0 0 0", "outer loop"]
+        lines += ["vertex {} {} {}".format(*corners[i]) for i in face]
+        lines += ["endloop", "endfacet"]
+    return "\n".join(lines + ["endsolid cube", ""])
+
+
+# case -> (link b's elements, PyBullet's own warning, the one warning every backend gives)
+PYBULLET_WARNS = {
+    "a link without <inertial>": (
+        BOX,
+        r"No inertial data for link, using mass=1, .*: b$",
+        r"lenient\.urdf:3: link 'b' has no <inertial>: simulated with mass 1 kg",
+    ),
+    "an ASCII STL": (
+        f'{INERTIAL}<collision><geometry><mesh filename="cube.stl"/></geometry></collision>{BOX}',
+        r"cannot extract mesh from '.*cube\.stl'",
+        r"lenient\.urdf:3: link 'b' <collision> #0 <mesh>: 'cube\.stl' is not a binary STL, "
+        r"which PyBullet alone reads: the shape is left out",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(PYBULLET_WARNS))
+def test_what_pybullet_warns_of_every_backend_says_once(make_sim, case, caplog, tmp_path):
+    """A link without <inertial> (PyBullet: mass 1 at the link frame) and an ASCII STL (PyBullet
+    reads binary STL only and leaves the shape out): raw PyBullet warns; every backend loads
+    the same body (joint table, masses, inertias, frames) and gives one warning on the
+    ``simbridge.urdf`` logger naming the file, the line and the link (the PyBullet backend's
+    own copy of PyBullet's lines is kept at DEBUG). MuJoCo refused the whole robot over the
+    ASCII STL (its compiler's error) and gave the missing <inertial> its mass without a word."""
+    link_b, pybullet_says, we_say = PYBULLET_WARNS[case]
+    (tmp_path / "cube.stl").write_text(_ascii_stl(0.3))
+    path = tmp_path / "lenient.urdf"
+    path.write_text(robot(link_b=link_b))
+    caplog.set_level(logging.DEBUG, logger="simbridge")
+    raw = _raw.raw_load(str(path))
+    said = [r.getMessage() for r in caplog.records]  # (the classifier's level: DEBUG)
+    assert any(re.search(pybullet_says, m) for m in said), said
+    caplog.clear()
+    sim = make_sim()
+    body = sim.load_urdf(path)
+    assert _raw.table_difference(sim.joints(body), raw.table) is None
+    assert _raw.dynamics_difference(sim, body, raw.dynamics, 1e-7) is None
+    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    warnings = [r for r in caplog.records if r.levelno >= logging.WARNING]
+    assert [r.name for r in warnings] == ["simbridge.urdf"], [r.getMessage() for r in warnings]
+    assert re.search(we_say, warnings[0].getMessage()), warnings[0].getMessage()
