@@ -20,7 +20,7 @@ import functools
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-from simbridge.exceptions import SimBusyError
+from simbridge.exceptions import SimBusyError, SimClosedError
 
 __all__ = ["WAIT_LIMIT_S", "WAIT_SLICE_S", "exclusive", "wait_for_lock"]
 
@@ -35,12 +35,16 @@ WAIT_LIMIT_S = 10.0
 def wait_for_lock(backend: Any) -> None:
     """Take ``backend._stepping`` (its non-blocking acquire just failed: another thread holds
     it), or raise SimBusyError once the holder is seen stepping (``backend._in_step``) or
-    after WAIT_LIMIT_S."""
+    after WAIT_LIMIT_S, and SimClosedError when the holder closed the Sim meanwhile
+    (``backend._closed``)."""
     lock = backend._stepping
     for _ in range(int(WAIT_LIMIT_S / WAIT_SLICE_S)):
         if backend._in_step:
             raise SimBusyError()
         if lock.acquire(True, WAIT_SLICE_S):
+            if backend._closed:
+                lock.release()
+                raise SimClosedError()
             return
     raise SimBusyError(
         f"a call in another thread has held this Sim for over {WAIT_LIMIT_S:g} s; a Sim takes "

@@ -147,6 +147,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         # SimBusyError if it is a step (_in_step): pybullet_common.wait_for_lock
         self._stepping = threading.RLock()
         self._in_step = False
+        self._closed = False  # a call that waited for the lock through close() is refused
         self._file_texts: dict[str, str] = {}  # URDF files loaded by path: their first text
         self._diverged: SimulationDivergedError | None = None  # raised again until reset()
         self._checked_at = 0.0  # the time of the last probe that found every body finite
@@ -613,6 +614,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
                 except p.error:  # already disconnected (e.g. the GUI window was closed)
                     pass
                 self._c = -1
+            self._closed = True
 
     # ---------------------------------------------------------------- description
 
