@@ -132,7 +132,9 @@ def _paths(out: Path) -> list[str]:
     return sorted({str(out), str(ROOT), str(Path.home())}, key=len, reverse=True)
 
 
-def _record() -> None:
+def _record(cases: list[str]) -> None:
+    """Record the named cases (all when none are named: ``python
+    tests/compare/test_compare_same_results.py [CASE ...]``)."""
     import shutil
     import tempfile
 
@@ -140,7 +142,7 @@ def _record() -> None:
     (DATA / "recorded.json").write_text(
         json.dumps(_environment(), indent=2) + "\n", encoding="utf-8"
     )
-    for case in CASES:
+    for case in cases or CASES:
         with tempfile.TemporaryDirectory() as tmp:
             out = _produce(case, Path(tmp) / case)
             paths = _paths(out)
@@ -196,4 +198,4 @@ def test_same_summary_and_report_as_recorded(case, tmp_path):
 
 
 if __name__ == "__main__":
-    _record()
+    _record(sys.argv[1:])
