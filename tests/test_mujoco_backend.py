@@ -345,3 +345,16 @@ def test_a_load_that_fails_to_compile_leaves_the_world_as_it_was(tmp_path):
         cube = sim.load_urdf("cube.urdf", base_position=(3, 0, 1))
         sim.step(10)
         assert sim.bodies() == [r2d2, cube]
+
+
+def test_a_call_waiting_for_the_sim_when_another_thread_closes_it_is_refused():
+    import sys
+    from pathlib import Path
+
+    from simbridge.backends.mujoco.inspect import backend_of
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from _closing_race import check_waiting_call_refused_after_close
+
+    sim = simbridge.Sim("mujoco")
+    check_waiting_call_refused_after_close(sim, backend_of(sim)._stepping)

@@ -240,3 +240,16 @@ def test_a_name_pybullet_cannot_hold_is_refused_before_it_reads_the_file():
         with pytest.raises(UrdfStructureError, match=r":4: <joint name='j.*PyBullet holds at most"):
             sim.load_urdf(text)
         assert sim.load_urdf(text.replace(name, "j" * 1023)) == 0  # the longest it holds
+
+
+def test_a_call_waiting_for_the_sim_when_another_thread_closes_it_is_refused():
+    import sys
+    from pathlib import Path
+
+    from simbridge.backends.pybullet_inspect import backend_of
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from _closing_race import check_waiting_call_refused_after_close
+
+    sim = simbridge.Sim("pybullet")
+    check_waiting_call_refused_after_close(sim, backend_of(sim)._stepping)

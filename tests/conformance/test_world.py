@@ -10,7 +10,6 @@ from __future__ import annotations
 import pytest
 
 import simbridge
-from simbridge.exceptions import SimClosedError
 
 
 def test_body_ids_follow_pybullets_pool(make_sim):
@@ -216,38 +215,6 @@ def test_reads_from_several_threads_at_once_are_not_refused(make_sim):
     for t in threads:
         t.join()
     assert errors == [] and answers == []
-
-
-def test_a_call_waiting_for_the_sim_when_another_thread_closes_it_is_refused(make_sim):
-    """A read from another thread waits while a call holds the Sim; when that thread closes
-    the Sim meanwhile, the waiting read gets SimClosedError once it has the lock (it went on
-    into the closed engine and failed with a raw AssertionError)."""
-    import threading
-    import time
-
-    sim = make_sim()
-    robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
-    lock = sim._b._stepping  # the lock every call takes: held here as a long call would
-    outcome: list[BaseException | object] = []
-
-    def reader() -> None:
-        try:
-            outcome.append(sim.base_state(robot))
-        except BaseException as error:  # noqa: BLE001 - reported below
-            outcome.append(error)
-
-    lock.acquire()
-    try:
-        t = threading.Thread(target=reader)
-        t.start()
-        time.sleep(0.05)  # the reader is waiting for the lock
-        assert outcome == []
-        sim.close()  # the same thread: its own lock, taken again
-    finally:
-        lock.release()
-    t.join(timeout=20)
-    assert not t.is_alive()
-    assert len(outcome) == 1 and isinstance(outcome[0], SimClosedError), outcome
 
 
 @pytest.mark.parametrize("read", ["joint_states", "get_state"])
