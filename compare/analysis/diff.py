@@ -157,33 +157,6 @@ class Divergence:
                 best = (key, q.thresholds[0], t)
         return best
 
-    def to_dict(self) -> dict[str, Any]:
-        """Every headline figure, JSON-ready (SI units: m, rad, s)."""
-        first = self.first_to_diverge()
-        return {
-            "a": self.a,
-            "b": self.b,
-            "subject": self.subject,
-            "duration": float(self.time[-1] - self.time[0]),
-            "samples": len(self.time),
-            "final": self.final,
-            "max": self.maximum,
-            "crossings": {
-                k: [{"threshold": thr, "time": t} for thr, t in v.items()]
-                for k, v in self.crossings.items()
-            },
-            "first_to_diverge": (
-                None
-                if first is None
-                else {"quantity": first[0], "threshold": first[1], "time": first[2]}
-            ),
-            "phases": [
-                {"name": p.name, "start": p.start, "end": p.end, "at_end": p.at_end, "max": p.max}
-                for p in self.phases
-            ],
-            "final_pose": self.final_pose,
-        }
-
 
 def _crossing(time: np.ndarray, values: np.ndarray, threshold: float) -> float | None:
     hit = np.flatnonzero(values >= threshold)

@@ -6,12 +6,28 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from ..analysis.diff import QUANTITIES
-from ..analysis.events import engine_events, parting
-from ..analysis.outcomes import CONFIDENCE, INTERVAL_METHOD, summarize
-from ..analysis.parts import rank_parts
-from ..analysis.verdict import Verdict
+from ..analysis.diff import QUANTITIES, Divergence
+from ..analysis.events import Parting, engine_events, parting
+from ..analysis.outcomes import (
+    CONFIDENCE,
+    INTERVAL_METHOD,
+    Distribution,
+    OutcomeStats,
+    SuccessRate,
+    summarize,
+)
+from ..analysis.parts import Part, rank_parts
+from ..analysis.verdict import (
+    ALPHA,
+    MARGINAL,
+    EngineJudgement,
+    Interval,
+    TwoSampleTest,
+    Verdict,
+)
+from ..analysis.verdict import CONFIDENCE as VERDICT_CONFIDENCE
 from ..pipeline import Comparison, Pair
+from ..run.ensemble import SPREAD_PERCENTILE
 from ..run.events import EngineEvents
 from ..run.resync import Resync
 from ..scenario import Scenario, format_timestep
@@ -19,7 +35,15 @@ from .departures import applicable
 from .events import event_words
 from .verdict import marginal_words
 
-__all__ = ["summary", "verdict_dict"]
+__all__ = [
+    "summary",
+    "verdict_dict",
+    "divergence_dict",
+    "parting_dict",
+    "part_dict",
+    "outcome_stats_dict",
+    "outcomes_summary",
+]
 
 
 def summary(c: Comparison) -> dict[str, Any]:
@@ -65,7 +89,7 @@ def summary(c: Comparison) -> dict[str, Any]:
         "headline_quantity": q,
         "headline": first["headline"],
         "cross": first["cross"],
-        "own": {label: c.own[(slot, dt)].to_dict() for slot, label in enumerate(c.labels)},
+        "own": {label: divergence_dict(c.own[(slot, dt)]) for slot, label in enumerate(c.labels)},
         "sweep": sweep,
         "verdict": first["verdict"],
         "ensemble": _ensemble_summary(c),
@@ -135,17 +159,19 @@ def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[st
             "own_error": own,
             "gap_exceeds_all_own_errors": all(v["gap_exceeds"] for v in own.values()),
         },
-        "cross": cross.to_dict(),
+        "cross": divergence_dict(cross),
         "verdict": None if p.verdict is None else verdict_dict(p.verdict),
-        "parting": parting(
-            cross.first_crossing(q, thr),
-            thr,
-            q,
-            phases,
-            [events[p.a], events[p.b]],
-            c.timestep,
-        ).to_dict(),
-        "parts": [part.to_dict() for part in rank_parts(cross)],
+        "parting": parting_dict(
+            parting(
+                cross.first_crossing(q, thr),
+                thr,
+                q,
+                phases,
+                [events[p.a], events[p.b]],
+                c.timestep,
+            )
+        ),
+        "parts": [part_dict(part) for part in rank_parts(cross)],
     }
 
 
@@ -179,7 +205,7 @@ def _ensemble_summary(c: Comparison) -> dict[str, Any] | None:
         engines[e.label] = {
             "backend": e.backend,
             "profile": e.profile,
-            "spread_end": fig.spread_end.to_dict() if fig else float(e.spread[-1]),
+            "spread_end": _interval(fig.spread_end) if fig else float(e.spread[-1]),
             "spread_max": float(e.spread.max()),
             "horizons": [{"threshold": t, "time": h} for t, h in e.horizons()],
             "end_points": e.end_points.tolist(),
@@ -208,11 +234,163 @@ def _version() -> str:
     return __version__
 
 
+# ---------------------------------------------------------------- one result each
+
+
 def verdict_dict(v: Verdict) -> dict[str, Any]:
-    """``summary.json``'s ``verdict``: :meth:`Verdict.to_dict`, the marginal reasons in words."""
-    out = v.to_dict()
-    out["marginal_reasons"] = [marginal_words(m) for m in v.marginal_reasons]
-    return out
+    """``summary.json``'s ``verdict`` (and ``pairs[k].verdict``), the marginal reasons in
+    words."""
+    return {
+        "verdict": v.verdict,
+        "engines": list(v.engines),
+        "reason": v.reason,
+        "marginal": v.marginal,
+        "marginal_reasons": [marginal_words(m) for m in v.marginal_reasons],
+        "quantity": v.quantity,
+        "unit": v.unit,
+        "tolerance": v.tolerance,
+        "floor": v.floor,
+        "labels": list(v.labels),
+        "judged_at": {"time": v.judged_time, "why": v.judged_at},
+        "gap": _interval(v.gap),
+        "gap_end": _interval(v.gap_end),
+        "nominal_gap": v.nominal_gap,
+        "max_gap": {"value": v.max_gap[0], "time": v.max_gap[1]},
+        "test": None if v.test is None else _test(v.test),
+        "engine_figures": {e.label: _judgement(e) for e in v.per_engine},
+        "instants": {"total": len(v.classes), **v.counts()},
+        "timeline": v.timeline(),
+        "confidence": VERDICT_CONFIDENCE,
+        "marginal_range": list(MARGINAL),
+        "spread_percentile": SPREAD_PERCENTILE,
+    }
+
+
+def _interval(x: Interval) -> dict[str, Any]:
+    return {"value": x.value, "low": x.low, "high": x.high}
+
+
+def _judgement(e: EngineJudgement) -> dict[str, Any]:
+    return {
+        "label": e.label,
+        "size": e.size,
+        "spread": _interval(e.spread),
+        "spread_end": _interval(e.spread_end),
+        "spread_max": e.spread_max,
+        "largest_pair": e.largest_pair,
+        "other_to_nearest": e.other_to_nearest,
+        "own_error": e.own_error,
+        "gap_over_spread": e.gap_over_spread,
+        "gap_over_own_error": e.gap_over_own_error,
+        "horizons": [{"threshold": t, "time": h} for t, h in e.horizons],
+    }
+
+
+def _test(t: TwoSampleTest) -> dict[str, Any]:
+    return {
+        "name": t.name,
+        "statistic": t.statistic,
+        "p_value": t.p_value,
+        "alpha": ALPHA,
+        "resamples": t.resamples,
+        "exact": t.exact,
+        "sizes": list(t.sizes),
+    }
+
+
+def divergence_dict(d: Divergence) -> dict[str, Any]:
+    """``summary.json``'s ``cross`` and ``own.<engine>``: every headline figure of a diff."""
+    first = d.first_to_diverge()
+    return {
+        "a": d.a,
+        "b": d.b,
+        "subject": d.subject,
+        "duration": float(d.time[-1] - d.time[0]),
+        "samples": len(d.time),
+        "final": d.final,
+        "max": d.maximum,
+        "crossings": {
+            k: [{"threshold": thr, "time": t} for thr, t in v.items()]
+            for k, v in d.crossings.items()
+        },
+        "first_to_diverge": (
+            None
+            if first is None
+            else {"quantity": first[0], "threshold": first[1], "time": first[2]}
+        ),
+        "phases": [
+            {"name": p.name, "start": p.start, "end": p.end, "at_end": p.at_end, "max": p.max}
+            for p in d.phases
+        ],
+        "final_pose": d.final_pose,
+    }
+
+
+def parting_dict(p: Parting) -> dict[str, Any]:
+    """``summary.json``'s ``parting``."""
+    return {
+        "quantity": p.quantity,
+        "threshold": p.threshold,
+        "time": p.time,
+        "step": p.step,
+        "body": p.body,
+        "phase": p.phase,
+        "event": None if p.event is None else {"label": p.event_label, **p.event.to_dict()},
+        "relation": p.relation,
+        "since": p.since,
+        "ongoing": [{"label": label, **e.to_dict()} for label, e in p.ongoing],
+        "initial_contacts": dict(p.initial_contacts),
+    }
+
+
+def part_dict(p: Part) -> dict[str, Any]:
+    """One of ``summary.json``'s ``parts``."""
+    return {
+        "kind": p.kind,
+        "name": p.name,
+        "unit": p.unit,
+        "threshold": p.threshold,
+        "first": p.first,
+        "largest": p.largest,
+        "largest_at": p.largest_at,
+        "at_end": p.at_end,
+    }
+
+
+def outcome_stats_dict(s: OutcomeStats) -> dict[str, Any]:
+    """``summary.json``'s ``outcomes.engines.<engine>.<outcome>``."""
+    return {
+        "name": s.name,
+        "kind": s.kind,
+        "unit": s.unit,
+        "success": None if s.success is None else _success(s.success),
+        "value": None if s.value is None else _distribution(s.value),
+        "nominal": None if s.nominal is None else dict(s.nominal),
+        "runs": [dict(r) for r in s.records],
+    }
+
+
+def _success(r: SuccessRate) -> dict[str, Any]:
+    return {
+        "successes": r.successes,
+        "runs": r.runs,
+        "rate": r.rate,
+        "low": r.low,
+        "high": r.high,
+        "confidence": CONFIDENCE,
+        "method": INTERVAL_METHOD,
+    }
+
+
+def _distribution(d: Distribution) -> dict[str, Any]:
+    return {
+        "runs": d.runs,
+        "mean": d.mean,
+        "std": d.std,
+        "min": d.min,
+        "median": d.median,
+        "max": d.max,
+    }
 
 
 def _resync(r: Resync) -> dict[str, Any]:
@@ -239,7 +417,7 @@ def outcomes_summary(
     engines: dict[str, Any] = {}
     for label, runs in zip(labels, per_engine, strict=True):
         engines[label] = {
-            o.name: summarize(o, [r[o.name] for r in runs if o.name in r]).to_dict()
+            o.name: outcome_stats_dict(summarize(o, [r[o.name] for r in runs if o.name in r]))
             for o in scenario.outcomes
         }
     return {

@@ -9,6 +9,7 @@ import pytest
 from _synthetic import quat_x, quat_z, trajectory
 
 from simbridge.compare import QUANTITIES, diff
+from simbridge.compare.report.summary_json import divergence_dict
 from simbridge.compare.scenario import HEADLINE_QUANTITIES
 from simbridge.exceptions import SimbridgeError
 
@@ -158,7 +159,7 @@ def test_summary_dict_is_json_ready():
     import json
 
     d = diff(trajectory(), trajectory(position=ramp_x))
-    data = json.loads(json.dumps(d.to_dict()))
+    data = json.loads(json.dumps(divergence_dict(d)))
     assert data["final"]["base_distance"] == 2.0
     assert data["first_to_diverge"] == {
         "quantity": "base_distance",

@@ -14,6 +14,7 @@ from simbridge.compare.analysis.events import KINDS, EngineEvents, Event, find_e
 from simbridge.compare.analysis.parts import THRESHOLDS, rank_parts
 from simbridge.compare.report.events import event_words, parting_words
 from simbridge.compare.report.parts import parts_words
+from simbridge.compare.report.summary_json import part_dict, parting_dict
 from simbridge.compare.run.quantities import DEG, tilt_from
 
 DT = 0.01  # bridge: ceil(0.05 / 0.01) = 5 rows
@@ -210,7 +211,7 @@ def test_parting_names_the_recent_event_then_the_ongoing_one_then_the_last_one()
         figures={"max_force": 5.0, "duration": 0.01},
     )
     a, b = _engine("A", old, lost), _engine("B", air)
-    p = parting(1.25, 0.01, "base_distance", PHASES, [a, b], step=0.01).to_dict()
+    p = parting_dict(parting(1.25, 0.01, "base_distance", PHASES, [a, b], step=0.01))
     assert p["phase"] == "turn" and p["relation"] == "after"
     assert p["event"]["label"] == "A" and p["event"]["kind"] == "contact_lost"
     assert p["since"] == pytest.approx(0.05)
@@ -219,37 +220,40 @@ def test_parting_names_the_recent_event_then_the_ongoing_one_then_the_last_one()
         "during 'turn', 0.050 s after A's bot lost contact with plane at wheel"
     )
     # 0.3 s later the contact loss is no longer recent: the flight going on is named
-    p = parting(1.55, 0.01, "base_distance", PHASES, [a, b], step=0.01).to_dict()
+    p = parting_dict(parting(1.55, 0.01, "base_distance", PHASES, [a, b], step=0.01))
     assert p["relation"] == "during" and p["event"]["kind"] == "airborne"
     assert parting_words(p) == (
         "during 'turn', while B's bot left the ground (airborne for 2 s, from t = 0.500 s)"
     )
     # without the flight: the latest event, however old
-    p = parting(1.55, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
+    p = parting_dict(parting(1.55, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["relation"] == "after" and p["event"]["kind"] == "contact_lost"
     assert p["since"] == pytest.approx(0.35)
     # an event in the very step that parts them counts; one after it does not
-    p = parting(1.195, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
+    p = parting_dict(parting(1.195, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["event"]["kind"] == "contact_lost" and p["since"] < 0
     assert parting_words(p).startswith("during 'turn', in the same step as A's bot lost")
-    p = parting(1.0, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
+    p = parting_dict(parting(1.0, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["phase"] == "settle"  # at the boundary: the phase that led to it
     assert p["event"]["kind"] == "motor_saturated"
 
 
 def test_parting_never_and_before_any_event():
-    assert parting(None, 0.01, "base_distance", PHASES, [_engine("A")]).to_dict()["phase"] is None
     assert (
-        parting_words(parting(None, 0.01, "base_distance", PHASES, [_engine("A")]).to_dict()) == ""
+        parting_dict(parting(None, 0.01, "base_distance", PHASES, [_engine("A")]))["phase"] is None
+    )
+    assert (
+        parting_words(parting_dict(parting(None, 0.01, "base_distance", PHASES, [_engine("A")])))
+        == ""
     )
     e = _engine("A")
-    p = parting(0.5, 0.01, "base_distance", PHASES, [e]).to_dict()
+    p = parting_dict(parting(0.5, 0.01, "base_distance", PHASES, [e]))
     assert (
         p["event"] is None
         and parting_words(p) == "during 'settle', before any event of either engine"
     )
     e.initial_contacts = ["base", "wheel"]
-    p = parting(0.01, 0.01, "base_distance", PHASES, [e], step=0.01).to_dict()
+    p = parting_dict(parting(0.01, 0.01, "base_distance", PHASES, [e], step=0.01))
     assert p["initial_contacts"] == {"A": ["base", "wheel"]}
     assert parting_words(p) == (
         "during 'settle', in the first step, with bot touching something from its first step "
@@ -312,7 +316,7 @@ def test_parts_ranked_by_when_and_how_far():
     assert base.largest_at == pytest.approx(1.0) and base.at_end == pytest.approx(0.2)
     assert base.threshold == THRESHOLDS["m"] == 0.01 and base.unit == "m"
     assert (j1.name, j1.first, j1.largest) == ("j1", pytest.approx(0.5), pytest.approx(3 * DEG))
-    words = parts_words([p.to_dict() for p in parts])
+    words = parts_words([part_dict(p) for p in parts])
     assert words.startswith("The first part to come apart is ")
     assert words.endswith("(of 4 joints and links).")
 
@@ -328,7 +332,7 @@ def test_parts_that_never_part_rank_by_their_gap_over_the_threshold():
     parts = rank_parts(diff(a, b))
     assert [p.name for p in parts] == ["j0", "base", "l0", "j1"]  # 0.5, 0.2, 0.2, 0.1
     assert all(p.first is None for p in parts)
-    assert parts_words([p.to_dict() for p in parts]) == (
+    assert parts_words([part_dict(p) for p in parts]) == (
         "No joint or link comes 1° or 1 cm apart; the nearest to it is joint `j0` "
         "(largest gap 0.5° at t = 0.000 s)."
     )
