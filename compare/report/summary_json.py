@@ -6,6 +6,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
 from ..analysis.diff import QUANTITIES, Divergence
 from ..analysis.events import Parting, engine_events, parting
 from ..analysis.outcomes import (
@@ -28,8 +30,8 @@ from ..analysis.verdict import (
 from ..analysis.verdict import CONFIDENCE as VERDICT_CONFIDENCE
 from ..pipeline import Comparison, Pair
 from ..run.ensemble import SPREAD_PERCENTILE
-from ..run.events import EngineEvents
-from ..run.resync import Resync
+from ..run.events import EngineEvents, Event
+from ..run.resync import BORN_FACTOR, PARTS, Direction, Peak, PhaseErrors, Resync
 from ..scenario import Scenario, format_timestep
 from .departures import applicable
 from .events import event_words
@@ -43,6 +45,9 @@ __all__ = [
     "part_dict",
     "outcome_stats_dict",
     "outcomes_summary",
+    "event_dict",
+    "engine_events_dict",
+    "resync_dict",
 ]
 
 
@@ -93,9 +98,9 @@ def summary(c: Comparison) -> dict[str, Any]:
         "sweep": sweep,
         "verdict": first["verdict"],
         "ensemble": _ensemble_summary(c),
-        "resync": None if c.resync is None else _resync(c.resync),
+        "resync": None if c.resync is None else resync_dict(c.resync),
         "outcomes": _outcomes_summary(c),
-        "events": {e.label: e.to_dict() for e in events},
+        "events": {e.label: engine_events_dict(e) for e in events},
         "parting": first["parting"],
         "parts": first["parts"],
         "departures": applicable(c, events),
@@ -335,10 +340,10 @@ def parting_dict(p: Parting) -> dict[str, Any]:
         "step": p.step,
         "body": p.body,
         "phase": p.phase,
-        "event": None if p.event is None else {"label": p.event_label, **p.event.to_dict()},
+        "event": None if p.event is None else {"label": p.event_label, **event_dict(p.event)},
         "relation": p.relation,
         "since": p.since,
-        "ongoing": [{"label": label, **e.to_dict()} for label, e in p.ongoing],
+        "ongoing": [{"label": label, **event_dict(e)} for label, e in p.ongoing],
         "initial_contacts": dict(p.initial_contacts),
     }
 
@@ -393,12 +398,118 @@ def _distribution(d: Distribution) -> dict[str, Any]:
     }
 
 
-def _resync(r: Resync) -> dict[str, Any]:
-    out = r.to_dict()
-    for d in out["directions"]:
-        for w in d["worst"]:
-            w["events"] = [{**e, "words": event_words(e, d["source"])} for e in w["events"]]
-    return out
+def event_dict(e: Event) -> dict[str, Any]:
+    """One event as ``summary.json`` holds it (``events.<engine>.events``, ``parting``)."""
+    return {
+        "kind": e.kind,
+        "time": e.time,
+        "end": e.end,
+        "phase": e.phase,
+        "body": e.body,
+        "part": e.part,
+        "others": list(e.others),
+        "side": e.side,
+        "figures": dict(e.figures),
+    }
+
+
+def engine_events_dict(e: EngineEvents, limit: int = 500) -> dict[str, Any]:
+    """``summary.json``'s ``events.<engine>``: at most ``limit`` events listed (the first
+    ones), ``total`` counts all."""
+    return {
+        "body": e.body,
+        "up": [float(v) for v in e.up],
+        "spawn_orientation": [float(v) for v in e.spawn],
+        "contacts_recorded": e.has_contacts,
+        "initial_contacts": list(e.initial_contacts),
+        "initial_limits": [
+            {"joint": x.joint, "side": x.side, "end": x.end} for x in e.initial_limits
+        ],
+        "counts": e.counts(),
+        "total": len(e.events),
+        "events": [event_dict(x) for x in e.events[:limit]],
+    }
+
+
+def resync_dict(r: Resync) -> dict[str, Any]:
+    """``summary.json``'s ``resync`` (docs/compare.md describes every field)."""
+    dirs = [_direction(d) for d in r.directions]
+    floors = {d["source"]: d["floor_max"]["value"] for d in dirs}
+    largest = max(dirs, key=lambda d: -1.0 if d["max"]["value"] is None else d["max"]["value"])
+    born = r.born()
+    return {
+        "every": r.every,
+        "quantity": r.quantity,
+        "unit": r.unit,
+        "precision_floor": r.precision_floor,
+        "significant": r.significant,
+        "born_factor": BORN_FACTOR,
+        "largest": {
+            "value": largest["max"]["value"],
+            "source": largest["source"],
+            "target": largest["target"],
+            "time": largest["max"]["time"],
+            "phase": largest["max"]["phase"],
+        },
+        "floors": floors,
+        "born": None if born is None else dict(vars(born)),
+        "directions": dirs,
+        "wall_time": r.wall_time,
+    }
+
+
+def _direction(d: Direction) -> dict[str, Any]:
+    def med(v: Any) -> float | None:
+        return float(np.nanmedian(v)) if np.isfinite(v).any() else None
+
+    return {
+        "source": d.source,
+        "target": d.target,
+        "points": len(d.rows),
+        "failed": d.failed,
+        "max": _peak(d.peak(d.error)),
+        "median": med(d.error),
+        "floor_max": _peak(d.peak(d.floor)),
+        "floor_median": med(d.floor),
+        "parts": {
+            k: {
+                "unit": PARTS[k][1],
+                "max": d.peak(d.parts[k]).value,
+                "floor_max": d.peak(d.floor_parts[k]).value,
+            }
+            for k in PARTS
+        },
+        "phases": [_phase_errors(p) for p in d.by_phase()],
+        "worst": [
+            {
+                "time": w.time,
+                "row": w.row,
+                "phase": w.phase,
+                "error": w.error,
+                "floor": w.floor,
+                "parts": dict(w.parts),
+                "events": [
+                    {**e, "words": event_words(e, d.source)} for e in map(event_dict, w.events)
+                ],
+            }
+            for w in d.worst
+        ],
+    }
+
+
+def _peak(p: Peak) -> dict[str, Any]:
+    return {"value": p.value, "time": p.time, "phase": p.phase}
+
+
+def _phase_errors(p: PhaseErrors) -> dict[str, Any]:
+    return {
+        "phase": p.phase,
+        "points": p.points,
+        "median": p.median,
+        "max": p.max,
+        "floor_median": p.floor_median,
+        "floor_max": p.floor_max,
+    }
 
 
 def outcomes_summary(

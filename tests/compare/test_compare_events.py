@@ -14,7 +14,7 @@ from simbridge.compare.analysis.events import KINDS, EngineEvents, Event, find_e
 from simbridge.compare.analysis.parts import THRESHOLDS, rank_parts
 from simbridge.compare.report.events import event_words, parting_words
 from simbridge.compare.report.parts import parts_words
-from simbridge.compare.report.summary_json import part_dict, parting_dict
+from simbridge.compare.report.summary_json import event_dict, part_dict, parting_dict
 from simbridge.compare.run.quantities import DEG, tilt_from
 
 DT = 0.01  # bridge: ceil(0.05 / 0.01) = 5 rows
@@ -74,8 +74,8 @@ def test_contact_airborne_peak_and_chatter_events():
     assert chatter.figures == {"losses": 3.0, "duration": pytest.approx(0.05)}
     assert [x.phase for x in e.events] == ["all"] * 5
     assert e.counts()["contact_made"] == 1 and sum(e.counts().values()) == 5
-    assert event_words(lost.to_dict(), "A") == "A's bot lost contact with ground at l0"
-    assert event_words(made.to_dict(), "A") == "A's bot touched ground with l0"
+    assert event_words(event_dict(lost), "A") == "A's bot lost contact with ground at l0"
+    assert event_words(event_dict(made), "A") == "A's bot touched ground with l0"
 
 
 def test_a_robot_that_never_touches_is_not_airborne_and_no_record_no_contact_event():
@@ -149,7 +149,8 @@ def test_joint_limit_events_and_a_joint_resting_at_its_limit_from_the_start():
     tr = trajectory(dt=DT, steps=60, q=q)
     tr.body.joint_limits = np.array([[-1.0, 1.0], [np.nan, np.nan]])  # j1: no limit
     e = find_events(tr)
-    assert e.initial_limits == [{"joint": "j0", "side": "lower", "end": pytest.approx(0.05)}]
+    (start,) = e.initial_limits
+    assert (start.joint, start.side, start.end) == ("j0", "lower", pytest.approx(0.05))
     (hit,) = e.events
     # -1 + 10 (t - 0.05) >= 1 - 1e-3 first at t = 0.2499 -> row 25
     assert (hit.kind, hit.part, hit.side, hit.row) == ("joint_limit", "j0", "upper", 25)
@@ -176,7 +177,7 @@ def test_motor_saturated_at_max_force():
     assert (sat.kind, sat.part, sat.row) == ("motor_saturated", "j1", 20)
     assert sat.end == pytest.approx(0.29)
     assert sat.figures == {"max_force": 10.0, "duration": pytest.approx(0.10)}
-    assert "j1 motor saturated at its max_force 10" in event_words(sat.to_dict(), "A")
+    assert "j1 motor saturated at its max_force 10" in event_words(event_dict(sat), "A")
 
 
 # ---------------------------------------------------------------- parting
@@ -284,7 +285,7 @@ def test_every_kind_has_words():
                 "losses": 3,
             },
         )
-        assert not event_words(e.to_dict(), "A").endswith(kind)
+        assert not event_words(event_dict(e), "A").endswith(kind)
 
 
 # ---------------------------------------------------------------- ranking
