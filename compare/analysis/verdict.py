@@ -58,6 +58,7 @@ __all__ = [
     "EngineJudgement",
     "TwoSampleTest",
     "Verdict",
+    "Segment",
     "judge",
     "precision_floor",
     "energy_test",
@@ -91,6 +92,17 @@ class Marginal:
     what: str
     ratio: float
     label: str | None = None
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A stretch of the run over which the per-instant class stays the same
+    (:meth:`Verdict.timeline`)."""
+
+    verdict: str  # the class of its instants, one of VERDICTS
+    start: float  # s, its first instant
+    end: float  # s, its last instant
+    instants: int  # how many
 
 
 @dataclass
@@ -171,21 +183,20 @@ class Verdict:
         """How many instants fall in each class (:data:`VERDICTS`)."""
         return {k: int(np.sum(self.classes == v)) for k, v in _CODES.items()}
 
-    def timeline(self) -> list[dict[str, Any]]:
-        """The run cut where the per-instant class changes: ``{"class", "start", "end"}``
-        (``end`` is the last instant of the segment)."""
+    def timeline(self) -> list[Segment]:
+        """The run cut where the per-instant class changes."""
         names = {v: k for k, v in _CODES.items()}
-        out: list[dict[str, Any]] = []
+        out: list[Segment] = []
         start = 0
         for i in range(1, len(self.classes) + 1):
             if i == len(self.classes) or self.classes[i] != self.classes[start]:
                 out.append(
-                    {
-                        "class": names[int(self.classes[start])],
-                        "start": float(self.time[start]),
-                        "end": float(self.time[i - 1]),
-                        "instants": i - start,
-                    }
+                    Segment(
+                        verdict=names[int(self.classes[start])],
+                        start=float(self.time[start]),
+                        end=float(self.time[i - 1]),
+                        instants=i - start,
+                    )
                 )
                 start = i
         return out

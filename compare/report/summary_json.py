@@ -264,7 +264,10 @@ def verdict_dict(v: Verdict) -> dict[str, Any]:
         "test": None if v.test is None else _test(v.test),
         "engine_figures": {e.label: _judgement(e) for e in v.per_engine},
         "instants": {"total": len(v.classes), **v.counts()},
-        "timeline": v.timeline(),
+        "timeline": [
+            {"class": s.verdict, "start": s.start, "end": s.end, "instants": s.instants}
+            for s in v.timeline()
+        ],
         "confidence": VERDICT_CONFIDENCE,
         "marginal_range": list(MARGINAL),
         "spread_percentile": SPREAD_PERCENTILE,
@@ -327,7 +330,7 @@ def divergence_dict(d: Divergence) -> dict[str, Any]:
             {"name": p.name, "start": p.start, "end": p.end, "at_end": p.at_end, "max": p.max}
             for p in d.phases
         ],
-        "final_pose": d.final_pose,
+        "final_pose": {k: dict(vars(p)) for k, p in d.final_pose.items()},
     }
 
 

@@ -127,8 +127,8 @@ def test_a_y_up_robot_turning_in_place_never_tips_over():
     assert np.abs(tilt_from(tr.body.base_orientation, tr.body.base_orientation[0])).max() < 1e-7
     assert find_events(tr).events == []
     d = diff(tr, tr)
-    assert d.final_pose["a"]["tilt"] == pytest.approx(90 * DEG)  # from world z: on its side
-    assert d.final_pose["a"]["tilt_from_spawn"] == pytest.approx(0.0, abs=1e-7)
+    assert d.final_pose["a"].tilt == pytest.approx(90 * DEG)  # from world z: on its side
+    assert d.final_pose["a"].tilt_from_spawn == pytest.approx(0.0, abs=1e-7)
 
 
 def test_tilt_follows_gravity_not_z():
