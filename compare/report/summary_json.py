@@ -197,9 +197,9 @@ def _outcomes_summary(c: Comparison) -> dict[str, Any] | None:
 
 
 def _ensemble_summary(c: Comparison) -> dict[str, Any] | None:
-    if not c.ensembles:
-        return None
     s = c.ensemble_settings
+    if not c.ensembles or s is None:
+        return None
     judged = {}  # slot -> its figures in the first pair that holds it
     for p in reversed(_pairs_of(c)):
         if p.verdict is not None:
@@ -217,13 +217,13 @@ def _ensemble_summary(c: Comparison) -> dict[str, Any] | None:
             "wall_time": e.wall_time,
         }
     return {
-        "size": s["size"],
-        "perturbation": {"position": s["perturb"][0], "orientation": s["perturb"][1]},
-        "seed": s["seed"],
-        "workers": s["workers"],
+        "size": s.size,
+        "perturbation": {"position": s.perturb[0], "orientation": s.perturb[1]},
+        "seed": s.seed,
+        "workers": s.workers,
         "quantity": c.ensembles[0].quantity,
         "instants": len(c.ensembles[0].time),
-        "wall_time": s.get("wall_time", 0.0),
+        "wall_time": s.wall_time,
         "engines": engines,
     }
 

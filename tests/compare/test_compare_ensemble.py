@@ -227,7 +227,7 @@ def test_a_script_read_from_stdin_runs_its_members_in_process():
     script = (
         "from simbridge.compare import compare\n"
         "c = compare('pendulum', ['pybullet', 'pybullet'], ensemble=3, duration=0.1)\n"
-        "print(c.verdict.verdict, c.ensemble_settings['workers'], c.ensembles[0].size)\n"
+        "print(c.verdict.verdict, c.ensemble_settings.workers, c.ensembles[0].size)\n"
     )
     done = subprocess.run(
         [sys.executable, "-"], input=script, capture_output=True, text=True, timeout=300
