@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from simbridge.compare.report.fmt import fmt_time, fmt_value
+from simbridge.compare.report.summary_json import resync_dict
 from simbridge.compare.run.resync import resync
 from simbridge.compare.scenario import list_scenarios, load_scenario
 
@@ -41,7 +42,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     print("|---|---|---|---|---|---|---|---|")
     for sc in scenarios:
         r = resync(sc, args.backends, every=args.every)
-        s = r.to_dict()
+        s = resync_dict(r)
         unit = s["unit"]
         for d in s["directions"]:
             big = d["max"]

@@ -27,10 +27,21 @@ from .run.resync import resync as one_step_resync
 from .run.trajectory import Trajectory, run
 from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
 
-__all__ = ["Comparison", "Pair", "compare", "ProgressCallback"]
+__all__ = ["Comparison", "Pair", "EnsembleSettings", "compare", "ProgressCallback"]
 
 ProgressCallback = Callable[[str, int, int], None]
 """progress(what, steps_done_overall, steps_total_overall)."""
+
+
+@dataclass(frozen=True)
+class EnsembleSettings:
+    """How the ensembles of a comparison were run."""
+
+    size: int  # runs per engine, the nominal one included
+    perturb: tuple[float, float]  # largest perturbation of the spawn: position m, orientation rad
+    seed: int
+    workers: int  # worker processes (0: in this process)
+    wall_time: float = 0.0  # s, every engine's ensemble
 
 
 @dataclass
@@ -71,8 +82,8 @@ class Comparison:
     resync: Resync | None = None
     """The one-step error from each other's states and each engine's floor, between the first
     pair's engines (:mod:`simbridge.compare.run.resync`); None with ``resync_every=0``."""
-    ensemble_settings: dict[str, Any] = field(default_factory=dict)
-    """size, perturbation (position m, orientation rad), seed, workers, wall_time (s)."""
+    ensemble_settings: EnsembleSettings | None = None
+    """How the ensembles were run (None in a Comparison made by hand)."""
     pairs: list[Pair] = field(default_factory=list)
     """Every pair of engines, in order; the first is (0, 1), whose ``cross`` and ``verdict``
     these are."""
@@ -316,13 +327,13 @@ def compare(
         ensembles=ensembles,
         verdict=pairs[0].verdict,
         resync=resynced,
-        ensemble_settings={
-            "size": runner.size,
-            "perturb": runner.eps,
-            "seed": runner.seed,
-            "workers": runner.workers,
-            "wall_time": runner.wall_time,
-        },
+        ensemble_settings=EnsembleSettings(
+            size=runner.size,
+            perturb=runner.eps,
+            seed=runner.seed,
+            workers=runner.workers,
+            wall_time=runner.wall_time,
+        ),
         pairs=pairs,
     )
 

@@ -18,7 +18,6 @@ A threshold is crossed at the first recorded instant whose value is ``>=`` the t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -92,6 +91,20 @@ def _resample_quat(t_src: np.ndarray, q: np.ndarray, t: np.ndarray) -> np.ndarra
 # ---------------------------------------------------------------- result
 
 
+@dataclass(frozen=True)
+class FinalPose:
+    """One run's subject at the last compared instant (SI units)."""
+
+    position: list[float]  # m, the base
+    orientation: list[float]  # the base's quaternion (x, y, z, w)
+    yaw: float  # rad, heading about the world's z
+    tilt: float  # rad, from the world's z
+    tilt_from_spawn: float  # rad, from its spawn orientation, about the world's up
+    joint_names: list[str]
+    joint_positions: list[float]  # rad or m
+    joint_velocities: list[float]  # rad/s or m/s
+
+
 @dataclass
 class PhaseRow:
     """One phase of the timeline: the quantities at its end and their largest value in it."""
@@ -117,7 +130,7 @@ class Divergence:
     series: dict[str, np.ndarray]  # quantity -> (T,)
     crossings: dict[str, dict[float, float | None]]
     phases: list[PhaseRow]
-    final_pose: dict[str, dict[str, Any]]  # "a"/"b" -> position, yaw, tilt, joints...
+    final_pose: dict[str, FinalPose]  # "a" and "b": each run's subject at the last instant
     path_a: np.ndarray = field(repr=False, default_factory=lambda: np.empty((0, 3)))
     path_b: np.ndarray = field(repr=False, default_factory=lambda: np.empty((0, 3)))
     joint_names: list[str] = field(default_factory=list)
@@ -157,51 +170,24 @@ class Divergence:
                 best = (key, q.thresholds[0], t)
         return best
 
-    def to_dict(self) -> dict[str, Any]:
-        """Every headline figure, JSON-ready (SI units: m, rad, s)."""
-        first = self.first_to_diverge()
-        return {
-            "a": self.a,
-            "b": self.b,
-            "subject": self.subject,
-            "duration": float(self.time[-1] - self.time[0]),
-            "samples": len(self.time),
-            "final": self.final,
-            "max": self.maximum,
-            "crossings": {
-                k: [{"threshold": thr, "time": t} for thr, t in v.items()]
-                for k, v in self.crossings.items()
-            },
-            "first_to_diverge": (
-                None
-                if first is None
-                else {"quantity": first[0], "threshold": first[1], "time": first[2]}
-            ),
-            "phases": [
-                {"name": p.name, "start": p.start, "end": p.end, "at_end": p.at_end, "max": p.max}
-                for p in self.phases
-            ],
-            "final_pose": self.final_pose,
-        }
-
 
 def _crossing(time: np.ndarray, values: np.ndarray, threshold: float) -> float | None:
     hit = np.flatnonzero(values >= threshold)
     return float(time[hit[0]]) if hit.size else None
 
 
-def _pose(body: BodyTrajectory, row: int, up: np.ndarray) -> dict[str, Any]:
+def _pose(body: BodyTrajectory, row: int, up: np.ndarray) -> FinalPose:
     q = body.base_orientation[row]
-    return {
-        "position": [float(v) for v in body.base_position[row]],
-        "orientation": [float(v) for v in q],
-        "yaw": float(yaw(q)),
-        "tilt": float(tilt(q)),
-        "tilt_from_spawn": float(tilt_from(q, body.base_orientation[0], up)),
-        "joint_names": list(body.joint_names),
-        "joint_positions": [float(v) for v in body.joint_positions[row]],
-        "joint_velocities": [float(v) for v in body.joint_velocities[row]],
-    }
+    return FinalPose(
+        position=[float(v) for v in body.base_position[row]],
+        orientation=[float(v) for v in q],
+        yaw=float(yaw(q)),
+        tilt=float(tilt(q)),
+        tilt_from_spawn=float(tilt_from(q, body.base_orientation[0], up)),
+        joint_names=list(body.joint_names),
+        joint_positions=[float(v) for v in body.joint_positions[row]],
+        joint_velocities=[float(v) for v in body.joint_velocities[row]],
+    )
 
 
 def diff(a: Trajectory, b: Trajectory) -> Divergence:

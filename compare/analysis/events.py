@@ -5,7 +5,7 @@ event the gap between two engines first crossed its threshold after (:func:`part
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..run.events import (
     INTERVAL_KINDS,
@@ -51,7 +51,8 @@ class Parting:
     before ``time`` it began (negative: in the same step, just after); ``ongoing`` every
     interval event going on at ``time``, with its engine's label; ``initial_contacts`` per
     engine label, the links touching from the first step (only when no event came before).
-    :meth:`to_dict` is ``summary.json``'s ``parting``."""
+    :func:`simbridge.compare.report.summary_json.parting_dict` is ``summary.json``'s
+    ``parting``."""
 
     quantity: str
     threshold: float
@@ -65,23 +66,6 @@ class Parting:
     since: float | None = None
     ongoing: list[tuple[str, Event]] = field(default_factory=list)
     initial_contacts: dict[str, list[str]] = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "quantity": self.quantity,
-            "threshold": self.threshold,
-            "time": self.time,
-            "step": self.step,
-            "body": self.body,
-            "phase": self.phase,
-            "event": (
-                None if self.event is None else {"label": self.event_label, **self.event.to_dict()}
-            ),
-            "relation": self.relation,
-            "since": self.since,
-            "ongoing": [{"label": label, **e.to_dict()} for label, e in self.ongoing],
-            "initial_contacts": dict(self.initial_contacts),
-        }
 
 
 def parting(

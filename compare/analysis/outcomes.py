@@ -58,17 +58,6 @@ class SuccessRate:
     def rate(self) -> float:
         return self.successes / self.runs
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "successes": self.successes,
-            "runs": self.runs,
-            "rate": self.rate,
-            "low": self.low,
-            "high": self.high,
-            "confidence": CONFIDENCE,
-            "method": INTERVAL_METHOD,
-        }
-
 
 @dataclass(frozen=True)
 class Distribution:
@@ -80,16 +69,6 @@ class Distribution:
     min: float
     median: float
     max: float
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "runs": self.runs,
-            "mean": self.mean,
-            "std": self.std,
-            "min": self.min,
-            "median": self.median,
-            "max": self.max,
-        }
 
 
 @dataclass(frozen=True)
@@ -108,18 +87,6 @@ class OutcomeStats:
     @property
     def nominal(self) -> dict[str, Any] | None:
         return self.records[0] if self.records else None
-
-    def to_dict(self) -> dict[str, Any]:
-        """``summary.json``'s ``outcomes.engines.<engine>.<outcome>``."""
-        return {
-            "name": self.name,
-            "kind": self.kind,
-            "unit": self.unit,
-            "success": None if self.success is None else self.success.to_dict(),
-            "value": None if self.value is None else self.value.to_dict(),
-            "nominal": None if self.nominal is None else dict(self.nominal),
-            "runs": [dict(r) for r in self.records],
-        }
 
 
 def _distribution(values: Sequence[float]) -> Distribution | None:

@@ -11,7 +11,6 @@ first); then the others, the largest gap relative to the threshold first.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -42,18 +41,6 @@ class Part:
     def ratio(self) -> float:
         """The largest gap over the threshold."""
         return self.largest / self.threshold
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "kind": self.kind,
-            "name": self.name,
-            "unit": self.unit,
-            "threshold": self.threshold,
-            "first": self.first,
-            "largest": self.largest,
-            "largest_at": self.largest_at,
-            "at_end": self.at_end,
-        }
 
 
 def _part(kind: str, name: str, unit: str, time: np.ndarray, gap: np.ndarray) -> Part:

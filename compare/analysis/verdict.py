@@ -58,6 +58,7 @@ __all__ = [
     "EngineJudgement",
     "TwoSampleTest",
     "Verdict",
+    "Segment",
     "judge",
     "precision_floor",
     "energy_test",
@@ -93,6 +94,17 @@ class Marginal:
     label: str | None = None
 
 
+@dataclass(frozen=True)
+class Segment:
+    """A stretch of the run over which the per-instant class stays the same
+    (:meth:`Verdict.timeline`)."""
+
+    verdict: str  # the class of its instants, one of VERDICTS
+    start: float  # s, its first instant
+    end: float  # s, its last instant
+    instants: int  # how many
+
+
 @dataclass
 class Interval:
     """A figure and its bootstrap interval (``low``, ``high``: None when there is none, as
@@ -101,9 +113,6 @@ class Interval:
     value: float
     low: float | None = None
     high: float | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"value": self.value, "low": self.low, "high": self.high}
 
 
 @dataclass
@@ -123,21 +132,6 @@ class EngineJudgement:
     gap_over_own_error: float  # gap / max(own error, floor)
     horizons: list[tuple[float, float | None]]  # (threshold, first time the spread reaches it)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "label": self.label,
-            "size": self.size,
-            "spread": self.spread.to_dict(),
-            "spread_end": self.spread_end.to_dict(),
-            "spread_max": self.spread_max,
-            "largest_pair": self.largest_pair,
-            "other_to_nearest": self.other_to_nearest,
-            "own_error": self.own_error,
-            "gap_over_spread": self.gap_over_spread,
-            "gap_over_own_error": self.gap_over_own_error,
-            "horizons": [{"threshold": t, "time": h} for t, h in self.horizons],
-        }
-
 
 @dataclass
 class TwoSampleTest:
@@ -151,21 +145,11 @@ class TwoSampleTest:
     sizes: tuple[int, int]
     name: str = "energy-distance permutation test"
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "statistic": self.statistic,
-            "p_value": self.p_value,
-            "alpha": ALPHA,
-            "resamples": self.resamples,
-            "exact": self.exact,
-            "sizes": list(self.sizes),
-        }
-
 
 @dataclass
 class Verdict:
-    """The judgement of a comparison; :meth:`to_dict` is ``summary.json``'s ``verdict``."""
+    """The judgement of a comparison (``summary.json``'s ``verdict``:
+    :func:`simbridge.compare.report.summary_json.verdict_dict`)."""
 
     verdict: str  # one of VERDICTS
     engines: list[str]  # chaotic: whose spread covers the gap; unresolved: whose own error does
@@ -195,51 +179,27 @@ class Verdict:
     def judged_time(self) -> float:
         return float(self.time[self.judged_index])
 
-    def timeline(self) -> list[dict[str, Any]]:
-        """The run cut where the per-instant class changes: ``{"class", "start", "end"}``
-        (``end`` is the last instant of the segment)."""
+    def counts(self) -> dict[str, int]:
+        """How many instants fall in each class (:data:`VERDICTS`)."""
+        return {k: int(np.sum(self.classes == v)) for k, v in _CODES.items()}
+
+    def timeline(self) -> list[Segment]:
+        """The run cut where the per-instant class changes."""
         names = {v: k for k, v in _CODES.items()}
-        out: list[dict[str, Any]] = []
+        out: list[Segment] = []
         start = 0
         for i in range(1, len(self.classes) + 1):
             if i == len(self.classes) or self.classes[i] != self.classes[start]:
                 out.append(
-                    {
-                        "class": names[int(self.classes[start])],
-                        "start": float(self.time[start]),
-                        "end": float(self.time[i - 1]),
-                        "instants": i - start,
-                    }
+                    Segment(
+                        verdict=names[int(self.classes[start])],
+                        start=float(self.time[start]),
+                        end=float(self.time[i - 1]),
+                        instants=i - start,
+                    )
                 )
                 start = i
         return out
-
-    def to_dict(self) -> dict[str, Any]:
-        counts = {k: int(np.sum(self.classes == v)) for k, v in _CODES.items()}
-        return {
-            "verdict": self.verdict,
-            "engines": list(self.engines),
-            "reason": self.reason,
-            "marginal": self.marginal,
-            "marginal_reasons": [vars(m) for m in self.marginal_reasons],
-            "quantity": self.quantity,
-            "unit": self.unit,
-            "tolerance": self.tolerance,
-            "floor": self.floor,
-            "labels": list(self.labels),
-            "judged_at": {"time": self.judged_time, "why": self.judged_at},
-            "gap": self.gap.to_dict(),
-            "gap_end": self.gap_end.to_dict(),
-            "nominal_gap": self.nominal_gap,
-            "max_gap": {"value": self.max_gap[0], "time": self.max_gap[1]},
-            "test": None if self.test is None else self.test.to_dict(),
-            "engine_figures": {e.label: e.to_dict() for e in self.per_engine},
-            "instants": {"total": len(self.classes), **counts},
-            "timeline": self.timeline(),
-            "confidence": CONFIDENCE,
-            "marginal_range": list(MARGINAL),
-            "spread_percentile": SPREAD_PERCENTILE,
-        }
 
 
 # ---------------------------------------------------------------- statistics

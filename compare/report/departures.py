@@ -182,8 +182,7 @@ def _judge(
             words: list[str] = []
             if e.initial_limits:
                 words.append(
-                    "from the start "
-                    + ", ".join(f"{x['joint']} ({x['side']})" for x in e.initial_limits)
+                    "from the start " + ", ".join(f"{x.joint} ({x.side})" for x in e.initial_limits)
                 )
             if reached:
                 first = reached[0]

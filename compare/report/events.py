@@ -13,7 +13,8 @@ __all__ = ["event_words", "parting_words", "with_start"]
 
 
 def event_words(e: dict[str, Any], label: str) -> str:
-    """An event's dict (:meth:`Event.to_dict`, as ``summary.json`` holds it) in words."""
+    """An event's dict (as ``summary.json`` holds it:
+    :func:`~simbridge.compare.report.summary_json.event_dict`) in words."""
     who = f"{label}'s {e['body']}"
     others = " and ".join(e["others"]) if e["others"] else "another of its own links"
     f = e["figures"]

@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..analysis.diff import DEG, QUANTITIES
+from ..analysis.diff import DEG, QUANTITIES, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
@@ -240,21 +240,21 @@ def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: l
         return "(" + ", ".join(f"{x:.4f}" for x in v) + ")"
 
     rows = [
-        ["base position (m)", xyz(pa["position"]), xyz(pb["position"])],
-        ["base orientation (x, y, z, w)", xyz(pa["orientation"]), xyz(pb["orientation"])],
-        ["heading (yaw)", f"{pa['yaw'] / DEG:.2f}°", f"{pb['yaw'] / DEG:.2f}°"],
+        ["base position (m)", xyz(pa.position), xyz(pb.position)],
+        ["base orientation (x, y, z, w)", xyz(pa.orientation), xyz(pb.orientation)],
+        ["heading (yaw)", f"{pa.yaw / DEG:.2f}°", f"{pb.yaw / DEG:.2f}°"],
         [
             "tilt from its spawn orientation",
             _tilt_cell(pa),
             _tilt_cell(pb),
         ],
     ]
-    for j, name in enumerate(pa["joint_names"]):
+    for j, name in enumerate(pa.joint_names):
         rows.append(
             [
                 f"joint `{name}`: position, velocity",
-                f"{pa['joint_positions'][j]:.4g}, {pa['joint_velocities'][j]:.4g}",
-                f"{pb['joint_positions'][j]:.4g}, {pb['joint_velocities'][j]:.4g}",
+                f"{pa.joint_positions[j]:.4g}, {pa.joint_velocities[j]:.4g}",
+                f"{pb.joint_positions[j]:.4g}, {pb.joint_velocities[j]:.4g}",
             ]
         )
     lines += _table([f"at t = {cross.time[-1]:.3f} s", a, b], rows)
@@ -373,8 +373,8 @@ def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: l
     return "\n".join(lines)
 
 
-def _tilt_cell(pose: dict[str, Any]) -> str:
-    t = pose.get("tilt_from_spawn", pose["tilt"])
+def _tilt_cell(pose: FinalPose) -> str:
+    t = pose.tilt_from_spawn
     return f"{t / DEG:.1f}°" + (" (tipped over)" if t > TIP_ANGLE else "")
 
 

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -44,6 +44,7 @@ from .quantities import DEG, tilt_from, up_of
 from .trajectory import BodyTrajectory, Trajectory
 
 __all__ = [
+    "LimitAtStart",
     "KINDS",
     "BRIDGE",
     "TIP_ANGLE",
@@ -116,18 +117,14 @@ class Event:
     side: str | None = None
     figures: dict[str, float] = field(default_factory=dict)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "kind": self.kind,
-            "time": self.time,
-            "end": self.end,
-            "phase": self.phase,
-            "body": self.body,
-            "part": self.part,
-            "others": list(self.others),
-            "side": self.side,
-            "figures": dict(self.figures),
-        }
+
+class LimitAtStart(NamedTuple):
+    """A joint at one of its limits from the first step (not an event:
+    :attr:`EngineEvents.initial_limits`)."""
+
+    joint: str
+    side: str  # "lower" or "upper"
+    end: float | None  # s, the last instant it held (None: to the end of the run)
 
 
 @dataclass
@@ -146,24 +143,10 @@ class EngineEvents:
     initial_contacts: list[str]
     has_contacts: bool
     """Whether contacts were recorded at all (False for a trajectory recorded without them)."""
-    initial_limits: list[dict[str, Any]] = field(default_factory=list)
+    initial_limits: list[LimitAtStart] = field(default_factory=list)
 
     def counts(self) -> dict[str, int]:
         return {k: sum(e.kind == k for e in self.events) for k in KINDS}
-
-    def to_dict(self, limit: int = 500) -> dict[str, Any]:
-        """JSON-ready; at most ``limit`` events listed (the first ones), ``total`` counts all."""
-        return {
-            "body": self.body,
-            "up": [float(v) for v in self.up],
-            "spawn_orientation": [float(v) for v in self.spawn],
-            "contacts_recorded": self.has_contacts,
-            "initial_contacts": list(self.initial_contacts),
-            "initial_limits": list(self.initial_limits),
-            "counts": self.counts(),
-            "total": len(self.events),
-            "events": [e.to_dict() for e in self.events[:limit]],
-        }
 
 
 # ---------------------------------------------------------------- helpers
@@ -367,8 +350,8 @@ def _airborne_events(
 
 def _limit_events(
     b: BodyTrajectory, bridge: int, ev: Any, end_of: Any, out: list[Event]
-) -> list[dict[str, Any]]:
-    initial: list[dict[str, Any]] = []
+) -> list[LimitAtStart]:
+    initial: list[LimitAtStart] = []
     if b.joint_limits is None:
         return initial
     q = b.joint_positions
@@ -380,7 +363,7 @@ def _limit_events(
         for side, limit, past in (("lower", lo, lo - q[:, j]), ("upper", hi, q[:, j] - hi)):
             for first, last in _runs(past >= -tol, bridge):
                 if first == 0:
-                    initial.append({"joint": joint, "side": side, "end": end_of(last)})
+                    initial.append(LimitAtStart(joint, side, end_of(last)))
                     continue
                 out.append(
                     ev(

@@ -30,7 +30,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import NamedTuple
 
 import numpy as np
 
@@ -39,7 +39,7 @@ from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 from simbridge.types import JointType
 
 from ..scenario import Scenario, load_scenario
-from .events import find_events, phase_at
+from .events import Event, find_events, phase_at
 from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features, rotation_angle
 from .trajectory import Trajectory, run
 
@@ -102,6 +102,53 @@ def default_every(steps: int) -> int:
 # ---------------------------------------------------------------- results
 
 
+class Peak(NamedTuple):
+    """The largest value of a series over the resync points, the time (s) and phase of its
+    point; all None when every value is NaN (the target never stepped)."""
+
+    value: float | None
+    time: float | None
+    phase: str | None
+
+
+@dataclass(frozen=True)
+class PhaseErrors:
+    """One phase's resync points (:meth:`Direction.by_phase`); a figure is None when every
+    value of it in the phase is NaN."""
+
+    phase: str
+    points: int  # resync points whose step lies in the phase
+    median: float | None  # of the error, the headline quantity's unit
+    max: float | None
+    floor_median: float | None  # of the floor
+    floor_max: float | None
+
+
+@dataclass(frozen=True)
+class WorstPoint:
+    """One of the resync points with the largest error (:attr:`Direction.worst`)."""
+
+    time: float  # s, the source run's instant whose state was taken
+    row: int  # its row in the source run
+    phase: str  # the phase of the step
+    error: float  # the headline quantity's unit
+    floor: float | None  # None: the floor Sim failed to step
+    parts: dict[str, float]  # per PARTS key, the error of that part
+    events: list[Event]  # the source engine's events around it, nearest first (at most 4)
+
+
+@dataclass(frozen=True)
+class Born:
+    """The first resync point whose error stands out (:meth:`Resync.born`)."""
+
+    time: float  # s
+    phase: str
+    source: str  # the engine whose state was set
+    target: str  # into this one
+    error: float  # the headline quantity's unit
+    floor: float
+
+
 @dataclass
 class Direction:
     """One direction: the states of engine ``source`` set into ``target`` (and into a second
@@ -123,47 +170,21 @@ class Direction:
     phases: list[tuple[str, int, int]]
     failed: int = 0
     """Resync points at which a target Sim refused the state or failed its step."""
-    worst: list[dict[str, Any]] = field(default_factory=list)
+    worst: list[WorstPoint] = field(default_factory=list)
 
     def phase(self, k: int) -> str:
         """The phase of resync point ``k``'s step (the one whose commands were in force)."""
         return phase_at(self.phases, int(self.rows[k]) + 1)
 
-    def peak(self, values: np.ndarray) -> dict[str, Any]:
-        """``{value, time, phase}`` of the largest of ``values`` (NaN ignored)."""
+    def peak(self, values: np.ndarray) -> Peak:
+        """The largest of ``values`` (NaN ignored), when and in which phase."""
         if not np.isfinite(values).any():
-            return {"value": None, "time": None, "phase": None}
+            return Peak(None, None, None)
         k = int(np.nanargmax(values))
-        return {"value": float(values[k]), "time": float(self.time[k]), "phase": self.phase(k)}
+        return Peak(float(values[k]), float(self.time[k]), self.phase(k))
 
-    def to_dict(self) -> dict[str, Any]:
-        def med(v: np.ndarray) -> float | None:
-            return float(np.nanmedian(v)) if np.isfinite(v).any() else None
-
-        return {
-            "source": self.source,
-            "target": self.target,
-            "points": len(self.rows),
-            "failed": self.failed,
-            "max": self.peak(self.error),
-            "median": med(self.error),
-            "floor_max": self.peak(self.floor),
-            "floor_median": med(self.floor),
-            "parts": {
-                k: {
-                    "unit": PARTS[k][1],
-                    "max": self.peak(self.parts[k])["value"],
-                    "floor_max": self.peak(self.floor_parts[k])["value"],
-                }
-                for k in PARTS
-            },
-            "phases": self.by_phase(),
-            "worst": self.worst,
-        }
-
-    def by_phase(self) -> list[dict[str, Any]]:
-        """Per phase (in order, those with resync points): ``{phase, points, median, max,
-        floor_median, floor_max}`` of the error and the floor."""
+    def by_phase(self) -> list[PhaseErrors]:
+        """Per phase (in order, those with resync points): the error and the floor in it."""
         names = [self.phase(k) for k in range(len(self.rows))]
         out = []
         for name, _, _ in self.phases:
@@ -173,14 +194,14 @@ class Direction:
             e, f = self.error[idx], self.floor[idx]
             ok_e, ok_f = np.isfinite(e).any(), np.isfinite(f).any()
             out.append(
-                {
-                    "phase": name,
-                    "points": len(idx),
-                    "median": float(np.nanmedian(e)) if ok_e else None,
-                    "max": float(np.nanmax(e)) if ok_e else None,
-                    "floor_median": float(np.nanmedian(f)) if ok_f else None,
-                    "floor_max": float(np.nanmax(f)) if ok_f else None,
-                }
+                PhaseErrors(
+                    phase=name,
+                    points=len(idx),
+                    median=float(np.nanmedian(e)) if ok_e else None,
+                    max=float(np.nanmax(e)) if ok_e else None,
+                    floor_median=float(np.nanmedian(f)) if ok_f else None,
+                    floor_max=float(np.nanmax(f)) if ok_f else None,
+                )
             )
         return out
 
@@ -206,11 +227,11 @@ class Resync:
     def unit(self) -> str:
         return QUANTITIES[self.quantity].unit
 
-    def born(self) -> dict[str, Any] | None:
+    def born(self) -> Born | None:
         """The first resync point (either direction) whose error exceeds :data:`BORN_FACTOR`
-        times its floor and the precision floor, and :attr:`significant`: ``{time, phase,
-        source, target, error, floor}``; None when no point does."""
-        first: dict[str, Any] | None = None
+        times its floor and the precision floor, and :attr:`significant`; None when no point
+        does."""
+        first: Born | None = None
         for d in self.directions:
             level = BORN_FACTOR * np.maximum(np.nan_to_num(d.floor), self.precision_floor)
             level = np.maximum(level, self.significant)
@@ -218,41 +239,16 @@ class Resync:
             if hit.size == 0:
                 continue
             k = int(hit[0])
-            if first is None or d.time[k] < first["time"]:
-                first = {
-                    "time": float(d.time[k]),
-                    "phase": d.phase(k),
-                    "source": d.source,
-                    "target": d.target,
-                    "error": float(d.error[k]),
-                    "floor": float(d.floor[k]),
-                }
+            if first is None or d.time[k] < first.time:
+                first = Born(
+                    time=float(d.time[k]),
+                    phase=d.phase(k),
+                    source=d.source,
+                    target=d.target,
+                    error=float(d.error[k]),
+                    floor=float(d.floor[k]),
+                )
         return first
-
-    def to_dict(self) -> dict[str, Any]:
-        """``summary.json``'s ``resync`` (docs/compare.md describes every field)."""
-        dirs = [d.to_dict() for d in self.directions]
-        floors = {d["source"]: d["floor_max"]["value"] for d in dirs}
-        largest = max(dirs, key=lambda d: -1.0 if d["max"]["value"] is None else d["max"]["value"])
-        return {
-            "every": self.every,
-            "quantity": self.quantity,
-            "unit": self.unit,
-            "precision_floor": self.precision_floor,
-            "significant": self.significant,
-            "born_factor": BORN_FACTOR,
-            "largest": {
-                "value": largest["max"]["value"],
-                "source": largest["source"],
-                "target": largest["target"],
-                "time": largest["max"]["time"],
-                "phase": largest["max"]["phase"],
-            },
-            "floors": floors,
-            "born": self.born(),
-            "directions": dirs,
-            "wall_time": self.wall_time,
-        }
 
 
 # ---------------------------------------------------------------- the driver
@@ -417,7 +413,7 @@ def _direction(
     return d, tr
 
 
-def _worst(d: Direction, tr: Trajectory, n: int = WORST) -> list[dict[str, Any]]:
+def _worst(d: Direction, tr: Trajectory, n: int = WORST) -> list[WorstPoint]:
     """The ``n`` resync points of ``d`` with the largest error, largest first, each with the
     source engine's events around it (:func:`~simbridge.compare.events.find_events`)."""
     if not np.isfinite(d.error).any():
@@ -441,15 +437,15 @@ def _worst(d: Direction, tr: Trajectory, n: int = WORST) -> list[dict[str, Any]]
                 near.append(e)
         near.sort(key=lambda e: abs(e.time - t))
         out.append(
-            {
-                "time": t,
-                "row": int(d.rows[k]),
-                "phase": d.phase(int(k)),
-                "error": float(d.error[k]),
-                "floor": None if not np.isfinite(d.floor[k]) else float(d.floor[k]),
-                "parts": {key: float(v[k]) for key, v in d.parts.items()},
-                "events": [e.to_dict() for e in near[:4]],
-            }
+            WorstPoint(
+                time=t,
+                row=int(d.rows[k]),
+                phase=d.phase(int(k)),
+                error=float(d.error[k]),
+                floor=None if not np.isfinite(d.floor[k]) else float(d.floor[k]),
+                parts={key: float(v[k]) for key, v in d.parts.items()},
+                events=near[:4],
+            )
         )
     return out
 

@@ -9,6 +9,7 @@ import pytest
 from _synthetic import quat_x, quat_z, trajectory
 
 from simbridge.compare import QUANTITIES, diff
+from simbridge.compare.report.summary_json import divergence_dict
 from simbridge.compare.scenario import HEADLINE_QUANTITIES
 from simbridge.exceptions import SimbridgeError
 
@@ -59,7 +60,7 @@ def test_heading_ramp_crossings():
     np.testing.assert_allclose(d.series["heading"], d.time * 12 * DEG, rtol=1e-12, atol=1e-15)
     assert d.crossings["heading"] == {1 * DEG: 0.125, 10 * DEG: 0.875}
     assert d.crossings["orientation"] == {1 * DEG: 0.125, 10 * DEG: 0.875}
-    assert d.final_pose["b"]["yaw"] == pytest.approx(24 * DEG, rel=1e-12)
+    assert d.final_pose["b"].yaw == pytest.approx(24 * DEG, rel=1e-12)
 
 
 def test_orientation_angle_sees_a_tilt_that_heading_does_not():
@@ -68,8 +69,8 @@ def test_orientation_angle_sees_a_tilt_that_heading_does_not():
     d = diff(a, b)
     assert d.final["orientation"] == pytest.approx(30 * DEG, rel=1e-12)
     assert d.final["heading"] == pytest.approx(0.0, abs=1e-15)
-    assert d.final_pose["b"]["tilt"] == pytest.approx(30 * DEG, rel=1e-12)
-    assert d.final_pose["a"]["tilt"] == 0.0
+    assert d.final_pose["b"].tilt == pytest.approx(30 * DEG, rel=1e-12)
+    assert d.final_pose["a"].tilt == 0.0
 
 
 def test_orientation_angle_of_opposite_quaternion_signs_is_zero():
@@ -158,7 +159,7 @@ def test_summary_dict_is_json_ready():
     import json
 
     d = diff(trajectory(), trajectory(position=ramp_x))
-    data = json.loads(json.dumps(d.to_dict()))
+    data = json.loads(json.dumps(divergence_dict(d)))
     assert data["final"]["base_distance"] == 2.0
     assert data["first_to_diverge"] == {
         "quantity": "base_distance",

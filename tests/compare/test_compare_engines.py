@@ -24,7 +24,7 @@ CONTACT_FREE = ["pendulum", "double-pendulum", "spinning-wheel"]
 @pytest.mark.parametrize("scenario", CONTACT_FREE)
 def test_contact_free_scenarios_agree_across_engines(other, scenario, profile):
     c = compare(scenario, ["pybullet", other], profile=profile, ensemble=3)
-    assert c.verdict.verdict == "agree" and not c.verdict.marginal, c.verdict.to_dict()
+    assert c.verdict.verdict == "agree" and not c.verdict.marginal, c.verdict
     cross = c.cross[c.timestep]
     # no quantity ever reaches its first threshold (1 cm, 1°, 0.1 rad/s)
     assert cross.first_to_diverge() is None, cross.maximum

@@ -33,7 +33,7 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
 def test_pendulum_agrees(other):
     c = compare("pendulum", ["pybullet", other], ensemble=4)
     v = c.verdict
-    assert v.verdict == "agree" and not v.marginal, v.to_dict()
+    assert v.verdict == "agree" and not v.marginal, v
     assert v.max_gap[0] < 1e-6 and v.test is None
     for e in v.per_engine:
         assert e.size == 4 and e.spread_end.value < 1e-6
@@ -43,7 +43,7 @@ def test_pendulum_agrees(other):
 def test_r2d2_gentle_differs(other):
     c = compare("r2d2-gentle", ["pybullet", other], ensemble=4)
     v = c.verdict
-    assert v.verdict == "differ" and v.judged_at == "end", v.to_dict()
+    assert v.verdict == "differ" and v.judged_at == "end", v
     assert 0.06 < v.gap.value < 0.08  # measured 7.18 cm
     assert v.gap.low <= v.gap.value <= v.gap.high
     # 4 + 4 runs: 70 splits; separated means p = 2/70
@@ -59,7 +59,7 @@ def test_balanced_pendulum_is_chaotic_on_the_engine_without_a_brake(other, loose
     profiles[loose] = "urdf"
     c = compare(BALANCED, ["pybullet", other], profile=profiles, ensemble=6)
     v = c.verdict
-    assert v.verdict == "chaotic", v.to_dict()
+    assert v.verdict == "chaotic", v
     assert v.engines == [c.labels[loose]]
     held, fell = v.per_engine[1 - loose], v.per_engine[loose]
     assert held.spread_end.value < 1e-6
@@ -227,7 +227,7 @@ def test_a_script_read_from_stdin_runs_its_members_in_process():
     script = (
         "from simbridge.compare import compare\n"
         "c = compare('pendulum', ['pybullet', 'pybullet'], ensemble=3, duration=0.1)\n"
-        "print(c.verdict.verdict, c.ensemble_settings['workers'], c.ensembles[0].size)\n"
+        "print(c.verdict.verdict, c.ensemble_settings.workers, c.ensembles[0].size)\n"
     )
     done = subprocess.run(
         [sys.executable, "-"], input=script, capture_output=True, text=True, timeout=300

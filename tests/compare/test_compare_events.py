@@ -14,6 +14,7 @@ from simbridge.compare.analysis.events import KINDS, EngineEvents, Event, find_e
 from simbridge.compare.analysis.parts import THRESHOLDS, rank_parts
 from simbridge.compare.report.events import event_words, parting_words
 from simbridge.compare.report.parts import parts_words
+from simbridge.compare.report.summary_json import event_dict, part_dict, parting_dict
 from simbridge.compare.run.quantities import DEG, tilt_from
 
 DT = 0.01  # bridge: ceil(0.05 / 0.01) = 5 rows
@@ -73,8 +74,8 @@ def test_contact_airborne_peak_and_chatter_events():
     assert chatter.figures == {"losses": 3.0, "duration": pytest.approx(0.05)}
     assert [x.phase for x in e.events] == ["all"] * 5
     assert e.counts()["contact_made"] == 1 and sum(e.counts().values()) == 5
-    assert event_words(lost.to_dict(), "A") == "A's bot lost contact with ground at l0"
-    assert event_words(made.to_dict(), "A") == "A's bot touched ground with l0"
+    assert event_words(event_dict(lost), "A") == "A's bot lost contact with ground at l0"
+    assert event_words(event_dict(made), "A") == "A's bot touched ground with l0"
 
 
 def test_a_robot_that_never_touches_is_not_airborne_and_no_record_no_contact_event():
@@ -126,8 +127,8 @@ def test_a_y_up_robot_turning_in_place_never_tips_over():
     assert np.abs(tilt_from(tr.body.base_orientation, tr.body.base_orientation[0])).max() < 1e-7
     assert find_events(tr).events == []
     d = diff(tr, tr)
-    assert d.final_pose["a"]["tilt"] == pytest.approx(90 * DEG)  # from world z: on its side
-    assert d.final_pose["a"]["tilt_from_spawn"] == pytest.approx(0.0, abs=1e-7)
+    assert d.final_pose["a"].tilt == pytest.approx(90 * DEG)  # from world z: on its side
+    assert d.final_pose["a"].tilt_from_spawn == pytest.approx(0.0, abs=1e-7)
 
 
 def test_tilt_follows_gravity_not_z():
@@ -148,7 +149,8 @@ def test_joint_limit_events_and_a_joint_resting_at_its_limit_from_the_start():
     tr = trajectory(dt=DT, steps=60, q=q)
     tr.body.joint_limits = np.array([[-1.0, 1.0], [np.nan, np.nan]])  # j1: no limit
     e = find_events(tr)
-    assert e.initial_limits == [{"joint": "j0", "side": "lower", "end": pytest.approx(0.05)}]
+    (start,) = e.initial_limits
+    assert (start.joint, start.side, start.end) == ("j0", "lower", pytest.approx(0.05))
     (hit,) = e.events
     # -1 + 10 (t - 0.05) >= 1 - 1e-3 first at t = 0.2499 -> row 25
     assert (hit.kind, hit.part, hit.side, hit.row) == ("joint_limit", "j0", "upper", 25)
@@ -175,7 +177,7 @@ def test_motor_saturated_at_max_force():
     assert (sat.kind, sat.part, sat.row) == ("motor_saturated", "j1", 20)
     assert sat.end == pytest.approx(0.29)
     assert sat.figures == {"max_force": 10.0, "duration": pytest.approx(0.10)}
-    assert "j1 motor saturated at its max_force 10" in event_words(sat.to_dict(), "A")
+    assert "j1 motor saturated at its max_force 10" in event_words(event_dict(sat), "A")
 
 
 # ---------------------------------------------------------------- parting
@@ -210,7 +212,7 @@ def test_parting_names_the_recent_event_then_the_ongoing_one_then_the_last_one()
         figures={"max_force": 5.0, "duration": 0.01},
     )
     a, b = _engine("A", old, lost), _engine("B", air)
-    p = parting(1.25, 0.01, "base_distance", PHASES, [a, b], step=0.01).to_dict()
+    p = parting_dict(parting(1.25, 0.01, "base_distance", PHASES, [a, b], step=0.01))
     assert p["phase"] == "turn" and p["relation"] == "after"
     assert p["event"]["label"] == "A" and p["event"]["kind"] == "contact_lost"
     assert p["since"] == pytest.approx(0.05)
@@ -219,37 +221,40 @@ def test_parting_names_the_recent_event_then_the_ongoing_one_then_the_last_one()
         "during 'turn', 0.050 s after A's bot lost contact with plane at wheel"
     )
     # 0.3 s later the contact loss is no longer recent: the flight going on is named
-    p = parting(1.55, 0.01, "base_distance", PHASES, [a, b], step=0.01).to_dict()
+    p = parting_dict(parting(1.55, 0.01, "base_distance", PHASES, [a, b], step=0.01))
     assert p["relation"] == "during" and p["event"]["kind"] == "airborne"
     assert parting_words(p) == (
         "during 'turn', while B's bot left the ground (airborne for 2 s, from t = 0.500 s)"
     )
     # without the flight: the latest event, however old
-    p = parting(1.55, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
+    p = parting_dict(parting(1.55, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["relation"] == "after" and p["event"]["kind"] == "contact_lost"
     assert p["since"] == pytest.approx(0.35)
     # an event in the very step that parts them counts; one after it does not
-    p = parting(1.195, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
+    p = parting_dict(parting(1.195, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["event"]["kind"] == "contact_lost" and p["since"] < 0
     assert parting_words(p).startswith("during 'turn', in the same step as A's bot lost")
-    p = parting(1.0, 0.01, "base_distance", PHASES, [a], step=0.01).to_dict()
+    p = parting_dict(parting(1.0, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["phase"] == "settle"  # at the boundary: the phase that led to it
     assert p["event"]["kind"] == "motor_saturated"
 
 
 def test_parting_never_and_before_any_event():
-    assert parting(None, 0.01, "base_distance", PHASES, [_engine("A")]).to_dict()["phase"] is None
     assert (
-        parting_words(parting(None, 0.01, "base_distance", PHASES, [_engine("A")]).to_dict()) == ""
+        parting_dict(parting(None, 0.01, "base_distance", PHASES, [_engine("A")]))["phase"] is None
+    )
+    assert (
+        parting_words(parting_dict(parting(None, 0.01, "base_distance", PHASES, [_engine("A")])))
+        == ""
     )
     e = _engine("A")
-    p = parting(0.5, 0.01, "base_distance", PHASES, [e]).to_dict()
+    p = parting_dict(parting(0.5, 0.01, "base_distance", PHASES, [e]))
     assert (
         p["event"] is None
         and parting_words(p) == "during 'settle', before any event of either engine"
     )
     e.initial_contacts = ["base", "wheel"]
-    p = parting(0.01, 0.01, "base_distance", PHASES, [e], step=0.01).to_dict()
+    p = parting_dict(parting(0.01, 0.01, "base_distance", PHASES, [e], step=0.01))
     assert p["initial_contacts"] == {"A": ["base", "wheel"]}
     assert parting_words(p) == (
         "during 'settle', in the first step, with bot touching something from its first step "
@@ -280,7 +285,7 @@ def test_every_kind_has_words():
                 "losses": 3,
             },
         )
-        assert not event_words(e.to_dict(), "A").endswith(kind)
+        assert not event_words(event_dict(e), "A").endswith(kind)
 
 
 # ---------------------------------------------------------------- ranking
@@ -312,7 +317,7 @@ def test_parts_ranked_by_when_and_how_far():
     assert base.largest_at == pytest.approx(1.0) and base.at_end == pytest.approx(0.2)
     assert base.threshold == THRESHOLDS["m"] == 0.01 and base.unit == "m"
     assert (j1.name, j1.first, j1.largest) == ("j1", pytest.approx(0.5), pytest.approx(3 * DEG))
-    words = parts_words([p.to_dict() for p in parts])
+    words = parts_words([part_dict(p) for p in parts])
     assert words.startswith("The first part to come apart is ")
     assert words.endswith("(of 4 joints and links).")
 
@@ -328,7 +333,7 @@ def test_parts_that_never_part_rank_by_their_gap_over_the_threshold():
     parts = rank_parts(diff(a, b))
     assert [p.name for p in parts] == ["j0", "base", "l0", "j1"]  # 0.5, 0.2, 0.2, 0.1
     assert all(p.first is None for p in parts)
-    assert parts_words([p.to_dict() for p in parts]) == (
+    assert parts_words([part_dict(p) for p in parts]) == (
         "No joint or link comes 1° or 1 cm apart; the nearest to it is joint `j0` "
         "(largest gap 0.5° at t = 0.000 s)."
     )

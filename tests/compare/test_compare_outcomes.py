@@ -13,6 +13,7 @@ from _synthetic import quat_x, quat_z, trajectory
 from simbridge.compare import Outcome, loads_scenario
 from simbridge.compare.analysis.outcomes import success_interval, summarize
 from simbridge.compare.report.outcomes import outcome_lines, outcomes_section
+from simbridge.compare.report.summary_json import outcome_stats_dict
 from simbridge.compare.run.outcomes import evaluate, tilt
 from simbridge.compare.scenario import dumps_scenario
 from simbridge.exceptions import ScenarioError
@@ -240,7 +241,7 @@ def test_summarize_counts_successes_and_describes_the_values():
         {"name": "goal", "kind": "reach", "unit": "s", "value": v, "success": v is not None}
         for v in times
     ]
-    s = summarize(o, records).to_dict()
+    s = outcome_stats_dict(summarize(o, records))
     assert s["success"]["successes"] == 3 and s["success"]["runs"] == 5
     assert s["success"]["rate"] == 0.6
     assert (s["success"]["low"], s["success"]["high"]) == success_interval(3, 5)
@@ -254,7 +255,7 @@ def test_summarize_counts_successes_and_describes_the_values():
     }
     assert s["nominal"]["value"] == 6.0 and len(s["runs"]) == 5
     # no bound: no success rate
-    e = summarize(Outcome.effort("w"), [{"value": 1.0, "success": None}]).to_dict()
+    e = outcome_stats_dict(summarize(Outcome.effort("w"), [{"value": 1.0, "success": None}]))
     assert e["success"] is None and e["value"]["std"] == 0.0
 
 
@@ -270,12 +271,12 @@ def _summary() -> dict:
 
     engines = {
         "pybullet": {
-            goal.name: summarize(goal, recs(goal, [6.0, 6.2], [True, True])).to_dict(),
-            work.name: summarize(work, recs(work, [10.0, 12.0], [None, None])).to_dict(),
+            goal.name: outcome_stats_dict(summarize(goal, recs(goal, [6.0, 6.2], [True, True]))),
+            work.name: outcome_stats_dict(summarize(work, recs(work, [10.0, 12.0], [None, None]))),
         },
         "mujoco": {
-            goal.name: summarize(goal, recs(goal, [None, 8.0], [False, True])).to_dict(),
-            work.name: summarize(work, recs(work, [20.0, 20.0], [None, None])).to_dict(),
+            goal.name: outcome_stats_dict(summarize(goal, recs(goal, [None, 8.0], [False, True]))),
+            work.name: outcome_stats_dict(summarize(work, recs(work, [20.0, 20.0], [None, None]))),
         },
     }
     return {

@@ -15,6 +15,7 @@ from simbridge.cli import main
 from simbridge.compare import compare, report, run
 from simbridge.compare.report import summary as compare_summary
 from simbridge.compare.report.events import event_words
+from simbridge.compare.report.summary_json import event_dict, resync_dict
 from simbridge.compare.run.resync import PARTS, default_every, resync
 from simbridge.compare.scenario import load_scenario
 from simbridge.exceptions import InvalidArgumentError
@@ -112,7 +113,7 @@ def test_on_r2d2_gentle_the_engines_differ_far_above_their_floors(gentle):
         assert np.max(d.error) > 10 * max(f.max() for f in floors)
         # measured: medians 6.4e-5 and 5.3e-5 m against floor medians 3.5e-10 and 3e-20 m
         assert np.median(d.error) > 1e4 * max(np.median(f) for f in floors)
-    s = gentle.to_dict()
+    s = resync_dict(gentle)
     born = s["born"]
     assert born is not None and born["phase"] == "settle"  # the landing at t = 0.025 s
     assert born["time"] == pytest.approx(0.025)
@@ -123,12 +124,12 @@ def test_on_r2d2_gentle_the_engines_differ_far_above_their_floors(gentle):
 def test_the_worst_steps_come_with_the_source_engines_events(gentle):
     worst = gentle.directions[0].worst
     assert len(worst) == 5
-    assert [w["error"] for w in worst] == sorted((w["error"] for w in worst), reverse=True)
+    assert [w.error for w in worst] == sorted((w.error for w in worst), reverse=True)
     first = worst[0]
-    assert first["phase"] == "settle" and first["time"] == pytest.approx(0.025)
-    kinds = {(e["kind"], e["part"]) for e in first["events"]}
+    assert first.phase == "settle" and first.time == pytest.approx(0.025)
+    kinds = {(e.kind, e.part) for e in first.events}
     assert ("contact_made", "left_back_wheel") in kinds  # pybullet lands in that very step
-    words = [event_words(e, "pybullet") for e in first["events"]]
+    words = [event_words(event_dict(e), "pybullet") for e in first.events]
     assert all(w.startswith("pybullet's r2d2") for w in words)
 
 
@@ -136,8 +137,8 @@ def test_the_tutorial_drive_differs_from_its_first_step():
     """r2d2 spawned 0.37 m inside the ground: the two engines push it out differently at once."""
     r = resync("r2d2", ["pybullet", "mujoco"])
     born = r.born()
-    assert born is not None and born["time"] == 0 and born["phase"] == "settle"
-    assert born["error"] > 0.01  # measured 6.8 cm in one step (16 m/s of base velocity)
+    assert born is not None and born.time == 0 and born.phase == "settle"
+    assert born.error > 0.01  # measured 6.8 cm in one step (16 m/s of base velocity)
 
 
 # ---------------------------------------------------------------- summary, report, flag

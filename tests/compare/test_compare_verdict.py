@@ -10,6 +10,7 @@ import pytest
 
 from simbridge.compare.analysis.verdict import (
     FLOOR_RELATIVE,
+    Segment,
     Verdict,
     energy_test,
     judge,
@@ -196,8 +197,8 @@ def test_judged_at_the_largest_gap_when_the_end_agrees():
     assert v.judged_at == "largest gap" and v.judged_time == 0.5
     assert v.max_gap == (pytest.approx(0.5), 0.5)
     # the instant is beyond every yardstick; two runs each cannot pass the test (p = 1/3)
-    assert [s["class"] for s in v.timeline()] == ["agree", "differ", "agree"]
-    assert v.timeline()[1] == {"class": "differ", "start": 0.5, "end": 0.5, "instants": 1}
+    assert [s.verdict for s in v.timeline()] == ["agree", "differ", "agree"]
+    assert v.timeline()[1] == Segment("differ", start=0.5, end=0.5, instants=1)
     assert v.verdict == "unresolved" and v.reason == "not separated"
     assert verdict_lines(summary_of(v, 2))[0].startswith(
         "**Unresolved**: the engines' runs are, at t = 0.500 s, a median"
@@ -216,7 +217,7 @@ def test_verdict_dict_is_json_ready():
     import json
 
     v = verdict(cloud(np.arange(4) * 1e-6), cloud(1.0 + np.arange(4) * 1e-6))
-    d = json.loads(json.dumps(v.to_dict()))
+    d = json.loads(json.dumps(verdict_dict(v)))
     assert d["verdict"] == "differ" and d["test"]["p_value"] == pytest.approx(2 / 70)
     assert d["instants"] == {"total": 3, "agree": 0, "chaotic": 0, "unresolved": 0, "differ": 3}
     assert set(d["engine_figures"]) == {"A", "B"}
