@@ -692,19 +692,7 @@ def test_the_python_loop_refuses_calls_from_another_thread_while_it_steps(monkey
         test_every_call_that_touches_the_world_is_refused_while_another_thread_steps as check,
     )
 
-    _select_loop(monkeypatch, "python")
-    sims: list[simbridge.Sim] = []
-
-    def make(**kwargs: object) -> simbridge.Sim:
-        sims.append(simbridge.Sim("mujoco", **kwargs))  # type: ignore[arg-type]
-        assert compiled(sims[-1]).kernel is None
-        return sims[-1]
-
-    try:
-        check(make)
-    finally:
-        for sim in sims:
-            sim.close()
+    _run_on_the_python_loop(monkeypatch, check)
 
 
 def test_the_python_loop_takes_racing_commands_and_teleports_whole(monkeypatch):
@@ -716,6 +704,11 @@ def test_the_python_loop_takes_racing_commands_and_teleports_whole(monkeypatch):
         test_commands_and_teleports_racing_a_stepping_thread_land_whole as check,
     )
 
+    _run_on_the_python_loop(monkeypatch, check)
+
+
+def _run_on_the_python_loop(monkeypatch, check) -> None:
+    """Run a conformance check (which takes a ``make_sim``) on Sims stepping in Python."""
     _select_loop(monkeypatch, "python")
     sims: list[simbridge.Sim] = []
 

@@ -1,16 +1,8 @@
 """How two trajectories part: :func:`diff` and :class:`Divergence`.
 
-Quantities, computed on the subject robot at every common instant:
-
-==================== ====== ===============================================================
-``base_distance``    m      distance between the two base link-frame positions
-``link_distance``    m      the largest distance between the same link's centres of mass (base
-                            included)
-``heading``          rad    |yaw_a - yaw_b| wrapped to [0, pi] (yaw of the base about world z)
-``orientation``      rad    angle of the rotation taking one base orientation to the other
-``joint_position_rms`` rad  RMS over movable joints of q_a - q_b (rad or m; unwrapped angles)
-``joint_velocity_rms`` rad/s RMS over movable joints of v_a - v_b
-==================== ====== ===============================================================
+The quantities (``base_distance``, ``link_distance``, ``heading``, ``orientation``,
+``joint_position_rms``, ``joint_velocity_rms``) are computed on the subject robot at every
+common instant; :mod:`..run.quantities` defines each, with its unit.
 
 A threshold is crossed at the first recorded instant whose value is ``>=`` the threshold.
 """
