@@ -157,7 +157,9 @@ class ShapePlan:
     ``(radius,)``; cylinder and capsule ``(radius, length)`` along the shape's z axis (a
     capsule's length without its caps); plane its normal ``(x, y, z)`` in the shape's frame, as
     written; mesh its scale. ``element``: the shape's place among its link's ``<collision>``
-    (or ``<visual>``) elements as written, counting the ones left out."""
+    (or ``<visual>``) elements as written, counting the ones left out. (PyBullet itself makes
+    a URDF cylinder a 32-gon convex hull, reported as a mesh by its collision shape data; the
+    plan keeps the cylinder.)"""
 
     element: int
     kind: str  # "box" | "sphere" | "cylinder" | "capsule" | "plane" | "mesh"
@@ -264,7 +266,10 @@ class BuildPlan:
     def self_collides(self, a: int, b: int) -> bool:
         """Whether links ``a`` and ``b`` (PyBullet indices) of this body may touch each other:
         the mode is not ``"off"``, they are two links, not a pair the mode excludes, not both
-        static, and the broadphase filter lets them (PyBullet's rules)."""
+        static, and the broadphase filter lets them (PyBullet's rules). PyBullet's collision
+        detection still pairs two static links the filter lets through (``getContactPoints``
+        lists them) but they carry no force (measured: r2d2 on a fixed base), so they are left
+        out here."""
         if self.self_collision == "off" or a == b:
             return False
         if (min(a, b), max(a, b)) in self.excluded_pairs:
@@ -272,8 +277,9 @@ class BuildPlan:
         return links_collide(self.link(a), self.link(b))
 
     def self_pairs(self) -> tuple[tuple[int, int], ...]:
-        """Every pair of links (i < j) of this body that may touch (:meth:`self_collides`)."""
-        ids = [link.index for link in self.links]
+        """Every pair of links (i < j) of this body, both with collision shapes, that may touch
+        (:meth:`self_collides`), in order."""
+        ids = [link.index for link in self.links if link.collisions]
         return tuple(
             (a, b) for k, a in enumerate(ids) for b in ids[k + 1 :] if self.self_collides(a, b)
         )
