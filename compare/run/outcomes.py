@@ -19,12 +19,14 @@ import numpy as np
 from simbridge.exceptions import ScenarioError
 
 from ..scenario.outcomes import KINDS, JointRef, Outcome
+from .quantities import rotate
 
 if TYPE_CHECKING:
     from ..scenario import Scenario
 
 # .trajectory's Trajectory and BodyTrajectory by name only: its run() imports this module, and
-# no module here imports one that imports it (tests/test_import_graph.py), not even for types
+# no module here imports one that imports it (tests/test_import_graph.py), not even for types;
+# .quantities, which this module imports, does not import .trajectory either
 Trajectory = Any
 BodyTrajectory = Any
 
@@ -81,21 +83,13 @@ def _positions(body: BodyTrajectory, link: JointRef) -> np.ndarray:
     return body.base_position if col is None else body.link_positions[:, col, :]
 
 
-def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Quaternions q (T, 4) (x, y, z, w) applied to the vector v (3,): (T, 3)."""
-    u = q[:, :3]
-    w = q[:, 3:4]
-    t = 2.0 * np.cross(u, np.broadcast_to(v, u.shape))
-    return v + w * t + np.cross(u, t)
-
-
 def tilt(orientation: np.ndarray) -> np.ndarray:
     """(T,) rad: the angle between the world z axis and the body axis that pointed along it at
     the first instant (orientations (T, 4), x, y, z, w)."""
     q0 = orientation[0]
     conj = np.array([-q0[0], -q0[1], -q0[2], q0[3]])
-    up_body = _rotate(conj[None, :], np.array([0.0, 0.0, 1.0]))[0]
-    up = _rotate(orientation, up_body)
+    up_body = rotate(conj, np.array([0.0, 0.0, 1.0]))
+    up = rotate(orientation, up_body)
     up /= np.linalg.norm(up, axis=1, keepdims=True)
     return np.arccos(np.clip(up[:, 2], -1.0, 1.0))
 

@@ -433,3 +433,21 @@ def test_outcome_names_are_unique():
 
 def test_quat_helpers_agree_with_tilt():
     assert tilt(np.stack([quat_z(0.0), quat_x(0.3)]))[1] == pytest.approx(0.3, abs=1e-12)
+
+
+def test_one_quaternion_rotation_in_compare():
+    """The tilt of the upright outcome rotates with run/quantities.py's ``rotate``, the one
+    definition in compare/ (run/outcomes.py had a copy)."""
+    import ast
+    from pathlib import Path
+
+    import simbridge.compare as package
+
+    root = Path(package.__file__).parent
+    found = [
+        f"{path.relative_to(root)}:{node.name}"
+        for path in sorted(root.rglob("*.py"))
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        if isinstance(node, ast.FunctionDef) and node.name.lstrip("_") == "rotate"
+    ]
+    assert found == ["run/quantities.py:rotate"]
