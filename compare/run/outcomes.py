@@ -283,6 +283,7 @@ def evaluate(
     base: Path | None = None,
     file: str = "<scenario>",
     index: int | None = None,
+    cut_at: float | None = None,
 ) -> OutcomeRecord:
     """Measure ``outcome`` on the recorded run ``tr``.
 
@@ -293,14 +294,17 @@ def evaluate(
     the first instant over the bound, None: never; ``final_tilt``, rad); ``track``:
     :class:`TrackFigures` (``samples``, values counted; ``max_error``); the other kinds none. A
     phase the run did not reach (a shortened run) gives value and success None, no figures and
-    a ``note``.
+    a ``note``. ``cut_at``: the seconds the scenario was cut to (``Scenario.cut_at``), said in
+    those notes; on such a run a ``function`` that raises or returns a number that is not
+    finite (it needed what was not run) gives value and success None and a ``note`` saying so,
+    where a whole run raises. Any other outcome of a cut run is measured on what ran.
 
     Raises:
         ScenarioError: an unknown robot, link or joint (naming the outcome and the valid
             names), or a function that fails.
     """
     if outcome.kind == "function":
-        return _evaluate_function(outcome, tr, base, file, index)
+        return _evaluate_function(outcome, tr, base, file, index, cut_at)
     robot = outcome.robot or tr.subject
     if robot not in tr.bodies:
         raise _fail(
@@ -309,7 +313,10 @@ def evaluate(
     body = tr.bodies[robot]
     window = _window(outcome, tr)
     if window is None:
-        return _record(outcome, None, None, note=f"phase {outcome.phase!r} was not run")
+        note = f"phase {outcome.phase!r} was not run"
+        if cut_at is not None:
+            note += f" (the run was cut at {cut_at:g} s)"
+        return _record(outcome, None, None, note=note)
     a, b = window
     t = tr.time[a : b + 1] - tr.time[a]
     try:
@@ -439,9 +446,18 @@ def _track(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray
 
 
 def _evaluate_function(
-    outcome: Outcome, tr: Trajectory, base: Path | None, file: str, index: int | None
+    outcome: Outcome,
+    tr: Trajectory,
+    base: Path | None,
+    file: str,
+    index: int | None,
+    cut_at: float | None = None,
 ) -> OutcomeRecord:
     from ..scenario.controllers import RefError, load_object
+
+    def not_evaluable(what: str) -> OutcomeRecord:
+        note = f"not evaluable on the run cut at {cut_at:g} s: {outcome.function}(trajectory) "
+        return _record(outcome, None, None, note=note + what)
 
     try:
         fn = load_object(outcome.function, base)
@@ -450,6 +466,8 @@ def _evaluate_function(
     try:
         out = fn(tr, **outcome.params)
     except Exception as exc:
+        if cut_at is not None:
+            return not_evaluable(f"raised {type(exc).__name__}: {exc}")
         raise _fail(
             outcome,
             index,
@@ -469,6 +487,8 @@ def _evaluate_function(
                 outcome.min is None or v >= outcome.min
             )
         return _record(outcome, v, ok)
+    if isinstance(out, (int, float, np.integer, np.floating)) and cut_at is not None:
+        return not_evaluable(f"returned {out!r}")
     raise _fail(
         outcome,
         index,
@@ -484,6 +504,6 @@ def evaluate_all(scenario: Scenario, tr: Trajectory) -> dict[str, OutcomeRecord]
     base = scenario.source.parent if scenario.source is not None else None
     file = str(scenario.source) if scenario.source is not None else f"<scenario {scenario.name}>"
     return {
-        o.name: evaluate(o, tr, base=base, file=file, index=i)
+        o.name: evaluate(o, tr, base=base, file=file, index=i, cut_at=scenario.cut_at)
         for i, o in enumerate(scenario.outcomes)
     }

@@ -549,3 +549,64 @@ def test_one_quaternion_rotation_in_compare():
         if isinstance(node, ast.FunctionDef) and node.name.lstrip("_") == "rotate"
     ]
     assert found == ["run/quantities.py:rotate"]
+
+
+# ---------------------------------------------------------------- a run cut short
+
+
+def test_truncated_says_where_it_cut():
+    from simbridge.compare import load_scenario
+
+    sc = load_scenario("kuka-reach")  # three phases of 2 s
+    assert sc.cut_at is None
+    assert sc.truncated(1.0).cut_at == 1.0
+    assert sc.truncated(3.0).with_timestep(1 / 480).cut_at == 3.0
+    assert sc.truncated(100.0).cut_at is None  # nothing cut
+
+
+def test_a_cut_run_says_what_it_could_not_measure(tmp_path):
+    (tmp_path / "metrics.py").write_text(
+        "def late(tr):\n    return float('nan')\n\ndef index(tr):\n    return tr.time[99]\n"
+    )
+    tr = trajectory(position=moving_x, phases=[("a", 0, 8), ("b", 8, 16)])
+    gone = evaluate(Outcome.reach("in c", (1.0, 0.0), 0.1, phase="c"), tr, cut_at=2.0)
+    assert gone.value is None and gone.success is None and gone.figures is None
+    assert gone.note == "phase 'c' was not run (the run was cut at 2 s)"
+    late = Outcome.function_of("late", "metrics.py:late", max=1.0)
+    r = evaluate(late, tr, base=tmp_path, cut_at=2.0)
+    assert (r.value, r.success) == (None, None)
+    assert r.note == "not evaluable on the run cut at 2 s: metrics.py:late(trajectory) returned nan"
+    r = evaluate(Outcome.function_of("i", "metrics.py:index"), tr, base=tmp_path, cut_at=2.0)
+    assert r.note.endswith("metrics.py:index(trajectory) raised IndexError: " + _index_error())
+    # on a whole run the same function is an error in the scenario
+    with pytest.raises(ScenarioError, match="returned nan; expected a finite number"):
+        evaluate(late, tr, base=tmp_path)
+    # what ran is measured: a reach on the whole (cut) run
+    assert evaluate(Outcome.reach("goal", (1.25, 0.0), 0.1), tr, cut_at=2.0).value == 1.25
+
+
+def _index_error() -> str:
+    try:
+        np.zeros(17)[99]
+    except IndexError as exc:
+        return str(exc)
+    raise AssertionError
+
+
+def test_the_headline_says_an_outcome_was_not_evaluated():
+    goal = Outcome.reach("later", (0, 2), 0.05, phase="b")
+    note = "phase 'b' was not run (the run was cut at 1 s)"
+    rec = OutcomeRecord(goal.name, goal.kind, goal.unit, None, None, note=note)
+    summary = {
+        "outcomes": {
+            "declared": [goal.to_dict()],
+            "confidence": 0.95,
+            "engines": {
+                label: {goal.name: outcome_stats_dict(summarize(goal, [rec, rec]))}
+                for label in ("pybullet", "mujoco")
+            },
+        }
+    }
+    assert outcome_lines(summary) == [f"**later**: not evaluated: {note}."]
+    rows = [x for x in outcomes_section(summary) if x.startswith("| later")]
+    assert rows and all(x.endswith(f"| not evaluated: {note} |") for x in rows)
