@@ -15,6 +15,7 @@ timing noise), derandomised so that a run is repeatable: a few seconds in all.
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -34,9 +35,14 @@ SETTINGS = settings(
 
 
 @pytest.fixture(autouse=True)
-def _quiet() -> None:
-    # the lenient reader warns once per odd file: thousands of records otherwise
-    logging.getLogger("simbridge").setLevel(logging.ERROR)
+def _quiet() -> Iterator[None]:
+    # the lenient reader warns once per odd file: thousands of records otherwise; the level
+    # goes back as found, so that later tests see the records they expect
+    log = logging.getLogger("simbridge")
+    level = log.level
+    log.setLevel(logging.ERROR)
+    yield
+    log.setLevel(level)
 
 
 def parse(text: str, folder: Path) -> UrdfModel | None:

@@ -6,12 +6,12 @@ distribution of each value: :class:`OutcomeStats`). The outcome kinds are the sc
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
+from ..run.outcomes import OutcomeRecord
 from ..scenario.outcomes import Outcome
 
 __all__ = [
@@ -82,10 +82,10 @@ class OutcomeStats:
     unit: str
     success: SuccessRate | None
     value: Distribution | None
-    records: list[dict[str, Any]] = field(default_factory=list)
+    records: tuple[OutcomeRecord, ...] = ()
 
     @property
-    def nominal(self) -> dict[str, Any] | None:
+    def nominal(self) -> OutcomeRecord | None:
         return self.records[0] if self.records else None
 
 
@@ -103,22 +103,22 @@ def _distribution(values: Sequence[float]) -> Distribution | None:
     )
 
 
-def summarize(outcome: Outcome, records: Sequence[Mapping[str, Any]]) -> OutcomeStats:
-    """One engine's runs of one outcome (``records``: :func:`evaluate`'s dicts, the nominal
-    run first): the success rate over the runs that judge it, the distribution of the value
-    over the runs that have one, and every record."""
-    judged = [r["success"] for r in records if r.get("success") is not None]
+def summarize(outcome: Outcome, records: Sequence[OutcomeRecord]) -> OutcomeStats:
+    """One engine's runs of one outcome (``records``: :func:`evaluate`'s, the nominal run
+    first): the success rate over the runs that judge it, the distribution of the value over
+    the runs that have one, and every record."""
+    judged = [r.success for r in records if r.success is not None]
     success = None
     if judged:
         k, n = sum(bool(s) for s in judged), len(judged)
         low, high = success_interval(k, n)
         success = SuccessRate(k, n, low, high)
-    values = [float(r["value"]) for r in records if r.get("value") is not None]
+    values = [r.value for r in records if r.value is not None]
     return OutcomeStats(
         name=outcome.name,
         kind=outcome.kind,
         unit=outcome.unit,
         success=success,
         value=_distribution(values),
-        records=[dict(r) for r in records],
+        records=tuple(records),
     )

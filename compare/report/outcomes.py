@@ -49,6 +49,12 @@ def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
     for decl in out["declared"]:
         name, unit = decl["name"], decl["unit"]
         per = [out["engines"][label][name] for label in labels]
+        notes = [_note(p) for p in per]
+        if all(p["success"] is None and p["value"] is None for p in per) and all(notes):
+            # nothing measured (a phase or a function a cut run could not give): say why
+            said = dict.fromkeys(n for n in notes if n is not None)
+            lines.append(f"**{name}**: not evaluated: " + "; ".join(said) + ".")
+            continue
         parts = []
         verb = {
             "reach": "reached",
@@ -73,9 +79,9 @@ def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
         if decl["kind"] == "reach" and all(p["value"] is None for p in per):
             values_text = "no run reached it"
             closest = [
-                min(r["closest"] for r in p["runs"] if r.get("closest") is not None)
+                min(near)
                 for p in per
-                if p["runs"]
+                if (near := [r["closest"] for r in p["runs"] if r.get("closest") is not None])
             ]
             if len(closest) == len(per):
                 values_text += "; closest " + " and ".join(
@@ -95,6 +101,12 @@ def outcome_lines(summary: Mapping[str, Any]) -> list[str]:
             )
         lines.append(f"**{name}**: " + "; ".join(parts) + ".")
     return lines
+
+
+def _note(stats: Mapping[str, Any]) -> str | None:
+    """The nominal run's note on an outcome (why it was not measured as declared), if any."""
+    nominal = stats.get("nominal")
+    return None if nominal is None else nominal.get("note")
 
 
 def _state(record: Mapping[str, Any], unit: str) -> str:
@@ -166,6 +178,8 @@ def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
                 cells.append(fmt_value(nv, unit))
             elif decl["kind"] == "reach" and nom is not None and nom.get("closest") is not None:
                 cells.append(f"never (closest {fmt_value(nom['closest'], 'm')})")
+            elif _note(p) is not None:
+                cells.append(f"not evaluated: {_note(p)}")
             else:
                 cells.append("none")
             lines.append("| " + " | ".join(cells) + " |")

@@ -31,6 +31,7 @@ from ..analysis.verdict import CONFIDENCE as VERDICT_CONFIDENCE
 from ..pipeline import Comparison, Pair
 from ..run.ensemble import SPREAD_PERCENTILE
 from ..run.events import EngineEvents, Event
+from ..run.outcomes import OutcomeRecord
 from ..run.resync import BORN_FACTOR, PARTS, Direction, Peak, PhaseErrors, Resync
 from ..scenario import Scenario, format_timestep
 from .departures import applicable
@@ -373,8 +374,8 @@ def outcome_stats_dict(s: OutcomeStats) -> dict[str, Any]:
         "unit": s.unit,
         "success": None if s.success is None else _success(s.success),
         "value": None if s.value is None else _distribution(s.value),
-        "nominal": None if s.nominal is None else dict(s.nominal),
-        "runs": [dict(r) for r in s.records],
+        "nominal": None if s.nominal is None else s.nominal.to_dict(),
+        "runs": [r.to_dict() for r in s.records],
     }
 
 
@@ -518,8 +519,8 @@ def _phase_errors(p: PhaseErrors) -> dict[str, Any]:
 def outcomes_summary(
     scenario: Scenario,
     labels: Sequence[str],
-    per_engine: Sequence[Sequence[Mapping[str, Any]]],
-    half_timestep: Sequence[Mapping[str, Any]] | None = None,
+    per_engine: Sequence[Sequence[Mapping[str, OutcomeRecord]]],
+    half_timestep: Sequence[Mapping[str, OutcomeRecord]] | None = None,
 ) -> dict[str, Any] | None:
     """``summary.json``'s ``outcomes``: ``declared`` (each outcome's declaration) and
     ``engines`` (per engine label, per outcome name, :func:`summarize`); ``per_engine[slot]``
@@ -544,7 +545,7 @@ def outcomes_summary(
             None
             if half_timestep is None
             else {
-                label: {k: dict(v) for k, v in runs.items()}
+                label: {k: v.to_dict() for k, v in runs.items()}
                 for label, runs in zip(labels, half_timestep, strict=True)
             }
         ),

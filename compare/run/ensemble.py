@@ -33,6 +33,7 @@ from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 from simbridge.transforms import quat_multiply
 
 from ..scenario import Scenario
+from .outcomes import OutcomeRecord
 from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features
 from .trajectory import BodyTrajectory, Trajectory, run
 
@@ -74,13 +75,28 @@ class Member:
     features: np.ndarray  # (T, ...) the headline quantity's features at the kept instants
     end_point: np.ndarray  # (3,) m, world: base position (free base) or last link's CoM (fixed)
     wall_time: float  # s, the whole run in its worker
-    outcomes: dict[str, dict[str, Any]] = field(default_factory=dict)
-    """The scenario's outcomes on this run, by name (:func:`~simbridge.compare.outcomes.evaluate`
-    records)."""
+    outcomes: dict[str, OutcomeRecord] = field(default_factory=dict)
+    """The scenario's outcomes on this run, by name
+    (:func:`~simbridge.compare.run.outcomes.evaluate` records)."""
     log: list[tuple[str, int, str]] = field(default_factory=list)
     """A worker process's ``simbridge`` log records (logger name, level, message), for the
     parent to show: empty for a member run in the caller's process (its records went out as
     they came)."""
+
+    # A member comes back from its worker process pickled: the outcome records travel in their
+    # JSON form (OutcomeRecord.to_dict, from_dict), as in a saved trajectory.
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state["outcomes"] = {name: r.to_dict() for name, r in self.outcomes.items()}
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        state = dict(state)
+        state["outcomes"] = {
+            name: OutcomeRecord.from_dict(r, file="<ensemble worker>", key=f"outcomes.{name}")
+            for name, r in state["outcomes"].items()
+        }
+        self.__dict__.update(state)
 
 
 @dataclass
@@ -101,7 +117,7 @@ class Ensemble:
     offsets_m: np.ndarray  # (N, R, 3) m: position offset per member and robot
     offsets_rad: np.ndarray  # (N, R, 3) rad: rotation vector per member and robot
     wall_time: float = 0.0  # s, summed over the members run in workers
-    outcomes: list[dict[str, dict[str, Any]]] = field(default_factory=list)
+    outcomes: list[dict[str, OutcomeRecord]] = field(default_factory=list)
     """Per member (member 0 first), the scenario's outcomes by name."""
     _spread: np.ndarray | None = field(default=None, repr=False)
 

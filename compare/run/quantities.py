@@ -18,11 +18,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
-
-from .trajectory import Trajectory
 
 __all__ = [
     "DEG",
@@ -171,6 +169,13 @@ def distance(quantity: str, fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
     raise KeyError(f"unknown quantity {quantity!r}; quantities: {', '.join(QUANTITIES)}")
 
 
-def up_of(tr: Trajectory) -> np.ndarray:
+class _Recorded(Protocol):
+    """What :func:`up_of` reads of a :class:`~simbridge.compare.run.Trajectory` (named by its
+    shape: .trajectory imports .outcomes, which imports this module)."""
+
+    manifest: dict[str, Any]
+
+
+def up_of(tr: _Recorded) -> np.ndarray:
     """The world's up (against the gravity the run had, from its manifest; z when unknown)."""
     return up_axis((tr.manifest.get("profile") or {}).get("gravity"))

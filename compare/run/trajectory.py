@@ -23,11 +23,12 @@ from typing import Any
 import numpy as np
 
 import simbridge
-from simbridge.exceptions import ScenarioError
+from simbridge.exceptions import ScenarioError, TrajectoryFileError
 from simbridge.types import JointType
 
 from ..scenario import Scenario, load_scenario, parse_timestep
 from ..scenario.controllers import PhaseControl
+from .outcomes import OutcomeRecord, evaluate_all
 
 __all__ = ["BodyTrajectory", "Trajectory", "run", "urdf_sha256"]
 
@@ -116,9 +117,9 @@ class Trajectory:
     wall_total: float = 0.0
     """Seconds of the whole run: loading, stepping and recording."""
     manifest: dict[str, Any] = field(default_factory=dict)
-    outcomes: dict[str, dict[str, Any]] = field(default_factory=dict)
+    outcomes: dict[str, OutcomeRecord] = field(default_factory=dict)
     """The scenario's outcomes measured on this run, by name
-    (:func:`simbridge.compare.outcomes.evaluate`)."""
+    (:func:`simbridge.compare.run.outcomes.evaluate`)."""
 
     @property
     def body(self) -> BodyTrajectory:
@@ -160,7 +161,7 @@ class Trajectory:
             "wall_time": self.wall_time,
             "wall_total": self.wall_total,
             "manifest": self.manifest,
-            "outcomes": self.outcomes,
+            "outcomes": {name: r.to_dict() for name, r in self.outcomes.items()},
             "bodies": {},
         }
         for name, b in self.bodies.items():
@@ -184,8 +185,15 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: str | Path) -> Trajectory:
+        """The trajectory :meth:`save` wrote.
+
+        Raises:
+            TrajectoryFileError: an outcome record that is malformed (naming the file and the
+                record's key, ``outcomes.<name>.<key>``).
+        """
         with np.load(Path(path), allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
+            outcomes = _outcomes_of(meta.get("outcomes", {}), str(path))
             bodies = {}
             for name, m in meta["bodies"].items():
                 bodies[name] = BodyTrajectory(
@@ -212,7 +220,7 @@ class Trajectory:
                 wall_time=meta["wall_time"],
                 wall_total=meta["wall_total"],
                 manifest=meta["manifest"],
-                outcomes=meta.get("outcomes", {}),
+                outcomes=outcomes,
             )
 
     def columns(self) -> tuple[list[str], np.ndarray]:
@@ -253,6 +261,21 @@ class Trajectory:
             for row in table:
                 writer.writerow([repr(float(v)) for v in row])
         return path
+
+
+def _outcomes_of(raw: Any, file: str) -> dict[str, OutcomeRecord]:
+    """A saved header's ``outcomes``: ``{name: record}`` (:meth:`OutcomeRecord.from_dict`)."""
+    if not isinstance(raw, dict):
+        raise TrajectoryFileError(file, "outcomes", f"expected a table, got {raw!r}")
+    out = {}
+    for name, record in raw.items():
+        r = OutcomeRecord.from_dict(record, file=file, key=f"outcomes.{name}")
+        if r.name != name:
+            raise TrajectoryFileError(
+                file, f"outcomes.{name}.name", f"the record of {name!r} is named {r.name!r}"
+            )
+        out[name] = r
+    return out
 
 
 def _json_default(obj: Any) -> Any:
@@ -442,8 +465,6 @@ def run(
         manifest=manifest,
     )
     if sc.outcomes:
-        from .outcomes import evaluate_all
-
         tr.outcomes = evaluate_all(sc, tr)
     return tr
 

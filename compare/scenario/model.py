@@ -97,6 +97,9 @@ class Scenario:
     """The file this scenario was read from (URDF paths are relative to its folder)."""
     outcomes: tuple[Outcome, ...] = ()
     """What success means (:mod:`simbridge.compare.outcomes`), measured on every run."""
+    cut_at: float | None = field(default=None, compare=False)
+    """Seconds :meth:`truncated` cut the scenario to (None: it runs whole); the outcomes say
+    when a phase they measure was not run, or cannot be measured, because of it."""
 
     @property
     def closed_loop(self) -> bool:
@@ -208,13 +211,14 @@ class Scenario:
                 f"{duration:g} s is less than half of scenario {self.name!r}'s time step "
                 f"({self.timestep:g} s): no step would run",
             )
+        cut_at = left * self.timestep if left < self.steps else self.cut_at
         phases = []
         for p in self.phases:
             if left <= 0:
                 break
             phases.append(replace(p, steps=min(p.steps, left)))
             left -= p.steps
-        return replace(self, phases=tuple(phases))
+        return replace(self, phases=tuple(phases), cut_at=cut_at)
 
     def resolve_urdf(self, robot: RobotSpec) -> str:
         """The URDF argument for ``Sim.load_urdf``: a path next to the scenario file when one

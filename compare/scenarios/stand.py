@@ -65,5 +65,9 @@ def height_error(trajectory, height: float, robot: str = "laikago", after: float
     ``after`` seconds on."""
     body = trajectory.bodies[robot]
     keep = trajectory.time >= after
+    if not keep.any():  # a run cut short (--duration) ends before: nothing to measure
+        raise ValueError(
+            f"no instant from {after:g} s on: the run ends at {trajectory.time[-1]:g} s"
+        )
     z = body.base_position[keep, 2]
     return float(np.sqrt(np.mean((z - height) ** 2)))

@@ -36,6 +36,7 @@ __all__ = [
     "SimNotCopyableError",
     "StaleCommandError",
     "ScenarioError",
+    "TrajectoryFileError",
     "SlowStepWarning",
 ]
 
@@ -295,6 +296,18 @@ class ScenarioError(SimbridgeError, ValueError):
         where = file if line is None else f"{file}:{line}"
         what = f"key {key!r}: " if key else ""
         super().__init__(f"{where}: {what}{detail}")
+
+
+class TrajectoryFileError(SimbridgeError, ValueError):
+    """A saved comparison trajectory (``Trajectory.load``) holds something malformed.
+
+    ``file`` names the file, ``key`` the dotted key path inside its header
+    (``outcomes.goal.closest``)."""
+
+    def __init__(self, file: str, key: str, detail: str):
+        self.file = file
+        self.key = key
+        super().__init__(f"{file}: key {key!r}: {detail}")
 
 
 class SlowStepWarning(UserWarning):

@@ -201,3 +201,38 @@ def test_a_duration_between_whole_steps_runs(capsys, tmp_path, duration, timeste
     # whole steps of the sweep's coarsest step (1/240 s), its half and 1/480 s alike
     steps = round(float(duration) * 240)
     assert summary["duration"] == pytest.approx(steps / 240)
+
+
+@pytest.mark.parametrize(
+    "scenario,start,end",
+    [
+        # the run stops inside "to A": B and C were not run
+        (
+            "kuka-reach",
+            "**settles at B**: not evaluated: phase 'to B' was not run (the run was cut at 1 s).",
+            "",
+        ),
+        # the height is measured from 3 s on (the function is named by its resolved path)
+        (
+            "laikago-stand",
+            "**holds 0.45 m**: not evaluated: not evaluable on the run cut at 1 s: ",
+            "stand.py:height_error(trajectory) raised ValueError: no instant from 3 s on: the run "
+            "ends at 1 s.",
+        ),
+    ],
+)
+def test_a_duration_that_cuts_a_phase_reports_what_was_not_measured(
+    tmp_path, capsys, scenario, start, end
+):
+    out = tmp_path / "rep"
+    argv = ["compare", scenario, "--duration", "1", "--ensemble", "1", "--resync-every", "0"]
+    assert main([*argv, "--no-plots", "--out", str(out)]) == 0
+    headline = capsys.readouterr().out.splitlines()
+    report_lines = (out / "report.md").read_text().splitlines()
+    for lines, s, e in ((report_lines, start, end), (headline, start.replace("**", ""), end)):
+        assert [x for x in lines if x.startswith(s) and x.endswith(e)], s
+
+    def no_nan(text: str) -> float:
+        raise AssertionError(f"{text} in summary.json")
+
+    json.loads((out / "summary.json").read_text(), parse_constant=no_nan)

@@ -25,10 +25,10 @@ def goto():
 
 def test_r2d2_goto_straight_ahead_both_engines_arrive_together(goto):
     a, b = goto["pybullet"]["goal ahead (0, 2)"], goto["mujoco"]["goal ahead (0, 2)"]
-    assert a["success"] and b["success"]
+    assert a.success and b.success
     # measured: 6.596 s and 6.663 s
-    assert 6.4 < a["value"] < 6.9 and 6.4 < b["value"] < 6.9
-    assert abs(a["value"] - b["value"]) < 0.2
+    assert 6.4 < a.value < 6.9 and 6.4 < b.value < 6.9
+    assert abs(a.value - b.value) < 0.2
 
 
 def test_r2d2_goto_behind_only_mujoco_reaches_it(goto):
@@ -38,26 +38,26 @@ def test_r2d2_goto_behind_only_mujoco_reaches_it(goto):
     )
     # PyBullet turns r2d2 about three times slower for the same wheel command: it circles the
     # goal (closest 12.6 cm in 20 s, never within 5 cm: README); MuJoCo arrives at 9.72 s
-    assert a["success"] is False and a["value"] is None and a["closest"] > 0.08
-    assert b["success"] is True and 9.3 < b["value"] < 10.2 and b["closest"] <= 0.05
+    assert a.success is False and a.value is None and a.figures.closest > 0.08
+    assert b.success is True and 9.3 < b.value < 10.2 and b.figures.closest <= 0.05
 
 
 def test_r2d2_goto_the_right_turn_takes_mujoco_half_the_time(goto):
     a, b = goto["pybullet"]["goal right (2, 0)"], goto["mujoco"]["goal right (2, 0)"]
-    assert b["success"] is True and 8.2 < b["value"] < 8.9  # measured 8.55 s
+    assert b.success is True and 8.2 < b.value < 8.9  # measured 8.55 s
     # PyBullet overshoots the turn and orbits: 19.8 s on the nominal run, not reached in most
     # perturbed runs, never sooner than 15.5 s (README)
-    assert a["value"] is None and a["closest"] > 0.05
+    assert a.value is None and a.figures.closest > 0.05
 
 
 @pytest.mark.parametrize("backend", ["pybullet", "mujoco"])
 def test_laikago_holds_its_height_upright(backend):
     out = run("laikago-stand", backend).outcomes
     up, height, work = out["stays upright"], out["holds 0.45 m"], out["motor work"]
-    assert up["success"] and up["value"] < 0.2
+    assert up.success and up.value < 0.2
     # measured RMS from t = 3 s: 0.70 mm (PyBullet), 1.86 mm (MuJoCo)
-    assert height["success"] and height["value"] < 0.0025 and height["unit"] == "m"
-    assert 100 < work["value"] < 500 and work["success"] is None
+    assert height.success and height.value < 0.0025 and height.unit == "m"
+    assert 100 < work.value < 500 and work.success is None
 
 
 def test_kuka_reach_through_compare_with_a_small_ensemble(tmp_path):

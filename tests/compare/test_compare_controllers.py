@@ -330,8 +330,8 @@ def test_ensemble_workers_make_the_controller_from_its_file(tmp_path):
     nominal = run(sc, "pybullet").outcomes["spins up"]
     for member in ens.outcomes:  # measured in each worker on its own run
         record = member["spins up"]
-        assert record["samples"] == 24 and record["success"] is True
-        assert record["value"] == pytest.approx(nominal["value"], rel=1e-6)
+        assert record.figures.samples == 24 and record.success is True
+        assert record.value == pytest.approx(nominal.value, rel=1e-6)
 
 
 def test_with_timestep_keeps_the_control_period_in_seconds(tmp_path):

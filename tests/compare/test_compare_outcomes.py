@@ -14,9 +14,17 @@ from simbridge.compare import Outcome, loads_scenario
 from simbridge.compare.analysis.outcomes import success_interval, summarize
 from simbridge.compare.report.outcomes import outcome_lines, outcomes_section
 from simbridge.compare.report.summary_json import outcome_stats_dict
-from simbridge.compare.run.outcomes import evaluate, tilt
+from simbridge.compare.run.outcomes import (
+    OutcomeRecord,
+    ReachFigures,
+    TrackFigures,
+    UprightFigures,
+    evaluate,
+    tilt,
+)
+from simbridge.compare.run.trajectory import Trajectory
 from simbridge.compare.scenario import dumps_scenario
-from simbridge.exceptions import ScenarioError
+from simbridge.exceptions import ScenarioError, TrajectoryFileError
 
 DT = 0.125  # the synthetic trajectories: 16 steps of 1/8 s, 17 instants from t = 0 to 2 s
 
@@ -32,45 +40,45 @@ def moving_x(t):
 def test_reach_gives_the_first_instant_within_the_radius():
     tr = trajectory(position=moving_x)
     r = evaluate(Outcome.reach("goal", (1.25, 0.0), 0.1), tr)
-    assert r["value"] == 1.25 and r["success"] is True and r["unit"] == "s"
-    assert r["closest"] == 0.0 and r["final_distance"] == 0.75
+    assert r.value == 1.25 and r.success is True and r.unit == "s"
+    assert r.figures.closest == 0.0 and r.figures.final_distance == 0.75
     # just out of reach: the closest instant is 1/8 m away
     r = evaluate(Outcome.reach("goal", (1.3, 0.2, 0.0), 0.05), tr)
-    assert r["value"] is None and r["success"] is False
-    assert r["closest"] == pytest.approx(math.hypot(0.05, 0.2), abs=1e-15)
+    assert r.value is None and r.success is False
+    assert r.figures.closest == pytest.approx(math.hypot(0.05, 0.2), abs=1e-15)
 
 
 def test_reach_in_the_plane_ignores_height_and_a_link_is_its_centre_of_mass():
     tr = trajectory(position=lambda t: moving_x(t) + np.array([0.0, 0.0, 5.0]))
-    assert evaluate(Outcome.reach("xy", (0.5, 0.0), 0.01), tr)["value"] == 0.5
-    assert evaluate(Outcome.reach("xyz", (0.5, 0.0, 0.0), 0.01), tr)["value"] is None
+    assert evaluate(Outcome.reach("xy", (0.5, 0.0), 0.01), tr).value == 0.5
+    assert evaluate(Outcome.reach("xyz", (0.5, 0.0, 0.0), 0.01), tr).value is None
     # link l0 sits 1 m above the base
     r = evaluate(Outcome.reach("link", (0.5, 0.0, 6.0), 0.01, link="l0"), tr)
-    assert r["value"] == 0.5
-    assert evaluate(Outcome.reach("by index", (0.5, 0.0, 6.0), 0.01, link=0), tr)["value"] == 0.5
+    assert r.value == 0.5
+    assert evaluate(Outcome.reach("by index", (0.5, 0.0, 6.0), 0.01, link=0), tr).value == 0.5
 
 
 def test_reach_with_hold_is_the_settling_time_and_by_is_a_deadline():
     # x = t up to 1 m at t = 1 s, then overshoots and rings: 1.2, 1.05, 0.85, then stays at 1
     x = np.concatenate([np.arange(9) * DT, [1.2, 1.05, 0.85], np.ones(5)])
     tr = trajectory(position=lambda t: np.stack([x, 0 * t, 0 * t], axis=1))
-    assert evaluate(Outcome.reach("first", (1.0, 0.0), 0.1), tr)["value"] == 1.0
+    assert evaluate(Outcome.reach("first", (1.0, 0.0), 0.1), tr).value == 1.0
     settled = evaluate(Outcome.reach("settled", (1.0, 0.0), 0.1, hold=True), tr)
-    assert settled["value"] == 1.5 and settled["success"] is True  # from row 12 on
+    assert settled.value == 1.5 and settled.success is True  # from row 12 on
     late = evaluate(Outcome.reach("by", (1.0, 0.0), 0.1, hold=True, by=1.25), tr)
-    assert late["value"] == 1.5 and late["success"] is False
+    assert late.value == 1.5 and late.success is False
     # leaves for good: never settles
-    assert evaluate(Outcome.reach("gone", (0.5, 0.0), 0.1, hold=True), tr)["value"] is None
+    assert evaluate(Outcome.reach("gone", (0.5, 0.0), 0.1, hold=True), tr).value is None
 
 
 def test_a_phase_window_counts_time_from_the_phase_start():
     tr = trajectory(position=moving_x, phases=[("a", 0, 8), ("b", 8, 16)])
     r = evaluate(Outcome.reach("in b", (1.5, 0.0), 0.01, phase="b"), tr)
-    assert r["value"] == 0.5  # t = 1.5 s, 0.5 s after b starts
+    assert r.value == 0.5  # t = 1.5 s, 0.5 s after b starts
     r = evaluate(Outcome.reach("not in a", (1.5, 0.0), 0.01, phase="a"), tr)
-    assert r["value"] is None and r["final_distance"] == 0.5
+    assert r.value is None and r.figures.final_distance == 0.5
     r = evaluate(Outcome.reach("missing", (1.5, 0.0), 0.01, phase="c"), tr)
-    assert r["value"] is None and r["success"] is None and "was not run" in r["note"]
+    assert r.value is None and r.success is None and "was not run" in r.note
 
 
 # ---------------------------------------------------------------- upright
@@ -81,10 +89,10 @@ def test_tilt_is_measured_against_the_initial_orientation_not_world_z():
     # a y-up robot turned upright (90 degrees about x), then tilting 0.1 rad/s further about x
     tr = trajectory(orientation=lambda t: np.stack([quat_x(half_pi + 0.1 * s) for s in t]))
     r = evaluate(Outcome.upright("upright", 0.25), tr)
-    assert r["value"] == pytest.approx(0.2, abs=1e-12) and r["success"] is True
-    assert r["exceeded_at"] is None and r["final_tilt"] == pytest.approx(0.2, abs=1e-12)
+    assert r.value == pytest.approx(0.2, abs=1e-12) and r.success is True
+    assert r.figures.exceeded_at is None and r.figures.final_tilt == pytest.approx(0.2, abs=1e-12)
     r = evaluate(Outcome.upright("strict", 0.105), tr)
-    assert r["success"] is False and r["exceeded_at"] == 1.125
+    assert r.success is False and r.figures.exceeded_at == 1.125
     # turning about the vertical is no tilt
     spun = trajectory(yaw=lambda t: 3 * t)
     assert np.abs(tilt(spun.body.base_orientation)).max() < 1e-7
@@ -94,7 +102,7 @@ def test_tilt_is_measured_against_the_initial_orientation_not_world_z():
         phases=[("a", 0, 8), ("b", 8, 16)],
     )
     r = evaluate(Outcome.upright("b only", 1.0, phase="b"), tr2)
-    assert r["value"] == pytest.approx(0.1, abs=1e-12)
+    assert r.value == pytest.approx(0.1, abs=1e-12)
 
 
 # ---------------------------------------------------------------- track, final pose, effort
@@ -108,17 +116,17 @@ def test_track_joints_against_their_recorded_targets():
     b.joint_targets[1:, 1] = 9.0  # a velocity target on joint 1: not a position to track
     b.joint_modes[1:, 1] = 1
     r = evaluate(Outcome.track("q"), tr)
-    assert r["value"] == pytest.approx(0.1, abs=1e-15) and r["samples"] == 12
-    assert r["unit"] == "rad" and r["success"] is None
+    assert r.value == pytest.approx(0.1, abs=1e-15) and r.figures.samples == 12
+    assert r.unit == "rad" and r.success is None
     r = evaluate(Outcome.track("bounded", joints=["j0"], max=0.05), tr)
-    assert r["success"] is False
+    assert r.success is False
     # velocity tracking: joint 1's velocity (zero) against 9 rad/s over 16 rows
     r = evaluate(Outcome.track("v", quantity="velocity"), tr)
-    assert r["value"] == 9.0 and r["samples"] == 16 and r["unit"] == "rad/s"
+    assert r.value == 9.0 and r.figures.samples == 16 and r.unit == "rad/s"
     # constant targets, every instant: joint 1 (q = t) against 1: sqrt(mean((t - 1)^2))
     t = tr.time
     r = evaluate(Outcome.track("const", joints=[1], targets=[1.0]), tr)
-    assert r["value"] == pytest.approx(math.sqrt(np.mean((t - 1) ** 2)), abs=1e-15)
+    assert r.value == pytest.approx(math.sqrt(np.mean((t - 1) ** 2)), abs=1e-15)
 
 
 def test_track_a_link_against_timed_points():
@@ -127,29 +135,29 @@ def test_track_a_link_against_timed_points():
     r = evaluate(Outcome.track("path", points=points), tr)
     t = tr.time
     err = np.where(t < 1.0, t, t - 1.0)
-    assert r["value"] == pytest.approx(math.sqrt(np.mean(err**2)), abs=1e-15)
-    assert r["max_error"] == 1.0 and r["unit"] == "m"
+    assert r.value == pytest.approx(math.sqrt(np.mean(err**2)), abs=1e-15)
+    assert r.figures.max_error == 1.0 and r.unit == "m"
 
 
 def test_final_pose_of_a_position_or_of_joints():
     tr = trajectory(position=moving_x, q=lambda t: np.stack([t, -t], axis=1))
     r = evaluate(Outcome.final_pose("end", point=(2.0, 0.3)), tr)
-    assert r["value"] == pytest.approx(0.3, abs=1e-15) and r["success"] is None
+    assert r.value == pytest.approx(0.3, abs=1e-15) and r.success is None
     r = evaluate(Outcome.final_pose("end", point=(2.0, 0.3), within=0.2), tr)
-    assert r["success"] is False
+    assert r.success is False
     r = evaluate(Outcome.final_pose("q", joints=["j0", "j1"], targets=[2.0, -1.0], within=1.0), tr)
-    assert r["value"] == pytest.approx(math.sqrt(0.5), abs=1e-15) and r["success"] is True
-    assert r["unit"] == "rad"
+    assert r.value == pytest.approx(math.sqrt(0.5), abs=1e-15) and r.success is True
+    assert r.unit == "rad"
 
 
 def test_final_orientation_is_the_angle_of_the_rotation_between():
     tr = trajectory(yaw=lambda t: 0.25 * t)  # ends turned 0.5 rad about z
     r = evaluate(Outcome.final_pose("facing", orientation=(0, 0, 0, 1), within=0.4), tr)
-    assert r["value"] == pytest.approx(0.5, abs=1e-12) and r["success"] is False
-    assert r["unit"] == "rad"
+    assert r.value == pytest.approx(0.5, abs=1e-12) and r.success is False
+    assert r.unit == "rad"
     # q and -q are the same orientation
     r = evaluate(Outcome.final_pose("facing", orientation=tuple(-quat_z(0.5))), tr)
-    assert r["value"] == pytest.approx(0.0, abs=1e-7)
+    assert r.value == pytest.approx(0.0, abs=1e-7)
 
 
 def test_effort_is_the_sum_of_force_times_speed_over_the_steps():
@@ -158,8 +166,10 @@ def test_effort_is_the_sum_of_force_times_speed_over_the_steps():
     b.joint_forces[:] = [2.0, 5.0]  # joint 1 brakes: power -10 W, counted as 10
     b.joint_forces[0] = 1e9  # row 0 ends no step: not counted
     r = evaluate(Outcome.effort("work"), tr)
-    assert r["value"] == (6.0 + 10.0) * 16 * DT == 32.0 and r["unit"] == "J"
-    assert evaluate(Outcome.effort("j0", joints=["j0"], max=10.0), tr) == {
+    assert r.value == (6.0 + 10.0) * 16 * DT == 32.0 and r.unit == "J"
+    j0 = evaluate(Outcome.effort("j0", joints=["j0"], max=10.0), tr)
+    assert j0 == OutcomeRecord("j0", "effort", "J", 12.0, False)
+    assert j0.to_dict() == {
         "name": "j0",
         "kind": "effort",
         "unit": "J",
@@ -178,9 +188,9 @@ def test_a_function_of_the_trajectory():
     r = evaluate(
         Outcome.function_of("far", farthest_x, params={"scale": 2.0}, min=3.0, unit="m"), tr
     )
-    assert r["value"] == 4.0 and r["success"] is True and r["unit"] == "m"
+    assert r.value == 4.0 and r.success is True and r.unit == "m"
     r = evaluate(Outcome.function_of("plain", farthest_x), tr)
-    assert r["value"] == 2.0 and r["success"] is None
+    assert r.value == 2.0 and r.success is None
 
 
 def test_a_function_that_fails_or_returns_something_else(tmp_path):
@@ -190,7 +200,7 @@ def test_a_function_that_fails_or_returns_something_else(tmp_path):
     )
     tr = trajectory()
     yes = evaluate(Outcome.function_of("y", "metrics.py:yes"), tr, base=tmp_path)
-    assert yes["success"] is True and yes["value"] == 1.0
+    assert yes.success is True and yes.value == 1.0
     with pytest.raises(ScenarioError, match=r"metrics.py:boom\(trajectory\) raised KeyError"):
         evaluate(Outcome.function_of("b", "metrics.py:boom"), tr, base=tmp_path, index=2)
     with pytest.raises(ScenarioError, match="returned 'fine'; expected a finite number"):
@@ -205,6 +215,96 @@ def test_unknown_robot_link_or_joint_names_the_outcome_and_the_choices():
         evaluate(Outcome.track("x", joints=["knee"]), tr)
     with pytest.raises(ScenarioError, match=r"no robot 'other'"):
         evaluate(Outcome.upright("x", 0.1, robot="other"), tr)
+
+
+# ---------------------------------------------------------------- records on disk
+
+
+def _records(tr) -> dict[str, OutcomeRecord]:
+    """One record of every shape: each kind's figures, none, a null figure, a note."""
+    outcomes = [
+        Outcome.reach("goal", (1.25, 0.0), 0.1),
+        Outcome.upright("upright", 0.25),
+        Outcome.track("q", joints=["j0"], targets=[0.0]),
+        Outcome.effort("work", max=1.0),
+        Outcome.reach("later", (1.0, 0.0), 0.1, phase="not run"),
+    ]
+    return {o.name: evaluate(o, tr) for o in outcomes}
+
+
+def test_outcome_records_survive_a_saved_trajectory(tmp_path):
+    tr = trajectory(position=moving_x, q=lambda t: np.stack([t, -t], axis=1))
+    tr.outcomes = _records(tr)
+    assert isinstance(tr.outcomes["goal"].figures, ReachFigures)
+    assert isinstance(tr.outcomes["upright"].figures, UprightFigures)
+    assert tr.outcomes["upright"].figures.exceeded_at is None  # a null figure
+    assert isinstance(tr.outcomes["q"].figures, TrackFigures)
+    assert tr.outcomes["work"].figures is None and tr.outcomes["later"].note
+    back = Trajectory.load(tr.save(tmp_path / "run.npz"))
+    assert back.outcomes == tr.outcomes
+    assert list(back.outcomes) == list(tr.outcomes)
+    # the JSON form keeps summary.json's key order: the common keys, the figures, the note
+    assert list(tr.outcomes["goal"].to_dict()) == [
+        "name", "kind", "unit", "value", "success", "closest", "final_distance"
+    ]  # fmt: skip
+    assert list(tr.outcomes["later"].to_dict())[-1] == "note"
+
+
+def _save_with_record(tmp_path, name: str, record: dict) -> str:
+    """A saved trajectory whose header holds ``record`` as outcome ``name``."""
+    import json
+
+    path = tmp_path / "run.npz"
+    trajectory().save(path)
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    meta = json.loads(str(arrays["meta"]))
+    meta["outcomes"] = {name: record}
+    arrays["meta"] = np.array(json.dumps(meta))
+    np.savez_compressed(path, **arrays)
+    return str(path)
+
+
+GOAL = {"name": "goal", "kind": "reach", "unit": "s", "value": 1.0, "success": True}
+
+
+@pytest.mark.parametrize(
+    "record,key,message",
+    [
+        (
+            {**GOAL, "closest": 0.0, "final_distance": 0.5, "colour": 1},
+            "goal.colour",
+            "unknown key",
+        ),
+        ({**GOAL, "exceeded_at": None}, "goal.exceeded_at", "closest, final_distance, note"),
+        ({**GOAL, "closest": 0.0}, "goal.final_distance", "missing"),
+        ({**GOAL, "value": "soon"}, "goal.value", "expected a number, got 'soon'"),
+        ({**GOAL, "success": 1}, "goal.success", "expected true, false or null"),
+        ({**GOAL, "kind": "win"}, "goal.kind", "unknown kind 'win'"),
+        ({k: v for k, v in GOAL.items() if k != "unit"}, "goal.unit", "missing"),
+        ({**GOAL, "name": "other"}, "goal.name", "named 'other'"),
+    ],
+)
+def test_a_malformed_record_names_the_file_and_the_key(tmp_path, record, key, message):
+    path = _save_with_record(tmp_path, "goal", record)
+    with pytest.raises(TrajectoryFileError) as info:
+        Trajectory.load(path)
+    assert info.value.file == path and info.value.key == f"outcomes.{key}"
+    assert message in str(info.value) and path in str(info.value)
+
+
+def test_ensemble_members_carry_records_across_the_process_boundary():
+    """A member pickles its records through their JSON form and reads them back equal."""
+    import pickle
+
+    from simbridge.compare.run.ensemble import Member
+
+    records = _records(trajectory(position=moving_x, q=lambda t: np.stack([t, -t], axis=1)))
+    m = Member(1, np.zeros((2, 3)), np.zeros(3), 0.5, records)
+    state = m.__getstate__()
+    assert state["outcomes"]["goal"] == records["goal"].to_dict()  # plain data on the wire
+    back = pickle.loads(pickle.dumps(m))
+    assert back.outcomes == records and back.index == 1
 
 
 # ---------------------------------------------------------------- over an ensemble
@@ -237,10 +337,7 @@ def test_success_rates_carry_wilson_intervals(k, n):
 def test_summarize_counts_successes_and_describes_the_values():
     o = Outcome.reach("goal", (0, 0), 0.1)
     times = [6.0, 6.5, None, 7.0, None]
-    records = [
-        {"name": "goal", "kind": "reach", "unit": "s", "value": v, "success": v is not None}
-        for v in times
-    ]
+    records = [OutcomeRecord("goal", "reach", "s", v, v is not None) for v in times]
     s = outcome_stats_dict(summarize(o, records))
     assert s["success"]["successes"] == 3 and s["success"]["runs"] == 5
     assert s["success"]["rate"] == 0.6
@@ -255,7 +352,9 @@ def test_summarize_counts_successes_and_describes_the_values():
     }
     assert s["nominal"]["value"] == 6.0 and len(s["runs"]) == 5
     # no bound: no success rate
-    e = outcome_stats_dict(summarize(Outcome.effort("w"), [{"value": 1.0, "success": None}]))
+    e = outcome_stats_dict(
+        summarize(Outcome.effort("w"), [OutcomeRecord("w", "effort", "J", 1.0, None)])
+    )
     assert e["success"] is None and e["value"]["std"] == 0.0
 
 
@@ -265,8 +364,7 @@ def _summary() -> dict:
 
     def recs(o, values, ok):
         return [
-            {"name": o.name, "kind": o.kind, "unit": o.unit, "value": v, "success": s}
-            for v, s in zip(values, ok, strict=True)
+            OutcomeRecord(o.name, o.kind, o.unit, v, s) for v, s in zip(values, ok, strict=True)
         ]
 
     engines = {
@@ -433,3 +531,82 @@ def test_outcome_names_are_unique():
 
 def test_quat_helpers_agree_with_tilt():
     assert tilt(np.stack([quat_z(0.0), quat_x(0.3)]))[1] == pytest.approx(0.3, abs=1e-12)
+
+
+def test_one_quaternion_rotation_in_compare():
+    """The tilt of the upright outcome rotates with run/quantities.py's ``rotate``, the one
+    definition in compare/ (run/outcomes.py had a copy)."""
+    import ast
+    from pathlib import Path
+
+    import simbridge.compare as package
+
+    root = Path(package.__file__).parent
+    found = [
+        f"{path.relative_to(root)}:{node.name}"
+        for path in sorted(root.rglob("*.py"))
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        if isinstance(node, ast.FunctionDef) and node.name.lstrip("_") == "rotate"
+    ]
+    assert found == ["run/quantities.py:rotate"]
+
+
+# ---------------------------------------------------------------- a run cut short
+
+
+def test_truncated_says_where_it_cut():
+    from simbridge.compare import load_scenario
+
+    sc = load_scenario("kuka-reach")  # three phases of 2 s
+    assert sc.cut_at is None
+    assert sc.truncated(1.0).cut_at == 1.0
+    assert sc.truncated(3.0).with_timestep(1 / 480).cut_at == 3.0
+    assert sc.truncated(100.0).cut_at is None  # nothing cut
+
+
+def test_a_cut_run_says_what_it_could_not_measure(tmp_path):
+    (tmp_path / "metrics.py").write_text(
+        "def late(tr):\n    return float('nan')\n\ndef index(tr):\n    return tr.time[99]\n"
+    )
+    tr = trajectory(position=moving_x, phases=[("a", 0, 8), ("b", 8, 16)])
+    gone = evaluate(Outcome.reach("in c", (1.0, 0.0), 0.1, phase="c"), tr, cut_at=2.0)
+    assert gone.value is None and gone.success is None and gone.figures is None
+    assert gone.note == "phase 'c' was not run (the run was cut at 2 s)"
+    late = Outcome.function_of("late", "metrics.py:late", max=1.0)
+    r = evaluate(late, tr, base=tmp_path, cut_at=2.0)
+    assert (r.value, r.success) == (None, None)
+    assert r.note == "not evaluable on the run cut at 2 s: metrics.py:late(trajectory) returned nan"
+    r = evaluate(Outcome.function_of("i", "metrics.py:index"), tr, base=tmp_path, cut_at=2.0)
+    assert r.note.endswith("metrics.py:index(trajectory) raised IndexError: " + _index_error())
+    # on a whole run the same function is an error in the scenario
+    with pytest.raises(ScenarioError, match="returned nan; expected a finite number"):
+        evaluate(late, tr, base=tmp_path)
+    # what ran is measured: a reach on the whole (cut) run
+    assert evaluate(Outcome.reach("goal", (1.25, 0.0), 0.1), tr, cut_at=2.0).value == 1.25
+
+
+def _index_error() -> str:
+    try:
+        np.zeros(17)[99]
+    except IndexError as exc:
+        return str(exc)
+    raise AssertionError
+
+
+def test_the_headline_says_an_outcome_was_not_evaluated():
+    goal = Outcome.reach("later", (0, 2), 0.05, phase="b")
+    note = "phase 'b' was not run (the run was cut at 1 s)"
+    rec = OutcomeRecord(goal.name, goal.kind, goal.unit, None, None, note=note)
+    summary = {
+        "outcomes": {
+            "declared": [goal.to_dict()],
+            "confidence": 0.95,
+            "engines": {
+                label: {goal.name: outcome_stats_dict(summarize(goal, [rec, rec]))}
+                for label in ("pybullet", "mujoco")
+            },
+        }
+    }
+    assert outcome_lines(summary) == [f"**later**: not evaluated: {note}."]
+    rows = [x for x in outcomes_section(summary) if x.startswith("| later")]
+    assert rows and all(x.endswith(f"| not evaluated: {note} |") for x in rows)
