@@ -1,0 +1,209 @@
+"""PyBullet's joint motors as PhysX joint drives (a part of :class:`PhysxBackend`).
+
+PyBullet's VELOCITY_CONTROL (and its default brake) is a constraint row asking for the joint
+velocity ``v*`` within one step, its impulse clamped to ``max_force dt``. A PhysX drive with
+stiffness 0 and damping D pushes with ``D (v* - v)`` clamped to its force limit, implicitly: with
+D large (:data:`DRIVE_DAMPING`) it is a velocity constraint that reaches ``v*`` within a step
+when ``max_force`` allows, the same meaning. POSITION_CONTROL's law
+
+    v_new = v_free + kd (v* - v_free) + kp (q* - q) / dt,      |impulse| <= max_force dt
+
+is that velocity drive with the target ``kp (q* - q) / dt + (1 - kd) v``, set before every step
+from the state at its start. TORQUE_CONTROL is the articulation's joint force (``qf``) for one
+step, cleared after it; the drive stays (PyBullet's brake cancels small torques until released
+with ``max_force=0``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+from simbridge.profiles import Profile
+from simbridge.types import JointCommands, JointType, MotorMode
+
+from ..locking import exclusive
+from .world import Robot
+
+__all__ = ["MotorCommands", "DRIVE_DAMPING"]
+
+# the damping (N·m·s/rad) of a drive standing for PyBullet's velocity row: large enough that the
+# drive reaches its target within a step wherever its force limit allows (measured: see
+# tests/test_physx_backend.py), small enough that PhysX's float32 solver stays exact
+DRIVE_DAMPING = 1e7
+SPEED_UNCAPPED = 1e6  # rad/s, m/s: a joint speed PhysX never reaches
+
+
+class MotorCommands:
+    """The ``Backend`` motor methods (a part of :class:`PhysxBackend`)."""
+
+    if TYPE_CHECKING:
+        name: ClassVar[str]
+        profile: Profile
+        _robots: dict[int, Robot]
+        _active: list[Robot]
+        _dt: float
+
+        def _check_idle(self) -> None: ...
+
+    # ---------------------------------------------------------------- set-up
+
+    def _configure(self, robot: Robot) -> None:
+        """A new robot's speed clamp, link damping and motors at load."""
+        if robot.static:
+            return
+        p = self.profile
+        cap = p.max_joint_velocity if p.max_joint_velocity is not None else SPEED_UNCAPPED
+        for link in robot.built.links:
+            link.linear_damping = p.linear_damping
+            link.angular_damping = p.angular_damping
+        if not robot.fixed and p.max_joint_velocity is not None:
+            root = robot.built.links[0]
+            root.max_linear_velocity = cap
+            root.max_angular_velocity = cap
+        for j in robot.movable:
+            robot.joints[j].max_velocity = cap
+        for s in range(len(robot.movable)):
+            self._apply(robot, s)
+
+    def _apply(self, robot: Robot, s: int) -> None:
+        """Make slot ``s``'s motor PhysX's drive."""
+        m = robot.motors
+        joint = robot.joints[robot.movable[s]]
+        force = min(float(m["max_force"][s]), float(m["effort"][s]))
+        if force <= 0.0:
+            joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+            return
+        joint.set_drive_properties(0.0, DRIVE_DAMPING, force, "force")
+        if m["ball"][s]:
+            joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+        elif m["mode"][s] == MotorMode.VELOCITY:
+            joint.set_drive_velocity_target(float(m["target"][s]))
+
+    def _refresh_active(self) -> None:
+        """The robots whose motors need work at every step (position motors, torques)."""
+        self._active = [
+            r
+            for r in self._robots.values()
+            if not r.static and (r.pending or bool((r.motors["mode"] == MotorMode.POSITION).any()))
+        ]
+
+    def _before_step(self, robot: Robot) -> None:
+        m = robot.motors
+        art = robot.built.articulation
+        position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
+        if len(position):
+            q = art.qpos
+            v = art.qvel
+            inv_dt = 1.0 / self._dt
+            for s in position:
+                if min(m["max_force"][s], m["effort"][s]) <= 0.0:
+                    continue
+                k = robot.dof[robot.movable[s]]
+                target = m["kp"][s] * (m["target"][s] - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
+                robot.joints[robot.movable[s]].set_drive_velocity_target(float(target))
+        if robot.pending:
+            qf = np.zeros(robot.ndof, dtype=np.float32)
+            for s, j in enumerate(robot.movable):
+                if not m["ball"][s]:
+                    qf[robot.dof[j]] = m["torque"][s]
+            art.qf = qf
+
+    def _after_step(self, robot: Robot) -> None:
+        if robot.pending:
+            robot.built.articulation.qf = np.zeros(robot.ndof, dtype=np.float32)
+            robot.motors["torque"][:] = 0.0
+            robot.pending = False
+            self._refresh_active()
+
+    # ---------------------------------------------------------------- commands
+
+    def _slots(self, robot: Robot, joints: np.ndarray) -> list[int]:
+        return [robot.slot[int(j)] for j in joints]
+
+    @exclusive
+    def set_joint_velocity(
+        self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
+    ) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        for s, t, f in zip(self._slots(robot, joints), target, max_force, strict=True):
+            m["mode"][s] = MotorMode.VELOCITY
+            m["target"][s] = t
+            m["max_force"][s] = f
+            m["kp"][s] = 0.0
+            m["kd"][s] = 1.0
+            self._apply(robot, s)
+        self._refresh_active()
+
+    @exclusive
+    def set_joint_position(
+        self,
+        body: int,
+        joints: np.ndarray,
+        target: list[float],
+        max_force: list[float],
+        kp: list[float],
+        kd: list[float],
+    ) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        for s, t, f, p_, d_ in zip(
+            self._slots(robot, joints), target, max_force, kp, kd, strict=True
+        ):
+            m["mode"][s] = MotorMode.POSITION
+            m["target"][s] = t
+            m["max_force"][s] = f
+            m["kp"][s] = p_
+            m["kd"][s] = d_
+            self._apply(robot, s)
+        self._refresh_active()
+
+    @exclusive
+    def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        for s, t in zip(self._slots(robot, joints), torque, strict=True):
+            m["torque"][s] += t
+        robot.pending = True
+        self._refresh_active()
+
+    # ---------------------------------------------------------------- state of the motors
+
+    @exclusive
+    def joint_commands(self, body: int) -> JointCommands:
+        robot = self._robots[body]
+        n = len(robot.table)
+        mode = np.full(n, int(MotorMode.NONE))
+        target = np.zeros(n)
+        max_force = np.zeros(n)
+        kp = np.zeros(n)
+        kd = np.zeros(n)
+        torque = np.zeros(n)
+        m = robot.motors
+        for s, j in enumerate(robot.movable):
+            mode[j] = m["mode"][s]
+            target[j] = m["target"][s] if not m["ball"][s] else 0.0
+            max_force[j] = m["max_force"][s]
+            kp[j] = m["kp"][s]
+            kd[j] = m["kd"][s]
+            torque[j] = m["torque"][s]
+        return JointCommands(mode, target, max_force, kp, kd, torque)
+
+    @exclusive
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        for s, j in enumerate(robot.movable):
+            if robot.table[j].type == JointType.SPHERICAL:
+                continue
+            m["mode"][s] = int(commands.mode[j])
+            m["target"][s] = float(commands.target[j])
+            m["max_force"][s] = float(commands.max_force[j])
+            m["kp"][s] = float(commands.kp[j])
+            m["kd"][s] = float(commands.kd[j])
+            m["torque"][s] = float(commands.pending_torque[j])
+            self._apply(robot, s)
+        robot.pending = bool(np.any(m["torque"] != 0.0))
+        self._refresh_active()

@@ -1,0 +1,232 @@
+"""The world as the Sim reads and sets it (a part of :class:`PhysxBackend`): joint table, link
+and base states, joint states, teleports. Frames and units are PyBullet's: a link's entity pose
+is its URDF link frame, its centre-of-mass frame that pose times the link's ``cmass_local_pose``
+(the inertial frame the model gave it); PhysX's velocities are those of the centre of mass.
+PhysX keeps them in float32."""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from simbridge.exceptions import SimulationDivergedError
+from simbridge.profiles import Profile
+from simbridge.transforms import transform_inverse, transform_multiply, wxyz_to_xyzw
+from simbridge.types import (
+    BaseState,
+    DynamicsInfo,
+    JointInfo,
+    JointStates,
+    LinkState,
+    Quat,
+    Vec3,
+)
+
+from ..locking import exclusive
+from .model import _link_frame_in_base, contact_values, pose
+from .world import Robot
+
+__all__ = ["StateAccess"]
+
+
+def _vec(v: Any) -> Vec3:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _frame(p: Any) -> tuple[Vec3, Quat]:
+    """A SAPIEN pose as (position, (x, y, z, w))."""
+    q = p.q
+    return _vec(p.p), (float(q[1]), float(q[2]), float(q[3]), float(q[0]))
+
+
+class StateAccess:
+    """The ``Backend`` methods that read or set state."""
+
+    if TYPE_CHECKING:
+        name: ClassVar[str]
+        profile: Profile
+        _robots: dict[int, Robot]
+        _diverged: SimulationDivergedError | None
+        _stepping: threading.RLock
+        _in_step: bool
+        _steps: int
+        _dt: float
+        _contacts_cache: list[Any] | None
+
+        @property
+        def time(self) -> float: ...
+
+        def _check_idle(self) -> None: ...
+
+        def refuse_fixed_base_velocity(
+            self, body: int, linear: Vec3 | None, angular: Vec3 | None
+        ) -> None: ...
+
+    # ---------------------------------------------------------------- tables
+
+    def joint_info(self, body: int, joint: int) -> JointInfo:
+        return self._robots[body].table[joint]
+
+    def num_joints(self, body: int) -> int:
+        return len(self._robots[body].table)
+
+    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        robot = self._robots[body]
+        ine = robot.built.inertials[link + 1]
+        lateral, rolling, spinning, restitution = contact_values(
+            robot.model.link(link), self.profile
+        )
+        return DynamicsInfo(
+            ine.mass,
+            lateral,
+            ine.diagonal,
+            ine.position,
+            ine.orientation,
+            restitution,
+            rolling,
+            spinning,
+        )
+
+    # ---------------------------------------------------------------- reads
+
+    def _readable(self, values: Any, body: int) -> None:
+        if self._diverged is not None:
+            raise self._diverged
+        if not np.isfinite(values).all():
+            self._diverged = SimulationDivergedError(self.name, self.time, f"body {body} state")
+            raise self._diverged
+
+    @exclusive
+    def link_state(self, body: int, link: int) -> LinkState:
+        robot = self._robots[body]
+        ine = robot.built.inertials[link + 1]
+        local = (ine.position, ine.orientation)
+        if robot.static:
+            base = _frame(robot.built.entities[0].pose)
+            frame = transform_multiply(base, _link_frame_in_base(robot.model, link))
+            com = transform_multiply(frame, local)
+            zero = (0.0, 0.0, 0.0)
+            return LinkState(com[0], com[1], *local, frame[0], frame[1], zero, zero)
+        comp = robot.built.links[link + 1]
+        p = comp.entity_pose
+        lin = comp.linear_velocity
+        ang = comp.angular_velocity
+        self._readable(np.concatenate([p.p, p.q, lin, ang]), body)
+        frame = _frame(p)
+        com = transform_multiply(frame, local)
+        return LinkState(com[0], com[1], *local, frame[0], frame[1], _vec(lin), _vec(ang))
+
+    @exclusive
+    def base_state(self, body: int) -> BaseState:
+        s = self.link_state(body, -1)
+        return BaseState(s[0], s[1], s[6], s[7])
+
+    @exclusive
+    def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        robot = self._robots[body]
+        n = len(joints)
+        pos = np.zeros(n)
+        vel = np.zeros(n)
+        tau = np.zeros(n)
+        if robot.static or robot.ndof == 0:
+            return JointStates(pos, vel, tau)
+        art = robot.built.articulation
+        q = art.qpos
+        v = art.qvel
+        self._readable(np.concatenate([q, v]), body)
+        applied = self._applied(robot)
+        for k, j in enumerate(joints):
+            d = robot.dof[j]
+            if d >= 0:
+                pos[k] = q[d]
+                vel[k] = v[d]
+                tau[k] = applied[d]
+        return JointStates(pos, vel, tau)
+
+    def _applied(self, robot: Robot) -> np.ndarray:
+        """Each dof's motor force of the last step: the joint's incoming force along its axis
+        (PhysX reports no drive force)."""
+        out = np.zeros(robot.ndof)
+        art = robot.built.articulation
+        forces = art.get_link_incoming_joint_forces()
+        for k, uj in enumerate(robot.model.joints):
+            d = robot.dof[k]
+            if d < 0 or uj.type == "spherical":
+                continue
+            f = forces[k + 1]
+            joint = robot.joints[k]
+            # the joint frame's x axis (the URDF axis) in the child link's frame
+            axis = _x_axis(joint.pose_in_child.q)
+            if uj.type == "prismatic":
+                out[d] = float(np.dot(f[3:6], axis))
+            else:
+                out[d] = float(np.dot(f[0:3], axis))
+        return out
+
+    # ---------------------------------------------------------------- teleports
+
+    @exclusive
+    def reset_joint_state(
+        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
+    ) -> None:
+        self._check_idle()
+        robot = self._robots[body]
+        art = robot.built.articulation
+        q = art.qpos
+        v = art.qvel
+        for j, x, u in zip(joints, positions, velocities, strict=True):
+            d = robot.dof[j]
+            q[d] = x
+            v[d] = u
+        art.qpos = q
+        art.qvel = v
+        self._contacts_cache = None
+
+    @exclusive
+    def reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        self._check_idle()
+        robot = self._robots[body]
+        if robot.fixed:
+            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
+        ine = robot.built.inertials[0]
+        local = (ine.position, ine.orientation)
+        if position is not None or orientation is not None:
+            if robot.static:
+                cur = _frame(robot.built.entities[0].pose)
+            else:
+                cur = _frame(robot.built.links[0].entity_pose)
+            com = transform_multiply(cur, local)
+            new_com = (
+                position if position is not None else com[0],
+                orientation if orientation is not None else com[1],
+            )
+            frame = transform_multiply(new_com, transform_inverse(local))
+            if robot.static:
+                robot.built.entities[0].pose = pose(*frame)
+            else:
+                robot.built.articulation.root_pose = pose(*frame)
+        if not robot.static:
+            art = robot.built.articulation
+            if linear_velocity is not None:
+                art.root_linear_velocity = np.asarray(linear_velocity, dtype=np.float32)
+            if angular_velocity is not None:
+                art.root_angular_velocity = np.asarray(angular_velocity, dtype=np.float32)
+        self._contacts_cache = None
+
+    def set_time(self, time: float) -> None:
+        self._steps = round(time / self._dt)
+
+
+def _x_axis(q_wxyz: Any) -> np.ndarray:
+    """The x axis of a frame turned by the (w, x, y, z) quaternion."""
+    x, y, z, w = wxyz_to_xyzw(q_wxyz)
+    return np.array([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)])
