@@ -20,6 +20,7 @@ from sapien import physx
 
 from simbridge.backend import Backend
 from simbridge.exceptions import (
+    BackendUnsupportedError,
     SimBusyError,
     SimulationDivergedError,
 )
@@ -31,6 +32,7 @@ from simbridge.types import Quat, Vec3
 from simbridge.urdf import UrdfModel
 
 from ..locking import exclusive, wait_for_lock
+from .combine import product_combine_available
 from .contacts import ContactReads
 from .model import build_robot
 from .motors import MotorCommands
@@ -57,14 +59,14 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
     NATIVE_DEFAULTS = {
         "gravity": (0.0, 0.0, -9.81),
         "timestep": 0.01,
-        "solver": "TGS, 10 position and 1 velocity iterations",
+        "solver": "TGS, 10 position and 1 velocity iterations (here: PGS, the profile's count)",
         "joint_brake": "none",
         "joint_friction": 0.05,
         "max_link_angular_velocity": 50.0,
         "max_link_linear_velocity": 10.0,
         "max_joint_velocity": 100.0,
         "max_depenetration_velocity": 1e32,
-        "friction_combine": "average",
+        "friction_combine": "average (here: the product, combine.py)",
         "restitution_combine": "average",
         "contact_offset": 0.01,
         "rest_offset": 0.0,
@@ -76,8 +78,6 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
         super().__init__(profile, gui)
         self.refuse_unsupported()
         if gui:
-            from simbridge.exceptions import BackendUnsupportedError
-
             raise BackendUnsupportedError(
                 self.name, "gui=True", "the PhysX backend runs headless (no viewer yet)"
             )
@@ -98,6 +98,10 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
         cfg = physx.PhysxSceneConfig()
         cfg.gravity = np.asarray(p.gravity, dtype=np.float32)
         cfg.bounce_threshold = 2.0
+        # PGS, PyBullet's kind of solver: under TGS (PhysX's default) r2d2's wheels, turning it
+        # on the spot at 100 rad/s, kick to 1150 rad/s for a step (PGS: never past the target;
+        # PyBullet's wheels drop as low as 10 rad/s for a step too, as PGS's do)
+        cfg.enable_tgs = False
         physx.set_scene_config(cfg)
         self._system = physx.PhysxCpuSystem()
         self._scene = sapien.Scene([self._system])
@@ -129,6 +133,14 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
         profile = self.profile
         if options.inertia_source != profile.inertia_source:
             profile = profile.with_(inertia_source=options.inertia_source)
+        spherical = [j.name for j in model.joints if j.type == "spherical"]
+        if spherical:
+            raise BackendUnsupportedError(
+                self.name,
+                f"{model.source.display_name}: spherical joints {spherical}",
+                "SAPIEN 3.0.3 builds no spherical articulation joint ('spherical joint is not "
+                "supported yet')",
+            )
         body = self._free_ids[-1] if self._free_ids else self._next_id
         skip = self_collision_exclusions(model, options.self_collision)
         built = build_robot(
@@ -292,11 +304,6 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
             "PhysX's contact (TGS solver, 1 cm contact offset, rest offset 0) instead of "
             "PyBullet's sequential impulse with a 1 mm collision margin"
         ),
-        "friction combine": (
-            "PhysX combines two materials' friction and restitution as their average (SAPIEN "
-            "3.0.3 exposes no combine mode); PyBullet as their product: a pair of 0.5 and 1.0 "
-            "(r2d2 on plane.urdf) slides at 0.75 here, 0.5 on PyBullet"
-        ),
         "rolling/spinning friction": "PhysX has none: <contact> rolling and spinning friction "
         "are reported, not applied",
         "link damping": (
@@ -341,6 +348,13 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
 
     def manifest(self) -> dict[str, Any]:
         departures: dict[str, str] = dict(self.DEPARTURES)
+        if not product_combine_available():
+            departures["friction combine"] = (
+                "PhysX combines two materials' friction and restitution as their average: this "
+                "SAPIEN build's setFrictionCombineMode could not be reached (combine.py); "
+                "PyBullet takes the product: a pair of 0.5 and 1.0 (r2d2 on plane.urdf) slides "
+                "at 0.75 here, 0.5 on PyBullet"
+            )
         for r in self._robots.values():
             if r.built.bounded_links:
                 departures[f"body {r.id} mass bound"] = (

@@ -40,6 +40,8 @@ from simbridge.transforms import quat_multiply, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
 from simbridge.urdf import Geometry, Link, UrdfModel
 
+from .combine import set_product_combine
+
 __all__ = ["BuiltRobot", "build_robot", "contact_values", "pose", "MIN_MASS", "MIN_INERTIA"]
 
 MIN_MASS = 1e-6  # kg, for a moving link of mass 0 (PhysX refuses zero)
@@ -53,6 +55,13 @@ LINK_SPEED_CAP = 1e6
 # measured to behave closest: see DEPARTURES["depenetration"] in backend.py.
 MAX_DEPENETRATION = 1e32
 CYLINDER_SIDES = 32  # PyBullet's cylinder hull from a URDF (URDF2Bullet.cpp)
+# PhysX's own cylinder instead of PyBullet's hull: no steadier on r2d2's wheels (measured)
+TRUE_CYLINDER = False
+# PyBullet's shapes from a URDF carry a 1 mm collision margin and rest that far apart: two
+# shapes here rest the sum of their rest offsets apart (r2d2 on plane.urdf: base at z 0.47100,
+# PyBullet 0.47099; at PhysX's rest offset 0, 0.47000)
+REST_OFFSET = 0.0005
+CONTACT_OFFSET = 0.01  # PhysX's default: contacts are made within 1 cm
 
 
 def pose(xyz: Vec3, quat: Quat) -> sapien.Pose:
@@ -137,6 +146,11 @@ def _shapes(g: Geometry, material: Any, where: str, skipped: list[str]) -> list[
             radius=size[0], half_length=0.5 * size[1], material=material
         )
         local = transform_multiply(local, ((0.0, 0.0, 0.0), _X_TO_Z))
+    elif g.kind == "cylinder" and TRUE_CYLINDER:
+        shape = physx.PhysxCollisionShapeCylinder(
+            radius=size[0], half_length=0.5 * size[1], material=material
+        )
+        local = transform_multiply(local, ((0.0, 0.0, 0.0), _X_TO_Z))
     elif g.kind == "cylinder":
         verts = _cylinder_hull(size[0], size[1]).astype(np.float32)
         shape = physx.PhysxCollisionShapeConvexMesh(vertices=verts, scale=one, material=material)
@@ -164,6 +178,8 @@ def _shapes(g: Geometry, material: Any, where: str, skipped: list[str]) -> list[
             skipped.append(where)
             return []
     shape.local_pose = pose(*local)
+    shape.rest_offset = REST_OFFSET
+    shape.contact_offset = CONTACT_OFFSET
     return [shape]
 
 
@@ -192,7 +208,9 @@ def build_robot(
         lateral, _rolling, _spinning, restitution = contact_values(link, profile)
         key = (lateral, restitution)
         if key not in materials:
-            materials[key] = physx.PhysxMaterial(lateral, lateral, restitution)
+            mat = physx.PhysxMaterial(lateral, lateral, restitution)
+            set_product_combine(mat)  # PyBullet's product rule (combine.py), where reachable
+            materials[key] = mat
         return materials[key]
 
     def link_shapes(link: Link) -> list[Any]:
@@ -276,11 +294,6 @@ def build_robot(
                     joint.limit = np.array([[-np.inf, np.inf]], dtype=np.float32)
                 joint.friction = 0.0
                 joint.armature = np.zeros(1, dtype=np.float32)
-            elif uj.type == "spherical":
-                joint.type = "spherical"
-                joint.pose_in_parent = pose(uj.origin_xyz, uj.origin_quat)
-                joint.pose_in_child = pose((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
-                joint.friction = 0.0
             else:
                 joint.type = "fixed"
                 joint.pose_in_parent = pose(uj.origin_xyz, uj.origin_quat)
@@ -294,6 +307,8 @@ def build_robot(
     for entity in entities:
         scene.add_entity(entity)
     art = links[0].articulation
+    art.solver_position_iterations = profile.solver_iterations
+    art.solver_velocity_iterations = 1
     return BuiltRobot(
         inertials,
         False,

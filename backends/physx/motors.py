@@ -55,9 +55,9 @@ class MotorCommands:
             return
         p = self.profile
         cap = p.max_joint_velocity if p.max_joint_velocity is not None else SPEED_UNCAPPED
-        for link in robot.built.links:
-            link.linear_damping = p.linear_damping
-            link.angular_damping = p.angular_damping
+        for link in robot.built.links:  # PyBullet's damping is applied in _before_step
+            link.linear_damping = 0.0
+            link.angular_damping = 0.0
         if not robot.fixed and p.max_joint_velocity is not None:
             root = robot.built.links[0]
             root.max_linear_velocity = cap
@@ -82,16 +82,29 @@ class MotorCommands:
             joint.set_drive_velocity_target(float(m["target"][s]))
 
     def _refresh_active(self) -> None:
-        """The robots whose motors need work at every step (position motors, torques)."""
+        """The robots that need work at every step (link damping, position motors, torques)."""
+        damped = bool(self.profile.linear_damping or self.profile.angular_damping)
         self._active = [
             r
             for r in self._robots.values()
-            if not r.static and (r.pending or bool((r.motors["mode"] == MotorMode.POSITION).any()))
+            if not r.static
+            and (damped or r.pending or bool((r.motors["mode"] == MotorMode.POSITION).any()))
         ]
 
     def _before_step(self, robot: Robot) -> None:
         m = robot.motors
         art = robot.built.articulation
+        k_lin, k_ang = self.profile.linear_damping, self.profile.angular_damping
+        if k_lin or k_ang:
+            # PyBullet's link damping f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal
+            # axes), from the velocities at the start of the step: as accelerations the inertia
+            # drops out of both
+            for link in robot.built.links:
+                v = link.linear_velocity
+                w = link.angular_velocity
+                a_lin = v * np.float32(-k_lin * (1.0 + float(np.sqrt(v @ v))))
+                a_ang = w * np.float32(-k_ang * (1.0 + float(np.sqrt(w @ w))))
+                link.add_force_torque(a_lin, a_ang, "acceleration")
         position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
         if len(position):
             q = art.qpos
@@ -105,9 +118,9 @@ class MotorCommands:
                 robot.joints[robot.movable[s]].set_drive_velocity_target(float(target))
         if robot.pending:
             qf = np.zeros(robot.ndof, dtype=np.float32)
-            for s, j in enumerate(robot.movable):
-                if not m["ball"][s]:
-                    qf[robot.dof[j]] = m["torque"][s]
+            for slot, j in enumerate(robot.movable):
+                if not m["ball"][slot]:
+                    qf[robot.dof[j]] = m["torque"][slot]
             art.qf = qf
 
     def _after_step(self, robot: Robot) -> None:
