@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import mujoco
 
 from simbridge.backend import Backend
+from simbridge.build_plan import build_plan
 from simbridge.exceptions import (
     BackendUnsupportedError,
     EngineError,
@@ -28,9 +29,8 @@ from simbridge.exceptions import (
     SimulationDivergedError,
     UrdfStructureError,
 )
-from simbridge.inertia import is_fixed_base
 from simbridge.joint_table import joint_table
-from simbridge.load_options import LoadOptions, self_collision_exclusions
+from simbridge.load_options import LoadOptions
 from simbridge.profiles import Profile
 from simbridge.types import (
     JointType,
@@ -206,35 +206,26 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
                 f"MuJoCo's compiler refuses a body tree deeper than {MAX_TREE_DEPTH + 1} bodies "
                 f"(at most {MAX_TREE_DEPTH} joints from the root to any link)",
             )
-        # this body's inertia source (the profile's unless load_urdf said otherwise)
-        profile = self.profile
-        if options.inertia_source != profile.inertia_source:
-            profile = profile.with_(inertia_source=options.inertia_source)
+        # every PyBullet rule resolved once (the inertia source and self-collision mode are the
+        # options'); the builder only translates it
+        plan = build_plan(
+            model,
+            self.profile,
+            options,
+            fixed_base=fixed_base,
+            base_position=base_position,
+            base_orientation=base_orientation,
+        )
         body = self._free_ids[-1] if self._free_ids else self._next_id
         prefix = f"b{body}/"
         spec = self._spec
         meshes = self._meshes.mark()
         try:
-            rspec = build.add_robot(
-                spec,
-                self._meshes,
-                model,
-                prefix,
-                base_position,
-                base_orientation,
-                fixed_base,
-                profile,
-            )
-            skip = self_collision_exclusions(model, options.self_collision)
+            rspec = build.add_robot(spec, self._meshes, plan, prefix, self.profile)
             build.add_pairs(
-                spec,
-                rspec,
-                [r.spec for r in self._robots.values()],
-                self.profile,
-                CONTACT_MARGIN,
-                skip,
+                spec, rspec, [r.spec for r in self._robots.values()], self.profile, CONTACT_MARGIN
             )
-            fixed = is_fixed_base(model, fixed_base)
+            fixed = plan.fixed_base
             table = joint_table(model, fixed_base, rspec.inertials)
             movable = [j.index for j in table if j.type != JointType.FIXED]
             robot = Robot(body, model, rspec, table, fixed, movable)

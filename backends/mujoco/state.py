@@ -36,7 +36,6 @@ from simbridge.types import (
 )
 
 from ..locking import exclusive, wait_for_lock
-from . import model as build
 from .world import Compiled, Robot
 
 __all__ = ["StateAccess"]
@@ -87,18 +86,16 @@ class StateAccess:
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
         robot = self._robots[body]
         ine = robot.spec.inertials[link + 1]
-        lateral, rolling, spinning, restitution = build._contact_values(
-            robot.model.link(link), self.profile
-        )
+        ct = robot.spec.plan.link(link).contact
         return DynamicsInfo(
             ine.mass,
-            lateral,
+            ct.lateral_friction,
             ine.diagonal,
             ine.position,
             ine.orientation,
-            restitution,
-            rolling,
-            spinning,
+            ct.restitution,
+            ct.rolling_friction,
+            ct.spinning_friction,
         )
 
     # ---------------------------------------------------------------- state
