@@ -19,14 +19,14 @@ import sapien
 from sapien import physx
 
 from simbridge.backend import Backend
+from simbridge.build_plan import build_plan
 from simbridge.exceptions import (
     BackendUnsupportedError,
     SimBusyError,
     SimulationDivergedError,
 )
-from simbridge.inertia import is_fixed_base
 from simbridge.joint_table import joint_table
-from simbridge.load_options import LoadOptions, self_collision_exclusions
+from simbridge.load_options import LoadOptions
 from simbridge.profiles import Profile
 from simbridge.types import Quat, Vec3
 from simbridge.urdf import UrdfModel
@@ -130,9 +130,6 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
         options: LoadOptions,
     ) -> int:
         self._check_idle()
-        profile = self.profile
-        if options.inertia_source != profile.inertia_source:
-            profile = profile.with_(inertia_source=options.inertia_source)
         spherical = [j.name for j in model.joints if j.type == "spherical"]
         if spherical:
             raise BackendUnsupportedError(
@@ -142,19 +139,18 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
                 "supported yet')",
             )
         body = self._free_ids[-1] if self._free_ids else self._next_id
-        skip = self_collision_exclusions(model, options.self_collision)
-        built = build_robot(
-            self._scene,
+        plan = build_plan(
             model,
-            base_position,
-            base_orientation,
-            fixed_base,
-            profile,
-            body + 1,
-            skip,
+            self.profile,
+            options,
+            fixed_base=fixed_base,
+            base_position=base_position,
+            base_orientation=base_orientation,
         )
+        built = build_robot(self._scene, plan, self.profile.solver_iterations, body + 1)
+        built.plan = plan
         try:
-            fixed = is_fixed_base(model, fixed_base)
+            fixed = plan.fixed_base
             table = joint_table(model, fixed_base, built.inertials)
             movable = movable_joints(table)
             robot = self._robot(body, model, built, table, fixed, movable)

@@ -1,4 +1,6 @@
-"""A :class:`~simbridge.urdf.UrdfModel` built into PhysX through SAPIEN's components.
+"""A robot's :class:`~simbridge.build_plan.BuildPlan` built into PhysX through SAPIEN's
+components. The plan holds every PyBullet rule (link order, inertials, shapes and meshes,
+contact values, contact filter); what is decided here is PhysX's alone.
 
 Not SAPIEN's URDF loader (which orders joints depth-first, needs a render device for visuals and
 loads a mass-0 link as a dynamic body): every link is made here, one
@@ -6,8 +8,8 @@ loads a mass-0 link as a dynamic body): every link is made here, one
 articulation is PyBullet's link ``i - 1`` (the base first):
 
 * the entity frame of a link is its URDF link frame; its centre of mass and principal axes are
-  :func:`simbridge.inertia.model_inertials`' (PyBullet's numbers for the profile), mass and
-  inertia bounded below for moving links (PhysX refuses zero);
+  the plan's (PyBullet's numbers for the profile), mass and inertia bounded below for moving
+  links (PhysX refuses zero);
 * a revolute or prismatic joint turns or slides along the x axis of its joint frame in PhysX:
   the joint frame is the URDF joint origin turned so that its x axis is the URDF axis
   (normalised), in the parent (``pose_in_parent``) and in the child (``pose_in_child``), so the
@@ -33,16 +35,14 @@ import numpy as np
 import sapien
 from sapien import physx
 
-from simbridge.inertia import LinkInertial, is_fixed_base, model_inertials
-from simbridge.meshes import read_mesh
-from simbridge.profiles import Profile
+from simbridge.build_plan import BuildPlan, JointPlan, LinkPlan, ShapePlan
+from simbridge.inertia import LinkInertial
 from simbridge.transforms import quat_multiply, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
-from simbridge.urdf import Geometry, Link, UrdfModel
 
 from .combine import set_product_combine
 
-__all__ = ["BuiltRobot", "build_robot", "contact_values", "pose", "MIN_MASS", "MIN_INERTIA"]
+__all__ = ["BuiltRobot", "build_robot", "pose", "MIN_MASS", "MIN_INERTIA"]
 
 MIN_MASS = 1e-6  # kg, for a moving link of mass 0 (PhysX refuses zero)
 MIN_INERTIA = 1e-10  # kg m^2, likewise
@@ -68,23 +68,6 @@ def pose(xyz: Vec3, quat: Quat) -> sapien.Pose:
     """A SAPIEN pose from a position and an (x, y, z, w) quaternion."""
     return sapien.Pose(
         np.asarray(xyz, dtype=np.float32), np.asarray(xyzw_to_wxyz(quat), np.float32)
-    )
-
-
-def contact_values(link: Link, profile: Profile) -> tuple[float, float, float, float]:
-    """(lateral, rolling, spinning friction, restitution) of a link: its ``<contact>`` where the
-    profile reads it, else the profile's."""
-    ct = link.contact
-    read = profile.read_urdf_contact
-
-    def pick(value: float | None, default: float) -> float:
-        return float(value) if read and value is not None else default
-
-    return (
-        pick(ct.lateral_friction, profile.lateral_friction),
-        pick(ct.rolling_friction, profile.rolling_friction),
-        pick(ct.spinning_friction, profile.spinning_friction),
-        pick(ct.restitution, profile.restitution),
     )
 
 
@@ -117,7 +100,7 @@ class BuiltRobot:
     shape_links: dict[int, int] = field(default_factory=dict)  # id(shape component) -> link
     bounded_links: list[str] = field(default_factory=list)
     skipped_shapes: list[str] = field(default_factory=list)
-    obj_compounds: list[str] = field(default_factory=list)  # .obj meshes of several objects
+    plan: BuildPlan | None = None
 
 
 def _cylinder_hull(radius: float, length: float) -> np.ndarray:
@@ -130,9 +113,9 @@ def _cylinder_hull(radius: float, length: float) -> np.ndarray:
     return np.concatenate([top, bottom])
 
 
-def _shapes(g: Geometry, material: Any, where: str, skipped: list[str]) -> list[Any]:
-    """PhysX shapes of one collision element, placed in the link frame."""
-    local: tuple[Vec3, Quat] = (g.origin_xyz, g.origin_quat)
+def _shapes(g: ShapePlan, material: Any, where: str, skipped: list[str]) -> list[Any]:
+    """PhysX shapes of one collision shape of the plan, placed in the link frame."""
+    local: tuple[Vec3, Quat] = (g.position, g.orientation)
     one = np.ones(3, dtype=np.float32)
     size = [max(float(v), MIN_SIZE) for v in g.size] if g.kind != "mesh" else list(g.size)
     if g.kind == "box":
@@ -156,16 +139,10 @@ def _shapes(g: Geometry, material: Any, where: str, skipped: list[str]) -> list[
         shape = physx.PhysxCollisionShapeConvexMesh(vertices=verts, scale=one, material=material)
     elif g.kind == "plane":
         shape = physx.PhysxCollisionShapePlane(material=material)
-        normal = np.asarray(g.size, dtype=float)
-        local = transform_multiply(local, ((0.0, 0.0, 0.0), _x_to(tuple(normal))))
+        local = transform_multiply(local, ((0.0, 0.0, 0.0), _x_to(tuple(g.size))))
     else:
-        assert g.mesh_path is not None
-        try:
-            verts, _faces = read_mesh(g.mesh_path)
-        except (OSError, ValueError, IndexError):
-            skipped.append(where)
-            return []
-        v = np.asarray(verts, dtype=float) * np.asarray(g.size, dtype=float)
+        assert g.mesh is not None
+        v = np.asarray(g.mesh.vertices, dtype=float)
         v = v[np.isfinite(v).all(axis=1)]
         if len(v) < 4:
             skipped.append(where)
@@ -183,57 +160,47 @@ def _shapes(g: Geometry, material: Any, where: str, skipped: list[str]) -> list[
     return [shape]
 
 
-def build_robot(
-    scene: Any,
-    model: UrdfModel,
-    base_position: Vec3,
-    base_orientation: Quat,
-    fixed_base: bool,
-    profile: Profile,
-    group: int,
-    self_collision_skip: set[tuple[int, int]] | None,
-) -> BuiltRobot:
-    """Add ``model`` to ``scene``; ``group`` tags its shapes for the contact filter (a robot's
-    links do not collide with each other unless ``self_collision_skip`` is given, which lists
-    the link pairs left out)."""
-    fixed = is_fixed_base(model, fixed_base)
-    inertials = model_inertials(model, fixed_base, profile.inertia_source)
-    moving = any(j.type != "fixed" for j in model.joints)
-    static_body = fixed and not moving
+def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) -> BuiltRobot:
+    """Add the robot of ``plan`` to ``scene``; ``body`` (its id) tags its shapes for the
+    contact filter (:func:`_filter`)."""
+    moving = any(link.joint is not None and link.joint.type != "fixed" for link in plan.links)
+    static_body = plan.fixed_base and not moving
+    inertials = [link.inertial for link in plan.links]
     skipped: list[str] = []
     bounded: list[str] = []
     materials: dict[tuple[float, float], Any] = {}
 
-    def material_of(link: Link) -> Any:
-        lateral, _rolling, _spinning, restitution = contact_values(link, profile)
-        key = (lateral, restitution)
+    def material_of(link: LinkPlan) -> Any:
+        key = (link.contact.lateral_friction, link.contact.restitution)
         if key not in materials:
-            mat = physx.PhysxMaterial(lateral, lateral, restitution)
+            mat = physx.PhysxMaterial(key[0], key[0], key[1])
             set_product_combine(mat)  # PyBullet's product rule (combine.py), where reachable
             materials[key] = mat
         return materials[key]
 
-    def link_shapes(link: Link) -> list[Any]:
+    def link_shapes(link: LinkPlan) -> list[Any]:
         mat = material_of(link)
         out = []
-        for k, g in enumerate(link.collisions):
-            out += _shapes(g, mat, f"link {link.name!r} <collision> #{k}", skipped)
+        for g in link.collisions:
+            where = f"link {link.name!r} <collision> #{g.element}"
+            for shape in _shapes(g, mat, where, skipped):
+                _filter(shape, link, plan, body)
+                out.append(shape)
         return out
 
-    root_pose = pose(base_position, base_orientation)
+    root_pose = pose(plan.base_position, plan.base_orientation)
+    shape_links: dict[int, int] = {}
     if static_body:
         entity = sapien.Entity()
         actor = physx.PhysxRigidStaticComponent()
-        shape_links = {}
-        for link in model.links:
-            frame = _link_frame_in_base(model, link.index)
+        for link in plan.links:
+            frame = _link_frame_in_base(plan, link.index)
             for shape in link_shapes(link):
                 shape.local_pose = pose(*frame) * shape.local_pose
-                _filter(shape, group, -1, None)
                 actor.attach(shape)
-                shape_links[id(shape)] = -1 if link.index == -1 else link.index
+                shape_links[id(shape)] = link.index
         entity.add_component(actor)
-        entity.name = model.name
+        entity.name = plan.name
         entity.pose = root_pose
         scene.add_entity(entity)
         return BuiltRobot(
@@ -248,19 +215,17 @@ def build_robot(
 
     entities: list[Any] = []
     links: list[Any] = []
-    shape_links = {}
-    for link in model.links:
+    for link in plan.links:
         i = link.index
-        parent = None if i == -1 else links[model.parent_index(model.joints[i]) + 1]
+        parent = None if link.parent is None else links[link.parent + 1]
         comp = physx.PhysxArticulationLinkComponent(parent)
         for shape in link_shapes(link):
-            _filter(shape, group, i, self_collision_skip)
             comp.attach(shape)
             shape_links[id(shape)] = i
-        ine = inertials[i + 1]
+        ine = link.inertial
         mass, diag = ine.mass, list(ine.diagonal)
         if not (mass >= MIN_MASS and min(diag) >= MIN_INERTIA):  # NaN too
-            if not (i == -1 and fixed):
+            if not link.static:
                 bounded.append(link.name)
             mass = max(mass, MIN_MASS) if math.isfinite(mass) else MIN_MASS
             diag = [v if v >= MIN_INERTIA else MIN_INERTIA for v in diag]
@@ -273,31 +238,7 @@ def build_robot(
         comp.max_depenetration_velocity = MAX_DEPENETRATION
         comp.linear_damping = 0.0
         comp.angular_damping = 0.0
-        joint = comp.joint
-        if i == -1:
-            joint.type = "fixed" if fixed else "undefined"
-        else:
-            uj = model.joints[i]
-            joint.name = uj.name
-            if uj.type in ("revolute", "continuous", "prismatic"):
-                turn = _x_to(uj.axis) if any(uj.axis) else (0.0, 0.0, 0.0, 1.0)
-                limited = uj.type != "continuous" and uj.has_limit and uj.lower <= uj.upper
-                if uj.type == "prismatic":
-                    joint.type = "prismatic"
-                else:
-                    joint.type = "revolute" if limited else "revolute_unwrapped"
-                joint.pose_in_parent = pose(uj.origin_xyz, quat_multiply(uj.origin_quat, turn))
-                joint.pose_in_child = pose((0.0, 0.0, 0.0), turn)
-                if limited:
-                    joint.limit = np.array([[uj.lower, uj.upper]], dtype=np.float32)
-                else:
-                    joint.limit = np.array([[-np.inf, np.inf]], dtype=np.float32)
-                joint.friction = 0.0
-                joint.armature = np.zeros(1, dtype=np.float32)
-            else:
-                joint.type = "fixed"
-                joint.pose_in_parent = pose(uj.origin_xyz, uj.origin_quat)
-                joint.pose_in_child = pose((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+        _joint(comp.joint, link.joint, plan.fixed_base)
         entity = sapien.Entity()
         entity.add_component(comp)
         entity.name = link.name
@@ -307,7 +248,7 @@ def build_robot(
     for entity in entities:
         scene.add_entity(entity)
     art = links[0].articulation
-    art.solver_position_iterations = profile.solver_iterations
+    art.solver_position_iterations = solver_iterations
     art.solver_velocity_iterations = 1
     return BuiltRobot(
         inertials,
@@ -321,24 +262,53 @@ def build_robot(
     )
 
 
-def _link_frame_in_base(model: UrdfModel, index: int) -> tuple[Vec3, Quat]:
+def _joint(joint: Any, jp: JointPlan | None, fixed_base: bool) -> None:
+    """Set up a link's incoming PhysX joint from the plan's joint (None: the base)."""
+    if jp is None:
+        joint.type = "fixed" if fixed_base else "undefined"
+        return
+    joint.name = jp.name
+    identity: Quat = (0.0, 0.0, 0.0, 1.0)
+    if jp.type in ("revolute", "continuous", "prismatic"):
+        turn = _x_to(jp.axis) if any(jp.axis) else identity
+        limited = jp.type != "continuous" and jp.limited
+        if jp.type == "prismatic":
+            joint.type = "prismatic"
+        else:
+            joint.type = "revolute" if limited else "revolute_unwrapped"
+        joint.pose_in_parent = pose(jp.position, quat_multiply(jp.orientation, turn))
+        joint.pose_in_child = pose((0.0, 0.0, 0.0), turn)
+        bounds = [jp.lower, jp.upper] if limited else [-np.inf, np.inf]
+        joint.limit = np.array([bounds], dtype=np.float32)
+        joint.friction = 0.0  # PhysX's default 0.05: PyBullet's joints have none
+        joint.armature = np.zeros(1, dtype=np.float32)
+    else:
+        joint.type = "fixed"
+        joint.pose_in_parent = pose(jp.position, jp.orientation)
+        joint.pose_in_child = pose((0.0, 0.0, 0.0), identity)
+
+
+def _link_frame_in_base(plan: BuildPlan, index: int) -> tuple[Vec3, Quat]:
     """Link ``index``'s frame in the base's, every joint at 0."""
     frame: tuple[Vec3, Quat] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
     chain = []
     while index != -1:
-        joint = model.joints[index]
-        chain.append(joint)
-        index = model.parent_index(joint)
-    for joint in reversed(chain):
-        frame = transform_multiply(frame, (joint.origin_xyz, joint.origin_quat))
+        jp = plan.link(index).joint
+        assert jp is not None
+        chain.append(jp)
+        index = jp.parent
+    for jp in reversed(chain):
+        frame = transform_multiply(frame, (jp.position, jp.orientation))
     return frame
 
 
-def _filter(shape: Any, group: int, link: int, skip: set[tuple[int, int]] | None) -> None:
-    """PhysX's shape filter (SAPIEN: groups[0] & other[1] or groups[1] & other[0] -> no
-    contact; groups[2] == other[2] and groups[3] bits shared -> no contact). Word 2 is the body
-    (``group``): the links of one body never touch each other (PyBullet's default) unless
-    self-collision is asked for, when word 2 is 0 and nothing is filtered here (the pairs left
-    out are removed in the contact callback's stead: see DEPARTURES)."""
-    del link, skip
-    shape.set_collision_groups([1, 1, group if True else 0, 0])
+def _filter(shape: Any, link: LinkPlan, plan: BuildPlan, body: int) -> None:
+    """PyBullet's contact filter as SAPIEN's four collision groups (two shapes touch when
+    ``(A.g0 & B.g1) or (A.g1 & B.g0)``, unless ``A.g2 & B.g2`` and ``A.g3 == B.g3``): g0, g1
+    the plan's group and mask (Bullet's OR rule); g3 the body, and g2 1 where its links never
+    touch each other (self-collision off, PyBullet's default), else 0 (every pair but PhysX's
+    own parent and child: the exclusion modes are a departure)."""
+    own = 1 if plan.self_collision == "off" else 0
+    shape.set_collision_groups(
+        [link.filter.group & 0xFFFFFFFF, link.filter.mask & 0xFFFFFFFF, own, body & 0xFFFF]
+    )

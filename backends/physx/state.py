@@ -25,7 +25,7 @@ from simbridge.types import (
 )
 
 from ..locking import exclusive
-from .model import _link_frame_in_base, contact_values, pose
+from .model import _link_frame_in_base, pose
 from .world import Robot
 
 __all__ = ["StateAccess"]
@@ -75,18 +75,17 @@ class StateAccess:
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
         robot = self._robots[body]
         ine = robot.built.inertials[link + 1]
-        lateral, rolling, spinning, restitution = contact_values(
-            robot.model.link(link), self.profile
-        )
+        assert robot.built.plan is not None
+        ct = robot.built.plan.link(link).contact
         return DynamicsInfo(
             ine.mass,
-            lateral,
+            ct.lateral_friction,
             ine.diagonal,
             ine.position,
             ine.orientation,
-            restitution,
-            rolling,
-            spinning,
+            ct.restitution,
+            ct.rolling_friction,
+            ct.spinning_friction,
         )
 
     # ---------------------------------------------------------------- reads
@@ -105,7 +104,8 @@ class StateAccess:
         local = (ine.position, ine.orientation)
         if robot.static:
             base = _frame(robot.built.entities[0].pose)
-            frame = transform_multiply(base, _link_frame_in_base(robot.model, link))
+            assert robot.built.plan is not None
+            frame = transform_multiply(base, _link_frame_in_base(robot.built.plan, link))
             com = transform_multiply(frame, local)
             zero = (0.0, 0.0, 0.0)
             return LinkState(com[0], com[1], *local, frame[0], frame[1], zero, zero)
