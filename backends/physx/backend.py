@@ -107,6 +107,7 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
         self._scene = sapien.Scene([self._system])
         self._scene.timestep = p.timestep
         self._diverged = None
+        self._generation = getattr(self, "_generation", 0) + 1  # a new world: old snapshots void
         self._contacts_cache: list[Any] | None = None
         self._active: list[Robot] = []  # robots that need work before or after a step
 
@@ -161,6 +162,7 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
                 self._scene.remove_entity(entity)
             raise
         self._robots[body] = robot
+        self._generation += 1
         if self._free_ids:
             self._free_ids.pop()
         else:
@@ -208,6 +210,7 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
         for entity in robot.built.entities:
             self._scene.remove_entity(entity)
         self._free_ids.append(body)
+        self._generation += 1
         self._contacts_cache = None
         self._refresh_active()
 
@@ -278,6 +281,32 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
                 )
                 raise self._diverged
 
+    # ---------------------------------------------------------------- snapshots
+
+    @exclusive
+    def snapshot(self) -> Any:
+        """PhysX's own record of the world (``PhysxCpuSystem.pack``: every body's pose and
+        velocities, the articulations' joint state), for this world as it is now."""
+        return (id(self), self._generation, self._system.pack())
+
+    @exclusive
+    def restore(self, native: Any) -> bool:
+        """Unpack a snapshot of this very world (no load, remove or reset since). PhysX keeps
+        its contact and solver caches out of the blob: the next step is not a bitwise
+        continuation (see DEPARTURES["snapshot"])."""
+        self._check_idle()
+        self._contacts_cache = None
+        if (
+            isinstance(native, tuple)
+            and len(native) == 3
+            and native[0] == id(self)
+            and native[1] == self._generation
+        ):
+            self._system.unpack(native[2])
+            self._diverged = None
+            return True
+        return False
+
     @exclusive
     def close(self) -> None:
         if self._closed:
@@ -319,12 +348,18 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
         ),
         "applied torques": (
             "a drive's force is not reported by PhysX: joint_states' applied torque is the "
-            "joint's incoming force along its axis"
+            "joint's incoming force along its axis (kuka joint 0 held at max_force 1000 N m: "
+            "reads 1000.2)"
         ),
         "snapshot": (
-            "get_state/set_state put back positions and velocities (float32) and the motors; "
-            "PhysX's contact and solver caches are not saved: a restored world's next step is "
-            "not a bitwise continuation"
+            "get_state/set_state put back positions and velocities (float32; exact=True: "
+            "PhysX's pack/unpack) and the motors; PhysX's contact and solver caches are not in "
+            "either: a restored world's next step is not a bitwise continuation (r2d2 driving "
+            "at 5 rad/s: 0.05 to 0.09 rad/s off on a joint after one step, measured)"
+        ),
+        "contact friction": (
+            "PhysX reports no friction impulse per contact point (SAPIEN 3.0.3): "
+            "contact_points' friction fields are 0"
         ),
         "cylinder": "PyBullet's 32-gon prism hull, as PyBullet collides with it",
         "meshes": (

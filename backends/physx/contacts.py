@@ -5,11 +5,12 @@ its two components and points (position, normal, impulse, separation). Each poin
 :class:`~simbridge.types.ContactPoint` with A = the first component's link, B = the second's:
 
 * PhysX's normal points from the second shape towards the first: it is ``normal_on_b``;
-* ``distance`` is PhysX's separation (negative: penetration); the point PhysX gives is taken
+* ``distance`` is PhysX's separation less the two shapes' rest offsets (1 mm, standing in for
+  PyBullet's collision margin), so 0 is where the force starts; the point PhysX gives is taken
   as the point on B, ``position_on_a = position_on_b + distance * normal_on_b``;
-* the forces are PhysX's impulse over the step (impulse / dt): the normal part is the normal
-  force, the rest the friction force on A, along ``lateral_friction_dir_1`` (its direction;
-  an arbitrary perpendicular when there is none), dir 2 completing the frame with force 0.
+* the normal force is PhysX's impulse over the step (impulse / dt) along the normal. PhysX
+  reports no friction impulse per point (SAPIEN 3.0.3): the friction fields are 0, along an
+  arbitrary frame perpendicular to the normal (a departure).
 """
 
 from __future__ import annotations
@@ -22,9 +23,13 @@ from simbridge.exceptions import SimulationDivergedError
 from simbridge.types import ContactPoint
 
 from ..locking import exclusive
+from .model import REST_OFFSET
 from .world import Robot
 
 __all__ = ["ContactReads"]
+
+# two shapes rest this far apart (the sum of their rest offsets, model.py): distance 0 there
+REST = 2.0 * REST_OFFSET
 
 
 def _perpendicular(n: np.ndarray) -> np.ndarray:
@@ -80,7 +85,7 @@ class ContactReads:
                 size = float(np.linalg.norm(tangential))
                 d1 = tangential / size if size > 0.0 else _perpendicular(n)
                 d2 = np.cross(n, d1)
-                dist = float(point.separation)
+                dist = float(point.separation) - REST
                 on_b = np.asarray(point.position, dtype=float)
                 on_a = on_b + dist * n
                 out.append(

@@ -66,6 +66,11 @@ class MotorCommands:
             root.max_angular_velocity = cap
         for j in robot.movable:
             robot.joints[j].max_velocity = cap
+        if p.apply_joint_damping:
+            damping = np.zeros(robot.ndof)
+            for j in robot.movable:
+                damping[robot.dof[j]] = robot.model.joints[j].damping
+            robot.damping = damping if damping.any() else None
         for s in range(len(robot.movable)):
             self._apply(robot, s)
 
@@ -90,7 +95,12 @@ class MotorCommands:
             r
             for r in self._robots.values()
             if not r.static
-            and (damped or r.pending or bool((r.motors["mode"] == MotorMode.POSITION).any()))
+            and (
+                damped
+                or r.pending
+                or r.damping is not None
+                or bool((r.motors["mode"] == MotorMode.POSITION).any())
+            )
         ]
 
     def _before_step(self, robot: Robot) -> None:
@@ -118,16 +128,22 @@ class MotorCommands:
                 k = robot.dof[robot.movable[s]]
                 target = m["kp"][s] * (m["target"][s] - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
                 robot.joints[robot.movable[s]].set_drive_velocity_target(float(target))
-        if robot.pending:
-            qf = np.zeros(robot.ndof, dtype=np.float32)
-            for slot, j in enumerate(robot.movable):
-                if not m["ball"][slot]:
-                    qf[robot.dof[j]] = m["torque"][slot]
-            art.qf = qf
+        if robot.pending or robot.damping is not None:
+            qf = np.zeros(robot.ndof)
+            if robot.pending:
+                for slot, j in enumerate(robot.movable):
+                    if not m["ball"][slot]:
+                        qf[robot.dof[j]] = m["torque"][slot]
+            if robot.damping is not None:  # <dynamics damping>, explicit as PyBullet's server
+                qf -= robot.damping * art.qvel
+            art.qf = qf.astype(np.float32)
+            robot.qf_set = True
 
     def _after_step(self, robot: Robot) -> None:
-        if robot.pending:
+        if robot.qf_set:  # PhysX keeps joint forces until changed: they last this step only
             robot.built.articulation.qf = np.zeros(robot.ndof, dtype=np.float32)
+            robot.qf_set = False
+        if robot.pending:
             robot.motors["torque"][:] = 0.0
             robot.pending = False
             self._refresh_active()
@@ -180,7 +196,8 @@ class MotorCommands:
         robot = self._robots[body]
         m = robot.motors
         for s, t in zip(self._slots(robot, joints), torque, strict=True):
-            m["torque"][s] += t
+            effort = m["effort"][s]  # inf unless the profile enforces <limit effort>
+            m["torque"][s] += min(max(t, -effort), effort)  # each command clamped, as PyBullet
         robot.pending = True
         self._refresh_active()
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from simbridge.exceptions import SimulationDivergedError
 from simbridge.profiles import Profile
-from simbridge.transforms import transform_inverse, transform_multiply, wxyz_to_xyzw
+from simbridge.transforms import transform_inverse, transform_multiply
 from simbridge.types import (
     BaseState,
     DynamicsInfo,
@@ -147,22 +147,16 @@ class StateAccess:
 
     def _applied(self, robot: Robot) -> np.ndarray:
         """Each dof's motor force of the last step: the joint's incoming force along its axis
-        (PhysX reports no drive force)."""
+        (PhysX reports no drive force; the incoming spatial force is in the child's joint
+        frame, whose x axis is the joint's, force first, then torque)."""
         out = np.zeros(robot.ndof)
-        art = robot.built.articulation
-        forces = art.get_link_incoming_joint_forces()
+        forces = robot.built.articulation.get_link_incoming_joint_forces()
         for k, uj in enumerate(robot.model.joints):
             d = robot.dof[k]
             if d < 0 or uj.type == "spherical":
                 continue
-            f = forces[k + 1]
-            joint = robot.joints[k]
-            # the joint frame's x axis (the URDF axis) in the child link's frame
-            axis = _x_axis(joint.pose_in_child.q)
-            if uj.type == "prismatic":
-                out[d] = float(np.dot(f[3:6], axis))
-            else:
-                out[d] = float(np.dot(f[0:3], axis))
+            f = forces[robot.built.links[k + 1].index]
+            out[d] = float(f[0] if uj.type == "prismatic" else f[3])
         return out
 
     # ---------------------------------------------------------------- teleports
@@ -224,9 +218,3 @@ class StateAccess:
 
     def set_time(self, time: float) -> None:
         self._steps = round(time / self._dt)
-
-
-def _x_axis(q_wxyz: Any) -> np.ndarray:
-    """The x axis of a frame turned by the (w, x, y, z) quaternion."""
-    x, y, z, w = wxyz_to_xyzw(q_wxyz)
-    return np.array([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)])

@@ -39,6 +39,8 @@ class Robot:
     motors: dict[str, np.ndarray] = field(default_factory=dict)
     pending: bool = False  # a torque waits for the next step
     slot: dict[int, int] = field(default_factory=dict)  # joint -> index in the motor arrays
+    damping: np.ndarray | None = None  # <dynamics damping> per dof where the profile applies it
+    qf_set: bool = False  # joint forces were handed to PhysX for the coming step
 
     @property
     def static(self) -> bool:
