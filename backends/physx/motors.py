@@ -16,7 +16,6 @@ with ``max_force=0``).
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -119,15 +118,13 @@ class MotorCommands:
             # PyBullet's link damping f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal
             # axes), from the velocities at the start of the step: as accelerations the inertia
             # drops out of both
-            sqrt = math.sqrt
-            for link in robot.moving_links:
-                v = link.linear_velocity
-                w = link.angular_velocity
-                vx, vy, vz = v.tolist()
-                wx, wy, wz = w.tolist()
-                v *= -k_lin * (1.0 + sqrt(vx * vx + vy * vy + vz * vz))
-                w *= -k_ang * (1.0 + sqrt(wx * wx + wy * wy + wz * wz))
-                link.add_force_torque(v, w, "acceleration")
+            links = robot.moving_links
+            v = np.array([link.linear_velocity for link in links])  # (n, 3) float32
+            w = np.array([link.angular_velocity for link in links])
+            v *= (-k_lin * (1.0 + np.sqrt(np.einsum("ij,ij->i", v, v))))[:, None]
+            w *= (-k_ang * (1.0 + np.sqrt(np.einsum("ij,ij->i", w, w))))[:, None]
+            for link, a_lin, a_ang in zip(links, v, w, strict=True):
+                link.add_force_torque(a_lin, a_ang, "acceleration")
         if robot.has_position:
             position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
             q = art.qpos
