@@ -250,6 +250,8 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
     art = links[0].articulation
     art.solver_position_iterations = solver_iterations
     art.solver_velocity_iterations = 1
+    # PyBullet lets a body sleep only when loaded with URDF_ENABLE_SLEEPING: never here
+    art.sleep_threshold = 0.0
     return BuiltRobot(
         inertials,
         False,

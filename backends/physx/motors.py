@@ -175,15 +175,31 @@ class MotorCommands:
     ) -> None:
         robot = self._robots[body]
         m = robot.motors
-        was_position = bool(m["mode"][self._slots(robot, joints)].any())
-        mode, tgt, force, kp, kd = m["mode"], m["target"], m["max_force"], m["kp"], m["kd"]
-        for s, t, f in zip(self._slots(robot, joints), target, max_force, strict=True):
-            mode[s] = 0  # MotorMode.VELOCITY
-            tgt[s] = t
-            force[s] = f
-            kp[s] = 0.0
-            kd[s] = 1.0
-            self._apply(robot, s)
+        slots = self._slots(robot, joints)
+        was_position = bool(m["mode"][slots].any())  # POSITION is 2, VELOCITY 0
+        m["mode"][slots] = 0
+        m["target"][slots] = target
+        m["max_force"][slots] = max_force
+        m["kp"][slots] = 0.0
+        m["kd"][slots] = 1.0
+        forces = np.minimum(m["max_force"][slots], m["effort"][slots]).tolist()
+        drive = robot.drive_force
+        ball = m["ball"]
+        for s, joint, t, f in zip(
+            slots.tolist(), robot.slot_joints(slots), target, forces, strict=True
+        ):
+            if f <= 0.0:
+                if drive[s] != 0.0:
+                    joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                    drive[s] = 0.0
+                continue
+            if drive[s] != f:
+                joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
+                drive[s] = f
+            if ball[s]:
+                joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+            else:
+                joint.set_drive_velocity_target(t)
         if was_position:  # a position motor replaced: the step may have less to do
             self._refresh_active()
 
