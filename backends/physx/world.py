@@ -44,6 +44,9 @@ class Robot:
     drive_force: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per slot, as set
     has_position: bool = False  # a position motor needs its velocity target every step
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
+    ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
+    dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
+    balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
     read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
