@@ -25,7 +25,11 @@ ROOT = Path(__file__).resolve().parents[1]
 TESTS = ROOT / "tests"
 
 # The backends this project ships: module prefix under simbridge.backends -> own test files.
-OWN_TESTS = {"mujoco": "test_mujoco_*.py", "pybullet": "test_pybullet_*.py"}
+OWN_TESTS = {
+    "mujoco": "test_mujoco_*.py",
+    "pybullet": "test_pybullet_*.py",
+    "physx": "test_physx_*.py",
+}
 
 # The public API of namedtuples (JointInfo and the other state records) starts with "_".
 NAMEDTUPLE_API = {"_asdict", "_fields", "_replace", "_make", "_field_defaults"}
