@@ -84,29 +84,9 @@ def engine_versions() -> dict[str, str]:
     return {"mujoco": mujoco.__version__, "pybullet_api": str(pybullet.getAPIVersion())}
 
 
-def python_loop_hashes() -> dict[str, str]:
-    """The MuJoCo scenarios' hashes on the Python step loop (chosen for the Sims made here)."""
-    saved = os.environ.get("SIMBRIDGE_MUJOCO_STEP")
-    os.environ["SIMBRIDGE_MUJOCO_STEP"] = "python"
-    try:
-        return {**all_hashes(("mujoco",)), **all_extras(("mujoco",))}
-    finally:
-        if saved is None:
-            del os.environ["SIMBRIDGE_MUJOCO_STEP"]
-        else:
-            os.environ["SIMBRIDGE_MUJOCO_STEP"] = saved
-
-
 if __name__ == "__main__":
     if sys.argv[1:] == ["--mujoco-only"]:  # the loop SIMBRIDGE_MUJOCO_STEP chooses
         json.dump({**all_hashes(("mujoco",)), **all_extras(("mujoco",))}, sys.stdout)
-        sys.exit(0)
-    if sys.argv[1:] == ["--both-loops"]:  # what tests/test_same_results.py checks in a child
-        both = {
-            "compiled": {**all_hashes(), **all_extras()},
-            "python_loop_mujoco": python_loop_hashes(),
-        }
-        json.dump(both, sys.stdout)
         sys.exit(0)
     # the record: the Python loop must give the compiled loop's bits (it is checked, not
     # recorded: tests/test_same_results.py)

@@ -45,3 +45,20 @@ def test_static_check_passes(name: str) -> None:
             f"{out.stdout}{out.stderr}",
             pytrace=False,
         )
+
+
+def test_ci_runs_exactly_the_readmes_test_command() -> None:
+    """.ci/run is the README's test command, character for character (its workers and
+    distribution included: a suite that passes in CI passes for a reader who copies it)."""
+
+    def command(text: str) -> list[str]:
+        return [
+            line.strip()
+            for line in text.splitlines()
+            if line.strip().startswith("python3 -m venv") and "[test]" in line
+        ]
+
+    readme = command((ROOT / "README.md").read_text(encoding="utf-8"))
+    ci = command((ROOT / ".ci" / "run").read_text(encoding="utf-8"))
+    assert len(readme) == 1 and "pytest" in readme[0], readme
+    assert ci == readme

@@ -105,6 +105,18 @@ def _temp_leftovers() -> set[str]:
     return {f for f in os.listdir(tempfile.gettempdir()) if f.startswith("simbridge_")}
 
 
+@pytest.fixture
+def private_tmp(tmp_path, monkeypatch):
+    """Every ``tempfile`` call of this process writes under a folder of this test's own: the
+    shared temporary folder holds other processes' ``simbridge_`` files (another pytest worker
+    loading URDF text at the same moment), which the before/after comparison would count."""
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setenv("TMPDIR", str(folder))
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    return folder
+
+
 CUBE = """<robot name="cube"><link name="box">
   <inertial><mass value="{mass}"/>
     <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
@@ -112,7 +124,7 @@ CUBE = """<robot name="cube"><link name="box">
 </link></robot>"""
 
 
-def test_urdf_text_goes_through_a_unique_temp_file_that_is_removed():
+def test_urdf_text_goes_through_a_unique_temp_file_that_is_removed(private_tmp):
     before = _temp_leftovers()
     with simbridge.Sim("pybullet") as sim:
         a = sim.load_urdf(CUBE.format(mass=1.0), base_position=(0, 0, 1))
@@ -126,7 +138,7 @@ def test_urdf_text_goes_through_a_unique_temp_file_that_is_removed():
     assert _temp_leftovers() == before
 
 
-def test_failed_text_load_leaves_no_temp_file_and_sim_stays_usable():
+def test_failed_text_load_leaves_no_temp_file_and_sim_stays_usable(private_tmp):
     before = _temp_leftovers()
     with simbridge.Sim("pybullet") as sim:
         with pytest.raises(simbridge.exceptions.UrdfParseError, match="<urdf text>: malformed"):
