@@ -14,7 +14,6 @@ import pytest
 import simbridge
 from simbridge.exceptions import (
     BackendNotInstalledError,
-    BackendUnsupportedError,
     SimulationDivergedError,
 )
 from simbridge.transforms import rpy_from_quat
@@ -214,22 +213,25 @@ def test_a_torque_lasts_one_step_and_the_brake_holds_until_released():
 @needs_sapien
 def test_the_tutorial_drive_turns_and_drives_on_pybullets_motors():
     """The tutorial's R2D2 drive (README), from 0.5 m: the wheels hold the commanded +-100 rad/s
-    as on PyBullet, and the robot turns (measured: -1.03 rad in the 240 steps, drifting 1.1 m;
-    PyBullet -2.15 rad, 0.07 m: skid steering is the engines' contact models' business)."""
+    after most steps of the turn, as on PyBullet (within 0.01 rad/s after 80 % of the 240 steps,
+    measured; PyBullet 91 %: on both a wheel that hits the ground edge-first loses speed for a
+    step), and the robot turns (measured about 1 rad; PyBullet -2.15 rad: skid steering is the
+    engines' contact models' business)."""
     with simbridge.Sim("physx") as sim:
         sim.load_urdf("plane.urdf")
         r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
         sim.step(240)
         start = sim.base_state(r2d2)
+        held = []
         for _ in range(240):
             sim.set_joint_velocity(r2d2, WHEELS, [-100, -100, 100, 100], max_force=50)
             sim.step()
+            speeds = np.abs(sim.joint_states(r2d2, WHEELS).velocities)
+            held.append(np.abs(speeds - 100.0).max() < 0.01)
+        assert np.mean(held) > 0.7
         turned = sim.base_state(r2d2)
         yaw = [rpy_from_quat(s.orientation)[2] for s in (start, turned)]
         assert abs(yaw[1] - yaw[0]) > 0.2
-        np.testing.assert_allclose(
-            sim.joint_states(r2d2, WHEELS).velocities, [-100, -100, 100, 100], atol=1e-2
-        )
         for _ in range(500):
             sim.set_joint_velocity(r2d2, WHEELS, -100, max_force=10)
             sim.step()
@@ -255,13 +257,35 @@ def test_contacts_hold_a_resting_robot_up():
         assert total == pytest.approx(weight, rel=0.01)
 
 
+def _neck(backend: str):
+    with simbridge.Sim(backend) as sim:
+        h = sim.load_urdf("humanoid/humanoid.urdf", base_position=(0, 0, 3), fixed_base=True)
+        table = [sim.joint_info(h, j) for j in range(sim.num_joints(h))]
+        q0 = (0.1, 0.2, 0.0, float(np.sqrt(0.95)))
+        sim.reset_joint_state_multi_dof(h, "neck", q0, [0.5, -0.3, 0.2])
+        links = [sim.link_state(h, k) for k in range(-1, len(table))]
+        reset = sim.joint_states_multi_dof(h, "neck")[0]
+        sim.step(120)  # PyBullet's default spherical motor pulls the neck back to the identity
+        held = sim.joint_states_multi_dof(h, "neck")[0]
+        return table, links, reset, held
+
+
 @needs_sapien
-def test_spherical_joints_are_refused_with_the_reason():
-    with (
-        simbridge.Sim("physx") as sim,
-        pytest.raises(BackendUnsupportedError, match="spherical"),
-    ):
-        sim.load_urdf("humanoid/humanoid.urdf", fixed_base=True)
+def test_spherical_joints_are_pybullets():
+    """A spherical joint as three revolute joints (ball.py): humanoid.urdf's joint table and
+    link frames are PyBullet's, a reset reads back, and PyBullet's default motor brings the
+    neck back as PyBullet's does (after 120 steps within 1e-5 of PyBullet's quaternion,
+    measured 1e-6)."""
+    ta, la, ra, ha = _neck("pybullet")
+    tb, lb, rb, hb = _neck("physx")
+    assert [tuple(r) for r in ta] == [tuple(r) for r in tb]
+    for a, b in zip(la, lb, strict=True):
+        np.testing.assert_allclose(b.link_frame_position, a.link_frame_position, atol=F32_POSITION)
+        np.testing.assert_allclose(b.com_position, a.com_position, atol=F32_POSITION)
+    np.testing.assert_allclose(rb.position, ra.position, atol=1e-7)
+    np.testing.assert_allclose(rb.velocity, ra.velocity, atol=1e-6)
+    np.testing.assert_allclose(hb.position, ha.position, atol=1e-5)
+    assert abs(ha.position[3]) > 0.9999  # back at the identity
 
 
 @needs_sapien
