@@ -19,7 +19,16 @@ from typing import TypeVar
 from simbridge.exceptions import BackendError
 from simbridge.registry import available_backends, load_backend, unavailable_reason
 
-__all__ = ["KNOWN_GAPS", "REFERENCE", "declared", "gap", "gap_names", "usable_backends"]
+__all__ = [
+    "KNOWN_GAPS",
+    "REFERENCE",
+    "as_stored",
+    "declared",
+    "gap",
+    "gap_names",
+    "tolerance",
+    "usable_backends",
+]
 
 T = TypeVar("T")
 
@@ -37,7 +46,41 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # (test_kinematics.py, poses within ~2 m of the origin): 3.3e-7 (laikago_toes.urdf), 2.1e-7
     # (r2d2), 7e-8 (pendulum); limit 5e-7 (float32 eps 1.19e-7 times |x| <= ~2, plus composition).
     # Exact rule: 1e-9 (test_kinematics.TOL).
-    "link_state_float32": {"pybullet": 5e-7},
+    "link_state_float32": {"pybullet": 5e-7, "physx": 1e-5},
+    # PhysX keeps every state in float32 (SAPIEN 3.0.3: joint positions and velocities, link
+    # poses and velocities; float32 spacing 1.2e-7 at 1, so 1.2e-7 m at 1 m): a value written
+    # reads back as its float32 rounding, and a closed form worked out in double is met to a few
+    # float32 steps only. The size is relative. Measured on PhysX (the tests at their exact
+    # rules): one step of tau/I on wheel.urdf 5.3e-8, M^-1 tau on the double pendulum 2.9e-7,
+    # the brake threshold at 1.05 x 5.6e-7, file friction 1.6e-7, 240 steps of link damping
+    # 6.1e-7, the speed clamps at 100 and 60 rad/s 1.5e-7 and 6.4e-8, the prismatic ramp 3e-8,
+    # free fall after 480 steps 1.6e-7 (1.6e-6 m/s at 10 m/s), the slope's contact normal 8.1e-8,
+    # a free body's 0.1 m/s 1.5e-8, the coupled motors' targets 3.6e-7; limit 1e-6.
+    # Exact rule: each test's own (the double-precision figure PyBullet and MuJoCo meet).
+    "state_float32": {"physx": 1e-6},
+    # The same float32 state carried over a whole trajectory against a double one, absolute
+    # (test_cross_engine.py: the largest joint position or velocity difference from PyBullet
+    # over the run; test_dynamics.py: free fall against the double recurrence). PhysX measured
+    # 1.55e-5 rad and 8.1e-5 rad/s (pendulum.urdf swinging freely for 2 s), 6.7e-6 rad and
+    # 6.9e-5 rad/s (the double pendulum for 0.5 s), 1.0e-4 rad/s (wheel.urdf's motor reaching
+    # 20 rad/s, 2 s; its applied torque 6.9e-5 N m), 1.03e-5 m at z 9.8 m (480 steps of free
+    # fall); limit 2e-4. Exact rule:
+    # each test's own (1e-7 rad, 5e-7 rad/s...: MuJoCo's double state).
+    "trajectory_float32": {"physx": 2e-4},
+    # The torque a velocity motor applied, as read back (test_dynamics.py, kuka_iiwa joint 0
+    # asking 100 rad/s in one step, so saturated): PyBullet and MuJoCo report the motor's own
+    # clamped impulse over dt, exactly max_force or the effort limit. PhysX reports the joint
+    # force its solver left in the joint frame (the drive's force is not readable in SAPIEN
+    # 3.0.3): measured 1000.198 for 1000 N m (2.0e-4 relative) and 299.9955 for 300 N m under
+    # enforce_effort_limit (1.5e-5); limit 5e-4 relative. Exact rule: 1e-6 relative.
+    "applied_torque_from_joint_force": {"physx": 5e-4},
+    # Link frames at load against raw PyBullet's (float32 both, composed in another order):
+    # _raw.frames_difference's relative tolerance. PyBullet itself: 0; MuJoCo within PyBullet's
+    # own float32 rounding (2e-7, _raw.FRAME_REL). PhysX measured 3.6e-7 relative
+    # (mjcf/humanoid.xml link 9: z 0.6720146 against 0.6720148), 6.4e-7 (test_urdf_leniency.py,
+    # a link at (1, 2, 3) read (1.0000007, 2.0000012, 3.0000019)) and within 3.0e-7 on 1087 of
+    # pybullet_data's URDFs (bench/urdf_coverage.py); limit 1e-6. Exact rule: 2e-7.
+    "frames_vs_raw_float32": {"physx": 1e-6},
     # The most movable joints one body may have (test_limits.py, test_corpus.py): PyBullet's
     # state reads fail past 121 (measured, bench/limits.py). Exact rule: no limit (128 load).
     "most_joints": {"pybullet": 121},
@@ -109,6 +152,24 @@ def gap(backend: str, name: str) -> float | None:
     """The measured size of known gap ``name`` of ``backend`` (or of the backend its class
     derives from), or None when it has none: held to the exact rule."""
     return declared(KNOWN_GAPS[name], backend)  # KeyError: a gap no entry describes (a typo)
+
+
+def tolerance(backend: str, exact: float, name: str = "state_float32", scale: float = 1.0) -> float:
+    """The tolerance a test uses: its exact rule ``exact``, or where ``backend`` declares gap
+    ``name`` that gap's size times ``scale`` (a relative size times the value's magnitude)
+    when that is larger."""
+    size = gap(backend, name)
+    return exact if size is None else max(exact, size * scale)
+
+
+def as_stored(backend: str, values: object) -> object:
+    """``values`` as a backend that declares ``state_float32`` stores them (each rounded to the
+    nearest float32), or unchanged: what a read must give back after a write."""
+    if gap(backend, "state_float32") is None:
+        return values
+    import numpy as np
+
+    return np.asarray(np.asarray(values, dtype=np.float32), dtype=np.float64)
 
 
 def gap_names() -> list[str]:

@@ -20,7 +20,10 @@ POSE = ((0.2, -0.1, 0.6), (0.0, 0.0, 0.2955202066613396, 0.955336489125606))  # 
 
 def _compare(sim, body, raw, rel=1e-7):
     assert _raw.table_difference(sim.joints(body), raw.table) is None
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    )
     # moments: PyBullet's carry float32 rounding (measured worst 7.8e-8 relative)
     assert _raw.dynamics_difference(sim, body, raw.dynamics, rel) is None
 

@@ -72,7 +72,10 @@ def test_joint_table_and_link_frames_are_raw_pybullets(make_sim, path, fixed_bas
         path, base_position=POSE[0], base_orientation=POSE[1], fixed_base=fixed_base
     )
     assert _raw.table_difference(sim.joints(body), raw.table) is None
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    )
     spherical = [j for j in sim.joints(body) if j.type == simbridge.JointType.SPHERICAL]
     assert spherical, "the file has spherical joints"
     for j in spherical:  # the measured facts, written out
@@ -149,7 +152,12 @@ def test_states_after_resets_are_raw_pybullets(make_sim):
             tuple(p.getLinkState(raw.body, i, computeForwardKinematics=1, physicsClientId=c)[4:6])
             for i in everything
         ]
-        assert _raw.frames_difference(_raw.sim_frames(sim, body)[1:], frames) is None
+        assert (
+            _raw.frames_difference(
+                _raw.sim_frames(sim, body)[1:], frames, _raw.frame_rel(sim.backend)
+            )
+            is None
+        )
     finally:
         p.removeBody(raw.body, physicsClientId=c)
 
