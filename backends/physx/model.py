@@ -260,6 +260,9 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
     art.solver_velocity_iterations = 1
     # PyBullet lets a body sleep only when loaded with URDF_ENABLE_SLEEPING: never here
     art.sleep_threshold = 0.0
+    # the links' poses are PhysX's only after a step or a write of the joint positions: one
+    # write now, so that a read right after the load sees every link where it is
+    art.qpos = art.qpos
     return BuiltRobot(
         inertials,
         False,

@@ -241,6 +241,10 @@ class StateAccess:
                 art.root_linear_velocity = np.asarray(linear_velocity, dtype=np.float32)
             if angular_velocity is not None:
                 art.root_angular_velocity = np.asarray(angular_velocity, dtype=np.float32)
+            # the other links follow the root in PhysX only after a step or a write of the
+            # joint state: one write now, so that reads see the teleport whole
+            art.qpos = art.qpos
+            art.qvel = art.qvel
         self._contacts_cache = None
 
     def set_time(self, time: float) -> None:

@@ -46,7 +46,10 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # (test_kinematics.py, poses within ~2 m of the origin): 3.3e-7 (laikago_toes.urdf), 2.1e-7
     # (r2d2), 7e-8 (pendulum); limit 5e-7 (float32 eps 1.19e-7 times |x| <= ~2, plus composition).
     # Exact rule: 1e-9 (test_kinematics.TOL).
-    "link_state_float32": {"pybullet": 5e-7, "physx": 1e-5},
+    # PhysX keeps every link pose in float32, free base included: measured worst 9.0e-7
+    # (cartpole.urdf), 6.2e-7 (kuka_iiwa/model.urdf), 2.2e-7 (pendulum), 1.9e-7 (r2d2); limit
+    # 2e-6.
+    "link_state_float32": {"pybullet": 5e-7, "physx": 2e-6},
     # PhysX keeps every state in float32 (SAPIEN 3.0.3: joint positions and velocities, link
     # poses and velocities; float32 spacing 1.2e-7 at 1, so 1.2e-7 m at 1 m): a value written
     # reads back as its float32 rounding, and a closed form worked out in double is met to a few
