@@ -103,6 +103,25 @@ def test_joint_table_dynamics_and_link_frames_are_pybullets(urdf, fixed):
 
 
 @needs_sapien
+def test_links_are_in_place_right_after_a_load_and_a_teleport():
+    """PhysX moves an articulation's links only at a step or a joint-state write: read before
+    either, every link but the root was at the origin (measured before the fix)."""
+    frames = {}
+    for backend in ("pybullet", "physx"):
+        with simbridge.Sim(backend) as sim:
+            r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0.2, -0.1, 0.6))
+            loaded = [sim.link_state(r2d2, k).link_frame_position for k in range(15)]
+            sim.reset_base_state(r2d2, (1.0, 2.0, 3.0), angular_velocity=(0.5, -0.2, 0.1))
+            moved = [sim.link_state(r2d2, k) for k in range(15)]
+            frames[backend] = (loaded, moved)
+    (la, ma), (lb, mb) = frames["pybullet"], frames["physx"]
+    np.testing.assert_allclose(lb, la, atol=F32_POSITION)
+    for a, b in zip(ma, mb, strict=True):
+        np.testing.assert_allclose(b.link_frame_position, a.link_frame_position, atol=F32_POSITION)
+        np.testing.assert_allclose(b.linear_velocity, a.linear_velocity, atol=F32_POSITION)
+
+
+@needs_sapien
 def test_r2d2_rests_where_pybullets_does():
     """PyBullet's 1 mm collision margin as PhysX's rest offset: PyBullet 0.470990, PhysX at its
     own rest offset 0 would rest 1 mm lower."""

@@ -382,8 +382,9 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             "reported; PyBullet's swing/twist limit is not enforced"
         ),
         "self collision": (
-            "self-collision on: every pair of links but a joint's parent and child (PhysX's own "
-            "rule); the exclusion modes are not reproduced"
+            "the plan's excluded pairs through SAPIEN's ignore bits (exact up to 32 pairs per "
+            "body); PhysX never lets a joint's parent and child touch, so 'include_parent' "
+            "misses those pairs (and, measured on the conformance tree, base and link 2)"
         ),
     }
 

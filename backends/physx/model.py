@@ -101,6 +101,7 @@ class BuiltRobot:
     bounded_links: list[str] = field(default_factory=list)
     skipped_shapes: list[str] = field(default_factory=list)
     plan: BuildPlan | None = None
+    filtered_exactly: bool = True  # the self-collision exclusions fit SAPIEN's 32 bits
     ball_links: list[Any] = field(default_factory=list)  # the spherical joints' extra links
 
 
@@ -169,6 +170,7 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
     inertials = [link.inertial for link in plan.links]
     skipped: list[str] = []
     bounded: list[str] = []
+    ignore = _ignore_bits(plan)
     materials: dict[tuple[float, float], Any] = {}
 
     def material_of(link: LinkPlan) -> Any:
@@ -185,7 +187,7 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
         for g in link.collisions:
             where = f"link {link.name!r} <collision> #{g.element}"
             for shape in _shapes(g, mat, where, skipped):
-                _filter(shape, link, plan, body)
+                _filter(shape, link, ignore, body)
                 out.append(shape)
         return out
 
@@ -370,13 +372,29 @@ def _link_frame_in_base(plan: BuildPlan, index: int) -> tuple[Vec3, Quat]:
     return frame
 
 
-def _filter(shape: Any, link: LinkPlan, plan: BuildPlan, body: int) -> None:
+def _ignore_bits(plan: BuildPlan) -> dict[int, int] | None:
+    """Each link's "ignore" bits (SAPIEN's g2) that leave out exactly the plan's pairs: all
+    links one bit with self-collision off; else one bit per excluded pair (at most 32), set on
+    both its links, so two links share a bit only where their pair is excluded. None where
+    there are more pairs than bits (PhysX's own rule then: a departure)."""
+    if plan.self_collision == "off":
+        return {link.index: 1 for link in plan.links}
+    pairs = sorted(plan.excluded_pairs)
+    if len(pairs) > 32:
+        return None
+    bits = {link.index: 0 for link in plan.links}
+    for k, (a, b) in enumerate(pairs):
+        bits[a] |= 1 << k
+        bits[b] |= 1 << k
+    return bits
+
+
+def _filter(shape: Any, link: LinkPlan, bits: dict[int, int] | None, body: int) -> None:
     """PyBullet's contact filter as SAPIEN's four collision groups (two shapes touch when
     ``(A.g0 & B.g1) or (A.g1 & B.g0)``, unless ``A.g2 & B.g2`` and ``A.g3 == B.g3``): g0, g1
-    the plan's group and mask (Bullet's OR rule); g3 the body, and g2 1 where its links never
-    touch each other (self-collision off, PyBullet's default), else 0 (every pair but PhysX's
-    own parent and child: the exclusion modes are a departure)."""
-    own = 1 if plan.self_collision == "off" else 0
+    the plan's group and mask (Bullet's OR rule); g3 the body, g2 the link's ignore bits
+    (:func:`_ignore_bits`)."""
+    own = 0 if bits is None else bits[link.index]
     shape.set_collision_groups(
         [link.filter.group & 0xFFFFFFFF, link.filter.mask & 0xFFFFFFFF, own, body & 0xFFFF]
     )
