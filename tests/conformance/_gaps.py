@@ -77,6 +77,31 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # 3.0.3): measured 1000.198 for 1000 N m (2.0e-4 relative) and 299.9955 for 300 N m under
     # enforce_effort_limit (1.5e-5); limit 5e-4 relative. Exact rule: 1e-6 relative.
     "applied_torque_from_joint_force": {"physx": 5e-4},
+    # The sum of the normal forces under r2d2 at rest on plane.urdf after 240 steps, relative to
+    # m g (test_contacts.py): PyBullet 4.2e-8, MuJoCo 3.3e-12. PhysX's per-step normal impulses
+    # at rest (its solver's last iteration over four wheel contacts, with no PyBullet-like split
+    # impulse) measured 638.163 N ("pybullet" profile) and 640.708 N ("urdf") for 639.45 N:
+    # 2.0e-3; limit 5e-3. Exact rule: 1e-6.
+    "resting_normal_force_sum": {"physx": 5e-3},
+    # A free box spinning about an offset centre of mass for 240 steps (test_cross_engine.py),
+    # against PyBullet: PyBullet's and MuJoCo's integrators carry the gyroscopic term alike
+    # (1e-12 on the velocities); PhysX's articulation root does its own (implicit) gyroscopic
+    # update: measured 2.6e-4 rad/s on the angular velocity (of 5 rad/s about z, 0.3 about y);
+    # limit 5e-4. Exact rule: 1e-6.
+    "free_spin_gyroscopic": {"physx": 5e-4},
+    # include_parent self-collision (test_load_options.py): the pairs of PyBullet's six that a
+    # backend cannot make. PhysX never lets an articulation joint's parent and child touch:
+    # measured 3 missing (base-A, A-B, C-B: reported (-1, 1), (0, 2), (1, 2) only). Exact
+    # rule: 0.
+    "self_collision_pairs_missing": {"physx": 3},
+    # get_state/set_state then one step against the uninterrupted step (test_state.py, r2d2
+    # driving, largest difference over base pose, velocities and joint states). PyBullet and
+    # MuJoCo: the same bits. PhysX's pack/unpack puts back positions and velocities but not its
+    # contact and solver caches (SAPIEN 3.0.3 exposes none): not a bitwise continuation; the
+    # backend measured 0.05 to 0.09 rad/s on a joint (manifest "snapshot"); limit 0.2. This
+    # test measures 4.52 at this commit: a backend bug past the gap (filed), not widened.
+    # Exact rule: the same bits.
+    "state_continuation": {"physx": 0.2},
     # Link frames at load against raw PyBullet's (float32 both, composed in another order):
     # _raw.frames_difference's relative tolerance. PyBullet itself: 0; MuJoCo within PyBullet's
     # own float32 rounding (2e-7, _raw.FRAME_REL). PhysX measured 3.6e-7 relative

@@ -204,8 +204,9 @@ def test_a_free_body_spinning_about_an_offset_centre_of_mass(backend, offset):
             exact = tolerance(name, 1e-12, scale=0.1)
             assert s.linear_velocity == pytest.approx((0.1, 0.0, 0.0), abs=exact)
     ref, got = out
-    assert np.abs(ref - got).max() < 1e-6  # float32 link frame on PyBullet
-    assert np.abs(ref[:9] - got[:9]).max() < 1e-12
+    # float32 link frame on PyBullet; a backend's own integration of the gyroscopic term
+    assert np.abs(ref - got).max() < tolerance(backend, 1e-6, "free_spin_gyroscopic")
+    assert np.abs(ref[:9] - got[:9]).max() < tolerance(backend, 1e-12, "free_spin_gyroscopic")
 
 
 @pytest.mark.parametrize("target", [0.6, 0.4, 0.3, -0.9])
