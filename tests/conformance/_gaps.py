@@ -75,8 +75,20 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # clamped impulse over dt, exactly max_force or the effort limit. PhysX reports the joint
     # force its solver left in the joint frame (the drive's force is not readable in SAPIEN
     # 3.0.3): measured 1000.198 for 1000 N m (2.0e-4 relative) and 299.9955 for 300 N m under
-    # enforce_effort_limit (1.5e-5); limit 5e-4 relative. Exact rule: 1e-6 relative.
-    "applied_torque_from_joint_force": {"physx": 5e-4},
+    # enforce_effort_limit (1.5e-5); and, relative to max_force, 1.0e-2 on pendulum.urdf's
+    # position motor (max_force 100 N m) while it leaves saturation (76.109 against 75.296 at
+    # step 6; 1.016 N m the largest over 2 s, test_cross_engine.py: the joint force carries the
+    # link's inertial reaction, the motor impulse does not); limit 2e-2. Exact rule: 1e-6
+    # relative (1e-5 N m on the pendulum).
+    "applied_torque_from_joint_force": {"physx": 2e-2},
+    # PyBullet's position law as a PhysX velocity drive (test_cross_engine.py, the double
+    # pendulum's two coupled position motors, kp 0.05, kd 0.5, 2 s): the drive's target is set
+    # before the step from the velocity at its start, where PyBullet's row uses the velocity
+    # after the smooth forces (manifest "motors"), so with kd < 1 the settling differs: measured
+    # final positions 0.49744, -0.29439 against PyBullet's 0.49999, -0.29999 (5.6e-3 rad; 7.1e-3
+    # the largest over the run; 0.183 rad/s and 0.716 N m, against which the test scales the
+    # size by 30 and 100); limit 1e-2. Exact rule: 2e-4 rad (PyBullet's own iterative solve against MuJoCo's exact one).
+    "position_motor_law": {"physx": 1e-2},
     # The sum of the normal forces under r2d2 at rest on plane.urdf after 240 steps, relative to
     # m g (test_contacts.py): PyBullet 4.2e-8, MuJoCo 3.3e-12. PhysX's per-step normal impulses
     # at rest (its solver's last iteration over four wheel contacts, with no PyBullet-like split
