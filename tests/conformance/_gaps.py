@@ -87,7 +87,8 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # after the smooth forces (manifest "motors"), so with kd < 1 the settling differs: measured
     # final positions 0.49744, -0.29439 against PyBullet's 0.49999, -0.29999 (5.6e-3 rad; 7.1e-3
     # the largest over the run; 0.183 rad/s and 0.716 N m, against which the test scales the
-    # size by 30 and 100); limit 1e-2. Exact rule: 2e-4 rad (PyBullet's own iterative solve against MuJoCo's exact one).
+    # size by 30 and 100); limit 1e-2. Exact rule: 2e-4 rad (PyBullet's own iterative solve
+    # against MuJoCo's exact one).
     "position_motor_law": {"physx": 1e-2},
     # The sum of the normal forces under r2d2 at rest on plane.urdf after 240 steps, relative to
     # m g (test_contacts.py): PyBullet 4.2e-8, MuJoCo 3.3e-12. PhysX's per-step normal impulses
