@@ -2183,8 +2183,17 @@ def lookup(name: str) -> Case:
 
 
 # Expected failures: case name -> backend -> the reason (an xfail, strict: a case that passes
-# fails the suite until its entry is removed). Empty: every case of the corpus holds.
-KNOWN: dict[str, dict[str, str]] = {}
+# fails the suite until its entry is removed).
+KNOWN: dict[str, dict[str, str]] = {
+    # PhysX backend bugs, each measured and with its proposed fix filed with the backend's owner
+    "chain-2000-links": {"physx": "issue 21 item 1: PhysX segfaults at the chain's first step"},
+    "blowup-gravity-1e300": {
+        "physx": "issue 21 item 1: a jointless body's joint_states not refused"
+    },
+    "blowup-timestep-1e200": {
+        "physx": "issue 21 item 1: a jointless body's joint_states not refused"
+    },
+}
 
 
 def known(name: str, backend: str) -> str | None:
