@@ -430,13 +430,16 @@ def _cross(backend: str, other: str) -> None:
         b.load_urdf(PENDULUM, base_position=(2, 0, 1), fixed_base=True)
         b.set_state(state)
         back = b.get_state()
+        # read back by the receiving engine: to its float32 rounding where its state is float32
+        # (PhysX: 2.9e-14 on a -2.0e-6 quaternion component, measured)
+        tol = tolerance(other, 1e-15)
         for mine, theirs in zip(state.bodies, back.bodies, strict=True):
             assert len(mine.spherical) == len(theirs.spherical)
             for e, f in zip(mine.spherical, theirs.spherical, strict=True):
                 for x, y in zip(e, f, strict=True):
-                    assert _raw.close(x, y, 1e-15), (e.joint, x, y)
+                    assert _raw.close(x, y, tol), (e.joint, x, y)
             for field in ("joint_positions", "motor_mode", "motor_max_force", "pending_torque"):
-                assert _raw.close(getattr(mine, field), getattr(theirs, field), 1e-15), field
+                assert _raw.close(getattr(mine, field), getattr(theirs, field), tol), field
 
 
 def test_a_bad_spherical_state_is_refused_before_anything_is_set(make_sim):
