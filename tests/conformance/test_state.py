@@ -92,7 +92,8 @@ def test_the_portable_state_in_the_same_sim_is_at_float_precision(make_sim):
         else:
             sim.step()
     print(f"{sim.backend}: one-step error of the portable state in the same Sim {worst:.3g}")
-    assert worst < 1e-10
+    same_sim_gap = gap(sim.backend, "portable_state_in_the_same_sim")
+    assert worst < (1e-10 if same_sim_gap is None else same_sim_gap)
 
 
 # The floor of a state carried into another Sim of the same engine (r2d2-gentle's drive, 6
