@@ -406,12 +406,16 @@ def test_get_state_and_set_state_carry_spherical_joints(make_sim):
     assert state.bodies[0].joint_positions[2] == neck.position[0]  # the first coordinate
     first = _record(sim, bodies)
     sim.set_state(state)  # into the same world: bit for bit
-    assert np.array_equal(_record(sim, bodies), first)
+    same = float(np.abs(_record(sim, bodies) - first).max())
     other = make_sim()
     theirs = _spherical_world(other)
     other.step(7)
     other.set_state(state.portable())  # another world: the state, the motors, the torques
-    assert np.abs(_record(other, theirs) - first).max() < 1e-12  # measured 6.7e-16 on PyBullet
+    there = float(np.abs(_record(other, theirs) - first).max())
+    print(f"{sim.backend}: after set_state {same:.3g} (same Sim), {there:.3g} (another)")
+    # no contact in this world: a float32 state's rounding only (PhysX measured 3.4e-7 both)
+    assert same <= tolerance(sim.backend, 0.0)
+    assert there < tolerance(sim.backend, 1e-12)  # measured 6.7e-16 on PyBullet
 
 
 def test_a_spherical_state_crosses_engines(backend):
