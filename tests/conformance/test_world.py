@@ -370,11 +370,13 @@ def test_commands_and_teleports_racing_a_stepping_thread_land_whole(make_sim):
             accepted[name] += 1
             k += 1
 
-    def whole_steps(position: float, speed: float) -> bool:
-        n = position / (speed * dt)
-        return speed in (2.0, 3.0) and abs(n - round(n)) < 1e-6
-
     f32 = gap(sim.backend, "state_float32") or 0.0
+
+    def whole_steps(position: float, speed: float) -> bool:
+        # a float32 position (_gaps "state_float32") gathers a rounding of up to 2^-24 of itself
+        # at each of its n steps: n^2 2^-24 steps' worth at most, bounded by f32 n^2
+        n = position / (speed * dt)
+        return speed in (2.0, 3.0) and abs(n - round(n)) < 1e-6 + f32 * n * n
 
     def stepper() -> None:
         deadline = time.monotonic() + 1.0
