@@ -1,7 +1,7 @@
 """Soak: many Sim lifetimes (or many loads in one Sim) in one process; memory, open files and
 temporary files must stay flat.
 
-    python bench/soak.py                          # 1000 cycles of each pattern, both backends
+    python bench/soak.py                          # 1000 cycles of each pattern, every backend
     python bench/soak.py --cycles 200 --check     # exit 1 where something is not flat
 
 Patterns (each on each backend, in its own child process, so one does not inherit another's
@@ -57,6 +57,14 @@ def _rss_mb() -> float:
 
 def _fds() -> int:
     return len(os.listdir("/proc/self/fd"))
+
+
+def usable_backends() -> list[str]:
+    """Every registered backend whose engine is installed here (PhysX with the physx extra)."""
+    import simbridge
+    from simbridge.registry import unavailable_reason
+
+    return [b for b in simbridge.available_backends() if unavailable_reason(b) is None]
 
 
 def _cycle_function(pattern: str, backend: str) -> Any:
@@ -137,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--cycles", type=int, default=1000)
-    parser.add_argument("--backend", nargs="+", default=["pybullet", "mujoco"])
+    parser.add_argument("--backend", nargs="+", help="default: every installed backend")
     parser.add_argument("--pattern", nargs="+", default=list(PATTERNS), choices=PATTERNS)
     parser.add_argument("--check", action="store_true", help="exit 1 where not flat")
     parser.add_argument("--limit", type=float, default=10.0, help="kB per cycle (--check)")
@@ -147,9 +155,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.one:  # a child: one row, as JSON
         print(json.dumps(run_one(args.one[0], args.one[1], args.cycles)))
         return 0
+    backends = args.backend or usable_backends()
     rows = []
     for pattern in args.pattern:
-        for backend in ["pybullet"] if pattern.startswith("raw") else args.backend:
+        for backend in ["pybullet"] if pattern.startswith("raw") else backends:
             child = subprocess.run(
                 [sys.executable, __file__, "--cycles", str(args.cycles), "--one", pattern, backend],
                 capture_output=True,

@@ -84,9 +84,29 @@ def engine_versions() -> dict[str, str]:
     return {"mujoco": mujoco.__version__, "pybullet_api": str(pybullet.getAPIVersion())}
 
 
+def physx_version() -> str | None:
+    """SAPIEN's version where the PhysX backend can run here, else None."""
+    from simbridge.registry import unavailable_reason
+
+    if unavailable_reason("physx") is not None:
+        return None
+    import sapien
+
+    return str(sapien.__version__)
+
+
+def physx_hashes() -> dict[str, str]:
+    """Every shipped scenario and the KUKA script on PhysX (CPU PhysX 5 through SAPIEN: the
+    same bits over fresh runs and in two processes, measured)."""
+    return {**all_hashes(("physx",)), **all_extras(("physx",))}
+
+
 if __name__ == "__main__":
     if sys.argv[1:] == ["--mujoco-only"]:  # the loop SIMBRIDGE_MUJOCO_STEP chooses
         json.dump({**all_hashes(("mujoco",)), **all_extras(("mujoco",))}, sys.stdout)
+        sys.exit(0)
+    if sys.argv[1:] == ["--physx-only"]:  # what tests/test_same_results.py checks in a child
+        json.dump(physx_hashes(), sys.stdout)
         sys.exit(0)
     # the record: the Python loop must give the compiled loop's bits (it is checked, not
     # recorded: tests/test_same_results.py)
@@ -101,5 +121,10 @@ if __name__ == "__main__":
     differ = {k for k, v in json.loads(python_loop).items() if compiled[k] != v}
     if differ:
         sys.exit(f"the Python step loop differs from the compiled loop on {sorted(differ)}")
-    json.dump({"engines": engine_versions(), "compiled": compiled}, sys.stdout, indent=2)
+    record: dict[str, object] = {"engines": engine_versions(), "compiled": compiled}
+    sapien_version = physx_version()
+    if sapien_version is not None:
+        # PhysX's hashes, recorded apart: they need the physx extra and SAPIEN's exact build
+        record["physx"] = {"sapien": sapien_version, "hashes": physx_hashes()}
+    json.dump(record, sys.stdout, indent=2)
     print()

@@ -146,13 +146,22 @@ def sim_frames(sim: simbridge.Sim, body: int) -> list[tuple[Any, Any]]:
     return out
 
 
-def frames_difference(got: list[Any], raw: list[Any]) -> str | None:
-    """None when every link frame agrees to PyBullet's float32 rounding (2e-7 relative)."""
+def frame_rel(backend: str) -> float:
+    """The relative tolerance on link frames against raw PyBullet's for ``backend``: FRAME_REL,
+    or its declared ``frames_vs_raw_float32`` gap (_gaps.py)."""
+    from _gaps import gap
+
+    return gap(backend, "frames_vs_raw_float32") or FRAME_REL
+
+
+def frames_difference(got: list[Any], raw: list[Any], rel: float = FRAME_REL) -> str | None:
+    """None when every link frame agrees to PyBullet's float32 rounding (2e-7 relative), or to
+    ``rel`` (a backend's declared frames_vs_raw_float32 gap, _gaps.py)."""
     if len(got) != len(raw):
         return f"{len(got)} links, raw {len(raw)}"
     for k, ((gp, go), (rp, ro)) in enumerate(zip(got, raw, strict=True)):
-        tol = FRAME_REL * max(1.0, float(np.abs(rp).max()))
-        if not close(gp, rp, tol) or not same_quat(go, ro, FRAME_REL):
+        tol = rel * max(1.0, float(np.abs(rp).max()))
+        if not close(gp, rp, tol) or not same_quat(go, ro, rel):
             return f"link {k - 1} frame {gp}, {go}; raw {rp}, {ro}"
     return None
 

@@ -3,7 +3,7 @@
 Every test that takes the ``backend`` fixture runs once per name in
 :func:`simbridge.available_backends` (built-in and entry-point backends alike), so a new backend
 needs no new test code. A backend whose module or class is not there at all (not yet written,
-or its engine not installed) fails if it is one this project ships (pybullet, mujoco) and is
+or its engine not installed) fails if it is one this project ships (pybullet, mujoco, physx) and is
 skipped with the reason if it is a third-party one, unless
 ``SIMBRIDGE_REQUIRE_ALL_BACKENDS=1`` (CI) turns that into a failure; a backend that is there but
 breaks on import always fails.
@@ -24,7 +24,7 @@ from simbridge.registry import unavailable_reason
 BACKENDS = simbridge.available_backends()
 PROFILES = ["pybullet", "urdf"]
 # The backends this project ships must always run: only a third-party backend may be skipped.
-SHIPPED_BACKENDS = ("pybullet", "mujoco")
+SHIPPED_BACKENDS = ("pybullet", "mujoco", "physx")
 
 ROBOTS_DIR = Path(__file__).resolve().parents[2] / "robots"
 

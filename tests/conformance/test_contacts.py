@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from _gaps import gap
+from _gaps import gap, tolerance
 
 from simbridge import exceptions as exc
 from simbridge.transforms import quat_rotate
@@ -118,10 +118,18 @@ def test_a_box_resting_on_a_slope(make_sim, profile):
     points = sim.contact_points(box, slope)
     assert len(points) == 4
     for c in points:
-        assert c.normal_on_b == pytest.approx(tuple(normal), abs=1e-9)
+        assert c.normal_on_b == pytest.approx(tuple(normal), abs=tolerance(sim.backend, 1e-9))
     # the contact forces on the box carry its weight: measured worst component error 0.058 N
     # (pybullet "pybullet" profile: its box creeps down at 9e-5 m/s), 3.7e-5 N (mujoco)
     force = _force_on_a(points)
+    if "contact friction" in sim.manifest()["departures"]:
+        # no friction force is reported (a listed departure): the fields are 0 but for the
+        # normal impulse's float32 residue (PhysX measured 4.6e-7 N), and the normal forces
+        # alone carry m g cos(angle) (PhysX measured 28.953351 N for 28.953348: 9e-8)
+        assert all(abs(c.lateral_friction_1) + abs(c.lateral_friction_2) < 1e-5 for c in points)
+        total = sum(c.normal_force for c in points)
+        assert total == pytest.approx(abs(BOX_MASS * G) * math.cos(angle), rel=1e-6)
+        return
     assert force == pytest.approx((0.0, 0.0, BOX_MASS * G), abs=0.1)
     # ... friction taking m g sin(angle) = 5.105 N up the slope: measured 5.162 N (pybullet),
     # 5.1052 N (mujoco); a friction sign error would give a force down the slope
@@ -142,7 +150,8 @@ def test_r2d2_at_rest_stands_on_its_four_wheels(make_sim, profile):
     assert touching == WHEELS
     mass = sum(sim.dynamics_info(r2d2, link).mass for link in range(-1, sim.num_joints(r2d2)))
     # measured |sum / (m g) - 1| <= 4.2e-8 (pybullet), 3.3e-12 (mujoco)
-    assert sum(c.normal_force for c in points) == pytest.approx(mass * G, rel=1e-6)
+    rel = tolerance(sim.backend, 1e-6, "resting_normal_force_sum")
+    assert sum(c.normal_force for c in points) == pytest.approx(mass * G, rel=rel)
     # the link filter, by name and by index, keeps that wheel's points alone
     wheel = sim.contact_points(r2d2, plane, link_a="right_front_wheel")
     assert wheel and {c.link_a for c in wheel} == {sim.link_index(r2d2, "right_front_wheel")}

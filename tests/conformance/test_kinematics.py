@@ -14,7 +14,7 @@ import _reference as ref
 import numpy as np
 import pybullet_data
 import pytest
-from _gaps import gap
+from _gaps import as_stored, gap
 
 DATA = Path(pybullet_data.getDataPath())
 TOL = 1e-9
@@ -117,7 +117,8 @@ def test_link_frames_match_yourdfpy(make_sim, path, fixed_base):
         if names:
             sim.reset_joint_state(body, names, [positions[n] for n in names])
             np.testing.assert_array_equal(
-                sim.joint_states(body, names).positions, [positions[n] for n in names]
+                sim.joint_states(body, names).positions,
+                as_stored(sim.backend, [positions[n] for n in names]),
             )
         worst = max(worst, _check_poses(sim, body, path, positions, fixed_base, tol))
     print(f"{sim.backend} {Path(path).name}: worst link pose error {worst:.3g}")

@@ -28,7 +28,7 @@ import _raw
 import _reference as ref
 import numpy as np
 import pytest
-from _gaps import REFERENCE, gap, usable_backends
+from _gaps import REFERENCE, gap, tolerance, usable_backends
 
 import simbridge
 from simbridge import exceptions as exc
@@ -72,7 +72,10 @@ def test_joint_table_and_link_frames_are_raw_pybullets(make_sim, path, fixed_bas
         path, base_position=POSE[0], base_orientation=POSE[1], fixed_base=fixed_base
     )
     assert _raw.table_difference(sim.joints(body), raw.table) is None
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    )
     spherical = [j for j in sim.joints(body) if j.type == simbridge.JointType.SPHERICAL]
     assert spherical, "the file has spherical joints"
     for j in spherical:  # the measured facts, written out
@@ -135,21 +138,28 @@ def test_states_after_resets_are_raw_pybullets(make_sim):
         everything = list(range(sim.num_joints(body)))
         got = sim.joint_states_multi_dof(body)
         want = p.getJointStatesMultiDof(raw.body, everything, physicsClientId=c)
+        # a float32 state (_gaps "state_float32"): to its rounding, velocities up to 2 rad/s
+        tol_q, tol_v = tolerance(sim.backend, 1e-15), tolerance(sim.backend, 0.0, scale=2.0)
         for g, w in zip(got, want, strict=True):
             assert len(g.position) == len(w[0]) and len(g.velocity) == len(w[1])
-            assert _raw.close(g.position, w[0], 1e-15) if w[0] else g.position == ()
-            assert _raw.close(g.velocity, w[1], 0.0) if w[1] else g.velocity == ()
+            assert _raw.close(g.position, w[0], tol_q) if w[0] else g.position == ()
+            assert _raw.close(g.velocity, w[1], tol_v) if w[1] else g.velocity == ()
             assert g.applied_torque == tuple(0.0 for _ in w[3])  # no step yet
         # getJointStates: the first coordinate of each
         scalar = sim.joint_states(body)
         rows = p.getJointStates(raw.body, everything, physicsClientId=c)
-        assert _raw.close(scalar.positions, [r[0] for r in rows], 1e-15)
-        assert _raw.close(scalar.velocities, [r[1] for r in rows], 0.0)
+        assert _raw.close(scalar.positions, [r[0] for r in rows], tol_q)
+        assert _raw.close(scalar.velocities, [r[1] for r in rows], tol_v)
         frames = [
             tuple(p.getLinkState(raw.body, i, computeForwardKinematics=1, physicsClientId=c)[4:6])
             for i in everything
         ]
-        assert _raw.frames_difference(_raw.sim_frames(sim, body)[1:], frames) is None
+        assert (
+            _raw.frames_difference(
+                _raw.sim_frames(sim, body)[1:], frames, _raw.frame_rel(sim.backend)
+            )
+            is None
+        )
     finally:
         p.removeBody(raw.body, physicsClientId=c)
 
@@ -162,8 +172,10 @@ def test_a_quaternion_is_normalised_as_pybullet_does(make_sim, caplog):
     state = sim.joint_states_multi_dof(body, "ball")[0]
     # raw PyBullet reads back (0, 0, 0.7071067811865476, 0.7071067811865476) (measured); MuJoCo
     # one ulp less (the Sim's division by the norm)
-    assert _raw.close(state.position, (0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5)), 2e-16)
-    assert state.velocity == (0.5, 0.2, 0.1)
+    # (PhysX: 0.70710680, 0.70710677, a float32 state: 2.2e-8)
+    half = math.sqrt(0.5)
+    assert _raw.close(state.position, (0.0, 0.0, half, half), tolerance(sim.backend, 2e-16))
+    assert state.velocity == pytest.approx((0.5, 0.2, 0.1), abs=tolerance(sim.backend, 0.0))
     assert "has norm 0.707107: normalised" in caplog.text
 
 
@@ -394,12 +406,16 @@ def test_get_state_and_set_state_carry_spherical_joints(make_sim):
     assert state.bodies[0].joint_positions[2] == neck.position[0]  # the first coordinate
     first = _record(sim, bodies)
     sim.set_state(state)  # into the same world: bit for bit
-    assert np.array_equal(_record(sim, bodies), first)
+    same = float(np.abs(_record(sim, bodies) - first).max())
     other = make_sim()
     theirs = _spherical_world(other)
     other.step(7)
     other.set_state(state.portable())  # another world: the state, the motors, the torques
-    assert np.abs(_record(other, theirs) - first).max() < 1e-12  # measured 6.7e-16 on PyBullet
+    there = float(np.abs(_record(other, theirs) - first).max())
+    print(f"{sim.backend}: after set_state {same:.3g} (same Sim), {there:.3g} (another)")
+    # no contact in this world: a float32 state's rounding only (PhysX measured 3.4e-7 both)
+    assert same <= tolerance(sim.backend, 0.0)
+    assert there < tolerance(sim.backend, 1e-12)  # measured 6.7e-16 on PyBullet
 
 
 def test_a_spherical_state_crosses_engines(backend):
@@ -418,13 +434,16 @@ def _cross(backend: str, other: str) -> None:
         b.load_urdf(PENDULUM, base_position=(2, 0, 1), fixed_base=True)
         b.set_state(state)
         back = b.get_state()
+        # read back by the receiving engine: to its float32 rounding where its state is float32
+        # (PhysX: 2.9e-14 on a -2.0e-6 quaternion component, measured)
+        tol = tolerance(other, 1e-15)
         for mine, theirs in zip(state.bodies, back.bodies, strict=True):
             assert len(mine.spherical) == len(theirs.spherical)
             for e, f in zip(mine.spherical, theirs.spherical, strict=True):
                 for x, y in zip(e, f, strict=True):
-                    assert _raw.close(x, y, 1e-15), (e.joint, x, y)
+                    assert _raw.close(x, y, tol), (e.joint, x, y)
             for field in ("joint_positions", "motor_mode", "motor_max_force", "pending_torque"):
-                assert _raw.close(getattr(mine, field), getattr(theirs, field), 1e-15), field
+                assert _raw.close(getattr(mine, field), getattr(theirs, field), tol), field
 
 
 def test_a_bad_spherical_state_is_refused_before_anything_is_set(make_sim):

@@ -47,6 +47,8 @@ def _drive(sim, robot, k: int) -> None:
 
 def test_set_state_then_step_equals_the_uninterrupted_step(make_sim):
     sim, _, robot = _r2d2(make_sim)
+    continuation = gap(sim.backend, "state_continuation")
+    worst = 0.0
     for k in range(120):
         _drive(sim, robot, k)
         if k % 20 == 19:
@@ -57,9 +59,15 @@ def test_set_state_then_step_equals_the_uninterrupted_step(make_sim):
             assert sim.time == state.time
             sim.step()
             assert sim.time == t
-            np.testing.assert_array_equal(_observe(sim, robot), truth)  # bit for bit
+            got = _observe(sim, robot)
+            worst = max(worst, float(np.abs(got - truth).max()))
+            if continuation is None:
+                np.testing.assert_array_equal(got, truth)  # bit for bit
         else:
             sim.step()
+    print(f"{sim.backend}: one step after set_state off the uninterrupted one by {worst:.3g}")
+    if continuation is not None:  # the gap is real, and no larger than measured
+        assert 0.0 < worst < continuation
 
 
 def test_the_portable_state_in_the_same_sim_is_at_float_precision(make_sim):
@@ -84,7 +92,8 @@ def test_the_portable_state_in_the_same_sim_is_at_float_precision(make_sim):
         else:
             sim.step()
     print(f"{sim.backend}: one-step error of the portable state in the same Sim {worst:.3g}")
-    assert worst < 1e-10
+    same_sim_gap = gap(sim.backend, "portable_state_in_the_same_sim")
+    assert worst < (1e-10 if same_sim_gap is None else same_sim_gap)
 
 
 # The floor of a state carried into another Sim of the same engine (r2d2-gentle's drive, 6
@@ -285,4 +294,8 @@ def test_bound_commands_are_read_and_then_replaced(make_sim):
     with pytest.raises(exc.StaleCommandError, match=r"set_state replaced the commands in force"):
         cmd.targets[:] = 0.0
     sim.step()
-    np.testing.assert_array_equal(_observe(sim, robot), truth)
+    continuation = gap(sim.backend, "state_continuation")
+    if continuation is None:
+        np.testing.assert_array_equal(_observe(sim, robot), truth)
+    else:  # not a bitwise continuation: within the measured gap
+        assert float(np.abs(_observe(sim, robot) - truth).max()) < continuation

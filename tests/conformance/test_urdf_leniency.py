@@ -141,7 +141,10 @@ def test_lenient_input_reads_as_pybullet_reads_it(make_sim, case, caplog, tmp_pa
     body = sim.load_urdf(path)
     assert _raw.table_difference(sim.joints(body), raw.table) is None
     assert _raw.dynamics_difference(sim, body, raw.dynamics, 1e-7) is None
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    )
     records = [r for r in caplog.records if r.name == "simbridge.urdf"]
     assert len(records) == 1, [r.getMessage() for r in records]
     assert records[0].getMessage().startswith(f"{path}: read as PyBullet reads it: ")
@@ -370,7 +373,10 @@ def test_what_pybullet_warns_of_every_backend_says_once(make_sim, case, caplog, 
     body = sim.load_urdf(path)
     assert _raw.table_difference(sim.joints(body), raw.table) is None
     assert _raw.dynamics_difference(sim, body, raw.dynamics, 1e-7) is None
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    )
     warnings = [r for r in caplog.records if r.levelno >= logging.WARNING]
     assert [r.name for r in warnings] == ["simbridge.urdf"], [r.getMessage() for r in warnings]
     assert re.search(we_say, warnings[0].getMessage()), warnings[0].getMessage()

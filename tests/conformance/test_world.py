@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 
 import pytest
+from _gaps import gap
 
 import simbridge
 
@@ -369,9 +370,13 @@ def test_commands_and_teleports_racing_a_stepping_thread_land_whole(make_sim):
             accepted[name] += 1
             k += 1
 
+    f32 = gap(sim.backend, "state_float32") or 0.0
+
     def whole_steps(position: float, speed: float) -> bool:
+        # a float32 position (_gaps "state_float32") gathers a rounding of up to 2^-24 of itself
+        # at each of its n steps: n^2 2^-24 steps' worth at most, bounded by f32 n^2
         n = position / (speed * dt)
-        return speed in (2.0, 3.0) and abs(n - round(n)) < 1e-6
+        return speed in (2.0, 3.0) and abs(n - round(n)) < 1e-6 + f32 * n * n
 
     def stepper() -> None:
         deadline = time.monotonic() + 1.0
@@ -381,10 +386,17 @@ def test_commands_and_teleports_racing_a_stepping_thread_land_whole(make_sim):
             accepted["steps"] += 1
             now = speeds()
             pull = now[0] - last[0]
-            if abs(pull - pull_vel) > 1e-9 * pull_vel and abs(pull - pull_pos) > -1e-9 * pull_pos:
+            # a float32 state (_gaps "state_float32"): the speeds read are rounded, so a pull or
+            # a count of torques is whole to a few roundings of the speeds it is taken from
+            round_v = 4 * f32 * (abs(now[0]) + abs(last[0]) + abs(pull))
+            round_t = 4 * f32 * (abs(now[2]) + abs(last[2]) + abs(now[2] - last[2])) / per_torque
+            if (
+                abs(pull - pull_vel) > 1e-9 * pull_vel + round_v
+                and abs(pull - pull_pos) > -1e-9 * pull_pos + round_v
+            ):
                 torn.append(f"command: a pull of {pull / pull_vel:.3f} velocity pulls")
             torques = (now[2] - last[2]) / per_torque
-            if abs(torques - round(torques)) > 1e-6:
+            if abs(torques - round(torques)) > 1e-6 + round_t:
                 torn.append(f"torque: {torques:.6f} torques' worth in one step")
             if not whole_steps(sim.joint_states(robot, [spun]).positions[0], now[1]):
                 torn.append("teleport: reset_joint_state")
@@ -428,7 +440,10 @@ def test_commands_and_teleports_racing_a_stepping_thread_land_whole(make_sim):
     sim.step()  # the torques still pending
     total = (speeds()[2] - 0.0) / per_torque
     assert torn == [], f"{len(torn)} of {accepted['steps']} steps: {sorted(set(torn))}"
-    assert total == pytest.approx(accepted["torques"], abs=1e-6), "torques lost"
+    # whole to the float32 rounding of the speed and of one torque's worth (measured 1.1e-4 of
+    # 2430 on PhysX: 4.3e-8 relative), a lost torque being 1
+    rounding = 4 * f32 * (abs(total) + 1.0)
+    assert total == pytest.approx(accepted["torques"], abs=1e-6 + rounding), "torques lost"
     assert min(accepted.values()) > 0, accepted  # every kind of call raced the steps
 
 
