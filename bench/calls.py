@@ -91,7 +91,7 @@ class World:
 def _pybullet_raw(w: World) -> dict[str, Callable[[Any], object]]:
     import pybullet as p
 
-    from simbridge.backends.pybullet_inspect import client_id
+    from simbridge.backends.pybullet.inspect import client_id
 
     c = client_id(w.sim)  # the same client, called raw
     b, j, link, n = w.body, w.joints, w.link, len(w.joints)

@@ -303,7 +303,7 @@ def single_calls(backend: str, n: int) -> list[Case]:
     if backend == "pybullet":
         import pybullet as p
 
-        from simbridge.backends.pybullet_inspect import client_id
+        from simbridge.backends.pybullet.inspect import client_id
 
         c = client_id(sim)  # the same client, called raw
 

@@ -44,7 +44,7 @@ import pybullet as p
 import pybullet_data
 
 import simbridge
-from simbridge.backends.pybullet_inspect import set_check_every
+from simbridge.backends.pybullet.inspect import set_check_every
 
 DATA = Path(pybullet_data.getDataPath())
 

@@ -12,7 +12,7 @@ step of a 2000-link chain takes minutes). What a backend refuses up front is a
 BackendUnsupportedError from ``load_urdf``, timed too:
 
 * PyBullet: at most 121 movable joints and 127 joints per body (past them its state reads fail
-  or read 0: backends/pybullet_backend.py MAX_BODY_*);
+  or read 0: backends/pybullet/backend.py MAX_BODY_*);
 * MuJoCo: joints nested at most 1022 deep (its compiler refuses a deeper body tree, after tens
   of seconds: backends/mujoco/backend.py MAX_TREE_DEPTH).
 

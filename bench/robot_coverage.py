@@ -96,7 +96,7 @@ def run_phase(phase: str, path: str) -> dict[str, Any]:
     }
     warnings = _collect_warnings(engine_lines=phase == "raw")
     if phase == "raw":
-        from simbridge.backends.pybullet_output import p  # registers PyBullet's classifier
+        from simbridge.backends.pybullet.output import p  # registers PyBullet's classifier
         from simbridge.engine_output import captured
 
         with captured("pybullet", "connect"):

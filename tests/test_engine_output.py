@@ -79,11 +79,11 @@ def test_the_banner_is_a_debug_record_in_a_fresh_process():
 @pytest.mark.parametrize(
     "module",
     [
-        "pybullet_backend",
-        "pybullet_reads",
-        "pybullet_commands",
-        "pybullet_scene",
-        "pybullet_inspect",
+        "pybullet.backend",
+        "pybullet.reads",
+        "pybullet.commands",
+        "pybullet.scene",
+        "pybullet.inspect",
     ],
 )
 def test_importing_a_backend_module_directly_prints_nothing(module):

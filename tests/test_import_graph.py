@@ -200,11 +200,14 @@ def test_every_package_module_is_found():
         "simbridge",
         "simbridge.sim",
         "simbridge.urdf",
-        "simbridge.backends.pybullet_backend",
+        "simbridge.backends.pybullet.backend",
         "simbridge.compare.scenario",
     ):
         assert name in modules
     assert any(name.startswith("simbridge.backends.mujoco") for name in modules)
+    # every package under backends/ is declared, so the rules below see it installed
+    on_disk = {p.parent.name for p in (ROOT / "backends").glob("*/__init__.py")}
+    assert on_disk == set(_backend_packages(modules))
 
 
 def test_the_import_graph_has_no_circle():
@@ -344,3 +347,129 @@ def test_the_analysis_stage_writes_no_sentence():
             tree = ast.parse(path.read_text(encoding="utf-8"))
             found += [f"{path.name}:{line}" for line in _formatted_strings(tree)]
     assert not found, "formatted strings in the analysis stage: " + ", ".join(found)
+
+
+# ---------------------------------------------------------------- the backend packages
+
+
+def _backend_packages(modules: dict[str, tuple[Path, bool]]) -> list[str]:
+    """The backend packages installed: every package directly under simbridge.backends
+    (``simbridge.backends.<name>``), the shipped ones and any added beside them alike."""
+    return sorted(
+        name.rpartition(".")[2]
+        for name, (_, is_package) in modules.items()
+        if is_package and name.rpartition(".")[0] == "simbridge.backends"
+    )
+
+
+def _engines(packages: list[str]) -> dict[str, set[str]]:
+    """Backend package -> the engine modules it may import: what the registry entries whose
+    class lives in that package require (``register(..., requires=("pybullet",))``)."""
+    from simbridge.registry import available_backends, backend_spec
+
+    engines: dict[str, set[str]] = {package: set() for package in packages}
+    for name in available_backends():
+        module = backend_spec(name).entry_point.partition(":")[0]
+        parts = module.split(".")
+        if parts[:2] == ["simbridge", "backends"] and len(parts) > 2 and parts[2] in engines:
+            engines[parts[2]].update(backend_spec(name).requires)
+    return engines
+
+
+def _engine_imports(tree: ast.Module) -> list[tuple[int, str]]:
+    """(line, top-level module) of every absolute import of a module outside simbridge."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name.split(".")[0]) for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            out.append((node.lineno, node.module.split(".")[0]))
+    return [(line, top) for line, top in out if top != "simbridge"]
+
+
+def _layer_breaches(
+    modules: dict[str, tuple[Path, bool]], engines: dict[str, set[str]]
+) -> list[str]:
+    """Each backend package imports its own modules, the modules shared by every backend
+    (simbridge.backends' own plain modules, such as ``locking``), the core and its own engine;
+    never another backend package, compare, or another backend's engine. Nothing outside the
+    backend packages imports an engine."""
+    every_engine = set().union(*engines.values())
+    graph = _edges(modules)
+    out = []
+    for module, (path, _) in sorted(modules.items()):
+        parts = module.split(".")
+        package = (
+            parts[2]
+            if parts[:2] == ["simbridge", "backends"] and len(parts) > 2 and parts[2] in engines
+            else None
+        )
+        own_engine = engines.get(package, set()) if package else set()
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for line, top in _engine_imports(tree):
+            if top in every_engine and top not in own_engine:
+                out.append(f"{module} (line {line}) imports the engine {top}")
+        if package is None:
+            continue
+        for target, line in graph[module].items():
+            t = target.split(".")
+            own = t[:3] == ["simbridge", "backends", package]
+            shared = t[:2] == ["simbridge", "backends"] and (
+                len(t) == 2 or (len(t) == 3 and not modules[target][1])
+            )
+            core = t[1] not in ("backends", "compare") if len(t) > 1 else True
+            if not (own or shared or core):
+                out.append(f"{module} (line {line}) imports {target}")
+    return out
+
+
+def test_each_backend_package_imports_only_its_engine_the_interface_and_the_core():
+    """backends/<name>/ imports its own modules, simbridge's core (the Backend interface, the
+    types, the readers) and the engine its registry entry requires; every backend package is
+    covered, a new one as soon as it is there and registered."""
+    modules = _modules()
+    packages = _backend_packages(modules)
+    engines = _engines(packages)
+    unregistered = [p for p, engine in engines.items() if not engine]
+    assert not unregistered, (
+        f"backend packages with no registry entry naming an engine: {unregistered}"
+    )
+    breaches = _layer_breaches(modules, engines)
+    assert not breaches, "\n".join(breaches)
+
+
+def test_the_backend_rule_sees_a_foreign_import(tmp_path):
+    """The checker itself, on a made-up tree with a third backend package: a backend importing
+    another backend's module, compare, or another's engine is flagged; the core importing an
+    engine is flagged; a backend's own engine, the shared modules and the core are not."""
+    sources = {
+        "simbridge": ("", True),
+        "simbridge.backend": ("import numpy\n", False),
+        "simbridge.backends": ("", True),
+        "simbridge.backends.locking": ("", False),
+        "simbridge.backends.alpha": ("from .world import W\n", True),
+        "simbridge.backends.alpha.world": (
+            "import sapien\nfrom ..locking import x\nfrom simbridge.backend import Backend\n"
+            "from simbridge.backends.beta import world\nimport mujoco\n",
+            False,
+        ),
+        "simbridge.backends.beta": ("", True),
+        "simbridge.backends.beta.world": (
+            "import mujoco.viewer\nimport simbridge.compare\n",
+            False,
+        ),
+        "simbridge.compare": ("import sapien\n", True),
+    }
+    modules = {}
+    for name, (text, is_package) in sources.items():
+        path = tmp_path / f"{name}.py"
+        path.write_text(text, encoding="utf-8")
+        modules[name] = (path, is_package)
+    engines = {"alpha": {"sapien"}, "beta": {"mujoco"}}
+    assert _backend_packages(modules) == ["alpha", "beta"]
+    assert _layer_breaches(modules, engines) == [
+        "simbridge.backends.alpha.world (line 5) imports the engine mujoco",
+        "simbridge.backends.alpha.world (line 4) imports simbridge.backends.beta.world",
+        "simbridge.backends.beta.world (line 2) imports simbridge.compare",
+        "simbridge.compare (line 1) imports the engine sapien",
+    ]

@@ -4,11 +4,12 @@ through that backend's own door, from that backend's own test file.
 Every file is parsed with :mod:`ast` (none is executed), so a rule holds wherever the code
 stands: at the top, inside a function, or in a string given to ``getattr``.
 
-- No file under tests/, bench/ or examples/ reaches into a `Sim`'s backend (``sim._b``): the
-  backends' inspect modules (``simbridge.backends.mujoco.inspect``,
-  ``simbridge.backends.pybullet_inspect``) are the doors.
+- No file under tests/, bench/ or examples/ reaches into a `Sim`'s backend (``sim._b``): each
+  backend package's inspect module (``simbridge.backends.<name>.inspect``, for example
+  ``simbridge.backends.mujoco.inspect``) is its door.
 - A test file imports a backend's modules only when it is that backend's own test file
-  (tests/test_mujoco_*.py, tests/test_pybullet_*.py); bench/ may use the doors for its raw
+  (tests/test_<name>_*.py for the package backends/<name>/: every package under backends/ is a
+  backend and is covered alike, with no list to keep); bench/ may use the doors for its raw
   floors.
 - The conformance suite (tests/conformance/) runs the same tests on every registered backend,
   a third-party one too: it speaks the public interface alone, with no private name of
@@ -24,8 +25,19 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ROOT / "tests"
 
-# The backends this project ships: module prefix under simbridge.backends -> own test files.
-OWN_TESTS = {"mujoco": "test_mujoco_*.py", "pybullet": "test_pybullet_*.py"}
+
+def _backend_packages() -> tuple[str, ...]:
+    """The backends this project ships: every package under backends/ (a folder with an
+    ``__init__.py``), named as under simbridge.backends."""
+    return tuple(sorted(p.parent.name for p in (ROOT / "backends").glob("*/__init__.py")))
+
+
+def own_tests(backend: str) -> str:
+    """The pattern of a backend package's own test files."""
+    return f"test_{backend}_*.py"
+
+
+BACKENDS = _backend_packages()
 
 # The public API of namedtuples (JointInfo and the other state records) starts with "_".
 NAMEDTUPLE_API = {"_asdict", "_fields", "_replace", "_make", "_field_defaults"}
@@ -79,23 +91,25 @@ def _imported_modules(tree: ast.Module) -> Iterator[tuple[int, str]]:
             yield node.lineno, node.args[0].value
 
 
-def _backend_of_module(name: str) -> str | None:
-    """Which shipped backend a module under simbridge.backends belongs to ("" for the
-    simbridge.backends package itself or a module of no known backend; None: not a backend
+def _backend_of_module(name: str, backends: tuple[str, ...] = BACKENDS) -> str | None:
+    """Which backend package a module under simbridge.backends belongs to ("" for the
+    simbridge.backends package itself or a module of no backend package; None: not a backend
     module)."""
     if name != "simbridge.backends" and not name.startswith("simbridge.backends."):
         return None
     first = name.removeprefix("simbridge.backends").lstrip(".").split(".")[0]
-    return next((b for b in OWN_TESTS if first == b or first.startswith(b + "_")), "")
+    return first if first in backends else ""
 
 
-def _foreign_backend_imports(path: Path, tree: ast.Module) -> Iterator[tuple[int, str]]:
+def _foreign_backend_imports(
+    path: Path, tree: ast.Module, backends: tuple[str, ...] = BACKENDS
+) -> Iterator[tuple[int, str]]:
     """Imports of a backend's modules in a test file that is not that backend's own."""
     for line, name in _imported_modules(tree):
-        backend = _backend_of_module(name)
+        backend = _backend_of_module(name, backends)
         if backend is None:
             continue
-        if not backend or path.parent != TESTS or not path.match(OWN_TESTS[backend]):
+        if not backend or path.parent != TESTS or not path.match(own_tests(backend)):
             yield line, name
 
 
@@ -141,8 +155,8 @@ def test_no_file_reaches_into_a_sims_backend():
     }
     assert not found, (
         "these read a Sim's backend (sim._b); use the public interface, or the backend's "
-        "inspect module (simbridge.backends.mujoco.inspect, simbridge.backends.pybullet_inspect) "
-        "from that backend's own test file:\n" + _report(found)
+        "inspect module (simbridge.backends.<name>.inspect) from that backend's own test "
+        "file (tests/test_<name>_*.py):\n" + _report(found)
     )
 
 
@@ -152,7 +166,7 @@ def test_backend_modules_are_imported_only_by_their_own_test_files():
         for path in _files("tests")
         if (hits := list(_foreign_backend_imports(path, _tree(path))))
     }
-    own = ", ".join(f"tests/{pattern}" for pattern in OWN_TESTS.values())
+    own = ", ".join(f"tests/{own_tests(backend)}" for backend in BACKENDS)
     assert not found, (
         f"a backend's modules are looked into only from its own test file ({own}); these "
         "should use the public interface (sim.manifest(), sim.profile, ...) or move there:\n"
@@ -170,36 +184,56 @@ def test_conformance_suite_speaks_the_public_interface():
     )
 
 
+def test_every_backend_package_is_found():
+    """The rules cover every package under backends/, the two the project has always shipped
+    among them; a new one (backends/physx/) is covered by being there."""
+    assert {"mujoco", "pybullet"} <= set(BACKENDS)
+    assert not list((ROOT / "backends").glob("pybullet_*.py")), "PyBullet is a package now"
+
+
 def test_the_rules_see_what_they_forbid():
-    """Each rule flags a sample of what it forbids, in each way it can be written."""
+    """Each rule flags a sample of what it forbids, in each way it can be written; a backend
+    package the project does not ship yet (physx here) is held to the same rule."""
     code = ast.parse(
         "import simbridge.backends.mujoco.inspect\n"
         "def f(sim):\n"
-        "    from simbridge.backends.pybullet_inspect import client_id\n"
+        "    from simbridge.backends.pybullet.inspect import client_id\n"
         "    from simbridge.backends import mujoco\n"
         "    from simbridge import _version\n"
-        "    importlib.import_module('simbridge.backends.pybullet_backend')\n"
+        "    importlib.import_module('simbridge.backends.pybullet.backend')\n"
         "    c = sim._b._c\n"
         "    return getattr(sim, '_b'), info._asdict(), self._x, x.__class__, ref._rule\n"
+        "import simbridge.backends.physx.inspect\n"
     )
     assert sorted(line for line, _ in _backend_reaches(code)) == [7, 8]
+    backends = ("mujoco", "physx", "pybullet")
     elsewhere = TESTS / "test_core.py"
-    assert [n for _, n in sorted(_foreign_backend_imports(elsewhere, code))] == [
+    assert [n for _, n in sorted(_foreign_backend_imports(elsewhere, code, backends))] == [
         "simbridge.backends.mujoco.inspect",
-        "simbridge.backends.pybullet_inspect.client_id",
+        "simbridge.backends.pybullet.inspect.client_id",
         "simbridge.backends.mujoco",
-        "simbridge.backends.pybullet_backend",
+        "simbridge.backends.pybullet.backend",
+        "simbridge.backends.physx.inspect",
     ]
-    # in a backend's own test file, only the other backend's modules are flagged
+    # in a backend's own test file, only the other backends' modules are flagged
     own = TESTS / "test_mujoco_backend.py"
-    assert [n for _, n in sorted(_foreign_backend_imports(own, code))] == [
-        "simbridge.backends.pybullet_inspect.client_id",
-        "simbridge.backends.pybullet_backend",
+    assert [n for _, n in sorted(_foreign_backend_imports(own, code, backends))] == [
+        "simbridge.backends.pybullet.inspect.client_id",
+        "simbridge.backends.pybullet.backend",
+        "simbridge.backends.physx.inspect",
     ]
     own = TESTS / "test_pybullet_backend.py"
-    assert [n for _, n in sorted(_foreign_backend_imports(own, code))] == [
+    assert [n for _, n in sorted(_foreign_backend_imports(own, code, backends))] == [
         "simbridge.backends.mujoco.inspect",
         "simbridge.backends.mujoco",
+        "simbridge.backends.physx.inspect",
+    ]
+    own = TESTS / "test_physx_backend.py"
+    assert [n for _, n in sorted(_foreign_backend_imports(own, code, backends))] == [
+        "simbridge.backends.mujoco.inspect",
+        "simbridge.backends.pybullet.inspect.client_id",
+        "simbridge.backends.mujoco",
+        "simbridge.backends.pybullet.backend",
     ]
     assert sorted(code for _, code in _private_uses(code)) == [
         "ref._rule",

@@ -220,3 +220,46 @@ def test_the_kernels_command_entry_points_refuse_bad_input():
             k.add_torque(np.array([99], np.intp), [1.0])
         with pytest.raises(ValueError, match="slots in range"):
             k.add_torque(np.array([0], np.intp), [1])  # an int, not a float
+
+
+def test_a_release_refused_mid_step_leaves_the_command_bound() -> None:
+    """A release while another thread steps is refused (SimBusyError); the command stays bound
+    in the Sim as in the backend (the Sim's lists once dropped it before the backend refused:
+    the joints took plain commands while the compiled loop still read the arrays)."""
+    import threading
+
+    from simbridge.exceptions import InvalidArgumentError, SimBusyError
+
+    sim = simbridge.Sim("mujoco")
+    try:
+        robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+        command = sim.velocity_command(robot, WHEELS, [1.0] * 4, max_force=[10.0] * 4)
+        b = inspect.backend_of(sim)
+        held = threading.Event()
+        done = threading.Event()
+
+        def stepper() -> None:  # holds the lock as a step(n) does
+            with b._stepping:
+                b._in_step = True
+                held.set()
+                done.wait(10)
+                b._in_step = False
+
+        t = threading.Thread(target=stepper)
+        t.start()
+        try:
+            assert held.wait(10)
+            with pytest.raises(SimBusyError):
+                command.release()
+            assert command.bound
+            with pytest.raises(InvalidArgumentError, match="bound"):
+                sim.set_joint_velocity(robot, WHEELS, [0.0] * 4, max_force=10.0)
+        finally:
+            done.set()
+            t.join(10)
+        command.release()
+        assert not command.bound
+        sim.set_joint_velocity(robot, WHEELS, [0.0] * 4, max_force=10.0)
+        sim.step(1)
+    finally:
+        sim.close()

@@ -31,7 +31,7 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/__init__.py",
         "simbridge/sim.py",
         "simbridge/py.typed",
-        "simbridge/backends/pybullet_backend.py",
+        "simbridge/backends/pybullet/backend.py",
         "simbridge/backends/mujoco/backend.py",
         "simbridge/backends/mujoco/loop.py",
         "simbridge/compare/__init__.py",

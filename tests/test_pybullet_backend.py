@@ -1,7 +1,7 @@
 """PyBullet-backend specifics: the layer adds nothing to raw PyBullet under the "pybullet" profile.
 
 These tests import pybullet directly because they compare against raw PyBullet code, and look
-inside the backend only through ``simbridge.backends.pybullet_inspect``.
+inside the backend only through ``simbridge.backends.pybullet.inspect``.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import pybullet_data
 import pytest
 
 import simbridge
-from simbridge.backends.pybullet_inspect import client_id, set_check_every
+from simbridge.backends.pybullet.inspect import client_id, set_check_every
 from simbridge.exceptions import DisplayError
 
 WHEELS_RIGHT, WHEELS_LEFT = (2, 3), (6, 7)
@@ -246,7 +246,7 @@ def test_a_call_waiting_for_the_sim_when_another_thread_closes_it_is_refused():
     import sys
     from pathlib import Path
 
-    from simbridge.backends.pybullet_inspect import backend_of
+    from simbridge.backends.pybullet.inspect import backend_of
 
     sys.path.insert(0, str(Path(__file__).parent))
     from _closing_race import check_waiting_call_refused_after_close

@@ -1,4 +1,4 @@
-"""The PyBullet backend's bookkeeping for get_state/set_state (backends/pybullet_state.py): its
+"""The PyBullet backend's bookkeeping for get_state/set_state (backends/pybullet/state.py): its
 saveState snapshots are freed when their states are collected, never across a reset, and a
 snapshot of another world is not restored."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pybullet as p
 
 import simbridge
-from simbridge.backends.pybullet_inspect import backend_of, client_id
+from simbridge.backends.pybullet.inspect import backend_of, client_id
 
 
 def _world() -> simbridge.Sim:

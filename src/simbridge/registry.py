@@ -25,6 +25,7 @@ __all__ = [
     "register",
     "available_backends",
     "load_backend",
+    "backend_spec",
     "unavailable_reason",
     "ENTRY_POINT_GROUP",
 ]
@@ -71,6 +72,16 @@ def available_backends() -> list[str]:
     """Names of every registered backend (installed or not), in registration order."""
     _read_entry_points()
     return list(_REGISTRY)
+
+
+def backend_spec(name: str) -> BackendSpec:
+    """How backend ``name`` is registered: its ``"module:Class"`` and the engine modules it
+    requires. Imports nothing of the backend."""
+    if isinstance(name, str) and name not in _REGISTRY:
+        _read_entry_points()
+    if not isinstance(name, str) or name not in _REGISTRY:
+        raise UnknownBackendError(repr(name) if not isinstance(name, str) else name, _REGISTRY)
+    return _REGISTRY[name]
 
 
 def load_backend(name: str) -> type[Backend]:
@@ -123,7 +134,7 @@ def unavailable_reason(name: str) -> str | None:
 
 register(
     "pybullet",
-    "simbridge.backends.pybullet_backend:PyBulletBackend",
+    "simbridge.backends.pybullet:PyBulletBackend",
     requires=("pybullet",),
     pip_name="pybullet",
 )

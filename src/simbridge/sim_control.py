@@ -262,7 +262,10 @@ class Control:
                 )
 
     def _release_command(self, command: BoundCommand) -> None:
-        """Unbind one command (BoundCommand.release)."""
+        """Unbind one command (BoundCommand.release). The backend unbinds first: a refusal
+        (SimBusyError while another thread steps) leaves the command bound, here and there."""
+        if not isinstance(self._b, _Closed):
+            self._b.unbind_command(command)
         if command in self._commands:
             self._commands.remove(command)
         if command in self._presend:
@@ -273,8 +276,6 @@ class Control:
                 del held[j]
         if not held:
             self._held.pop(command.body, None)
-        if not isinstance(self._b, _Closed):
-            self._b.unbind_command(command)
 
     def _end_commands(self, why: str) -> None:
         """A world change ends every bound command (unbound before the change)."""

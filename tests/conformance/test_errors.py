@@ -9,6 +9,7 @@ import re
 import numpy as np
 import pybullet_data
 import pytest
+from _gaps import declared, gap
 
 import simbridge
 from simbridge import exceptions as exc
@@ -253,7 +254,7 @@ DEFAULT_TRIGGER = {"timestep": 1e200}
 
 
 def test_diverged_simulation_is_reported(backend, make_sim, profile, private_tmp):
-    trigger = DIVERGENCE_TRIGGERS.get(backend, DEFAULT_TRIGGER)
+    trigger = declared(DIVERGENCE_TRIGGERS, backend) or DEFAULT_TRIGGER
     sim = make_sim(profile=profile, **trigger)
     sim.load_urdf("free_box.urdf", base_position=(0, 0, 1))
     with pytest.raises(
@@ -729,10 +730,6 @@ def test_a_position_or_velocity_no_engine_can_take_is_refused_where_it_is_given(
     sim.step()
 
 
-# The deepest element nesting each backend's engine reads (None: no limit of its own).
-DEEPEST_XML = {"pybullet": 98, "mujoco": None}
-
-
 @pytest.mark.parametrize("depth", [96, 200_000])
 def test_elements_nested_deeper_than_the_engine_reads(make_sim, backend, private_tmp, depth):
     """Unknown elements nested inside a link (one a line): PyBullet's XML reader refuses more
@@ -741,12 +738,12 @@ def test_elements_nested_deeper_than_the_engine_reads(make_sim, backend, private
     nested = "<a>\n" * depth + "</a>\n" * depth
     text = f'<robot name="deep"><link name="l">\n{nested}</link></robot>'
     sim = make_sim()
-    limit = DEEPEST_XML[backend]
+    limit = gap(backend, "deepest_xml")  # the deepest its engine's reader takes; None: no limit
     if limit is not None and depth + 2 > limit:
         with pytest.raises(
             exc.UrdfStructureError,
             match=rf"elements nested {depth + 2} deep: PyBullet's XML reader refuses more than "
-            rf"{limit}",
+            rf"{limit:.0f}",
         ):
             sim.load_urdf(text)
         assert sim.bodies() == []

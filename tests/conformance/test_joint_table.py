@@ -17,6 +17,7 @@ import _reference as ref
 import numpy as np
 import pybullet_data  # data files only: this imports no engine
 import pytest
+from _gaps import declared
 
 import simbridge
 from simbridge import exceptions as exc
@@ -81,7 +82,7 @@ BACKEND_REFUSED: dict[str, dict[str, tuple[type[Exception], str, str]]] = {}
 
 def _load_or_documented_refusal(sim, name: str) -> bool:
     """True when ``name`` is a documented refusal of this backend (and it did fail as written)."""
-    entry = BACKEND_REFUSED.get(sim.backend, {}).get(name)
+    entry = (declared(BACKEND_REFUSED, sim.backend) or {}).get(name)
     if entry is None:
         return False
     error, message, _reason = entry

@@ -6,13 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _gaps import gap
 from _generated import arms_urdf, chain_urdf
 
 from simbridge import exceptions as exc
-
-# Per backend: the most movable joints one body may have, and the deepest nesting of joints.
-MOST_JOINTS = {"pybullet": 121, "mujoco": None}
-DEEPEST = {"pybullet": 121, "mujoco": 1022}
 
 
 def test_a_robot_with_128_joints(make_sim, backend):
@@ -23,7 +20,8 @@ def test_a_robot_with_128_joints(make_sim, backend):
     driven (a 122nd reads 0 and takes no reset or motor in raw PyBullet)."""
     sim = make_sim()
     urdf = arms_urdf(8, 16)
-    limit = MOST_JOINTS[backend]
+    most = gap(backend, "most_joints")  # None: no limit of its own
+    limit = None if most is None else int(most)
     if limit is not None and limit < 128:
         with pytest.raises(
             exc.BackendUnsupportedError,
@@ -31,7 +29,7 @@ def test_a_robot_with_128_joints(make_sim, backend):
         ):
             sim.load_urdf(urdf, fixed_base=True)
         assert sim.bodies() == []
-        urdf = arms_urdf(121, 1)  # the most it takes: 121 (uncoupled: its solver converges)
+        urdf = arms_urdf(limit, 1)  # the most it takes (uncoupled: its solver converges)
     body = sim.load_urdf(urdf, fixed_base=True)
     n = sim.num_joints(body)
     every = list(range(n))
@@ -51,9 +49,17 @@ def test_joints_nested_past_the_engines_depth_are_refused_up_front(make_sim, bac
     """A chain one joint deeper than the backend takes is refused by load_urdf before the
     engine sees it (MuJoCo's compiler refused a 2000-link chain itself, after 40 s: "depth limit
     exceeded in signature computation"; PyBullet loaded it in 0.5 s, and its first step took
-    220 s)."""
+    220 s). A backend with no depth limit of its own (no ``deepest_chain`` gap) loads and
+    steps a 200-joint chain, deeper than PyBullet takes."""
     sim = make_sim()
-    deepest = DEEPEST[backend]
+    limit = gap(backend, "deepest_chain")
+    if limit is None:
+        body = sim.load_urdf(chain_urdf(200), fixed_base=True)
+        sim.step()
+        assert sim.num_joints(body) == 200
+        assert np.isfinite(sim.joint_states(body).positions).all()
+        return
+    deepest = int(limit)
     with pytest.raises(exc.BackendUnsupportedError, match=rf"{deepest + 1}"):
         sim.load_urdf(chain_urdf(deepest + 1), fixed_base=True)
     assert sim.bodies() == []

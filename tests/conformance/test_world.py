@@ -7,9 +7,25 @@ sequence below: [0..4], [3, 1, 5], [2, 4, 0, 6], [0, 1, 2])."""
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 import simbridge
+
+
+def _steps_lasting(sim: simbridge.Sim, seconds: float) -> int:
+    """How many steps of r2d2 on the plane last about ``seconds`` on ``sim``'s backend, timed on
+    a twin world (200 steps after 10), so a thread can be caught stepping on any backend (the
+    figures were fixed per backend: 3000 on PyBullet, 40000 on MuJoCo, about 0.3 s)."""
+    with simbridge.Sim(sim.backend, profile=sim.profile.name) as twin:
+        twin.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
+        twin.load_urdf("plane.urdf")
+        twin.step(10)
+        start = time.perf_counter()
+        twin.step(200)
+        per_step = (time.perf_counter() - start) / 200
+    return max(200, int(seconds / per_step))
 
 
 def test_body_ids_follow_pybullets_pool(make_sim):
@@ -87,7 +103,7 @@ def test_changing_the_world_while_another_thread_steps_it_is_refused(make_sim):
     sim = make_sim()
     robot = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
     sim.load_urdf("plane.urdf")
-    n = 3000 if sim.manifest()["backend"] == "pybullet" else 40000  # about 0.3 s each
+    n = _steps_lasting(sim, 0.3)
     for change in (
         lambda: sim.load_urdf("cube_small.urdf"),
         lambda: sim.remove(robot),
@@ -161,7 +177,7 @@ def test_every_call_that_touches_the_world_is_refused_while_another_thread_steps
         "set_state": lambda: sim.set_state(state),
         "velocity_command": lambda: sim.velocity_command(robot, 3, 0.0, max_force=1),
     }
-    n = 4000 if sim.manifest()["backend"] == "pybullet" else 40000  # about 0.4 s each
+    n = _steps_lasting(sim, 0.4)
     worker = threading.Thread(target=sim.step, args=(n,))
     worker.start()
     deadline = time.monotonic() + 10.0

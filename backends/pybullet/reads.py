@@ -1,5 +1,5 @@
 """The PyBullet backend's state reads and resets (a part of
-:class:`~simbridge.backends.pybullet_backend.PyBulletBackend`): joint tables, link, base
+:class:`~simbridge.backends.pybullet.backend.PyBulletBackend`): joint tables, link, base
 and joint states (multi-DoF ones too), contact points, snapshots and the time. Every read
 checks the values it returns: none hands out a NaN or an infinity."""
 
@@ -27,9 +27,9 @@ from simbridge.types import (
     Vec3,
 )
 
-from .pybullet_common import _all_finite, _Body, _exclusive, _finite_base, wait_for_lock
-from .pybullet_output import p  # pybullet, imported with its banner captured
-from .pybullet_state import Records, Saved, contact_point
+from .common import _all_finite, _Body, _exclusive, _finite_base, wait_for_lock
+from .output import p  # pybullet, imported with its banner captured
+from .state import Records, Saved, contact_point
 
 __all__ = ["StateReads"]
 

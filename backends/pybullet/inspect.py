@@ -13,7 +13,7 @@ from typing import Any
 
 from simbridge.exceptions import InvalidArgumentError
 
-from .pybullet_backend import PyBulletBackend
+from .backend import PyBulletBackend
 
 __all__ = ["backend_of", "client_id", "set_check_every"]
 

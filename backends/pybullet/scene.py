@@ -21,11 +21,11 @@ from simbridge.exceptions import UrdfStructureError
 from simbridge.scene import SceneBody, find_mesh
 from simbridge.types import JointInfo
 
-from .pybullet_output import p  # pybullet, imported with its banner captured
+from .output import p  # pybullet, imported with its banner captured
 
 
 class PyBulletBackend(Protocol):
-    """What this module uses of :class:`~simbridge.backends.pybullet_backend.PyBulletBackend`
+    """What this module uses of :class:`~simbridge.backends.pybullet.backend.PyBulletBackend`
     (named here, not imported: that module imports this one)."""
 
     name: ClassVar[str]

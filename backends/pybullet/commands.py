@@ -1,5 +1,5 @@
 """The PyBullet backend's motor commands (a part of
-:class:`~simbridge.backends.pybullet_backend.PyBulletBackend`): velocity, position and
+:class:`~simbridge.backends.pybullet.backend.PyBulletBackend`): velocity, position and
 torque, per joint and per spherical joint, within <limit effort> when the profile
 enforces it; and the commands in force, read and set (``joint_commands``, the spherical
 joints' states with their motors)."""
@@ -14,9 +14,9 @@ import numpy as np
 from simbridge.profiles import Profile
 from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointState
 
-from .pybullet_common import _Body, _exclusive, wait_for_lock
-from .pybullet_output import p  # pybullet, imported with its banner captured
-from .pybullet_state import Records
+from .common import _Body, _exclusive, wait_for_lock
+from .output import p  # pybullet, imported with its banner captured
+from .state import Records
 
 __all__ = ["MotorCommands", "SPHERICAL_BRAKE_IMPULSE", "SPHERICAL_BRAKE_KP"]
 

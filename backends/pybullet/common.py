@@ -14,7 +14,7 @@ from simbridge.exceptions import UrdfStructureError
 from simbridge.types import JointInfo, JointType, Quat, Vec3
 from simbridge.urdf import UrdfModel
 
-from .locking import WAIT_LIMIT_S, WAIT_SLICE_S, exclusive, wait_for_lock
+from ..locking import WAIT_LIMIT_S, WAIT_SLICE_S, exclusive, wait_for_lock
 
 __all__ = [
     "MAX_NAME_BYTES",

@@ -6,13 +6,9 @@ tutorial user would write (``loadURDF``, ``getJointInfo``, ``setJointMotorContro
 "urdf" profile is reached with PyBullet's own switches (``URDF_USE_INERTIA_FROM_FILE``,
 ``changeDynamics``, the default motor's force set to the file's friction).
 
-One job per module: this one holds :class:`PyBulletBackend`, the world's lifecycle (connect,
-load, remove, reset, close) and stepping with its divergence probe; ``pybullet_reads`` the
-state reads and resets, contacts and snapshots; ``pybullet_commands`` the motor commands and
-the commands in force; ``pybullet_output`` PyBullet's printout classified into log records;
-``pybullet_common`` what they share (the per-body record, the busy guard, the checks made
-before PyBullet is given a file or a display); ``pybullet_state`` the commands' records and
-saved states; ``pybullet_scene`` MJCF/SDF files; ``pybullet_inspect`` the tests' door.
+This module holds :class:`PyBulletBackend`, the world's lifecycle (connect, load, remove,
+reset, close) and stepping with its divergence probe; the package's ``__init__`` lists the
+other modules.
 """
 
 from __future__ import annotations
@@ -46,8 +42,8 @@ from simbridge.types import (
 )
 from simbridge.urdf import UrdfModel, resolve_mesh
 
-from .pybullet_commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands
-from .pybullet_common import (
+from .commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands
+from .common import (
     _all_finite,
     _Body,
     _nesting,
@@ -55,14 +51,14 @@ from .pybullet_common import (
     _x_display_problem,
     wait_for_lock,
 )
-from .pybullet_output import (
+from .output import (
     _pybullet_gui_output,
     _pybullet_merge_output,
     p,  # pybullet, imported with its banner captured
 )
-from .pybullet_reads import StateReads
-from .pybullet_scene import Pending, named_table
-from .pybullet_state import Records
+from .reads import StateReads
+from .scene import Pending, named_table
+from .state import Records
 
 __all__ = ["PyBulletBackend"]
 
@@ -144,7 +140,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         self._c = -1
         # held by step() and by every call that touches the world (re-entrant: a call's own
         # nested calls pass); a call from another thread meanwhile waits for it, or raises
-        # SimBusyError if it is a step (_in_step): pybullet_common.wait_for_lock
+        # SimBusyError if it is a step (_in_step): common.wait_for_lock
         self._stepping = threading.RLock()
         self._in_step = False
         self._closed = False  # a call that waited for the lock through close() is refused
@@ -178,7 +174,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         # (a control loop repeating it every step pays 1.4 us less); any other motor command,
         # load, remove or reset forgets it.
         self._last_velocity: tuple[Any, ...] | None = None
-        self._records = Records()  # the commands given and saved states (pybullet_state.py)
+        self._records = Records()  # the commands given and saved states (state.py)
         # PyBullet's pool of body ids: the freed ones (a stack: the last freed is handed out
         # first), ids below _fresh handed out since the world was new, removals since then
         self._freed: list[int] = []
@@ -293,7 +289,7 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         return body
 
     def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
-        """``p.loadMJCF``/``p.loadSDF`` on the file itself (backends/pybullet_scene.py); each
+        """``p.loadMJCF``/``p.loadSDF`` on the file itself (backends/pybullet/scene.py); each
         body then goes through ``load`` as a URDF's does."""
         self._scene = Pending(bodies, _SELF_COLLISION_FLAGS[options.self_collision])
         try:
