@@ -214,22 +214,25 @@ def test_a_torque_lasts_one_step_and_the_brake_holds_until_released():
 @needs_sapien
 def test_the_tutorial_drive_turns_and_drives_on_pybullets_motors():
     """The tutorial's R2D2 drive (README), from 0.5 m: the wheels hold the commanded +-100 rad/s
-    as on PyBullet, and the robot turns (measured: -1.03 rad in the 240 steps, drifting 1.1 m;
-    PyBullet -2.15 rad, 0.07 m: skid steering is the engines' contact models' business)."""
+    after most steps of the turn, as on PyBullet (within 0.01 rad/s after 80 % of the 240 steps,
+    measured; PyBullet 91 %: on both a wheel that hits the ground edge-first loses speed for a
+    step), and the robot turns (measured about 1 rad; PyBullet -2.15 rad: skid steering is the
+    engines' contact models' business)."""
     with simbridge.Sim("physx") as sim:
         sim.load_urdf("plane.urdf")
         r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5))
         sim.step(240)
         start = sim.base_state(r2d2)
+        held = []
         for _ in range(240):
             sim.set_joint_velocity(r2d2, WHEELS, [-100, -100, 100, 100], max_force=50)
             sim.step()
+            speeds = np.abs(sim.joint_states(r2d2, WHEELS).velocities)
+            held.append(np.abs(speeds - 100.0).max() < 0.01)
+        assert np.mean(held) > 0.7
         turned = sim.base_state(r2d2)
         yaw = [rpy_from_quat(s.orientation)[2] for s in (start, turned)]
         assert abs(yaw[1] - yaw[0]) > 0.2
-        np.testing.assert_allclose(
-            sim.joint_states(r2d2, WHEELS).velocities, [-100, -100, 100, 100], atol=1e-2
-        )
         for _ in range(500):
             sim.set_joint_velocity(r2d2, WHEELS, -100, max_force=10)
             sim.step()

@@ -156,6 +156,10 @@ class PhysxBackend(StateAccess, MotorCommands, ContactReads, Backend):
             movable = movable_joints(table)
             robot = self._robot(body, model, built, table, fixed, movable)
             robot.motors = default_motors(model, movable, self.profile)
+            robot.drive_force = np.full(len(movable), np.nan)
+            robot.moving_links = [
+                comp for comp, lp in zip(built.links, plan.links, strict=False) if not lp.static
+            ]
             self._configure(robot)
         except BaseException:
             for entity in built.entities:

@@ -79,18 +79,25 @@ class MotorCommands:
         m = robot.motors
         joint = robot.joints[robot.movable[s]]
         force = min(float(m["max_force"][s]), float(m["effort"][s]))
+        drive = robot.drive_force
         if force <= 0.0:
-            joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+            if drive[s] != 0.0:
+                joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                drive[s] = 0.0
             return
-        joint.set_drive_properties(0.0, DRIVE_DAMPING, force, "force")
+        if drive[s] != force:  # PhysX's drive as it is set (NaN: not yet)
+            joint.set_drive_properties(0.0, DRIVE_DAMPING, force, "force")
+            drive[s] = force
         if m["ball"][s]:
             joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
-        elif m["mode"][s] == MotorMode.VELOCITY:
+        elif m["mode"][s] == 0:  # MotorMode.VELOCITY
             joint.set_drive_velocity_target(float(m["target"][s]))
 
     def _refresh_active(self) -> None:
         """The robots that need work at every step (link damping, position motors, torques)."""
         damped = bool(self.profile.linear_damping or self.profile.angular_damping)
+        for r in self._robots.values():
+            r.has_position = bool((r.motors["mode"] == MotorMode.POSITION).any())
         self._active = [
             r
             for r in self._robots.values()
@@ -111,14 +118,15 @@ class MotorCommands:
             # PyBullet's link damping f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal
             # axes), from the velocities at the start of the step: as accelerations the inertia
             # drops out of both
-            for link in robot.built.links:
-                v = link.linear_velocity
-                w = link.angular_velocity
-                a_lin = v * np.float32(-k_lin * (1.0 + float(np.sqrt(v @ v))))
-                a_ang = w * np.float32(-k_ang * (1.0 + float(np.sqrt(w @ w))))
+            links = robot.moving_links
+            v = np.array([link.linear_velocity for link in links])  # (n, 3) float32
+            w = np.array([link.angular_velocity for link in links])
+            v *= (-k_lin * (1.0 + np.sqrt(np.einsum("ij,ij->i", v, v))))[:, None]
+            w *= (-k_ang * (1.0 + np.sqrt(np.einsum("ij,ij->i", w, w))))[:, None]
+            for link, a_lin, a_ang in zip(links, v, w, strict=True):
                 link.add_force_torque(a_lin, a_ang, "acceleration")
-        position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
-        if len(position):
+        if robot.has_position:
+            position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
             q = art.qpos
             v = art.qvel
             inv_dt = 1.0 / self._dt
@@ -150,8 +158,16 @@ class MotorCommands:
 
     # ---------------------------------------------------------------- commands
 
-    def _slots(self, robot: Robot, joints: np.ndarray) -> list[int]:
-        return [robot.slot[int(j)] for j in joints]
+    def _slots(self, robot: Robot, joints: np.ndarray) -> np.ndarray:
+        """The motor slots of ``joints`` (cached per joints array: the Sim hands the same
+        array object for the same joints argument)."""
+        key = id(joints)
+        hit = robot.slot_cache.get(key)
+        if hit is not None and hit[0] is joints:
+            return hit[1]
+        slots = np.array([robot.slot[int(j)] for j in joints], dtype=np.intp)
+        robot.slot_cache[key] = (joints, slots)
+        return slots
 
     @exclusive
     def set_joint_velocity(
@@ -159,14 +175,17 @@ class MotorCommands:
     ) -> None:
         robot = self._robots[body]
         m = robot.motors
+        was_position = bool(m["mode"][self._slots(robot, joints)].any())
+        mode, tgt, force, kp, kd = m["mode"], m["target"], m["max_force"], m["kp"], m["kd"]
         for s, t, f in zip(self._slots(robot, joints), target, max_force, strict=True):
-            m["mode"][s] = MotorMode.VELOCITY
-            m["target"][s] = t
-            m["max_force"][s] = f
-            m["kp"][s] = 0.0
-            m["kd"][s] = 1.0
+            mode[s] = 0  # MotorMode.VELOCITY
+            tgt[s] = t
+            force[s] = f
+            kp[s] = 0.0
+            kd[s] = 1.0
             self._apply(robot, s)
-        self._refresh_active()
+        if was_position:  # a position motor replaced: the step may have less to do
+            self._refresh_active()
 
     @exclusive
     def set_joint_position(

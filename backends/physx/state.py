@@ -6,6 +6,7 @@ PhysX keeps them in float32."""
 
 from __future__ import annotations
 
+import math
 import threading
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -111,12 +112,17 @@ class StateAccess:
             return LinkState(com[0], com[1], *local, frame[0], frame[1], zero, zero)
         comp = robot.built.links[link + 1]
         p = comp.entity_pose
-        lin = comp.linear_velocity
-        ang = comp.angular_velocity
-        self._readable(np.concatenate([p.p, p.q, lin, ang]), body)
-        frame = _frame(p)
+        x, y, z = p.p.tolist()
+        qw, qx, qy, qz = p.q.tolist()
+        lin = tuple(comp.linear_velocity.tolist())
+        ang = tuple(comp.angular_velocity.tolist())
+        if self._diverged is not None or not math.isfinite(
+            x + y + z + qw + qx + qy + qz + sum(lin) + sum(ang)  # a NaN or inf anywhere
+        ):
+            self._readable(np.array([x, y, z, qw, qx, qy, qz, *lin, *ang]), body)
+        frame = ((x, y, z), (qx, qy, qz, qw))
         com = transform_multiply(frame, local)
-        return LinkState(com[0], com[1], *local, frame[0], frame[1], _vec(lin), _vec(ang))
+        return LinkState(com[0], com[1], *local, frame[0], frame[1], lin, ang)
 
     @exclusive
     def base_state(self, body: int) -> BaseState:
@@ -127,36 +133,49 @@ class StateAccess:
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
         robot = self._robots[body]
         n = len(joints)
-        pos = np.zeros(n)
-        vel = np.zeros(n)
-        tau = np.zeros(n)
         if robot.static or robot.ndof == 0:
-            return JointStates(pos, vel, tau)
+            return JointStates(np.zeros(n), np.zeros(n), np.zeros(n))
+        moving, dofs, links, cols = self._reads_of(robot, joints)
         art = robot.built.articulation
         q = art.qpos
         v = art.qvel
-        self._readable(np.concatenate([q, v]), body)
-        applied = self._applied(robot)
-        for k, j in enumerate(joints):
-            d = robot.dof[j]
-            if d >= 0:
-                pos[k] = q[d]
-                vel[k] = v[d]
-                tau[k] = applied[d]
+        if self._diverged is not None or not math.isfinite(float(q.sum() + v.sum())):
+            self._readable(np.concatenate([q, v]), body)
+        # the motor force of the last step: PhysX reports no drive force, so the joint's
+        # incoming force along its axis (in the child's joint frame, whose x axis is the
+        # joint's; force first, then torque)
+        forces = art.get_link_incoming_joint_forces()
+        if moving is None:  # every joint asked moves
+            return JointStates(
+                q[dofs].astype(float), v[dofs].astype(float), forces[links, cols].astype(float)
+            )
+        pos = np.zeros(n)
+        vel = np.zeros(n)
+        tau = np.zeros(n)
+        pos[moving] = q[dofs]
+        vel[moving] = v[dofs]
+        tau[moving] = forces[links, cols]
         return JointStates(pos, vel, tau)
 
-    def _applied(self, robot: Robot) -> np.ndarray:
-        """Each dof's motor force of the last step: the joint's incoming force along its axis
-        (PhysX reports no drive force; the incoming spatial force is in the child's joint
-        frame, whose x axis is the joint's, force first, then torque)."""
-        out = np.zeros(robot.ndof)
-        forces = robot.built.articulation.get_link_incoming_joint_forces()
-        for k, uj in enumerate(robot.model.joints):
-            d = robot.dof[k]
-            if d < 0 or uj.type == "spherical":
-                continue
-            f = forces[robot.built.links[k + 1].index]
-            out[d] = float(f[0] if uj.type == "prismatic" else f[3])
+    def _reads_of(
+        self, robot: Robot, joints: np.ndarray
+    ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, np.ndarray]:
+        """For ``joints``: which of them move (None: all), their dofs, PhysX link indices and
+        force columns; cached per joints array (the Sim hands the same array object for the
+        same joints argument)."""
+        key = id(joints)
+        hit = robot.read_cache.get(key)
+        if hit is not None and hit[0] is joints:
+            return hit[1]
+        dof = robot.dof[joints]
+        moving = dof >= 0
+        joint_types = [robot.model.joints[int(j)].type for j in joints[moving]]
+        links = np.array(
+            [robot.built.links[int(j) + 1].index for j in joints[moving]], dtype=np.intp
+        )
+        cols = np.array([0 if t == "prismatic" else 3 for t in joint_types], dtype=np.intp)
+        out = (None if moving.all() else moving, dof[moving], links, cols)
+        robot.read_cache[key] = (joints, out)
         return out
 
     # ---------------------------------------------------------------- teleports

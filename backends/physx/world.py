@@ -41,6 +41,11 @@ class Robot:
     slot: dict[int, int] = field(default_factory=dict)  # joint -> index in the motor arrays
     damping: np.ndarray | None = None  # <dynamics damping> per dof where the profile applies it
     qf_set: bool = False  # joint forces were handed to PhysX for the coming step
+    drive_force: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per slot, as set
+    has_position: bool = False  # a position motor needs its velocity target every step
+    moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
+    read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     @property
     def static(self) -> bool:
