@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 import pybullet_data
+from _gaps import gap
 
 import simbridge
 from simbridge.engine_output import captured
@@ -146,13 +147,21 @@ def sim_frames(sim: simbridge.Sim, body: int) -> list[tuple[Any, Any]]:
     return out
 
 
-def frames_difference(got: list[Any], raw: list[Any]) -> str | None:
-    """None when every link frame agrees to PyBullet's float32 rounding (2e-7 relative)."""
+def frame_rel(backend: str) -> float:
+    """How close ``backend``'s link frames at load must be to raw PyBullet's, relative to
+    max(1, |position|): PyBullet's float32 rounding (2e-7), or the backend's measured gap."""
+    size = gap(backend, "link_frames_vs_raw")
+    return FRAME_REL if size is None else size
+
+
+def frames_difference(got: list[Any], raw: list[Any], rel: float = FRAME_REL) -> str | None:
+    """None when every link frame agrees to ``rel`` relative (PyBullet's float32 rounding,
+    2e-7, unless a backend's :func:`frame_rel` says more)."""
     if len(got) != len(raw):
         return f"{len(got)} links, raw {len(raw)}"
     for k, ((gp, go), (rp, ro)) in enumerate(zip(got, raw, strict=True)):
-        tol = FRAME_REL * max(1.0, float(np.abs(rp).max()))
-        if not close(gp, rp, tol) or not same_quat(go, ro, FRAME_REL):
+        tol = rel * max(1.0, float(np.abs(rp).max()))
+        if not close(gp, rp, tol) or not same_quat(go, ro, rel):
             return f"link {k - 1} frame {gp}, {go}; raw {rp}, {ro}"
     return None
 

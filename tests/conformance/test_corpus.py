@@ -145,7 +145,10 @@ def test_every_robot_loads_as_raw_pybullet_loads_it(make_sim, name, caplog):
     sim = make_sim()
     body = sim.load_urdf(os.path.join(ROOT, name), base_position=POSE[0], base_orientation=POSE[1])
     assert _raw.table_difference(sim.joints(body), raw.table) is None, name
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None, name
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    ), name
     said = [r for r in caplog.records if r.levelno >= logging.WARNING]
     assert all(r.name == "simbridge.urdf" for r in said), [r.getMessage() for r in said]
     assert len(said) == len(wanted), ([r.getMessage() for r in said], raw_lines)

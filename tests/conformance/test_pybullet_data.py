@@ -130,7 +130,10 @@ def test_sim_loads_it_as_raw_pybullet_does(make_sim, name, caplog):
     sim = make_sim()
     body = sim.load_urdf(path, base_position=POSE[0], base_orientation=POSE[1])
     assert _raw.table_difference(sim.joints(body), raw.table) is None, name
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None, name
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    ), name
 
 
 def test_refused_files_fail_as_listed(make_sim):
@@ -190,7 +193,10 @@ def test_a_non_unit_spawn_quaternion_is_normalised_with_a_warning(make_sim, capl
     raw = _raw.raw_load(path, base_position=(0, 0, 0.5), base_orientation=orn)
     sim = make_sim()
     body = sim.load_urdf(path, base_position=(0, 0, 0.5), base_orientation=orn)
-    assert _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames) is None
+    assert (
+        _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
+        is None
+    )
     (record,) = [r for r in caplog.records if r.name == "simbridge.sim"]
     assert record.getMessage() == (
         "base_orientation [0.0, 0.5, 0.5, 0.0] has norm 0.707107: normalised to "
