@@ -11,7 +11,7 @@ same), then every file that fails or differs with its reason, and the reasons gr
 Files are shared among worker processes, PhysX's apart from the others' (a crash in one file
 loses only its chunk of that engine, reported as such).
 
-    python bench/urdf_coverage.py               # all of pybullet_data (about 90 s on 2 cores)
+    python bench/urdf_coverage.py               # all of pybullet_data (about 2 min on 2 cores)
     python bench/urdf_coverage.py husky/husky.urdf plane_implicit.urdf
     python bench/urdf_coverage.py --backends physx
     python bench/urdf_coverage.py --global-scaling 1.7 --merge-fixed-links --inertia-from-file
@@ -177,6 +177,7 @@ def compare(
 _PARTICULARS = [
     (re.compile(r"(?:/[^\s:'\"]+)+"), "<path>"),  # file paths
     (re.compile(r"'[^']*'"), "'…'"),  # names
+    (re.compile(r"\[\[[^\]]*\], \[[^\]]*\]\]"), "(…)"),  # frames as JSON lists
     (re.compile(r"\[[^\]]*\]"), "[…]"),  # lists of names
     (re.compile(r"\([-+0-9.e, ()naif]*\)"), "(…)"),  # vectors and frames
     (re.compile(r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?"), "#"),  # numbers
