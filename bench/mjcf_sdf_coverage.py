@@ -9,8 +9,8 @@ fields, names exactly; floats to 1e-9, quaternions up to sign) and every link's 
 2e-7 relative: PyBullet's ``getLinkState`` rounds to float32). The PhysX column: every file both
 load as raw PyBullet does is loaded on ``Sim("physx")`` too (where SAPIEN is installed) and
 compared the same way, its link frames to 1e-6 relative (float32 state:
-``urdf_coverage.FRAME_REL_OF``). Prints the counts, then every file that fails or differs with
-its reason.
+``FRAME_REL_BY_BACKEND``). Prints the counts, then every file that fails or differs with its
+reason.
 
 ``--departures`` prints, per MJCF file, MuJoCo's own reading (``mujoco.MjModel.from_xml_path``:
 the file's density, joint damping and armature, time step, integrator, free joints) beside the
@@ -51,8 +51,9 @@ from simbridge.registry import unavailable_reason
 DATA = pybullet_data.getDataPath()
 TOL = 1e-9
 FRAME_REL = 2e-7
-# Link frames on PhysX, whose state is float32: bench/urdf_coverage.py's FRAME_REL_OF says why
-PHYSX_FRAME_REL = 1e-6
+# Link frames on PhysX, whose state is float32: bench/urdf_coverage.py's FRAME_REL_BY_BACKEND
+# says why
+FRAME_REL_BY_BACKEND = {"physx": 1e-6}
 
 _RAW = """
 import json, sys, pybullet as p
@@ -121,9 +122,8 @@ def table_difference(got: list[Any], raw: list[list[Any]]) -> str | None:
     return None
 
 
-def frames_difference(
-    sim: simbridge.Sim, body: int, raw: list[Any], rel: float = FRAME_REL
-) -> str | None:
+def frames_difference(sim: simbridge.Sim, body: int, raw: list[Any]) -> str | None:
+    rel = FRAME_REL_BY_BACKEND.get(sim.backend, FRAME_REL)
     for k, (rp, ro) in enumerate(raw):
         s = sim.link_state(body, k - 1)
         tol = rel * max(1.0, float(np.abs(rp).max()))
@@ -152,7 +152,7 @@ def physx_check(name: str, raw: list[dict[str, Any]]) -> tuple[str, str]:
             return "differs", f"{len(ids)} bodies, raw {len(raw)}"
         for body, r in zip(ids, raw, strict=True):
             why = table_difference(sim.joints(body), r["table"]) or frames_difference(
-                sim, body, r["frames"], PHYSX_FRAME_REL
+                sim, body, r["frames"]
             )
             if why:
                 return "differs", f"body {body}: {why}"

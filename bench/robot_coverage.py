@@ -9,8 +9,9 @@ recorded as such), at the same spawn pose as ``bench/urdf_coverage.py`` and comp
 helpers: the joint count, the 17 fields of every joint table row (floats to 1e-9, the parent
 frame's quaternion *with its sign*), every link's world frame at spawn (2e-7 relative:
 PyBullet's ``getLinkState`` rounds to float32; PhysX, whose state is float32, 1e-6:
-``urdf_coverage.FRAME_REL_OF``), and the warnings each gives (PyBullet's own ``b3Warning`` lines
-for raw PyBullet; for a backend, what reaches the ``simbridge`` logger at WARNING or above).
+``urdf_coverage.FRAME_REL_BY_BACKEND``), and the warnings each gives (PyBullet's own
+``b3Warning`` lines for raw PyBullet; for a backend, what reaches the ``simbridge`` logger at
+WARNING or above).
 Prints one row per URDF, the counts (PhysX's over the robots both other backends load as raw
 PyBullet does), the load times and every difference and warning.
 
@@ -174,7 +175,7 @@ def frame_error(raw: dict[str, Any], got: dict[str, Any]) -> float:
 def verdict(raw: dict[str, Any], got: dict[str, Any], backend: str = "pybullet") -> str | None:
     """None when ``got`` has raw PyBullet's joint table (quaternion signs included) and link
     frames (to ``backend``'s tolerance); else the first difference."""
-    rel = urdf_coverage.FRAME_REL_OF.get(backend, urdf_coverage.FRAME_REL)
+    rel = urdf_coverage.FRAME_REL_BY_BACKEND.get(backend, urdf_coverage.FRAME_REL)
     return urdf_coverage.compare(raw, got, quat_sign=True, frame_rel=rel)
 
 

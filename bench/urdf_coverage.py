@@ -5,7 +5,7 @@ raw PyBullet (``p.loadURDF``), with ``Sim("pybullet")``, ``Sim("mujoco")`` and `
 (each backend that is installed), each at the same spawn pose, and compare with raw PyBullet:
 the joint count, the 17 fields of every joint table row (floats to 1e-9, quaternions up to
 sign), and every link's world frame at spawn (to 2e-7 relative: PyBullet's ``getLinkState``
-rounds to float32; PhysX to 1e-6 relative, see ``FRAME_REL_OF``). Prints the counts, the PhysX
+rounds to float32; PhysX to 1e-6 relative: ``FRAME_REL_BY_BACKEND``). Prints the counts, the PhysX
 column (of the files both other backends load as raw PyBullet does, how many PhysX loads the
 same), then every file that fails or differs with its reason, and the reasons grouped by cause.
 Files are shared among worker processes, PhysX's apart from the others' (a crash in one file
@@ -53,7 +53,7 @@ FIRST_TWO = ("pybullet", "mujoco")
 # frames down the chain, each composition rounding again; raw PyBullet's own frames are float32
 # too. Measured worst over pybullet_data: 3.0e-7 (bicycle/bike.urdf; kuka_iiwa/model.urdf's
 # link 3 2.2e-7): 1e-6 is about 8 float32 spacings.
-FRAME_REL_OF = {"physx": 1e-6}
+FRAME_REL_BY_BACKEND = {"physx": 1e-6}
 
 
 def all_files() -> list[str]:
@@ -292,7 +292,7 @@ def main(argv: list[str] | None = None) -> int:
             elif "error" not in got and "error" in raw:
                 lines[backend].append((name, "loads, raw PyBullet refuses it"))
             elif "error" not in got:
-                rel = FRAME_REL_OF.get(backend, FRAME_REL)
+                rel = FRAME_REL_BY_BACKEND.get(backend, FRAME_REL)
                 why = compare(raw, got, frame_rel=rel)
                 if why is None:
                     same[backend].add(name)
@@ -304,7 +304,7 @@ def main(argv: list[str] | None = None) -> int:
         loaded = sum(
             "error" not in r[backend] and "crash" not in r[backend] for r in results.values()
         )
-        rel = FRAME_REL_OF.get(backend, FRAME_REL)
+        rel = FRAME_REL_BY_BACKEND.get(backend, FRAME_REL)
         error, where = worst[backend]
         print(
             f"Sim({backend!r}) loads {loaded}; same joint table and link frames as raw: "

@@ -14,7 +14,6 @@ import pytest
 import simbridge
 from simbridge.exceptions import (
     BackendNotInstalledError,
-    BackendUnsupportedError,
     SimulationDivergedError,
 )
 from simbridge.transforms import rpy_from_quat
@@ -101,6 +100,25 @@ def test_joint_table_dynamics_and_link_frames_are_pybullets(urdf, fixed):
         np.testing.assert_allclose(b.angular_velocity, a.angular_velocity, atol=F32_POSITION)
     np.testing.assert_allclose(jb.positions, ja.positions, atol=F32_ANGLE)
     np.testing.assert_allclose(jb.velocities, ja.velocities, atol=F32_ANGLE)
+
+
+@needs_sapien
+def test_links_are_in_place_right_after_a_load_and_a_teleport():
+    """PhysX moves an articulation's links only at a step or a joint-state write: read before
+    either, every link but the root was at the origin (measured before the fix)."""
+    frames = {}
+    for backend in ("pybullet", "physx"):
+        with simbridge.Sim(backend) as sim:
+            r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0.2, -0.1, 0.6))
+            loaded = [sim.link_state(r2d2, k).link_frame_position for k in range(15)]
+            sim.reset_base_state(r2d2, (1.0, 2.0, 3.0), angular_velocity=(0.5, -0.2, 0.1))
+            moved = [sim.link_state(r2d2, k) for k in range(15)]
+            frames[backend] = (loaded, moved)
+    (la, ma), (lb, mb) = frames["pybullet"], frames["physx"]
+    np.testing.assert_allclose(lb, la, atol=F32_POSITION)
+    for a, b in zip(ma, mb, strict=True):
+        np.testing.assert_allclose(b.link_frame_position, a.link_frame_position, atol=F32_POSITION)
+        np.testing.assert_allclose(b.linear_velocity, a.linear_velocity, atol=F32_POSITION)
 
 
 @needs_sapien
@@ -258,13 +276,35 @@ def test_contacts_hold_a_resting_robot_up():
         assert total == pytest.approx(weight, rel=0.01)
 
 
+def _neck(backend: str):
+    with simbridge.Sim(backend) as sim:
+        h = sim.load_urdf("humanoid/humanoid.urdf", base_position=(0, 0, 3), fixed_base=True)
+        table = [sim.joint_info(h, j) for j in range(sim.num_joints(h))]
+        q0 = (0.1, 0.2, 0.0, float(np.sqrt(0.95)))
+        sim.reset_joint_state_multi_dof(h, "neck", q0, [0.5, -0.3, 0.2])
+        links = [sim.link_state(h, k) for k in range(-1, len(table))]
+        reset = sim.joint_states_multi_dof(h, "neck")[0]
+        sim.step(120)  # PyBullet's default spherical motor pulls the neck back to the identity
+        held = sim.joint_states_multi_dof(h, "neck")[0]
+        return table, links, reset, held
+
+
 @needs_sapien
-def test_spherical_joints_are_refused_with_the_reason():
-    with (
-        simbridge.Sim("physx") as sim,
-        pytest.raises(BackendUnsupportedError, match="spherical"),
-    ):
-        sim.load_urdf("humanoid/humanoid.urdf", fixed_base=True)
+def test_spherical_joints_are_pybullets():
+    """A spherical joint as three revolute joints (ball.py): humanoid.urdf's joint table and
+    link frames are PyBullet's, a reset reads back, and PyBullet's default motor brings the
+    neck back as PyBullet's does (after 120 steps within 1e-5 of PyBullet's quaternion,
+    measured 1e-6)."""
+    ta, la, ra, ha = _neck("pybullet")
+    tb, lb, rb, hb = _neck("physx")
+    assert [tuple(r) for r in ta] == [tuple(r) for r in tb]
+    for a, b in zip(la, lb, strict=True):
+        np.testing.assert_allclose(b.link_frame_position, a.link_frame_position, atol=F32_POSITION)
+        np.testing.assert_allclose(b.com_position, a.com_position, atol=F32_POSITION)
+    np.testing.assert_allclose(rb.position, ra.position, atol=1e-7)
+    np.testing.assert_allclose(rb.velocity, ra.velocity, atol=1e-6)
+    np.testing.assert_allclose(hb.position, ha.position, atol=1e-5)
+    assert abs(ha.position[3]) > 0.9999  # back at the identity
 
 
 @needs_sapien

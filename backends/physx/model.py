@@ -101,6 +101,8 @@ class BuiltRobot:
     bounded_links: list[str] = field(default_factory=list)
     skipped_shapes: list[str] = field(default_factory=list)
     plan: BuildPlan | None = None
+    filtered_exactly: bool = True  # the self-collision exclusions fit SAPIEN's 32 bits
+    ball_links: list[Any] = field(default_factory=list)  # the spherical joints' extra links
 
 
 def _cylinder_hull(radius: float, length: float) -> np.ndarray:
@@ -168,6 +170,7 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
     inertials = [link.inertial for link in plan.links]
     skipped: list[str] = []
     bounded: list[str] = []
+    ignore = _ignore_bits(plan)
     materials: dict[tuple[float, float], Any] = {}
 
     def material_of(link: LinkPlan) -> Any:
@@ -184,7 +187,7 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
         for g in link.collisions:
             where = f"link {link.name!r} <collision> #{g.element}"
             for shape in _shapes(g, mat, where, skipped):
-                _filter(shape, link, plan, body)
+                _filter(shape, link, ignore, body)
                 out.append(shape)
         return out
 
@@ -215,9 +218,13 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
 
     entities: list[Any] = []
     links: list[Any] = []
+    extra: list[Any] = []
     for link in plan.links:
         i = link.index
         parent = None if link.parent is None else links[link.parent + 1]
+        jp = link.joint
+        if jp is not None and jp.type == "spherical":  # two massless links, then this one
+            parent = _ball_links(parent, jp, link.inertial.orientation, entities, extra)
         comp = physx.PhysxArticulationLinkComponent(parent)
         for shape in link_shapes(link):
             comp.attach(shape)
@@ -238,7 +245,10 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
         comp.max_depenetration_velocity = MAX_DEPENETRATION
         comp.linear_damping = 0.0
         comp.angular_damping = 0.0
-        _joint(comp.joint, link.joint, plan.fixed_base)
+        if jp is not None and jp.type == "spherical":
+            _ball_joint(comp.joint, jp, link.inertial.orientation, 2)
+        else:
+            _joint(comp.joint, jp, plan.fixed_base)
         entity = sapien.Entity()
         entity.add_component(comp)
         entity.name = link.name
@@ -250,6 +260,11 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
     art = links[0].articulation
     art.solver_position_iterations = solver_iterations
     art.solver_velocity_iterations = 1
+    # PyBullet lets a body sleep only when loaded with URDF_ENABLE_SLEEPING: never here
+    art.sleep_threshold = 0.0
+    # the links' poses are PhysX's only after a step or a write of the joint positions: one
+    # write now, so that a read right after the load sees every link where it is
+    art.qpos = art.qpos
     return BuiltRobot(
         inertials,
         False,
@@ -259,7 +274,62 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
         shape_links=shape_links,
         bounded_links=bounded,
         skipped_shapes=skipped,
+        ball_links=extra,
     )
+
+
+# a spherical joint is three revolute joints about the child's inertial x, y and z axes at the
+# joint origin, through two links of this mass and inertia (PhysX has no spherical joint in
+# SAPIEN 3.0.3; its reduced coordinates then are XYZ angles of the child's inertial frame)
+BALL_LINK_MASS = 1e-6
+BALL_LINK_INERTIA = 1e-9
+_X_TO: dict[int, Quat] = {
+    0: (0.0, 0.0, 0.0, 1.0),
+    1: (0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5)),  # x onto y: a quarter turn about z
+    2: (0.0, -math.sqrt(0.5), 0.0, math.sqrt(0.5)),  # x onto z: a quarter turn about -y
+}
+
+
+def _ball_joint(joint: Any, jp: JointPlan, inertial: Quat, axis: int) -> None:
+    """Revolute ``axis`` (0, 1, 2: x, y, z of the child's inertial frame) of a spherical
+    joint; all three turn about the joint origin, the frame F = joint origin * inertial turn."""
+    joint.name = f"{jp.name}#{axis}"
+    joint.type = "revolute_unwrapped"
+    turn = _X_TO[axis]
+    if axis == 0:
+        joint.pose_in_parent = pose(jp.position, quat_multiply(jp.orientation, inertial))
+    else:
+        joint.pose_in_parent = pose((0.0, 0.0, 0.0), turn)
+    if axis == 2:  # the child's link frame: F turned back by the inertial turn
+        joint.pose_in_child = pose((0.0, 0.0, 0.0), quat_multiply(inertial, turn))
+    else:
+        joint.pose_in_child = pose((0.0, 0.0, 0.0), turn)
+    joint.limit = np.array([[-np.inf, np.inf]], dtype=np.float32)
+    joint.friction = 0.0
+    joint.armature = np.zeros(1, dtype=np.float32)
+
+
+def _ball_links(
+    parent: Any, jp: JointPlan, inertial: Quat, entities: list[Any], extra: list[Any]
+) -> Any:
+    """The two massless links of a spherical joint; returns the second (the child's parent)."""
+    for axis in (0, 1):
+        comp = physx.PhysxArticulationLinkComponent(parent)
+        comp.mass = BALL_LINK_MASS
+        comp.inertia = np.full(3, BALL_LINK_INERTIA, dtype=np.float32)
+        comp.name = f"{jp.name}#{axis}"
+        comp.max_linear_velocity = LINK_SPEED_CAP
+        comp.max_angular_velocity = LINK_SPEED_CAP
+        comp.linear_damping = 0.0
+        comp.angular_damping = 0.0
+        _ball_joint(comp.joint, jp, inertial, axis)
+        entity = sapien.Entity()
+        entity.add_component(comp)
+        entity.name = comp.name
+        entities.append(entity)
+        extra.append(comp)
+        parent = comp
+    return parent
 
 
 def _joint(joint: Any, jp: JointPlan | None, fixed_base: bool) -> None:
@@ -302,13 +372,29 @@ def _link_frame_in_base(plan: BuildPlan, index: int) -> tuple[Vec3, Quat]:
     return frame
 
 
-def _filter(shape: Any, link: LinkPlan, plan: BuildPlan, body: int) -> None:
+def _ignore_bits(plan: BuildPlan) -> dict[int, int] | None:
+    """Each link's "ignore" bits (SAPIEN's g2) that leave out exactly the plan's pairs: all
+    links one bit with self-collision off; else one bit per excluded pair (at most 32), set on
+    both its links, so two links share a bit only where their pair is excluded. None where
+    there are more pairs than bits (PhysX's own rule then: a departure)."""
+    if plan.self_collision == "off":
+        return {link.index: 1 for link in plan.links}
+    pairs = sorted(plan.excluded_pairs)
+    if len(pairs) > 32:
+        return None
+    bits = {link.index: 0 for link in plan.links}
+    for k, (a, b) in enumerate(pairs):
+        bits[a] |= 1 << k
+        bits[b] |= 1 << k
+    return bits
+
+
+def _filter(shape: Any, link: LinkPlan, bits: dict[int, int] | None, body: int) -> None:
     """PyBullet's contact filter as SAPIEN's four collision groups (two shapes touch when
     ``(A.g0 & B.g1) or (A.g1 & B.g0)``, unless ``A.g2 & B.g2`` and ``A.g3 == B.g3``): g0, g1
-    the plan's group and mask (Bullet's OR rule); g3 the body, and g2 1 where its links never
-    touch each other (self-collision off, PyBullet's default), else 0 (every pair but PhysX's
-    own parent and child: the exclusion modes are a departure)."""
-    own = 1 if plan.self_collision == "off" else 0
+    the plan's group and mask (Bullet's OR rule); g3 the body, g2 the link's ignore bits
+    (:func:`_ignore_bits`)."""
+    own = 0 if bits is None else bits[link.index]
     shape.set_collision_groups(
         [link.filter.group & 0xFFFFFFFF, link.filter.mask & 0xFFFFFFFF, own, body & 0xFFFF]
     )

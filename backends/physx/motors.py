@@ -16,7 +16,7 @@ with ``max_force=0``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -49,6 +49,14 @@ class MotorCommands:
 
         def _check_idle(self) -> None: ...
 
+        def _ball_forces(self, robot: Robot, joint: int) -> None: ...
+
+        def _ball_before_step(
+            self, robot: Robot, q: Any, v: Any, qf: np.ndarray | None
+        ) -> bool: ...
+
+        def _ball_after_step(self, robot: Robot) -> None: ...
+
     # ---------------------------------------------------------------- set-up
 
     def _configure(self, robot: Robot) -> None:
@@ -64,15 +72,18 @@ class MotorCommands:
             root = robot.built.links[0]
             root.max_linear_velocity = cap
             root.max_angular_velocity = cap
-        for j in robot.movable:
-            robot.joints[j].max_velocity = cap
+        for joint in robot.dof_joint.values():
+            joint.max_velocity = cap
         if p.apply_joint_damping:
             damping = np.zeros(robot.ndof)
             for j in robot.movable:
                 damping[robot.dof[j]] = robot.model.joints[j].damping
             robot.damping = damping if damping.any() else None
         for s in range(len(robot.movable)):
-            self._apply(robot, s)
+            if not robot.motors["ball"][s]:
+                self._apply(robot, s)
+        for j in robot.balls:
+            self._ball_forces(robot, j)
 
     def _apply(self, robot: Robot, s: int) -> None:
         """Make slot ``s``'s motor PhysX's drive."""
@@ -106,6 +117,7 @@ class MotorCommands:
                 damped
                 or r.pending
                 or r.damping is not None
+                or bool(r.balls)
                 or bool((r.motors["mode"] == MotorMode.POSITION).any())
             )
         ]
@@ -136,6 +148,7 @@ class MotorCommands:
                 k = robot.dof[robot.movable[s]]
                 target = m["kp"][s] * (m["target"][s] - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
                 robot.joints[robot.movable[s]].set_drive_velocity_target(float(target))
+        qf = None
         if robot.pending or robot.damping is not None:
             qf = np.zeros(robot.ndof)
             if robot.pending:
@@ -144,6 +157,9 @@ class MotorCommands:
                         qf[robot.dof[j]] = m["torque"][slot]
             if robot.damping is not None:  # <dynamics damping>, explicit as PyBullet's server
                 qf -= robot.damping * art.qvel
+        if robot.balls:
+            self._ball_before_step(robot, art.qpos, art.qvel, qf)
+        if qf is not None:
             art.qf = qf.astype(np.float32)
             robot.qf_set = True
 
@@ -153,6 +169,8 @@ class MotorCommands:
             robot.qf_set = False
         if robot.pending:
             robot.motors["torque"][:] = 0.0
+            if robot.balls:
+                self._ball_after_step(robot)
             robot.pending = False
             self._refresh_active()
 
@@ -175,15 +193,31 @@ class MotorCommands:
     ) -> None:
         robot = self._robots[body]
         m = robot.motors
-        was_position = bool(m["mode"][self._slots(robot, joints)].any())
-        mode, tgt, force, kp, kd = m["mode"], m["target"], m["max_force"], m["kp"], m["kd"]
-        for s, t, f in zip(self._slots(robot, joints), target, max_force, strict=True):
-            mode[s] = 0  # MotorMode.VELOCITY
-            tgt[s] = t
-            force[s] = f
-            kp[s] = 0.0
-            kd[s] = 1.0
-            self._apply(robot, s)
+        slots = self._slots(robot, joints)
+        was_position = bool(m["mode"][slots].any())  # POSITION is 2, VELOCITY 0
+        m["mode"][slots] = 0
+        m["target"][slots] = target
+        m["max_force"][slots] = max_force
+        m["kp"][slots] = 0.0
+        m["kd"][slots] = 1.0
+        forces = np.minimum(m["max_force"][slots], m["effort"][slots]).tolist()
+        drive = robot.drive_force
+        ball = m["ball"]
+        for s, joint, t, f in zip(
+            slots.tolist(), robot.slot_joints(slots), target, forces, strict=True
+        ):
+            if f <= 0.0:
+                if drive[s] != 0.0:
+                    joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                    drive[s] = 0.0
+                continue
+            if drive[s] != f:
+                joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
+                drive[s] = f
+            if ball[s]:
+                joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+            else:
+                joint.set_drive_velocity_target(t)
         if was_position:  # a position motor replaced: the step may have less to do
             self._refresh_active()
 
@@ -234,8 +268,16 @@ class MotorCommands:
         torque = np.zeros(n)
         m = robot.motors
         for s, j in enumerate(robot.movable):
+            if j in robot.balls:  # the first axis, as PyBullet's tables
+                ball = robot.balls[j]
+                mode[j] = ball["mode"]
+                max_force[j] = ball["max_force"][0]
+                kp[j] = ball["kp"][0]
+                kd[j] = ball["kd"][0]
+                torque[j] = ball["torque"][0]
+                continue
             mode[j] = m["mode"][s]
-            target[j] = m["target"][s] if not m["ball"][s] else 0.0
+            target[j] = m["target"][s]
             max_force[j] = m["max_force"][s]
             kp[j] = m["kp"][s]
             kd[j] = m["kd"][s]

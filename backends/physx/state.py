@@ -61,6 +61,8 @@ class StateAccess:
 
         def _check_idle(self) -> None: ...
 
+        def _ball_state(self, robot: Robot, joint: int, q: Any, v: Any) -> tuple[Any, Any]: ...
+
         def refuse_fixed_base_velocity(
             self, body: int, linear: Vec3 | None, angular: Vec3 | None
         ) -> None: ...
@@ -145,16 +147,22 @@ class StateAccess:
         # incoming force along its axis (in the child's joint frame, whose x axis is the
         # joint's; force first, then torque)
         forces = art.get_link_incoming_joint_forces()
-        if moving is None:  # every joint asked moves
+        if moving is None and not robot.balls:  # every joint asked moves, none spherical
             return JointStates(
                 q[dofs].astype(float), v[dofs].astype(float), forces[links, cols].astype(float)
             )
+        if moving is None:
+            moving = np.ones(n, dtype=bool)
         pos = np.zeros(n)
         vel = np.zeros(n)
         tau = np.zeros(n)
         pos[moving] = q[dofs]
         vel[moving] = v[dofs]
         tau[moving] = forces[links, cols]
+        for k, j in enumerate(joints.tolist()):
+            if j in robot.balls:  # the first coordinate, as p.getJointState
+                quat, w = self._ball_state(robot, j, q, v)
+                pos[k], vel[k], tau[k] = quat[0], w[0], 0.0
         return JointStates(pos, vel, tau)
 
     def _reads_of(
@@ -233,6 +241,10 @@ class StateAccess:
                 art.root_linear_velocity = np.asarray(linear_velocity, dtype=np.float32)
             if angular_velocity is not None:
                 art.root_angular_velocity = np.asarray(angular_velocity, dtype=np.float32)
+            # the other links follow the root in PhysX only after a step or a write of the
+            # joint state: one write now, so that reads see the teleport whole
+            art.qpos = art.qpos
+            art.qvel = art.qvel
         self._contacts_cache = None
 
     def set_time(self, time: float) -> None:

@@ -44,12 +44,26 @@ class Robot:
     drive_force: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per slot, as set
     has_position: bool = False  # a position motor needs its velocity target every step
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
+    ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
+    dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
+    balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
     read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     @property
     def static(self) -> bool:
         return self.built.static
+
+    def slot_joints(self, slots: np.ndarray) -> list[Any]:
+        """The PhysX joints of motor ``slots`` (cached per slots array)."""
+        key = id(slots)
+        hit = self.joint_cache.get(key)
+        if hit is not None and hit[0] is slots:
+            return hit[1]
+        out = [self.joints[self.movable[s]] for s in slots.tolist()]
+        self.joint_cache[key] = (slots, out)
+        return out
 
 
 def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> dict[str, np.ndarray]:
