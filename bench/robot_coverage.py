@@ -17,7 +17,7 @@ PyBullet does), the load times and every difference and warning.
 
     python bench/robot_coverage.py                    # every URDF of the corpus (~4 min on 2 cores)
     python bench/robot_coverage.py ur_description/urdf/ur5_robot.urdf --timeout 60
-    python bench/robot_coverage.py --backends physx
+    python bench/robot_coverage.py --backend physx
 
 Measured (pybullet 3.2.7, mujoco 4.0.0, SAPIEN 3.0.3, example-robot-data 6.0.0; the shared 2-core
 machine):
@@ -307,7 +307,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds per phase")
     parser.add_argument(
-        "--backends", nargs="+", choices=BACKENDS, default=list(BACKENDS), help="(default: all)"
+        "--backend",
+        action="append",
+        choices=BACKENDS,
+        help="a backend to run (repeatable; default: every one installed)",
     )
     parser.add_argument("--phase", choices=PHASES, help=argparse.SUPPRESS)  # the child's
     args = parser.parse_args(argv)
@@ -319,14 +322,16 @@ def main(argv: list[str] | None = None) -> int:
         print("example-robot-data is not installed: pip install -e '.[corpus]'")
         return 2
     files = args.files or corpus_files(root)
-    backends = tuple(urdf_coverage.installed(tuple(b for b in BACKENDS if b in args.backends)))
+    backends = tuple(
+        urdf_coverage.installed(tuple(b for b in BACKENDS if b in (args.backend or BACKENDS)))
+    )
     phases = ("raw", *backends)
     start = time.perf_counter()
     with ThreadPoolExecutor(args.workers) as pool:
         done = pool.map(lambda f: measure(str(root / f), args.timeout, phases), files)
         results = dict(zip(files, done, strict=True))
     print(f"# example-robot-data ({root})\n")
-    for b in args.backends:
+    for b in args.backend or BACKENDS:
         if b not in backends:
             print(f"Sim({b!r}): not installed here, not run\n")
     bad = report(results, time.perf_counter() - start, args.workers, f"{root}{os.sep}", backends)

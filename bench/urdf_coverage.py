@@ -13,7 +13,7 @@ loses only its chunk of that engine, reported as such).
 
     python bench/urdf_coverage.py               # all of pybullet_data (about 2 min on 2 cores)
     python bench/urdf_coverage.py husky/husky.urdf plane_implicit.urdf
-    python bench/urdf_coverage.py --backends physx
+    python bench/urdf_coverage.py --backend physx
     python bench/urdf_coverage.py --global-scaling 1.7 --merge-fixed-links --inertia-from-file
 
 Measured (pybullet 3.2.7, mujoco 4.0.0, SAPIEN 3.0.3; the shared 2-core machine):
@@ -236,7 +236,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("files", nargs="*", help="paths under pybullet_data (default: all)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument(
-        "--backends", nargs="+", choices=BACKENDS, default=list(BACKENDS), help="(default: all)"
+        "--backend",
+        action="append",
+        choices=BACKENDS,
+        help="a backend to run (repeatable; default: every one installed)",
     )
     parser.add_argument("--global-scaling", type=float, default=1.0)
     parser.add_argument("--merge-fixed-links", action="store_true")
@@ -247,8 +250,8 @@ def main(argv: list[str] | None = None) -> int:
         "merge_fixed_links": args.merge_fixed_links,
         "inertia_source": "file" if args.inertia_from_file else "collision_aabb",
     }
-    backends = installed(tuple(b for b in BACKENDS if b in args.backends))
-    missing = [b for b in args.backends if b not in backends]
+    backends = installed(tuple(b for b in BACKENDS if b in (args.backend or BACKENDS)))
+    missing = [b for b in (args.backend or BACKENDS) if b not in backends]
     files = args.files or all_files()
     start = time.perf_counter()
     chunks = [files[i :: 8 * args.workers] for i in range(8 * args.workers)]
