@@ -154,6 +154,19 @@ def frame_rel(backend: str) -> float:
     return FRAME_REL if size is None else size
 
 
+def largest_frame_error(got: list[Any], raw: list[Any]) -> float:
+    """The largest difference between a link frame and raw PyBullet's: position relative to
+    max(1, |position|), quaternion components up to sign (what :func:`frames_difference` holds
+    to ``rel``)."""
+    worst = 0.0
+    for (gp, go), (rp, ro) in zip(got, raw, strict=True):
+        scale = max(1.0, float(np.abs(rp).max()))
+        position = float(np.abs(np.subtract(gp, rp)).max()) / scale
+        turn = min(float(np.abs(np.subtract(go, ro)).max()), float(np.abs(np.add(go, ro)).max()))
+        worst = max(worst, position, turn)
+    return worst
+
+
 def frames_difference(got: list[Any], raw: list[Any], rel: float = FRAME_REL) -> str | None:
     """None when every link frame agrees to ``rel`` relative (PyBullet's float32 rounding,
     2e-7, unless a backend's :func:`frame_rel` says more)."""
