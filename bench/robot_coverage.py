@@ -21,11 +21,11 @@ PyBullet does), the load times and every difference and warning.
 
 Measured (pybullet 3.2.7, mujoco 4.0.0, SAPIEN 3.0.3, example-robot-data 6.0.0; the shared 2-core
 machine):
-raw PyBullet loads 66 of the 69 URDFs; Sim("pybullet") and Sim("mujoco") load all 66 with its
-joint table and link frames; Sim("physx"): 1/66 with the same table and frames, 65 listed with
-reasons, every one a jointed robot whose links but the root read at the world origin until the
-first step (backends/physx/model.py places only the root at load); PhysX also loads
-tiago_dual.urdf (129 joints), as MuJoCo does. 1475 s on a machine loaded 5x.
+raw PyBullet loads 66 of the 69 URDFs; Sim("pybullet"), Sim("mujoco") and Sim("physx") load all
+66 with its joint table and link frames, each backend giving the same 103 warnings (physx:
+66/66, 0 listed; at physx 62ccff4, before the links were placed at load, 1/66); MuJoCo and PhysX
+also load tiago_dual.urdf (129 joints, past PyBullet's limit). 1545 s on a machine loaded 5x
+(physx branch at 87381f5).
 """
 
 from __future__ import annotations
