@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 import pybullet_data
+from _gaps import gap
 
 import simbridge
 from simbridge.engine_output import captured
@@ -147,16 +148,28 @@ def sim_frames(sim: simbridge.Sim, body: int) -> list[tuple[Any, Any]]:
 
 
 def frame_rel(backend: str) -> float:
-    """The relative tolerance on link frames against raw PyBullet's for ``backend``: FRAME_REL,
-    or its declared ``frames_vs_raw_float32`` gap (_gaps.py)."""
-    from _gaps import gap
+    """How close ``backend``'s link frames at load must be to raw PyBullet's, relative to
+    max(1, |position|): PyBullet's float32 rounding (2e-7), or the backend's measured gap."""
+    size = gap(backend, "link_frames_vs_raw")
+    return FRAME_REL if size is None else size
 
-    return gap(backend, "frames_vs_raw_float32") or FRAME_REL
+
+def largest_frame_error(got: list[Any], raw: list[Any]) -> float:
+    """The largest difference between a link frame and raw PyBullet's: position relative to
+    max(1, |position|), quaternion components up to sign (what :func:`frames_difference` holds
+    to ``rel``)."""
+    worst = 0.0
+    for (gp, go), (rp, ro) in zip(got, raw, strict=True):
+        scale = max(1.0, float(np.abs(rp).max()))
+        position = float(np.abs(np.subtract(gp, rp)).max()) / scale
+        turn = min(float(np.abs(np.subtract(go, ro)).max()), float(np.abs(np.add(go, ro)).max()))
+        worst = max(worst, position, turn)
+    return worst
 
 
 def frames_difference(got: list[Any], raw: list[Any], rel: float = FRAME_REL) -> str | None:
-    """None when every link frame agrees to PyBullet's float32 rounding (2e-7 relative), or to
-    ``rel`` (a backend's declared frames_vs_raw_float32 gap, _gaps.py)."""
+    """None when every link frame agrees to ``rel`` relative (PyBullet's float32 rounding,
+    2e-7, unless a backend's :func:`frame_rel` says more)."""
     if len(got) != len(raw):
         return f"{len(got)} links, raw {len(raw)}"
     for k, ((gp, go), (rp, ro)) in enumerate(zip(got, raw, strict=True)):

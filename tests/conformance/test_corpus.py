@@ -3,7 +3,8 @@ the ``test`` extra installs it too), against raw PyBullet, on every backend.
 
 Every robot raw PyBullet loads loads on every backend with raw PyBullet's joint table (the 17
 fields of ``getJointInfo``, the parent frame's quaternion with its sign: ``_raw.table_difference``)
-and its link frames at a spawn pose (float32's 2e-7 relative: ``_raw.frames_difference``), and
+and its link frames at a spawn pose (float32's 2e-7 relative, or the backend's declared
+``link_frames_vs_raw`` gap: ``_raw.frames_difference``), and
 every line raw PyBullet warns with is said once, by simbridge's URDF reader, on every backend.
 The robots sampled by default cover each case (joints whose quaternion MuJoCo's table had
 negated, links without ``<inertial>``, an ASCII STL PyBullet leaves out, meshes by
