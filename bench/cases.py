@@ -14,7 +14,17 @@ import numpy as np
 
 import simbridge
 
-BACKENDS = [b for b in ("pybullet", "mujoco") if b in simbridge.available_backends()]
+
+def _usable(name: str) -> bool:
+    from simbridge.registry import unavailable_reason
+
+    return name in simbridge.available_backends() and unavailable_reason(name) is None
+
+
+# pybullet and mujoco always (they ship with simbridge); physx where its extra is installed
+BACKENDS = [b for b in ("pybullet", "mujoco") if b in simbridge.available_backends()] + [
+    b for b in ("physx",) if _usable(b)
+]
 WHEELS = [2, 3, 6, 7]
 TURN = np.array([-100.0, -100.0, 100.0, 100.0])
 FORWARD = np.array([-100.0, -100.0, -100.0, -100.0])
@@ -47,6 +57,8 @@ class Case:
 
 def engine_versions() -> str:
     engines = f"pybullet {version('pybullet')}, mujoco {version('mujoco')}"
+    if "physx" in BACKENDS:
+        engines += f", sapien {version('sapien')}"
     return f"{engines}, simbridge {simbridge.__version__}"
 
 
@@ -265,12 +277,74 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
     return run
 
 
+# ---------------------------------------------------------------- raw PhysX (SAPIEN)
+
+
+def _physx_raw_world(sim: simbridge.Sim, robot: int) -> tuple:
+    """What a user of raw SAPIEN drives: the layer's world (the same articulation, shapes,
+    materials and solver settings, built from the same model) with PhysX's own link damping
+    (the profile's 0.04) in place of the layer's per-step PyBullet law, the wheels' drives set
+    the idiomatic way (stiffness 0, the layer's damping, the force limit set where the schedule
+    changes it, targets every step) and the other joints' brakes left as the layer set them."""
+    from simbridge.backends.physx import inspect
+    from simbridge.backends.physx.motors import DRIVE_DAMPING
+
+    r = inspect.robot(sim, robot)
+    for link in r.moving_links:
+        link.linear_damping = sim.profile.linear_damping
+        link.angular_damping = sim.profile.angular_damping
+    joints = [r.joints[j] for j in WHEELS]
+    return inspect.scene(sim), r, joints, DRIVE_DAMPING
+
+
+def physx_raw_drive(record: bool) -> Callable[[], float]:
+    """Raw SAPIEN, written the fast idiomatic way: ``set_drive_velocity_target`` per wheel and
+    ``scene.step()`` (:func:`_physx_raw_world`)."""
+
+    def run() -> float:
+        sim, robot = _layer_sim("physx")
+        try:
+            scene, r, joints, damping = _physx_raw_world(sim, robot)
+            art = r.built.articulation
+            root = r.built.links[0]
+            dofs = r.dof[WHEELS]
+            wheel_links = [r.built.links[j + 1].index for j in WHEELS]  # PhysX's link order
+            base = np.empty((980, 13))
+            wheel_state = np.empty((980, 12))
+            turn, forward = TURN.tolist(), FORWARD.tolist()
+            t0 = time.perf_counter()
+            for k in range(980):
+                if k in (TURN_FROM, FORWARD_FROM):
+                    force = 50.0 if k == TURN_FROM else 10.0
+                    for j in joints:
+                        j.set_drive_properties(0.0, damping, force, "force")
+                if k >= TURN_FROM:
+                    for j, v in zip(joints, turn if k < FORWARD_FROM else forward, strict=True):
+                        j.set_drive_velocity_target(v)
+                scene.step()
+                if record:
+                    pose = root.entity_pose * root.cmass_local_pose
+                    base[k, :3] = pose.p
+                    base[k, 3:7] = pose.q
+                    base[k, 7:10] = root.linear_velocity
+                    base[k, 10:] = root.angular_velocity
+                    wheel_state[k, :4] = art.qpos[dofs]
+                    wheel_state[k, 4:8] = art.qvel[dofs]
+                    wheel_state[k, 8:] = art.get_link_incoming_joint_forces()[wheel_links, 3]
+            return time.perf_counter() - t0
+        finally:
+            sim.close()
+
+    return run
+
+
 DRIVES: dict[str, Case] = {}
 BOUND_DRIVES: dict[str, Case] = {}
 RECORDED_DRIVES: dict[str, Case] = {}
 for _b, _raw, _t, _tr in (
     ("pybullet", pybullet_raw_drive, 1.03, 1.10),
     ("mujoco", mujoco_raw_drive, 1.15, 1.20),
+    ("physx", physx_raw_drive, 1.10, 1.20),
 ):
     if _b in BACKENDS:
         DRIVES[_b] = Case("drive", _raw(False), layer_drive(_b, False), _t)
@@ -324,6 +398,24 @@ def single_calls(backend: str, n: int) -> list[Case]:
                 forces=[50.0] * 4,
                 physicsClientId=c,
             )
+    elif backend == "physx":
+        from simbridge.backends.physx import inspect as physx_inspect
+
+        r = physx_inspect.robot(sim, robot)
+        link2 = r.built.links[3]  # link 2
+        art = r.built.articulation
+        dofs = r.dof[WHEELS]
+        wheel_joints = [r.joints[j] for j in WHEELS]
+
+        def raw_link() -> object:
+            return link2.entity_pose, link2.linear_velocity, link2.angular_velocity
+
+        def raw_js() -> object:
+            return art.qpos[dofs], art.qvel[dofs]
+
+        def raw_set() -> None:
+            for j, v in zip(wheel_joints, raw_targets(), strict=True):
+                j.set_drive_velocity_target(v)
     else:
         import mujoco
 

@@ -144,3 +144,9 @@ register(
     requires=("mujoco",),
     pip_name="'mujoco>=4'",
 )
+register(
+    "physx",
+    "simbridge.backends.physx:PhysxBackend",
+    requires=("sapien",),
+    pip_name="'simbridge[physx]'",
+)

@@ -1,0 +1,39 @@
+"""Look inside a PhysX-backed `Sim`: its SAPIEN objects, for tests and debugging. What it
+returns is live engine state: read it, do not keep it across a ``load``, ``remove`` or
+``reset``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from simbridge.exceptions import InvalidArgumentError
+
+from .backend import PhysxBackend
+from .world import Robot
+
+__all__ = ["backend_of", "scene", "robot", "articulation"]
+
+
+def backend_of(sim: Any) -> PhysxBackend:
+    """The :class:`PhysxBackend` behind ``sim`` (InvalidArgumentError for another backend)."""
+    backend = getattr(sim, "_b", None)
+    if not isinstance(backend, PhysxBackend):
+        raise InvalidArgumentError(
+            "sim", f"a Sim on the 'physx' backend is needed, got {type(backend).__name__}"
+        )
+    return backend
+
+
+def scene(sim: Any) -> Any:
+    """The world's ``sapien.Scene``."""
+    return backend_of(sim)._scene
+
+
+def robot(sim: Any, body: int) -> Robot:
+    """What the backend keeps of body ``body`` (model, joint table, PhysX objects, motors)."""
+    return backend_of(sim)._robots[body]
+
+
+def articulation(sim: Any, body: int) -> Any:
+    """Body ``body``'s ``PhysxArticulation`` (None for a static body)."""
+    return robot(sim, body).built.articulation

@@ -1,0 +1,302 @@
+"""PyBullet's joint motors as PhysX joint drives (a part of :class:`PhysxBackend`).
+
+PyBullet's VELOCITY_CONTROL (and its default brake) is a constraint row asking for the joint
+velocity ``v*`` within one step, its impulse clamped to ``max_force dt``. A PhysX drive with
+stiffness 0 and damping D pushes with ``D (v* - v)`` clamped to its force limit, implicitly: with
+D large (:data:`DRIVE_DAMPING`) it is a velocity constraint that reaches ``v*`` within a step
+when ``max_force`` allows, the same meaning. POSITION_CONTROL's law
+
+    v_new = v_free + kd (v* - v_free) + kp (q* - q) / dt,      |impulse| <= max_force dt
+
+is that velocity drive with the target ``kp (q* - q) / dt + (1 - kd) v``, set before every step
+from the state at its start. TORQUE_CONTROL is the articulation's joint force (``qf``) for one
+step, cleared after it; the drive stays (PyBullet's brake cancels small torques until released
+with ``max_force=0``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from simbridge.profiles import Profile
+from simbridge.types import JointCommands, JointType, MotorMode
+
+from ..locking import exclusive
+from .world import Robot
+
+__all__ = ["MotorCommands", "DRIVE_DAMPING"]
+
+# the damping (N·m·s/rad) of a drive standing for PyBullet's velocity row: large enough that the
+# drive reaches its target within a step wherever its force limit allows. Measured: the default
+# brake (240 N·m) against 0.95 of its force lets the joint creep at force / D (2.3e-5 rad/s at
+# 1e7, 4.7e-10 at 1e9, 0 at 1e11); kuka position and velocity motors stay within 5e-4 rad of
+# PyBullet's over 240 steps
+DRIVE_DAMPING = 1e11
+SPEED_UNCAPPED = 1e6  # rad/s, m/s: a joint speed PhysX never reaches
+
+
+class MotorCommands:
+    """The ``Backend`` motor methods (a part of :class:`PhysxBackend`)."""
+
+    if TYPE_CHECKING:
+        name: ClassVar[str]
+        profile: Profile
+        _robots: dict[int, Robot]
+        _active: list[Robot]
+        _dt: float
+
+        def _check_idle(self) -> None: ...
+
+        def _ball_forces(self, robot: Robot, joint: int) -> None: ...
+
+        def _ball_before_step(
+            self, robot: Robot, q: Any, v: Any, qf: np.ndarray | None
+        ) -> bool: ...
+
+        def _ball_after_step(self, robot: Robot) -> None: ...
+
+    # ---------------------------------------------------------------- set-up
+
+    def _configure(self, robot: Robot) -> None:
+        """A new robot's speed clamp, link damping and motors at load."""
+        if robot.static:
+            return
+        p = self.profile
+        cap = p.max_joint_velocity if p.max_joint_velocity is not None else SPEED_UNCAPPED
+        for link in robot.built.links:  # PyBullet's damping is applied in _before_step
+            link.linear_damping = 0.0
+            link.angular_damping = 0.0
+        if not robot.fixed and p.max_joint_velocity is not None:
+            root = robot.built.links[0]
+            root.max_linear_velocity = cap
+            root.max_angular_velocity = cap
+        for joint in robot.dof_joint.values():
+            joint.max_velocity = cap
+        if p.apply_joint_damping:
+            damping = np.zeros(robot.ndof)
+            for j in robot.movable:
+                damping[robot.dof[j]] = robot.model.joints[j].damping
+            robot.damping = damping if damping.any() else None
+        for s in range(len(robot.movable)):
+            if not robot.motors["ball"][s]:
+                self._apply(robot, s)
+        for j in robot.balls:
+            self._ball_forces(robot, j)
+
+    def _apply(self, robot: Robot, s: int) -> None:
+        """Make slot ``s``'s motor PhysX's drive."""
+        m = robot.motors
+        joint = robot.joints[robot.movable[s]]
+        force = min(float(m["max_force"][s]), float(m["effort"][s]))
+        drive = robot.drive_force
+        if force <= 0.0:
+            if drive[s] != 0.0:
+                joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                drive[s] = 0.0
+            return
+        if drive[s] != force:  # PhysX's drive as it is set (NaN: not yet)
+            joint.set_drive_properties(0.0, DRIVE_DAMPING, force, "force")
+            drive[s] = force
+        if m["ball"][s]:
+            joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+        elif m["mode"][s] == 0:  # MotorMode.VELOCITY
+            joint.set_drive_velocity_target(float(m["target"][s]))
+
+    def _refresh_active(self) -> None:
+        """The robots that need work at every step (link damping, position motors, torques)."""
+        damped = bool(self.profile.linear_damping or self.profile.angular_damping)
+        for r in self._robots.values():
+            r.has_position = bool((r.motors["mode"] == MotorMode.POSITION).any())
+        self._active = [
+            r
+            for r in self._robots.values()
+            if not r.static
+            and (
+                damped
+                or r.pending
+                or r.damping is not None
+                or bool(r.balls)
+                or bool((r.motors["mode"] == MotorMode.POSITION).any())
+            )
+        ]
+
+    def _before_step(self, robot: Robot) -> None:
+        m = robot.motors
+        art = robot.built.articulation
+        k_lin, k_ang = self.profile.linear_damping, self.profile.angular_damping
+        if k_lin or k_ang:
+            # PyBullet's link damping f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal
+            # axes), from the velocities at the start of the step: as accelerations the inertia
+            # drops out of both
+            links = robot.moving_links
+            v = np.array([link.linear_velocity for link in links])  # (n, 3) float32
+            w = np.array([link.angular_velocity for link in links])
+            v *= (-k_lin * (1.0 + np.sqrt(np.einsum("ij,ij->i", v, v))))[:, None]
+            w *= (-k_ang * (1.0 + np.sqrt(np.einsum("ij,ij->i", w, w))))[:, None]
+            for link, a_lin, a_ang in zip(links, v, w, strict=True):
+                link.add_force_torque(a_lin, a_ang, "acceleration")
+        if robot.has_position:
+            position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
+            q = art.qpos
+            v = art.qvel
+            inv_dt = 1.0 / self._dt
+            for s in position:
+                if min(m["max_force"][s], m["effort"][s]) <= 0.0:
+                    continue
+                k = robot.dof[robot.movable[s]]
+                target = m["kp"][s] * (m["target"][s] - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
+                robot.joints[robot.movable[s]].set_drive_velocity_target(float(target))
+        qf = None
+        if robot.pending or robot.damping is not None:
+            qf = np.zeros(robot.ndof)
+            if robot.pending:
+                for slot, j in enumerate(robot.movable):
+                    if not m["ball"][slot]:
+                        qf[robot.dof[j]] = m["torque"][slot]
+            if robot.damping is not None:  # <dynamics damping>, explicit as PyBullet's server
+                qf -= robot.damping * art.qvel
+        if robot.balls:
+            self._ball_before_step(robot, art.qpos, art.qvel, qf)
+        if qf is not None:
+            art.qf = qf.astype(np.float32)
+            robot.qf_set = True
+
+    def _after_step(self, robot: Robot) -> None:
+        if robot.qf_set:  # PhysX keeps joint forces until changed: they last this step only
+            robot.built.articulation.qf = np.zeros(robot.ndof, dtype=np.float32)
+            robot.qf_set = False
+        if robot.pending:
+            robot.motors["torque"][:] = 0.0
+            if robot.balls:
+                self._ball_after_step(robot)
+            robot.pending = False
+            self._refresh_active()
+
+    # ---------------------------------------------------------------- commands
+
+    def _slots(self, robot: Robot, joints: np.ndarray) -> np.ndarray:
+        """The motor slots of ``joints`` (cached per joints array: the Sim hands the same
+        array object for the same joints argument)."""
+        key = id(joints)
+        hit = robot.slot_cache.get(key)
+        if hit is not None and hit[0] is joints:
+            return hit[1]
+        slots = np.array([robot.slot[int(j)] for j in joints], dtype=np.intp)
+        robot.slot_cache[key] = (joints, slots)
+        return slots
+
+    @exclusive
+    def set_joint_velocity(
+        self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
+    ) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        slots = self._slots(robot, joints)
+        was_position = bool(m["mode"][slots].any())  # POSITION is 2, VELOCITY 0
+        m["mode"][slots] = 0
+        m["target"][slots] = target
+        m["max_force"][slots] = max_force
+        m["kp"][slots] = 0.0
+        m["kd"][slots] = 1.0
+        forces = np.minimum(m["max_force"][slots], m["effort"][slots]).tolist()
+        drive = robot.drive_force
+        ball = m["ball"]
+        for s, joint, t, f in zip(
+            slots.tolist(), robot.slot_joints(slots), target, forces, strict=True
+        ):
+            if f <= 0.0:
+                if drive[s] != 0.0:
+                    joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                    drive[s] = 0.0
+                continue
+            if drive[s] != f:
+                joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
+                drive[s] = f
+            if ball[s]:
+                joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+            else:
+                joint.set_drive_velocity_target(t)
+        if was_position:  # a position motor replaced: the step may have less to do
+            self._refresh_active()
+
+    @exclusive
+    def set_joint_position(
+        self,
+        body: int,
+        joints: np.ndarray,
+        target: list[float],
+        max_force: list[float],
+        kp: list[float],
+        kd: list[float],
+    ) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        for s, t, f, p_, d_ in zip(
+            self._slots(robot, joints), target, max_force, kp, kd, strict=True
+        ):
+            m["mode"][s] = MotorMode.POSITION
+            m["target"][s] = t
+            m["max_force"][s] = f
+            m["kp"][s] = p_
+            m["kd"][s] = d_
+            self._apply(robot, s)
+        self._refresh_active()
+
+    @exclusive
+    def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        for s, t in zip(self._slots(robot, joints), torque, strict=True):
+            effort = m["effort"][s]  # inf unless the profile enforces <limit effort>
+            m["torque"][s] += min(max(t, -effort), effort)  # each command clamped, as PyBullet
+        robot.pending = True
+        self._refresh_active()
+
+    # ---------------------------------------------------------------- state of the motors
+
+    @exclusive
+    def joint_commands(self, body: int) -> JointCommands:
+        robot = self._robots[body]
+        n = len(robot.table)
+        mode = np.full(n, int(MotorMode.NONE))
+        target = np.zeros(n)
+        max_force = np.zeros(n)
+        kp = np.zeros(n)
+        kd = np.zeros(n)
+        torque = np.zeros(n)
+        m = robot.motors
+        for s, j in enumerate(robot.movable):
+            if j in robot.balls:  # the first axis, as PyBullet's tables
+                ball = robot.balls[j]
+                mode[j] = ball["mode"]
+                max_force[j] = ball["max_force"][0]
+                kp[j] = ball["kp"][0]
+                kd[j] = ball["kd"][0]
+                torque[j] = ball["torque"][0]
+                continue
+            mode[j] = m["mode"][s]
+            target[j] = m["target"][s]
+            max_force[j] = m["max_force"][s]
+            kp[j] = m["kp"][s]
+            kd[j] = m["kd"][s]
+            torque[j] = m["torque"][s]
+        return JointCommands(mode, target, max_force, kp, kd, torque)
+
+    @exclusive
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        robot = self._robots[body]
+        m = robot.motors
+        for s, j in enumerate(robot.movable):
+            if robot.table[j].type == JointType.SPHERICAL:
+                continue
+            m["mode"][s] = int(commands.mode[j])
+            m["target"][s] = float(commands.target[j])
+            m["max_force"][s] = float(commands.max_force[j])
+            m["kp"][s] = float(commands.kp[j])
+            m["kd"][s] = float(commands.kd[j])
+            m["torque"][s] = float(commands.pending_torque[j])
+            self._apply(robot, s)
+        robot.pending = bool(np.any(m["torque"] != 0.0))
+        self._refresh_active()

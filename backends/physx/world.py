@@ -1,0 +1,102 @@
+"""The robots of one PhysX world: what the backend keeps of each body between calls."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from simbridge.profiles import Profile
+from simbridge.types import JointInfo, JointType
+from simbridge.urdf import UrdfModel
+
+from .model import BuiltRobot
+
+__all__ = ["Robot", "default_motors", "SPHERICAL_BRAKE_KP", "SPHERICAL_BRAKE_IMPULSE"]
+
+SPHERICAL_BRAKE_KP = 0.2  # PyBullet's spherical joint motor at load
+SPHERICAL_BRAKE_IMPULSE = 1000.0  # N·m·s per step per axis
+
+
+@dataclass(eq=False)
+class Robot:
+    """One body: its model, joint table, PhysX objects and motor table.
+
+    ``dof[j]`` is the first entry of joint ``j`` in the articulation's ``qpos``/``qvel`` (-1 for
+    a fixed joint); ``movable`` the movable 1-DoF and spherical joints in index order. The motor
+    arrays run over ``movable``."""
+
+    id: int
+    model: UrdfModel
+    built: BuiltRobot
+    table: list[JointInfo]
+    fixed: bool
+    movable: list[int]
+    dof: np.ndarray
+    ndof: int
+    joints: list[Any]  # PhysxArticulationJoint per URDF joint (None for a static body)
+    motors: dict[str, np.ndarray] = field(default_factory=dict)
+    pending: bool = False  # a torque waits for the next step
+    slot: dict[int, int] = field(default_factory=dict)  # joint -> index in the motor arrays
+    damping: np.ndarray | None = None  # <dynamics damping> per dof where the profile applies it
+    qf_set: bool = False  # joint forces were handed to PhysX for the coming step
+    drive_force: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per slot, as set
+    has_position: bool = False  # a position motor needs its velocity target every step
+    moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
+    ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
+    dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
+    balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
+    read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
+    slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    @property
+    def static(self) -> bool:
+        return self.built.static
+
+    def slot_joints(self, slots: np.ndarray) -> list[Any]:
+        """The PhysX joints of motor ``slots`` (cached per slots array)."""
+        key = id(slots)
+        hit = self.joint_cache.get(key)
+        if hit is not None and hit[0] is slots:
+            return hit[1]
+        out = [self.joints[self.movable[s]] for s in slots.tolist()]
+        self.joint_cache[key] = (slots, out)
+        return out
+
+
+def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> dict[str, np.ndarray]:
+    """PyBullet's motor at load per movable joint: the brake (velocity 0, impulse 1 N·s per
+    step), PyBullet's spherical motor on a spherical joint, or under joint_brake
+    "urdf_friction" the file's friction."""
+    joints = [model.joints[j] for j in movable]
+    n = len(joints)
+    ball = np.array([j.type == "spherical" for j in joints], dtype=bool)
+    kp = np.zeros(n)
+    mode = np.zeros(n, dtype=int)
+    if profile.joint_brake == "pybullet":
+        brake = np.full(n, 1.0 / profile.timestep)
+        brake[ball] = SPHERICAL_BRAKE_IMPULSE / profile.timestep
+        kp[ball] = SPHERICAL_BRAKE_KP
+        mode[ball] = 2
+    else:
+        brake = np.array([j.friction for j in joints], dtype=float)
+    effort = np.full(n, np.inf)
+    if profile.enforce_effort_limit:
+        effort = np.array([j.effort if j.effort > 0 else np.inf for j in joints], float)
+    return {
+        "mode": mode,  # MotorMode: 0 VELOCITY, 2 POSITION
+        "target": np.zeros(n),
+        "max_force": brake,
+        "kp": kp,
+        "kd": np.ones(n),
+        "effort": effort,
+        "torque": np.zeros(n),
+        "applied": np.zeros(n),
+        "ball": ball,
+    }
+
+
+def movable_joints(table: list[JointInfo]) -> list[int]:
+    return [j.index for j in table if j.type != JointType.FIXED]
