@@ -4,7 +4,8 @@ And what MuJoCo's own reading of each MJCF file would simulate that PyBullet's d
 For every ``mjcf/*.xml`` and ``**/*.sdf`` under pybullet_data (or the files named on the command
 line): load it with raw PyBullet (``p.loadMJCF``/``p.loadSDF``) in a fresh process (a crash costs
 that file only; the joint names PyBullet makes up are then a first load's), with
-``Sim("pybullet")`` and with ``Sim("mujoco")``; compare every body's joint table (the 17
+``Sim("pybullet")``, ``Sim("mujoco")`` and, where its extra is installed, ``Sim("physx")``
+(its frames to 1e-6: float32); compare every body's joint table (the 17
 fields, names exactly; floats to 1e-9, quaternions up to sign) and every link's world frame (to
 2e-7 relative: PyBullet's ``getLinkState`` rounds to float32). Prints the counts, then every file
 that fails or differs with its reason.
@@ -40,6 +41,21 @@ from simbridge.exceptions import SimbridgeError
 DATA = pybullet_data.getDataPath()
 TOL = 1e-9
 FRAME_REL = 2e-7
+# PhysX keeps link poses in float32 and composes them in float32 (bench/urdf_coverage.py)
+FRAME_REL_BY_BACKEND = {"physx": 1e-6}
+
+
+def backends() -> tuple[str, ...]:
+    """pybullet and mujoco, and physx where its extra is installed."""
+    from simbridge.registry import unavailable_reason
+
+    extra = tuple(
+        b
+        for b in ("physx",)
+        if b in simbridge.available_backends() and unavailable_reason(b) is None
+    )
+    return ("pybullet", "mujoco", *extra)
+
 
 _RAW = """
 import json, sys, pybullet as p
@@ -109,12 +125,13 @@ def table_difference(got: list[Any], raw: list[list[Any]]) -> str | None:
 
 
 def frames_difference(sim: simbridge.Sim, body: int, raw: list[Any]) -> str | None:
+    rel = FRAME_REL_BY_BACKEND.get(sim.backend, FRAME_REL)
     for k, (rp, ro) in enumerate(raw):
         s = sim.link_state(body, k - 1)
-        tol = FRAME_REL * max(1.0, float(np.abs(rp).max()))
+        tol = rel * max(1.0, float(np.abs(rp).max()))
         go = s.link_frame_orientation
         if not _close(s.link_frame_position, rp, tol) or not (
-            _close(go, ro, FRAME_REL) or _close(go, -np.asarray(ro), FRAME_REL)
+            _close(go, ro, rel) or _close(go, -np.asarray(ro), rel)
         ):
             return f"link {k - 1} frame {s.link_frame_position}, raw {rp}"
     return None
@@ -125,7 +142,7 @@ def check(name: str) -> tuple[str, str]:
     raw = raw_load(name)
     kind = "mjcf" if name.endswith(".xml") else "sdf"
     results = []
-    for backend in ("pybullet", "mujoco"):
+    for backend in backends():
         with simbridge.Sim(backend) as sim:
             try:
                 load = sim.load_mjcf if kind == "mjcf" else sim.load_sdf
@@ -205,7 +222,7 @@ def main() -> int:
         f"s: " + ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
     )
     print(
-        f"bodies equal to raw PyBullet's on both backends: "
+        f"bodies equal to raw PyBullet's on every backend ({', '.join(backends())}): "
         f"{sum(int(d.split()[0]) for s, d in results.values() if s == 'ok')}"
     )
     for name, (status, detail) in results.items():
