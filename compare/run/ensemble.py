@@ -230,8 +230,11 @@ def engine_perturbation(
     coordinate near 1 m, and the offsets it does see are not the sizes asked for. With
     ``FLOAT_SPACINGS`` = 8 spacings each component is off by at most 1/16 of the offset, the
     stored offset by at most sqrt(3)/16 = 11% of its length. Measured on r2d2 (spawn z 0.1 m,
-    PhysX, 8 runs, seed 0; the spread of the base position at the end, 4.08 s): see
-    docs/compare.md, "A float32 engine's perturbation". For float64 (spacing 2.2e-16 at 1)
+    PhysX, 8 runs, seed 0; the spread of the base position at the end, 4.08 s): 1.71 mm at
+    1e-9 m / rad and 1.66 mm at 1e-8 (below float32's spacing the spread does not follow the
+    size asked for: it is float32's rounding of the spawn pose), 9.0 mm at 1.2e-7, 4.78 cm at
+    1.2e-6; at this rule's 5.96e-8 m / 9.54e-7 rad, 6.03 cm (docs/compare.md, "A float32
+    engine's perturbation"). For float64 (spacing 2.2e-16 at 1)
     the requested 1e-9 stands: PyBullet and MuJoCo keep the sizes asked for, and every engine
     keeps the same random directions (:func:`directions`)."""
     kind = np.dtype(state_dtype).type
