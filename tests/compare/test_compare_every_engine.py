@@ -55,8 +55,14 @@ def test_the_rule_is_the_requested_size_or_spacings_of_the_engines_type():
     assert engine_perturbation((1e-9, 1e-9), "float64", sc) == (1e-9, 1e-9)
     # float32: 8 spacings at the largest spawn coordinate (m) and at 1 (rad)
     m, rad = engine_perturbation((1e-9, 1e-9), "float32", sc)
-    assert m == FLOAT_SPACINGS * float(np.spacing(np.float32(0.1))) == pytest.approx(5.96e-8, rel=1e-3)
-    assert rad == FLOAT_SPACINGS * float(np.spacing(np.float32(1.0))) == pytest.approx(9.54e-7, rel=1e-3)
+    assert (
+        m == FLOAT_SPACINGS * float(np.spacing(np.float32(0.1))) == pytest.approx(5.96e-8, rel=1e-3)
+    )
+    assert (
+        rad
+        == FLOAT_SPACINGS * float(np.spacing(np.float32(1.0)))
+        == pytest.approx(9.54e-7, rel=1e-3)
+    )
     # a requested size above the floor stands
     assert engine_perturbation((1e-3, 2e-3), "float32", sc) == (1e-3, 2e-3)
     # the floor follows the largest spawn coordinate: a robot 10 m out
@@ -70,7 +76,9 @@ def test_state_dtype_is_declared_by_the_backend_class(float32_engine):
     assert registry.state_dtype("mujoco") == "float64"
     assert registry.state_dtype(float32_engine) == "float32"
     registry.register("bad", "simbridge.backends.mujoco:MujocoBackend")
-    registry._LOADED["bad"] = type("Bad", (registry.load_backend("mujoco"),), {"state_dtype": "f16"})
+    registry._LOADED["bad"] = type(
+        "Bad", (registry.load_backend("mujoco"),), {"state_dtype": "f16"}
+    )
     with pytest.raises(BackendError, match="state_dtype 'f16'"):
         registry.state_dtype("bad")
 
