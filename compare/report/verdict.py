@@ -60,7 +60,7 @@ def _perturbation(ensemble: dict[str, Any] | None, label: str | None = None) -> 
     if not ensemble:
         return "runs"
     pert = ensemble["perturbation"]
-    own = ensemble["engines"].get(label, {}).get("perturbation") if label else None
+    own = ensemble.get("engines", {}).get(label, {}).get("perturbation") if label else None
     if own is not None:
         pert = own
     return f"runs started {pert['position']:g} m / {pert['orientation']:g} rad apart"
@@ -75,7 +75,7 @@ def perturbation_words(ensemble: dict[str, Any] | None) -> str | None:
     raised = [
         f"{label} ({e['perturbation']['state_dtype']}) {e['perturbation']['position']:g} m and "
         f"{e['perturbation']['orientation']:g} rad"
-        for label, e in ensemble["engines"].items()
+        for label, e in (ensemble.get("engines") or {}).items()
         if "perturbation" in e
         and (
             e["perturbation"]["position"] != req["position"]
