@@ -61,8 +61,11 @@ def _perturbation(ensemble: dict[str, Any] | None, label: str | None = None) -> 
         return "runs"
     pert = ensemble["perturbation"]
     own = ensemble.get("engines", {}).get(label, {}).get("perturbation") if label else None
-    if own is not None:
-        pert = own
+    if own is not None and (own["position"], own["orientation"]) != (
+        pert["position"],
+        pert["orientation"],
+    ):
+        return f"runs started {own['position']:.3g} m / {own['orientation']:.3g} rad apart"
     return f"runs started {pert['position']:g} m / {pert['orientation']:g} rad apart"
 
 
@@ -73,8 +76,8 @@ def perturbation_words(ensemble: dict[str, Any] | None) -> str | None:
         return None
     req = ensemble["perturbation"]
     raised = [
-        f"{label} ({e['perturbation']['state_dtype']}) {e['perturbation']['position']:g} m and "
-        f"{e['perturbation']['orientation']:g} rad"
+        f"{label} ({e['perturbation']['state_dtype']}) {e['perturbation']['position']:.3g} m "
+        f"and {e['perturbation']['orientation']:.3g} rad"
         for label, e in (ensemble.get("engines") or {}).items()
         if "perturbation" in e
         and (

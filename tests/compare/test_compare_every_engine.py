@@ -121,7 +121,7 @@ def test_report_and_summary_say_which_size_each_engine_got(float32_engine, tmp_p
     }
     assert s["ensemble"]["perturbation"] == {"position": 1e-9, "orientation": 1e-9}
     text = (report(c, tmp_path, plots=False, trajectories=False)).read_text()
-    line = f"{float32_engine} (float32) {want[0]:g} m and {want[1]:g} rad"
+    line = f"{float32_engine} (float32) {want[0]:.3g} m and {want[1]:.3g} rad"
     assert line in text and text.count(line) == 2  # the opening lines and the verdict section
     # two float64 engines: no per-engine key, no sentence (the summary as before)
     plain = summary(compare("r2d2", ["pybullet", "mujoco"], duration=0.1, ensemble=2, workers=0))
