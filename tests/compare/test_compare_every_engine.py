@@ -195,3 +195,16 @@ def test_three_engines_with_physx_every_pair_judged(tmp_path):
     text = (report(c, tmp_path, plots=False, trajectories=False)).read_text()
     assert "# r2d2: pybullet, mujoco and physx" in text
     assert "Every pair of the 3 engines: pybullet and mujoco " in text
+
+
+def test_the_command_line_runs_every_installed_engine_by_default(own_registry, tmp_path, capsys):
+    from simbridge.cli import main
+
+    registry._REGISTRY.pop("physx", None)
+    registry.register("ghost", "no_such_package.backend:Ghost", requires=("no_such_engine_mod",))
+    out = tmp_path / "r"
+    args = ["compare", "pendulum", "--duration", "0.2", "--ensemble", "1", "--no-plots"]
+    assert main([*args, "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["backends"] == ["pybullet", "mujoco"] and list(s["left_out"]) == ["ghost"]
+    assert "Registered engines left out, not installed here: ghost (" in capsys.readouterr().out
