@@ -88,10 +88,10 @@ def perturbation_words(ensemble: dict[str, Any] | None) -> str | None:
     if not raised:
         return None
     return (
-        "An engine keeping its state in float32 cannot represent the requested offsets at this "
-        "scenario's spawn coordinates: its runs were moved and turned by "
-        f"{FLOAT_SPACINGS} spacings of its type "
-        "there instead (the same random directions): " + "; ".join(raised) + "."
+        "An engine keeping its state in float32 cannot represent offsets that small at this "
+        f"scenario's spawn pose: its runs were moved and turned by at least {FLOAT_SPACINGS} "
+        "spacings of its type (at the largest spawn coordinate; at 1 for the orientation), in "
+        "the same random directions: " + "; ".join(raised) + "."
     )
 
 
