@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from .analysis.diff import Divergence, PhaseRow, diff
 from .analysis.verdict import Verdict, judge
-from .pipeline import Comparison, compare
+from .pipeline import Comparison, compare, installed_backends
 from .report import headline, report, summary
 from .run.ensemble import Ensemble, run_ensembles
 from .run.quantities import QUANTITIES, Quantity
@@ -65,6 +65,7 @@ __all__ = [
     "Comparison",
     "Ensemble",
     "run_ensembles",
+    "installed_backends",
     "Verdict",
     "judge",
     "Scenario",

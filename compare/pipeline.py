@@ -27,7 +27,14 @@ from .run.resync import resync as one_step_resync
 from .run.trajectory import Trajectory, run
 from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
 
-__all__ = ["Comparison", "Pair", "EnsembleSettings", "compare", "ProgressCallback"]
+__all__ = [
+    "Comparison",
+    "Pair",
+    "EnsembleSettings",
+    "compare",
+    "installed_backends",
+    "ProgressCallback",
+]
 
 ProgressCallback = Callable[[str, int, int], None]
 """progress(what, steps_done_overall, steps_total_overall)."""
@@ -87,6 +94,9 @@ class Comparison:
     pairs: list[Pair] = field(default_factory=list)
     """Every pair of engines, in order; the first is (0, 1), whose ``cross`` and ``verdict``
     these are."""
+    left_out: dict[str, str] = field(default_factory=dict)
+    """With the backends chosen by default (every installed one): each registered backend
+    left out and why (:func:`installed_backends`); empty when the backends were named."""
 
     @property
     def timestep(self) -> float:
@@ -124,13 +134,30 @@ def engine_labels(backends: Sequence[str], profiles: Sequence[str]) -> tuple[str
     return tuple(out)
 
 
+def installed_backends() -> tuple[list[str], dict[str, str]]:
+    """Every registered backend that loads here, in registration order, and each other
+    registered one with why it does not (:func:`simbridge.registry.unavailable_reason`: its
+    engine or module is not installed): what :func:`compare` runs when no backend is named."""
+    from simbridge.registry import available_backends, unavailable_reason
+
+    names: list[str] = []
+    left_out: dict[str, str] = {}
+    for name in available_backends():
+        reason = unavailable_reason(name)
+        if reason is None:
+            names.append(name)
+        else:
+            left_out[name] = reason
+    return names, left_out
+
+
 def _pairs(n: int) -> list[tuple[int, int]]:
     return [(i, j) for i in range(n) for j in range(i + 1, n)]
 
 
 def compare(
     scenario: str | Path | Scenario,
-    backends: Sequence[str] = ("pybullet", "mujoco"),
+    backends: Sequence[str] | None = None,
     *,
     profile: str | Sequence[str] | None = None,
     timesteps: Sequence[float | str] | None = None,
@@ -151,7 +178,10 @@ def compare(
     Args:
         scenario: a shipped scenario name, a TOML path or a :class:`Scenario`.
         backends: two or more registered backend names (the same one twice compares it with
-            itself); every pair is judged, the first two make the headline.
+            itself); every pair is judged, the first two make the headline. Default: every
+            installed backend, in registration order (:func:`installed_backends`: ``pybullet
+            mujoco`` and ``physx`` where SAPIEN is installed); the report names each registered
+            one left out and why.
         profile: one profile name for all, or one per backend; default the scenario's.
         timesteps: time steps (s or ``"1/480"``), the first one being the headline's; default
             the scenario's. Every phase keeps its duration.
@@ -185,6 +215,16 @@ def compare(
     sc = load_scenario(scenario)
     if controller is not None:
         sc = sc.with_controller(controller)
+    left_out: dict[str, str] = {}
+    if backends is None:
+        backends, left_out = installed_backends()
+        if len(backends) < 2:
+            why = "; ".join(f"{b}: {r}" for b, r in left_out.items()) or "none registered"
+            raise InvalidArgumentError(
+                "backends",
+                f"two or more installed backends are needed, installed here: {backends} "
+                f"(left out: {why})",
+            )
     if isinstance(backends, str) or len(backends) < 2:
         raise InvalidArgumentError(
             "backends", f"expected two or more backend names, got {backends!r}"
@@ -335,6 +375,7 @@ def compare(
             wall_time=runner.wall_time,
         ),
         pairs=pairs,
+        left_out=left_out,
     )
 
 

@@ -21,7 +21,7 @@ from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
 from .parts import parts_words
 from .resync import resync_lines, resync_section
-from .verdict import verdict_lines
+from .verdict import perturbation_words, verdict_lines
 
 __all__ = ["headline", "markdown"]
 
@@ -85,7 +85,23 @@ def headline(summary: dict[str, Any]) -> list[str]:
     lines.append("Halving the time step " + "; it ".join(parts) + ".")
     lines += resync_lines(summary)  # one step from the same state: the model error
     lines += pairs_lines(summary)  # more than two engines: every pair's verdict
+    raised = perturbation_words(summary.get("ensemble"))  # a float32 engine's own offsets
+    if raised:
+        lines.append(raised)
+    left = left_out_words(summary)
+    if left:
+        lines.append(left)
     return lines
+
+
+def left_out_words(summary: dict[str, Any]) -> str | None:
+    """With the backends chosen by default: the registered engines left out and why, in one
+    sentence; None when none was (or the backends were named)."""
+    left = summary.get("left_out") or {}
+    if not left:
+        return None
+    why = "; ".join(f"{name} ({reason})" for name, reason in left.items())
+    return f"Registered engines left out, not installed here: {why}."
 
 
 def pairs_lines(summary: dict[str, Any]) -> list[str]:
@@ -191,6 +207,9 @@ def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: l
         rows,
     )
     lines += ["", f"Scenario file: `{s['scenario_file']}`. Followed robot: `{s['subject']}`.", ""]
+    left = left_out_words(s)
+    if left:
+        lines += [left, ""]
     # -- over time
     lines += ["## When each quantity parts", ""]
     rows = []
@@ -586,6 +605,9 @@ def _verdict_section(s: dict[str, Any]) -> list[str]:
             f"figures below are {where}, with 95% bootstrap intervals in brackets.",
             "",
         ]
+        raised = perturbation_words(e)
+        if raised:
+            lines += [raised, ""]
     rows = []
     for label, f in v["engine_figures"].items():
         hz = ", ".join(

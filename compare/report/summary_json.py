@@ -107,6 +107,7 @@ def summary(c: Comparison) -> dict[str, Any]:
         "departures": applicable(c, events),
         "pairs": pairs,
         "wall_time": c.wall_time,
+        **({"left_out": dict(c.left_out)} if c.left_out else {}),
         "manifest": {
             "simbridge_version": _version(),
             "command_line": c.command_line,
@@ -217,6 +218,13 @@ def _ensemble_summary(c: Comparison) -> dict[str, Any] | None:
             "end_points": e.end_points.tolist(),
             "wall_time": e.wall_time,
         }
+    if any(tuple(e.perturbation) != tuple(s.perturb) for e in c.ensembles):
+        for e in c.ensembles:  # only where an engine's differs: two engines' summary unchanged
+            engines[e.label]["perturbation"] = {
+                "position": e.perturbation[0],
+                "orientation": e.perturbation[1],
+                "state_dtype": e.state_dtype,
+            }
     return {
         "size": s.size,
         "perturbation": {"position": s.perturb[0], "orientation": s.perturb[1]},

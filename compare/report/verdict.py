@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..analysis.verdict import ALPHA, Marginal
+from ..run.ensemble import FLOAT_SPACINGS
 from .fmt import fmt_threshold, fmt_time, fmt_value
 
 __all__ = ["verdict_lines", "marginal_words"]
@@ -52,12 +53,46 @@ def _p(test: dict[str, Any]) -> str:
     return f"p = {p:.2g}"
 
 
-def _perturbation(ensemble: dict[str, Any] | None) -> str:
+def _perturbation(ensemble: dict[str, Any] | None, label: str | None = None) -> str:
+    """``runs started <m> m / <rad> rad apart``: the requested sizes, or engine ``label``'s
+    where its own differ (a float32 engine's, :func:`~simbridge.compare.run.ensemble.
+    engine_perturbation`)."""
     if not ensemble:
         return "runs"
-    pm = ensemble["perturbation"]["position"]
-    pr = ensemble["perturbation"]["orientation"]
-    return f"runs started {pm:g} m / {pr:g} rad apart"
+    pert = ensemble["perturbation"]
+    own = ensemble.get("engines", {}).get(label, {}).get("perturbation") if label else None
+    if own is not None and (own["position"], own["orientation"]) != (
+        pert["position"],
+        pert["orientation"],
+    ):
+        return f"runs started {own['position']:.3g} m / {own['orientation']:.3g} rad apart"
+    return f"runs started {pert['position']:g} m / {pert['orientation']:g} rad apart"
+
+
+def perturbation_words(ensemble: dict[str, Any] | None) -> str | None:
+    """A sentence naming each engine whose perturbation was raised above the requested one and
+    the size it got; None when every engine got the requested one."""
+    if not ensemble:
+        return None
+    req = ensemble["perturbation"]
+    raised = [
+        f"{label} ({e['perturbation']['state_dtype']}) {e['perturbation']['position']:.3g} m "
+        f"and {e['perturbation']['orientation']:.3g} rad"
+        for label, e in (ensemble.get("engines") or {}).items()
+        if "perturbation" in e
+        and (
+            e["perturbation"]["position"] != req["position"]
+            or e["perturbation"]["orientation"] != req["orientation"]
+        )
+    ]
+    if not raised:
+        return None
+    return (
+        "An engine keeping its state in float32 cannot represent offsets that small at this "
+        f"scenario's spawn pose: its runs were moved and turned by at least {FLOAT_SPACINGS} "
+        "spacings of its type (at the largest spawn coordinate; at 1 for the orientation), in "
+        "the same random directions: " + "; ".join(raised) + "."
+    )
 
 
 def verdict_lines(summary: dict[str, Any]) -> list[str]:
@@ -94,7 +129,8 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
         first = figs[names[0]]
         others = [lab for lab in (a, b) if lab not in names]
         spread_words = (
-            f"**{who} {verb} chaotic on this scenario**{marg}: {first['size']} {started} "
+            f"**{who} {verb} chaotic on this scenario**{marg}: {first['size']} "
+            f"{_perturbation(ens, names[0])} "
             f"{when} up to {fmt_value(first['largest_pair'], unit)} apart (spread "
             f"{_iv(first['spread'], unit, inner=True)})"
         )

@@ -3,8 +3,11 @@ random offset, in parallel processes: :func:`run_ensembles`, :class:`Ensemble`.
 
 Member 0 of every ensemble is the nominal run (no offset); member k >= 1 moves every robot's
 spawn pose by offset k: its position by ``eps_m`` metres in a random direction, its orientation
-by ``eps_rad`` radians about a random axis (world frame). Both engines get the same offsets
-(member k of one engine starts exactly where member k of the other does).
+by ``eps_rad`` radians about a random axis (world frame). Every engine gets the same
+directions; the sizes are the requested ones, raised for an engine whose state type cannot
+represent them (:func:`engine_perturbation`: a float32 engine), so that member k of every
+engine starts in the same direction from the spawn pose, and of engines of the same state type
+exactly where member k of the other does.
 
 Each worker process creates its own engines (nothing engine-made crosses a process boundary),
 sends nothing to stdout or stderr (its file descriptors 1 and 2 go to ``os.devnull`` before any
@@ -30,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
+from simbridge.registry import state_dtype
 from simbridge.transforms import quat_multiply
 
 from ..scenario import Scenario
@@ -46,6 +50,9 @@ __all__ = [
     "Ensemble",
     "Member",
     "offsets",
+    "directions",
+    "engine_perturbation",
+    "FLOAT_SPACINGS",
     "perturbed",
     "member_of",
     "run_ensembles",
@@ -116,6 +123,10 @@ class Ensemble:
     end_points: np.ndarray  # (N, 3) m
     offsets_m: np.ndarray  # (N, R, 3) m: position offset per member and robot
     offsets_rad: np.ndarray  # (N, R, 3) rad: rotation vector per member and robot
+    perturbation: tuple[float, float] = (DEFAULT_PERTURB, DEFAULT_PERTURB)
+    """The offsets' size (m, rad) this engine got (:func:`engine_perturbation`)."""
+    state_dtype: str = "float64"
+    """The floating-point type the engine keeps its state in (its backend's declaration)."""
     wall_time: float = 0.0  # s, summed over the members run in workers
     outcomes: list[dict[str, OutcomeRecord]] = field(default_factory=list)
     """Per member (member 0 first), the scenario's outcomes by name."""
@@ -170,19 +181,67 @@ def _unit_vectors(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarra
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
+def directions(size: int, robots: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The unit directions of an ensemble's offsets, ``(positions, rotation axes)`` each
+    (size, robots, 3), drawn from ``numpy.random.default_rng(seed)`` (row 0 too, then unused:
+    the nominal run); every engine of a comparison gets these same directions."""
+    rng = np.random.default_rng(seed)
+    return _unit_vectors(rng, (size, robots)), _unit_vectors(rng, (size, robots))
+
+
+def scaled(
+    units: tuple[np.ndarray, np.ndarray], eps_m: float, eps_rad: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`directions` made offsets of length ``eps_m`` and ``eps_rad``, row 0 zero."""
+    dpos = units[0] * eps_m
+    drot = units[1] * eps_rad
+    dpos[0] = 0.0
+    drot[0] = 0.0
+    return dpos, drot
+
+
 def offsets(
     size: int, robots: int, eps_m: float, eps_rad: float, seed: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """The spawn-pose offsets of an ensemble: ``(positions (size, robots, 3) m, rotation
     vectors (size, robots, 3) rad)``, row 0 zero (the nominal run), every other row of length
     exactly ``eps_m`` and ``eps_rad`` in directions drawn from
-    ``numpy.random.default_rng(seed)``."""
-    rng = np.random.default_rng(seed)
-    dpos = _unit_vectors(rng, (size, robots)) * eps_m
-    drot = _unit_vectors(rng, (size, robots)) * eps_rad
-    dpos[0] = 0.0
-    drot[0] = 0.0
-    return dpos, drot
+    ``numpy.random.default_rng(seed)`` (:func:`directions`)."""
+    return scaled(directions(size, robots, seed), eps_m, eps_rad)
+
+
+FLOAT_SPACINGS = 8
+"""A perturbation is at least this many spacings of the engine's state type at the scenario's
+largest spawn coordinate (:func:`engine_perturbation`)."""
+
+
+def engine_perturbation(
+    requested: tuple[float, float], state_dtype: str, scenario: Scenario
+) -> tuple[float, float]:
+    """The perturbation ``(m, rad)`` an engine keeping its state in ``state_dtype`` gets: for
+    the position ``max(requested m, FLOAT_SPACINGS x the type's spacing at x)``, x the
+    scenario's largest spawn coordinate (the largest absolute value of a component of any
+    robot's spawn position); for the orientation ``max(requested rad, FLOAT_SPACINGS x the
+    type's spacing at 1)`` (a quaternion's components reach 1).
+
+    Why: the engine stores the spawn pose in its type, so an offset component below half a
+    spacing there is rounded away and one above it is rounded to a whole spacing: a float32
+    engine (spacing 1.19e-7 at 1 m, 7.5e-9 at 0.1 m) cannot see a 1e-9 m offset of a
+    coordinate near 1 m, and the offsets it does see are not the sizes asked for. With
+    ``FLOAT_SPACINGS`` = 8 spacings each component is off by at most 1/16 of the offset, the
+    stored offset by at most sqrt(3)/16 = 11% of its length. Measured on r2d2 (spawn z 0.1 m,
+    PhysX, 8 runs, seed 0; the spread of the base position at the end, 4.08 s): 1.71 mm at
+    1e-9 m / rad and 1.66 mm at 1e-8 (below float32's spacing the spread does not follow the
+    size asked for: it is float32's rounding of the spawn pose), 9.0 mm at 1.2e-7, 4.78 cm at
+    1.2e-6; at this rule's 5.96e-8 m / 9.54e-7 rad, 6.03 cm (docs/compare.md, "A float32
+    engine's perturbation"). For float64 (spacing 2.2e-16 at 1)
+    the requested 1e-9 stands: PyBullet and MuJoCo keep the sizes asked for, and every engine
+    keeps the same random directions (:func:`directions`)."""
+    kind = np.dtype(state_dtype).type
+    extent = max((abs(float(c)) for r in scenario.robots for c in r.position), default=0.0)
+    position = FLOAT_SPACINGS * float(np.spacing(kind(extent)))
+    orientation = FLOAT_SPACINGS * float(np.spacing(kind(1.0)))
+    return max(requested[0], position), max(requested[1], orientation)
 
 
 def perturbed(scenario: Scenario, dpos: np.ndarray, drot: np.ndarray) -> Scenario:
@@ -368,7 +427,18 @@ class EnsembleRunner:
         self.size = size
         self.eps = (eps_m, eps_rad)
         self.seed = seed
-        self.dpos, self.drot = offsets(size, len(scenario.robots), eps_m, eps_rad, seed)
+        units = directions(size, len(scenario.robots), seed)
+        self.dpos, self.drot = scaled(units, eps_m, eps_rad)  # the requested sizes
+        self.state_dtypes = [state_dtype(backend) for backend, _ in self.engines]
+        self.engine_eps = [
+            engine_perturbation(self.eps, dtype, scenario) for dtype in self.state_dtypes
+        ]
+        """Per engine, the perturbation it gets (m, rad): the requested one, raised for a
+        float32 engine (:func:`engine_perturbation`)."""
+        self.engine_offsets = [
+            (self.dpos, self.drot) if eps == self.eps else scaled(units, *eps)
+            for eps in self.engine_eps
+        ]
         self.jobs = [(slot, k) for k in range(1, size) for slot in range(len(self.engines))]
         if workers is None:
             workers = os.cpu_count() or 1
@@ -403,7 +473,8 @@ class EnsembleRunner:
         level = logging.getLogger("simbridge").getEffectiveLevel()  # what the caller shows
         for slot, k in self.jobs:
             backend, profile = self.engines[slot]
-            sc = perturbed(self.scenario, self.dpos[k], self.drot[k])
+            dpos, drot = self.engine_offsets[slot]
+            sc = perturbed(self.scenario, dpos[k], drot[k])
             self.futures[(slot, k)] = self.pool.submit(
                 _member_job, sc, backend, profile, self.quantity, k, level
             )
@@ -431,7 +502,8 @@ class EnsembleRunner:
             if self.pool is None:
                 for slot, k in self.jobs:
                     backend, profile = self.engines[slot]
-                    sc = perturbed(self.scenario, self.dpos[k], self.drot[k])
+                    dpos, drot = self.engine_offsets[slot]
+                    sc = perturbed(self.scenario, dpos[k], drot[k])
                     results[(slot, k)] = self._check(
                         _member_job(sc, backend, profile, self.quantity, k), slot, k
                     )
@@ -471,8 +543,10 @@ class EnsembleRunner:
                     rows=rows,
                     features=np.stack([m.features for m in members]),
                     end_points=np.stack([m.end_point for m in members]),
-                    offsets_m=self.dpos,
-                    offsets_rad=self.drot,
+                    offsets_m=self.engine_offsets[slot][0],
+                    offsets_rad=self.engine_offsets[slot][1],
+                    perturbation=self.engine_eps[slot],
+                    state_dtype=self.state_dtypes[slot],
                     wall_time=sum(m.wall_time for m in members[1:]),
                     outcomes=[m.outcomes for m in members],
                 )

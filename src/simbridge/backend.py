@@ -58,6 +58,11 @@ class Backend(ABC):
     """One engine behind the :class:`simbridge.Sim` interface."""
 
     name: ClassVar[str]
+    state_dtype: ClassVar[str] = "float64"
+    """The floating-point type the engine keeps its state in (positions, orientations,
+    velocities): ``"float64"`` (PyBullet, MuJoCo: the default) or ``"float32"`` (PhysX). A
+    declared fact, read without making an engine (:func:`simbridge.registry.state_dtype`):
+    ``simbridge compare`` perturbs a float32 engine's ensemble at a size that type represents."""
 
     def __init__(self, profile: Profile, gui: bool = False) -> None:
         self.profile = profile

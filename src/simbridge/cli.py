@@ -104,10 +104,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--backends",
         nargs="+",
         metavar="NAME",
-        default=["pybullet", "mujoco"],
+        default=None,
         choices=backends,
         help="two or more backends, every pair judged, the first two in the headline (default: "
-        f"pybullet mujoco; registered: {', '.join(backends)})",
+        "every installed one, the report naming those left out; registered: "
+        f"{', '.join(backends)})",
     )
     p.add_argument(
         "--profile",
@@ -203,9 +204,14 @@ def _compare(args: argparse.Namespace) -> int:
     from simbridge.compare.report.progress import ProgressBar
     from simbridge.exceptions import ScenarioError
 
-    if len(args.backends) < 2:
+    if args.backends is None:  # every installed backend: compare() records those left out
+        from simbridge.compare import installed_backends
+
+        n = len(installed_backends()[0])
+    elif len(args.backends) < 2:
         raise _Usage("--backends takes two or more backends")
-    n = len(args.backends)
+    else:
+        n = len(args.backends)
     if args.profile is not None and len(args.profile) not in (1, n):
         many = "two" if n == 2 else str(n)
         raise _Usage(f"--profile takes one profile, or one per backend ({many})")

@@ -27,6 +27,8 @@ __all__ = [
     "load_backend",
     "backend_spec",
     "unavailable_reason",
+    "state_dtype",
+    "STATE_DTYPES",
     "ENTRY_POINT_GROUP",
 ]
 
@@ -112,6 +114,27 @@ def load_backend(name: str) -> type[Backend]:
             ) from exc
     _LOADED[name] = cls
     return cls
+
+
+STATE_DTYPES = ("float64", "float32")
+"""The values :attr:`simbridge.backend.Backend.state_dtype` may take."""
+
+
+def state_dtype(name: str) -> str:
+    """The floating-point type backend ``name`` keeps its state in (its class's
+    :attr:`~simbridge.backend.Backend.state_dtype`, ``"float64"`` unless it declares another):
+    imports the backend, makes no engine.
+
+    Raises:
+        UnknownBackendError, BackendNotInstalledError: as :func:`load_backend`.
+        BackendError: the backend declares a type not in :data:`STATE_DTYPES`.
+    """
+    value = getattr(load_backend(name), "state_dtype", "float64")
+    if value not in STATE_DTYPES:
+        raise BackendError(
+            f"backend {name!r}: state_dtype {value!r} is not one of {list(STATE_DTYPES)}"
+        )
+    return str(value)
 
 
 def unavailable_reason(name: str) -> str | None:
