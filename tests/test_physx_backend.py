@@ -362,3 +362,22 @@ def test_a_waiting_call_is_refused_once_the_sim_is_closed():
 
     sim = simbridge.Sim("physx")
     check_waiting_call_refused_after_close(sim, backend_of(sim)._stepping)
+
+
+@needs_sapien
+def test_a_position_target_past_a_limit_is_clamped_to_it():
+    """PyBullet clamps a POSITION_CONTROL target into the joint's limits: 0.6 on the slider
+    (limits +-0.4 m) moves the carriage as 0.4 does (unclamped: 8.1e-4 m apart after 30
+    steps on PhysX; clamped: float32 spacings)."""
+
+    def run(backend: str, target: float) -> float:
+        with simbridge.Sim(backend) as sim:
+            body = sim.load_urdf("slider.urdf", fixed_base=True)
+            sim.reset_joint_state(body, 0, 0.399, 0.0)
+            sim.set_joint_position(body, 0, target, max_force=20.0)
+            sim.step(30)
+            return float(sim.joint_states(body, [0]).positions[0])
+
+    ref = run("pybullet", 0.6)
+    assert abs(run("physx", 0.6) - ref) < 4e-7
+    assert abs(run("physx", 0.6) - run("physx", 0.4)) == 0.0

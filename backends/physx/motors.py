@@ -236,6 +236,10 @@ class MotorCommands:
         for s, t, f, p_, d_ in zip(
             self._slots(robot, joints), target, max_force, kp, kd, strict=True
         ):
+            info = robot.table[robot.movable[s]]
+            lo, hi = info.lower_limit, info.upper_limit
+            if lo <= hi and info.type in (JointType.REVOLUTE, JointType.PRISMATIC):
+                t = min(max(t, lo), hi)  # PyBullet clamps a position target to the limits
             m["mode"][s] = MotorMode.POSITION
             m["target"][s] = t
             m["max_force"][s] = f
