@@ -320,6 +320,23 @@ def test_a_non_finite_state_raises_diverged():
 
 
 @needs_sapien
+def test_reads_of_a_jointless_body_are_refused_after_a_divergence():
+    """After the step that diverged every read raises until reset(), a body with no movable
+    joint (the plane) too (before: the plane's empty joint states were returned)."""
+    with simbridge.Sim("physx", gravity=(0.0, 0.0, -1e300), divergence_check="every_step") as sim:
+        plane = sim.load_urdf("plane.urdf")
+        sim.load_urdf("free_box.urdf", base_position=(0.0, 0.0, 2.0))
+        with pytest.raises(SimulationDivergedError):
+            sim.step(32)
+        with pytest.raises(SimulationDivergedError):
+            sim.joint_states(plane)
+        with pytest.raises(SimulationDivergedError):
+            sim.joint_states_multi_dof(plane)
+        sim.reset()
+        assert sim.num_joints(sim.load_urdf("plane.urdf")) == 0
+
+
+@needs_sapien
 def test_manifest_lists_what_physx_cannot_match():
     with simbridge.Sim("physx") as sim:
         m = sim.manifest()
