@@ -56,6 +56,9 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
     """`Sim` on PhysX 5 (SAPIEN 3.0.3, CPU)."""
 
     name = "physx"
+    # PhysX keeps poses and velocities in float32 (DEPARTURES["precision"]): readable before an
+    # engine is made, for a perturbation this engine can represent
+    state_dtype = "float32"
 
     NATIVE_DEFAULTS = {
         "gravity": (0.0, 0.0, -9.81),
