@@ -130,13 +130,25 @@ class MotorCommands:
             # PyBullet's link damping f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal
             # axes), from the velocities at the start of the step: as accelerations the inertia
             # drops out of both
-            links = robot.moving_links
-            v = np.array([link.linear_velocity for link in links])  # (n, 3) float32
-            w = np.array([link.angular_velocity for link in links])
-            v *= (-k_lin * (1.0 + np.sqrt(np.einsum("ij,ij->i", v, v))))[:, None]
-            w *= (-k_ang * (1.0 + np.sqrt(np.einsum("ij,ij->i", w, w))))[:, None]
-            for link, a_lin, a_ang in zip(links, v, w, strict=True):
-                link.add_force_torque(a_lin, a_ang, "acceleration")
+            # (two reads and one write per link and step: SAPIEN's CPU articulation has no
+            # batched link velocities; the bound methods are looked up once per robot)
+            calls = robot.damping_calls
+            if calls is None:
+                links = robot.moving_links
+                getters = []
+                for link in links:  # interleaved: v0, w0, v1, w1, ...
+                    getters += [link.get_linear_velocity, link.get_angular_velocity]
+                k = np.tile(np.array([-k_lin, -k_ang], dtype=np.float32), len(links))
+                calls = robot.damping_calls = (
+                    getters,
+                    k,
+                    [link.add_force_torque for link in links],
+                )
+            getters, k, add = calls
+            vw = np.array([f() for f in getters])  # (2n, 3) float32
+            vw *= (k * (1.0 + np.sqrt((vw * vw).sum(axis=1))))[:, None]
+            for f, a_lin, a_ang in zip(add, vw[0::2], vw[1::2], strict=True):
+                f(a_lin, a_ang, "acceleration")
         if robot.has_position:
             position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
             q = art.qpos

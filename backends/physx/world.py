@@ -50,6 +50,9 @@ class Robot:
     read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    # link damping, made once: the moving links' bound velocity getters (linear, angular, per
+    # link), the float32 factors -k_lin, -k_ang per row, their bound add_force_torque
+    damping_calls: tuple[list[Any], np.ndarray, list[Any]] | None = None
 
     @property
     def static(self) -> bool:
