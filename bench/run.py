@@ -113,6 +113,19 @@ def main(argv: list[str] | None = None) -> int:
                 drive.target,
             )
         )
+        floor = cases.DAMPED_FLOOR if backend == "physx" else None
+        if floor is not None:  # the raw code doing what PyBullet's link damping takes
+            raw, lay = interleave(floor.raw, floor.layer, reps)
+            rows.append(
+                Row(
+                    f"{backend}: same drive, raw applying PyBullet's link damping",
+                    "µs/step",
+                    [t / 980 for t in raw],
+                    [t / 980 for t in lay],
+                    floor.target,
+                    "the floor: raw + 2 reads, 1 write per link",
+                )
+            )
         bound = cases.BOUND_DRIVES[backend]
         raw, lay = interleave(bound.raw, bound.layer, reps)
         rows.append(

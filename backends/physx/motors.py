@@ -139,16 +139,17 @@ class MotorCommands:
                 for link in links:  # interleaved: v0, w0, v1, w1, ...
                     getters += [link.get_linear_velocity, link.get_angular_velocity]
                 k = np.tile(np.array([-k_lin, -k_ang], dtype=np.float32), len(links))
-                calls = robot.damping_calls = (
-                    getters,
-                    k,
-                    [link.add_force_torque for link in links],
-                )
-            getters, k, add = calls
-            vw = np.array([f() for f in getters])  # (2n, 3) float32
-            vw *= (k * (1.0 + np.sqrt((vw * vw).sum(axis=1))))[:, None]
-            for f, a_lin, a_ang in zip(add, vw[0::2], vw[1::2], strict=True):
-                f(a_lin, a_ang, "acceleration")
+                buf = np.empty((2 * len(links), 3), dtype=np.float32)
+                adds = [
+                    (link.add_force_torque, buf[2 * i], buf[2 * i + 1])  # views of buf's rows
+                    for i, link in enumerate(links)
+                ]
+                calls = robot.damping_calls = (getters, k, buf, adds)
+            getters, k, buf, adds = calls
+            buf[:] = [f() for f in getters]  # (2n, 3) float32
+            buf *= (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
+            for add, a_lin, a_ang in adds:
+                add(a_lin, a_ang, "acceleration")
         if robot.has_position:
             position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
             q = art.qpos

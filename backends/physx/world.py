@@ -51,8 +51,9 @@ class Robot:
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     # link damping, made once: the moving links' bound velocity getters (linear, angular, per
-    # link), the float32 factors -k_lin, -k_ang per row, their bound add_force_torque
-    damping_calls: tuple[list[Any], np.ndarray, list[Any]] | None = None
+    # link), the float32 factors -k_lin, -k_ang per row, the (2n, 3) buffer they are read into,
+    # and per link its bound add_force_torque with the views of its two rows
+    damping_calls: tuple[list[Any], np.ndarray, np.ndarray, list[Any]] | None = None
 
     @property
     def static(self) -> bool:
