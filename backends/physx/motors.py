@@ -207,18 +207,19 @@ class MotorCommands:
         robot = self._robots[body]
         m = robot.motors
         slots = self._slots(robot, joints)
-        was_position = bool(m["mode"][slots].any())  # POSITION is 2, VELOCITY 0
+        # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
+        was_position = robot.has_position and bool(m["mode"][slots].any())
         m["mode"][slots] = 0
         m["target"][slots] = target
         m["max_force"][slots] = max_force
         m["kp"][slots] = 0.0
         m["kd"][slots] = 1.0
-        forces = np.minimum(m["max_force"][slots], m["effort"][slots]).tolist()
         drive = robot.drive_force
         ball = m["ball"]
-        for s, joint, t, f in zip(
-            slots.tolist(), robot.slot_joints(slots), target, forces, strict=True
+        for s, joint, effort, t, mf in zip(
+            *robot.slot_calls(slots, m["effort"]), target, max_force, strict=True
         ):
+            f = mf if mf < effort else effort
             if f <= 0.0:
                 if drive[s] != 0.0:
                     joint.set_drive_properties(0.0, 0.0, 0.0, "force")

@@ -50,6 +50,7 @@ class Robot:
     read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    call_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
     # link damping, made once: the moving links' bound velocity getters (linear, angular, per
     # link), the float32 factors -k_lin, -k_ang per row, the (2n, 3) buffer they are read into,
     # and per link its bound add_force_torque with the views of its two rows
@@ -58,6 +59,19 @@ class Robot:
     @property
     def static(self) -> bool:
         return self.built.static
+
+    def slot_calls(
+        self, slots: np.ndarray, effort: np.ndarray
+    ) -> tuple[list[int], list[Any], list[float]]:
+        """Motor ``slots`` as a list, their PhysX joints and their effort limits (cached per
+        slots array; the effort limits are fixed at load)."""
+        key = id(slots)
+        hit = self.call_cache.get(key)
+        if hit is not None and hit[0] is slots:
+            return hit[1]
+        out = (slots.tolist(), self.slot_joints(slots), effort[slots].tolist())
+        self.call_cache[key] = (slots, out)
+        return out
 
     def slot_joints(self, slots: np.ndarray) -> list[Any]:
         """The PhysX joints of motor ``slots`` (cached per slots array)."""
