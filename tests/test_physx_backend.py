@@ -398,3 +398,23 @@ def test_a_position_target_past_a_limit_is_clamped_to_it():
     ref = run("pybullet", 0.6)
     assert abs(run("physx", 0.6) - ref) < 4e-7
     assert abs(run("physx", 0.6) - run("physx", 0.4)) == 0.0
+
+
+@needs_sapien
+def test_a_torque_kick_is_clamped_at_the_profiles_speed_as_pybullet():
+    """PyBullet clamps every joint speed after the step, what a torque added too: a wheel at
+    40 rad/s kicked by a torque worth 150 rad/s more reads 100 (the "pybullet" profile's
+    clamp) on raw PyBullet; PhysX's joint max velocity alone left it at 189.7."""
+
+    def kick(backend: str) -> float:
+        with simbridge.Sim(backend) as sim:
+            body = sim.load_urdf("wheel.urdf", fixed_base=True)
+            sim.reset_joint_state(body, "axle", 0.0, 40.0)
+            sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)
+            inertia = max(sim.dynamics_info(body, "wheel").local_inertia_diagonal)
+            sim.set_joint_torque(body, "axle", 150.0 * inertia / sim.timestep)
+            sim.step()
+            return float(sim.joint_states(body, "axle").velocities[0])
+
+    assert kick("pybullet") == 100.0
+    assert kick("physx") == 100.0

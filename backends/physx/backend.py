@@ -114,6 +114,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         self._generation = getattr(self, "_generation", 0) + 1  # a new world: old snapshots void
         self._contacts_cache: list[Any] | None = None
         self._active: list[Robot] = []  # robots that need work before or after a step
+        self._clamped: list[Robot] = []  # robots whose joint speeds the profile clamps
 
     @property
     def time(self) -> float:
@@ -261,6 +262,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             system = self._system
             active = self._active
             every = self._every_step
+            cap = self.profile.max_joint_velocity
             for _ in range(n):
                 for robot in active:
                     self._before_step(robot)
@@ -268,6 +270,9 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                 self._steps += 1
                 for robot in active:
                     self._after_step(robot)
+                if cap is not None:
+                    for robot in self._clamped:
+                        self._clamp_speeds(robot, cap)
                 if every or self._steps % CHECK_EVERY == 0:
                     self._check_world()
             if n > 0:
