@@ -418,3 +418,18 @@ def test_a_torque_kick_is_clamped_at_the_profiles_speed_as_pybullet():
 
     assert kick("pybullet") == 100.0
     assert kick("physx") == 100.0
+
+
+@needs_sapien
+def test_an_unenforced_spherical_limit_is_warned_and_listed(caplog):
+    """spherical_joint_limit.urdf's neck has PyBullet's swing/twist limit, which the three
+    revolute stand-in does not hold: said at load and under the body's departures."""
+    import logging
+
+    caplog.set_level(logging.WARNING, logger="simbridge")
+    with simbridge.Sim("physx") as sim:
+        body = sim.load_urdf("spherical_joint_limit.urdf", fixed_base=True)
+        assert f"body {body} spherical joint limits" in sim.manifest()["departures"]
+        assert "spherical joints ['neck'] have PyBullet's swing/twist limit" in caplog.text
+        free = sim.load_urdf("humanoid/humanoid.urdf", fixed_base=True)
+        assert f"body {free} spherical joint limits" not in sim.manifest()["departures"]

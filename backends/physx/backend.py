@@ -162,6 +162,19 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             for entity in built.entities:
                 self._scene.remove_entity(entity)
             raise
+        robot.unlimited_spherical = [
+            lp.joint.name
+            for lp in plan.links
+            if lp.joint is not None and lp.joint.spherical_limit is not None
+        ]
+        if robot.unlimited_spherical:
+            _log.warning(
+                "%s: spherical joints %s have PyBullet's swing/twist limit (<limit lower upper "
+                "twist effort> all > 0), which the PhysX backend does not enforce: listed in "
+                "manifest()['departures']",
+                model.source.display_name,
+                robot.unlimited_spherical,
+            )
         self._robots[body] = robot
         self._generation += 1
         if self._free_ids:
@@ -421,6 +434,13 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                 departures[f"body {r.id} mass bound"] = (
                     f"links {r.built.bounded_links} move but have zero mass or inertia: raised "
                     "to 1e-06 kg / 1e-10 kg m^2 (PhysX refuses zero)"
+                )
+            if r.unlimited_spherical:
+                departures[f"body {r.id} spherical joint limits"] = (
+                    f"{r.unlimited_spherical}: PyBullet's btMultiBodySphericalJointLimit (swing "
+                    "about x within <limit lower>, about y within upper, twist within twist) is "
+                    "not enforced; the joint moves past it (spherical_joint_limit.urdf's neck "
+                    "pushed 5 N m for one step: 2.01 rad where PyBullet stops at 0.2)"
                 )
             if r.built.skipped_shapes:
                 departures[f"body {r.id} shapes left out"] = (

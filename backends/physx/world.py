@@ -51,6 +51,8 @@ class Robot:
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     call_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    # spherical joints with PyBullet's swing/twist <limit>, which the stand-in does not enforce
+    unlimited_spherical: list[str] = field(default_factory=list)
     # link damping, made once: the moving links' bound velocity getters (linear, angular, per
     # link), the float32 factors -k_lin, -k_ang per row, the (2n, 3) buffer they are read into,
     # and per link its bound add_force_torque with the views of its two rows
