@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ import pytest
 import simbridge
 from simbridge.exceptions import (
     BackendNotInstalledError,
+    BackendUnsupportedError,
     SimulationDivergedError,
 )
 from simbridge.transforms import rpy_from_quat
@@ -433,3 +435,20 @@ def test_an_unenforced_spherical_limit_is_warned_and_listed(caplog):
         assert "spherical joints ['neck'] have PyBullet's swing/twist limit" in caplog.text
         free = sim.load_urdf("humanoid/humanoid.urdf", fixed_base=True)
         assert f"body {free} spherical joint limits" not in sim.manifest()["departures"]
+
+
+@needs_sapien
+def test_a_body_past_physx_articulation_size_is_refused_at_load():
+    """255 links (root included) step; 256 crashed the process at the first step: refused at
+    load naming the count, and the Sim goes on."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent / "conformance"))
+    from _generated import arms_urdf, chain_urdf
+
+    with simbridge.Sim("physx") as sim:
+        for urdf in (chain_urdf(2000), arms_urdf(255, 1)):
+            with pytest.raises(BackendUnsupportedError, match=r"no more than 255 links"):
+                sim.load_urdf(urdf, fixed_base=True)
+        assert sim.bodies() == []
+        body = sim.load_urdf(chain_urdf(254), fixed_base=True)
+        sim.step()
+        assert np.isfinite(sim.joint_states(body).positions).all()
