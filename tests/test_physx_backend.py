@@ -395,6 +395,7 @@ def test_a_position_target_past_a_limit_is_clamped_to_it():
             sim.reset_joint_state(body, 0, 0.399, 0.0)
             sim.set_joint_position(body, 0, target, max_force=20.0)
             sim.step(30)
+            assert sim.get_state().bodies[body].motor_target[0] == target  # read back as given
             return float(sim.joint_states(body, [0]).positions[0])
 
     ref = run("pybullet", 0.6)

@@ -75,6 +75,15 @@ class MotorCommands:
             root.max_angular_velocity = cap
         for joint in robot.dof_joint.values():
             joint.max_velocity = cap
+        lo = np.full(len(robot.movable), -np.inf)
+        hi = np.full(len(robot.movable), np.inf)
+        for s, j in enumerate(robot.movable):  # PyBullet's limited joints: lower <= upper
+            info = robot.table[j]
+            if info.type in (JointType.REVOLUTE, JointType.PRISMATIC) and (
+                info.lower_limit <= info.upper_limit
+            ):
+                lo[s], hi[s] = info.lower_limit, info.upper_limit
+        robot.target_lo, robot.target_hi = lo, hi
         if p.apply_joint_damping:
             damping = np.zeros(robot.ndof)
             for j in robot.movable:
@@ -165,7 +174,10 @@ class MotorCommands:
                 if min(m["max_force"][s], m["effort"][s]) <= 0.0:
                     continue
                 k = robot.dof[robot.movable[s]]
-                target = m["kp"][s] * (m["target"][s] - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
+                # PyBullet moves to the target clamped into the joint's limits (the command
+                # keeps the target as given: joint_commands reads it back unclamped)
+                goal = min(max(m["target"][s], robot.target_lo[s]), robot.target_hi[s])
+                target = m["kp"][s] * (goal - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
                 robot.joints[robot.movable[s]].set_drive_velocity_target(float(target))
         qf = None
         if robot.pending or robot.damping is not None:
@@ -265,10 +277,6 @@ class MotorCommands:
         for s, t, f, p_, d_ in zip(
             self._slots(robot, joints), target, max_force, kp, kd, strict=True
         ):
-            info = robot.table[robot.movable[s]]
-            lo, hi = info.lower_limit, info.upper_limit
-            if lo <= hi and info.type in (JointType.REVOLUTE, JointType.PRISMATIC):
-                t = min(max(t, lo), hi)  # PyBullet clamps a position target to the limits
             m["mode"][s] = MotorMode.POSITION
             m["target"][s] = t
             m["max_force"][s] = f

@@ -51,6 +51,9 @@ class Robot:
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     call_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    # per motor slot, the range a position target is clamped into (-inf, inf: no limit)
+    target_lo: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    target_hi: np.ndarray = field(default_factory=lambda: np.zeros(0))
     # spherical joints with PyBullet's swing/twist <limit>, which the stand-in does not enforce
     unlimited_spherical: list[str] = field(default_factory=list)
     # link damping, made once: the moving links' bound velocity getters (linear, angular, per
