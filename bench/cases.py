@@ -280,7 +280,7 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
 # ---------------------------------------------------------------- raw PhysX (SAPIEN)
 
 
-def _physx_raw_world(sim: simbridge.Sim, robot: int) -> tuple:
+def _physx_raw_world(sim: simbridge.Sim, robot: int, native_damping: bool = True) -> tuple:
     """What a user of raw SAPIEN drives: the layer's world (the same articulation, shapes,
     materials and solver settings, built from the same model) with PhysX's own link damping
     (the profile's 0.04) in place of the layer's per-step PyBullet law, the wheels' drives set
@@ -290,21 +290,36 @@ def _physx_raw_world(sim: simbridge.Sim, robot: int) -> tuple:
     from simbridge.backends.physx.motors import DRIVE_DAMPING
 
     r = inspect.robot(sim, robot)
-    for link in r.moving_links:
-        link.linear_damping = sim.profile.linear_damping
-        link.angular_damping = sim.profile.angular_damping
+    if native_damping:
+        for link in r.moving_links:
+            link.linear_damping = sim.profile.linear_damping
+            link.angular_damping = sim.profile.angular_damping
     joints = [r.joints[j] for j in WHEELS]
     return inspect.scene(sim), r, joints, DRIVE_DAMPING
 
 
-def physx_raw_drive(record: bool) -> Callable[[], float]:
+def physx_raw_drive(record: bool, pybullet_damping: bool = False) -> Callable[[], float]:
     """Raw SAPIEN, written the fast idiomatic way: ``set_drive_velocity_target`` per wheel and
-    ``scene.step()`` (:func:`_physx_raw_world`)."""
+    ``scene.step()`` (:func:`_physx_raw_world`). With ``pybullet_damping``, PhysX's own link
+    damping is off and the raw code applies PyBullet's law itself, as few engine calls as it
+    takes (each moving link's two velocities read, one ``add_force_torque``, per step): the
+    floor of any layer that gives PhysX PyBullet's link damping."""
 
     def run() -> float:
         sim, robot = _layer_sim("physx")
         try:
-            scene, r, joints, damping = _physx_raw_world(sim, robot)
+            scene, r, joints, damping = _physx_raw_world(sim, robot, not pybullet_damping)
+            getters = []
+            for link in r.moving_links:
+                getters += [link.get_linear_velocity, link.get_angular_velocity]
+            p = sim.profile
+            n = len(r.moving_links)
+            k = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), n)
+            buf = np.empty((2 * n, 3), dtype=np.float32)
+            adds = [
+                (link.add_force_torque, buf[2 * i], buf[2 * i + 1])
+                for i, link in enumerate(r.moving_links)
+            ]
             art = r.built.articulation
             root = r.built.links[0]
             dofs = r.dof[WHEELS]
@@ -321,6 +336,11 @@ def physx_raw_drive(record: bool) -> Callable[[], float]:
                 if k >= TURN_FROM:
                     for j, v in zip(joints, turn if k < FORWARD_FROM else forward, strict=True):
                         j.set_drive_velocity_target(v)
+                if pybullet_damping:
+                    buf[:] = [f() for f in getters]
+                    buf *= (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
+                    for add, a, b in adds:
+                        add(a, b, "acceleration")
                 scene.step()
                 if record:
                     pose = root.entity_pose * root.cmass_local_pose
@@ -338,6 +358,17 @@ def physx_raw_drive(record: bool) -> Callable[[], float]:
     return run
 
 
+# the layer's PhysX drive against raw SAPIEN that applies PyBullet's link damping itself
+DAMPED_FLOOR: Case | None = (
+    Case(
+        "drive vs raw with PyBullet's damping law",
+        physx_raw_drive(False, pybullet_damping=True),
+        layer_drive("physx", False),
+        None,
+    )
+    if "physx" in BACKENDS
+    else None
+)
 DRIVES: dict[str, Case] = {}
 BOUND_DRIVES: dict[str, Case] = {}
 RECORDED_DRIVES: dict[str, Case] = {}

@@ -10,6 +10,16 @@ idiomatic way (``setJointMotorControlArray``; ``d.ctrl[:] = array``). The N-envi
 (bench/parallel.py) run 8 worlds on two threads or two processes, raw and layer alike, and
 give the wall-clock time per env-step (the target 1.11x is PERFORMANCE.md's "at least 0.9x the
 raw throughput").
+
+PhysX's drive misses its 1.10x target, and cannot meet it while the layer gives PhysX PyBullet's
+link damping law (``f = -m k (1 + |v|) v``; PhysX's own damping is linear in v): SAPIEN 3.0.3's
+CPU articulation reads link velocities one link at a time, so the law costs two velocity reads
+and one ``add_force_torque`` per moving link per step (r2d2: 16 links, 48 engine calls). The row
+"raw applying PyBullet's link damping" is that floor: raw SAPIEN doing only those calls, as few
+as they can be (bound methods, one preallocated buffer). Measured on the shared 2-core machine
+(``python bench/run.py --backends physx``, medians): the floor is 1.41-1.60x raw SAPIEN with
+its native damping, the layer 1.43-1.47x the floor and 2.0-2.2x raw (2.1-2.3x before the
+damping and set_joint_velocity paths were trimmed, same-run interleaved medians and minima).
 """
 
 from __future__ import annotations
@@ -113,6 +123,19 @@ def main(argv: list[str] | None = None) -> int:
                 drive.target,
             )
         )
+        floor = cases.DAMPED_FLOOR if backend == "physx" else None
+        if floor is not None:  # the raw code doing what PyBullet's link damping takes
+            raw, lay = interleave(floor.raw, floor.layer, reps)
+            rows.append(
+                Row(
+                    f"{backend}: same drive, raw applying PyBullet's link damping",
+                    "µs/step",
+                    [t / 980 for t in raw],
+                    [t / 980 for t in lay],
+                    floor.target,
+                    "the floor: raw + 2 reads, 1 write per link",
+                )
+            )
         bound = cases.BOUND_DRIVES[backend]
         raw, lay = interleave(bound.raw, bound.layer, reps)
         rows.append(

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ import pytest
 import simbridge
 from simbridge.exceptions import (
     BackendNotInstalledError,
+    BackendUnsupportedError,
     SimulationDivergedError,
 )
 from simbridge.transforms import rpy_from_quat
@@ -320,6 +322,23 @@ def test_a_non_finite_state_raises_diverged():
 
 
 @needs_sapien
+def test_reads_of_a_jointless_body_are_refused_after_a_divergence():
+    """After the step that diverged every read raises until reset(), a body with no movable
+    joint (the plane) too (before: the plane's empty joint states were returned)."""
+    with simbridge.Sim("physx", gravity=(0.0, 0.0, -1e300), divergence_check="every_step") as sim:
+        plane = sim.load_urdf("plane.urdf")
+        sim.load_urdf("free_box.urdf", base_position=(0.0, 0.0, 2.0))
+        with pytest.raises(SimulationDivergedError):
+            sim.step(32)
+        with pytest.raises(SimulationDivergedError):
+            sim.joint_states(plane)
+        with pytest.raises(SimulationDivergedError):
+            sim.joint_states_multi_dof(plane)
+        sim.reset()
+        assert sim.num_joints(sim.load_urdf("plane.urdf")) == 0
+
+
+@needs_sapien
 def test_manifest_lists_what_physx_cannot_match():
     with simbridge.Sim("physx") as sim:
         m = sim.manifest()
@@ -362,3 +381,75 @@ def test_a_waiting_call_is_refused_once_the_sim_is_closed():
 
     sim = simbridge.Sim("physx")
     check_waiting_call_refused_after_close(sim, backend_of(sim)._stepping)
+
+
+@needs_sapien
+def test_a_position_target_past_a_limit_is_clamped_to_it():
+    """PyBullet clamps a POSITION_CONTROL target into the joint's limits: 0.6 on the slider
+    (limits +-0.4 m) moves the carriage as 0.4 does (unclamped: 8.1e-4 m apart after 30
+    steps on PhysX; clamped: float32 spacings)."""
+
+    def run(backend: str, target: float) -> float:
+        with simbridge.Sim(backend) as sim:
+            body = sim.load_urdf("slider.urdf", fixed_base=True)
+            sim.reset_joint_state(body, 0, 0.399, 0.0)
+            sim.set_joint_position(body, 0, target, max_force=20.0)
+            sim.step(30)
+            assert sim.get_state().bodies[body].motor_target[0] == target  # read back as given
+            return float(sim.joint_states(body, [0]).positions[0])
+
+    ref = run("pybullet", 0.6)
+    assert abs(run("physx", 0.6) - ref) < 4e-7
+    assert abs(run("physx", 0.6) - run("physx", 0.4)) == 0.0
+
+
+@needs_sapien
+def test_a_torque_kick_is_clamped_at_the_profiles_speed_as_pybullet():
+    """PyBullet clamps every joint speed after the step, what a torque added too: a wheel at
+    40 rad/s kicked by a torque worth 150 rad/s more reads 100 (the "pybullet" profile's
+    clamp) on raw PyBullet; PhysX's joint max velocity alone left it at 189.7."""
+
+    def kick(backend: str) -> float:
+        with simbridge.Sim(backend) as sim:
+            body = sim.load_urdf("wheel.urdf", fixed_base=True)
+            sim.reset_joint_state(body, "axle", 0.0, 40.0)
+            sim.set_joint_velocity(body, "axle", 0.0, max_force=0.0)
+            inertia = max(sim.dynamics_info(body, "wheel").local_inertia_diagonal)
+            sim.set_joint_torque(body, "axle", 150.0 * inertia / sim.timestep)
+            sim.step()
+            return float(sim.joint_states(body, "axle").velocities[0])
+
+    assert kick("pybullet") == 100.0
+    assert kick("physx") == 100.0
+
+
+@needs_sapien
+def test_an_unenforced_spherical_limit_is_warned_and_listed(caplog):
+    """spherical_joint_limit.urdf's neck has PyBullet's swing/twist limit, which the three
+    revolute stand-in does not hold: said at load and under the body's departures."""
+    import logging
+
+    caplog.set_level(logging.WARNING, logger="simbridge")
+    with simbridge.Sim("physx") as sim:
+        body = sim.load_urdf("spherical_joint_limit.urdf", fixed_base=True)
+        assert f"body {body} spherical joint limits" in sim.manifest()["departures"]
+        assert "spherical joints ['neck'] have PyBullet's swing/twist limit" in caplog.text
+        free = sim.load_urdf("humanoid/humanoid.urdf", fixed_base=True)
+        assert f"body {free} spherical joint limits" not in sim.manifest()["departures"]
+
+
+@needs_sapien
+def test_a_body_past_physx_articulation_size_is_refused_at_load():
+    """255 links (root included) step; 256 crashed the process at the first step: refused at
+    load naming the count, and the Sim goes on."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent / "conformance"))
+    from _generated import arms_urdf, chain_urdf
+
+    with simbridge.Sim("physx") as sim:
+        for urdf in (chain_urdf(2000), arms_urdf(255, 1)):
+            with pytest.raises(BackendUnsupportedError, match=r"no more than 255 links"):
+                sim.load_urdf(urdf, fixed_base=True)
+        assert sim.bodies() == []
+        body = sim.load_urdf(chain_urdf(254), fixed_base=True)
+        sim.step()
+        assert np.isfinite(sim.joint_states(body).positions).all()

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from simbridge.exceptions import SimulationDivergedError
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_multiply
 from simbridge.types import (
@@ -115,6 +116,7 @@ class BallJoints:
         profile: Profile
         _robots: dict[int, Robot]
         _dt: float
+        _diverged: SimulationDivergedError | None
 
         def _check_idle(self) -> None: ...
 
@@ -129,6 +131,8 @@ class BallJoints:
 
     @exclusive
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        if self._diverged is not None:  # refused until reset, a body with no joints too
+            raise self._diverged
         robot = self._robots[body]
         out: list[JointStateMultiDof] = []
         art = robot.built.articulation

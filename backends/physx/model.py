@@ -36,6 +36,7 @@ import sapien
 from sapien import physx
 
 from simbridge.build_plan import BuildPlan, JointPlan, LinkPlan, ShapePlan
+from simbridge.exceptions import BackendUnsupportedError
 from simbridge.inertia import LinkInertial
 from simbridge.transforms import quat_multiply, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
@@ -54,6 +55,9 @@ LINK_SPEED_CAP = 1e6
 # penetration out at a bounded speed. PhysX's own default for new bodies is taken as it is
 # measured to behave closest: see DEPARTURES["depenetration"] in backend.py.
 MAX_DEPENETRATION = 1e32
+# the most links one PhysX articulation takes here (root included): measured with chains and
+# with one-link arms, 255 links step, 256 crash the process at the first step (SAPIEN 3.0.3, CPU)
+MAX_ARTICULATION_LINKS = 255
 CYLINDER_SIDES = 32  # PyBullet's cylinder hull from a URDF (URDF2Bullet.cpp)
 # PhysX's own cylinder instead of PyBullet's hull: no steadier on r2d2's wheels (measured)
 TRUE_CYLINDER = False
@@ -167,6 +171,17 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
     contact filter (:func:`_filter`)."""
     moving = any(link.joint is not None and link.joint.type != "fixed" for link in plan.links)
     static_body = plan.fixed_base and not moving
+    n_links = len(plan.links) + 2 * sum(  # a spherical joint's two extra links (ball.py)
+        1 for link in plan.links if link.joint is not None and link.joint.type == "spherical"
+    )
+    if not static_body and n_links > MAX_ARTICULATION_LINKS:
+        raise BackendUnsupportedError(
+            "physx",
+            f"a body with {len(plan.links) - 1} joints ({n_links} PhysX links, its base and a "
+            "spherical joint's two extra links included)",
+            f"one PhysX articulation takes no more than {MAX_ARTICULATION_LINKS} links "
+            f"(measured: {MAX_ARTICULATION_LINKS + 1} crash the process at the first step)",
+        )
     inertials = [link.inertial for link in plan.links]
     skipped: list[str] = []
     bounded: list[str] = []

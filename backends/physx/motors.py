@@ -45,6 +45,7 @@ class MotorCommands:
         profile: Profile
         _robots: dict[int, Robot]
         _active: list[Robot]
+        _clamped: list[Robot]
         _dt: float
 
         def _check_idle(self) -> None: ...
@@ -74,6 +75,15 @@ class MotorCommands:
             root.max_angular_velocity = cap
         for joint in robot.dof_joint.values():
             joint.max_velocity = cap
+        lo = np.full(len(robot.movable), -np.inf)
+        hi = np.full(len(robot.movable), np.inf)
+        for s, j in enumerate(robot.movable):  # PyBullet's limited joints: lower <= upper
+            info = robot.table[j]
+            if info.type in (JointType.REVOLUTE, JointType.PRISMATIC) and (
+                info.lower_limit <= info.upper_limit
+            ):
+                lo[s], hi[s] = info.lower_limit, info.upper_limit
+        robot.target_lo, robot.target_hi = lo, hi
         if p.apply_joint_damping:
             damping = np.zeros(robot.ndof)
             for j in robot.movable:
@@ -109,6 +119,11 @@ class MotorCommands:
         damped = bool(self.profile.linear_damping or self.profile.angular_damping)
         for r in self._robots.values():
             r.has_position = bool((r.motors["mode"] == MotorMode.POSITION).any())
+        self._clamped = (
+            [r for r in self._robots.values() if not r.static and r.ndof > 0]
+            if self.profile.max_joint_velocity is not None
+            else []
+        )
         self._active = [
             r
             for r in self._robots.values()
@@ -130,13 +145,26 @@ class MotorCommands:
             # PyBullet's link damping f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal
             # axes), from the velocities at the start of the step: as accelerations the inertia
             # drops out of both
-            links = robot.moving_links
-            v = np.array([link.linear_velocity for link in links])  # (n, 3) float32
-            w = np.array([link.angular_velocity for link in links])
-            v *= (-k_lin * (1.0 + np.sqrt(np.einsum("ij,ij->i", v, v))))[:, None]
-            w *= (-k_ang * (1.0 + np.sqrt(np.einsum("ij,ij->i", w, w))))[:, None]
-            for link, a_lin, a_ang in zip(links, v, w, strict=True):
-                link.add_force_torque(a_lin, a_ang, "acceleration")
+            # (two reads and one write per link and step: SAPIEN's CPU articulation has no
+            # batched link velocities; the bound methods are looked up once per robot)
+            calls = robot.damping_calls
+            if calls is None:
+                links = robot.moving_links
+                getters = []
+                for link in links:  # interleaved: v0, w0, v1, w1, ...
+                    getters += [link.get_linear_velocity, link.get_angular_velocity]
+                k = np.tile(np.array([-k_lin, -k_ang], dtype=np.float32), len(links))
+                buf = np.empty((2 * len(links), 3), dtype=np.float32)
+                adds = [
+                    (link.add_force_torque, buf[2 * i], buf[2 * i + 1])  # views of buf's rows
+                    for i, link in enumerate(links)
+                ]
+                calls = robot.damping_calls = (getters, k, buf, adds)
+            getters, k, buf, adds = calls
+            buf[:] = [f() for f in getters]  # (2n, 3) float32
+            buf *= (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
+            for add, a_lin, a_ang in adds:
+                add(a_lin, a_ang, "acceleration")
         if robot.has_position:
             position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
             q = art.qpos
@@ -146,7 +174,10 @@ class MotorCommands:
                 if min(m["max_force"][s], m["effort"][s]) <= 0.0:
                     continue
                 k = robot.dof[robot.movable[s]]
-                target = m["kp"][s] * (m["target"][s] - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
+                # PyBullet moves to the target clamped into the joint's limits (the command
+                # keeps the target as given: joint_commands reads it back unclamped)
+                goal = min(max(m["target"][s], robot.target_lo[s]), robot.target_hi[s])
+                target = m["kp"][s] * (goal - q[k]) * inv_dt + (1.0 - m["kd"][s]) * v[k]
                 robot.joints[robot.movable[s]].set_drive_velocity_target(float(target))
         qf = None
         if robot.pending or robot.damping is not None:
@@ -162,6 +193,15 @@ class MotorCommands:
         if qf is not None:
             art.qf = qf.astype(np.float32)
             robot.qf_set = True
+
+    def _clamp_speeds(self, robot: Robot, cap: float) -> None:
+        """PyBullet's clamp of every joint speed after the step. PhysX's joint max velocity
+        bounds the drives inside its solver, not what a joint force (a torque) adds: a wheel
+        at 40 rad/s kicked by a torque worth 150 rad/s read 189.7 after the step, unclamped."""
+        art = robot.built.articulation
+        v = art.qvel
+        if float(np.abs(v).max()) > cap:
+            art.qvel = np.clip(v, -cap, cap)
 
     def _after_step(self, robot: Robot) -> None:
         if robot.qf_set:  # PhysX keeps joint forces until changed: they last this step only
@@ -194,18 +234,19 @@ class MotorCommands:
         robot = self._robots[body]
         m = robot.motors
         slots = self._slots(robot, joints)
-        was_position = bool(m["mode"][slots].any())  # POSITION is 2, VELOCITY 0
+        # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
+        was_position = robot.has_position and bool(m["mode"][slots].any())
         m["mode"][slots] = 0
         m["target"][slots] = target
         m["max_force"][slots] = max_force
         m["kp"][slots] = 0.0
         m["kd"][slots] = 1.0
-        forces = np.minimum(m["max_force"][slots], m["effort"][slots]).tolist()
         drive = robot.drive_force
         ball = m["ball"]
-        for s, joint, t, f in zip(
-            slots.tolist(), robot.slot_joints(slots), target, forces, strict=True
+        for s, joint, effort, t, mf in zip(
+            *robot.slot_calls(slots, m["effort"]), target, max_force, strict=True
         ):
+            f = mf if mf < effort else effort
             if f <= 0.0:
                 if drive[s] != 0.0:
                     joint.set_drive_properties(0.0, 0.0, 0.0, "force")

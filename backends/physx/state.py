@@ -133,6 +133,8 @@ class StateAccess:
 
     @exclusive
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        if self._diverged is not None:  # every read refused until reset, jointless bodies too
+            raise self._diverged
         robot = self._robots[body]
         n = len(joints)
         if robot.static or robot.ndof == 0:

@@ -50,10 +50,33 @@ class Robot:
     read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    call_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    # per motor slot, the range a position target is clamped into (-inf, inf: no limit)
+    target_lo: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    target_hi: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    # spherical joints with PyBullet's swing/twist <limit>, which the stand-in does not enforce
+    unlimited_spherical: list[str] = field(default_factory=list)
+    # link damping, made once: the moving links' bound velocity getters (linear, angular, per
+    # link), the float32 factors -k_lin, -k_ang per row, the (2n, 3) buffer they are read into,
+    # and per link its bound add_force_torque with the views of its two rows
+    damping_calls: tuple[list[Any], np.ndarray, np.ndarray, list[Any]] | None = None
 
     @property
     def static(self) -> bool:
         return self.built.static
+
+    def slot_calls(
+        self, slots: np.ndarray, effort: np.ndarray
+    ) -> tuple[list[int], list[Any], list[float]]:
+        """Motor ``slots`` as a list, their PhysX joints and their effort limits (cached per
+        slots array; the effort limits are fixed at load)."""
+        key = id(slots)
+        hit = self.call_cache.get(key)
+        if hit is not None and hit[0] is slots:
+            return hit[1]
+        out = (slots.tolist(), self.slot_joints(slots), effort[slots].tolist())
+        self.call_cache[key] = (slots, out)
+        return out
 
     def slot_joints(self, slots: np.ndarray) -> list[Any]:
         """The PhysX joints of motor ``slots`` (cached per slots array)."""
