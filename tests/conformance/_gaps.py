@@ -20,12 +20,14 @@ from simbridge.exceptions import BackendError
 from simbridge.registry import available_backends, load_backend, unavailable_reason
 
 __all__ = [
+    "KNOWN_BUGS",
     "KNOWN_GAPS",
     "REFERENCE",
     "as_stored",
     "declared",
     "gap",
     "gap_names",
+    "known_bug",
     "tolerance",
     "usable_backends",
 ]
@@ -197,6 +199,49 @@ def declared(table: Mapping[str, T], backend: str) -> T | None:
         if candidate in table:
             return table[candidate]
     return None
+
+
+# Known bugs: a test a backend still fails for a cause not yet fixed (or an engine behaviour the
+# backend does not yet emulate), with what was measured. A test marked
+# ``@pytest.mark.known_bug("<name>")`` is reported as xfail on a backend listed here when it fails
+# an assertion, and FAILS when it passes (strict: a fixed bug must leave this table); any other
+# error still fails. Keyed by bug, then backend.
+KNOWN_BUGS: dict[str, dict[str, str]] = {
+    # slider.urdf's carriage reset past its limit (test_cross_engine.py): PhysX corrects a limit
+    # violation at its depenetration speed and has one drive per joint (held by the motor), so
+    # PyBullet's limit row (push back at 0.2 x depth / dt within 0.04 m, only stop deeper) is not
+    # emulated. Measured over 60 steps: reset at 0.7 ends at -0.4 (PyBullet: stays at 0.7),
+    # 1.10 m and 57.6 m/s off; at 0.41, 0.36 m and 1.44 m/s. Listed in the manifest's departures
+    # ("joint limits").
+    "joint_reset_past_a_limit": {
+        "physx": "a joint reset past its limit is thrown back at PhysX's depenetration speed "
+        "(measured up to 1.10 m and 57.6 m/s from PyBullet over 60 steps)"
+    },
+    # arms_urdf(8, 16) (test_limits.py): velocity motors at 0.5 rad/s, force 10, after 2 steps:
+    # 110 of 128 joints read -0.79 .. 0.29; one 16-joint chain with no gravity misses 14 of 16
+    # (the drives read back right; force limit, drive damping, solver iterations and speed caps
+    # ruled out). Cause not found.
+    "long_chain_velocity_motors": {
+        "physx": "velocity motors down a 16-link chain miss their target after 2 steps (110 of "
+        "128 joints, -0.79 .. 0.29 for 0.5 rad/s); cause not found"
+    },
+    # Spherical joints are three revolute joints through two 1e-6 kg links on PhysX (SAPIEN 3.0.3
+    # has none): PyBullet's spherical motor and states are not met (test_spherical.py). Measured
+    # against raw PyBullet: brake 0.07, default motor 1.0e-3, position 0.11, saturated 0.21,
+    # released 4.6e-3, torque 4.3e-4 (rad or rad/s over the case); free swing and coupled-row
+    # cases beyond float32; the humanoid's reset read-back 1.5e-8 against 1e-15.
+    "spherical_emulation": {
+        "physx": "spherical joints are emulated by three revolute joints: PyBullet's spherical "
+        "motor is met to 4e-4 .. 0.21 only (measured per case in _gaps.py)"
+    },
+}
+
+
+def known_bug(backend: str | None, name: str) -> str | None:
+    """Why ``backend`` still fails the tests marked ``known_bug(name)``, or None."""
+    if backend is None:
+        return None
+    return declared(KNOWN_BUGS[name], backend)  # as gap(): a subclass answers as its base
 
 
 def gap(backend: str, name: str) -> float | None:

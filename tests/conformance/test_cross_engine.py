@@ -147,9 +147,23 @@ def test_coupled_velocity_motors(backend, profile):
     assert dtau < 0.1
 
 
+_PAST = pytest.mark.known_bug("joint_reset_past_a_limit")  # at the limit (0.4) PhysX agrees
+
+
 @pytest.mark.parametrize(
     ("start", "speed"),
-    [(0.4, 1.0), (0.41, 0.0), (0.439, 0.0), (0.441, 0.0), (0.7, 0.0), (0.7, -0.5), (-0.45, 2.0)],
+    [(0.4, 1.0)]
+    + [
+        pytest.param(start, speed, marks=_PAST)
+        for start, speed in [
+            (0.41, 0.0),
+            (0.439, 0.0),
+            (0.441, 0.0),
+            (0.7, 0.0),
+            (0.7, -0.5),
+            (-0.45, 2.0),
+        ]
+    ],
 )
 def test_joint_limit_rows_follow_pybullets_rule(backend, profile, start, speed):
     """slider.urdf's carriage (limits +-0.4 m) reset at or past a limit: PyBullet's limit row

@@ -112,6 +112,7 @@ def _unit(v: np.ndarray) -> list[float]:
     return (v / np.linalg.norm(v)).tolist()
 
 
+@pytest.mark.known_bug("spherical_emulation")
 def test_states_after_resets_are_raw_pybullets(make_sim):
     """Every joint of the humanoid reset to a random state; states and link frames read back."""
     p, c = _raw.raw_client()
@@ -317,6 +318,7 @@ CASES: dict[str, tuple[RawSetup, SimSetup, int, tuple[float, float, float]]] = {
 }
 
 
+@pytest.mark.known_bug("spherical_emulation")
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_commands_as_raw_pybullet(make_sim, backend, case):
     raw_setup, sim_setup, steps, tolerances = CASES[case]
@@ -528,6 +530,7 @@ def _swing(backend: str, profile: str, steps: int) -> np.ndarray:
         return out[:, :7]
 
 
+@pytest.mark.known_bug("spherical_emulation")
 @pytest.mark.parametrize(
     ("profile", "tol_q", "tol_v"),
     [
@@ -558,6 +561,7 @@ izz="0.004166666666666667"/></inertial></link><joint name="ball" type="spherical
 <parent link="pivot"/><child link="bob"/></joint></robot>"""
 
 
+@pytest.mark.known_bug("spherical_emulation")
 def test_coupled_motor_rows(backend):
     """Where the child's inertia about the joint is not diagonal in its inertial frame, the
     spherical motor's three rows are coupled and PyBullet's 50 solver iterations do not reach
