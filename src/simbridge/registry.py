@@ -11,6 +11,8 @@ Backends are registered by ``"module:Class"`` strings and imported on first use,
 from __future__ import annotations
 
 import importlib
+import logging
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -99,7 +101,10 @@ def load_backend(name: str) -> type[Backend]:
         raise UnknownBackendError(str(name), _REGISTRY)
     spec = _REGISTRY[name]
     module_name, _, attr = spec.entry_point.partition(":")
-    with captured(name, "importing"):  # an engine's banner goes to the log (engine_output.py)
+    # an engine's banner goes to the log (engine_output.py), and so do the Python warnings its
+    # import raises (SAPIEN: "Failed to find system libvulkan", where its CPU physics needs none)
+    with captured(name, "importing"), warnings.catch_warnings(record=True) as raised:
+        warnings.simplefilter("always")
         for required in spec.requires:
             try:
                 importlib.import_module(required)
@@ -112,6 +117,10 @@ def load_backend(name: str) -> type[Backend]:
             raise BackendError(
                 f"backend {name!r}: cannot load {spec.entry_point!r}: {exc}"
             ) from exc
+    for w in raised:
+        logging.getLogger(f"simbridge.{name}").info(
+            "importing: %s: %s", w.category.__name__, w.message
+        )
     _LOADED[name] = cls
     return cls
 

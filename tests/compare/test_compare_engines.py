@@ -13,6 +13,7 @@ import json
 
 import numpy as np
 import pytest
+from _precision import float32
 
 from simbridge.compare import QUANTITIES, Trajectory, compare, diff, report
 from simbridge.compare.report.fmt import fmt_value
@@ -33,7 +34,9 @@ def test_contact_free_scenarios_agree_across_engines(other, scenario, profile):
     for slot in (0, 1):
         own = c.own[(slot, c.timestep)].final[q]
         assert own > 0, "the own-error run changed nothing: the measure is blind"
-        assert cross.maximum[q] < 0.01 * own, (c.labels[slot], cross.maximum[q], own)
+        # a float32 engine: PhysX's spinning wheel measured 8.7e-5 against PyBullet's own 5.6e-3
+        share = 0.03 if float32(other) else 0.01
+        assert cross.maximum[q] < share * own, (c.labels[slot], cross.maximum[q], own)
 
 
 def test_r2d2_report_records_the_divergence_from_the_trajectories(other, tmp_path):

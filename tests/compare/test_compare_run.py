@@ -6,6 +6,7 @@ import csv
 
 import numpy as np
 import pytest
+from _precision import float32
 
 import simbridge
 from simbridge.compare import Trajectory, loads_scenario, run
@@ -70,9 +71,11 @@ def test_torque_and_velocity_commands_on_the_wheel(backend):
     10 rad/s, 0.05 N·m for 1 s adds 5 rad/s, then it coasts at 15 rad/s."""
     tr = run("spinning-wheel", backend, profile="urdf")
     v = tr.body.joint_velocities[:, 0]
-    assert v[240] == pytest.approx(10.0, abs=1e-6)
-    assert v[480] == pytest.approx(15.0, abs=1e-6)
-    assert v[720] == pytest.approx(15.0, abs=1e-6)
+    # a float32 state (PhysX) adds its rounding each step: measured 15 - 7.6e-5 at step 480
+    tol = 2e-4 if float32(backend) else 1e-6
+    assert v[240] == pytest.approx(10.0, abs=tol)
+    assert v[480] == pytest.approx(15.0, abs=tol)
+    assert v[720] == pytest.approx(15.0, abs=tol)
     assert list(tr.body.joint_modes[[240, 241, 481], 0]) == [1, 3, 1]
 
 
