@@ -40,9 +40,9 @@ when the motor rows are the only rows, by the backend's own active-set solve
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
+
+from simbridge.multi_dof import motor_error
 
 __all__ = [
     "MotorTable",
@@ -92,31 +92,9 @@ SPHERICAL_BRAKE_IMPULSE = 1000.0
 def spherical_error(
     qw: float, qx: float, qy: float, qz: float, tx: float, ty: float, tz: float, tw: float
 ) -> tuple[float, float, float]:
-    """Bullet's error of a spherical motor: ``matrixToEulerXYZ`` of the rotation
-    ``conj(q) * t`` from the joint quaternion q (MuJoCo's order: w, x, y, z) to the target t
-    (x, y, z, w), with Bullet's quaternion product and matrix (the matrix divides by the
-    squared norm). The compiled loop (_mjkernel.c spherical_error) does the same arithmetic in
-    the same order; math's atan2 and asin are the C library's."""
-    cx, cy, cz, cw = -qx, -qy, -qz, qw
-    rx = cw * tx + cx * tw + cy * tz - cz * ty
-    ry = cw * ty + cy * tw + cz * tx - cx * tz
-    rz = cw * tz + cz * tw + cx * ty - cy * tx
-    rw = cw * tw - cx * tx - cy * ty - cz * tz
-    s = 2.0 / (rx * rx + ry * ry + rz * rz + rw * rw)
-    xs, ys, zs = rx * s, ry * s, rz * s
-    wx, wy, wz = rw * xs, rw * ys, rw * zs
-    xx, xy, xz = rx * xs, rx * ys, rx * zs
-    yy, yz, zz = ry * ys, ry * zs, rz * zs
-    m20 = xz - wy
-    if m20 < 1.0:
-        if m20 > -1.0:
-            return (
-                math.atan2(-(yz + wx), 1.0 - (xx + yy)),
-                math.asin(m20),
-                math.atan2(-(xy + wz), 1.0 - (yy + zz)),
-            )
-        return (-math.atan2(xy - wz, 1.0 - (xx + zz)), -0.5 * math.pi, 0.0)
-    return (math.atan2(xy - wz, 1.0 - (xx + zz)), 0.5 * math.pi, 0.0)
+    """Bullet's error of a spherical motor (:func:`simbridge.multi_dof.motor_error`) from the
+    joint quaternion q in MuJoCo's order (w, x, y, z) to the target t (x, y, z, w)."""
+    return motor_error(qx, qy, qz, qw, tx, ty, tz, tw)
 
 
 _NO_ROWS = np.zeros(0, dtype=np.intp)

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from simbridge.exceptions import SimulationDivergedError
+from simbridge.multi_dof import motor_error
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_multiply
 from simbridge.types import (
@@ -67,29 +68,9 @@ def rate_matrix(b: float, c: float) -> np.ndarray:
 
 
 def spherical_error(q: tuple[float, ...], t: tuple[float, ...]) -> tuple[float, float, float]:
-    """Bullet's ``matrixToEulerXYZ`` of ``conj(q) * t`` (both x, y, z, w)."""
-    qx, qy, qz, qw = q
-    tx, ty, tz, tw = t
-    cx, cy, cz, cw = -qx, -qy, -qz, qw
-    rx = cw * tx + cx * tw + cy * tz - cz * ty
-    ry = cw * ty + cy * tw + cz * tx - cx * tz
-    rz = cw * tz + cz * tw + cx * ty - cy * tx
-    rw = cw * tw - cx * tx - cy * ty - cz * tz
-    s = 2.0 / (rx * rx + ry * ry + rz * rz + rw * rw)
-    xs, ys, zs = rx * s, ry * s, rz * s
-    wx, wy, wz = rw * xs, rw * ys, rw * zs
-    xx, xy, xz = rx * xs, rx * ys, rx * zs
-    yy, yz, zz = ry * ys, ry * zs, rz * zs
-    m20 = xz - wy
-    if m20 < 1.0:
-        if m20 > -1.0:
-            return (
-                math.atan2(-(yz + wx), 1.0 - (xx + yy)),
-                math.asin(m20),
-                math.atan2(-(xy + wz), 1.0 - (yy + zz)),
-            )
-        return (-math.atan2(xy - wz, 1.0 - (xx + zz)), -0.5 * math.pi, 0.0)
-    return (math.atan2(xy - wz, 1.0 - (xx + zz)), 0.5 * math.pi, 0.0)
+    """Bullet's error of a spherical motor (:func:`simbridge.multi_dof.motor_error`) from q to
+    t (both x, y, z, w)."""
+    return motor_error(*q, *t)
 
 
 def default_ball_motor(profile: Profile) -> dict[str, Any]:

@@ -41,7 +41,7 @@ import numpy as np
 
 from .exceptions import InvalidArgumentError
 
-__all__ = ["per_axis", "quaternions", "Q_SIZE", "U_SIZE"]
+__all__ = ["motor_error", "per_axis", "quaternions", "Q_SIZE", "U_SIZE"]
 
 Q_SIZE = {0: 1, 1: 1, 2: 4, 3: 3, 4: 0}
 """Position coordinates per joint type (JointType's values), as PyBullet's q layout."""
@@ -113,3 +113,33 @@ def quaternions(value: Any, n: int, argument: str) -> list[list[float]]:
             )
         out.append([c / norm for c in q])
     return out
+
+
+def motor_error(
+    qx: float, qy: float, qz: float, qw: float, tx: float, ty: float, tz: float, tw: float
+) -> tuple[float, float, float]:
+    """The spherical motor's error e: Bullet's ``matrixToEulerXYZ`` of the rotation
+    ``conj(q) * t`` from the joint quaternion q to the target t (both x, y, z, w), with Bullet's
+    quaternion product and matrix (the matrix divides by the squared norm), in Bullet's order of
+    operations (the MuJoCo backend's compiled loop, _mjkernel.c ``spherical_error``, does the
+    same arithmetic in the same order; math's atan2 and asin are the C library's)."""
+    cx, cy, cz, cw = -qx, -qy, -qz, qw
+    rx = cw * tx + cx * tw + cy * tz - cz * ty
+    ry = cw * ty + cy * tw + cz * tx - cx * tz
+    rz = cw * tz + cz * tw + cx * ty - cy * tx
+    rw = cw * tw - cx * tx - cy * ty - cz * tz
+    s = 2.0 / (rx * rx + ry * ry + rz * rz + rw * rw)
+    xs, ys, zs = rx * s, ry * s, rz * s
+    wx, wy, wz = rw * xs, rw * ys, rw * zs
+    xx, xy, xz = rx * xs, rx * ys, rx * zs
+    yy, yz, zz = ry * ys, ry * zs, rz * zs
+    m20 = xz - wy
+    if m20 < 1.0:
+        if m20 > -1.0:
+            return (
+                math.atan2(-(yz + wx), 1.0 - (xx + yy)),
+                math.asin(m20),
+                math.atan2(-(xy + wz), 1.0 - (yy + zz)),
+            )
+        return (-math.atan2(xy - wz, 1.0 - (xx + zz)), -0.5 * math.pi, 0.0)
+    return (math.atan2(xy - wz, 1.0 - (xx + zz)), 0.5 * math.pi, 0.0)
