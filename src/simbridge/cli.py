@@ -4,6 +4,9 @@
   simbridge compare r2d2 --timestep 1/240 1/480 1/960
                                               speed against accuracy over time steps
   simbridge compare my_scenario.toml --out reports/mine
+  simbridge compare r2d2 --workers 8 --cache /tmp/sbcache
+                                              runs as jobs on 8 processes, cached by content
+  simbridge report reports/r2d2               the report again, from the cache: nothing runs
   simbridge scenarios                         the shipped scenarios, one line each
   simbridge joints r2d2.urdf --movable        the joint table as a backend loads it
   simbridge joints r2d2.urdf --json           the same, every field, for machines
@@ -160,7 +163,26 @@ def build_parser() -> argparse.ArgumentParser:
         "Sim of its own, the floor) and step once: the one-step model error; 0: none "
         "(default: about 150 points per run)",
     )
+    _jobs_arguments(p)
     _verbose(p)
+
+    r = sub.add_parser(
+        "report",
+        help="write a report folder's report again from the cache, running nothing",
+        description="Read DIR/study.json (written by `simbridge compare`) and write DIR's "
+        "report.md, summary.json and figures again from the cached results of the study's "
+        "runs: no engine runs. Fails, naming the first one, when a run is not in the cache.",
+    )
+    r.add_argument("folder", metavar="DIR", type=Path, help="a report folder")
+    r.add_argument(
+        "--cache",
+        type=Path,
+        metavar="DIR",
+        help="the cache the study used (default: $XDG_CACHE_HOME/simbridge, else "
+        "~/.cache/simbridge)",
+    )
+    r.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    _verbose(r)
 
     s = sub.add_parser(
         "scenarios",
@@ -185,6 +207,42 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
     return parser
+
+
+def _jobs_arguments(p: argparse.ArgumentParser) -> None:
+    """Where and how a study's runs (jobs) run, and their cache."""
+    p.add_argument(
+        "--workers",
+        type=_seed,  # an integer >= 0
+        metavar="N",
+        help="processes running the study's runs on this machine (default: the CPU count; 0: "
+        "all in this process)",
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="run the study's runs on this Dask cluster (needs simbridge[cluster])",
+    )
+    p.add_argument(
+        "--cache",
+        type=Path,
+        metavar="DIR",
+        help="keep every run's result here, by content, and reuse it (default: "
+        "$XDG_CACHE_HOME/simbridge, else ~/.cache/simbridge)",
+    )
+    p.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
+    p.add_argument(
+        "--fresh", action="store_true", help="run everything again (the cache's entries replaced)"
+    )
+
+
+def _report(args: argparse.Namespace) -> int:
+    from simbridge.compare.report.study import rebuild
+
+    options = {"plots": False} if args.no_plots else {}
+    path = rebuild(args.folder, cache=args.cache, **options)
+    print(f"report: {path}")
+    return 0
 
 
 def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) -> None:
@@ -237,6 +295,10 @@ def _compare(args: argparse.Namespace) -> int:
             perturb=args.perturb,
             seed=args.seed,
             resync_every=args.resync_every,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            cache=False if args.no_cache else args.cache,
+            fresh=args.fresh,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots)
@@ -389,7 +451,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 2 on bad usage, 0 after --help
         return exc.code if isinstance(exc.code, int) else 2
     args.argv = None if argv is None else list(argv)
-    handler = {"compare": _compare, "scenarios": _scenarios, "joints": _joints}[args.command]
+    handler = {
+        "compare": _compare,
+        "report": _report,
+        "scenarios": _scenarios,
+        "joints": _joints,
+    }[args.command]
     log = logging.getLogger("simbridge")
     level = log.level
     args.log = _StderrLog() if args.verbose else None

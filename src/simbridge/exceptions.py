@@ -37,6 +37,7 @@ __all__ = [
     "StaleCommandError",
     "ScenarioError",
     "TrajectoryFileError",
+    "CacheEntryMissingError",
     "SlowStepWarning",
 ]
 
@@ -308,6 +309,25 @@ class TrajectoryFileError(SimbridgeError, ValueError):
         self.file = file
         self.key = key
         super().__init__(f"{file}: key {key!r}: {detail}")
+
+
+class CacheEntryMissingError(SimbridgeError, LookupError):
+    """A study rebuilt from the cache alone (``simbridge report DIR``) needs a job's result that
+    the cache does not hold: ``cache`` the folder, ``job`` and ``key`` the first such job,
+    ``missing`` of ``total`` jobs absent."""
+
+    def __init__(self, cache: str, job: str, key: str, missing: int, total: int):
+        self.cache = cache
+        self.job = job
+        self.key = key
+        self.missing = missing
+        self.total = total
+        super().__init__(
+            f"{missing} of {total} jobs of the study are not in the cache {cache}: the first is "
+            f"{job} (key {key[:16]}); name the cache the study used (--cache DIR), or run the "
+            "study again (simbridge compare): a changed robot, controller or scenario file, or "
+            "another simbridge version, makes new jobs"
+        )
 
 
 class SlowStepWarning(UserWarning):
