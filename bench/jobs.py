@@ -88,7 +88,7 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
 
 def rebuild_time(backends: list[str], size: int, workers: int, cache: Path) -> dict:
     from simbridge.compare import compare, report
-    from simbridge.compare.report.study import rebuild
+    from simbridge.compare.report.rebuild import rebuild
 
     t0 = time.perf_counter()
     c = compare("r2d2", backends, ensemble=size, workers=workers, cache=cache, progress=None)

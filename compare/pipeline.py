@@ -24,6 +24,7 @@ from .run.ensemble import (
     DEFAULT_SEED,
     Ensemble,
     EnsembleRunner,
+    _main_importable,
 )
 from .run.resync import Resync, default_every
 from .run.studyjobs import (
@@ -315,6 +316,8 @@ def compare(
         seed=seed,
         workers=workers,
     )
+    if executor is None and scheduler is None and workers != 0 and not _main_importable():
+        workers = runner.workers = 0  # a script read from stdin: a spawned one cannot import it
     labels = engine_labels(names, profiles)
     plan = Plan(scaled, dts, todo, names, profiles, labels, quantity, runner, resync_every)
     results, failed, counts = run_jobs(

@@ -237,7 +237,7 @@ def _jobs_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from simbridge.compare.report.study import rebuild
+    from simbridge.compare.report.rebuild import rebuild
 
     options = {"plots": False} if args.no_plots else {}
     path = rebuild(args.folder, cache=args.cache, **options)

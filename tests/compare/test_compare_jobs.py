@@ -233,7 +233,7 @@ def test_report_names_a_missing_entry(study, no_stepping, capsys):
     assert main(["report", str(out), "--cache", str(cache)]) == 1
     err = capsys.readouterr().err
     assert "1 of 8 jobs of the study are not in the cache" in err and str(cache) in err
-    from simbridge.compare.report.study import rebuild
+    from simbridge.compare.report.rebuild import rebuild
 
     with pytest.raises(CacheEntryMissingError) as info:
         rebuild(out, cache=cache)
