@@ -178,15 +178,16 @@ class _Tracker:
         self.on_result = on_result
         self.bar: Any = None
         if progress is None:
+            from tqdm import tqdm
+
+            # disable=None: silent when stderr is not a terminal; the ETA counts from here
+            self.bar = tqdm(
+                total=len(labels), unit="job", file=sys.stderr, disable=None, leave=False
+            )
             progress = self._bar
         self.progress = progress
 
     def _bar(self, done: int, total: int, label: str) -> None:
-        if self.bar is None:
-            from tqdm import tqdm
-
-            # disable=None: silent when stderr is not a terminal
-            self.bar = tqdm(total=total, unit="job", file=sys.stderr, disable=None, leave=False)
         self.bar.set_postfix_str(label, refresh=False)
         self.bar.update(done - self.bar.n)
 

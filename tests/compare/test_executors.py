@@ -267,3 +267,19 @@ def test_dask_reruns_a_killed_workers_job_and_gives_up_a_segfaulting_one(
     assert out[0] == "A" and out[2] == "B"
     assert isinstance(out[1], JobFailed)
     assert out[1].cause.startswith("KilledWorker") and out[1].attempts == 2
+
+
+def test_the_default_progress_is_a_bar_on_a_terminal_and_silent_elsewhere(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import io
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    for stream, shown in ((io.StringIO(), False), (Terminal(), True)):
+        monkeypatch.setattr(sys, "stderr", stream)
+        assert [r[0] for r in run_all(_square, [1, 2, 3], workers=0, labels="abc")] == [1, 4, 9]
+        text = stream.getvalue()
+        assert ("/3 [" in text and "job/s" in text) is shown and (text == "") is not shown
