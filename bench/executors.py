@@ -17,7 +17,10 @@ jobs, which must give the same end points:
   timing; the ratio is Dask's wall / the pool's.
 
 Other work on the machine slows every figure; the efficiency and the ratio are only meaningful
-when nothing else runs (say so with the figures).
+when nothing else runs (say so with the figures). The CPU column does not depend on that load:
+the CPU time this process and its finished child processes spent on the timing (user + system),
+so CPU / serial CPU is what the executor costs on top of the runs themselves (worker starts,
+imports, pickling, Dask's scheduler).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import resource
 import sys
 import time
 
@@ -43,6 +47,13 @@ def member(args: tuple[Scenario, str, int, int]) -> tuple[float, ...]:
     return tuple(float(v) for v in end_point(tr.body))
 
 
+def cpu() -> float:
+    """CPU seconds (user + system) of this process and its reaped child processes."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=64, help="ensemble members per engine")
@@ -59,16 +70,16 @@ def main() -> int:
     for b in args.backends:  # warm-up: the engines loaded in this process
         member((scenario, b, 0, args.runs))
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), cpu()
     serial = run_all(member, items, workers=0, **quiet)
-    t_serial = time.perf_counter() - t0
+    t_serial, c_serial = time.perf_counter() - t0, cpu() - c0
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), cpu()
     pooled = run_all(member, items, workers=args.workers, **quiet)
-    t_pool = time.perf_counter() - t0
+    t_pool, c_pool = time.perf_counter() - t0, cpu() - c0
     assert pooled == serial, "the pool's end points differ from the serial ones"
 
-    t_dask = None
+    t_dask = c_dask = None
     if not args.no_dask:
         import logging
 
@@ -82,9 +93,11 @@ def main() -> int:
             dashboard_address=None,
             silence_logs=logging.ERROR,
         ) as cluster:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), cpu()
             on_dask = run_all(member, items, scheduler=cluster.scheduler_address, **quiet)
             t_dask = time.perf_counter() - t0
+            cluster.close()  # its workers reaped: their CPU time counted
+            c_dask = cpu() - c0
         assert on_dask == serial, "Dask's end points differ from the serial ones"
     assert not any(isinstance(r, JobFailed) for r in serial)
 
@@ -95,19 +108,21 @@ def main() -> int:
         f"Python {platform.python_version()} | load average {load[0]:.1f} {load[1]:.1f}"
     )
     print()
-    print("| executor | workers | wall s | per run ms | figure |")
-    print("|---|---|---|---|---|")
+    print("| executor | workers | wall s | per run ms | CPU s (x serial) | figure |")
+    print("|---|---|---|---|---|---|")
     per = 1000 / len(items)
-    print(f"| serial (this process) | 1 | {t_serial:.2f} | {t_serial * per:.0f} | |")
+    print(
+        f"| serial (this process) | 1 | {t_serial:.2f} | {t_serial * per:.0f} | {c_serial:.1f} | |"
+    )
     eff = t_serial / (t_pool * args.workers)
     print(
         f"| local pool | {args.workers} | {t_pool:.2f} | {t_pool * per:.0f} | "
-        f"parallel efficiency {eff:.2f} |"
+        f"{c_pool:.1f} ({c_pool / c_serial:.2f}) | parallel efficiency {eff:.2f} |"
     )
-    if t_dask is not None:
+    if t_dask is not None and c_dask is not None:
         print(
             f"| Dask LocalCluster | {args.workers} | {t_dask:.2f} | {t_dask * per:.0f} | "
-            f"{t_dask / t_pool:.2f}x the pool's wall |"
+            f"{c_dask:.1f} ({c_dask / c_serial:.2f}) | {t_dask / t_pool:.2f}x the pool's wall |"
         )
     print()
     print(f"every executor gave the same {len(serial)} end points, to the last bit")
