@@ -60,7 +60,7 @@ def ensemble_jobs(backend: str, size: int, seed: int = 0) -> list:
 def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) -> dict:
     from simbridge.compare.run.cache import Cache
     from simbridge.compare.run.jobs import run_job
-    from simbridge.compare.run.studyjobs import run_all
+    from simbridge.compare.run.executors import run_all
 
     jobs = ensemble_jobs(backend, size)
     out: dict = {"backend": backend, "jobs": len(jobs), "workers": workers}

@@ -22,7 +22,6 @@ from simbridge._version import __version__
 from simbridge.exceptions import CacheEntryMissingError
 
 from ..scenario import Scenario, dumps_scenario
-from ._standin_executors import JobFailed, run_all
 from .cache import Cache, resolve
 from .ensemble import (
     Ensemble,
@@ -33,6 +32,7 @@ from .ensemble import (
     member_of,
     perturbed,
 )
+from .executors import JobFailed, run_all
 from .jobs import Job, JobResult, run_job
 from .quantities import QUANTITIES
 from .resync import FLOOR_RELATIVE, Resync
@@ -206,25 +206,24 @@ def run_jobs(
                 workers = 0  # a script read from stdin: a spawned process cannot import it
         start = _time.perf_counter()
 
-        def on_result(index: int, result: Any) -> None:
+        def finished(job: Job) -> None:
             nonlocal done
-            job = missing[index]
-            if isinstance(result, JobResult):
-                results[job.key] = result
-                counts.ran += 1
-                if store is not None:
-                    try:
-                        store.put(job.key, result)
-                    except OSError as exc:
-                        log.warning("cannot write the cache entry of %s: %s", job.label, exc)
-            else:
-                failed[job.key] = result
-                counts.failed += 1
             done += steps[job.key]
             if progress is not None:
                 progress(job.label, done, total)
 
-        run_all(
+        def on_result(index: int, result: Any) -> None:
+            job = missing[index]
+            results[job.key] = result
+            counts.ran += 1
+            if store is not None:
+                try:
+                    store.put(job.key, result)
+                except OSError as exc:
+                    log.warning("cannot write the cache entry of %s: %s", job.label, exc)
+            finished(job)
+
+        out = run_all(
             run_job,
             missing,
             labels=[j.label for j in missing],
@@ -234,6 +233,11 @@ def run_jobs(
             progress=None if progress is None else _silent,
             on_result=on_result,
         )
+        for job, result in zip(missing, out, strict=True):
+            if isinstance(result, JobFailed):  # not cached: the next study runs it again
+                failed[job.key] = result
+                counts.failed += 1
+                finished(job)
         counts.wall_time = _time.perf_counter() - start
     elif progress is not None:
         progress("every run from the cache", done, total)

@@ -249,12 +249,21 @@ def test_failed_members_are_carried_into_the_report(tmp_path, monkeypatch):
     real = studyjobs.run_all
 
     def one_member_dies(fn, items, *, on_result=None, **kw):
-        def relay(i, result):
-            if items[i].kind == "member" and items[i].backend == "mujoco":
-                result = studyjobs.JobFailed(items[i].label, "SIGSEGV", 2)
-            on_result(i, result)
+        """mujoco's members as if each had killed its worker twice (run_all's JobFailed: no
+        on_result for them)."""
 
-        return real(fn, items, on_result=relay, **kw)
+        def dies(job):
+            return job.kind == "member" and job.backend == "mujoco"
+
+        def relay(i, result):
+            if not dies(items[i]):
+                on_result(i, result)
+
+        out = real(fn, items, on_result=relay, **kw)
+        return [
+            studyjobs.JobFailed(j.label, "SIGSEGV", 2) if dies(j) else r
+            for j, r in zip(items, out, strict=True)
+        ]
 
     monkeypatch.setattr(studyjobs, "run_all", one_member_dies)
     cache = tmp_path / "cache"
