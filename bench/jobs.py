@@ -16,7 +16,9 @@
     .venv/bin/python bench/jobs.py --size 8 --backends pybullet   # a quick look
 
 Timings depend on what else the machine runs: the serial and the pool runs are taken back to
-back, each engine in turn, and the load average is printed beside them.
+back, each engine in turn, and the load average is printed beside them, with the CPU seconds
+of each (this process and its workers), which the load does not move: pool CPU over serial CPU
+is what the pool costs on top of the runs.
 """
 
 from __future__ import annotations
@@ -57,19 +59,31 @@ def ensemble_jobs(backend: str, size: int, seed: int = 0) -> list:
     return jobs
 
 
+def _cpu() -> float:
+    """CPU seconds (user + system) of this process and its reaped children (the pool's
+    workers, once shut down): what the machine's load does not move."""
+    import resource
+
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
 def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) -> dict:
     from simbridge.compare.run.cache import Cache
-    from simbridge.compare.run.jobs import run_job
     from simbridge.compare.run.executors import run_all
+    from simbridge.compare.run.jobs import run_job
 
     jobs = ensemble_jobs(backend, size)
     out: dict = {"backend": backend, "jobs": len(jobs), "workers": workers}
     if serial:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for job in jobs:
             run_job(job)
         out["serial"] = time.perf_counter() - t0
+        out["serial_cpu"] = time.process_time() - c0
     store = Cache(cache)
+    c0 = _cpu()
     t0 = time.perf_counter()
     results = run_all(
         run_job,
@@ -80,6 +94,7 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
         on_result=lambda i, r: store.put(jobs[i].key, r),
     )
     out["wall"] = time.perf_counter() - t0
+    out["pool_cpu"] = _cpu() - c0
     out["in_jobs"] = sum(r.wall_time for r in results)
     if serial:
         out["efficiency"] = out["serial"] / (out["wall"] * workers)
@@ -93,14 +108,16 @@ def rebuild_time(backends: list[str], size: int, workers: int, cache: Path) -> d
     t0 = time.perf_counter()
     c = compare("r2d2", backends, ensemble=size, workers=workers, cache=cache, progress=None)
     study = time.perf_counter() - t0
+    times = {}
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "r2d2"
         report(c, out)
-        t0 = time.perf_counter()
-        rebuild(out, cache=cache)
-        wall = time.perf_counter() - t0
+        for plots in (True, False):
+            t0, c0 = time.perf_counter(), time.process_time()
+            rebuild(out, cache=cache, plots=plots)
+            times[plots] = (time.perf_counter() - t0, time.process_time() - c0)
     assert c.jobs is not None
-    return {"study": study, "ran": c.jobs.ran, "cached": c.jobs.cached, "rebuild": wall}
+    return {"study": study, "ran": c.jobs.ran, "cached": c.jobs.cached, "rebuild": times}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -110,28 +127,38 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=2, help="pool processes (default 2)")
     p.add_argument("--no-serial", action="store_true", help="skip the serial runs")
     p.add_argument("--no-rebuild", action="store_true", help="skip the report rebuild")
+    p.add_argument("--rebuild-only", action="store_true", help="only the report rebuild")
     p.add_argument("--cache", type=Path, help="cache folder (default: a temporary one)")
     args = p.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         cache = args.cache or Path(tmp) / "cache"
         print(f"cpus {os.cpu_count()}, load average before {os.getloadavg()[0]:.1f}")
-        print("engine    runs  workers  serial s  pool wall s  in-jobs s  efficiency  load")
-        for backend in args.backends:
+        print(
+            "engine    runs  workers  serial s  pool wall s  in-jobs s  efficiency  load"
+            "  serial cpu s  pool cpu s"
+        )
+        for backend in [] if args.rebuild_only else args.backends:
             r = measure(backend, args.size, args.workers, cache, not args.no_serial)
             serial = f"{r['serial']:8.1f}" if "serial" in r else "       -"
             eff = f"{r['efficiency']:10.2f}" if "efficiency" in r else "         -"
             print(
                 f"{backend:<9} {r['jobs']:4d}  {r['workers']:7d}  {serial}  {r['wall']:11.1f}"
-                f"  {r['in_jobs']:9.1f}  {eff}  {os.getloadavg()[0]:4.1f}",
+                f"  {r['in_jobs']:9.1f}  {eff}  {os.getloadavg()[0]:4.1f}"
+                f"  {r.get('serial_cpu', float('nan')):12.1f}  {r['pool_cpu']:10.1f}",
                 flush=True,
             )
         if not args.no_rebuild:
-            r = rebuild_time(args.backends, args.size, args.workers, cache)
+            pair = args.backends if len(args.backends) >= 2 else ["pybullet", "mujoco"]
+            r = rebuild_time(pair, args.size, args.workers, cache)
             print(
                 f"compare r2d2 --ensemble {args.size}: {r['study']:.1f} s ({r['ran']} jobs ran, "
-                f"{r['cached']} from the cache); report rebuilt from the cache: "
-                f"{r['rebuild']:.2f} s (load {os.getloadavg()[0]:.1f})"
+                f"{r['cached']} from the cache)"
             )
+            for plots, (wall, cpu) in r["rebuild"].items():
+                print(
+                    f"report rebuilt from the cache{'' if plots else ', no figures'}: "
+                    f"{wall:.2f} s wall, {cpu:.2f} s CPU (load {os.getloadavg()[0]:.1f})"
+                )
     return 0
 
 

@@ -155,12 +155,22 @@ class Job:
             )
 
     @classmethod
-    def of(cls, kind: str, sc: Scenario, backend: str, profile: Any, **kw: Any) -> Job:
-        """The job running ``sc`` (as it is: scaled, cut, perturbed) on ``backend``."""
+    def of(
+        cls,
+        kind: str,
+        sc: Scenario,
+        backend: str,
+        profile: Any,
+        files: tuple[tuple[str, str], ...] | None = None,
+        **kw: Any,
+    ) -> Job:
+        """The job running ``sc`` (as it is: scaled, cut, perturbed) on ``backend``;
+        ``files``: :func:`file_hashes` of ``sc`` when the caller has them (the jobs of one
+        study share them)."""
         return cls(
             kind=kind,
             scenario=dumps_scenario(sc),
-            files=file_hashes(sc),
+            files=file_hashes(sc) if files is None else files,
             backend=backend,
             profile=profile,
             timestep=float(sc.timestep),

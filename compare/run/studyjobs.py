@@ -33,7 +33,7 @@ from .ensemble import (
     perturbed,
 )
 from .executors import JobFailed, run_all
-from .jobs import Job, JobResult, run_job
+from .jobs import Job, JobResult, file_hashes, run_job
 from .quantities import QUANTITIES
 from .resync import FLOOR_RELATIVE, Resync
 from .trajectory import Trajectory
@@ -95,11 +95,13 @@ class Plan:
         self.nominal: dict[tuple[int, float], str] = {}
         self.members: dict[tuple[int, int], str] = {}
         self.resync: list[str] = []
+        head = scaled[self.dts[0]]
+        hashes = {d: file_hashes(s) for d, s in scaled.items()}  # once per study, not per job
+        files = hashes[self.dts[0]]  # the members' and resync's (only their poses differ)
         for slot, d in todo:
             kind = "nominal" if d in self.dts else "half-step"
-            job = Job.of(kind, scaled[d], names[slot], profiles[slot])
+            job = Job.of(kind, scaled[d], names[slot], profiles[slot], hashes[d])
             self.nominal[(slot, d)] = self._add(job)
-        head = scaled[self.dts[0]]
         if every:
             for i in (0, 1):
                 job = Job.of(
@@ -107,6 +109,7 @@ class Plan:
                     head,
                     names[i],
                     profiles[i],
+                    files,
                     target=(names[1 - i], profiles[1 - i]),
                     labels=(labels[i], labels[1 - i]),
                     every=every,
@@ -120,6 +123,7 @@ class Plan:
                 perturbed(head, dpos[k], drot[k]),
                 names[slot],
                 profiles[slot],
+                files,
                 seed=runner.seed,
                 member=k,
                 quantity=quantity,
@@ -241,6 +245,14 @@ def run_jobs(
         counts.wall_time = _time.perf_counter() - start
     elif progress is not None:
         progress("every run from the cache", done, total)
+    log.info(
+        "%d jobs: %d from the cache (%s), %d run, %d failed",
+        counts.total,
+        counts.cached,
+        counts.cache or "none",
+        counts.ran,
+        counts.failed,
+    )
     here = os.getpid()
     for job in jobs:  # what the runs logged, each once, where no handler has seen it yet
         r = results.get(job.key)
