@@ -312,3 +312,22 @@ def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path):
     assert not same._diff(expected, summary)
     text = same._mask_report((out / "report.md").read_text("utf-8"), paths) + "\n"
     assert text == (same.DATA / case / "report.md").read_text("utf-8")
+
+
+def test_the_jobs_bench_runs(tmp_path):
+    """bench/jobs.py on a 2-run ensemble of one engine prints its row (speed not asserted)."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run(
+        [sys.executable, str(root / "bench" / "jobs.py"), "--size", "2", "--backends", "mujoco"]
+        + ["--no-rebuild", "--cache", str(tmp_path / "cache")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    row = [line for line in done.stdout.splitlines() if line.startswith("mujoco")]
+    assert len(row) == 1 and row[0].split()[1:3] == ["2", "2"]
+    assert len(list((tmp_path / "cache" / "jobs").rglob("*.pkl"))) == 2
