@@ -65,7 +65,8 @@ class Pictures:
         if length == 0.0:
             raise InvalidArgumentError("eye", f"must differ from target, both are {e!r}")
         size = float(np.linalg.norm(u))
-        if size == 0.0 or float(np.linalg.norm(np.cross(sight / length, np.divide(u, size)))) < 1e-6:
+        across = 0.0 if size == 0.0 else float(np.linalg.norm(np.cross(sight / length, u))) / size
+        if across < 1e-6:
             raise InvalidArgumentError(
                 "up", f"must be a direction not along the line of sight, got {u!r}"
             )
