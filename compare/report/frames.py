@@ -216,7 +216,7 @@ class _Painter:
         eye = target + distance * _direction(self.up)
         w, h = PANEL
         up = tuple(float(x) for x in self.up)
-        return self.sim.render(w, h, eye=eye, target=target, up=up, fov=FOV)
+        return self.sim.render(w, h, eye=eye.tolist(), target=target.tolist(), up=up, fov=FOV)
 
 
 def _direction(up: np.ndarray) -> np.ndarray:
@@ -287,7 +287,8 @@ def _font(module: Any) -> Any:
 
 
 def _row(tr: Trajectory, time: float) -> int:
-    return int(min(len(tr.time) - 1, max(0, np.searchsorted(tr.time, time - 1e-9))))
+    found = int(np.searchsorted(tr.time, time - 1e-9))
+    return min(len(tr.time) - 1, max(0, found))
 
 
 # ---------------------------------------------------------------- writing
