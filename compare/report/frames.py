@@ -24,11 +24,12 @@ from typing import Any
 
 import numpy as np
 
+from ..analysis.diff import QUANTITIES
 from ..pipeline import Comparison
 from ..run.quantities import up_axis
 from ..run.trajectory import Trajectory
-from .events import event_words, parting_words
-from .fmt import fmt_distance, fmt_time
+from .events import event_words
+from .fmt import fmt_distance, fmt_threshold, fmt_time
 
 __all__ = [
     "Frames",
@@ -112,8 +113,9 @@ def key_instants(s: dict[str, Any], duration: float) -> tuple[list[KeyFrame], in
     candidates: list[tuple[int, float, str]] = []
     p = s.get("parting") or {}
     if p.get("time") is not None:
-        born = parting_words(p)
-        candidates.append((-1, float(p["time"]), "the gap is born" + (f", {born}" if born else "")))
+        q = QUANTITIES[p["quantity"]]
+        words = f"the {q.title} first reaches {fmt_threshold(p['threshold'], q.unit)}"
+        candidates.append((-1, float(p["time"]), words))
     for label, ev in (s.get("events") or {}).items():
         seen: set[str] = set()
         for e in ev["events"]:
@@ -125,14 +127,19 @@ def key_instants(s: dict[str, Any], duration: float) -> tuple[list[KeyFrame], in
     window = max(0.05, MERGE * duration)
     chosen: list[KeyFrame] = []
     left = 0
+    times: dict[int, list[tuple[float, str]]] = {}
     for _, t, words in candidates:
         near = [k for k in chosen if abs(k.time - t) <= window]
         if near:
-            near[0].events.append(f"{words} (t = {fmt_time(t)})")
+            times[id(near[0])].append((t, words))
         elif len(chosen) < MAX_KEY_EVENTS:
-            chosen.append(KeyFrame(t, "", [f"{words} (t = {fmt_time(t)})"]))
+            chosen.append(KeyFrame(t, ""))
+            times[id(chosen[-1])] = [(t, words)]
         else:
             left += 1
+    for k in chosen:  # by time, each merged one with its own
+        said = sorted(times[id(k)], key=lambda x: x[0])
+        k.events = [w if t == k.time else f"{w} (t = {fmt_time(t)})" for t, w in said]
     chosen.sort(key=lambda k: k.time)
     return chosen, left
 
@@ -143,15 +150,15 @@ def key_instants(s: dict[str, Any], duration: float) -> tuple[list[KeyFrame], in
 @dataclass
 class _Posed:
     """One robot loaded in the drawing Sim: its body, the movable 1-DoF joints the
-    trajectory's columns ``cols`` hold, and its base's centre-of-mass frame in its root link's
-    frame (the trajectory records the root link's pose; a teleport takes the former)."""
+    trajectory's columns ``cols`` hold (a spherical joint is left as loaded), and its base's
+    centre-of-mass frame in its root link's frame (the trajectory records the root link's pose;
+    a teleport takes the former)."""
 
     name: str
     body: int
     joints: list[int]
     cols: list[int]
     inertial: tuple[tuple[float, float, float], tuple[float, float, float, float]]
-    fixed: bool
 
 
 class _Painter:
@@ -184,7 +191,6 @@ class _Painter:
                         joints,
                         cols,
                         (base.local_inertial_position, base.local_inertial_orientation),
-                        r.fixed_base,
                     )
                 )
         except BaseException:
@@ -203,7 +209,7 @@ class _Painter:
             if rec is None:
                 continue
             row_r = min(row, len(rec.base_position) - 1)
-            if not r.fixed:
+            if not rec.fixed_base:
                 pos, orn = transform_multiply(
                     (rec.base_position[row_r], rec.base_orientation[row_r]), r.inertial
                 )
@@ -310,34 +316,9 @@ def write_frames(c: Comparison, s: dict[str, Any], out: Path, folder: str = "fra
         return Frames(note=f"no pictures drawn: {exc}", seconds=_time.perf_counter() - t0)
     result = Frames()
     try:
-        (out / folder).mkdir(parents=True, exist_ok=True)
-        distance = _distance(c)
-        events, result.left_out = key_instants(s, duration)
-        stills = [KeyFrame(0.0, "", [], "the start"), *events]
-        stills.append(KeyFrame(duration, "", [], "the end"))
-        for k in stills:
-            name = "start" if k.title == "the start" else "end" if k.title == "the end" else None
-            k.file = f"{folder}/{name or f't{k.time:.3f}'.replace('.', '_')}.png"
-            _strip(c, painter, k.time, distance).save(out / k.file)
-        result.key_frames = stills
-        n = max(2, min(GIF_FRAMES, int(duration * GIF_FPS) + 1))
-        times = np.linspace(0.0, duration, n)
-        pictures = [_strip(c, painter, float(t), distance) for t in times]
-        step_ms = 1000.0 * duration / (n - 1)
-        shown_ms = min(max(step_ms, 60.0), 200.0)
-        result.animation_speed = step_ms / shown_ms
-        ms = [round(shown_ms)] * (n - 1) + [1500]  # the end held
-        frames = [p.quantize(colors=128, method=2) for p in pictures]  # median cut
-        result.animation = f"{folder}/replay.gif"
-        frames[0].save(
-            out / result.animation,
-            save_all=True,
-            append_images=frames[1:],
-            duration=ms,
-            loop=0,
-            optimize=False,
-        )
-        result.animation_frames = n
+        _draw(c, s, out, folder, painter, duration, result)
+    except SimbridgeError as exc:  # a pose the drawing Sim refuses (a diverged run's NaN)
+        return Frames(note=f"no pictures drawn: {exc}", seconds=_time.perf_counter() - t0)
     finally:
         painter.close()
     result.files = [k.file for k in result.key_frames]
@@ -345,6 +326,46 @@ def write_frames(c: Comparison, s: dict[str, Any], out: Path, folder: str = "fra
         result.files.append(result.animation)
     result.seconds = _time.perf_counter() - t0
     return result
+
+
+def _draw(
+    c: Comparison,
+    s: dict[str, Any],
+    out: Path,
+    folder: str,
+    painter: _Painter,
+    duration: float,
+    result: Frames,
+) -> None:
+    """:func:`write_frames`'s drawing, into ``result``."""
+    (out / folder).mkdir(parents=True, exist_ok=True)
+    distance = _distance(c)
+    events, result.left_out = key_instants(s, duration)
+    stills = [KeyFrame(0.0, "", [], "the start"), *events]
+    stills.append(KeyFrame(duration, "", [], "the end"))
+    for k in stills:
+        name = "start" if k.title == "the start" else "end" if k.title == "the end" else None
+        k.file = f"{folder}/{name or f't{k.time:.3f}'.replace('.', '_')}.png"
+        _strip(c, painter, k.time, distance).save(out / k.file)
+    result.key_frames = stills
+    n = max(2, min(GIF_FRAMES, int(duration * GIF_FPS) + 1))
+    times = np.linspace(0.0, duration, n)
+    pictures = [_strip(c, painter, float(t), distance) for t in times]
+    step_ms = 1000.0 * duration / (n - 1)
+    shown_ms = min(max(step_ms, 60.0), 200.0)
+    result.animation_speed = step_ms / shown_ms
+    ms = [round(shown_ms)] * (n - 1) + [1500]  # the end held
+    frames = [p.quantize(colors=128, method=2) for p in pictures]  # median cut
+    result.animation = f"{folder}/replay.gif"
+    frames[0].save(
+        out / result.animation,
+        save_all=True,
+        append_images=frames[1:],
+        duration=ms,
+        loop=0,
+        optimize=False,
+    )
+    result.animation_frames = n
 
 
 def frames_section(f: Frames, subject: str, labels: tuple[str, ...]) -> list[str]:
