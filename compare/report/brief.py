@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from .fmt import fmt_threshold, fmt_time, fmt_value
+from .markdown import left_out_words
 from .outcomes import outcome_lines
 
 __all__ = ["brief", "MAX_LINES"]
@@ -35,9 +36,9 @@ def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
                 f"{' and '.join(p['labels'])} {what}, {fmt_value(p['headline']['final'], unit)}"
             )
         lines.append("Other pairs: " + "; ".join(words) + ".")
-    left = s.get("left_out") or {}
+    left = left_out_words(s)
     if left:
-        lines.append("Left out: " + "; ".join(f"{k} ({why})" for k, why in left.items()) + ".")
+        lines.append(left)
     if path is not None:
         lines.append(f"report: {path}")
     return lines[: MAX_LINES - 1] + lines[-1:] if len(lines) > MAX_LINES else lines
