@@ -343,14 +343,22 @@ def _draw(
     events, result.left_out = key_instants(s, duration)
     stills = [KeyFrame(0.0, "", [], "the start"), *events]
     stills.append(KeyFrame(duration, "", [], "the end"))
+    drawn: dict[float, Any] = {}  # the start and the end are the animation's first and last
+
+    def strip(time: float) -> Any:
+        if time not in drawn:
+            drawn[time] = _strip(c, painter, time, distance)
+        return drawn[time]
+
     for k in stills:
         name = "start" if k.title == "the start" else "end" if k.title == "the end" else None
         k.file = f"{folder}/{name or f't{k.time:.3f}'.replace('.', '_')}.png"
-        _strip(c, painter, k.time, distance).save(out / k.file)
+        strip(k.time).save(out / k.file)
     result.key_frames = stills
     n = max(2, min(GIF_FRAMES, int(duration * GIF_FPS) + 1))
     times = np.linspace(0.0, duration, n)
-    pictures = [_strip(c, painter, float(t), distance) for t in times]
+    times[-1] = duration  # exactly: the end's still
+    pictures = [strip(float(t)) for t in times]
     step_ms = 1000.0 * duration / (n - 1)
     shown_ms = min(max(step_ms, 60.0), 200.0)
     result.animation_speed = step_ms / shown_ms
