@@ -145,8 +145,6 @@ def run_all(
         elif scheduler is not None:
             _run_dask(fn, items, scheduler, tracker)
         else:
-            from .ensemble import _main_importable
-
             count = (os.cpu_count() or 1) if workers is None else workers
             if count == 0 or not _main_importable():
                 _run_here(fn, items, tracker)
@@ -271,6 +269,15 @@ def _run_dask(fn: Callable[[Any], Any], items: list[Any], address: str, tracker:
 
 
 # ---------------------------------------------------------------- the local pool
+
+
+def _main_importable() -> bool:
+    """Whether a spawned process can import this program's ``__main__`` (it always tries): no
+    file (``python -c``, an interactive session) or a file that exists. Else (a script read
+    from stdin) the jobs run in this process."""
+    path = getattr(sys.modules.get("__main__"), "__file__", None)
+    return path is None or os.path.isfile(path)
+
 
 _STARTED: Any = None
 """In a pool worker: the queue on which it says which job it starts (index, pid)."""
