@@ -169,8 +169,9 @@ if __name__ == "__main__":
     def on_result(i, r):
         got.append(r)
         print("result", i, r[1], flush=True)
+    where = {"scheduler": sys.argv[1]} if len(sys.argv) > 1 else {"workers": 2}
     try:
-        run_all(slow, list(range(12)), workers=2, on_result=on_result)
+        run_all(slow, list(range(12)), on_result=on_result, **where)
         print("finished", flush=True)
     except KeyboardInterrupt:
         print("interrupted", len(got), len(multiprocessing.active_children()), flush=True)
@@ -179,10 +180,20 @@ if __name__ == "__main__":
 
 
 def test_ctrl_c_stops_cleanly_after_delivering_finished_jobs(tmp_path: Path) -> None:
+    results = _interrupt(tmp_path)
+    for pid in {int(ln.split()[2]) for ln in results}:
+        deadline = time.monotonic() + 5
+        while _alive(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(pid), f"worker {pid} outlived the study"
+
+
+def _interrupt(tmp_path: Path, *args: str) -> list[str]:
+    """Run _INTERRUPTED with ``args``, Ctrl-C it after its first result: its result lines."""
     script = tmp_path / "study.py"
     script.write_text(textwrap.dedent(_INTERRUPTED))
     proc = subprocess.Popen(
-        [sys.executable, str(script)],
+        [sys.executable, str(script), *args],
         stdout=subprocess.PIPE,
         text=True,
         start_new_session=True,  # its own process group, as a terminal's foreground job
@@ -200,12 +211,8 @@ def test_ctrl_c_stops_cleanly_after_delivering_finished_jobs(tmp_path: Path) -> 
     last = lines[-1].split()
     assert last[0] == "interrupted"
     assert int(last[1]) == len(results) and 1 <= len(results) < 12
-    assert last[2] == "0"  # no worker left
-    for pid in {int(ln.split()[2]) for ln in results}:
-        deadline = time.monotonic() + 5
-        while _alive(pid) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert not _alive(pid), f"worker {pid} outlived the study"
+    assert last[2] == "0"  # no worker process left
+    return results
 
 
 def _alive(pid: int) -> bool:
@@ -234,7 +241,7 @@ def cluster():
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
-            dashboard_address=None,
+            dashboard_address=":0",  # any free port, none taken from another cluster
             silence_logs=logging.CRITICAL,
         )
     try:
@@ -283,3 +290,18 @@ def test_the_default_progress_is_a_bar_on_a_terminal_and_silent_elsewhere(
         assert [r[0] for r in run_all(_square, [1, 2, 3], workers=0, labels="abc")] == [1, 4, 9]
         text = stream.getvalue()
         assert ("/3 [" in text and "job/s" in text) is shown and (text == "") is not shown
+
+
+def test_ctrl_c_on_dask_cancels_the_clusters_pending_tasks(cluster, tmp_path: Path) -> None:
+    from distributed import Client
+
+    _interrupt(tmp_path, cluster.scheduler_address)
+    with Client(cluster.scheduler_address) as client:
+        deadline = time.monotonic() + 10  # a task running when cancelled ends first
+
+        def left() -> int:
+            return client.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks))
+
+        while left() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert left() == 0
