@@ -35,6 +35,8 @@ def _faulty(x: str) -> str:
         ctypes.string_at(0)  # reads address 0: SIGSEGV
     if x == "abort":
         os.abort()
+    if x == "oom":  # what the kernel's out-of-memory killer sends
+        os.kill(os.getpid(), signal.SIGKILL)
     if x == "raise":
         raise ValueError("a bug in the job")
     return x.upper()
@@ -111,8 +113,9 @@ def test_a_job_that_kills_its_worker_is_job_failed_and_the_others_complete() -> 
     assert out[0] == "A" and out[2] == "B" and out[3] == "C"
     assert out[1] == JobFailed("job-segv", "SIGSEGV", 2)  # its worker died twice
     assert "SIGSEGV" in str(out[1]) and "2 times" in str(out[1])
-    out = run_all(_faulty, ["abort", "a"], workers=1, max_attempts=1)
-    assert out == [JobFailed("job 0", "SIGABRT", 1), "A"]
+    out = run_all(_faulty, ["abort", "a", "oom"], workers=1, max_attempts=1)
+    assert out[:2] == [JobFailed("job 0", "SIGABRT", 1), "A"]
+    assert out[2] == JobFailed("job 2", "SIGKILL (killed: out of memory?)", 1)
 
 
 def test_a_worker_killed_mid_study_has_its_job_rerun(tmp_path: Path) -> None:
