@@ -38,7 +38,7 @@ from typing import Any
 
 from simbridge.exceptions import ExtraNotInstalledError, InvalidArgumentError, SimbridgeError
 
-__all__ = ["JobFailed", "run_all", "DEFAULT_ATTEMPTS", "Progress", "OnResult"]
+__all__ = ["JobFailed", "run_all", "describe_exit", "DEFAULT_ATTEMPTS", "Progress", "OnResult"]
 
 DEFAULT_ATTEMPTS = 2
 """A job is given up (:class:`JobFailed`) once its worker died this many times while running
