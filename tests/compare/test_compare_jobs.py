@@ -152,8 +152,8 @@ def test_a_rerun_runs_no_job_and_gives_the_same_figures(tmp_path, monkeypatch):
     assert calls == [] and again.jobs is not None
     assert (again.jobs.ran, again.jobs.cached) == (0, 8)
     a, b = tmp_path / "a", tmp_path / "b"
-    report(first, a, plots=False, trajectories=False)
-    report(again, b, plots=False, trajectories=False)
+    report(first, a, plots=False, trajectories=False, replay=False)
+    report(again, b, plots=False, trajectories=False, replay=False)
     sa = json.loads((a / "summary.json").read_text())
     sb = json.loads((b / "summary.json").read_text())
     assert _figures(sa) == _figures(sb)
@@ -272,7 +272,7 @@ def test_failed_members_are_carried_into_the_report(tmp_path, monkeypatch):
     assert c.ensembles[1].size == 1 and c.ensembles[0].size == 3
     assert c.jobs is not None and c.jobs.failed == 2
     out = tmp_path / "r"
-    report(c, out, plots=False, trajectories=False)
+    report(c, out, plots=False, trajectories=False, replay=False)
     s = json.loads((out / "summary.json").read_text())
     assert s["ensemble"]["engines"]["mujoco"]["failed"] == {
         "members": 2,
@@ -304,7 +304,7 @@ def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path):
     warm = compare(scenario, BACKENDS, command_line=["simbridge"], cache=cache, **options)
     assert warm.jobs is not None and warm.jobs.ran == 0 and warm.jobs.cached == warm.jobs.total
     out = tmp_path / case
-    report(warm, out, plots=False, trajectories=False)
+    report(warm, out, plots=False, trajectories=False, replay=False)
     paths = same._paths(out)
     summary = same._mask(json.loads((out / "summary.json").read_text("utf-8")), paths)
     with gzip.open(same.DATA / case / "summary.json.gz", "rt", encoding="utf-8") as f:
