@@ -331,3 +331,36 @@ def test_the_jobs_bench_runs(tmp_path):
     row = [line for line in done.stdout.splitlines() if line.startswith("mujoco")]
     assert len(row) == 1 and row[0].split()[1:3] == ["2", "2"]
     assert len(list((tmp_path / "cache" / "jobs").rglob("*.pkl"))) == 2
+
+
+def test_ctrl_c_keeps_what_finished_in_the_cache(tmp_path, monkeypatch):
+    """run_all delivers every finished job before raising KeyboardInterrupt: those are cached,
+    and the next study runs only the others."""
+    real = studyjobs.run_all
+
+    def interrupted(fn, items, *, on_result=None, **kw):
+        def relay(i, result):
+            on_result(i, result)
+            if i == 2:
+                raise KeyboardInterrupt
+
+        return real(fn, items, on_result=relay, **kw)
+
+    monkeypatch.setattr(studyjobs, "run_all", interrupted)
+    cache = tmp_path / "cache"
+    with pytest.raises(KeyboardInterrupt):
+        compare("pendulum", BACKENDS, cache=cache, **SMALL)
+    assert len(list((cache / "jobs").rglob("*.pkl"))) == 3
+    monkeypatch.setattr(studyjobs, "run_all", real)
+    again = compare("pendulum", BACKENDS, cache=cache, **SMALL)
+    assert again.jobs is not None and (again.jobs.cached, again.jobs.ran) == (3, 5)
+
+
+def test_an_exception_of_a_run_pickles_back_to_its_type():
+    from simbridge.compare.run.jobs import _portable
+    from simbridge.exceptions import ScenarioError
+
+    exc = ScenarioError("s.toml", "phases[0].steps", "must be > 0", 3)
+    _portable(exc)
+    back = pickle.loads(pickle.dumps(exc))
+    assert type(back) is ScenarioError and str(back) == str(exc) and back.line == 3
