@@ -245,10 +245,9 @@ def _jobs_arguments(p: argparse.ArgumentParser) -> None:
 def _report(args: argparse.Namespace) -> int:
     from simbridge.compare.report.rebuild import rebuild
 
-    options = {"plots": False} if args.no_plots else {}
-    if args.no_replay:
-        options["replay"] = False
-    path = rebuild(args.folder, cache=args.cache, **options)
+    path = rebuild(
+        args.folder, cache=args.cache, plots=not args.no_plots, replay=not args.no_replay
+    )
     print(f"report: {path}")
     return 0
 
