@@ -23,12 +23,16 @@ def report(
     *,
     plots: bool = True,
     trajectories: bool = True,
+    replay: bool = True,
 ) -> Path:
     """Write the report of ``comparison`` into folder ``out`` (created if needed).
 
     Writes ``report.md`` (the file a person opens), ``summary.json`` (every headline figure
     plus the manifests), the PNG figures beside them, and with ``trajectories`` the two
-    headline runs as ``trajectories/<engine>.npz`` and ``.csv``. Returns the path of
+    headline runs as ``trajectories/<engine>.npz`` and ``.csv``. ``report.html`` beside it is
+    the same report as one self-contained page (:mod:`.html`), with ``replay`` (and viser,
+    ``simbridge[report]``, installed) the 3D replay of every engine's nominal run, whose
+    ensembles' ghosts go to ``replay_ghosts.npz`` for ``simbridge replay``. Returns the path of
     ``report.md``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -57,7 +61,15 @@ def report(
         encoding="utf-8",
     )
     path = out / "report.md"
-    path.write_text(markdown(comparison, figures, images, files), encoding="utf-8")
+    text = markdown(comparison, figures, images, files)
+    path.write_text(text, encoding="utf-8")
+    from .html import write_html
+
+    _, engines = write_html(comparison, text, out, replay=replay)
+    if engines is not None and trajectories:
+        from .replay import save_ghosts
+
+        save_ghosts(engines, out)
     return path
 
 
