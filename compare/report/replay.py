@@ -124,9 +124,7 @@ def replay_engines(comparison: Any, *, ghosts: bool = True) -> list[ReplayEngine
         if ghosts and slot < len(comparison.ensembles):
             g, rows = _ghosts_of(comparison.ensembles[slot], tr)
         out.append(
-            ReplayEngine(
-                label, _engine_colour(slot), tr, find_events(tr, label=label), g, rows
-            )
+            ReplayEngine(label, _engine_colour(slot), tr, find_events(tr, label=label), g, rows)
         )
     return out
 
@@ -263,8 +261,7 @@ def _lathe(profile: np.ndarray, sections: int = 24) -> tuple[np.ndarray, np.ndar
     top, the first and last of radius 0 (the poles)."""
     a = np.linspace(0, 2 * np.pi, sections, endpoint=False)
     rings = [
-        np.stack([r * np.cos(a), r * np.sin(a), np.full(sections, z)], axis=1)
-        for r, z in profile
+        np.stack([r * np.cos(a), r * np.sin(a), np.full(sections, z)], axis=1) for r, z in profile
     ]
     v = np.concatenate(rings)
     faces = []
@@ -410,6 +407,7 @@ class _Scene:
         self.nodes: list[_Node] = []
         self.ghosts: list[tuple[Any, np.ndarray]] = []
         self.marks = event_marks(engines)
+        self.roots: dict[str, tuple[Any, Any]] = {}
         scene = server.scene
         scene.set_up_direction("+z")
         scene.add_grid(
@@ -422,11 +420,14 @@ class _Scene:
         )
         models: dict[str, Any] = {}
         drawn_static: set[str] = set()
-        for slot, eng in enumerate(engines):
+        for eng in engines:
             tr = eng.trajectory
             rows = self._rows_of(tr)
             root = f"/{_name(eng.label)}"
-            scene.add_frame(root, show_axes=False)
+            self.roots[eng.label] = (
+                scene.add_frame(root, show_axes=False),
+                scene.add_frame(f"/events/{_name(eng.label)}", show_axes=False),
+            )
             for (name, b), src in zip(tr.bodies.items(), _urdf_sources(tr), strict=True):
                 if src not in models:
                     models[src or ""] = _read_model(src)
@@ -509,7 +510,7 @@ class _Scene:
         pts = [n.positions[0] for n in self.nodes] or [np.zeros(3)]
         centre = np.mean(pts, axis=0)
         spread = max(float(np.ptp(np.asarray(pts), axis=0).max()), 0.3)
-        d = 3.5 * spread + 1.0
+        d = 1.6 * spread + 0.8
         cam = self.server.initial_camera
         cam.look_at = tuple(float(x) for x in centre)
         cam.position = tuple(float(x) for x in centre + np.array([0.9, -1.6, 0.9]) * d)
@@ -612,7 +613,9 @@ def engines_from_report(folder: str | Path) -> list[ReplayEngine]:
     summary = folder / "summary.json"
     if not summary.is_file():
         raise InvalidArgumentError(
-            "report_dir", str(folder), "a report folder (with summary.json and trajectories/)"
+            "report_dir",
+            f"{str(folder)!r} is not a report folder (no summary.json; expected the folder "
+            "`simbridge compare` wrote: summary.json and trajectories/<engine>.npz)",
         )
     data = json.loads(summary.read_text(encoding="utf-8"))
     labels = _labels_of(data)
@@ -635,8 +638,8 @@ def engines_from_report(folder: str | Path) -> list[ReplayEngine]:
     if not out:
         raise InvalidArgumentError(
             "report_dir",
-            str(folder),
-            "a report written with its trajectories (trajectories/<engine>.npz)",
+            f"{str(folder)!r} holds no trajectories/<engine>.npz (a report written with its "
+            "trajectories is needed)",
         )
     return out
 
@@ -649,11 +652,9 @@ def _labels_of(summary: dict[str, Any]) -> list[str]:
         if isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
             names = [x.get("label") or x.get("name") for x in v]
             if all(isinstance(n, str) for n in names):
-                return list(names)  # type: ignore[arg-type]
+                return list(names)
     files = summary.get("files", [])
-    return [
-        Path(f).stem for f in files if f.startswith("trajectories/") and f.endswith(".npz")
-    ]
+    return [Path(f).stem for f in files if f.startswith("trajectories/") and f.endswith(".npz")]
 
 
 def save_ghosts(engines: list[ReplayEngine], folder: str | Path) -> Path | None:
@@ -684,7 +685,6 @@ def serve(
     """Serve the replay of the report in ``folder`` live until Ctrl-C (KeyboardInterrupt):
     a time slider, play and pause, speed, a checkbox per engine and a button per event in the
     viewer's panel. ``ready(url)`` is called once the server listens (default: print it)."""
-    import threading
     import time
 
     engines = engines_from_report(folder)
@@ -702,12 +702,11 @@ def serve(
         speed = gui.add_dropdown("speed", ("0.25x", "0.5x", "1x", "2x", "4x"), initial_value="1x")
         for eng in engines:
             box = gui.add_checkbox(f"show {eng.label}", initial_value=True)
-            node = f"/{_name(eng.label)}"
 
             @box.on_update
-            def _(_: Any, box: Any = box, node: str = node) -> None:
-                server.scene.set_global_visibility  # noqa: B018 - present in every viser 1.x
-                _set_visible(server, node, bool(box.value))
+            def _(_: Any, box: Any = box, label: str = eng.label) -> None:
+                for handle in scene.roots[label]:
+                    handle.visible = bool(box.value)
 
         folder_events = gui.add_folder("events")
         with folder_events:
@@ -727,8 +726,7 @@ def serve(
         url = f"http://{host}:{server.get_port()}"
         (ready or print)(url)
         last = time.monotonic()
-        stop = threading.Event()
-        while not stop.is_set():
+        while True:
             time.sleep(1 / 30)
             now = time.monotonic()
             if playing.value and duration > 0:
@@ -737,11 +735,3 @@ def serve(
             last = now
     finally:
         server.stop()
-
-
-def _set_visible(server: Any, node: str, visible: bool) -> None:
-    """Hide or show the scene node ``node`` and everything under it."""
-    handles = getattr(server.scene, "_handle_from_node_name", {})
-    h = handles.get(node)
-    if h is not None:
-        h.visible = visible

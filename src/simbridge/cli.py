@@ -7,6 +7,7 @@
   simbridge scenarios                         the shipped scenarios, one line each
   simbridge joints r2d2.urdf --movable        the joint table as a backend loads it
   simbridge joints r2d2.urdf --json           the same, every field, for machines
+  simbridge replay reports/r2d2               a report's 3D replay, live in the browser
 
 stdout carries the results alone; the engines' own banners and warnings go to the log, which
 --verbose (-v) shows on stderr.
@@ -128,6 +129,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
     p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    p.add_argument(
+        "--no-replay",
+        action="store_true",
+        help="leave the 3D replay out of report.html (and the key frames and animation out of "
+        "report.md)",
+    )
     from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
 
     p.add_argument(
@@ -168,6 +175,22 @@ def build_parser() -> argparse.ArgumentParser:
         description="The shipped scenarios, one line each: name, simulated time, description.",
     )
     _verbose(s)
+
+    r = sub.add_parser(
+        "replay",
+        help="serve a written report's 3D replay live in the browser",
+        description="Serve the 3D replay of the report in REPORT_DIR (its trajectories/*.npz) "
+        "from a local viser server and print its URL; Ctrl-C stops it. Needs viser "
+        "(pip install 'simbridge[report]').",
+    )
+    r.add_argument("report_dir", metavar="REPORT_DIR", type=Path, help="a report folder")
+    r.add_argument(
+        "--host", default="127.0.0.1", help="address to listen on (default: %(default)s)"
+    )
+    r.add_argument(
+        "--port", type=int, default=8080, help="port (default: %(default)s, or the next free)"
+    )
+    _verbose(r)
 
     j = sub.add_parser(
         "joints",
@@ -239,7 +262,7 @@ def _compare(args: argparse.Namespace) -> int:
             resync_every=args.resync_every,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
-        path = report(result, out, plots=not args.no_plots)
+        path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)
     from simbridge.compare.report import headline, summary
 
     print("\n".join(line.replace("**", "") for line in headline(summary(result))))
@@ -256,6 +279,26 @@ def _check_writable(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryFile(dir=out):
         pass
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from simbridge.compare.report import replay
+
+    if not replay.available():
+        print(
+            f"{PROG}: error: the replay needs viser: pip install 'simbridge[report]'",
+            file=sys.stderr,
+        )
+        return 1
+
+    def ready(url: str) -> None:
+        print(f"replay of {args.report_dir}: {url} (Ctrl-C stops it)", flush=True)
+
+    try:
+        replay.serve(args.report_dir, host=args.host, port=args.port, ready=ready)
+    except KeyboardInterrupt:  # Ctrl-C: the way to stop it
+        print("replay stopped", file=sys.stderr)
+    return 0
 
 
 def _scenarios(args: argparse.Namespace) -> int:
@@ -389,7 +432,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 2 on bad usage, 0 after --help
         return exc.code if isinstance(exc.code, int) else 2
     args.argv = None if argv is None else list(argv)
-    handler = {"compare": _compare, "scenarios": _scenarios, "joints": _joints}[args.command]
+    handler = {
+        "compare": _compare,
+        "scenarios": _scenarios,
+        "joints": _joints,
+        "replay": _replay,
+    }[args.command]
     log = logging.getLogger("simbridge")
     level = log.level
     args.log = _StderrLog() if args.verbose else None
