@@ -507,13 +507,21 @@ class _Scene:
                 )
 
     def _camera(self) -> None:
-        pts = [n.positions[0] for n in self.nodes] or [np.zeros(3)]
-        centre = np.mean(pts, axis=0)
-        spread = max(float(np.ptp(np.asarray(pts), axis=0).max()), 0.3)
-        d = 1.6 * spread + 0.8
+        """Look at the robots' start from a distance that holds where they go on the ground
+        (the middle 80% of every link's horizontal positions over the run, and the robots'
+        own size): a robot thrown high leaves the view for a while rather than shrinking the
+        others to specks."""
+        if not self.nodes:
+            return
+        start = np.array([n.positions[0] for n in self.nodes])
+        pts = np.concatenate([n.positions for n in self.nodes])
+        lo, hi = np.percentile(pts, 10, axis=0), np.percentile(pts, 90, axis=0)
+        centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, start[:, 2].mean()])
+        spread = max(float((hi - lo)[:2].max()), float(np.ptp(start, axis=0).max()), 0.6)
+        d = 1.1 * spread + 0.6
         cam = self.server.initial_camera
         cam.look_at = tuple(float(x) for x in centre)
-        cam.position = tuple(float(x) for x in centre + np.array([0.9, -1.6, 0.9]) * d)
+        cam.position = tuple(float(x) for x in centre + np.array([0.8, -1.4, 0.7]) * d)
 
     def show(self, k: int) -> None:
         """Every engine at frame ``k``."""
