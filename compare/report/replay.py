@@ -565,7 +565,7 @@ def replay_html(engines: list[ReplayEngine], *, ghosts: bool = True) -> str:
                 record(scene, k)
         return str(rec.as_html())
     finally:
-        server.stop()
+        _stop(server)
 
 
 def _pose_recorder(server: Any, rec: Any) -> Any:
@@ -595,6 +595,15 @@ def _pose_recorder(server: Any, rec: Any) -> Any:
             insert(update(h.name, {"points": pts}, owner=owner))
 
     return record
+
+
+def _stop(server: Any) -> None:
+    """Stop ``server`` without its words on stdout (which carries simbridge's results)."""
+    import contextlib
+    import io
+
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        server.stop()
 
 
 def _quiet_server(host: str = "127.0.0.1", port: int = 8080) -> Any:
@@ -742,4 +751,4 @@ def serve(
                 slider.value = t if t <= duration else 0.0
             last = now
     finally:
-        server.stop()
+        _stop(server)
