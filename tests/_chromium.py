@@ -42,6 +42,7 @@ class Browser:
                 executable,
                 "--headless",
                 "--no-sandbox",
+                "--disable-dev-shm-usage",
                 "--disable-gpu-sandbox",
                 "--use-angle=swiftshader",
                 "--enable-unsafe-swiftshader",
