@@ -35,6 +35,7 @@ from ..run.outcomes import OutcomeRecord
 from ..run.resync import BORN_FACTOR, PARTS, Direction, Peak, PhaseErrors, Resync
 from ..scenario import Scenario, format_timestep
 from .departures import applicable
+from .engine_settings import settings_summary
 from .events import event_words
 from .verdict import marginal_words
 
@@ -81,7 +82,8 @@ def summary(c: Comparison) -> dict[str, Any]:
     events = engine_events(c)
     pairs = [_pair_summary(c, p, events) for p in _pairs_of(c)]
     first = pairs[0]
-    return {
+    chosen = settings_summary(c.scenario, c.backends, c.profiles, dt)
+    out = {
         "scenario": c.scenario.name,
         "description": c.scenario.description,
         "scenario_file": str(c.scenario.source) if c.scenario.source else None,
@@ -114,6 +116,9 @@ def summary(c: Comparison) -> dict[str, Any]:
             "engines": manifests,
         },
     }
+    if chosen:  # the engine settings the study set (none: the key is left out)
+        out["engine_settings"] = chosen
+    return out
 
 
 def _pairs_of(c: Comparison) -> list[Pair]:
