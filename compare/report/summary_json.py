@@ -83,6 +83,8 @@ def summary(c: Comparison) -> dict[str, Any]:
     pairs = [_pair_summary(c, p, events) for p in _pairs_of(c)]
     first = pairs[0]
     chosen = settings_summary(c.scenario, c.backends, c.profiles, dt)
+    if not chosen:  # every engine at its defaults: the manifests as they were before settings
+        manifests = {k: _without_settings(m) for k, m in manifests.items()}
     out = {
         "scenario": c.scenario.name,
         "description": c.scenario.description,
@@ -119,6 +121,10 @@ def summary(c: Comparison) -> dict[str, Any]:
     if chosen:  # the engine settings the study set (none: the key is left out)
         out["engine_settings"] = chosen
     return out
+
+
+def _without_settings(manifest: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in manifest.items() if k != "engine_settings"}
 
 
 def _pairs_of(c: Comparison) -> list[Pair]:
