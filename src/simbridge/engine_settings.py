@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import profiles
 from .exceptions import InvalidArgumentError, InvalidEngineSettingError
 from .registry import backend_spec
 
@@ -293,3 +294,6 @@ def merge(*layers: Mapping[str, Mapping[str, Any]] | None) -> dict[str, dict[str
         for backend, values in (layer or {}).items():
             out.setdefault(backend, {}).update(values)
     return out
+
+
+profiles.ENGINE_SETTINGS_CHECK = freeze  # Profile(engines=...) and with_engine check here
