@@ -270,3 +270,17 @@ def test_the_manifest_records_the_effective_values(backend):
 
 def _json(d):
     return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+
+
+@needs_sapien
+def test_physx_contact_distance_follows_the_rest_offset():
+    """A resting contact reads distance ~0 whatever the rest offset (the offset is where
+    PhysX's shapes rest, the contact's zero)."""
+    for settings in ({}, {"rest_offset": 0.004}):
+        with simbridge.Sim("physx", engine_settings=settings) as sim:
+            sim.load_urdf(ROBOTS / "plane.urdf", fixed_base=True)
+            sim.load_urdf(ROBOTS / "free_box.urdf", base_position=(0.0, 0.0, 0.21))
+            sim.step(240)
+            points = sim.contact_points()
+            assert points
+            assert max(abs(c.distance) for c in points) < 2e-4, settings
