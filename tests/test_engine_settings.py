@@ -94,6 +94,15 @@ def test_a_bad_value_names_the_key_and_its_range(backend, key, value, words):
     assert f"{backend}.{key}" in str(err.value) and words in str(err.value)
 
 
+def test_settings_that_must_agree_are_checked_together():
+    with pytest.raises(InvalidEngineSettingError, match="physx.rest_offset.*below contact_offset"):
+        simbridge.get_profile("pybullet").with_engine("physx", rest_offset=0.02)  # 1 cm default
+    with pytest.raises(InvalidEngineSettingError, match="rest_offset"):
+        es.validate("physx", {"contact_offset": 0.0002})  # below the 0.5 mm rest offset
+    ok = es.validate("physx", {"contact_offset": 0.05, "rest_offset": 0.02})
+    assert ok == {"contact_offset": 0.05, "rest_offset": 0.02}
+
+
 def test_an_unknown_backend_lists_the_registered_ones():
     with pytest.raises(UnknownBackendError) as err:
         simbridge.get_profile("pybullet").with_engine("bullet", erp=0.3)
