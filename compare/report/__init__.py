@@ -1,5 +1,6 @@
 """The report stage: ``report.md`` (:mod:`.markdown`), ``summary.json`` (:mod:`.summary_json`), the
-figures (:mod:`.plots`), the terminal's headline and progress bar, from a
+figures (:mod:`.plots`), the pictures of the runs (:mod:`.frames`), the terminal's headline
+(:mod:`.brief`) and progress bar, from a
 :class:`~simbridge.compare.pipeline.Comparison`: :func:`report` writes them all."""
 
 from __future__ import annotations
@@ -9,12 +10,13 @@ from pathlib import Path
 from typing import Any
 
 from ..pipeline import Comparison
+from .brief import brief
 from .fmt import fmt_distance, fmt_time, fmt_value
 from .markdown import headline, markdown
 from .resync import plot_resync
 from .summary_json import summary
 
-__all__ = ["report", "headline", "summary", "fmt_distance", "fmt_time", "fmt_value"]
+__all__ = ["report", "headline", "brief", "summary", "fmt_distance", "fmt_time", "fmt_value"]
 
 
 def report(
@@ -29,8 +31,10 @@ def report(
 
     Writes ``report.md`` (the file a person opens), ``summary.json`` (every headline figure
     plus the manifests), the PNG figures beside them, and with ``trajectories`` the two
-    headline runs as ``trajectories/<engine>.npz`` and ``.csv``. ``report.html`` beside it is
-    the same report as one self-contained page (:mod:`.html`), with ``replay`` (and viser,
+    headline runs as ``trajectories/<engine>.npz`` and ``.csv``; with ``replay`` the pictures
+    of the nominal runs (``frames/``: key frames and ``replay.gif``,
+    :func:`~simbridge.compare.report.frames.write_frames`). ``report.html`` beside it is the
+    same report as one self-contained page (:mod:`.html`), with ``replay`` (and viser,
     ``simbridge[report]``, installed) the 3D replay of every engine's nominal run, whose
     ensembles' ghosts go to ``replay_ghosts.npz`` for ``simbridge replay``. Returns the path of
     ``report.md``."""
@@ -54,6 +58,13 @@ def report(
         images = all_plots(comparison, out)
         if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
             images["resync"] = out / "resync.png"
+    seen: list[str] = []
+    if replay:
+        from .frames import frames_section, write_frames
+
+        drawn = write_frames(comparison, figures, out)
+        seen = frames_section(drawn, figures["subject"], comparison.labels)
+        files += drawn.files
     figures["files"] = files + [p.name for p in images.values()]
     figures["headline"]["text"] = headline(figures)
     (out / "summary.json").write_text(
@@ -61,7 +72,7 @@ def report(
         encoding="utf-8",
     )
     path = out / "report.md"
-    text = markdown(comparison, figures, images, files)
+    text = markdown(comparison, figures, images, files, seen)
     path.write_text(text, encoding="utf-8")
     from .html import write_html
 

@@ -114,8 +114,9 @@ def _markdown_html(text: str, folder: Path) -> str:
 
     def inline(m: re.Match[str]) -> str:
         src = html.unescape(m.group(1))
-        path = folder / src
-        if "/" not in src.replace("\\", "/").strip("./") and path.is_file():
+        path = (folder / src).resolve()
+        inside = path.is_relative_to(folder.resolve()) and ":" not in src
+        if inside and path.is_file():  # the report's own figures and frames
             return f'src="{_data_uri(path)}"'
         return m.group(0)
 
