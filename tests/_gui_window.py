@@ -3,7 +3,8 @@
 ``python _gui_window.py BACKEND show OUTDIR``: r2d2 on the plane, stepped; screenshots of the X
 display with the robot and after it is removed (OUTDIR/with.png, OUTDIR/without.png); prints
 one JSON line with the robot-blue pixel counts, then closes the Sim.
-``python _gui_window.py BACKEND close``: r2d2 in a window, stepped, then ``close()``; prints
+``python _gui_window.py BACKEND close``: r2d2 alone in a window, stepped, drawn, then
+``close()``; prints
 ``closing <time>`` just before it. Either way the process then ends as Python ends it.
 """
 
@@ -15,6 +16,7 @@ import sys
 import time
 from collections.abc import Callable
 
+import numpy as np
 from PIL import Image, ImageGrab
 
 import simbridge
@@ -22,11 +24,16 @@ import simbridge
 WAIT_S = 20.0  # the most a window gets to draw a new state (llvmpipe on loaded cores)
 
 
+def _channels(img: Image.Image) -> list[np.ndarray]:
+    a = np.asarray(img.convert("RGB"), dtype=np.int16)
+    return [a[..., 0], a[..., 1], a[..., 2]]
+
+
 def robot_pixels(img: Image.Image) -> int:
     """Pixels of r2d2's blue body (material "blue", rgba 0 0 0.8): blue clearly above red and
     green; the grey plane, the sky and the panels have none."""
-    rgb = img.convert("RGB")
-    return sum(1 for r, g, b in rgb.getdata() if b >= 70 and r < 40 and g < 40)
+    r, g, b = _channels(img)
+    return int(((b >= 70) & (r < 40) & (g < 40)).sum())
 
 
 def scene_pixels(img: Image.Image) -> int:
@@ -55,7 +62,8 @@ def grab(until: Callable[[int, int], bool], out: str | None = None) -> tuple[int
 def main() -> None:
     backend, mode = sys.argv[1], sys.argv[2]
     sim = simbridge.Sim(backend, gui=True)
-    sim.load_urdf("plane.urdf")
+    if mode == "show":
+        sim.load_urdf("plane.urdf")
     body = sim.load_urdf("r2d2.urdf", base_position=(0.0, 0.0, 0.5))
     sim.step(24)
     if mode == "show":
@@ -69,7 +77,7 @@ def main() -> None:
         print(json.dumps({"with": with_robot, "without": without}), flush=True)
     else:
         # the window has drawn the robot before it is closed
-        grab(lambda n, _: n > 2000)
+        print("drawn", grab(lambda n, _: n > 2000), time.time(), flush=True)
     print(f"closing {time.time()}", flush=True)
     sim.close()
 

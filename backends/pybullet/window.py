@@ -18,6 +18,7 @@ __all__ = ["Window"]
 
 YAW, PITCH = 50.0, -35.0  # PyBullet's own start view
 MIN_DISTANCE = 1.0  # metres
+PENDING_STEPS = 100  # step calls a camera set here may wait to be shown (then: moved by hand)
 
 
 class Window:
@@ -26,6 +27,10 @@ class Window:
     def __init__(self, c: int) -> None:
         self._c = c
         self._centre: tuple[float, float, float] | None = None
+        # the camera last set here, until the window shows it: PyBullet's window takes a new
+        # camera at its next frame, and read back before that it gives the old one
+        self._pending: tuple[float, list[float]] | None = None
+        self._waited = 0
         p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=c)
 
     @contextmanager
@@ -61,9 +66,11 @@ class Window:
         if size > 50:  # a ground plane alone: PyBullet's own view of the origin
             centre, size = (0.0, 0.0, 0.0), 2.5
         self._centre = (centre[0], centre[1], centre[2])
-        p.resetDebugVisualizerCamera(
-            max(MIN_DISTANCE, 2.0 * size), YAW, PITCH, self._centre, physicsClientId=self._c
-        )
+        self._set(max(MIN_DISTANCE, 1.6 * size), YAW, PITCH, list(self._centre))
+
+    def _set(self, distance: float, yaw: float, pitch: float, target: list[float]) -> None:
+        p.resetDebugVisualizerCamera(distance, yaw, pitch, target, physicsClientId=self._c)
+        self._pending, self._waited = (distance, target), 0
 
     def follow(self, bodies: Iterable[tuple[int, bool]]) -> None:
         """Move the camera with the robots (after a step), keeping the user's angle and zoom."""
@@ -75,6 +82,13 @@ class Window:
         now = tuple((a + b) / 2 for a, b in zip(lo, hi, strict=True))
         info = p.getDebugVisualizerCamera(physicsClientId=self._c)
         yaw, pitch, distance, target = info[8], info[9], info[10], info[11]
+        if self._pending is not None:
+            want_distance, want_target = self._pending
+            shown = abs(distance - want_distance) < 1e-3 and math.dist(target, want_target) < 1e-3
+            self._waited += 1
+            if not shown and self._waited < PENDING_STEPS:
+                return  # not drawn yet: what reads back is the camera before it
+            self._pending = None
         moved = [t + n - o for t, n, o in zip(target, now, self._centre, strict=True)]
         self._centre = (now[0], now[1], now[2])
-        p.resetDebugVisualizerCamera(distance, yaw, pitch, moved, physicsClientId=self._c)
+        self._set(distance, yaw, pitch, moved)
