@@ -13,6 +13,7 @@ import shutil
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import pytest
@@ -24,6 +25,7 @@ XVFB = shutil.which("Xvfb")
 SCRIPT = str(Path(__file__).with_name("_gui_window.py"))
 RUNS = 10  # runs in a row of open, step, close
 EXIT_S = 10.0  # the most a process may take to end after close() is called
+OPEN_RETRIES = 3  # PyBullet runs that died before their window opened, run again (_unopened)
 RUN_S = 120.0  # the most one run may take in all (a window's first frame is slow under Mesa)
 
 pytestmark = pytest.mark.skipif(
@@ -73,6 +75,10 @@ def test_the_window_shows_the_robot(display, backend, tmp_path):
     """A screenshot of the display holds r2d2's blue body, which is gone once r2d2 is
     removed: the robot drawn in the scene, not only the viewer's panels."""
     done, _ = _run(display, backend, "show", str(tmp_path))
+    for _ in range(OPEN_RETRIES):
+        if not (backend == "pybullet" and _unopened(done)):
+            break
+        done, _ = _run(display, backend, "show", str(tmp_path))  # see _unopened
     assert done.returncode == 0, done.stderr[-2000:]
     counts = json.loads([ln for ln in done.stdout.splitlines() if ln.startswith("{")][-1])
     (robot, _), (left, scene) = counts["with"], counts["without"]
@@ -84,12 +90,30 @@ def test_the_window_shows_the_robot(display, backend, tmp_path):
 def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):
     """Window open and drawing the robot, then close(): exit status 0 within EXIT_S, every
     one of RUNS runs (MuJoCo's viewer in the simulation's process hung or crashed here)."""
+    unopened = 0
     for run in range(RUNS):
         done, ended = _run(display, backend, "close")
+        while backend == "pybullet" and _unopened(done) and unopened < OPEN_RETRIES:
+            unopened += 1  # the X connection failed before any window: not close's doing
+            done, ended = _run(display, backend, "close")
         assert done.returncode == 0, (run, done.returncode, done.stderr[-2000:])
         closing = [line for line in done.stdout.splitlines() if line.startswith("closing ")]
         assert closing, (run, done.stdout[-2000:])
         assert ended - float(closing[-1].split()[1]) < EXIT_S, run
+    if unopened:
+        warnings.warn(
+            f"{backend}: {unopened} of the runs ended with status 1 before any window opened "
+            "(PyBullet ends the process when its connection to the X server fails) and were run "
+            "again",
+            stacklevel=1,
+        )
+
+
+def _unopened(done: subprocess.CompletedProcess[str]) -> bool:
+    """PyBullet's GUI ends the process with status 1 when its own connection to the X server
+    fails (its message is inside the Sim's capture of the engine's output, lost with the
+    process): measured here, 3-8 % of connections to a busy Xvfb fail at once."""
+    return done.returncode == 1 and not done.stdout and not done.stderr
 
 
 def test_physx_gui_is_refused_with_what_is_missing():
