@@ -57,6 +57,7 @@ from .output import (
     p,  # pybullet, imported with its banner captured
 )
 from .reads import StateReads
+from .render import Rendering
 from .scene import Pending, named_table
 from .state import Records
 from .window import Window
@@ -116,7 +117,7 @@ _SELF_COLLISION_FLAGS = {
 }
 
 
-class PyBulletBackend(StateReads, MotorCommands, Backend):
+class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
     """`Sim` on PyBullet (DIRECT, or GUI when asked)."""
 
     name = "pybullet"
@@ -192,6 +193,12 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         p.setPhysicsEngineParameter(
             numSolverIterations=self.profile.solver_iterations, physicsClientId=c
         )
+        # the engine settings the profile sets (backends/settings_pybullet.py), and those alone: a
+        # setting not given keeps PyBullet's own value
+        settings = self.profile.engine(self.name)
+        if settings:
+            given = {k: int(v) if isinstance(v, bool) else v for k, v in settings.items()}
+            p.setPhysicsEngineParameter(**given, physicsClientId=c)
 
     # ---------------------------------------------------------------- world
 

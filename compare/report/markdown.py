@@ -16,6 +16,7 @@ from ..analysis.diff import DEG, QUANTITIES, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
+from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
@@ -161,7 +162,15 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
     return out
 
 
-def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: list[str]) -> str:
+def markdown(
+    c: Comparison,
+    s: dict[str, Any],
+    images: dict[str, Path],
+    files: list[str],
+    pictures: list[str] | None = None,
+) -> str:
+    """``report.md`` from ``summary.json``'s dict ``s``; ``pictures``: the lines of the runs'
+    pictures (:func:`~simbridge.compare.report.frames.frames_section`), after the headline."""
     a, b = s["labels"][:2]
     cross = c.cross[c.timestep]
     if len(s["labels"]) > 2:
@@ -173,6 +182,7 @@ def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: l
     lines += [""]
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
+    lines += pictures or []
     # -- verdict
     lines += outcomes_section(s)
     lines += pairs_section(s)
@@ -210,6 +220,7 @@ def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: l
     left = left_out_words(s)
     if left:
         lines += [left, ""]
+    lines += settings_section(s)
     # -- over time
     lines += ["## When each quantity parts", ""]
     rows = []

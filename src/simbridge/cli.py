@@ -81,6 +81,7 @@ def _seed(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from simbridge import PROFILES, available_backends
+    from simbridge.cli_settings import add_set_option, add_settings_parser
 
     backends = available_backends()
     parser = argparse.ArgumentParser(
@@ -128,6 +129,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
     p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    p.add_argument(
+        "--no-replay",
+        action="store_true",
+        help="skip the pictures of the runs (report.md's key frames and animation)",
+    )
     from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
 
     p.add_argument(
@@ -160,6 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
         "Sim of its own, the floor) and step once: the one-step model error; 0: none "
         "(default: about 150 points per run)",
     )
+    add_set_option(p)
     _verbose(p)
 
     s = sub.add_parser(
@@ -184,6 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--movable", action="store_true", help="movable joints only (not fixed)")
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
+    _verbose(add_settings_parser(sub, backends))
     return parser
 
 
@@ -200,6 +208,7 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from simbridge.cli_settings import settings_from_args
     from simbridge.compare import compare, load_scenario, report
     from simbridge.compare.report.progress import ProgressBar
     from simbridge.exceptions import ScenarioError
@@ -221,6 +230,7 @@ def _compare(args: argparse.Namespace) -> int:
         if exc.key is None and not Path(args.scenario).exists():  # neither a file nor a name
             raise _Usage(str(exc)) from None
         raise
+    engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
     with ProgressBar() as bar:
@@ -237,14 +247,22 @@ def _compare(args: argparse.Namespace) -> int:
             perturb=args.perturb,
             seed=args.seed,
             resync_every=args.resync_every,
+            engine_settings=engine_settings,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
-        path = report(result, out, plots=not args.no_plots)
-    from simbridge.compare.report import headline, summary
+        path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)
+    from simbridge.compare.report import summary
+    from simbridge.compare.report.brief import brief
 
-    print("\n".join(line.replace("**", "") for line in headline(summary(result))))
-    print(f"report: {path}")
+    print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
     return 0
+
+
+def _settings(args: argparse.Namespace) -> int:
+    from simbridge import available_backends
+    from simbridge.cli_settings import settings_command
+
+    return settings_command(args, available_backends())
 
 
 def _check_writable(out: Path) -> None:
@@ -389,7 +407,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 2 on bad usage, 0 after --help
         return exc.code if isinstance(exc.code, int) else 2
     args.argv = None if argv is None else list(argv)
-    handler = {"compare": _compare, "scenarios": _scenarios, "joints": _joints}[args.command]
+    handler = {
+        "compare": _compare,
+        "scenarios": _scenarios,
+        "joints": _joints,
+        "settings": _settings,
+    }[args.command]
     log = logging.getLogger("simbridge")
     level = log.level
     args.log = _StderrLog() if args.verbose else None

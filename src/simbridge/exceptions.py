@@ -16,6 +16,7 @@ __all__ = [
     "BackendError",
     "UnknownBackendError",
     "BackendNotInstalledError",
+    "ExtraNotInstalledError",
     "BackendUnsupportedError",
     "DisplayError",
     "UrdfError",
@@ -29,6 +30,7 @@ __all__ = [
     "UnknownLinkError",
     "InvalidArgumentError",
     "InvalidProfileError",
+    "InvalidEngineSettingError",
     "SimulationDivergedError",
     "EngineError",
     "SimBusyError",
@@ -74,6 +76,18 @@ class BackendNotInstalledError(BackendError, ImportError):
         super().__init__(
             f"backend {backend!r} needs the Python package {module!r}, which is not importable "
             f"({cause}); install it with: pip install {pip_name}"
+        )
+
+
+class ExtraNotInstalledError(SimbridgeError, ImportError):
+    """A feature needs a package of one of simbridge's extras that is not installed."""
+
+    def __init__(self, feature: str, module: str, pip_name: str, cause: BaseException):
+        self.feature = feature
+        self.module = module
+        super().__init__(
+            f"{feature} needs the Python package {module!r}, which is not importable "
+            f"({cause}); install it with: pip install '{pip_name}'"
         )
 
 
@@ -212,6 +226,15 @@ class InvalidArgumentError(SimbridgeError, ValueError):
 class InvalidProfileError(SimbridgeError, ValueError):
     def __init__(self, profile: object, valid: Iterable[str]):
         super().__init__(f"unknown profile {profile!r}; valid profiles: {_choices(valid)}")
+
+
+class InvalidEngineSettingError(InvalidProfileError):
+    """An engine setting that is not one of the backend's, or a value outside its range."""
+
+    def __init__(self, backend: str, key: str, detail: str):
+        self.backend = backend
+        self.key = key
+        SimbridgeError.__init__(self, f"engine setting {backend}.{key}: {detail}")
 
 
 # ---------------------------------------------------------------- running
