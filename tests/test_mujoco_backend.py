@@ -148,6 +148,14 @@ def test_gui_without_display_raises(monkeypatch):
         simbridge.Sim("mujoco", gui=True)
 
 
+def test_gui_with_an_unreachable_display_is_a_clear_error(monkeypatch):
+    """The window process cannot open its window: DisplayError with GLFW's reason, at once
+    (the window process is gone; nothing is left running)."""
+    monkeypatch.setenv("DISPLAY", ":77")  # no X server there
+    with pytest.raises(DisplayError, match="mujoco.*(display|GLFW)"):
+        simbridge.Sim("mujoco", gui=True)
+
+
 class _Window:
     """Stands in for the backend's viewer (viewer.Viewer, MuJoCo's passive viewer in a window
     process of its own; the real one is tested under Xvfb in test_gui.py): records what the
