@@ -48,6 +48,14 @@ __all__ = ["PhysxBackend"]
 _log = logging.getLogger("simbridge.physx")
 
 _BUSY = "this Sim is stepping in another thread; a Sim takes one call at a time"
+# why gui=True is refused, measured under Xvfb on Debian 12 (SAPIEN 3.0.3)
+GUI_MISSING = (
+    "the PhysX backend builds no visual shapes and opens no window yet. SAPIEN's viewer needs "
+    "a Vulkan device with VK_KHR_external_semaphore_fd: Debian 12's lavapipe (Mesa 22.3.6, "
+    "mesa-vulkan-drivers) lacks it ('failed to find a rendering device'); Mesa 25.0.7's "
+    "lavapipe (bookworm-backports) opens SAPIEN's window but draws its first frame in 29 s on "
+    "2 loaded cores. Watch a run with gui=True on 'pybullet' or 'mujoco'"
+)
 # "periodic" divergence check: the state is looked at every this many steps (and at every read)
 CHECK_EVERY = 8
 
@@ -86,9 +94,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         super().__init__(profile, gui)
         self.refuse_unsupported()
         if gui:
-            raise BackendUnsupportedError(
-                self.name, "gui=True", "the PhysX backend runs headless (no viewer yet)"
-            )
+            raise BackendUnsupportedError(self.name, "gui=True", GUI_MISSING)
         self._dt = profile.timestep
         self._robots: dict[int, Robot] = {}
         self._stepping = threading.RLock()
