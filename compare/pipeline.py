@@ -7,7 +7,7 @@ import math
 import os
 import sys
 import time as _time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -193,6 +193,7 @@ def compare(
     workers: int | None = None,
     controller: Any = None,
     resync_every: int | None = None,
+    engine_settings: Mapping[str, Mapping[str, Any]] | None = None,
     cache: Cache | str | os.PathLike[str] | bool | None = None,
     fresh: bool = False,
     scheduler: str | None = None,
@@ -234,6 +235,9 @@ def compare(
             and into a second Sim of its own, and step once (:mod:`~simbridge.compare.resync`);
             default about 150 points per run (:func:`~simbridge.compare.resync.default_every`);
             0: none.
+        engine_settings: engine settings per backend, ``{"mujoco": {"impratio": 10}}``
+            (:mod:`simbridge.engine_settings`), on top of the scenario's ``[engines.*]``
+            tables, key by key; every run of the study uses them (ensemble members included).
         cache: where job results are kept by content (:mod:`~simbridge.compare.run.cache`):
             None the default folder (``$XDG_CACHE_HOME/simbridge``, else
             ``~/.cache/simbridge``), a folder, a :class:`~simbridge.compare.run.cache.Cache`,
@@ -252,6 +256,7 @@ def compare(
     sc = load_scenario(scenario)
     if controller is not None:
         sc = sc.with_controller(controller)
+    sc = sc.with_engine_settings(engine_settings)
     left_out: dict[str, str] = {}
     backends_named = backends is not None
     if backends is None:

@@ -148,18 +148,24 @@ def test_gui_without_display_raises(monkeypatch):
         simbridge.Sim("mujoco", gui=True)
 
 
+def test_gui_with_an_unreachable_display_is_a_clear_error(monkeypatch):
+    """The window process cannot open its window: DisplayError with GLFW's reason, at once
+    (the window process is gone; nothing is left running)."""
+    monkeypatch.setenv("DISPLAY", ":77")  # no X server there
+    with pytest.raises(DisplayError, match="mujoco.*(display|GLFW)"):
+        simbridge.Sim("mujoco", gui=True)
+
+
 class _Window:
-    """Stands in for mujoco.viewer's passive window (no display on the test machines): records
-    what the backend asks of it."""
+    """Stands in for the backend's viewer (viewer.Viewer, MuJoCo's passive viewer in a window
+    process of its own; the real one is tested under Xvfb in test_gui.py): records what the
+    backend asks of it."""
 
     log: list[str] = []
 
-    def __init__(self, m, d) -> None:
+    def __init__(self, backend, m, d) -> None:
         self.m, self.d = m, d
         _Window.log.append(f"open nbody={m.nbody}")
-
-    def is_running(self) -> bool:
-        return True
 
     def sync(self) -> None:
         _Window.log.append(f"sync t={self.d.time:.4f}")
@@ -171,10 +177,10 @@ class _Window:
 def test_gui_opens_the_viewer_and_keeps_it_on_the_current_world(monkeypatch):
     """gui=True opens MuJoCo's passive viewer at once, syncs it every step, reopens it on the
     model of every load, remove and reset, and closes it with the Sim."""
-    import mujoco.viewer
+    from simbridge.backends.mujoco import backend as mujoco_backend
 
     monkeypatch.setenv("DISPLAY", ":0")
-    monkeypatch.setattr(mujoco.viewer, "launch_passive", _Window, raising=False)
+    monkeypatch.setattr(mujoco_backend, "Viewer", _Window)
     _Window.log = []
     with simbridge.Sim("mujoco", gui=True) as sim:
         assert _Window.log == ["open nbody=1"]

@@ -48,8 +48,20 @@ __all__ = ["PhysxBackend"]
 _log = logging.getLogger("simbridge.physx")
 
 _BUSY = "this Sim is stepping in another thread; a Sim takes one call at a time"
+# why gui=True is refused, measured under Xvfb on Debian 12 (SAPIEN 3.0.3)
+GUI_MISSING = (
+    "the PhysX backend builds no visual shapes and opens no window yet. SAPIEN's viewer needs "
+    "a Vulkan device with VK_KHR_external_semaphore_fd: Debian 12's lavapipe (Mesa 22.3.6, "
+    "mesa-vulkan-drivers) lacks it ('failed to find a rendering device'); Mesa 25.0.7's "
+    "lavapipe (bookworm-backports) opens SAPIEN's window but draws its first frame in 29 s on "
+    "2 loaded cores. Watch a run with gui=True on 'pybullet' or 'mujoco'"
+)
 # "periodic" divergence check: the state is looked at every this many steps (and at every read)
 CHECK_EVERY = 8
+
+
+# engine settings that are SAPIEN scene-config flags of the same name (backends/settings_physx.py)
+_SCENE_FLAGS = ("enable_pcm", "enable_friction_every_iteration", "enable_enhanced_determinism")
 
 
 class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend):
@@ -82,9 +94,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         super().__init__(profile, gui)
         self.refuse_unsupported()
         if gui:
-            raise BackendUnsupportedError(
-                self.name, "gui=True", "the PhysX backend runs headless (no viewer yet)"
-            )
+            raise BackendUnsupportedError(self.name, "gui=True", GUI_MISSING)
         self._dt = profile.timestep
         self._robots: dict[int, Robot] = {}
         self._stepping = threading.RLock()
@@ -106,6 +116,16 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         # on the spot at 100 rad/s, kick to 1150 rad/s for a step (PGS: never past the target;
         # PyBullet's wheels drop as low as 10 rad/s for a step too, as PGS's do)
         cfg.enable_tgs = False
+        # the engine settings the profile sets (backends/settings_physx.py); the shapes' and the
+        # articulations' ones: model.build_robot
+        settings = p.engine(self.name)
+        if "solver" in settings:
+            cfg.enable_tgs = settings["solver"] == "TGS"
+        if "bounce_threshold" in settings:
+            cfg.bounce_threshold = settings["bounce_threshold"]
+        for flag in _SCENE_FLAGS:
+            if flag in settings:
+                setattr(cfg, flag, settings[flag])
         physx.set_scene_config(cfg)
         self._system = physx.PhysxCpuSystem()
         self._scene = sapien.Scene([self._system])
@@ -145,7 +165,13 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             base_position=base_position,
             base_orientation=base_orientation,
         )
-        built = build_robot(self._scene, plan, self.profile.solver_iterations, body + 1)
+        built = build_robot(
+            self._scene,
+            plan,
+            self.profile.solver_iterations,
+            body + 1,
+            self.profile.engine(self.name),
+        )
         built.plan = plan
         try:
             fixed = plan.fixed_base

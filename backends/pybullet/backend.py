@@ -60,6 +60,7 @@ from .reads import StateReads
 from .render import Rendering
 from .scene import Pending, named_table
 from .state import Records
+from .window import Window
 
 __all__ = ["PyBulletBackend"]
 
@@ -162,9 +163,11 @@ class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
                 raise DisplayError(
                     self.name, "p.connect(p.GUI) failed (PyBullet allows one GUI per process)"
                 )
+            self._window: Window | None = Window(self._c)
         else:
             with captured(self.name, "connecting"):
                 self._c = p.connect(p.DIRECT)
+            self._window = None
         self._dt = profile.timestep
         self._steps = 0
         self._check_every = _CHECK_EVERY  # 1 under divergence_check="every_step"
@@ -190,6 +193,12 @@ class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
         p.setPhysicsEngineParameter(
             numSolverIterations=self.profile.solver_iterations, physicsClientId=c
         )
+        # the engine settings the profile sets (backends/settings_pybullet.py), and those alone: a
+        # setting not given keeps PyBullet's own value
+        settings = self.profile.engine(self.name)
+        if settings:
+            given = {k: int(v) if isinstance(v, bool) else v for k, v in settings.items()}
+            p.setPhysicsEngineParameter(**given, physicsClientId=c)
 
     # ---------------------------------------------------------------- world
 
@@ -225,7 +234,12 @@ class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
             )
         _refuse_long_names(model)
         with self._idle():
-            body = self._load(model, base_position, base_orientation, fixed_base, options)
+            if self._window is not None:
+                with self._window.paused():
+                    body = self._load(model, base_position, base_orientation, fixed_base, options)
+                self._window.aim((b, info.free) for b, info in self._bodies.items())
+            else:
+                body = self._load(model, base_position, base_orientation, fixed_base, options)
             if body in self._freed:  # PyBullet's pool: the last freed id, or a fresh one
                 self._freed.remove(body)
             self._fresh = max(self._fresh, body + 1)
@@ -550,6 +564,8 @@ class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
                         self._probe()
             if self._steps >= self._next_check:
                 self._probe()  # under the lock: no other thread steps between its calls
+            if self._window is not None:
+                self._window.follow((b, info.free) for b, info in self._bodies.items())
         finally:
             self._in_step = False
             lock.release()

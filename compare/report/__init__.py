@@ -34,7 +34,10 @@ def report(
     plus the manifests), the PNG figures beside them, and with ``trajectories`` the two
     headline runs as ``trajectories/<engine>.npz`` and ``.csv``; with ``replay`` the pictures
     of the nominal runs (``frames/``: key frames and ``replay.gif``,
-    :func:`~simbridge.compare.report.frames.write_frames`). Returns the path of
+    :func:`~simbridge.compare.report.frames.write_frames`). ``report.html`` beside it is the
+    same report as one self-contained page (:mod:`.html`), with ``replay`` (and viser,
+    ``simbridge[report]``, installed) the 3D replay of every engine's nominal run, whose
+    ensembles' ghosts go to ``replay_ghosts.npz`` for ``simbridge replay``. Returns the path of
     ``report.md``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -71,7 +74,15 @@ def report(
         encoding="utf-8",
     )
     path = out / "report.md"
-    path.write_text(markdown(comparison, figures, images, files, seen), encoding="utf-8")
+    text = markdown(comparison, figures, images, files, seen)
+    path.write_text(text, encoding="utf-8")
+    from .html import write_html
+
+    _, engines = write_html(comparison, text, out, replay=replay)
+    if engines is not None and trajectories:
+        from .replay import save_ghosts
+
+        save_ghosts(engines, out)
     return path
 
 

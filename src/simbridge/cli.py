@@ -10,6 +10,7 @@
   simbridge scenarios                         the shipped scenarios, one line each
   simbridge joints r2d2.urdf --movable        the joint table as a backend loads it
   simbridge joints r2d2.urdf --json           the same, every field, for machines
+  simbridge replay reports/r2d2               a report's 3D replay, live in the browser
 
 stdout carries the results alone; the engines' own banners and warnings go to the log, which
 --verbose (-v) shows on stderr.
@@ -84,6 +85,7 @@ def _seed(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from simbridge import PROFILES, available_backends
+    from simbridge.cli_settings import add_set_option, add_settings_parser
 
     backends = available_backends()
     parser = argparse.ArgumentParser(
@@ -134,7 +136,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--no-replay",
         action="store_true",
-        help="skip the pictures of the runs (report.md's key frames and animation)",
+        help="skip the pictures of the runs (report.html's 3D replay, report.md's key frames "
+        "and animation)",
     )
     from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
 
@@ -168,6 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
         "Sim of its own, the floor) and step once: the one-step model error; 0: none "
         "(default: about 150 points per run)",
     )
+    add_set_option(p)
     _jobs_arguments(p)
     _verbose(p)
 
@@ -197,6 +201,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _verbose(s)
 
+    r = sub.add_parser(
+        "replay",
+        help="serve a written report's 3D replay live in the browser",
+        description="Serve the 3D replay of the report in REPORT_DIR (its trajectories/*.npz) "
+        "from a local viser server and print its URL; Ctrl-C stops it. Needs viser "
+        "(pip install 'simbridge[report]').",
+    )
+    r.add_argument("report_dir", metavar="REPORT_DIR", type=Path, help="a report folder")
+    r.add_argument(
+        "--host", default="127.0.0.1", help="address to listen on (default: %(default)s)"
+    )
+    r.add_argument(
+        "--port", type=int, default=8080, help="port (default: %(default)s, or the next free)"
+    )
+    _verbose(r)
+
     j = sub.add_parser(
         "joints",
         help="print a URDF's joint table as a backend loads it",
@@ -212,6 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--movable", action="store_true", help="movable joints only (not fixed)")
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
+    _verbose(add_settings_parser(sub, backends))
     return parser
 
 
@@ -265,6 +286,7 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from simbridge.cli_settings import settings_from_args
     from simbridge.compare import compare, load_scenario, report
     from simbridge.compare.report.progress import ProgressBar
     from simbridge.exceptions import ScenarioError
@@ -286,6 +308,7 @@ def _compare(args: argparse.Namespace) -> int:
         if exc.key is None and not Path(args.scenario).exists():  # neither a file nor a name
             raise _Usage(str(exc)) from None
         raise
+    engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
     with ProgressBar() as bar:
@@ -302,6 +325,7 @@ def _compare(args: argparse.Namespace) -> int:
             perturb=args.perturb,
             seed=args.seed,
             resync_every=args.resync_every,
+            engine_settings=engine_settings,
             workers=args.workers,
             scheduler=args.scheduler,
             cache=False if args.no_cache else args.cache,
@@ -316,6 +340,13 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _settings(args: argparse.Namespace) -> int:
+    from simbridge import available_backends
+    from simbridge.cli_settings import settings_command
+
+    return settings_command(args, available_backends())
+
+
 def _check_writable(out: Path) -> None:
     """The report folder can be made and written to (an OSError naming it, else)."""
     import tempfile
@@ -325,6 +356,26 @@ def _check_writable(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryFile(dir=out):
         pass
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from simbridge.compare.report import replay
+
+    if not replay.available():
+        print(
+            f"{PROG}: error: the replay needs viser: pip install 'simbridge[report]'",
+            file=sys.stderr,
+        )
+        return 1
+
+    def ready(url: str) -> None:
+        print(f"replay of {args.report_dir}: {url} (Ctrl-C stops it)", flush=True)
+
+    try:
+        replay.serve(args.report_dir, host=args.host, port=args.port, ready=ready)
+    except KeyboardInterrupt:  # Ctrl-C: the way to stop it
+        print("replay stopped", file=sys.stderr)
+    return 0
 
 
 def _scenarios(args: argparse.Namespace) -> int:
@@ -463,6 +514,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         "report": _report,
         "scenarios": _scenarios,
         "joints": _joints,
+        "replay": _replay,
+        "settings": _settings,
     }[args.command]
     log = logging.getLogger("simbridge")
     level = log.level

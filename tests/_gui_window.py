@@ -1,0 +1,86 @@
+"""Run by tests/test_gui.py in a process of its own, under the test's Xvfb: one Sim(gui=True).
+
+``python _gui_window.py BACKEND show OUTDIR``: r2d2 on the plane, stepped; screenshots of the X
+display with the robot and after it is removed (OUTDIR/with.png, OUTDIR/without.png); prints
+one JSON line with the robot-blue pixel counts, then closes the Sim.
+``python _gui_window.py BACKEND close``: r2d2 alone in a window, stepped, drawn, then
+``close()``; prints
+``closing <time>`` just before it. Either way the process then ends as Python ends it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from collections.abc import Callable
+
+import numpy as np
+from PIL import Image, ImageGrab
+
+import simbridge
+
+WAIT_S = 20.0  # the most a window gets to draw a new state (llvmpipe on loaded cores)
+
+
+def _channels(img: Image.Image) -> list[np.ndarray]:
+    a = np.asarray(img.convert("RGB"), dtype=np.int16)
+    return [a[..., 0], a[..., 1], a[..., 2]]
+
+
+def robot_pixels(img: Image.Image) -> int:
+    """Pixels of r2d2's blue body (material "blue", rgba 0 0 0.8): blue clearly above red and
+    green; the grey plane, the sky and the panels have none."""
+    r, g, b = _channels(img)
+    return int(((b >= 70) & (r < 40) & (g < 40)).sum())
+
+
+def scene_pixels(img: Image.Image) -> int:
+    """Grey pixels (the ground plane: PyBullet's light grey, MuJoCo's dark grey), which a
+    window that has not drawn its scene yet (black, or MuJoCo's "LOADING...") lacks."""
+    rgb = img.convert("RGB")
+    return sum(
+        1 for r, g, b in rgb.getdata() if 50 <= r <= 235 and max(r, g, b) - min(r, g, b) < 12
+    )
+
+
+def grab(until: Callable[[int, int], bool], out: str | None = None) -> tuple[int, int]:
+    """Screenshots of the whole display until ``until(robot, scene)`` holds (pixel counts) or
+    WAIT_S pass; the last one's counts."""
+    deadline = time.monotonic() + WAIT_S
+    while True:
+        img = ImageGrab.grab(xdisplay=os.environ["DISPLAY"])
+        counts = robot_pixels(img), scene_pixels(img)
+        if until(*counts) or time.monotonic() > deadline:
+            if out is not None:
+                img.save(out)
+            return counts
+        time.sleep(0.25)
+
+
+def main() -> None:
+    backend, mode = sys.argv[1], sys.argv[2]
+    sim = simbridge.Sim(backend, gui=True)
+    if mode == "show":
+        sim.load_urdf("plane.urdf")
+    body = sim.load_urdf("r2d2.urdf", base_position=(0.0, 0.0, 0.5))
+    sim.step(24)
+    if mode == "show":
+        out = sys.argv[3]
+        with_robot = grab(lambda n, _: n > 2000, os.path.join(out, "with.png"))
+        sim.remove(body)
+        sim.step(1)
+        without = grab(
+            lambda n, scene: n < 50 and scene > 100_000, os.path.join(out, "without.png")
+        )
+        print(json.dumps({"with": with_robot, "without": without}), flush=True)
+    else:
+        # the window has drawn the robot before it is closed
+        print("drawn", grab(lambda n, _: n > 2000), time.time(), flush=True)
+    print(f"closing {time.time()}", flush=True)
+    sim.close()
+
+
+if __name__ == "__main__":
+    main()

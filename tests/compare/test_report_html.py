@@ -1,0 +1,260 @@
+"""report.html and its 3D replay (compare/report/html.py, replay.py), and `simbridge replay`.
+
+One short r2d2 comparison (PyBullet against MuJoCo, 0.6 s: the drop, r2d2 leaving the ground on
+both engines, ensembles of 2) is reported once per module. The scene's recording is read back
+from the page (base64, zstd, msgpack) and checked node by node; a headless Chromium, where one
+is installed, loads the page from disk and looks at it."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from simbridge.compare import compare, report
+from simbridge.compare.report import replay as rp
+
+pytest.importorskip("viser", reason="the replay needs viser (simbridge[report])")
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _chromium import Browser, chromium  # noqa: E402
+
+MB = 1_000_000
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report")
+    c = compare("r2d2", ["pybullet", "mujoco"], duration=0.6, ensemble=2, resync_every=0, workers=0)
+    started = time.process_time()
+    report(c, out, plots=False)
+    with_replay = time.process_time() - started
+    return c, out, with_replay
+
+
+def _recording(page: str) -> dict:
+    """The recorded scene inside report.html's viewer: {durationSeconds, messages, ...}."""
+    import msgspec
+    import zstandard
+
+    srcdoc = re.search(r'<iframe id="replay"[^>]* srcdoc="([^"]*)"', page)
+    assert srcdoc is not None, "no replay iframe"
+    viewer = html.unescape(srcdoc.group(1))
+    data = re.search(r'__VISER_EMBED_DATA__="([^"]+)"', viewer)
+    assert data is not None, "no recording in the viewer"
+    raw = base64.b64decode(data.group(1))
+    inner = zstandard.ZstdDecompressor().decompress(raw[8:], max_output_size=1 << 30)
+    n = int.from_bytes(inner[:8], "little")
+    return msgspec.msgpack.decode(inner[8 : 8 + n])
+
+
+def _names(rec: dict, kind: str) -> list[str]:
+    return [m["name"] for _, m in rec["messages"] if m.get("type") == kind and "name" in m]
+
+
+def test_page_is_one_offline_file(written):
+    c, out, _ = written
+    page = (out / "report.html").read_text(encoding="utf-8")
+    assert page.startswith("<!doctype html>")
+    # nothing fetched from elsewhere: no script, style or image from a URL
+    assert not re.search(r'<(script|img|link|iframe)[^>]+(src|href)="(https?:)?//', page)
+    assert "<h1>r2d2: pybullet against mujoco</h1>" in page
+    assert "<table>" in page  # report.md's tables
+    assert (out / "report.html").stat().st_size < 5 * MB
+
+
+def test_figures_are_inlined(tmp_path):
+    c = compare("r2d2", ["pybullet", "mujoco"], duration=0.2, ensemble=1, resync_every=0)
+    report(c, tmp_path, replay=False)
+    page = (tmp_path / "report.html").read_text(encoding="utf-8")
+    pngs = sorted(p.name for p in tmp_path.glob("*.png"))
+    assert pngs, "no figure written"
+    assert page.count('src="data:image/png;base64,') == len(pngs)
+    for name in pngs:
+        assert f'src="{name}"' not in page
+    # --no-replay: no viewer, no ghosts file
+    assert "<iframe" not in page
+    assert not (tmp_path / rp.GHOSTS_FILE).exists()
+
+
+def test_scene_has_every_engine_its_meshes_and_ghosts(written):
+    c, out, _ = written
+    rec = _recording((out / "report.html").read_text(encoding="utf-8"))
+    meshes = _names(rec, "MeshMessage")
+    for label in c.labels:
+        mine = [n for n in meshes if n.startswith(f"/{label}/r2d2/")]
+        # r2d2.urdf's visuals: every link's box, cylinder, sphere and STL finger
+        assert len(mine) >= 15, (label, mine)
+        assert f"/{label}/ensemble" in _names(rec, "PointCloudMessage")
+    # each engine's links move: poses recorded at every frame, in time order
+    times = [t for t, m in rec["messages"] if m.get("type") == "SetPositionMessage"]
+    assert times == sorted(times) and times[-1] == pytest.approx(0.6, abs=0.05)
+    frames = sorted(set(times))
+    assert 10 <= len(frames) <= rp.MAX_FRAMES
+    assert rec["durationSeconds"] == pytest.approx(frames[-1])
+
+
+def test_scene_marks_every_event_at_its_time(written):
+    c, out, _ = written
+    rec = _recording((out / "report.html").read_text(encoding="utf-8"))
+    spheres = {m["name"]: t for t, m in rec["messages"] if m.get("type") == "IcosphereMessage"}
+    engines = rp.replay_engines(c)
+    marks = rp.event_marks(engines)
+    kinds = {m.kind for m in marks}
+    assert {"contact_lost", "airborne"} <= kinds, kinds
+    for label in c.labels:
+        assert any(m.label == label for m in marks), label
+    for i, m in enumerate(marks):
+        name = f"/events/{m.label}/e{i}_{m.kind}"
+        assert name in spheres, name
+        # shown from the first frame at or after the event
+        assert m.time - 1e-9 <= spheres[name] <= m.time + 1 / rp.FPS + 1e-6
+    assert len(spheres) == len(marks)
+    page = (out / "report.html").read_text(encoding="utf-8")
+    assert page.count('<li><button data-time="') == len(marks)
+
+
+def test_link_frames_carry_the_recorded_centres_of_mass(written):
+    """The replay's link poses (recorded base frame and joints along the URDF) put every
+    link's centre of mass where the engine recorded it."""
+    from simbridge.urdf import parse_urdf, resolve_source
+
+    c, _, _ = written
+    model = parse_urdf(resolve_source("r2d2.urdf"))
+    for slot in range(2):
+        b = c.runs[(slot, c.timestep)].bodies["r2d2"]
+        rows = np.arange(0, len(b.base_position), 7)
+        frames = rp.link_poses(model, b, rows)
+        for link in model.links:
+            pos, rot = frames[link.index]
+            com = pos + rot @ np.asarray(link.inertial.origin_xyz)
+            k = b.link_names.index("base" if link.index == -1 else link.name)
+            np.testing.assert_allclose(com, b.link_positions[rows, k], atol=1e-6)
+
+
+def test_frames_are_capped():
+    class T:
+        def __init__(self, n, dt):
+            self.time = np.arange(n) * dt
+            self.duration = (n - 1) * dt
+
+    rows = rp.frame_rows(T(981, 1 / 240))
+    assert rows[0] == 0 and rows[-1] == 980
+    assert len(rows) == 124  # 30 per simulated second over 4.08 s
+    rows = rp.frame_rows(T(240 * 60 + 1, 1 / 240))  # a minute
+    assert len(rows) == rp.MAX_FRAMES and rows[-1] == 240 * 60
+
+
+def test_replay_cost(written):
+    """What the replay adds to report(): well under the 5 s budget, here in CPU seconds (the
+    wall clock of a loaded test machine says little)."""
+    c, out, with_replay = written
+    started = time.process_time()
+    report(c, out / "again", plots=False, replay=False)
+    without = time.process_time() - started
+    assert with_replay - without < 3.0, (with_replay, without)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    exe = chromium()
+    if exe is None:
+        pytest.skip("no Chromium here (Debian's chromium; .ci/run installs it as root)")
+    with Browser(exe, width=1100, height=1000) as b:
+        yield b
+
+
+def _pixels(png: bytes) -> np.ndarray:
+    import matplotlib.image
+
+    return matplotlib.image.imread(io.BytesIO(png), format="png")[..., :3]
+
+
+def _view(b: Browser) -> np.ndarray:
+    r = b.js(
+        "(() => { const f = document.getElementById('replay'); f.scrollIntoView();"
+        "const c = f.contentDocument.querySelector('canvas').getBoundingClientRect();"
+        "const o = f.getBoundingClientRect();"
+        "return [o.left + c.left, o.top + c.top, c.width, c.height]; })()"
+    )
+    b.pump(1.5)
+    x, y, w, h = (int(round(v)) for v in r)
+    return _pixels(b.screenshot())[y : y + h, x : x + w]
+
+
+def test_chromium_draws_the_replay_from_disk(written, browser):
+    _, out, _ = written
+    b = browser
+    b.open(out / "report.html")
+    b.wait_for(
+        "document.getElementById('replay').contentDocument.querySelector('canvas') !== null"
+        " && window.simbridgeSeek(0.05)",
+        timeout=120,
+    )
+    b.pump(2)
+    first = _view(b)
+    assert first.std() > 0.02, "the 3D canvas is blank"
+    assert b.js("window.simbridgeSeek(0.55)")
+    b.pump(1)
+    later = _view(b)
+    changed = np.abs(first - later).max(axis=2) > 0.1
+    assert changed.mean() > 1e-4, "two scrubber positions give the same picture"
+    # hiding both engines changes the picture again
+    b.js("document.querySelectorAll('input[data-engine]').forEach(x => x.click())")
+    b.pump(1)
+    hidden = _view(b)
+    assert (np.abs(hidden - later).max(axis=2) > 0.1).mean() > 1e-4
+    assert b.errors == [], b.errors
+
+
+def test_cli_no_replay_and_replay_command(written, tmp_path):
+    from simbridge.cli import build_parser, main
+
+    args = build_parser().parse_args(["compare", "r2d2", "--no-replay"])
+    assert args.no_replay is True
+    assert main(["replay", str(tmp_path / "nothing")]) == 1
+
+
+def test_replay_serves_until_ctrl_c(written):
+    _, out, _ = written
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "simbridge", "replay", str(out), "--port", "8765"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+    try:
+        line = proc.stdout.readline()  # type: ignore[union-attr]
+        url = re.search(r"http://\S+", line)
+        assert url is not None, (line, proc.stderr.read() if proc.poll() is not None else "")  # type: ignore[union-attr]
+        from urllib.request import urlopen
+
+        page = urlopen(url.group(0), timeout=30).read().decode()
+        assert "<html" in page.lower()
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+
+
+def test_engines_from_report_reads_what_report_wrote(written):
+    c, out, _ = written
+    engines = rp.engines_from_report(out)
+    assert [e.label for e in engines] == list(c.labels)
+    assert all(e.ghosts is not None and e.ghosts.shape[0] == 1 for e in engines)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["labels"] == list(c.labels)

@@ -1,0 +1,121 @@
+"""``Sim(gui=True)`` under a real X server (Xvfb, started here): each backend's own window shows
+the robot, and the process exits cleanly soon after ``close()``, ten runs in a row.
+
+Each run is a process of its own (tests/_gui_window.py). Skipped, saying why, where Xvfb is not
+installed (Debian: ``apt-get install xvfb``; .ci/run installs it when it runs as root).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import pytest
+
+import simbridge
+from simbridge.exceptions import BackendUnsupportedError
+
+XVFB = shutil.which("Xvfb")
+SCRIPT = str(Path(__file__).with_name("_gui_window.py"))
+RUNS = 10  # runs in a row of open, step, close
+EXIT_S = 10.0  # the most a process may take to end after close() is called
+OPEN_RETRIES = 3  # PyBullet runs that died before their window opened, run again (_unopened)
+RUN_S = 120.0  # the most one run may take in all (a window's first frame is slow under Mesa)
+
+pytestmark = pytest.mark.skipif(
+    XVFB is None,
+    reason="Xvfb is not installed: the window tests need a real X server "
+    "(Debian: apt-get install xvfb; .ci/run installs it when run as root)",
+)
+
+
+@pytest.fixture(scope="module")
+def display():
+    """A fresh Xvfb; its display name (``:N``, the first free number, from -displayfd)."""
+    assert XVFB is not None
+    r, w = os.pipe()
+    proc = subprocess.Popen(
+        [XVFB, "-displayfd", str(w), "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+        pass_fds=(w,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(w)
+    with os.fdopen(r) as f:
+        number = f.readline().strip()
+    if not number:
+        proc.kill()
+        pytest.fail("Xvfb started but gave no display number")
+    yield f":{number}"
+    proc.terminate()
+    proc.wait(10)
+
+
+def _run(display: str, *args: str) -> tuple[subprocess.CompletedProcess[str], float]:
+    """One window process; its result and the time it ended."""
+    env = {**os.environ, "DISPLAY": display}
+    env.pop("WAYLAND_DISPLAY", None)
+    done = subprocess.run(
+        [sys.executable, SCRIPT, *args], env=env, capture_output=True, text=True, timeout=RUN_S
+    )
+    return done, time.time()
+
+
+WINDOWED = ["pybullet", "mujoco"]
+
+
+@pytest.mark.parametrize("backend", WINDOWED)
+def test_the_window_shows_the_robot(display, backend, tmp_path):
+    """A screenshot of the display holds r2d2's blue body, which is gone once r2d2 is
+    removed: the robot drawn in the scene, not only the viewer's panels."""
+    done, _ = _run(display, backend, "show", str(tmp_path))
+    for _ in range(OPEN_RETRIES):
+        if not (backend == "pybullet" and _unopened(done)):
+            break
+        done, _ = _run(display, backend, "show", str(tmp_path))  # see _unopened
+    assert done.returncode == 0, done.stderr[-2000:]
+    counts = json.loads([ln for ln in done.stdout.splitlines() if ln.startswith("{")][-1])
+    (robot, _), (left, scene) = counts["with"], counts["without"]
+    assert robot > 2000, (counts, tmp_path)  # r2d2 fills about 1-5 % of a 1024x768 screen
+    assert left < 50 and scene > 100_000, (counts, tmp_path)  # the plane drawn, no robot
+
+
+@pytest.mark.parametrize("backend", WINDOWED)
+def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):
+    """Window open and drawing the robot, then close(): exit status 0 within EXIT_S, every
+    one of RUNS runs (MuJoCo's viewer in the simulation's process hung or crashed here)."""
+    unopened = 0
+    for run in range(RUNS):
+        done, ended = _run(display, backend, "close")
+        while backend == "pybullet" and _unopened(done) and unopened < OPEN_RETRIES:
+            unopened += 1  # the X connection failed before any window: not close's doing
+            done, ended = _run(display, backend, "close")
+        assert done.returncode == 0, (run, done.returncode, done.stderr[-2000:])
+        closing = [line for line in done.stdout.splitlines() if line.startswith("closing ")]
+        assert closing, (run, done.stdout[-2000:])
+        assert ended - float(closing[-1].split()[1]) < EXIT_S, run
+    if unopened:
+        warnings.warn(
+            f"{backend}: {unopened} of the runs ended with status 1 before any window opened "
+            "(PyBullet ends the process when its connection to the X server fails) and were run "
+            "again",
+            stacklevel=1,
+        )
+
+
+def _unopened(done: subprocess.CompletedProcess[str]) -> bool:
+    """PyBullet's GUI ends the process with status 1 when its own connection to the X server
+    fails (its message is inside the Sim's capture of the engine's output, lost with the
+    process): measured here, 3-8 % of connections to a busy Xvfb fail at once."""
+    return done.returncode == 1 and not done.stdout and not done.stderr
+
+
+def test_physx_gui_is_refused_with_what_is_missing():
+    with pytest.raises(BackendUnsupportedError, match="Vulkan"):
+        simbridge.Sim("physx", gui=True)
