@@ -274,26 +274,54 @@ class MotorCommands:
     ) -> None:
         robot = self._robots[body]
         m = robot.motors
-        for s, t, f, p_, d_ in zip(
-            self._slots(robot, joints), target, max_force, kp, kd, strict=True
+        slots = self._slots(robot, joints)
+        if len(set(slots.tolist())) < len(slots):  # a joint named twice: the last one holds
+            for s, t, f, p_, d_ in zip(slots, target, max_force, kp, kd, strict=True):
+                m["mode"][s] = MotorMode.POSITION
+                m["target"][s] = t
+                m["max_force"][s] = f
+                m["kp"][s] = p_
+                m["kd"][s] = d_
+                self._apply(robot, s)
+            self._refresh_active()
+            return
+        m["mode"][slots] = MotorMode.POSITION
+        m["target"][slots] = target
+        m["max_force"][slots] = max_force
+        m["kp"][slots] = kp
+        m["kd"][slots] = kd
+        # the drive as _apply sets it for a position motor (its velocity target is set before
+        # each step): changed only where the force limit changes
+        drive = robot.drive_force
+        ball = m["ball"]
+        for s, joint, effort, mf in zip(
+            *robot.slot_calls(slots, m["effort"]), max_force, strict=True
         ):
-            m["mode"][s] = MotorMode.POSITION
-            m["target"][s] = t
-            m["max_force"][s] = f
-            m["kp"][s] = p_
-            m["kd"][s] = d_
-            self._apply(robot, s)
-        self._refresh_active()
+            f = mf if mf < effort else effort
+            if f <= 0.0:
+                if drive[s] != 0.0:
+                    joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                    drive[s] = 0.0
+                continue
+            if drive[s] != f:
+                joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
+                drive[s] = f
+            if ball[s]:
+                joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+        if not robot.has_position:  # the robot's step gains the position law
+            self._refresh_active()
 
     @exclusive
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         robot = self._robots[body]
         m = robot.motors
-        for s, t in zip(self._slots(robot, joints), torque, strict=True):
-            effort = m["effort"][s]  # inf unless the profile enforces <limit effort>
-            m["torque"][s] += min(max(t, -effort), effort)  # each command clamped, as PyBullet
-        robot.pending = True
-        self._refresh_active()
+        slots = self._slots(robot, joints)
+        effort = m["effort"][slots]  # inf unless the profile enforces <limit effort>
+        # each command clamped, as PyBullet; np.add.at: a joint named twice adds twice
+        np.add.at(m["torque"], slots, np.minimum(np.maximum(torque, -effort), effort))
+        if not robot.pending:
+            robot.pending = True
+            self._refresh_active()
 
     # ---------------------------------------------------------------- state of the motors
 
