@@ -5,6 +5,7 @@ engine call.
     python bench/calls.py --quick --repeats 1    # smoke run
     python bench/calls.py --backends mujoco --stat min   # one engine; the least of the repeats
     python bench/calls.py --backends pybullet,physx      # PhysX against PyBullet
+    python bench/calls.py --stat min --clock cpu         # a machine busier than its cores
     python bench/ab.py BEFORE_TREE AFTER_TREE    # two source trees' runs in turn, compared
 
 Two robots: r2d2 resting on plane.urdf (4 wheels commanded, link 2 read) and a fixed-base
@@ -37,7 +38,11 @@ through a bound command (``sim.position_command``), and the r2d2 drive through a
 velocity command against each raw engine (for PhysX also against raw SAPIEN that applies
 PyBullet's link damping law itself, the floor of any layer that gives PhysX that law).
 
+A last table (PhysX): where its layer call costs more than raw SAPIEN's, the raw call, the raw
+call plus what the layer must do that idiomatic SAPIEN does not, and the layer's call.
+
 The machine is shared: compare ratios measured in one run, not absolute times across runs.
+Where it runs more work than it has cores, ``--clock cpu`` times this process's CPU time.
 """
 
 from __future__ import annotations
@@ -50,6 +55,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -517,10 +523,10 @@ def time_row(row: Row, n: int, reps: int, prepare: Callable[[], None] | None) ->
     work), appending seconds per call less the loop's own cost."""
 
     def loop(fn: Callable[[int], object]) -> float:
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         for i in range(n):
             fn(i & 1)
-        return (time.perf_counter() - t0) / n
+        return (CLOCK() - t0) / n
 
     empty = _alternating(lambda _: None, (0, 0))
     raw: dict[str, list[float]] = {}
@@ -559,7 +565,7 @@ def kuka_position_loop(backend: str, how: str, steps: int) -> Callable[[], float
     sim.step(10)
 
     def run() -> float:
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         if how == "step alone":
             for _ in range(steps):
                 sim.step()
@@ -573,12 +579,27 @@ def kuka_position_loop(backend: str, how: str, steps: int) -> Callable[[], float
             for k in range(steps):
                 targets[:] = path[k]
                 sim.step()
-        return (time.perf_counter() - t0) / steps
+        return (CLOCK() - t0) / steps
 
     return run
 
 
 # ---------------------------------------------------------------- main
+
+
+# the clock of every timing: wall time (default), or with --clock cpu this process's CPU time
+# (on a machine shared with more runnable work than cores, a wall-clock loop mostly measures
+# the time the process waits for a core: r2d2's 300 steps on PhysX took 0.49 s of wall time
+# and 0.07 s of CPU time at load 12 on 2 cores; every engine here steps on the calling thread)
+CLOCK: Callable[[], float] = time.perf_counter
+
+
+def use_clock(name: str) -> None:
+    """Time with ``name`` ("wall" or "cpu"), here and in bench/cases.py's loops (which read
+    ``time.perf_counter``)."""
+    global CLOCK
+    CLOCK = time.process_time if name == "cpu" else time.perf_counter
+    cases.time = SimpleNamespace(perf_counter=CLOCK)  # type: ignore[assignment]
 
 
 # each timing's summary over the repeats: the median, or with --stat min the least (on a machine
@@ -615,7 +636,15 @@ def main(argv: list[str] | None = None) -> int:
         default="median",
         help="summary of the repeats: median (default) or min (a machine busy with other work)",
     )
+    parser.add_argument(
+        "--clock",
+        choices=("wall", "cpu"),
+        default="wall",
+        help="wall time (default) or this process's CPU time (a machine with more runnable "
+        "work than cores)",
+    )
     args = parser.parse_args(argv)
+    use_clock(args.clock)
     reps, n = max(1, args.repeats), 200 if args.quick else max(10, args.calls)
     backends = [b for b in CALL_BACKENDS if b in args.backends.split(",")]
     if not backends:
@@ -626,12 +655,14 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"# simbridge calls: {platform.node()} | {platform.processor() or platform.machine()}"
         f" | Python {platform.python_version()} | {cases.engine_versions()}"
-        f" | {args.stat}s of {reps} repeats of {n} calls"
+        f" | {args.stat}s of {reps} repeats of {n} calls, {args.clock} clock"
     )
     print()
     missed = calls_table(backends, reps, n)
     position_table(backends, reps, 240 if args.quick else 1000)
     drive_table(backends, reps)
+    if "physx" in backends:
+        physx_bounds(reps, n)
     print()
     for b, count in missed.items():
         print(f"{LABEL[b]} calls over {TARGET}x PyBullet's: {count}")
@@ -748,6 +779,165 @@ def drive_table(backends: list[str], reps: int) -> None:
         )
 
 
+def physx_bounds(reps: int, n: int) -> None:
+    """Where a PhysX layer call costs more than the raw SAPIEN call: the raw call, the raw
+    call plus what the layer must do that idiomatic SAPIEN does not (written raw, as fast as
+    SAPIEN allows), and the layer's call, timed side by side in the same way as the calls
+    table. Steps: r2d2 in the air, the KUKA in free space (as the step rows)."""
+    print()
+    print("| PhysX, per call | raw µs | raw + the layer's work µs | layer µs | the layer's work |")
+    print("|------|------|------|------|------|")
+    for robot in ("r2d2", "kuka"):
+        worlds = [World("physx", robot) for _ in range(3)]  # layer, raw, raw + the layer's work
+        for name, columns, what, step in _physx_bound_rows(robot, *worlds):
+            row = Row(f"{robot}: {name}", columns)
+            for col in row.columns.values():
+                col(0)
+                col(1)
+            prepare = _prepare_step(worlds) if step and robot == "r2d2" else None
+            time_row(row, n, reps, prepare)
+            t = row.times
+            print(
+                f"| {row.name} | {fmt_us(t.get('raw pybullet'))} | {fmt_us(t.get('raw mujoco'))} "
+                f"| {fmt_us(t.get('physx'))} | {what} |"
+            )
+        for w in worlds:
+            w.sim.close()
+
+
+def _physx_bound_rows(
+    robot: str, layer: World, native: World, law: World
+) -> list[tuple[str, dict[str, Callable[[int], object]], str, bool]]:
+    """The rows of :func:`physx_bounds` (name, columns, the layer's work, a step row): the
+    columns in the slots of :data:`COLUMNS` that :func:`time_row` times, "raw pybullet" for
+    the raw call, "raw mujoco" for raw + the layer's work, "physx" for the layer's call."""
+    import sapien
+
+    from simbridge.backends.physx import inspect
+    from simbridge.transforms import transform_multiply
+
+    raw = _physx_raw(native)  # PhysX's own link damping
+    r = inspect.robot(law.sim, law.body)  # law: the layer's world, stepped raw
+    scene, art = inspect.scene(law.sim), r.built.articulation
+    link = r.built.links[law.link + 1]
+    ine = r.built.inertials[law.link + 1]
+    local = (ine.position, ine.orientation)
+    dofs = r.dof[law.joints]
+    forces_at = (
+        np.array([r.built.links[j + 1].index for j in law.joints]),
+        np.array([0 if r.model.joints[j].type == "prismatic" else 3 for j in law.joints]),
+    )
+    pre = _physx_damping_law(law.sim, law.body)
+
+    def law_step(_: object) -> None:
+        after = pre()
+        scene.step()
+        after()
+
+    def js_forces(_: object) -> object:
+        return art.qpos[dofs], art.qvel[dofs], art.get_link_incoming_joint_forces()[forces_at]
+
+    def link_f64(_: object) -> object:
+        pose = link.entity_pose
+        x, y, z = pose.p.tolist()
+        qw, qx, qy, qz = pose.q.tolist()
+        frame = ((x, y, z), (qx, qy, qz, qw))
+        lin, ang = link.linear_velocity.tolist(), link.angular_velocity.tolist()
+        return transform_multiply(frame, local), frame, lin, ang
+
+    def root_rewrite(pose: tuple[np.ndarray, np.ndarray]) -> None:
+        art.root_pose = sapien.Pose(pose[0], pose[1])
+        art.qpos = art.qpos
+        art.qvel = art.qvel
+
+    s, b = layer.sim, layer.body
+    here = (0.0, 0.0, 1.0) if robot == "r2d2" else (0.0, 0.0, 0.0)
+    there = (here[0] + 0.01, here[1], here[2])
+    q0 = (0.0, 0.0, 0.0, 1.0)
+    raw_poses = tuple((np.array(p_), np.array([1.0, 0.0, 0.0, 0.0])) for p_ in (here, there))
+    damping = "PyBullet's link damping law (2 velocity reads + 1 force per moving link)"
+    if r.damping is not None:
+        damping += " and the file's joint damping as joint forces"
+
+    def cols(
+        raw_fn: Callable[[Any], object],
+        work_fn: Callable[[Any], object],
+        layer_fn: Callable[[Any], object],
+        args: tuple[Any, Any] = (0, 0),
+        layer_args: tuple[Any, Any] = (0, 0),
+    ) -> dict[str, Callable[[int], object]]:
+        return {
+            "raw pybullet": _alternating(raw_fn, args),
+            "raw mujoco": _alternating(work_fn, args),
+            "physx": _alternating(layer_fn, layer_args),
+        }
+
+    return [
+        ("step, contact-free", cols(raw["step"], law_step, lambda _: s.step()), damping, True),
+        (
+            "joint_states(commanded joints)",
+            cols(raw["joint_states"], js_forces, lambda _: s.joint_states(b, layer.np_joints)),
+            "the applied torque: the joints' incoming forces read",
+            False,
+        ),
+        (
+            "link_state(link)",
+            cols(raw["link_state"], link_f64, lambda _: s.link_state(b, layer.link)),
+            "PyBullet's float64 centre-of-mass frame (SAPIEN's Pose product is float32)",
+            False,
+        ),
+        (
+            "reset_base_state(pose)",
+            cols(
+                raw["reset_base_state"],
+                root_rewrite,
+                lambda pose: s.reset_base_state(b, pose[0], pose[1]),
+                raw_poses,
+                ((here, q0), (there, q0)),
+            ),
+            "the joint state rewritten so that reads see the teleport whole",
+            False,
+        ),
+    ]
+
+
+def _physx_damping_law(sim: simbridge.Sim, body: int) -> Callable[[], Callable[[], None]]:
+    """Raw SAPIEN giving PhysX PyBullet's link damping (and the file's joint damping) on the
+    layer's world: called before ``scene.step()``, returns what to call after it."""
+    from simbridge.backends.physx import inspect
+
+    r = inspect.robot(sim, body)
+    p = sim.profile
+    links = r.moving_links
+    getters = []
+    for link in links:
+        getters += [link.get_linear_velocity, link.get_angular_velocity]
+    k = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), len(links))
+    buf = np.empty((2 * len(links), 3), dtype=np.float32)
+    adds = [(lk.add_force_torque, buf[2 * i], buf[2 * i + 1]) for i, lk in enumerate(links)]
+    art = r.built.articulation
+    joint_damping = r.damping
+    zeros = np.zeros(art.dof, dtype=np.float32)
+
+    def after() -> None:
+        art.qf = zeros
+
+    def nothing() -> None:
+        pass
+
+    def pre() -> Callable[[], None]:
+        buf[:] = [f() for f in getters]
+        np.multiply(buf, (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None], out=buf)
+        for add, a, b in adds:
+            add(a, b, "acceleration")
+        if joint_damping is None:
+            return nothing
+        art.qf = (-joint_damping * art.qvel).astype(np.float32)
+        return after
+
+    return pre
+
+
 def _mujoco_raw_chunks() -> float:
     """Raw MuJoCo's drive stepped in three ``mj_step(m, d, n)`` calls."""
     import mujoco
@@ -755,14 +945,14 @@ def _mujoco_raw_chunks() -> float:
     sim, robot = cases._layer_sim("mujoco")  # noqa: SLF001
     try:
         m, d, _, _ = cases._mujoco_raw_model(sim, robot)  # noqa: SLF001
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         mujoco.mj_step(m, d, cases.TURN_FROM)
         d.ctrl[:] = cases.TURN
         mujoco.mj_step(m, d, cases.FORWARD_FROM - cases.TURN_FROM)
         m.actuator_forcerange[:] = [-10.0, 10.0]
         d.ctrl[:] = cases.FORWARD
         mujoco.mj_step(m, d, 980 - cases.FORWARD_FROM)
-        return time.perf_counter() - t0
+        return CLOCK() - t0
     finally:
         sim.close()
 
@@ -772,13 +962,13 @@ def _layer_chunks() -> float:
     sim, robot = cases._layer_sim("mujoco")  # noqa: SLF001
     try:
         wheels = np.array(cases.WHEELS)
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         sim.step(cases.TURN_FROM)
         sim.set_joint_velocity(robot, wheels, cases.TURN, max_force=50.0)
         sim.step(cases.FORWARD_FROM - cases.TURN_FROM)
         sim.set_joint_velocity(robot, wheels, cases.FORWARD, max_force=10.0)
         sim.step(980 - cases.FORWARD_FROM)
-        return time.perf_counter() - t0
+        return CLOCK() - t0
     finally:
         sim.close()
 
