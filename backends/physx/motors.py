@@ -35,6 +35,7 @@ __all__ = ["MotorCommands", "DRIVE_DAMPING"]
 # PyBullet's over 240 steps
 DRIVE_DAMPING = 1e11
 SPEED_UNCAPPED = 1e6  # rad/s, m/s: a joint speed PhysX never reaches
+_POSITION = int(MotorMode.POSITION)  # as a plain int: an Enum member costs a lookup per use
 
 
 class MotorCommands:
@@ -118,7 +119,7 @@ class MotorCommands:
         """The robots that need work at every step (link damping, position motors, torques)."""
         damped = bool(self.profile.linear_damping or self.profile.angular_damping)
         for r in self._robots.values():
-            r.has_position = bool((r.motors["mode"] == MotorMode.POSITION).any())
+            r.has_position = bool((r.motors["mode"] == _POSITION).any())
         self._clamped = (
             [r for r in self._robots.values() if not r.static and r.ndof > 0]
             if self.profile.max_joint_velocity is not None
@@ -128,13 +129,7 @@ class MotorCommands:
             r
             for r in self._robots.values()
             if not r.static
-            and (
-                damped
-                or r.pending
-                or r.damping is not None
-                or bool(r.balls)
-                or bool((r.motors["mode"] == MotorMode.POSITION).any())
-            )
+            and (damped or r.pending or r.damping is not None or bool(r.balls) or r.has_position)
         ]
 
     def _before_step(self, robot: Robot) -> None:
@@ -166,7 +161,7 @@ class MotorCommands:
             for add, a_lin, a_ang in adds:
                 add(a_lin, a_ang, "acceleration")
         if robot.has_position:
-            position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
+            position = np.flatnonzero((m["mode"] == _POSITION) & ~m["ball"])
             q = art.qpos
             v = art.qvel
             inv_dt = 1.0 / self._dt
@@ -242,9 +237,8 @@ class MotorCommands:
         m["kp"][slots] = 0.0
         m["kd"][slots] = 1.0
         drive = robot.drive_force
-        ball = m["ball"]
-        for s, joint, effort, t, mf in zip(
-            *robot.slot_calls(slots, m["effort"]), target, max_force, strict=True
+        for s, joint, effort, ball, t, mf in zip(
+            *robot.slot_calls(slots, m["effort"], m["ball"]), target, max_force, strict=True
         ):
             f = mf if mf < effort else effort
             if f <= 0.0:
@@ -255,7 +249,7 @@ class MotorCommands:
             if drive[s] != f:
                 joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
                 drive[s] = f
-            if ball[s]:
+            if ball:
                 joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
             else:
                 joint.set_drive_velocity_target(t)
@@ -285,7 +279,7 @@ class MotorCommands:
                 self._apply(robot, s)
             self._refresh_active()
             return
-        m["mode"][slots] = MotorMode.POSITION
+        m["mode"][slots] = _POSITION
         m["target"][slots] = target
         m["max_force"][slots] = max_force
         m["kp"][slots] = kp
@@ -293,9 +287,8 @@ class MotorCommands:
         # the drive as _apply sets it for a position motor (its velocity target is set before
         # each step): changed only where the force limit changes
         drive = robot.drive_force
-        ball = m["ball"]
-        for s, joint, effort, mf in zip(
-            *robot.slot_calls(slots, m["effort"]), max_force, strict=True
+        for s, joint, effort, ball, mf in zip(
+            *robot.slot_calls(slots, m["effort"], m["ball"]), max_force, strict=True
         ):
             f = mf if mf < effort else effort
             if f <= 0.0:
@@ -306,7 +299,7 @@ class MotorCommands:
             if drive[s] != f:
                 joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
                 drive[s] = f
-            if ball[s]:
+            if ball:
                 joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
         if not robot.has_position:  # the robot's step gains the position law
             self._refresh_active()
