@@ -47,6 +47,7 @@ class MotorCommands:
         _robots: dict[int, Robot]
         _active: list[Robot]
         _clamped: list[Robot]
+        _generation: int
         _dt: float
 
         def _check_idle(self) -> None: ...
@@ -120,11 +121,13 @@ class MotorCommands:
         damped = bool(self.profile.linear_damping or self.profile.angular_damping)
         for r in self._robots.values():
             r.has_position = bool((r.motors["mode"] == _POSITION).any())
-        self._clamped = (
-            [r for r in self._robots.values() if not r.static and r.ndof > 0]
-            if self.profile.max_joint_velocity is not None
-            else []
-        )
+        if getattr(self, "_clamped_for", None) != self._generation:  # robots loaded or removed
+            self._clamped = (
+                [r for r in self._robots.values() if not r.static and r.ndof > 0]
+                if self.profile.max_joint_velocity is not None
+                else []
+            )
+            self._clamped_for = self._generation
         self._active = [
             r
             for r in self._robots.values()
