@@ -16,6 +16,7 @@ __all__ = [
     "BackendError",
     "UnknownBackendError",
     "BackendNotInstalledError",
+    "ExtraNotInstalledError",
     "BackendUnsupportedError",
     "DisplayError",
     "UrdfError",
@@ -74,6 +75,18 @@ class BackendNotInstalledError(BackendError, ImportError):
         super().__init__(
             f"backend {backend!r} needs the Python package {module!r}, which is not importable "
             f"({cause}); install it with: pip install {pip_name}"
+        )
+
+
+class ExtraNotInstalledError(SimbridgeError, ImportError):
+    """A feature needs a package of one of simbridge's extras that is not installed."""
+
+    def __init__(self, feature: str, module: str, pip_name: str, cause: BaseException):
+        self.feature = feature
+        self.module = module
+        super().__init__(
+            f"{feature} needs the Python package {module!r}, which is not importable "
+            f"({cause}); install it with: pip install '{pip_name}'"
         )
 
 
