@@ -58,12 +58,14 @@ def test_calls_table_times_every_call_on_every_engine():
     assert proc.returncode == 0, proc.stderr[-2000:]
     lines = proc.stdout.splitlines()
     engines = ["PyBullet", "MuJoCo"] + (["PhysX"] if "physx" in _usable_engines() else [])
-    header = next(line for line in lines if line.startswith("| call |"))
+    top = lines.index(next(line for line in lines if line.startswith("| call |")))
+    end = lines.index("", top)  # the calls table ends at the first blank line
+    header = lines[top]
     head = [c.strip() for c in header.strip("|").split("|")]
     layer = [head.index(f"{e} µs") for e in engines]
     ratio = [head.index(f"{e}/PyBullet") for e in engines[1:]]
     raw = [head.index(f"raw {e} µs") for e in engines]
-    calls = [line for line in lines if line.startswith(("| r2d2: ", "| kuka: "))]
+    calls = [line for line in lines[top:end] if line.startswith(("| r2d2: ", "| kuka: "))]
     names = {line.split("|")[1].split(":", 1)[1].strip() for line in calls}
     for call in (
         "set_joint_velocity (list)",
@@ -101,6 +103,9 @@ def test_calls_table_times_every_call_on_every_engine():
     assert len(drive) == len(engines) and all(float(line.split("|")[6]) > 0 for line in drive)
     summary = [line for line in lines if " calls over 1.5x PyBullet's: " in line]
     assert [line.split()[0] for line in summary] == engines[1:]
+    if "PhysX" in engines:  # the bounds table: raw, raw + the layer's work, the layer
+        bounds = [line for line in lines[end:] if line.startswith("| kuka: step, contact-free")]
+        assert len(bounds) == 1 and all(float(c) > 0 for c in bounds[0].split("|")[2:5])
 
 
 def _usable_engines() -> list[str]:
