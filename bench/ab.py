@@ -21,7 +21,7 @@ from pathlib import Path
 
 # the timed columns of bench/calls.py's tables (a layer's figure: raw engine calls do not
 # depend on the tree)
-TIMED = ("PyBullet µs", "MuJoCo µs", "plain µs", "bound µs")
+TIMED = ("PyBullet µs", "MuJoCo µs", "PhysX µs", "plain µs", "bound µs")
 
 
 def tables(text: str) -> dict[tuple[str, str], float]:

@@ -1,8 +1,11 @@
-"""Every call of the `Sim` interface, PyBullet and MuJoCo side by side, with the raw engine call.
+"""Every call of the `Sim` interface, PyBullet, MuJoCo and PhysX side by side, with the raw
+engine call.
 
     python bench/calls.py                        # full run (a few minutes)
     python bench/calls.py --quick --repeats 1    # smoke run
     python bench/calls.py --backends mujoco --stat min   # one engine; the least of the repeats
+    python bench/calls.py --backends pybullet,physx      # PhysX against PyBullet
+    python bench/calls.py --stat min --clock cpu         # a machine busier than its cores
     python bench/ab.py BEFORE_TREE AFTER_TREE    # two source trees' runs in turn, compared
 
 Two robots: r2d2 resting on plane.urdf (4 wheels commanded, link 2 read) and a fixed-base
@@ -10,23 +13,36 @@ KUKA iiwa (7 joints commanded, link 6 read). Every call is timed per call over a
 ``--calls`` calls (a command alternates two targets, so every call is a new command; a step
 row times single ``sim.step()`` calls, contact-free: r2d2 reset into the air before each
 repeat, the KUKA in free space). Each repeat times every row once, in turn (PyBullet layer,
-MuJoCo layer, raw PyBullet, raw MuJoCo), and the table gives the medians (``--stat min``: the
-least) over ``--repeats`` repeats, less the loop's own cost (a call of an empty lambda,
-measured the same way). The ratio is MuJoCo's layer call over PyBullet's layer call, the target
-(../shared/PERFORMANCE.md, issue 11) at most 1.5x.
+MuJoCo layer, PhysX layer, then the raw calls), and the table gives the medians (``--stat
+min``: the least) over ``--repeats`` repeats, less the loop's own cost (a call of an empty
+lambda, measured the same way). Each ratio is an engine's layer call over PyBullet's layer call,
+the target (../shared/PERFORMANCE.md, issues 11 and 21) at most 1.5x for every engine.
 
 Raw calls: PyBullet's own function on the same client (``setJointMotorControlArray``,
 ``getLinkState(computeLinkVelocity=1, computeForwardKinematics=1)``...); for MuJoCo, what a raw
 user writes: a ``d.ctrl[:] = array`` write (a model with one actuator per commanded joint),
 copies out of ``MjData`` for reads, ``mj_step`` on the same world without the layer's motors,
-brakes and damping. "-" where there is no raw counterpart.
+brakes and damping. For PhysX, raw SAPIEN 3 written the fast idiomatic way on a second world
+built by the layer from the same model (its own scene: the raw code changes it), with PhysX's
+own link damping (the profile's k) in place of the layer's per-step PyBullet law: joint
+handles, dof indices, links and poses looked up once; a drive target per joint
+(``set_drive_velocity_target``, ``set_drive_target``: SAPIEN's CPU articulation has no batched
+drive target), the force limit left as set (the layer, too, sets ``set_drive_properties`` only
+when it changes); ``art.qf``/``art.qpos``/``art.qvel`` array writes; ``entity_pose``,
+``cmass_local_pose``, ``linear_velocity``/``angular_velocity`` reads; ``scene.step()``.
+"-" where there is no raw counterpart.
 
 A second table: the position-controlled KUKA, a new target every step: the command and the
 step against the step alone (the target: within 1.3x), through ``set_joint_position`` and
 through a bound command (``sim.position_command``), and the r2d2 drive through a bound
-velocity command against raw MuJoCo and PyBullet.
+velocity command against each raw engine (for PhysX also against raw SAPIEN that applies
+PyBullet's link damping law itself, the floor of any layer that gives PhysX that law).
+
+A last table (PhysX): where its layer call costs more than raw SAPIEN's, the raw call, the raw
+call plus what the layer must do that idiomatic SAPIEN does not, and the layer's call.
 
 The machine is shared: compare ratios measured in one run, not absolute times across runs.
+Where it runs more work than it has cores, ``--clock cpu`` times this process's CPU time.
 """
 
 from __future__ import annotations
@@ -39,6 +55,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -51,7 +68,7 @@ import cases  # noqa: E402  (bench/cases.py: the r2d2 world and the raw drives)
 import simbridge  # noqa: E402
 
 KUKA = "kuka_iiwa/model.urdf"
-TARGET = 1.5  # no MuJoCo call more than 1.5x the same call on PyBullet
+TARGET = 1.5  # no MuJoCo or PhysX call more than 1.5x the same call on PyBullet
 
 
 @dataclass
@@ -64,9 +81,10 @@ class Row:
     times: dict[str, list[float]] = field(default_factory=dict)
 
 
-COLUMNS = ("pybullet", "mujoco", "raw pybullet", "raw mujoco")
-# the engines this table has raw code for (PhysX's column is in bench/run.py so far)
-CALL_BACKENDS = [b for b in cases.BACKENDS if b in ("pybullet", "mujoco")]
+COLUMNS = ("pybullet", "mujoco", "physx", "raw pybullet", "raw mujoco", "raw physx")
+# every engine installed (PhysX where its extra is: cases.BACKENDS)
+CALL_BACKENDS = list(cases.BACKENDS)
+LABEL = {"pybullet": "PyBullet", "mujoco": "MuJoCo", "physx": "PhysX"}
 
 
 # ---------------------------------------------------------------- worlds
@@ -247,6 +265,89 @@ def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
     }
 
 
+def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
+    """Raw SAPIEN 3 on a world of its own (``w``: built by the layer from the same model, never
+    stepped by it), PhysX's own link damping in place of the layer's per-step law
+    (as cases._physx_raw_world); every handle looked up once."""
+    import sapien
+
+    from simbridge.backends.physx import inspect
+    from simbridge.backends.physx.motors import DRIVE_DAMPING
+
+    scene, r = inspect.scene(w.sim), inspect.robot(w.sim, w.body)
+    for moving in r.moving_links:  # PhysX's own link damping, the profile's k
+        moving.linear_damping = w.sim.profile.linear_damping
+        moving.angular_damping = w.sim.profile.angular_damping
+    joints = [r.joints[j] for j in w.joints]
+    art = r.built.articulation
+    link = r.built.links[w.link + 1]
+    root = r.built.links[0]
+    link_cm, root_cm = link.cmass_local_pose, root.cmass_local_pose  # fixed at load
+    dofs = r.dof[w.joints]
+    qf = np.zeros(art.dof, dtype=np.float32)
+    groups = tuple([r.joints[j] for j in g] for g in _groups(w))
+
+    def velocity(t: np.ndarray) -> None:
+        for j, v in zip(joints, t.tolist(), strict=True):
+            j.set_drive_velocity_target(v)
+
+    def position(t: np.ndarray) -> None:
+        for j, v in zip(joints, t.tolist(), strict=True):
+            j.set_drive_target(v)
+
+    def torque(t: np.ndarray) -> None:
+        qf[dofs] = t
+        art.qf = qf
+
+    def link_state(_: object) -> object:
+        pose = link.entity_pose
+        return pose * link_cm, pose, link.linear_velocity, link.angular_velocity
+
+    def base_state(_: object) -> object:
+        return root.entity_pose * root_cm, root.linear_velocity, root.angular_velocity
+
+    def reset_joints(q: np.ndarray) -> None:
+        qpos = art.qpos
+        qvel = art.qvel
+        qpos[dofs] = q
+        qvel[dofs] = 0.0
+        art.qpos = qpos
+        art.qvel = qvel
+
+    def reset_base(pose: tuple[np.ndarray, np.ndarray]) -> None:
+        art.root_pose = sapien.Pose(pose[0], pose[1])
+
+    def two_groups(i: int) -> None:
+        for j in groups[i]:
+            j.set_drive_velocity_target(1.0 + i)
+
+    def mode_change(i: int) -> None:
+        # PhysX's own modes: a velocity drive (stiffness 0) or a position drive (stiffness kp)
+        for j in joints:
+            if i:
+                j.set_drive_properties(0.0, DRIVE_DAMPING, 50.0, "force")
+                j.set_drive_velocity_target(0.5)
+            else:
+                j.set_drive_properties(1e4, 1e2, 50.0, "force")
+                j.set_drive_target(0.2)
+
+    return {
+        "set_joint_velocity": velocity,
+        "set_joint_position": position,
+        "set_joint_torque": torque,
+        "link_state": link_state,
+        "base_state": base_state,
+        "joint_states": lambda _: (art.qpos[dofs], art.qvel[dofs]),
+        "dynamics_info": lambda _: (link.mass, link.inertia, link_cm),
+        "num_joints": lambda _: len(art.joints),
+        "reset_joint_state": reset_joints,
+        "reset_base_state": reset_base,
+        "step": lambda _: scene.step(),
+        "two groups": two_groups,
+        "mode change": mode_change,
+    }
+
+
 def _groups(w: World) -> tuple[list[int], list[int]]:
     """The commanded joints in two halves (r2d2's right and left wheels)."""
     half = len(w.joints) // 2
@@ -263,8 +364,11 @@ def _targets(w: World, kind: str) -> tuple[Any, Any]:
     return base * 2.0, base * -2.0
 
 
-def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
-    """The rows of one robot: each call on every backend present, and its raw counterparts."""
+def rows_for(
+    robot: str, worlds: dict[str, World], raw_worlds: dict[str, World] | None = None
+) -> list[Row]:
+    """The rows of one robot: each call on every backend present, and its raw counterparts
+    (raw PhysX on its own world, ``raw_worlds["physx"]``)."""
     layer: dict[str, dict[str, Callable[[Any], object]]] = {}
     raw: dict[str, dict[str, Callable[[Any], object]]] = {}
     for backend, w in worlds.items():
@@ -307,6 +411,8 @@ def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
         }
         if backend == "pybullet":
             raw[backend] = _pybullet_raw(w)
+        elif backend == "physx":
+            raw[backend] = _physx_raw((raw_worlds or {}).get("physx") or World("physx", robot))
         else:
             raw[backend] = _mujoco_raw(w)
     w0 = next(iter(worlds.values()))
@@ -382,8 +488,8 @@ def rows_for(robot: str, worlds: dict[str, World]) -> list[Row]:
             fn = raw[backend].get(raw_key)
             if fn is None:
                 continue
-            if backend == "mujoco" and raw_key == "reset_base_state":
-                cols["raw mujoco"] = _alternating(fn, raw_poses)
+            if backend in ("mujoco", "physx") and raw_key == "reset_base_state":
+                cols[f"raw {backend}"] = _alternating(fn, raw_poses)
             elif backend == "pybullet" and raw_key.startswith(("set_joint", "reset_joint")):
                 cols["raw pybullet"] = _alternating(fn, _lists(raw_args))
             else:
@@ -401,11 +507,11 @@ def _lists(pair: tuple[Any, Any]) -> tuple[Any, Any]:
     return tuple(v.tolist() if isinstance(v, np.ndarray) else v for v in pair)  # type: ignore[return-value]
 
 
-def _prepare_step(worlds: dict[str, World]) -> Callable[[], None]:
+def _prepare_step(worlds: list[World]) -> Callable[[], None]:
     """Before each timing of r2d2's step row: r2d2 back into the air at rest (no contact)."""
 
     def prepare() -> None:
-        for w in worlds.values():
+        for w in worlds:
             w.sim.reset_base_state(w.body, (0, 0, 1.0), (0, 0, 0, 1), (0, 0, 0), (0, 0, 0))
 
     return prepare
@@ -417,10 +523,10 @@ def time_row(row: Row, n: int, reps: int, prepare: Callable[[], None] | None) ->
     work), appending seconds per call less the loop's own cost."""
 
     def loop(fn: Callable[[int], object]) -> float:
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         for i in range(n):
             fn(i & 1)
-        return (time.perf_counter() - t0) / n
+        return (CLOCK() - t0) / n
 
     empty = _alternating(lambda _: None, (0, 0))
     raw: dict[str, list[float]] = {}
@@ -459,7 +565,7 @@ def kuka_position_loop(backend: str, how: str, steps: int) -> Callable[[], float
     sim.step(10)
 
     def run() -> float:
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         if how == "step alone":
             for _ in range(steps):
                 sim.step()
@@ -473,12 +579,27 @@ def kuka_position_loop(backend: str, how: str, steps: int) -> Callable[[], float
             for k in range(steps):
                 targets[:] = path[k]
                 sim.step()
-        return (time.perf_counter() - t0) / steps
+        return (CLOCK() - t0) / steps
 
     return run
 
 
 # ---------------------------------------------------------------- main
+
+
+# the clock of every timing: wall time (default), or with --clock cpu this process's CPU time
+# (on a machine shared with more runnable work than cores, a wall-clock loop mostly measures
+# the time the process waits for a core: r2d2's 300 steps on PhysX took 0.49 s of wall time
+# and 0.07 s of CPU time at load 12 on 2 cores; every engine here steps on the calling thread)
+CLOCK: Callable[[], float] = time.perf_counter
+
+
+def use_clock(name: str) -> None:
+    """Time with ``name`` ("wall" or "cpu"), here and in bench/cases.py's loops (which read
+    ``time.perf_counter``)."""
+    global CLOCK
+    CLOCK = time.process_time if name == "cpu" else time.perf_counter
+    cases.time = SimpleNamespace(perf_counter=CLOCK)  # type: ignore[assignment]
 
 
 # each timing's summary over the repeats: the median, or with --stat min the least (on a machine
@@ -515,7 +636,15 @@ def main(argv: list[str] | None = None) -> int:
         default="median",
         help="summary of the repeats: median (default) or min (a machine busy with other work)",
     )
+    parser.add_argument(
+        "--clock",
+        choices=("wall", "cpu"),
+        default="wall",
+        help="wall time (default) or this process's CPU time (a machine with more runnable "
+        "work than cores)",
+    )
     args = parser.parse_args(argv)
+    use_clock(args.clock)
     reps, n = max(1, args.repeats), 200 if args.quick else max(10, args.calls)
     backends = [b for b in CALL_BACKENDS if b in args.backends.split(",")]
     if not backends:
@@ -526,44 +655,57 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"# simbridge calls: {platform.node()} | {platform.processor() or platform.machine()}"
         f" | Python {platform.python_version()} | {cases.engine_versions()}"
-        f" | {args.stat}s of {reps} repeats of {n} calls"
+        f" | {args.stat}s of {reps} repeats of {n} calls, {args.clock} clock"
     )
     print()
     missed = calls_table(backends, reps, n)
     position_table(backends, reps, 240 if args.quick else 1000)
     drive_table(backends, reps)
+    if "physx" in backends:
+        physx_bounds(reps, n)
     print()
-    print(f"calls over {TARGET}x PyBullet's: {missed}")
+    for b, count in missed.items():
+        print(f"{LABEL[b]} calls over {TARGET}x PyBullet's: {count}")
     return 0
 
 
-def calls_table(backends: list[str], reps: int, n: int) -> int:
-    """The table of single calls; returns how many miss the 1.5x target."""
-    print("| call | PyBullet µs | MuJoCo µs | MuJoCo/PyBullet | raw PyBullet µs | raw MuJoCo µs |")
-    print("|------|------|------|------|------|------|")
-    missed = 0
+def calls_table(backends: list[str], reps: int, n: int) -> dict[str, int]:
+    """The table of single calls; returns per engine how many of its calls miss the 1.5x
+    target (PyBullet's layer call being the reference)."""
+    others = [b for b in backends if b != "pybullet"] if "pybullet" in backends else []
+    head = [f"{LABEL[b]} µs" for b in backends]
+    head += [f"{LABEL[b]}/PyBullet" for b in others]
+    head += [f"raw {LABEL[b]} µs" for b in backends]
+    print(f"| call | {' | '.join(head)} |")
+    print("|------" * (len(head) + 1) + "|")
+    missed = dict.fromkeys(others, 0)
     for robot in ("r2d2", "kuka"):
         worlds = {b: World(b, robot) for b in backends}
-        rows = rows_for(robot, worlds)
+        raw_worlds = {"physx": World("physx", robot)} if "physx" in backends else {}
+        rows = rows_for(robot, worlds, raw_worlds)
         for row in rows:
             for col in row.columns.values():  # warm up: caches, first compile of a path
                 col(0)
                 col(1)
-            prepare = _prepare_step(worlds) if row.name == "r2d2: step, contact-free" else None
+            prepare = None
+            if row.name == "r2d2: step, contact-free":
+                prepare = _prepare_step([*worlds.values(), *raw_worlds.values()])
             time_row(row, n, reps, prepare)
-            pb, mj = row.times.get("pybullet"), row.times.get("mujoco")
-            ratio = ""
-            if pb and mj and min(STAT(pb), STAT(mj)) >= RESOLUTION_S:
-                r = STAT(mj) / STAT(pb)
-                ok = r <= TARGET
-                missed += not ok
-                ratio = f"{r:.2f}" + ("" if ok else " MISSED")
-            print(
-                f"| {row.name} | {fmt_us(pb)} | {fmt_us(mj)} | {ratio} "
-                f"| {fmt_us(row.times.get('raw pybullet'))} "
-                f"| {fmt_us(row.times.get('raw mujoco'))} |"
-            )
-        for w in worlds.values():
+            pb = row.times.get("pybullet")
+            ratios = []
+            for b in others:
+                t = row.times.get(b)
+                ratio = ""
+                if pb and t and min(STAT(pb), STAT(t)) >= RESOLUTION_S:
+                    r = STAT(t) / STAT(pb)
+                    ok = r <= TARGET
+                    missed[b] += not ok
+                    ratio = f"{r:.2f}" + ("" if ok else " MISSED")
+                ratios.append(ratio)
+            cells = [fmt_us(row.times.get(b)) for b in backends] + ratios
+            cells += [fmt_us(row.times.get(f"raw {b}")) for b in backends]
+            print(f"| {row.name} | {' | '.join(cells)} |")
+        for w in [*worlds.values(), *raw_worlds.values()]:
             w.sim.close()
     return missed
 
@@ -571,8 +713,9 @@ def calls_table(backends: list[str], reps: int, n: int) -> int:
 def position_table(backends: list[str], reps: int, steps: int) -> None:
     """The position-controlled KUKA: command + step against the step alone."""
     print()
-    print("| per step | PyBullet µs | ratio | MuJoCo µs | ratio | target |")
-    print("|------|------|------|------|------|------|")
+    head = " | ".join(f"{LABEL[b]} µs | ratio" for b in backends)
+    print(f"| per step | {head} | target |")
+    print("|------" * (2 * len(backends) + 2) + "|")
     loops = {
         how: {b: kuka_position_loop(b, how, steps) for b in backends}
         for how in ("step alone", "set_joint_position", "bound")
@@ -588,10 +731,7 @@ def position_table(backends: list[str], reps: int, steps: int) -> None:
         ("bound", "KUKA: position_command targets[:] = q + step"),
     ):
         cells = []
-        for b in ("pybullet", "mujoco"):
-            if b not in backends:
-                cells += ["-", "-"]
-                continue
+        for b in backends:
             med = STAT(times[how][b])
             base = STAT(times["step alone"][b])
             cells += [f"{med * 1e6:.2f}", f"{med / base:.2f}"]
@@ -601,13 +741,17 @@ def position_table(backends: list[str], reps: int, steps: int) -> None:
 def drive_table(backends: list[str], reps: int) -> None:
     """The r2d2 drive: raw, plain set_joint_velocity, a bound velocity command; for MuJoCo
     also the stepping alone (the schedule in three step(n) calls, one command at each change:
-    no Python per step), the floor under any per-step loop."""
+    no Python per step), the floor under any per-step loop; for PhysX also the layer against
+    raw SAPIEN that applies PyBullet's link damping law itself (cases.DAMPED_FLOOR)."""
     drives: dict[str, list[Callable[[], float]]] = {
         b: [cases.DRIVES[b].raw, cases.DRIVES[b].layer, cases.BOUND_DRIVES[b].layer]
         for b in backends
     }
     if "mujoco" in drives:
         drives["mujoco"] += [_mujoco_raw_chunks, _layer_chunks]
+    floor = "physx, raw with PyBullet's damping law"
+    if "physx" in drives and cases.DAMPED_FLOOR is not None:
+        drives[floor] = [cases.DAMPED_FLOOR.raw]  # against the physx row's plain and bound
     dtimes: dict[str, list[list[float]]] = {b: [[] for _ in fns] for b, fns in drives.items()}
     for _ in range(reps):
         for b, fns in drives.items():
@@ -617,10 +761,15 @@ def drive_table(backends: list[str], reps: int) -> None:
     head = "| raw µs | plain µs | ratio | bound µs | ratio | target |"
     print(f"| r2d2 drive, 980 steps, per step {head} stepping alone: raw, layer µs |")
     print("|------|------|------|------|------|------|------|------|")
-    for b in backends:
+    for b in drives:
         med = [STAT(x) for x in dtimes[b]]
-        raw_m, plain_m, bound_m = med[:3]
-        target = "1.15x" if b == "mujoco" else "1.03x"
+        if b == floor:  # the physx layer's figures over this raw floor; no target
+            raw_m = med[0]
+            plain_m, bound_m = (STAT(x) for x in dtimes["physx"][1:3])
+            target = "-"
+        else:
+            raw_m, plain_m, bound_m = med[:3]
+            target = f"{cases.DRIVES[b].target:.2f}x"
         alone = "-"
         if len(med) == 5:
             alone = f"{med[3] * 1e6:.2f}, {med[4] * 1e6:.2f} ({med[4] / med[3]:.3f})"
@@ -630,6 +779,165 @@ def drive_table(backends: list[str], reps: int) -> None:
         )
 
 
+def physx_bounds(reps: int, n: int) -> None:
+    """Where a PhysX layer call costs more than the raw SAPIEN call: the raw call, the raw
+    call plus what the layer must do that idiomatic SAPIEN does not (written raw, as fast as
+    SAPIEN allows), and the layer's call, timed side by side in the same way as the calls
+    table. Steps: r2d2 in the air, the KUKA in free space (as the step rows)."""
+    print()
+    print("| PhysX, per call | raw µs | raw + the layer's work µs | layer µs | the layer's work |")
+    print("|------|------|------|------|------|")
+    for robot in ("r2d2", "kuka"):
+        worlds = [World("physx", robot) for _ in range(3)]  # layer, raw, raw + the layer's work
+        for name, columns, what, step in _physx_bound_rows(robot, *worlds):
+            row = Row(f"{robot}: {name}", columns)
+            for col in row.columns.values():
+                col(0)
+                col(1)
+            prepare = _prepare_step(worlds) if step and robot == "r2d2" else None
+            time_row(row, n, reps, prepare)
+            t = row.times
+            print(
+                f"| {row.name} | {fmt_us(t.get('raw pybullet'))} | {fmt_us(t.get('raw mujoco'))} "
+                f"| {fmt_us(t.get('physx'))} | {what} |"
+            )
+        for w in worlds:
+            w.sim.close()
+
+
+def _physx_bound_rows(
+    robot: str, layer: World, native: World, law: World
+) -> list[tuple[str, dict[str, Callable[[int], object]], str, bool]]:
+    """The rows of :func:`physx_bounds` (name, columns, the layer's work, a step row): the
+    columns in the slots of :data:`COLUMNS` that :func:`time_row` times, "raw pybullet" for
+    the raw call, "raw mujoco" for raw + the layer's work, "physx" for the layer's call."""
+    import sapien
+
+    from simbridge.backends.physx import inspect
+    from simbridge.transforms import transform_multiply
+
+    raw = _physx_raw(native)  # PhysX's own link damping
+    r = inspect.robot(law.sim, law.body)  # law: the layer's world, stepped raw
+    scene, art = inspect.scene(law.sim), r.built.articulation
+    link = r.built.links[law.link + 1]
+    ine = r.built.inertials[law.link + 1]
+    local = (ine.position, ine.orientation)
+    dofs = r.dof[law.joints]
+    forces_at = (
+        np.array([r.built.links[j + 1].index for j in law.joints]),
+        np.array([0 if r.model.joints[j].type == "prismatic" else 3 for j in law.joints]),
+    )
+    pre = _physx_damping_law(law.sim, law.body)
+
+    def law_step(_: object) -> None:
+        after = pre()
+        scene.step()
+        after()
+
+    def js_forces(_: object) -> object:
+        return art.qpos[dofs], art.qvel[dofs], art.get_link_incoming_joint_forces()[forces_at]
+
+    def link_f64(_: object) -> object:
+        pose = link.entity_pose
+        x, y, z = pose.p.tolist()
+        qw, qx, qy, qz = pose.q.tolist()
+        frame = ((x, y, z), (qx, qy, qz, qw))
+        lin, ang = link.linear_velocity.tolist(), link.angular_velocity.tolist()
+        return transform_multiply(frame, local), frame, lin, ang
+
+    def root_rewrite(pose: tuple[np.ndarray, np.ndarray]) -> None:
+        art.root_pose = sapien.Pose(pose[0], pose[1])
+        art.qpos = art.qpos
+        art.qvel = art.qvel
+
+    s, b = layer.sim, layer.body
+    here = (0.0, 0.0, 1.0) if robot == "r2d2" else (0.0, 0.0, 0.0)
+    there = (here[0] + 0.01, here[1], here[2])
+    q0 = (0.0, 0.0, 0.0, 1.0)
+    raw_poses = tuple((np.array(p_), np.array([1.0, 0.0, 0.0, 0.0])) for p_ in (here, there))
+    damping = "PyBullet's link damping law (2 velocity reads + 1 force per moving link)"
+    if r.damping is not None:
+        damping += " and the file's joint damping as joint forces"
+
+    def cols(
+        raw_fn: Callable[[Any], object],
+        work_fn: Callable[[Any], object],
+        layer_fn: Callable[[Any], object],
+        args: tuple[Any, Any] = (0, 0),
+        layer_args: tuple[Any, Any] = (0, 0),
+    ) -> dict[str, Callable[[int], object]]:
+        return {
+            "raw pybullet": _alternating(raw_fn, args),
+            "raw mujoco": _alternating(work_fn, args),
+            "physx": _alternating(layer_fn, layer_args),
+        }
+
+    return [
+        ("step, contact-free", cols(raw["step"], law_step, lambda _: s.step()), damping, True),
+        (
+            "joint_states(commanded joints)",
+            cols(raw["joint_states"], js_forces, lambda _: s.joint_states(b, layer.np_joints)),
+            "the applied torque: the joints' incoming forces read",
+            False,
+        ),
+        (
+            "link_state(link)",
+            cols(raw["link_state"], link_f64, lambda _: s.link_state(b, layer.link)),
+            "PyBullet's float64 centre-of-mass frame (SAPIEN's Pose product is float32)",
+            False,
+        ),
+        (
+            "reset_base_state(pose)",
+            cols(
+                raw["reset_base_state"],
+                root_rewrite,
+                lambda pose: s.reset_base_state(b, pose[0], pose[1]),
+                raw_poses,
+                ((here, q0), (there, q0)),
+            ),
+            "the joint state rewritten so that reads see the teleport whole",
+            False,
+        ),
+    ]
+
+
+def _physx_damping_law(sim: simbridge.Sim, body: int) -> Callable[[], Callable[[], None]]:
+    """Raw SAPIEN giving PhysX PyBullet's link damping (and the file's joint damping) on the
+    layer's world: called before ``scene.step()``, returns what to call after it."""
+    from simbridge.backends.physx import inspect
+
+    r = inspect.robot(sim, body)
+    p = sim.profile
+    links = r.moving_links
+    getters = []
+    for link in links:
+        getters += [link.get_linear_velocity, link.get_angular_velocity]
+    k = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), len(links))
+    buf = np.empty((2 * len(links), 3), dtype=np.float32)
+    adds = [(lk.add_force_torque, buf[2 * i], buf[2 * i + 1]) for i, lk in enumerate(links)]
+    art = r.built.articulation
+    joint_damping = r.damping
+    zeros = np.zeros(art.dof, dtype=np.float32)
+
+    def after() -> None:
+        art.qf = zeros
+
+    def nothing() -> None:
+        pass
+
+    def pre() -> Callable[[], None]:
+        buf[:] = [f() for f in getters]
+        np.multiply(buf, (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None], out=buf)
+        for add, a, b in adds:
+            add(a, b, "acceleration")
+        if joint_damping is None:
+            return nothing
+        art.qf = (-joint_damping * art.qvel).astype(np.float32)
+        return after
+
+    return pre
+
+
 def _mujoco_raw_chunks() -> float:
     """Raw MuJoCo's drive stepped in three ``mj_step(m, d, n)`` calls."""
     import mujoco
@@ -637,14 +945,14 @@ def _mujoco_raw_chunks() -> float:
     sim, robot = cases._layer_sim("mujoco")  # noqa: SLF001
     try:
         m, d, _, _ = cases._mujoco_raw_model(sim, robot)  # noqa: SLF001
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         mujoco.mj_step(m, d, cases.TURN_FROM)
         d.ctrl[:] = cases.TURN
         mujoco.mj_step(m, d, cases.FORWARD_FROM - cases.TURN_FROM)
         m.actuator_forcerange[:] = [-10.0, 10.0]
         d.ctrl[:] = cases.FORWARD
         mujoco.mj_step(m, d, 980 - cases.FORWARD_FROM)
-        return time.perf_counter() - t0
+        return CLOCK() - t0
     finally:
         sim.close()
 
@@ -654,13 +962,13 @@ def _layer_chunks() -> float:
     sim, robot = cases._layer_sim("mujoco")  # noqa: SLF001
     try:
         wheels = np.array(cases.WHEELS)
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         sim.step(cases.TURN_FROM)
         sim.set_joint_velocity(robot, wheels, cases.TURN, max_force=50.0)
         sim.step(cases.FORWARD_FROM - cases.TURN_FROM)
         sim.set_joint_velocity(robot, wheels, cases.FORWARD, max_force=10.0)
         sim.step(980 - cases.FORWARD_FROM)
-        return time.perf_counter() - t0
+        return CLOCK() - t0
     finally:
         sim.close()
 

@@ -314,7 +314,7 @@ def physx_raw_drive(record: bool, pybullet_damping: bool = False) -> Callable[[]
                 getters += [link.get_linear_velocity, link.get_angular_velocity]
             p = sim.profile
             n = len(r.moving_links)
-            k = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), n)
+            damp = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), n)
             buf = np.empty((2 * n, 3), dtype=np.float32)
             adds = [
                 (link.add_force_torque, buf[2 * i], buf[2 * i + 1])
@@ -338,7 +338,7 @@ def physx_raw_drive(record: bool, pybullet_damping: bool = False) -> Callable[[]
                         j.set_drive_velocity_target(v)
                 if pybullet_damping:
                     buf[:] = [f() for f in getters]
-                    buf *= (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
+                    buf *= (damp * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
                     for add, a, b in adds:
                         add(a, b, "acceleration")
                 scene.step()

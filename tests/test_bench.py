@@ -45,10 +45,10 @@ def test_bench_runs_with_a_tiny_repeat_count():
         assert float(cells[4]) > 0, line
 
 
-def test_calls_table_times_every_call_on_both_engines():
-    """bench/calls.py: every Sim call on r2d2 and a fixed KUKA, PyBullet and MuJoCo side by
-    side (a figure in each column, a ratio), then command + step against the step alone, and
-    the drive raw, plain and through a bound command."""
+def test_calls_table_times_every_call_on_every_engine():
+    """bench/calls.py: every Sim call on r2d2 and a fixed KUKA, every installed engine side by
+    side (a figure in each engine's column, its ratio over PyBullet's), then command + step
+    against the step alone, and the drive raw, plain and through a bound command."""
     proc = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "calls.py"), "--quick", "--repeats", "1"],
         capture_output=True,
@@ -57,7 +57,15 @@ def test_calls_table_times_every_call_on_both_engines():
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     lines = proc.stdout.splitlines()
-    calls = [line for line in lines if line.startswith(("| r2d2: ", "| kuka: "))]
+    engines = ["PyBullet", "MuJoCo"] + (["PhysX"] if "physx" in _usable_engines() else [])
+    top = lines.index(next(line for line in lines if line.startswith("| call |")))
+    end = lines.index("", top)  # the calls table ends at the first blank line
+    header = lines[top]
+    head = [c.strip() for c in header.strip("|").split("|")]
+    layer = [head.index(f"{e} µs") for e in engines]
+    ratio = [head.index(f"{e}/PyBullet") for e in engines[1:]]
+    raw = [head.index(f"raw {e} µs") for e in engines]
+    calls = [line for line in lines[top:end] if line.startswith(("| r2d2: ", "| kuka: "))]
     names = {line.split("|")[1].split(":", 1)[1].strip() for line in calls}
     for call in (
         "set_joint_velocity (list)",
@@ -77,13 +85,33 @@ def test_calls_table_times_every_call_on_both_engines():
     assert len(calls) == 2 * len(names)  # each call on both robots
     for line in calls:
         cells = [c.strip() for c in line.strip("|").split("|")]
+        assert len(cells) == len(head), line
         # a call within the noise of the timing loop's own cost reads "<0.01", with no ratio
-        floor = "<0.01" in cells[1:3]
-        assert all(c == "<0.01" or float(c) > 0 for c in cells[1:3]), line
-        assert (cells[3] == "") if floor else float(cells[3].split()[0]) > 0, line
+        pb = cells[layer[0]]
+        for c in (cells[k] for k in layer):
+            assert c == "<0.01" or float(c) > 0, line
+        for k, r in zip(layer[1:], ratio, strict=True):
+            floor = "<0.01" in (pb, cells[k])
+            assert (cells[r] == "") if floor else float(cells[r].split()[0]) > 0, line
+    # every engine has a raw figure for the step and the reads a raw user makes
+    for call in ("step, contact-free", "link_state(link)", "joint_states(commanded joints)"):
+        line = next(line for line in calls if line.startswith(f"| r2d2: {call} |"))
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert all(float(cells[k]) > 0 for k in raw), line
     assert any("position_command targets" in line for line in lines)
-    drive = [line for line in lines if line.startswith(("| pybullet |", "| mujoco |"))]
-    assert len(drive) == 2 and all(float(line.split("|")[6]) > 0 for line in drive)
+    drive = [line for line in lines if line.startswith(tuple(f"| {e.lower()} |" for e in engines))]
+    assert len(drive) == len(engines) and all(float(line.split("|")[6]) > 0 for line in drive)
+    summary = [line for line in lines if " calls over 1.5x PyBullet's: " in line]
+    assert [line.split()[0] for line in summary] == engines[1:]
+    if "PhysX" in engines:  # the bounds table: raw, raw + the layer's work, the layer
+        bounds = [line for line in lines[end:] if line.startswith("| kuka: step, contact-free")]
+        assert len(bounds) == 1 and all(float(c) > 0 for c in bounds[0].split("|")[2:5])
+
+
+def _usable_engines() -> list[str]:
+    from simbridge.registry import unavailable_reason
+
+    return [b for b in simbridge.available_backends() if unavailable_reason(b) is None]
 
 
 def test_calls_on_one_engine_and_the_before_after_table_of_two_trees(tmp_path):

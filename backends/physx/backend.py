@@ -179,7 +179,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             movable = movable_joints(table)
             robot = self._robot(body, model, built, table, fixed, movable)
             robot.motors = default_motors(model, movable, self.profile)
-            robot.drive_force = np.full(len(movable), np.nan)
+            robot.drive_force = [float("nan")] * len(movable)
             robot.moving_links = [
                 comp for comp, lp in zip(built.links, plan.links, strict=False) if not lp.static
             ]

@@ -35,6 +35,7 @@ __all__ = ["MotorCommands", "DRIVE_DAMPING"]
 # PyBullet's over 240 steps
 DRIVE_DAMPING = 1e11
 SPEED_UNCAPPED = 1e6  # rad/s, m/s: a joint speed PhysX never reaches
+_POSITION = int(MotorMode.POSITION)  # as a plain int: an Enum member costs a lookup per use
 
 
 class MotorCommands:
@@ -46,6 +47,7 @@ class MotorCommands:
         _robots: dict[int, Robot]
         _active: list[Robot]
         _clamped: list[Robot]
+        _generation: int
         _dt: float
 
         def _check_idle(self) -> None: ...
@@ -118,23 +120,19 @@ class MotorCommands:
         """The robots that need work at every step (link damping, position motors, torques)."""
         damped = bool(self.profile.linear_damping or self.profile.angular_damping)
         for r in self._robots.values():
-            r.has_position = bool((r.motors["mode"] == MotorMode.POSITION).any())
-        self._clamped = (
-            [r for r in self._robots.values() if not r.static and r.ndof > 0]
-            if self.profile.max_joint_velocity is not None
-            else []
-        )
+            r.has_position = bool((r.motors["mode"] == _POSITION).any())
+        if getattr(self, "_clamped_for", None) != self._generation:  # robots loaded or removed
+            self._clamped = (
+                [r for r in self._robots.values() if not r.static and r.ndof > 0]
+                if self.profile.max_joint_velocity is not None
+                else []
+            )
+            self._clamped_for = self._generation
         self._active = [
             r
             for r in self._robots.values()
             if not r.static
-            and (
-                damped
-                or r.pending
-                or r.damping is not None
-                or bool(r.balls)
-                or bool((r.motors["mode"] == MotorMode.POSITION).any())
-            )
+            and (damped or r.pending or r.damping is not None or bool(r.balls) or r.has_position)
         ]
 
     def _before_step(self, robot: Robot) -> None:
@@ -166,7 +164,7 @@ class MotorCommands:
             for add, a_lin, a_ang in adds:
                 add(a_lin, a_ang, "acceleration")
         if robot.has_position:
-            position = np.flatnonzero((m["mode"] == MotorMode.POSITION) & ~m["ball"])
+            position = np.flatnonzero((m["mode"] == _POSITION) & ~m["ball"])
             q = art.qpos
             v = art.qvel
             inv_dt = 1.0 / self._dt
@@ -242,9 +240,8 @@ class MotorCommands:
         m["kp"][slots] = 0.0
         m["kd"][slots] = 1.0
         drive = robot.drive_force
-        ball = m["ball"]
-        for s, joint, effort, t, mf in zip(
-            *robot.slot_calls(slots, m["effort"]), target, max_force, strict=True
+        for s, joint, effort, ball, t, mf in zip(
+            *robot.slot_calls(slots, m["effort"], m["ball"]), target, max_force, strict=True
         ):
             f = mf if mf < effort else effort
             if f <= 0.0:
@@ -255,7 +252,7 @@ class MotorCommands:
             if drive[s] != f:
                 joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
                 drive[s] = f
-            if ball[s]:
+            if ball:
                 joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
             else:
                 joint.set_drive_velocity_target(t)
@@ -274,26 +271,53 @@ class MotorCommands:
     ) -> None:
         robot = self._robots[body]
         m = robot.motors
-        for s, t, f, p_, d_ in zip(
-            self._slots(robot, joints), target, max_force, kp, kd, strict=True
+        slots = self._slots(robot, joints)
+        if len(set(slots.tolist())) < len(slots):  # a joint named twice: the last one holds
+            for s, t, f, p_, d_ in zip(slots, target, max_force, kp, kd, strict=True):
+                m["mode"][s] = MotorMode.POSITION
+                m["target"][s] = t
+                m["max_force"][s] = f
+                m["kp"][s] = p_
+                m["kd"][s] = d_
+                self._apply(robot, s)
+            self._refresh_active()
+            return
+        m["mode"][slots] = _POSITION
+        m["target"][slots] = target
+        m["max_force"][slots] = max_force
+        m["kp"][slots] = kp
+        m["kd"][slots] = kd
+        # the drive as _apply sets it for a position motor (its velocity target is set before
+        # each step): changed only where the force limit changes
+        drive = robot.drive_force
+        for s, joint, effort, ball, mf in zip(
+            *robot.slot_calls(slots, m["effort"], m["ball"]), max_force, strict=True
         ):
-            m["mode"][s] = MotorMode.POSITION
-            m["target"][s] = t
-            m["max_force"][s] = f
-            m["kp"][s] = p_
-            m["kd"][s] = d_
-            self._apply(robot, s)
-        self._refresh_active()
+            f = mf if mf < effort else effort
+            if f <= 0.0:
+                if drive[s] != 0.0:
+                    joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                    drive[s] = 0.0
+                continue
+            if drive[s] != f:
+                joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
+                drive[s] = f
+            if ball:
+                joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+        if not robot.has_position:  # the robot's step gains the position law
+            self._refresh_active()
 
     @exclusive
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         robot = self._robots[body]
         m = robot.motors
-        for s, t in zip(self._slots(robot, joints), torque, strict=True):
-            effort = m["effort"][s]  # inf unless the profile enforces <limit effort>
-            m["torque"][s] += min(max(t, -effort), effort)  # each command clamped, as PyBullet
-        robot.pending = True
-        self._refresh_active()
+        slots = self._slots(robot, joints)
+        effort = m["effort"][slots]  # inf unless the profile enforces <limit effort>
+        # each command clamped, as PyBullet; np.add.at: a joint named twice adds twice
+        np.add.at(m["torque"], slots, np.minimum(np.maximum(torque, -effort), effort))
+        if not robot.pending:
+            robot.pending = True
+            self._refresh_active()
 
     # ---------------------------------------------------------------- state of the motors
 

@@ -41,7 +41,7 @@ class Robot:
     slot: dict[int, int] = field(default_factory=dict)  # joint -> index in the motor arrays
     damping: np.ndarray | None = None  # <dynamics damping> per dof where the profile applies it
     qf_set: bool = False  # joint forces were handed to PhysX for the coming step
-    drive_force: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per slot, as set
+    drive_force: list[float] = field(default_factory=list)  # per slot, as set (NaN: not yet)
     has_position: bool = False  # a position motor needs its velocity target every step
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
     ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
@@ -66,15 +66,20 @@ class Robot:
         return self.built.static
 
     def slot_calls(
-        self, slots: np.ndarray, effort: np.ndarray
-    ) -> tuple[list[int], list[Any], list[float]]:
-        """Motor ``slots`` as a list, their PhysX joints and their effort limits (cached per
-        slots array; the effort limits are fixed at load)."""
+        self, slots: np.ndarray, effort: np.ndarray, ball: np.ndarray
+    ) -> tuple[list[int], list[Any], list[float], list[bool]]:
+        """Motor ``slots`` as a list, their PhysX joints, their effort limits and which are
+        spherical, as Python values (cached per slots array; all of it fixed at load)."""
         key = id(slots)
         hit = self.call_cache.get(key)
         if hit is not None and hit[0] is slots:
             return hit[1]
-        out = (slots.tolist(), self.slot_joints(slots), effort[slots].tolist())
+        out = (
+            slots.tolist(),
+            self.slot_joints(slots),
+            effort[slots].tolist(),
+            ball[slots].tolist(),
+        )
         self.call_cache[key] = (slots, out)
         return out
 
