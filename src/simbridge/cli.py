@@ -4,6 +4,10 @@
   simbridge compare r2d2 --timestep 1/240 1/480 1/960
                                               speed against accuracy over time steps
   simbridge compare my_scenario.toml --out reports/mine
+  simbridge compare minitaur.toml --resolve   halve the time step until the verdict resolves
+  simbridge sweep r2d2-gentle --vary lateral_friction=0.3,0.5,0.9
+                                              the gap and spreads against a setting's values
+  simbridge explain r2d2-gentle               which setting explains the gap
   simbridge scenarios                         the shipped scenarios, one line each
   simbridge joints r2d2.urdf --movable        the joint table as a backend loads it
   simbridge joints r2d2.urdf --json           the same, every field, for machines
@@ -99,6 +103,8 @@ def build_parser() -> argparse.ArgumentParser:
         "the trajectories of every pair and write report.md, summary.json, figures and "
         "trajectories.",
     )
+    from simbridge import cli_study
+
     p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
     p.add_argument(
         "--backends",
@@ -114,8 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--profile",
         nargs="+",
         metavar="PROFILE",
-        choices=sorted(PROFILES),
-        help="profile for every backend, or one per backend (default: the scenario's)",
+        type=cli_study.profile_name,
+        help="profile for every backend, or one per backend (default: the scenario's; one of "
+        f"{', '.join(sorted(PROFILES))}, or one with changes: pybullet+lateral_friction=0.9)",
     )
     p.add_argument(
         "--timestep",
@@ -160,6 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
         "Sim of its own, the floor) and step once: the one-step model error; 0: none "
         "(default: about 150 points per run)",
     )
+    cli_study.add_resolve_arguments(p)
     _verbose(p)
 
     s = sub.add_parser(
@@ -184,6 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--movable", action="store_true", help="movable joints only (not fixed)")
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
+    cli_study.add_commands(sub, _verbose)
     return parser
 
 
@@ -223,10 +232,13 @@ def _compare(args: argparse.Namespace) -> int:
         raise
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
+    from simbridge import cli_study
+
+    resolver = cli_study.resolver_of(args)  # --resolve: compare, halving dt while unresolved
     with ProgressBar() as bar:
         if args.log is not None:
             args.log.bar = bar  # a record clears the bar's line first
-        result = compare(
+        result = (resolver or compare)(
             scenario,
             args.backends,
             profile=args.profile,
@@ -243,6 +255,7 @@ def _compare(args: argparse.Namespace) -> int:
     from simbridge.compare.report import headline, summary
 
     print("\n".join(line.replace("**", "") for line in headline(summary(result))))
+    cli_study.finish_resolve(resolver, out)
     print(f"report: {path}")
     return 0
 
@@ -389,7 +402,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 2 on bad usage, 0 after --help
         return exc.code if isinstance(exc.code, int) else 2
     args.argv = None if argv is None else list(argv)
-    handler = {"compare": _compare, "scenarios": _scenarios, "joints": _joints}[args.command]
+    handler = (
+        getattr(args, "handler", None)
+        or {
+            "compare": _compare,
+            "scenarios": _scenarios,
+            "joints": _joints,
+        }[args.command]
+    )
     log = logging.getLogger("simbridge")
     level = log.level
     args.log = _StderrLog() if args.verbose else None
