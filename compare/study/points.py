@@ -36,6 +36,7 @@ __all__ = [
     "parse_vary",
     "parse_value",
     "setting_kind",
+    "split_slot",
     "apply_setting",
     "PairFigures",
     "pair_figures",
@@ -66,12 +67,33 @@ def _registered() -> list[str]:
     return list(available_backends())
 
 
+def split_slot(key: str) -> tuple[str, int | None]:
+    """``lateral_friction@2`` -> (``lateral_friction``, 1): the setting and the engine (1 for
+    the first, here 0-based) it is changed on alone; None: every engine it applies to.
+
+    Raises:
+        InvalidArgumentError: a slot that is not a whole number >= 1.
+    """
+    name, at, slot = key.partition("@")
+    if not at:
+        return key, None
+    if not slot.isdigit() or int(slot) < 1:
+        raise InvalidArgumentError(
+            "vary", f"{key!r}: expected KEY@N with N the engine's place, 1 for the first"
+        )
+    return name, int(slot) - 1
+
+
 def setting_kind(key: str) -> str:
-    """``timestep``, ``profile`` (a profile entry) or ``engine`` (``BACKEND.KEY``).
+    """``timestep``, ``profile`` (a profile entry) or ``engine`` (``BACKEND.KEY``); a key may
+    end in ``@N``: changed on the N-th engine alone (:func:`split_slot`).
 
     Raises:
         InvalidArgumentError: any other key (naming the valid ones).
     """
+    key, slot = split_slot(key)
+    if key == "timestep" and slot is not None:
+        raise InvalidArgumentError("vary", "timestep@N: every engine runs at one time step")
     if key == "timestep":
         return "timestep"
     if key in PROFILE_ENTRIES:
@@ -130,14 +152,15 @@ def parse_vary(text: str) -> Setting:
     if not eq or not key:
         raise InvalidArgumentError("vary", f"expected KEY=V1,V2,..., got {text!r}")
     kind = setting_kind(key)
-    values = tuple(parse_value(key, v) for v in _split_values(rest))
+    name = split_slot(key)[0]
+    values = tuple(parse_value(name, v) for v in _split_values(rest))
     if not values:
         raise InvalidArgumentError("vary", f"{key}: no value given in {text!r}")
     if len(set(map(repr, values))) != len(values):
         raise InvalidArgumentError("vary", f"{key}: a value is given twice in {text!r}")
     for v in values:
         if kind == "profile" or kind == "engine":
-            derived_profile("pybullet", {key: v})  # raises on a bad value
+            derived_profile("pybullet", {name: v})  # raises on a bad value
     return Setting(key, values)
 
 
@@ -149,16 +172,32 @@ def apply_setting(
     value: Any,
 ) -> tuple[tuple[str, ...], float | None]:
     """The profiles (one per slot) and the time step of a comparison point with ``key`` set
-    to ``value``: a profile entry on every slot, an engine setting on its backend's slots."""
+    to ``value``: a profile entry on every slot, an engine setting on its backend's slots
+    (``KEY@N``: on the N-th slot alone).
+
+    Raises:
+        InvalidArgumentError: ``KEY@N`` past the last slot, or naming another backend's slot.
+    """
     kind = setting_kind(key)
     if kind == "timestep":
         return tuple(profiles), float(value)
+    name, only = split_slot(key)
+    if only is not None and only >= len(backends):
+        raise InvalidArgumentError(
+            "vary", f"{key!r}: there are {len(backends)} engines ({', '.join(backends)})"
+        )
+    if only is not None and kind == "engine" and name.split(".", 1)[0] != backends[only]:
+        raise InvalidArgumentError(
+            "vary", f"{key!r}: engine {only + 1} is {backends[only]!r}, not that setting's backend"
+        )
     out = []
-    for backend, prof in zip(backends, profiles, strict=True):
-        if kind == "engine" and key.split(".", 1)[0] != backend:
+    for slot, (backend, prof) in enumerate(zip(backends, profiles, strict=True)):
+        if (only is not None and slot != only) or (
+            kind == "engine" and name.split(".", 1)[0] != backend
+        ):
             out.append(prof)
         else:
-            out.append(_with_change(prof, key, value))
+            out.append(_with_change(prof, name, value))
     return tuple(out), timestep
 
 

@@ -73,7 +73,8 @@ def resolution_lines(r: Resolution) -> list[str]:
     for s in r.steps:
         p = s.headline
         lines.append(
-            f"| {format_timestep(s.timestep)} | {_verdict(p)} ({p.reason}) | {_iv(p.gap, p.unit)} "
+            f"| {format_timestep(s.timestep)} | {p.verdict} ({p.reason}"
+            f"{', marginal' if p.marginal else ''}) | {_iv(p.gap, p.unit)} "
             f"| {fmt_value(p.own_errors[0], p.unit)} | {fmt_value(p.own_errors[1], p.unit)} "
             f"| {_ratio(p.gap.value, max(p.own_errors))} | {s.wall_time:.1f} s |"
         )
@@ -140,6 +141,7 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
         tag = ", ".join(f"{k}={format_value(p.values[k])}" for k in others)
         groups.setdefault(tag, []).append(p)
     head = pts[0].pairs[0]
+    names = _engine_names(s)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     ticks = [format_value(p.values[key]) for p in pts]
     for tag, group in groups.items():
@@ -149,7 +151,7 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
         g = [p.pairs[0].gap for p in group]
         lo = [x.value - (x.low if x.low is not None else x.value) for x in g]
         hi = [(x.high if x.high is not None else x.value) - x.value for x in g]
-        label = f"gap {head.labels[0]} - {head.labels[1]}" + (f" ({tag})" if tag else "")
+        label = f"gap {names[0]} - {names[1]}" + (f" ({tag})" if tag else "")
         ax1.errorbar(xs, [x.value for x in g], yerr=[lo, hi], marker="o", capsize=3, label=label)
         for slot in (0, 1):
             sp = [p.pairs[0].spreads[slot] for p in group]
@@ -162,7 +164,7 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
                 ],
                 marker="s" if slot else "o",
                 capsize=3,
-                label=f"spread of {group[0].pairs[0].labels[slot]}" + (f" ({tag})" if tag else ""),
+                label=f"spread of {names[slot]}" + (f" ({tag})" if tag else ""),
             )
     ax1.axhline(head.tolerance, color="grey", ls=":", lw=1, label="tolerance")
     for ax, title in ((ax1, "cross-engine gap (median, 95% interval)"), (ax2, "ensemble spread")):
@@ -181,6 +183,14 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
     return True
 
 
+def _engine_names(s: Sweep) -> tuple[str, ...]:
+    """The engines by place (the headline pair's), numbered when a backend is named twice:
+    a point's labels carry its changed profiles, these do not."""
+    if len(set(s.backends)) == len(s.backends):
+        return s.backends
+    return tuple(f"{b} #{k + 1}" for k, b in enumerate(s.backends))
+
+
 def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     """report.md, summary.json and one figure per setting (``sweep_<key>.png``) into ``out``."""
     out = Path(out)
@@ -194,6 +204,7 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     data = s.as_dict()
     data["files"] = ["summary.json", "report.md"] + [n for _, n in images]
     _dump(out / "summary.json", data)
+    names = _engine_names(s)
     lines = [
         f"# Sweep of {s.scenario}: {', '.join(s.backends)}",
         "",
@@ -203,7 +214,10 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
         + f"; {s.wall_time:.0f} s in all.",
         "",
         "Varied: "
-        + "; ".join(f"`{x.key}` = {', '.join(map(format_value, x.values))}" for x in s.settings),
+        + "; ".join(f"`{x.key}` = {', '.join(map(format_value, x.values))}" for x in s.settings)
+        + " (KEY@N: on the N-th engine alone). Engines: "
+        + ", ".join(f"{n} (profile {p})" for n, p in zip(names, s.profiles, strict=True))
+        + ".",
         "",
     ]
     if s.points and s.points[0].pairs:
@@ -219,16 +233,17 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     lines.append(
         "| "
         + " | ".join(keys)
-        + " | pair | verdict | gap [95%] | at | spread A | spread B | own error A, B | wall |"
+        + " | pair | verdict | gap [95%] | at | spread of the first | spread of the second "
+        "| own errors | wall |"
     )
-    lines.append("|" + "---|" * (len(keys) + 9))
+    lines.append("|" + "---|" * (len(keys) + 8))
     for p in s.points:
-        for f in p.pairs:
+        for (a, b), f in zip(_pairs(len(names)), p.pairs, strict=False):
             cells = [format_value(p.values[k]) if k in p.values else "·" for k in keys]
             lines.append(
                 "| "
                 + " | ".join(cells)
-                + f" | {f.labels[0]} - {f.labels[1]} | {_verdict(f)} | {_iv(f.gap, f.unit)} "
+                + f" | {names[a]} - {names[b]} | {_verdict(f)} | {_iv(f.gap, f.unit)} "
                 f"| {f.judged_time:.3f} s | {_iv(f.spreads[0], f.unit)} "
                 f"| {_iv(f.spreads[1], f.unit)} | {fmt_value(f.own_errors[0], f.unit)}, "
                 f"{fmt_value(f.own_errors[1], f.unit)} | {p.wall_time:.1f} s |"
@@ -238,6 +253,10 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _pairs(n: int) -> list[tuple[int, int]]:
+    return [(i, j) for i in range(n) for j in range(i + 1, n)]
 
 
 # ---------------------------------------------------------------- explain

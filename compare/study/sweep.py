@@ -57,6 +57,7 @@ class Sweep:
 
     scenario: str
     backends: tuple[str, ...]
+    profiles: tuple[str, ...]  # before any change
     settings: list[Setting]
     grid: bool
     points: list[SweepPoint]
@@ -72,6 +73,7 @@ class Sweep:
         return {
             "scenario": self.scenario,
             "backends": list(self.backends),
+            "profiles": list(self.profiles),
             "vary": {s.key: [_json_value(v) for v in s.values] for s in self.settings},
             "grid": self.grid,
             "ensemble": self.ensemble,
@@ -163,6 +165,7 @@ def sweep(
     return Sweep(
         scenario=sc.name,
         backends=names,
+        profiles=profiles,
         settings=settings,
         grid=grid,
         points=points,
