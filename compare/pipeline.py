@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import sys
 import time as _time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -171,6 +171,7 @@ def compare(
     workers: int | None = None,
     controller: Any = None,
     resync_every: int | None = None,
+    engine_settings: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> Comparison:
     """Run ``scenario`` on two or more backends at every time step of ``timesteps`` and at half
     of each, run each engine's ensemble at the first time step, diff and judge every pair.
@@ -206,6 +207,9 @@ def compare(
             and into a second Sim of its own, and step once (:mod:`~simbridge.compare.resync`);
             default about 150 points per run (:func:`~simbridge.compare.resync.default_every`);
             0: none.
+        engine_settings: engine settings per backend, ``{"mujoco": {"impratio": 10}}``
+            (:mod:`simbridge.engine_settings`), on top of the scenario's ``[engines.*]``
+            tables, key by key; every run of the study uses them (ensemble members included).
 
     Raises:
         ScenarioError, SimbridgeError: a bad scenario or time step, a backend that fails.
@@ -215,6 +219,7 @@ def compare(
     sc = load_scenario(scenario)
     if controller is not None:
         sc = sc.with_controller(controller)
+    sc = sc.with_engine_settings(engine_settings)
     left_out: dict[str, str] = {}
     if backends is None:
         backends, left_out = installed_backends()

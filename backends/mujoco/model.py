@@ -101,6 +101,23 @@ class RobotSpec:
     unlimited_spherical: list[str] = field(default_factory=list)
 
 
+_CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+_SOLVERS = {
+    "Newton": mujoco.mjtSolver.mjSOL_NEWTON,
+    "CG": mujoco.mjtSolver.mjSOL_CG,
+    "PGS": mujoco.mjtSolver.mjSOL_PGS,
+}
+# engine settings that are MuJoCo options of the same name
+_OPTIONS = (
+    "impratio",
+    "noslip_iterations",
+    "noslip_tolerance",
+    "tolerance",
+    "ls_iterations",
+    "ls_tolerance",
+)
+
+
 def new_world_spec(profile: Profile) -> mujoco.MjSpec:
     """An empty world with the profile's options."""
     spec = mujoco.MjSpec()
@@ -119,6 +136,15 @@ def new_world_spec(profile: Profile) -> mujoco.MjSpec:
     opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
     # islands copy efc_R/efc_D before the backend hardens the motor rows (motors.py)
     opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
+    # the engine settings the profile sets (backends/settings_mujoco.py); contacts: add_pairs
+    settings = profile.engine("mujoco")
+    if "cone" in settings:
+        opt.cone = _CONES[settings["cone"]]
+    if "solver" in settings:
+        opt.solver = _SOLVERS[settings["solver"]]
+    for key in _OPTIONS:
+        if key in settings:
+            setattr(opt, key, settings[key])
     spec.visual.global_.offwidth = 640
     return spec
 
@@ -393,6 +419,9 @@ def pair_friction(a: GeomContact, b: GeomContact) -> tuple[list[float], int]:
     return [mu, mu, spin, roll, roll], condim
 
 
+_SOLIMP_TAIL = (0.9, 0.95, 0.001, 0.5, 2.0)  # MuJoCo's solimp: a 3-number one keeps its tail
+
+
 def add_pairs(
     spec: mujoco.MjSpec,
     new: RobotSpec,
@@ -402,7 +431,11 @@ def add_pairs(
 ) -> None:
     """Explicit contact pairs between ``new`` and every robot in ``others``, and inside
     ``new`` between the links its plan lets collide (:meth:`BuildPlan.self_collides`)."""
-    solref = [2.0 * profile.timestep, 1.0]
+    settings = profile.engine("mujoco")  # the engine settings the profile sets
+    solref = list(settings.get("solref", (2.0 * profile.timestep, 1.0)))
+    solimp = settings.get("solimp")
+    margin = settings.get("margin", margin)
+    gap = settings.get("gap")
 
     def add(a: GeomContact, b: GeomContact) -> None:
         friction, condim = pair_friction(a, b)
@@ -412,6 +445,10 @@ def add_pairs(
         pair.condim = condim
         pair.solref = solref
         pair.margin = margin
+        if solimp is not None:
+            pair.solimp = list(solimp) + list(_SOLIMP_TAIL[len(solimp) :])
+        if gap is not None:
+            pair.gap = gap
         new.pair_names.append(name)
 
     for other in others:

@@ -52,6 +52,10 @@ _BUSY = "this Sim is stepping in another thread; a Sim takes one call at a time"
 CHECK_EVERY = 8
 
 
+# engine settings that are SAPIEN scene-config flags of the same name (backends/settings_physx.py)
+_SCENE_FLAGS = ("enable_pcm", "enable_friction_every_iteration", "enable_enhanced_determinism")
+
+
 class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend):
     """`Sim` on PhysX 5 (SAPIEN 3.0.3, CPU)."""
 
@@ -106,6 +110,16 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         # on the spot at 100 rad/s, kick to 1150 rad/s for a step (PGS: never past the target;
         # PyBullet's wheels drop as low as 10 rad/s for a step too, as PGS's do)
         cfg.enable_tgs = False
+        # the engine settings the profile sets (backends/settings_physx.py); the shapes' and the
+        # articulations' ones: model.build_robot
+        settings = p.engine(self.name)
+        if "solver" in settings:
+            cfg.enable_tgs = settings["solver"] == "TGS"
+        if "bounce_threshold" in settings:
+            cfg.bounce_threshold = settings["bounce_threshold"]
+        for flag in _SCENE_FLAGS:
+            if flag in settings:
+                setattr(cfg, flag, settings[flag])
         physx.set_scene_config(cfg)
         self._system = physx.PhysxCpuSystem()
         self._scene = sapien.Scene([self._system])
@@ -145,7 +159,13 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             base_position=base_position,
             base_orientation=base_orientation,
         )
-        built = build_robot(self._scene, plan, self.profile.solver_iterations, body + 1)
+        built = build_robot(
+            self._scene,
+            plan,
+            self.profile.solver_iterations,
+            body + 1,
+            self.profile.engine(self.name),
+        )
         built.plan = plan
         try:
             fixed = plan.fixed_base

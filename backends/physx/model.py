@@ -28,6 +28,7 @@ and PyBullet's one-step depenetration (see :data:`MAX_DEPENETRATION`).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,7 +37,7 @@ import sapien
 from sapien import physx
 
 from simbridge.build_plan import BuildPlan, JointPlan, LinkPlan, ShapePlan
-from simbridge.exceptions import BackendUnsupportedError
+from simbridge.exceptions import BackendUnsupportedError, InvalidEngineSettingError
 from simbridge.inertia import LinkInertial
 from simbridge.transforms import quat_multiply, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
@@ -119,7 +120,13 @@ def _cylinder_hull(radius: float, length: float) -> np.ndarray:
     return np.concatenate([top, bottom])
 
 
-def _shapes(g: ShapePlan, material: Any, where: str, skipped: list[str]) -> list[Any]:
+def _shapes(
+    g: ShapePlan,
+    material: Any,
+    where: str,
+    skipped: list[str],
+    offsets: tuple[float, float] = (REST_OFFSET, CONTACT_OFFSET),
+) -> list[Any]:
     """PhysX shapes of one collision shape of the plan, placed in the link frame."""
     local: tuple[Vec3, Quat] = (g.position, g.orientation)
     one = np.ones(3, dtype=np.float32)
@@ -161,14 +168,33 @@ def _shapes(g: ShapePlan, material: Any, where: str, skipped: list[str]) -> list
             skipped.append(where)
             return []
     shape.local_pose = pose(*local)
-    shape.rest_offset = REST_OFFSET
-    shape.contact_offset = CONTACT_OFFSET
+    shape.rest_offset, shape.contact_offset = offsets
     return [shape]
 
 
-def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) -> BuiltRobot:
+def build_robot(
+    scene: Any,
+    plan: BuildPlan,
+    solver_iterations: int,
+    body: int,
+    settings: Mapping[str, Any] | None = None,
+) -> BuiltRobot:
     """Add the robot of ``plan`` to ``scene``; ``body`` (its id) tags its shapes for the
-    contact filter (:func:`_filter`)."""
+    contact filter (:func:`_filter`); ``settings``: the engine settings a profile sets
+    (backends/settings_physx.py), each one not given at the backend's default."""
+    settings = settings or {}
+    offsets = (
+        float(settings.get("rest_offset", REST_OFFSET)),
+        float(settings.get("contact_offset", CONTACT_OFFSET)),
+    )
+    if offsets[0] >= offsets[1]:
+        raise InvalidEngineSettingError(
+            "physx",
+            "rest_offset",
+            f"must be below contact_offset ({offsets[1]:g} m), got {offsets[0]:g}",
+        )
+    depenetration = float(settings.get("max_depenetration_velocity", MAX_DEPENETRATION))
+    velocity_iterations = int(settings.get("solver_velocity_iterations", 1))
     moving = any(link.joint is not None and link.joint.type != "fixed" for link in plan.links)
     static_body = plan.fixed_base and not moving
     n_links = len(plan.links) + 2 * sum(  # a spherical joint's two extra links (ball.py)
@@ -201,7 +227,7 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
         out = []
         for g in link.collisions:
             where = f"link {link.name!r} <collision> #{g.element}"
-            for shape in _shapes(g, mat, where, skipped):
+            for shape in _shapes(g, mat, where, skipped, offsets):
                 _filter(shape, link, ignore, body)
                 out.append(shape)
         return out
@@ -257,7 +283,7 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
         comp.name = link.name
         comp.max_linear_velocity = LINK_SPEED_CAP
         comp.max_angular_velocity = LINK_SPEED_CAP
-        comp.max_depenetration_velocity = MAX_DEPENETRATION
+        comp.max_depenetration_velocity = depenetration
         comp.linear_damping = 0.0
         comp.angular_damping = 0.0
         if jp is not None and jp.type == "spherical":
@@ -274,7 +300,7 @@ def build_robot(scene: Any, plan: BuildPlan, solver_iterations: int, body: int) 
         scene.add_entity(entity)
     art = links[0].articulation
     art.solver_position_iterations = solver_iterations
-    art.solver_velocity_iterations = 1
+    art.solver_velocity_iterations = velocity_iterations
     # PyBullet lets a body sleep only when loaded with URDF_ENABLE_SLEEPING: never here
     art.sleep_threshold = 0.0
     # the links' poses are PhysX's only after a step or a write of the joint positions: one

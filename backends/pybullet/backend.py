@@ -189,6 +189,12 @@ class PyBulletBackend(StateReads, MotorCommands, Backend):
         p.setPhysicsEngineParameter(
             numSolverIterations=self.profile.solver_iterations, physicsClientId=c
         )
+        # the engine settings the profile sets (backends/settings_pybullet.py), and those alone: a
+        # setting not given keeps PyBullet's own value
+        settings = self.profile.engine(self.name)
+        if settings:
+            given = {k: int(v) if isinstance(v, bool) else v for k, v in settings.items()}
+            p.setPhysicsEngineParameter(**given, physicsClientId=c)
 
     # ---------------------------------------------------------------- world
 

@@ -16,6 +16,7 @@ from ..analysis.diff import DEG, QUANTITIES, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
+from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
@@ -210,6 +211,7 @@ def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: l
     left = left_out_words(s)
     if left:
         lines += [left, ""]
+    lines += settings_section(s)
     # -- over time
     lines += ["## When each quantity parts", ""]
     rows = []

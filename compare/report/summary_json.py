@@ -35,6 +35,7 @@ from ..run.outcomes import OutcomeRecord
 from ..run.resync import BORN_FACTOR, PARTS, Direction, Peak, PhaseErrors, Resync
 from ..scenario import Scenario, format_timestep
 from .departures import applicable
+from .engine_settings import settings_summary
 from .events import event_words
 from .verdict import marginal_words
 
@@ -81,7 +82,10 @@ def summary(c: Comparison) -> dict[str, Any]:
     events = engine_events(c)
     pairs = [_pair_summary(c, p, events) for p in _pairs_of(c)]
     first = pairs[0]
-    return {
+    chosen = settings_summary(c.scenario, c.backends, c.profiles, dt)
+    if not chosen:  # every engine at its defaults: the manifests as they were before settings
+        manifests = {k: _without_settings(m) for k, m in manifests.items()}
+    out = {
         "scenario": c.scenario.name,
         "description": c.scenario.description,
         "scenario_file": str(c.scenario.source) if c.scenario.source else None,
@@ -114,6 +118,13 @@ def summary(c: Comparison) -> dict[str, Any]:
             "engines": manifests,
         },
     }
+    if chosen:  # the engine settings the study set (none: the key is left out)
+        out["engine_settings"] = chosen
+    return out
+
+
+def _without_settings(manifest: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in manifest.items() if k != "engine_settings"}
 
 
 def _pairs_of(c: Comparison) -> list[Pair]:

@@ -259,7 +259,12 @@ class _World:
 
     def __init__(self, sc: Scenario, backend: str, profile: str):
         self.args = (sc, backend, profile)
-        self.sim = simbridge.Sim(backend, gravity=sc.gravity, timestep=sc.timestep, profile=profile)
+        self.sim = simbridge.Sim(
+            backend,
+            gravity=sc.gravity,
+            timestep=sc.timestep,
+            profile=sc.sim_profile(backend, profile),  # with the scenario's engine settings
+        )
         try:
             self.ids: dict[str, int] = {}
             for r in sc.robots:

@@ -355,7 +355,8 @@ def run(
     prof = profile or sc.profile
     grav = gravity if gravity is not None else sc.gravity
 
-    with simbridge.Sim(backend, gravity=grav, timestep=sc.timestep, profile=prof) as sim:
+    sim_prof = sc.sim_profile(backend, prof)  # with the scenario's engine settings, if any
+    with simbridge.Sim(backend, gravity=grav, timestep=sc.timestep, profile=sim_prof) as sim:
         ids: dict[str, int] = {}
         hashes: dict[str, dict[str, str]] = {}
         for r in sc.robots:

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import simbridge
+from simbridge.engine_settings import freeze, merge, thaw
 from simbridge.exceptions import InvalidArgumentError, ScenarioError
 from simbridge.transforms import quat_multiply
 
@@ -100,6 +101,40 @@ class Scenario:
     cut_at: float | None = field(default=None, compare=False)
     """Seconds :meth:`truncated` cut the scenario to (None: it runs whole); the outcomes say
     when a phase they measure was not run, or cannot be measured, because of it."""
+    engines: Any = ()
+    """Engine settings per backend (``[engines.mujoco]``: :mod:`simbridge.engine_settings`),
+    checked and frozen; a mapping ``{backend: {key: value}}`` given here is frozen too."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "engines", freeze(self.engines, "engines"))
+
+    def engine(self, backend: str) -> dict[str, Any]:
+        """The engine settings this scenario sets for ``backend`` (empty when none)."""
+        return thaw(self.engines).get(backend, {})
+
+    def engine_settings(self) -> dict[str, dict[str, Any]]:
+        """Every engine setting this scenario sets, by backend (JSON-able)."""
+        return thaw(self.engines)
+
+    def with_engine_settings(self, settings: Any) -> Scenario:
+        """The same scenario with ``settings`` (``{backend: {key: value}}``) on top of its own,
+        key by key.
+
+        Raises:
+            UnknownBackendError, InvalidProfileError: an unknown backend, key or bad value.
+        """
+        if not settings:
+            return self
+        merged = merge(thaw(self.engines), thaw(freeze(settings, "engine_settings")))
+        return replace(self, engines=merged)
+
+    def sim_profile(self, backend: str, profile: str | simbridge.Profile) -> Any:
+        """What to give ``Sim(profile=)`` on ``backend``: ``profile`` itself when this scenario
+        sets no engine setting for it, else the profile with them."""
+        settings = self.engine(backend)
+        if not settings:
+            return profile
+        return simbridge.get_profile(profile).with_engine(backend, **settings)
 
     @property
     def closed_loop(self) -> bool:

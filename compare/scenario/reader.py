@@ -14,7 +14,9 @@ from pathlib import Path
 from typing import Any
 
 import simbridge
-from simbridge.exceptions import ScenarioError
+from simbridge.engine_settings import freeze
+from simbridge.engine_settings import validate as validate_settings
+from simbridge.exceptions import InvalidEngineSettingError, ScenarioError
 from simbridge.transforms import quat_from_rpy
 
 from .controllers import ControllerSpec, RefError, absolute_ref, load_object
@@ -503,6 +505,27 @@ class _Reader:
             name, absolute_ref(ref, base), params=params, unit=unit, **bounds
         )
 
+    def engines(self, data: Any) -> Any:
+        """``[engines.BACKEND]`` tables: each backend's engine settings, checked."""
+        if not isinstance(data, dict):
+            raise self.error(["engines"], "expected [engines.BACKEND] tables")
+        out = {}
+        for backend, values in data.items():
+            path: list[str | int] = ["engines", backend]
+            if backend not in simbridge.available_backends():
+                raise self.error(
+                    path,
+                    f"unknown backend {backend!r}; registered backends: "
+                    f"{', '.join(simbridge.available_backends())}",
+                )
+            if not isinstance(values, dict):
+                raise self.error(path, f"expected a table of key = value, got {values!r}")
+            try:
+                out[backend] = validate_settings(backend, values)
+            except InvalidEngineSettingError as exc:
+                raise self.error([*path, exc.key], str(exc)) from None
+        return freeze(out, "engines")
+
     def scenario(self, data: dict[str, Any], default_name: str, source: Path | None) -> Scenario:
         self.keys(
             data,
@@ -518,6 +541,7 @@ class _Reader:
                 "robots",
                 "phases",
                 "outcomes",
+                "engines",
             ),
         )
         name = self.string(data.get("name", default_name), ["name"])
@@ -593,7 +617,9 @@ class _Reader:
             if o.name in seen:
                 raise self.error(["outcomes", i, "name"], f"outcome name {o.name!r} is used twice")
             seen.add(o.name)
+        engines = self.engines(data.get("engines", {}))
         return Scenario(
+            engines=engines,
             name=name,
             robots=tuple(robots),
             phases=tuple(phases),

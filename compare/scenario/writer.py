@@ -44,6 +44,11 @@ def _lines(s: Scenario) -> Iterator[str]:
     yield f"subject = {_toml_value(s.subject)}"
     if s.headline:
         yield f"headline = {_toml_value(s.headline)}"
+    for backend, settings in s.engine_settings().items():
+        yield ""
+        yield f"[engines.{_toml_key(backend)}]"
+        for k, v in settings.items():
+            yield f"{_toml_key(k)} = {_toml_value(v)}"
     for r in s.robots:
         yield ""
         yield "[[robots]]"

@@ -85,6 +85,7 @@ def _seed(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from simbridge import PROFILES, available_backends
+    from simbridge.cli_settings import add_set_option, add_settings_parser
 
     backends = available_backends()
     parser = argparse.ArgumentParser(
@@ -167,6 +168,7 @@ def build_parser() -> argparse.ArgumentParser:
         "Sim of its own, the floor) and step once: the one-step model error; 0: none "
         "(default: about 150 points per run)",
     )
+    add_set_option(p)
     cli_study.add_resolve_arguments(p)
     _verbose(p)
 
@@ -192,6 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--movable", action="store_true", help="movable joints only (not fixed)")
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
+    _verbose(add_settings_parser(sub, backends))
     cli_study.add_commands(sub, _verbose)
     return parser
 
@@ -209,6 +212,7 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from simbridge.cli_settings import settings_from_args
     from simbridge.compare import compare, load_scenario, report
     from simbridge.compare.report.progress import ProgressBar
     from simbridge.exceptions import ScenarioError
@@ -230,6 +234,7 @@ def _compare(args: argparse.Namespace) -> int:
         if exc.key is None and not Path(args.scenario).exists():  # neither a file nor a name
             raise _Usage(str(exc)) from None
         raise
+    engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
     from simbridge import cli_study
@@ -249,6 +254,7 @@ def _compare(args: argparse.Namespace) -> int:
             perturb=args.perturb,
             seed=args.seed,
             resync_every=args.resync_every,
+            engine_settings=engine_settings,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots)
@@ -258,6 +264,13 @@ def _compare(args: argparse.Namespace) -> int:
     cli_study.finish_resolve(resolver, out)
     print(f"report: {path}")
     return 0
+
+
+def _settings(args: argparse.Namespace) -> int:
+    from simbridge import available_backends
+    from simbridge.cli_settings import settings_command
+
+    return settings_command(args, available_backends())
 
 
 def _check_writable(out: Path) -> None:
@@ -408,6 +421,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "compare": _compare,
             "scenarios": _scenarios,
             "joints": _joints,
+            "settings": _settings,
         }[args.command]
     )
     log = logging.getLogger("simbridge")

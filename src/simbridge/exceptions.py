@@ -29,6 +29,7 @@ __all__ = [
     "UnknownLinkError",
     "InvalidArgumentError",
     "InvalidProfileError",
+    "InvalidEngineSettingError",
     "SimulationDivergedError",
     "EngineError",
     "SimBusyError",
@@ -212,6 +213,15 @@ class InvalidArgumentError(SimbridgeError, ValueError):
 class InvalidProfileError(SimbridgeError, ValueError):
     def __init__(self, profile: object, valid: Iterable[str]):
         super().__init__(f"unknown profile {profile!r}; valid profiles: {_choices(valid)}")
+
+
+class InvalidEngineSettingError(InvalidProfileError):
+    """An engine setting that is not one of the backend's, or a value outside its range."""
+
+    def __init__(self, backend: str, key: str, detail: str):
+        self.backend = backend
+        self.key = key
+        SimbridgeError.__init__(self, f"engine setting {backend}.{key}: {detail}")
 
 
 # ---------------------------------------------------------------- running

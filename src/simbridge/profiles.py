@@ -22,6 +22,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .engine_settings import freeze, thaw
 from .exceptions import InvalidArgumentError, InvalidProfileError
 
 __all__ = ["Profile", "PROFILES", "get_profile", "derived_profile"]
@@ -56,26 +57,61 @@ class Profile:
     enforce_effort_limit: bool = False
     enforce_velocity_limit: bool = False
     contact_model: Literal["stiff"] = "stiff"
+    # engine settings per backend (simbridge.engine_settings), checked and frozen: a mapping
+    # {backend: {key: value}} given here is stored as sorted (backend, ((key, value), ...))
+    engines: Any = ()
 
     def __post_init__(self) -> None:
         """Every entry checked when the profile is made: a bad value is an InvalidArgumentError
         naming it, before any engine starts (a wrong type used to surface from inside an
         engine, after a connection was opened)."""
         for f in fields(self):
-            _check_entry(f.name, getattr(self, f.name))
+            if f.name != "engines":
+                _check_entry(f.name, getattr(self, f.name))
+        object.__setattr__(self, "engines", freeze(self.engines, "profile.engines"))
 
     def with_(self, **changes: Any) -> Profile:
         """A copy with some entries changed (``gravity``, ``timestep`` ...)."""
         return replace(self, **changes)
 
+    def with_engine(self, backend: str, **settings: Any) -> Profile:
+        """A copy with engine settings of ``backend`` set (on top of those already set):
+        ``profile.with_engine("mujoco", solref=(0.01, 1.0), impratio=10)``.
+        :func:`simbridge.engine_settings.settings_for` lists each backend's.
+
+        Raises:
+            UnknownBackendError: ``backend`` is not registered.
+            InvalidProfileError: an unknown key (the valid ones listed) or a bad value.
+        """
+        merged = {b: dict(v) for b, v in self.engines}
+        merged[backend] = {**merged.get(backend, {}), **settings}
+        return replace(self, engines=merged)
+
+    def engine(self, backend: str) -> dict[str, Any]:
+        """The engine settings this profile sets for ``backend`` (only those set; empty by
+        default)."""
+        for name, values in self.engines:
+            if name == backend:
+                return dict(values)
+        return {}
+
+    def engine_settings(self) -> dict[str, dict[str, Any]]:
+        """Every engine setting this profile sets, by backend (JSON-able)."""
+        return thaw(self.engines)
+
     def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        """The entries, JSON-able; ``engines`` only where some engine setting is set."""
+        out = asdict(replace(self, engines=()))
+        del out["engines"]
+        if self.engines:
+            out["engines"] = self.engine_settings()
+        return out
 
     def __str__(self) -> str:
         width = max(len(f.name) for f in fields(self))
         lines = [f"profile {self.name!r}"]
         for f in fields(self):
-            if f.name == "name":
+            if f.name == "name" or (f.name == "engines" and not self.engines):
                 continue
             value = getattr(self, f.name)
             lines.append(f"  {f.name:<{width}}  {value!s:<22} {ENTRY_DOCS.get(f.name, '')}")
@@ -110,6 +146,7 @@ ENTRY_DOCS: dict[str, str] = {
     "self_collision": "links of one robot collide with each other (MuJoCo native: yes)",
     "enforce_effort_limit": "<limit effort> clamps motor force (MuJoCo native: yes)",
     "enforce_velocity_limit": "<limit velocity> clamps speed",
+    "engines": "engine settings per backend beyond these entries (simbridge settings)",
     "contact_model": (
         "'stiff' = each engine's contact made as rigid as it stays stable: PyBullet's "
         "defaults; MuJoCo solref (2*dt, 1) (MuJoCo native (0.02, 1), soft)"

@@ -43,6 +43,7 @@ class BackendSpec:
     entry_point: str  # "module:Class"
     requires: tuple[str, ...] = ()  # importable module names the backend needs
     pip_name: str = ""  # what to pip install when one is missing
+    settings: str = ""  # "module:ATTR": its engine settings (engine_settings.Setting), no engine
 
 
 _REGISTRY: dict[str, BackendSpec] = {}
@@ -51,12 +52,21 @@ _entry_points_read = False
 
 
 def register(
-    name: str, entry_point: str, *, requires: tuple[str, ...] = (), pip_name: str = ""
+    name: str,
+    entry_point: str,
+    *,
+    requires: tuple[str, ...] = (),
+    pip_name: str = "",
+    settings: str = "",
 ) -> None:
-    """Register a backend under ``name``; ``entry_point`` is ``"module:Class"``."""
+    """Register a backend under ``name``; ``entry_point`` is ``"module:Class"``; ``settings``
+    is ``"module:ATTR"``, a sequence of :class:`simbridge.engine_settings.Setting` in a module
+    that imports no engine (read when a profile or scenario sets one)."""
     if ":" not in entry_point:
         raise BackendError(f"backend {name!r}: entry point {entry_point!r} is not 'module:Class'")
-    _REGISTRY[name] = BackendSpec(name, entry_point, requires, pip_name or " ".join(requires))
+    _REGISTRY[name] = BackendSpec(
+        name, entry_point, requires, pip_name or " ".join(requires), settings
+    )
     _LOADED.pop(name, None)
 
 
@@ -169,16 +179,19 @@ register(
     "simbridge.backends.pybullet:PyBulletBackend",
     requires=("pybullet",),
     pip_name="pybullet",
+    settings="simbridge.backends.settings_pybullet:SETTINGS",
 )
 register(
     "mujoco",
     "simbridge.backends.mujoco:MujocoBackend",
     requires=("mujoco",),
     pip_name="'mujoco>=4'",
+    settings="simbridge.backends.settings_mujoco:SETTINGS",
 )
 register(
     "physx",
     "simbridge.backends.physx:PhysxBackend",
     requires=("sapien",),
     pip_name="'simbridge[physx]'",
+    settings="simbridge.backends.settings_physx:SETTINGS",
 )

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import os
 import time as _time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -34,6 +34,7 @@ from ._version import __version__
 from .arguments import flag, quat, vec, within
 from .backend import Backend
 from .bound import BoundCommand
+from .engine_settings import effective as effective_settings
 from .exceptions import InvalidArgumentError, SimBusyError, SimNotCopyableError
 from .profiles import Profile, get_profile
 from .registry import available_backends, load_backend
@@ -70,6 +71,10 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
             per body per step (1.01-1.09x a step: ``python bench/divergence.py``). Either way
             :class:`~simbridge.exceptions.SimulationDivergedError`, and every read and step
             refuses the world until ``reset()``.
+        engine_settings: this backend's own settings (``{"impratio": 10}`` on MuJoCo), on
+            top of those the profile sets (:meth:`~simbridge.Profile.with_engine`);
+            ``simbridge settings BACKEND`` and :func:`simbridge.engine_settings.settings_for`
+            list them. None set: the backend's defaults.
 
     Raises:
         UnknownBackendError: ``backend`` is not registered (the message lists those that are).
@@ -86,6 +91,7 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
         profile: str | Profile = "pybullet",
         gui: bool = False,
         divergence_check: str = "periodic",
+        engine_settings: Mapping[str, Any] | None = None,
     ) -> None:
         self._b: Backend = _Closed()  # type: ignore[assignment]
         self._commands: list[BoundCommand] = []  # bound commands, in binding order
@@ -109,6 +115,8 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
                 f"expected one of {list(DIVERGENCE_CHECKS)}, got {divergence_check!r}",
             )
         prof = get_profile(profile).with_(gravity=g, timestep=dt)
+        if engine_settings:  # on top of those the profile sets
+            prof = prof.with_engine(backend, **engine_settings)
         cls = load_backend(backend)
         self.backend: str = backend
         self._bodies: dict[int, _Body] = {}
@@ -198,6 +206,8 @@ class Sim(Control, MultiDof, WorldStates, Lookups):
             "divergence_check": self.divergence_check,
         }
         out.update(self._b.manifest())
+        # every engine setting of this backend with the value in force (simbridge.engine_settings)
+        out.setdefault("engine_settings", effective_settings(self.backend, self.profile))
         # each body's load: source, pose and loadURDF's options (global_scaling, ...)
         bodies: dict[int, dict[str, Any]] = {body: dict(b.load) for body, b in self._bodies.items()}
         out["bodies"] = bodies
