@@ -218,10 +218,14 @@ def _idict(x: Interval) -> dict[str, float | None]:
     return {"value": x.value, "low": x.low, "high": x.high}
 
 
+def _p(x: float) -> str:
+    return f"{100 * x:.0f}%".replace("-0%", "0%")
+
+
 def _pct(x: Interval) -> str:
     if x.low is None or x.high is None:
-        return f"{100 * x.value:.0f}%"
-    return f"{100 * x.value:.0f}% (95% interval {100 * x.low:.0f}% to {100 * x.high:.0f}%)"
+        return _p(x.value)
+    return f"{_p(x.value)} (95% interval {_p(x.low)} to {_p(x.high)})"
 
 
 # ---------------------------------------------------------------- candidates
@@ -242,9 +246,8 @@ def _profile_differences(profiles: tuple[str, str], labels: tuple[str, str]) -> 
                     f"{format_value(vb)}: {labels[0]} given {labels[1]}'s value",
                 )
             )
-    engines_a = getattr(pa, "engine_settings", None)
-    if callable(engines_a):
-        sa, sb = pa.engine_settings(), pb.engine_settings()  # type: ignore[attr-defined]
+    if True:
+        sa, sb = pa.engine_settings(), pb.engine_settings()
         for backend in sorted(set(sa) | set(sb)):
             ka, kb = sa.get(backend, {}), sb.get(backend, {})
             for key in sorted(set(ka) | set(kb)):
@@ -266,8 +269,85 @@ UNTESTABLE = {
     "cylinder": "a collision shape, not a setting: no setting moves it",
     "joint limits": "the limit rule is each backend's own: no setting moves it",
     "joint axis": "the file's axis, not a setting",
-    "contact": "no engine setting is exposed to move the contact model",
 }
+
+NOSLIP_ITERATIONS = 10
+"""MuJoCo's no-slip iterations in the candidate that removes its contacts' creep."""
+
+
+def _effective(backend: str, profile: str) -> dict[str, Any]:
+    from simbridge.engine_settings import effective
+
+    try:
+        return effective(backend, get_profile(profile))
+    except Exception:  # a backend without settings
+        return {}
+
+
+def _engine_candidates(
+    backends: tuple[str, str], profiles: tuple[str, str], labels: tuple[str, str], dt: float
+) -> list[Candidate]:
+    """The engine settings that could explain a contact gap between these two engines, each
+    moved toward the other engine's behaviour (a short list, reasoned one by one)."""
+    out: list[Candidate] = []
+    slot = {b: k for k, b in reversed(list(enumerate(backends)))}
+    eff = [_effective(b, p) for b, p in zip(backends, profiles, strict=True)]
+    if "mujoco" in slot:
+        m = slot["mujoco"]
+        ms = eff[m]
+        if "pybullet" in slot:
+            bs = eff[slot["pybullet"]]
+            erp = float(bs.get("contactERP", 0.0) or 0.0)
+            if erp > 0 and "solref" in ms:
+                tau = dt / erp
+                out.append(
+                    Candidate(
+                        "mujoco.solref",
+                        ((m, "mujoco.solref", (tau, 1.0)),),
+                        "departure: contact",
+                        f"PyBullet corrects {erp:g} of a contact's penetration per step "
+                        f"(contactERP), a time constant of about dt / {erp:g} = "
+                        f"{tau * 1000:.3g} ms; MuJoCo's contacts run at "
+                        f"{float(ms['solref'][0]) * 1000:.3g} ms: {labels[m]} given PyBullet's",
+                    )
+                )
+            cone = bs.get("enableConeFriction")
+            if cone is True and ms.get("cone") == "pyramidal":
+                p = slot["pybullet"]
+                out.append(
+                    Candidate(
+                        "pybullet.enableConeFriction",
+                        ((p, "pybullet.enableConeFriction", False),),
+                        "departure: contact",
+                        f"{labels[p]} limits friction by a cone, {labels[m]} by a pyramid: "
+                        f"{labels[p]} given the pyramid",
+                    )
+                )
+        if "noslip_iterations" in ms and not ms["noslip_iterations"]:
+            out.append(
+                Candidate(
+                    "mujoco.noslip_iterations",
+                    ((m, "mujoco.noslip_iterations", NOSLIP_ITERATIONS),),
+                    "departure: contact",
+                    f"MuJoCo's soft contacts let a loaded contact creep where impulse solvers "
+                    f"hold static friction: {labels[m]} given {NOSLIP_ITERATIONS} no-slip "
+                    "iterations",
+                )
+            )
+    if "physx" in slot:
+        x = slot["physx"]
+        rest = eff[x].get("rest_offset")
+        if rest:
+            out.append(
+                Candidate(
+                    "physx.rest_offset",
+                    ((x, "physx.rest_offset", 0.0),),
+                    "departure: contact",
+                    f"PhysX rests each shape {float(rest) * 1000:.3g} mm off its contacts; the "
+                    f"other engines rest them touching: {labels[x]} given 0",
+                )
+            )
+    return out
 
 
 def candidates(
@@ -275,10 +355,11 @@ def candidates(
     profiles: tuple[str, str],
     labels: tuple[str, str],
     departures: dict[str, dict[str, Any]] | None = None,
+    timestep: float = 1 / 240,
 ) -> tuple[list[Candidate], list[tuple[str, str]]]:
     """The candidates of one pair of engines and the departures that apply but are not
     tested (each with why). ``departures`` is :func:`~simbridge.compare.report.departures.
-    applicable`'s result for the comparison (by engine label)."""
+    applicable`'s result for the comparison (by engine label); ``timestep`` the runs'."""
     out = _profile_differences(profiles, labels)
     not_tested: list[tuple[str, str]] = []
     applying: dict[str, list[int]] = {}
@@ -311,22 +392,22 @@ def candidates(
                         "without the file's <contact>",
                     )
                 )
-            elif key in ("motors", "contact") and pyb:
-                if any(c.name == "solver_iterations" for c in out):
-                    continue
-                s = pyb[0]
-                out.append(
-                    Candidate(
-                        "solver_iterations",
-                        ((s, "solver_iterations", SOLVER_ITERATIONS_RAISED),),
-                        f"departure: {key}",
-                        f"{labels[1 - s]} solves its motor and contact rows exactly; PyBullet's "
-                        f"sequential impulses stop after the profile's iterations: "
-                        f"{SOLVER_ITERATIONS_RAISED} bring {labels[s]} toward the exact solve",
+            elif key in ("motors", "contact"):
+                if pyb and not any(c.name == "solver_iterations" for c in out):
+                    k = pyb[0]
+                    out.append(
+                        Candidate(
+                            "solver_iterations",
+                            ((k, "solver_iterations", SOLVER_ITERATIONS_RAISED),),
+                            f"departure: {key}",
+                            f"{labels[1 - k]} solves its motor and contact rows exactly; "
+                            "PyBullet's sequential impulses stop after the profile's "
+                            f"iterations: {SOLVER_ITERATIONS_RAISED} bring {labels[k]} toward "
+                            "the exact solve",
+                        )
                     )
-                )
                 if key == "contact":
-                    not_tested.append(("contact", UNTESTABLE["contact"]))
+                    out += _engine_candidates(backends, profiles, labels, timestep)
             elif key in UNTESTABLE:
                 not_tested.append((key, UNTESTABLE[key]))
             else:
@@ -459,7 +540,7 @@ def explain(
                 f"{fmt_tol(before)}): there is no gap to explain."
             )
             continue
-        cands, pe.not_tested = candidates(names, profs, labels, deps)
+        cands, pe.not_tested = candidates(names, profs, labels, deps, dt)
         results = []
         for cand in cands:
             moved = list(profs)

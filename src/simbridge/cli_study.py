@@ -173,6 +173,9 @@ def _common(p: argparse.ArgumentParser, backends: list[str], ensemble: int) -> N
     )
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>-<study>/)")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    from simbridge.cli_settings import add_set_option
+
+    add_set_option(p)
 
 
 def add_commands(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -> None:
@@ -244,6 +247,12 @@ def _check_profiles(args: argparse.Namespace) -> None:
         raise _usage(f"--profile takes one profile, or one per backend ({n})")
 
 
+def _engine_settings(args: argparse.Namespace) -> Any:
+    from simbridge.cli_settings import settings_from_args
+
+    return settings_from_args(args.engine_settings)
+
+
 def _usage(text: str) -> Exception:
     from simbridge.exceptions import InvalidArgumentError
 
@@ -280,6 +289,7 @@ def _sweep(args: argparse.Namespace) -> int:
             ensemble=args.ensemble,
             perturb=args.perturb,
             seed=args.seed,
+            engine_settings=_engine_settings(args),
             progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
         )
         path = write_sweep(result, out, plots=not args.no_plots)
@@ -321,6 +331,7 @@ def _explain(args: argparse.Namespace) -> int:
             on_run=on_run,
             duration=args.duration,
             perturb=args.perturb,
+            engine_settings=_engine_settings(args),
             progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
         )
         path = write_explanation(result, out, plots=not args.no_plots)

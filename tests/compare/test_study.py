@@ -131,6 +131,20 @@ def test_candidates_follow_the_departures_that_apply():
     assert names == ["max_joint_velocity", "solver_iterations", "read_urdf_contact"]
     assert cands[1].moves == ((0, "solver_iterations", 200),)  # PyBullet's, toward exact rows
     assert [k for k, _ in not_tested] == ["cylinder"]
+    # contacts: the engine settings that move one engine's contact toward the other's
+    deps["mujoco"]["apply"] = [{"key": "contact"}]
+    cands, _ = candidates(
+        ("pybullet", "mujoco"), ("pybullet",) * 2, ("pybullet", "mujoco"), deps, 1 / 240
+    )
+    moves = {c.name: c.moves for c in cands}
+    assert list(moves) == [
+        "solver_iterations",
+        "mujoco.solref",
+        "pybullet.enableConeFriction",
+        "mujoco.noslip_iterations",
+    ]
+    assert moves["mujoco.solref"] == ((1, "mujoco.solref", (1 / 240 / 0.08, 1.0)),)  # contactERP
+    assert moves["pybullet.enableConeFriction"] == ((0, "pybullet.enableConeFriction", False),)
     # the same engine twice: only what the profiles set differently
     cands, _ = candidates(
         ("pybullet", "pybullet"),
