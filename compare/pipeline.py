@@ -4,28 +4,40 @@ of time steps, every pair of them judged: :func:`compare` and :class:`Comparison
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time as _time
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from simbridge.exceptions import InvalidArgumentError, ScenarioError
+from simbridge.exceptions import InvalidArgumentError, ScenarioError, SimbridgeError
 
 from .analysis.diff import Divergence, diff
 from .analysis.verdict import Verdict, judge
+from .run.cache import Cache
 from .run.ensemble import (
     DEFAULT_ENSEMBLE,
     DEFAULT_PERTURB,
     DEFAULT_SEED,
     Ensemble,
     EnsembleRunner,
+    _main_importable,
 )
 from .run.resync import Resync, default_every
-from .run.resync import resync as one_step_resync
-from .run.trajectory import Trajectory, run
-from .scenario import Scenario, format_timestep, load_scenario, parse_timestep
+from .run.studyjobs import (
+    JobCounts,
+    JobFailed,
+    Plan,
+    ensembles_of,
+    resync_of,
+    run_jobs,
+    study_record,
+)
+from .run.trajectory import Trajectory
+from .scenario import Scenario, load_scenario, parse_timestep
 
 __all__ = [
     "Comparison",
@@ -97,6 +109,16 @@ class Comparison:
     left_out: dict[str, str] = field(default_factory=dict)
     """With the backends chosen by default (every installed one): each registered backend
     left out and why (:func:`installed_backends`); empty when the backends were named."""
+    failed: list[JobFailed] = field(default_factory=list)
+    """Jobs that killed their worker (a segfault, an abort, an out-of-memory kill): the study
+    was judged without them (an ensemble on its other members)."""
+    failed_members: dict[str, list[JobFailed]] = field(default_factory=dict)
+    """Per engine label, its ensemble members among :attr:`failed`."""
+    jobs: JobCounts | None = None
+    """How many jobs the comparison had, how many came from the cache and how many ran."""
+    study: dict[str, Any] | None = None
+    """What :func:`compare` was asked and the key of every job, for ``study.json``
+    (:mod:`simbridge.compare.report.study`: ``simbridge report DIR`` rebuilds from it)."""
 
     @property
     def timestep(self) -> float:
@@ -172,6 +194,11 @@ def compare(
     controller: Any = None,
     resync_every: int | None = None,
     engine_settings: Mapping[str, Mapping[str, Any]] | None = None,
+    cache: Cache | str | os.PathLike[str] | bool | None = None,
+    fresh: bool = False,
+    scheduler: str | None = None,
+    executor: Executor | None = None,
+    offline: bool = False,
 ) -> Comparison:
     """Run ``scenario`` on two or more backends at every time step of ``timesteps`` and at half
     of each, run each engine's ensemble at the first time step, diff and judge every pair.
@@ -196,9 +223,10 @@ def compare(
         seed: seeds the offsets, the bootstrap and the permutation test.
         tolerance: the gap below which the engines agree, in the headline quantity's unit
             (default its first threshold: 1 cm, 1°, 0.1 rad/s).
-        workers: processes for the ensemble (default: the CPU count; 0: in this process).
-            A script that calls this with ``ensemble > 1`` must guard its top level with
-            ``if __name__ == "__main__":`` (worker processes are spawned).
+        workers: processes that run the jobs (every run: nominal, half-step, ensemble members,
+            resync; default: the CPU count; 0: in this process). A script that calls this with
+            workers must guard its top level with ``if __name__ == "__main__":`` (worker
+            processes are spawned).
         controller: a controller driving every phase in place of the scenario's own (a class
             or function at a module's top level, a ``"file.py:Name"`` or
             ``"package.module:Name"`` reference, or a ``ControllerSpec``); see
@@ -210,10 +238,19 @@ def compare(
         engine_settings: engine settings per backend, ``{"mujoco": {"impratio": 10}}``
             (:mod:`simbridge.engine_settings`), on top of the scenario's ``[engines.*]``
             tables, key by key; every run of the study uses them (ensemble members included).
+        cache: where job results are kept by content (:mod:`~simbridge.compare.run.cache`):
+            None the default folder (``$XDG_CACHE_HOME/simbridge``, else
+            ``~/.cache/simbridge``), a folder, a :class:`~simbridge.compare.run.cache.Cache`,
+            or False for none. A job found there is not run again.
+        fresh: run every job, even those in the cache (their results replace the entries).
+        scheduler: ``"tcp://host:port"``: run the jobs on that Dask cluster.
+        executor: run the jobs on this :class:`concurrent.futures.Executor` (not shut down).
+        offline: run nothing: every job must be in the cache (``simbridge report DIR``).
 
     Raises:
         ScenarioError, SimbridgeError: a bad scenario or time step, a backend that fails.
         InvalidArgumentError: a bad ensemble size, perturbation, seed or worker count.
+        CacheEntryMissingError: ``offline`` and a job is not in the cache.
     """
     start = _time.perf_counter()
     sc = load_scenario(scenario)
@@ -221,6 +258,7 @@ def compare(
         sc = sc.with_controller(controller)
     sc = sc.with_engine_settings(engine_settings)
     left_out: dict[str, str] = {}
+    backends_named = backends is not None
     if backends is None:
         backends, left_out = installed_backends()
         if len(backends) < 2:
@@ -274,8 +312,7 @@ def compare(
         raise InvalidArgumentError(
             "resync_every", f"expected a whole number of steps >= 0 (0: none), got {resync_every!r}"
         )
-    resync_total = 2 * scaled[dts[0]].steps if resync_every else 0
-    runner = EnsembleRunner(
+    runner = EnsembleRunner(  # checks the ensemble's arguments, draws its offsets
         scaled[dts[0]],
         list(zip(names, profiles, strict=True)),
         quantity,
@@ -284,68 +321,32 @@ def compare(
         seed=seed,
         workers=workers,
     )
-    nominal_total = sum(scaled[d].steps for _, d in todo)
-    total = nominal_total + resync_total + runner.total_steps
-    done = 0
-    runs: dict[tuple[int, float], Trajectory] = {}
-    cache: dict[tuple[str, str, float], Trajectory] = {}
-    runner.submit()  # the workers run the perturbed members meanwhile
-    try:
-        for slot, d in todo:
-            key = (names[slot], profiles[slot], d)
-            if key not in cache:
-                what = f"{names[slot]} @ {format_timestep(d)} s"
-                base = done
-
-                def tick(n: int, _total: int, _what: str = what, _base: int = base) -> None:
-                    if progress is not None:
-                        progress(_what, _base + n, total)
-
-                cache[key] = run(scaled[d], names[slot], profile=profiles[slot], progress=tick)
-            runs[(slot, d)] = cache[key]
-            done += scaled[d].steps
-    except BaseException:
-        runner.cancel()
-        raise
-    pending = Comparison(
-        scenario=sc,
-        backends=names,
-        profiles=profiles,
-        timesteps=dts,
-        runs=runs,
-        cross={},
-        own={},
+    if executor is None and scheduler is None and workers != 0 and not _main_importable():
+        workers = runner.workers = 0  # a script read from stdin: a spawned one cannot import it
+    labels = engine_labels(names, profiles)
+    plan = Plan(scaled, dts, todo, names, profiles, labels, quantity, runner, resync_every)
+    results, failed, counts = run_jobs(
+        plan.jobs,
+        cache=cache,
+        fresh=fresh,
+        offline=offline,
+        workers=workers,
+        scheduler=scheduler,
+        executor=executor,
+        progress=progress,
     )
-
-    def resync_tick(what: str, n: int, _total: int) -> None:
-        if progress is not None:
-            progress(what, nominal_total + n, total)
-
-    try:
-        resynced = None
-        if resync_every:
-            resynced = one_step_resync(
-                scaled[dts[0]],
-                names[:2],
-                profiles=profiles[:2],
-                labels=pending.labels[:2],
-                every=resync_every,
-                quantity=quantity,
-                tolerance=tolerance,
-                progress=resync_tick,
-            )
-    except BaseException:
-        runner.cancel()
-        raise
-
-    def ens_tick(what: str, n: int) -> None:
-        if progress is not None:
-            progress(what, nominal_total + resync_total + n, total)
-
-    ensembles = runner.collect([runs[(k, dts[0])] for k in range(n)], pending.labels, ens_tick)
+    runs: dict[tuple[int, float], Trajectory] = {}
+    for (slot, d), key in plan.nominal.items():
+        result = results.get(key)
+        if result is None:
+            raise SimbridgeError(f"the run of {plan.by_key[key].label} failed: {failed[key].cause}")
+        runs[(slot, d)] = result.value
+    resynced = None
+    if resync_every:
+        resynced = resync_of(plan, results, failed, runs, scaled[dts[0]].steps, tolerance)
+    ensembles = ensembles_of(plan, results, runs)
     own = {(k, dt): diff(runs[(k, dt)], runs[(k, dt / 2)]) for k in range(n) for dt in dts}
     rows = ensembles[0].rows
-    labels = pending.labels
     pairs = []
     for a, b in _pairs(n):
         verdict = judge(
@@ -377,10 +378,22 @@ def compare(
             perturb=runner.eps,
             seed=runner.seed,
             workers=runner.workers,
-            wall_time=runner.wall_time,
+            wall_time=counts.wall_time,
         ),
         pairs=pairs,
         left_out=left_out,
+        failed=[failed[k] for k in plan.keys if k in failed],
+        failed_members=plan.failed_members(failed),
+        jobs=counts,
+        study=study_record(
+            sc,
+            plan,
+            backends_named=not left_out and backends_named,
+            duration=duration,
+            tolerance=tolerance,
+            command_line=list(sys.argv if command_line is None else command_line),
+            left_out=left_out,
+        ),
     )
 
 

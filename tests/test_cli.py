@@ -187,11 +187,11 @@ def test_a_log_record_clears_the_progress_bar_line_first(capsys):
     stream = io.StringIO()
     bar = ProgressBar(stream, enabled=True, delay=0.0)
     bar("pybullet run", 5, 10)
-    assert bar.drawn and stream.getvalue().startswith("\r[###############")
+    assert bar.drawn and "pybullet run:  50%|###############" in stream.getvalue()
     handler = _StderrLog()  # writes to sys.stderr, here capsys's
     handler.bar = bar
     handler.emit(logging.LogRecord("simbridge.x", logging.WARNING, "", 0, "a record", None, None))
-    assert not bar.drawn and stream.getvalue().endswith(" " * 74 + "\r")
+    assert not bar.drawn and stream.getvalue().endswith(" " * 60 + "\r")
     assert capsys.readouterr().err == "simbridge: WARNING: a record\n"
     bar("pybullet run", 6, 10)  # the next update draws it again
     assert bar.drawn

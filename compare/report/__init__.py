@@ -12,6 +12,7 @@ from ..pipeline import Comparison
 from .fmt import fmt_distance, fmt_time, fmt_value
 from .markdown import headline, markdown
 from .resync import plot_resync
+from .study import write_study
 from .summary_json import summary
 
 __all__ = ["report", "headline", "summary", "fmt_distance", "fmt_time", "fmt_value"]
@@ -52,6 +53,7 @@ def report(
             images["resync"] = out / "resync.png"
     figures["files"] = files + [p.name for p in images.values()]
     figures["headline"]["text"] = headline(figures)
+    write_study(comparison, out, {"plots": plots, "trajectories": trajectories})
     (out / "summary.json").write_text(
         json.dumps(figures, indent=2, default=_json_default, allow_nan=True) + "\n",
         encoding="utf-8",

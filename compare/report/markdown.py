@@ -573,6 +573,20 @@ def _departures_section(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def failed_members_lines(e: dict[str, Any]) -> list[str]:
+    """One line per engine whose ensemble members failed (killed their worker): how many, why,
+    and on how many runs it was judged."""
+    lines = []
+    for label, f in e.get("engines", {}).items():
+        if "failed" in f:
+            lines += [
+                f"**{f['failed']['members']} of {e['size']} {label} runs failed: "
+                f"{', '.join(f['failed']['causes'])}; judged on {f['failed']['judged_on']}.**",
+                "",
+            ]
+    return lines
+
+
 def _verdict_section(s: dict[str, Any]) -> list[str]:
     """The judgement in a table: each engine's spread, own error and their ratios to the gap,
     the test, the instants of each kind, the horizons."""
@@ -610,6 +624,7 @@ def _verdict_section(s: dict[str, Any]) -> list[str]:
         raised = perturbation_words(e)
         if raised:
             lines += [raised, ""]
+        lines += failed_members_lines(e)
     rows = []
     for label, f in v["engine_figures"].items():
         hz = ", ".join(

@@ -1,4 +1,5 @@
-"""A one-line progress bar on stderr for long comparisons.
+"""A one-line progress bar on stderr for long comparisons, drawn by tqdm (with the rate and the
+time left).
 
 Silent when the stream is not a terminal, and for runs shorter than ``delay`` seconds: nothing
 is drawn until a run has lasted that long. Calls from several threads draw one at a time; a
@@ -11,13 +12,19 @@ from __future__ import annotations
 import sys
 import threading
 import time
-from typing import TextIO
+from typing import Any, TextIO
 
 __all__ = ["ProgressBar"]
 
+REDRAW_S = 0.05
+"""At most one redraw per this many seconds (a run reports its progress every few steps)."""
+
 
 class ProgressBar:
-    """Call it as ``bar(what, done, total)``; :meth:`close` clears the line."""
+    """Call it as ``bar(what, done, total)``; :meth:`close` clears the line.
+
+    ``width``: the bar's own width in characters (the line also holds ``what``, the counts,
+    the rate and the time left)."""
 
     def __init__(
         self,
@@ -36,6 +43,7 @@ class ProgressBar:
         self.delay = delay
         self.start = time.perf_counter()
         self.drawn = False
+        self._bar: Any = None
         self._last = 0.0
         self._lock = threading.Lock()
 
@@ -45,28 +53,45 @@ class ProgressBar:
         now = time.perf_counter()
         if now - self.start < self.delay:
             return
-        if now - self._last < 0.05 and done < total:
+        if now - self._last < REDRAW_S and done < total:
             return
-        self._last = now
-        frac = done / total if total else 1.0
-        filled = int(round(frac * self.width))
-        bar = "#" * filled + "-" * (self.width - filled)
         with self._lock:
-            self.stream.write(f"\r[{bar}] {frac * 100:5.1f}%  {what:<32.32}")
-            self.stream.flush()
+            if self._bar is None:
+                from tqdm import tqdm
+
+                self._bar = tqdm(
+                    total=total,
+                    file=self.stream,
+                    leave=False,
+                    unit="step",
+                    disable=False,
+                    mininterval=0,
+                    bar_format=f"{{l_bar}}{{bar:{self.width}}}{{r_bar}}",
+                )
+                self._bar.start_t = self._bar.last_print_t = time.time() - (now - self.start)
+            bar = self._bar
+            bar.total = total
+            bar.n = done
+            bar.set_description_str(what, refresh=False)
+            bar.refresh()
+            self._last = now
             self.drawn = True
 
     def clear(self) -> None:
         """Blank the bar's line (the next update draws it again)."""
         with self._lock:
-            if self.drawn:
-                self.stream.write("\r" + " " * (self.width + 44) + "\r")
+            if self.drawn and self._bar is not None:
+                self._bar.clear()
                 self.stream.flush()
                 self.drawn = False
                 self._last = 0.0  # the next update draws at once
 
     def close(self) -> None:
-        self.clear()
+        with self._lock:
+            if self._bar is not None:
+                self._bar.close()  # leave=False: the line is cleared
+                self._bar = None
+                self.drawn = False
 
     def __enter__(self) -> ProgressBar:
         return self

@@ -236,6 +236,13 @@ def _ensemble_summary(c: Comparison) -> dict[str, Any] | None:
                 "orientation": e.perturbation[1],
                 "state_dtype": e.state_dtype,
             }
+    failed = getattr(c, "failed_members", None) or {}
+    for label, jobs in failed.items():  # only where members failed: the summary unchanged else
+        engines[label]["failed"] = {
+            "members": len(jobs),
+            "judged_on": int(c.ensembles[c.labels.index(label)].size),
+            "causes": sorted({f.cause for f in jobs}),
+        }
     return {
         "size": s.size,
         "perturbation": {"position": s.perturb[0], "orientation": s.perturb[1]},

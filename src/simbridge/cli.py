@@ -4,6 +4,9 @@
   simbridge compare r2d2 --timestep 1/240 1/480 1/960
                                               speed against accuracy over time steps
   simbridge compare my_scenario.toml --out reports/mine
+  simbridge compare r2d2 --workers 8 --cache /tmp/sbcache
+                                              runs as jobs on 8 processes, cached by content
+  simbridge report reports/r2d2               the report again, from the cache: nothing runs
   simbridge compare minitaur.toml --resolve   halve the time step until the verdict resolves
   simbridge sweep r2d2-gentle --vary lateral_friction=0.3,0.5,0.9
                                               the gap and spreads against a setting's values
@@ -169,8 +172,27 @@ def build_parser() -> argparse.ArgumentParser:
         "(default: about 150 points per run)",
     )
     add_set_option(p)
+    _jobs_arguments(p)
     cli_study.add_resolve_arguments(p)
     _verbose(p)
+
+    r = sub.add_parser(
+        "report",
+        help="write a report folder's report again from the cache, running nothing",
+        description="Read DIR/study.json (written by `simbridge compare`) and write DIR's "
+        "report.md, summary.json and figures again from the cached results of the study's "
+        "runs: no engine runs. Fails, naming the first one, when a run is not in the cache.",
+    )
+    r.add_argument("folder", metavar="DIR", type=Path, help="a report folder")
+    r.add_argument(
+        "--cache",
+        type=Path,
+        metavar="DIR",
+        help="the cache the study used (default: $XDG_CACHE_HOME/simbridge, else "
+        "~/.cache/simbridge)",
+    )
+    r.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    _verbose(r)
 
     s = sub.add_parser(
         "scenarios",
@@ -195,8 +217,44 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
     _verbose(add_settings_parser(sub, backends))
-    cli_study.add_commands(sub, _verbose)
+    cli_study.add_commands(sub, _verbose, _jobs_arguments)
     return parser
+
+
+def _jobs_arguments(p: argparse.ArgumentParser) -> None:
+    """Where and how a study's runs (jobs) run, and their cache."""
+    p.add_argument(
+        "--workers",
+        type=_seed,  # an integer >= 0
+        metavar="N",
+        help="processes running the study's runs on this machine (default: the CPU count; 0: "
+        "all in this process)",
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="run the study's runs on this Dask cluster (needs simbridge[cluster])",
+    )
+    p.add_argument(
+        "--cache",
+        type=Path,
+        metavar="DIR",
+        help="keep every run's result here, by content, and reuse it (default: "
+        "$XDG_CACHE_HOME/simbridge, else ~/.cache/simbridge)",
+    )
+    p.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
+    p.add_argument(
+        "--fresh", action="store_true", help="run everything again (the cache's entries replaced)"
+    )
+
+
+def _report(args: argparse.Namespace) -> int:
+    from simbridge.compare.report.rebuild import rebuild
+
+    options = {"plots": False} if args.no_plots else {}
+    path = rebuild(args.folder, cache=args.cache, **options)
+    print(f"report: {path}")
+    return 0
 
 
 def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) -> None:
@@ -255,6 +313,10 @@ def _compare(args: argparse.Namespace) -> int:
             seed=args.seed,
             resync_every=args.resync_every,
             engine_settings=engine_settings,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            cache=False if args.no_cache else args.cache,
+            fresh=args.fresh,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots)
@@ -419,6 +481,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         getattr(args, "handler", None)
         or {
             "compare": _compare,
+            "report": _report,
             "scenarios": _scenarios,
             "joints": _joints,
             "settings": _settings,

@@ -178,8 +178,13 @@ def _common(p: argparse.ArgumentParser, backends: list[str], ensemble: int) -> N
     add_set_option(p)
 
 
-def add_commands(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -> None:
-    """``simbridge sweep`` and ``simbridge explain`` (each parser's ``handler`` set)."""
+def add_commands(
+    sub: Any,
+    verbose: Callable[[argparse.ArgumentParser], None],
+    jobs_arguments: Callable[[argparse.ArgumentParser], None] | None = None,
+) -> None:
+    """``simbridge sweep`` and ``simbridge explain`` (each parser's ``handler`` set), with
+    ``jobs_arguments`` (``--workers``, ``--cache`` ...) added to each when given."""
     from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE
     from simbridge.compare.study.explain import DEFAULT_ENSEMBLE as EXPLAIN_ENSEMBLE
     from simbridge.registry import available_backends
@@ -206,6 +211,8 @@ def add_commands(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -
     )
     s.add_argument("--grid", action="store_true", help="every combination of the values")
     s.set_defaults(handler=_sweep)
+    if jobs_arguments is not None:
+        jobs_arguments(s)
     verbose(s)
 
     e = sub.add_parser(
@@ -219,6 +226,8 @@ def add_commands(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -
     )
     _common(e, backends, EXPLAIN_ENSEMBLE)
     e.set_defaults(handler=_explain)
+    if jobs_arguments is not None:
+        jobs_arguments(e)
     verbose(e)
 
 
@@ -245,6 +254,22 @@ def _check_profiles(args: argparse.Namespace) -> None:
         raise _usage("--backends takes two or more backends")
     if args.profile is not None and n is not None and len(args.profile) not in (1, n):
         raise _usage(f"--profile takes one profile, or one per backend ({n})")
+
+
+def _jobs(args: argparse.Namespace) -> dict[str, Any]:
+    """compare()'s job options from ``--workers``, ``--scheduler``, ``--cache`` ..."""
+    out: dict[str, Any] = {}
+    if getattr(args, "workers", None) is not None:
+        out["workers"] = args.workers
+    if getattr(args, "scheduler", None) is not None:
+        out["scheduler"] = args.scheduler
+    if getattr(args, "no_cache", False):
+        out["cache"] = False
+    elif getattr(args, "cache", None) is not None:
+        out["cache"] = args.cache
+    if getattr(args, "fresh", False):
+        out["fresh"] = True
+    return out
 
 
 def _engine_settings(args: argparse.Namespace) -> Any:
@@ -290,6 +315,7 @@ def _sweep(args: argparse.Namespace) -> int:
             perturb=args.perturb,
             seed=args.seed,
             engine_settings=_engine_settings(args),
+            **_jobs(args),
             progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
         )
         path = write_sweep(result, out, plots=not args.no_plots)
@@ -332,6 +358,7 @@ def _explain(args: argparse.Namespace) -> int:
             duration=args.duration,
             perturb=args.perturb,
             engine_settings=_engine_settings(args),
+            **_jobs(args),
             progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
         )
         path = write_explanation(result, out, plots=not args.no_plots)

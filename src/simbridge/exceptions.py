@@ -16,6 +16,7 @@ __all__ = [
     "BackendError",
     "UnknownBackendError",
     "BackendNotInstalledError",
+    "ExtraNotInstalledError",
     "BackendUnsupportedError",
     "DisplayError",
     "UrdfError",
@@ -38,6 +39,7 @@ __all__ = [
     "StaleCommandError",
     "ScenarioError",
     "TrajectoryFileError",
+    "CacheEntryMissingError",
     "SlowStepWarning",
 ]
 
@@ -75,6 +77,18 @@ class BackendNotInstalledError(BackendError, ImportError):
         super().__init__(
             f"backend {backend!r} needs the Python package {module!r}, which is not importable "
             f"({cause}); install it with: pip install {pip_name}"
+        )
+
+
+class ExtraNotInstalledError(SimbridgeError, ImportError):
+    """A feature needs a package of one of simbridge's extras that is not installed."""
+
+    def __init__(self, feature: str, module: str, pip_name: str, cause: BaseException):
+        self.feature = feature
+        self.module = module
+        super().__init__(
+            f"{feature} needs the Python package {module!r}, which is not importable "
+            f"({cause}); install it with: pip install '{pip_name}'"
         )
 
 
@@ -318,6 +332,25 @@ class TrajectoryFileError(SimbridgeError, ValueError):
         self.file = file
         self.key = key
         super().__init__(f"{file}: key {key!r}: {detail}")
+
+
+class CacheEntryMissingError(SimbridgeError, LookupError):
+    """A study rebuilt from the cache alone (``simbridge report DIR``) needs a job's result that
+    the cache does not hold: ``cache`` the folder, ``job`` and ``key`` the first such job,
+    ``missing`` of ``total`` jobs absent."""
+
+    def __init__(self, cache: str, job: str, key: str, missing: int, total: int):
+        self.cache = cache
+        self.job = job
+        self.key = key
+        self.missing = missing
+        self.total = total
+        super().__init__(
+            f"{missing} of {total} jobs of the study are not in the cache {cache}: the first is "
+            f"{job} (key {key[:16]}); name the cache the study used (--cache DIR), or run the "
+            "study again (simbridge compare): a changed robot, controller or scenario file, or "
+            "another simbridge version, makes new jobs"
+        )
 
 
 class SlowStepWarning(UserWarning):

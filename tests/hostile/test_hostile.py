@@ -7,6 +7,9 @@ what happened: a crash or hang, a raw exception with its traceback, a silent NaN
 that returned it, a leak (temporary file, file descriptor, thread), or the wrong error.
 
 ``python tests/hostile/_hostile_cases.py`` prints the number of cases per category and backend.
+
+This module: the cases that use no engine and PyBullet's; ``test_hostile_mujoco.py`` and
+``test_hostile_physx.py`` hold the other engines' (``_hostile_suite.py``: the shared test).
 """
 
 from __future__ import annotations
@@ -21,39 +24,23 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _hostile_cases as h  # noqa: E402
 import _hostile_runner as runner  # noqa: E402
+import _hostile_suite as suite  # noqa: E402
 
-
-def _params() -> list[Any]:
-    out = []
-    for case in h.CASES.values():
-        for backend in case.backends:
-            reason = h.known(case.name, backend)
-            marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
-            out.append(pytest.param(backend, case.name, id=f"{backend}-{case.name}", marks=marks))
-    return out
+GROUP = (h.NEUTRAL, "pybullet")
 
 
 @pytest.fixture(scope="module")
 def reports(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Any:
-    wanted = set()
-    for item in request.session.items:
-        spec = getattr(item, "callspec", None)
-        if getattr(item, "originalname", "") == "test_case" and spec is not None:
-            wanted.add((spec.params["backend"], spec.params["name"]))
-    return runner.run(sorted(wanted), tmp_path_factory.mktemp("hostile"))
+    return suite.run_wanted(request, tmp_path_factory)
 
 
-@pytest.mark.parametrize(("backend", "name"), _params())
+@pytest.mark.parametrize(("backend", "name"), suite.params(GROUP))
 def test_case(reports: Any, backend: str, name: str) -> None:
-    failure = runner.verdict(h.CASES[name], backend, reports.get((backend, name)))
-    assert failure is None, failure
+    suite.check(reports, backend, name)
 
 
 def test_children_left_nothing(reports: Any) -> None:
-    """What a child process left in its private TMPDIR when it ended (after every case in it
-    had been checked)."""
-    left = {key: value for key, value in reports.items() if key[1].startswith("@")}
-    assert left == {}
+    assert suite.left_behind(reports) == {}
 
 
 def test_corpus_size() -> None:

@@ -1,0 +1,70 @@
+"""A report written again from its folder's ``study.json`` and the cache alone
+(``simbridge report DIR``): :func:`rebuild`."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from simbridge.exceptions import SimbridgeError
+
+from ..pipeline import compare
+from ..run.cache import Cache
+from ..run.studyjobs import scenario_of
+from . import report
+from .study import STUDY_FILE, read_study
+
+__all__ = ["rebuild"]
+
+
+def rebuild(
+    folder: str | os.PathLike[str],
+    *,
+    cache: Cache | str | os.PathLike[str] | None = None,
+    **options: Any,
+) -> Path:
+    """Write the report of the study recorded in ``folder`` again, from the cache alone (no
+    engine runs); ``options`` replace the report options it recorded. Returns ``report.md``.
+
+    Raises:
+        CacheEntryMissingError: a job of the study is not in the cache.
+        SimbridgeError: ``study.json`` unreadable, or the jobs its arguments make now are not
+            the ones it recorded (a file it names changed, another simbridge version).
+    """
+    folder = Path(folder)
+    record = read_study(folder)
+    args = record["arguments"]
+    comparison = compare(
+        scenario_of(record),
+        args["backends"],
+        profile=args["profile"],
+        timesteps=args["timesteps"],
+        duration=args["duration"],
+        ensemble=args["ensemble"],
+        perturb=tuple(args["perturb"]),
+        seed=args["seed"],
+        tolerance=args["tolerance"],
+        resync_every=args["resync_every"],
+        workers=args["workers"],
+        command_line=record["command_line"],
+        cache=cache,
+        offline=True,
+    )
+    assert comparison.study is not None
+    now = [j["key"] for j in comparison.study["jobs"]]
+    then = [j["key"] for j in record["jobs"]]
+    if now != then:
+        changed = sum(1 for a, b in zip(now, then, strict=False) if a != b)
+        raise SimbridgeError(
+            f"{folder / STUDY_FILE}: the study's arguments now make other jobs than it recorded "
+            f"({changed} of {len(then)} differ): a file it names changed since, or another "
+            "simbridge version; run the study again (simbridge compare)"
+        )
+    comparison.left_out = dict(record.get("left_out", {}))
+    comparison.wall_time = float(record.get("wall_time", comparison.wall_time))
+    if not args.get("backends_named", True):
+        comparison.study["arguments"]["backends_named"] = False
+    kwargs = dict(record.get("report", {}))
+    kwargs.update(options)
+    return report(comparison, folder, **kwargs)

@@ -1,0 +1,394 @@
+"""A comparison's runs as jobs (:mod:`.jobs`): which jobs it has (:class:`Plan`), running those
+the cache does not hold (:func:`run_jobs`), and putting their results back together as the
+comparison needs them (:func:`ensembles_of`, :func:`resync_of`, :func:`study_record`).
+
+Results come back the same wherever a job ran (here, a worker process, a Dask worker) and
+whether it ran now or was read from the cache: a cached study gives the same figures."""
+
+from __future__ import annotations
+
+import logging
+import os
+import time as _time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from simbridge._version import __version__
+from simbridge.exceptions import CacheEntryMissingError
+
+from ..scenario import Scenario, dumps_scenario
+from .cache import Cache, resolve
+from .ensemble import (
+    Ensemble,
+    EnsembleRunner,
+    _main_importable,
+    _show_worker_log,
+    kept_rows,
+    member_of,
+    perturbed,
+)
+from .executors import JobFailed, run_all
+from .jobs import Job, JobResult, run_job
+from .quantities import QUANTITIES
+from .resync import FLOOR_RELATIVE, Resync
+from .trajectory import Trajectory
+
+__all__ = [
+    "JobCounts",
+    "JobFailed",
+    "Plan",
+    "run_jobs",
+    "ensembles_of",
+    "resync_of",
+    "study_record",
+    "STUDY_FORMAT",
+]
+
+log = logging.getLogger("simbridge.compare.jobs")
+
+STUDY_FORMAT = "simbridge.compare.study/1"
+
+
+@dataclass
+class JobCounts:
+    """A comparison's jobs: how many in all, read from the cache, run, failed; ``wall_time``
+    (s) of running them (0 when all came from the cache)."""
+
+    total: int
+    cached: int
+    ran: int
+    failed: int
+    wall_time: float = 0.0
+    cache: str | None = None  # the cache folder (None: no cache)
+
+
+class Plan:
+    """Every job of a comparison (each once: two runs with the same inputs are one job).
+
+    ``nominal[(slot, dt)]``, ``members[(slot, k)]`` and ``resync`` (A's states, B's) hold the
+    keys of the jobs whose results fill :attr:`Comparison.runs`, the ensembles and the resync.
+    """
+
+    def __init__(
+        self,
+        scaled: dict[float, Scenario],
+        dts: Sequence[float],
+        todo: Sequence[tuple[int, float]],
+        names: Sequence[str],
+        profiles: Sequence[Any],
+        labels: Sequence[str],
+        quantity: str,
+        runner: EnsembleRunner,
+        every: int,
+    ):
+        self.dts = list(dts)
+        self.names, self.profiles, self.labels = list(names), list(profiles), list(labels)
+        self.quantity = quantity
+        self.runner = runner
+        self.every = every
+        self.by_key: dict[str, Job] = {}
+        self.nominal: dict[tuple[int, float], str] = {}
+        self.members: dict[tuple[int, int], str] = {}
+        self.resync: list[str] = []
+        for slot, d in todo:
+            kind = "nominal" if d in self.dts else "half-step"
+            job = Job.of(kind, scaled[d], names[slot], profiles[slot])
+            self.nominal[(slot, d)] = self._add(job)
+        head = scaled[self.dts[0]]
+        if every:
+            for i in (0, 1):
+                job = Job.of(
+                    "resync",
+                    head,
+                    names[i],
+                    profiles[i],
+                    target=(names[1 - i], profiles[1 - i]),
+                    labels=(labels[i], labels[1 - i]),
+                    every=every,
+                    quantity=quantity,
+                )
+                self.resync.append(self._add(job))
+        for slot, k in runner.jobs:
+            dpos, drot = runner.engine_offsets[slot]
+            job = Job.of(
+                "member",
+                perturbed(head, dpos[k], drot[k]),
+                names[slot],
+                profiles[slot],
+                seed=runner.seed,
+                member=k,
+                quantity=quantity,
+            )
+            self.members[(slot, k)] = self._add(job)
+
+    def failed_members(self, failed: dict[str, JobFailed]) -> dict[str, list[JobFailed]]:
+        """Per engine label, its failed ensemble members (engines with none left out)."""
+        out: dict[str, list[JobFailed]] = {}
+        for (slot, _), key in self.members.items():
+            if key in failed:
+                out.setdefault(self.labels[slot], []).append(failed[key])
+        return out
+
+    def _add(self, job: Job) -> str:
+        self.by_key.setdefault(job.key, job)
+        return job.key
+
+    @property
+    def jobs(self) -> list[Job]:
+        return list(self.by_key.values())
+
+    @property
+    def keys(self) -> list[str]:
+        return list(self.by_key)
+
+
+_COST = {"resync": 3.0}  # a resync job steps its source and, at each point, two more Sims
+
+
+def run_jobs(
+    jobs: Sequence[Job],
+    *,
+    cache: Cache | str | os.PathLike[str] | bool | None = None,
+    fresh: bool = False,
+    offline: bool = False,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    executor: Executor | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> tuple[dict[str, JobResult], dict[str, JobFailed], JobCounts]:
+    """Each job's result by key: from the cache unless ``fresh``, else run (and then stored);
+    the jobs that killed their worker by key; the counts.
+
+    ``progress(what, steps_done, steps_total)``: as jobs finish (cached ones count as done);
+    None: the executor's own progress over jobs (a bar on a terminal).
+
+    Raises:
+        CacheEntryMissingError: ``offline`` and a job is not in the cache.
+    """
+    store = resolve(cache)
+    results: dict[str, JobResult] = {}
+    if store is not None and not fresh:
+        for job in jobs:
+            got = store.get(job.key)
+            if isinstance(got, JobResult) and got.kind == job.kind:
+                results[job.key] = got
+    missing = [j for j in jobs if j.key not in results]
+    counts = JobCounts(
+        total=len(jobs),
+        cached=len(results),
+        ran=0,
+        failed=0,
+        cache=str(store.dir) if store is not None else None,
+    )
+    if offline and missing:
+        raise CacheEntryMissingError(
+            str(store.dir) if store is not None else "(no cache)",
+            missing[0].label,
+            missing[0].key,
+            len(missing),
+            len(jobs),
+        )
+    steps = {j.key: j.steps for j in jobs}
+    total = sum(steps.values())
+    done = sum(steps[k] for k in results)
+    failed: dict[str, JobFailed] = {}
+    if missing:
+        missing.sort(key=lambda j: -_COST.get(j.kind, 1.0) * steps[j.key])
+        if executor is None and scheduler is None:
+            if workers is None and len(missing) == 1:
+                workers = 0  # one job: no process to start
+            elif workers != 0 and not _main_importable():
+                workers = 0  # a script read from stdin: a spawned process cannot import it
+        start = _time.perf_counter()
+
+        def finished(job: Job) -> None:
+            nonlocal done
+            done += steps[job.key]
+            if progress is not None:
+                progress(job.label, done, total)
+
+        def on_result(index: int, result: Any) -> None:
+            job = missing[index]
+            results[job.key] = result
+            counts.ran += 1
+            if store is not None:
+                try:
+                    store.put(job.key, result)
+                except OSError as exc:
+                    log.warning("cannot write the cache entry of %s: %s", job.label, exc)
+            finished(job)
+
+        out = run_all(
+            run_job,
+            missing,
+            labels=[j.label for j in missing],
+            workers=workers,
+            scheduler=scheduler,
+            executor=executor,
+            progress=None if progress is None else _silent,
+            on_result=on_result,
+        )
+        for job, result in zip(missing, out, strict=True):
+            if isinstance(result, JobFailed):  # not cached: the next study runs it again
+                failed[job.key] = result
+                counts.failed += 1
+                finished(job)
+        counts.wall_time = _time.perf_counter() - start
+    elif progress is not None:
+        progress("every run from the cache", done, total)
+    here = os.getpid()
+    for job in jobs:  # what the runs logged, each once, where no handler has seen it yet
+        r = results.get(job.key)
+        if r is not None and job.kind != "member" and r.pid != here:
+            for name, level, message in dict.fromkeys(r.log):
+                logging.getLogger(name).log(level, "%s [%s]", message, job.label)
+    return results, failed, counts
+
+
+def _silent(done: int, total: int, label: str) -> None:
+    pass
+
+
+def ensembles_of(
+    plan: Plan, results: dict[str, JobResult], runs: dict[tuple[int, float], Trajectory]
+) -> list[Ensemble]:
+    """One :class:`Ensemble` per engine: member 0 from its nominal run, the others from their
+    jobs (a failed member left out, with its offsets)."""
+    runner, quantity = plan.runner, plan.quantity
+    here = os.getpid()
+    out = []
+    for slot, backend in enumerate(plan.names):
+        tr = runs[(slot, plan.dts[0])]
+        members = [member_of(tr, quantity, 0)]
+        kept = [0]
+        for k in range(1, runner.size):
+            r = results.get(plan.members[(slot, k)])
+            if r is None:
+                continue
+            member = r.value
+            member.log = list(r.log) if r.pid != here else []
+            members.append(member)
+            kept.append(k)
+        _show_worker_log(members[1:], backend)
+        rows = kept_rows(tr.steps)
+        dm, dr = runner.engine_offsets[slot]
+        if len(kept) < runner.size:
+            dm, dr = dm[kept], dr[kept]
+        out.append(
+            Ensemble(
+                label=plan.labels[slot],
+                backend=backend,
+                profile=plan.profiles[slot],
+                quantity=quantity,
+                time=tr.time[rows],
+                rows=rows,
+                features=np.stack([m.features for m in members]),
+                end_points=np.stack([m.end_point for m in members]),
+                offsets_m=dm,
+                offsets_rad=dr,
+                perturbation=runner.engine_eps[slot],
+                state_dtype=runner.state_dtypes[slot],
+                wall_time=sum(m.wall_time for m in members[1:]),
+                outcomes=[m.outcomes for m in members],
+            )
+        )
+    return out
+
+
+def resync_of(
+    plan: Plan,
+    results: dict[str, JobResult],
+    failed: dict[str, JobFailed],
+    runs: dict[tuple[int, float], Trajectory],
+    steps: int,
+    tolerance: float | None,
+) -> Resync | None:
+    """The :class:`Resync` of the first two engines from its two jobs (None, with a warning,
+    when one failed)."""
+    directions, scales, wall = [], [1.0], 0.0
+    for key in plan.resync:
+        r = results.get(key)
+        if r is None:
+            log.warning(
+                "%s failed (%s): the report has no one-step resync",
+                plan.by_key[key].label,
+                failed[key].cause if key in failed else "no result",
+            )
+            return None
+        d, scale = r.value
+        directions.append(d)
+        scales.append(scale)
+        wall += r.wall_time
+    q = plan.quantity
+    return Resync(
+        every=plan.every,
+        quantity=q,
+        labels=(plan.labels[0], plan.labels[1]),
+        directions=directions,
+        precision_floor=FLOOR_RELATIVE * max(scales),
+        significant=(tolerance or QUANTITIES[q].thresholds[0]) / max(1, steps),
+        trajectories=[runs[(0, plan.dts[0])], runs[(1, plan.dts[0])]],
+        wall_time=wall,
+    )
+
+
+def _jsonable_profile(p: Any) -> Any:
+    if isinstance(p, str):
+        return p
+    from .jobs import profile_dict
+
+    return profile_dict(p)
+
+
+def study_record(
+    sc: Scenario,
+    plan: Plan,
+    *,
+    backends_named: bool,
+    duration: float | None,
+    tolerance: float | None,
+    command_line: list[str],
+    left_out: dict[str, str],
+) -> dict[str, Any]:
+    """What ``study.json`` records: the scenario, compare()'s arguments as resolved, every
+    job's key (:mod:`simbridge.compare.report.study`)."""
+    runner = plan.runner
+    return {
+        "format": STUDY_FORMAT,
+        "simbridge_version": __version__,
+        "scenario": {
+            "name": sc.name,
+            "file": str(sc.source) if sc.source is not None else None,
+            "toml": dumps_scenario(sc),
+        },
+        "arguments": {
+            "backends": list(plan.names),
+            "backends_named": backends_named,
+            "profile": [_jsonable_profile(p) for p in plan.profiles],
+            "timesteps": list(plan.dts),
+            "duration": duration,
+            "ensemble": runner.size,
+            "perturb": list(runner.eps),
+            "seed": runner.seed,
+            "tolerance": tolerance,
+            "resync_every": plan.every,
+            "workers": runner.workers,
+        },
+        "left_out": dict(left_out),
+        "command_line": list(command_line),
+        "jobs": [{"key": j.key, "kind": j.kind, "label": j.label} for j in plan.jobs],
+    }
+
+
+def scenario_of(record: dict[str, Any]) -> Scenario:
+    """The scenario a ``study.json`` records (its file for relative references)."""
+    from ..scenario import loads_scenario
+
+    file = record["scenario"].get("file")
+    source = Path(file) if file else None
+    return loads_scenario(record["scenario"]["toml"], file=file or "study.json", source=source)

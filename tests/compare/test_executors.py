@@ -1,0 +1,285 @@
+"""run_all (compare/run/executors.py) on real processes and a real Dask cluster: the same
+results here, on the local pool and on a Dask LocalCluster; a job that segfaults or aborts its
+worker is a JobFailed naming the signal while the others complete; a worker killed mid-study
+has its job rerun; Ctrl-C stops a study cleanly after delivering what finished.
+
+The job functions are this module's top-level functions: spawned workers import this module
+(spawn passes the parent's sys.path), Dask pickles them by reference."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from simbridge.compare.run.executors import JobFailed, describe_exit, run_all
+from simbridge.exceptions import ExtraNotInstalledError, InvalidArgumentError
+
+# ---------------------------------------------------------------- job functions
+
+
+def _square(x: int) -> tuple[int, int]:
+    return x * x, os.getpid()
+
+
+def _faulty(x: str) -> str:
+    if x == "segv":
+        ctypes.string_at(0)  # reads address 0: SIGSEGV
+    if x == "abort":
+        os.abort()
+    if x == "raise":
+        raise ValueError("a bug in the job")
+    return x.upper()
+
+
+def _killer(args: tuple[str, int, str]) -> str:
+    """Job ``("kill", _, dir)`` waits for job ``("victim", _, dir)`` to say its pid, then kills
+    that worker with SIGKILL (once: a marker file); a victim says its pid and sleeps."""
+    role, _, where = args
+    d = Path(where)
+    if role == "victim":
+        with open(d / "victim-runs", "a") as f:
+            f.write(f"{os.getpid()}\n")
+        time.sleep(1.0)
+        return "victim done"
+    if role == "kill" and not (d / "killed").exists():
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            runs = (d / "victim-runs").read_text().split() if (d / "victim-runs").exists() else []
+            if runs:
+                (d / "killed").write_text(runs[0])
+                os.kill(int(runs[0]), signal.SIGKILL)
+                return "killed"
+            time.sleep(0.02)
+    return role
+
+
+def _end_point(args: tuple[str, str, float]) -> tuple[float, ...]:
+    """A real simbridge run: the scenario on the backend for ``duration`` s; where the robot
+    ends (its base, or a fixed base's last link)."""
+    from simbridge.compare.run.ensemble import end_point
+    from simbridge.compare.run.trajectory import run
+
+    scenario, backend, duration = args
+    return tuple(float(v) for v in end_point(run(scenario, backend, duration=duration).body))
+
+
+# ---------------------------------------------------------------- here and the local pool
+
+
+def test_pool_gives_the_serial_results_in_order_with_callbacks() -> None:
+    items = list(range(7))
+    here = run_all(_square, items, workers=0)
+    assert [r[0] for r in here] == [x * x for x in items]
+    assert {r[1] for r in here} == {os.getpid()}
+    seen: list[int] = []
+    ticks: list[tuple[int, int, str]] = []
+    pooled = run_all(
+        _square,
+        items,
+        workers=2,
+        labels=[f"sq{x}" for x in items],
+        on_result=lambda i, r: seen.append(i),
+        progress=lambda done, total, label: ticks.append((done, total, label)),
+    )
+    assert [r[0] for r in pooled] == [x * x for x in items]
+    assert os.getpid() not in {r[1] for r in pooled}  # in workers
+    assert sorted(seen) == items
+    assert [t[0] for t in ticks] == list(range(1, 8)) and {t[1] for t in ticks} == {7}
+    assert sorted(t[2] for t in ticks) == sorted(f"sq{x}" for x in items)
+
+
+def test_an_exception_in_a_job_propagates() -> None:
+    with pytest.raises(ValueError, match="a bug in the job"):
+        run_all(_faulty, ["a", "raise", "b"], workers=1)
+    with pytest.raises(ValueError, match="a bug in the job"):
+        run_all(_faulty, ["a", "raise", "b"], workers=0)
+
+
+def test_a_job_that_kills_its_worker_is_job_failed_and_the_others_complete() -> None:
+    items = ["a", "segv", "b", "c"]
+    # one worker (each restart spawns fresh ones: the fewer, the faster on a busy machine)
+    out = run_all(_faulty, items, workers=1, labels=[f"job-{x}" for x in items])
+    assert out[0] == "A" and out[2] == "B" and out[3] == "C"
+    assert out[1] == JobFailed("job-segv", "SIGSEGV", 2)  # its worker died twice
+    assert "SIGSEGV" in str(out[1]) and "2 times" in str(out[1])
+    out = run_all(_faulty, ["abort", "a"], workers=1, max_attempts=1)
+    assert out == [JobFailed("job 0", "SIGABRT", 1), "A"]
+
+
+def test_a_worker_killed_mid_study_has_its_job_rerun(tmp_path: Path) -> None:
+    items = [("kill", 0, str(tmp_path)), ("victim", 1, str(tmp_path)), ("other", 2, "")]
+    out = run_all(_killer, items, workers=2)
+    assert out[1] == "victim done"  # rerun after its worker was killed
+    assert out[2] == "other"
+    runs = (tmp_path / "victim-runs").read_text().split()
+    assert len(runs) == 2 and runs[0] != runs[1]  # a second worker ran it
+    assert (tmp_path / "killed").read_text() == runs[0]
+
+
+def test_describe_exit() -> None:
+    assert describe_exit(-signal.SIGSEGV) == "SIGSEGV"
+    assert describe_exit(-signal.SIGKILL).startswith("SIGKILL (killed: out of memory")
+    assert describe_exit(3) == "exit code 3"
+
+
+def test_bad_arguments_name_the_argument() -> None:
+    with pytest.raises(InvalidArgumentError, match="workers"):
+        run_all(_square, [1], workers=-1)
+    with pytest.raises(InvalidArgumentError, match="labels"):
+        run_all(_square, [1, 2], labels=["one"])
+    with pytest.raises(InvalidArgumentError, match="scheduler"):
+        run_all(_square, [1], scheduler="tcp://127.0.0.1:1", executor=ThreadPoolExecutor(1))
+    with pytest.raises(InvalidArgumentError, match="max_attempts"):
+        run_all(_square, [1], max_attempts=0)
+    assert run_all(_square, [], workers=2) == []
+
+
+def test_any_executor() -> None:
+    with ThreadPoolExecutor(2) as pool:
+        out = run_all(_square, [3, 4], executor=pool)
+        assert [r[0] for r in out] == [9, 16]
+        assert pool.submit(_square, 2).result()[0] == 4  # not shut down by run_all
+
+
+def test_a_scheduler_without_dask_says_which_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed: ImportError
+    with pytest.raises(ExtraNotInstalledError, match=r"pip install 'simbridge\[cluster\]'"):
+        run_all(_square, [1], scheduler="tcp://127.0.0.1:8786")
+
+
+_INTERRUPTED = """
+import multiprocessing, os, sys, time
+
+def slow(x):
+    time.sleep(0.6)
+    return x, os.getpid()
+
+if __name__ == "__main__":
+    from simbridge.compare.run.executors import run_all
+    got = []
+    def on_result(i, r):
+        got.append(r)
+        print("result", i, r[1], flush=True)
+    try:
+        run_all(slow, list(range(12)), workers=2, on_result=on_result)
+        print("finished", flush=True)
+    except KeyboardInterrupt:
+        print("interrupted", len(got), len(multiprocessing.active_children()), flush=True)
+        sys.exit(130)
+"""
+
+
+def test_ctrl_c_stops_cleanly_after_delivering_finished_jobs(tmp_path: Path) -> None:
+    script = tmp_path / "study.py"
+    script.write_text(textwrap.dedent(_INTERRUPTED))
+    proc = subprocess.Popen(
+        [sys.executable, str(script)],
+        stdout=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own process group, as a terminal's foreground job
+    )
+    assert proc.stdout is not None
+    lines = [proc.stdout.readline()]
+    assert lines[0].startswith("result"), lines
+    os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C reaches the whole group, workers included
+    t0 = time.monotonic()
+    rest, _ = proc.communicate(timeout=30)
+    assert time.monotonic() - t0 < 10
+    lines += rest.splitlines()
+    assert proc.returncode == 130, lines
+    results = [ln for ln in lines if ln.startswith("result")]
+    last = lines[-1].split()
+    assert last[0] == "interrupted"
+    assert int(last[1]) == len(results) and 1 <= len(results) < 12
+    assert last[2] == "0"  # no worker left
+    for pid in {int(ln.split()[2]) for ln in results}:
+        deadline = time.monotonic() + 5
+        while _alive(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(pid), f"worker {pid} outlived the study"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(") ")[1][0] != "Z"
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+
+
+# ---------------------------------------------------------------- a real Dask cluster
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    import logging
+
+    import dask
+
+    # a task is given up after killing 2 workers (default 4): a worker killed once has its
+    # task rerun, and the test's segfault costs 2 worker restarts, not 4
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
+        lc = distributed.LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        )
+    try:
+        yield lc
+    finally:
+        lc.close()
+
+
+def test_dask_gives_the_local_pools_results_for_real_runs(cluster) -> None:
+    items = [("r2d2", b, 0.25) for b in ("pybullet", "mujoco")] + [("pendulum", "mujoco", 0.25)]
+    labels = [f"{s} on {b}" for s, b, _ in items]
+    pooled = run_all(_end_point, items, workers=1, labels=labels)
+    on_dask = run_all(_end_point, items, scheduler=cluster.scheduler_address, labels=labels)
+    assert on_dask == pooled  # the same numbers to the last bit
+    assert len(set(pooled)) == len(items)  # three different runs
+
+
+def test_dask_reruns_a_killed_workers_job_and_gives_up_a_segfaulting_one(
+    cluster, tmp_path: Path
+) -> None:
+    items = [("kill", 0, str(tmp_path)), ("victim", 1, str(tmp_path)), ("other", 2, "")]
+    out = run_all(_killer, items, scheduler=cluster.scheduler_address)
+    assert out == ["killed", "victim done", "other"]
+    assert len((tmp_path / "victim-runs").read_text().split()) == 2
+    from distributed import Client
+
+    with Client(cluster.scheduler_address) as client:
+        client.wait_for_workers(2, timeout=60)  # the nanny restarted the killed one
+        out = run_all(_faulty, ["a", "segv", "b"], executor=client.get_executor(pure=False))
+    assert out[0] == "A" and out[2] == "B"
+    assert isinstance(out[1], JobFailed)
+    assert out[1].cause.startswith("KilledWorker") and out[1].attempts == 2
+
+
+def test_the_default_progress_is_a_bar_on_a_terminal_and_silent_elsewhere(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import io
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    for stream, shown in ((io.StringIO(), False), (Terminal(), True)):
+        monkeypatch.setattr(sys, "stderr", stream)
+        assert [r[0] for r in run_all(_square, [1, 2, 3], workers=0, labels="abc")] == [1, 4, 9]
+        text = stream.getvalue()
+        assert ("/3 [" in text and "job/s" in text) is shown and (text == "") is not shown
