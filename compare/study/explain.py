@@ -138,6 +138,16 @@ class PairExplanation:
 
     @property
     def conclusion(self) -> str:
+        text = self._conclusion()
+        if self.before.verdict == "chaotic" and not self.note:
+            who = " and ".join(self.before.engines) or "an engine"
+            text += (
+                f" (The gap lies within {who}'s own spread: part of it is chaos, which no "
+                "setting removes.)"
+            )
+        return text
+
+    def _conclusion(self) -> str:
         a, b = self.labels
         if self.note:
             return self.note
@@ -314,13 +324,21 @@ def _engine_candidates(
             cone = bs.get("enableConeFriction")
             if cone is True and ms.get("cone") == "pyramidal":
                 p = slot["pybullet"]
+                why = f"{labels[p]} limits friction by a cone, {labels[m]} by a pyramid: "
+                out.append(
+                    Candidate(
+                        "mujoco.cone",
+                        ((m, "mujoco.cone", "elliptic"),),
+                        "departure: contact",
+                        why + f"{labels[m]} given the cone",
+                    )
+                )
                 out.append(
                     Candidate(
                         "pybullet.enableConeFriction",
                         ((p, "pybullet.enableConeFriction", False),),
                         "departure: contact",
-                        f"{labels[p]} limits friction by a cone, {labels[m]} by a pyramid: "
-                        f"{labels[p]} given the pyramid",
+                        why + f"{labels[p]} given the pyramid",
                     )
                 )
         if "noslip_iterations" in ms and not ms["noslip_iterations"]:

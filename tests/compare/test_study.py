@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -93,7 +94,7 @@ def test_share_removed_and_its_interval():
 
 def test_conclusion_says_when_nothing_explains_the_gap():
     labels = ("pybullet", "mujoco")
-    before = None
+    before = SimpleNamespace(verdict="differ", engines=[])
     c = Candidate("solver_iterations", ((0, "solver_iterations", 200),), "departure: motors", "")
 
     def result(share: float, low: float, high: float) -> CandidateResult:
@@ -109,6 +110,10 @@ def test_conclusion_says_when_nothing_explains_the_gap():
     assert pe.ranked[0].explains == "partly" and "explains part of the gap" in pe.conclusion
     pe.ranked = [result(0.9, 0.8, 0.95)]
     assert pe.ranked[0].explains == "yes" and "explains most of the gap" in pe.conclusion
+    pe.before = SimpleNamespace(verdict="chaotic", engines=["pybullet"])  # type: ignore[assignment]
+    assert pe.conclusion.endswith(
+        "within pybullet's own spread: part of it is chaos, which no setting removes.)"
+    )
 
 
 def test_candidates_follow_the_departures_that_apply():
@@ -140,11 +145,13 @@ def test_candidates_follow_the_departures_that_apply():
     assert list(moves) == [
         "solver_iterations",
         "mujoco.solref",
+        "mujoco.cone",
         "pybullet.enableConeFriction",
         "mujoco.noslip_iterations",
     ]
     assert moves["mujoco.solref"] == ((1, "mujoco.solref", (1 / 240 / 0.08, 1.0)),)  # contactERP
     assert moves["pybullet.enableConeFriction"] == ((0, "pybullet.enableConeFriction", False),)
+    assert moves["mujoco.cone"] == ((1, "mujoco.cone", "elliptic"),)  # each toward the other
     # the same engine twice: only what the profiles set differently
     cands, _ = candidates(
         ("pybullet", "pybullet"),
