@@ -8,6 +8,8 @@ SAPIEN's own scene flags. Left out: position iterations (the profile's ``solver_
 
 from __future__ import annotations
 
+from typing import Any
+
 from simbridge.engine_settings import Setting
 
 SETTINGS = (
@@ -86,3 +88,15 @@ SETTINGS = (
         "results independent of the order bodies were added in, at some cost",
     ),
 )
+
+
+def check_together(values: dict[str, Any]) -> tuple[str, str] | None:
+    """PhysX makes a shape's contacts within its contact offset and rests it at its rest
+    offset: the rest offset must be below the contact offset."""
+    if values["rest_offset"] >= values["contact_offset"]:
+        return (
+            "rest_offset",
+            f"must be below contact_offset ({values['contact_offset']:g} m), "
+            f"got {values['rest_offset']:g}",
+        )
+    return None

@@ -90,7 +90,7 @@ def main() -> int:
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
-            dashboard_address=None,
+            dashboard_address=":0",  # any free port, none taken from another cluster
             silence_logs=logging.ERROR,
         ) as cluster:
             t0, c0 = time.perf_counter(), cpu()

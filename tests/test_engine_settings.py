@@ -94,6 +94,15 @@ def test_a_bad_value_names_the_key_and_its_range(backend, key, value, words):
     assert f"{backend}.{key}" in str(err.value) and words in str(err.value)
 
 
+def test_settings_that_must_agree_are_checked_together():
+    with pytest.raises(InvalidEngineSettingError, match="physx.rest_offset.*below contact_offset"):
+        simbridge.get_profile("pybullet").with_engine("physx", rest_offset=0.02)  # 1 cm default
+    with pytest.raises(InvalidEngineSettingError, match="rest_offset"):
+        es.validate("physx", {"contact_offset": 0.0002})  # below the 0.5 mm rest offset
+    ok = es.validate("physx", {"contact_offset": 0.05, "rest_offset": 0.02})
+    assert ok == {"contact_offset": 0.05, "rest_offset": 0.02}
+
+
 def test_an_unknown_backend_lists_the_registered_ones():
     with pytest.raises(UnknownBackendError) as err:
         simbridge.get_profile("pybullet").with_engine("bullet", erp=0.3)
@@ -270,3 +279,48 @@ def test_the_manifest_records_the_effective_values(backend):
 
 def _json(d):
     return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+
+
+@needs_sapien
+def test_physx_contact_distance_follows_the_rest_offset():
+    """A resting contact reads distance ~0 whatever the rest offset (the offset is where
+    PhysX's shapes rest, the contact's zero)."""
+    for settings in ({}, {"rest_offset": 0.004}):
+        with simbridge.Sim("physx", engine_settings=settings) as sim:
+            sim.load_urdf(ROBOTS / "plane.urdf", fixed_base=True)
+            sim.load_urdf(ROBOTS / "free_box.urdf", base_position=(0.0, 0.0, 0.21))
+            sim.step(240)
+            points = sim.contact_points()
+            assert points
+            assert max(abs(c.distance) for c in points) < 2e-4, settings
+
+
+def _slide(backend, **settings):
+    """The box, settled, given 2 m/s along x and 1 m/s along y, sliding for a second against
+    friction 0.5: where it stops, (x, y) m from where it started."""
+    with simbridge.Sim(backend, engine_settings=settings) as sim:
+        sim.load_urdf(ROBOTS / "plane.urdf", fixed_base=True)
+        b = sim.load_urdf(ROBOTS / "free_box.urdf", base_position=(0.0, 0.0, 0.2))
+        sim.step(24)
+        sim.reset_base_state(b, linear_velocity=(2.0, 1.0, 0.0))
+        sim.step(240)
+        x, y, _ = sim.base_state(b).position
+        return x, y
+
+
+def test_the_friction_cone_settings_meet_across_engines():
+    """A cone decelerates the slide along its velocity; a pyramid, each axis apart: the path
+    bends. MuJoCo's elliptic cone takes its path to PyBullet's (whose default is a cone), and
+    PyBullet's pyramid bends it (measured: y/x 0.42 PyBullet, 0.83 MuJoCo's pyramid, 0.43
+    MuJoCo's cone, 0.19 PyBullet's pyramid)."""
+    x, y = _slide("pybullet")
+    cone = y / x
+    x, y = _slide("mujoco")
+    assert abs(y / x - cone) > 0.3
+    x, y = _slide("mujoco", cone="elliptic")
+    assert abs(y / x - cone) < 0.05
+    x, y = _slide("pybullet", enableConeFriction=False)
+    assert abs(y / x - cone) > 0.15
+    # MuJoCo's frictional impedance moves the slide too (measured: x 0.66 m at impratio 10,
+    # 0.48 m at 1, pyramidal cone)
+    assert _slide("mujoco", impratio=10)[0] > _slide("mujoco")[0] + 0.05

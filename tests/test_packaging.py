@@ -44,6 +44,8 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/compare/scenarios/goto.py",  # a shipped scenario's controller, beside it
         "simbridge/robots/r2d2.urdf",
         "simbridge/robots/plane.urdf",
+        "simbridge/robots/plane.mtl",  # the ground's checker (its look alone)
+        "simbridge/robots/plane_checker.png",
         "simbridge/robots/l_finger.stl",
     ):
         assert required in names, f"{required} missing from {wheel.name}"

@@ -51,6 +51,7 @@ class ContactReads:
         _scene: Any
         _dt: float
         _contacts_cache: list[Any] | None
+        profile: Any
 
     def _owners(self) -> dict[int, tuple[int, int]]:
         """id of each PhysX component -> (body id, link index)."""
@@ -71,6 +72,9 @@ class ContactReads:
             return self._contacts_cache
         owners = self._owners()
         inv_dt = 1.0 / self._dt
+        # the engine setting rest_offset, where the profile sets one (settings_physx.py)
+        given = self.profile.engine("physx").get("rest_offset")
+        rest = REST if given is None else 2.0 * float(given)
         out: list[ContactPoint] = []
         for contact in self._scene.get_contacts():
             a = owners.get(id(contact.bodies[0]))
@@ -85,7 +89,7 @@ class ContactReads:
                 size = float(np.linalg.norm(tangential))
                 d1 = tangential / size if size > 0.0 else _perpendicular(n)
                 d2 = np.cross(n, d1)
-                dist = float(point.separation) - REST
+                dist = float(point.separation) - rest
                 on_b = np.asarray(point.position, dtype=float)
                 on_a = on_b + dist * n
                 out.append(

@@ -11,6 +11,7 @@
                before PyBullet is given a file or a display
 ``state``      the commands' records and saved states
 ``scene``      MJCF/SDF files
+``render``     pictures of the world (TinyRenderer, on the CPU)
 ``inspect``    read-only access to a Sim's PyBullet client, for tests and debugging
 =============  ==========================================================================
 """

@@ -57,6 +57,7 @@ from .output import (
     p,  # pybullet, imported with its banner captured
 )
 from .reads import StateReads
+from .render import Rendering
 from .scene import Pending, named_table
 from .state import Records
 
@@ -115,7 +116,7 @@ _SELF_COLLISION_FLAGS = {
 }
 
 
-class PyBulletBackend(StateReads, MotorCommands, Backend):
+class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
     """`Sim` on PyBullet (DIRECT, or GUI when asked)."""
 
     name = "pybullet"

@@ -1,5 +1,6 @@
 """The report stage: ``report.md`` (:mod:`.markdown`), ``summary.json`` (:mod:`.summary_json`), the
-figures (:mod:`.plots`), the terminal's headline and progress bar, from a
+figures (:mod:`.plots`), the pictures of the runs (:mod:`.frames`), the terminal's headline
+(:mod:`.brief`) and progress bar, from a
 :class:`~simbridge.compare.pipeline.Comparison`: :func:`report` writes them all."""
 
 from __future__ import annotations
@@ -9,13 +10,14 @@ from pathlib import Path
 from typing import Any
 
 from ..pipeline import Comparison
+from .brief import brief
 from .fmt import fmt_distance, fmt_time, fmt_value
 from .markdown import headline, markdown
 from .resync import plot_resync
 from .study import write_study
 from .summary_json import summary
 
-__all__ = ["report", "headline", "summary", "fmt_distance", "fmt_time", "fmt_value"]
+__all__ = ["report", "headline", "brief", "summary", "fmt_distance", "fmt_time", "fmt_value"]
 
 
 def report(
@@ -24,12 +26,15 @@ def report(
     *,
     plots: bool = True,
     trajectories: bool = True,
+    replay: bool = True,
 ) -> Path:
     """Write the report of ``comparison`` into folder ``out`` (created if needed).
 
     Writes ``report.md`` (the file a person opens), ``summary.json`` (every headline figure
     plus the manifests), the PNG figures beside them, and with ``trajectories`` the two
-    headline runs as ``trajectories/<engine>.npz`` and ``.csv``. Returns the path of
+    headline runs as ``trajectories/<engine>.npz`` and ``.csv``; with ``replay`` the pictures
+    of the nominal runs (``frames/``: key frames and ``replay.gif``,
+    :func:`~simbridge.compare.report.frames.write_frames`). Returns the path of
     ``report.md``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -51,6 +56,13 @@ def report(
         images = all_plots(comparison, out)
         if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
             images["resync"] = out / "resync.png"
+    seen: list[str] = []
+    if replay:
+        from .frames import frames_section, write_frames
+
+        drawn = write_frames(comparison, figures, out)
+        seen = frames_section(drawn, figures["subject"], comparison.labels)
+        files += drawn.files
     figures["files"] = files + [p.name for p in images.values()]
     figures["headline"]["text"] = headline(figures)
     write_study(comparison, out, {"plots": plots, "trajectories": trajectories})
@@ -59,7 +71,7 @@ def report(
         encoding="utf-8",
     )
     path = out / "report.md"
-    path.write_text(markdown(comparison, figures, images, files), encoding="utf-8")
+    path.write_text(markdown(comparison, figures, images, files, seen), encoding="utf-8")
     return path
 
 

@@ -162,7 +162,15 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
     return out
 
 
-def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: list[str]) -> str:
+def markdown(
+    c: Comparison,
+    s: dict[str, Any],
+    images: dict[str, Path],
+    files: list[str],
+    pictures: list[str] | None = None,
+) -> str:
+    """``report.md`` from ``summary.json``'s dict ``s``; ``pictures``: the lines of the runs'
+    pictures (:func:`~simbridge.compare.report.frames.frames_section`), after the headline."""
     a, b = s["labels"][:2]
     cross = c.cross[c.timestep]
     if len(s["labels"]) > 2:
@@ -174,6 +182,7 @@ def markdown(c: Comparison, s: dict[str, Any], images: dict[str, Path], files: l
     lines += [""]
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
+    lines += pictures or []
     # -- verdict
     lines += outcomes_section(s)
     lines += pairs_section(s)

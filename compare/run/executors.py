@@ -38,7 +38,7 @@ from typing import Any
 
 from simbridge.exceptions import ExtraNotInstalledError, InvalidArgumentError, SimbridgeError
 
-__all__ = ["JobFailed", "run_all", "DEFAULT_ATTEMPTS", "Progress", "OnResult"]
+__all__ = ["JobFailed", "run_all", "describe_exit", "DEFAULT_ATTEMPTS", "Progress", "OnResult"]
 
 DEFAULT_ATTEMPTS = 2
 """A job is given up (:class:`JobFailed`) once its worker died this many times while running
@@ -145,8 +145,6 @@ def run_all(
         elif scheduler is not None:
             _run_dask(fn, items, scheduler, tracker)
         else:
-            from .ensemble import _main_importable
-
             count = (os.cpu_count() or 1) if workers is None else workers
             if count == 0 or not _main_importable():
                 _run_here(fn, items, tracker)
@@ -233,10 +231,7 @@ def _run_executor(
                 if exc is None:
                     tracker.finish(i, f.result())
                 elif _killed_worker(exc):
-                    attempts = getattr(exc, "allowed_failures", 0) + 1
-                    tracker.finish(
-                        i, JobFailed(tracker.labels[i], f"KilledWorker: {exc}", attempts)
-                    )
+                    tracker.finish(i, _killed(tracker.labels[i], exc))
                 else:
                     raise exc
     except BaseException:
@@ -244,6 +239,11 @@ def _run_executor(
             f.cancel()
         _deliver_done(futures, tracker)
         raise
+
+
+def _killed(label: str, exc: BaseException) -> JobFailed:
+    """Dask's KilledWorker: the task killed ``allowed_failures + 1`` workers."""
+    return JobFailed(label, f"KilledWorker: {exc}", getattr(exc, "allowed_failures", 0) + 1)
 
 
 def _deliver_done(futures: dict[Future[Any], int], tracker: _Tracker) -> None:
@@ -265,12 +265,47 @@ def _run_dask(fn: Callable[[Any], Any], items: list[Any], address: str, tracker:
     except OSError as exc:
         raise SimbridgeError(f"cannot reach the Dask scheduler at {address!r}: {exc}") from exc
     try:
-        _run_executor(fn, items, client.get_executor(pure=False), tracker)
+        _run_client(client, fn, items, tracker)
     finally:
         client.close()
 
 
+def _run_client(client: Any, fn: Callable[[Any], Any], items: list[Any], tracker: _Tracker) -> None:
+    """The jobs as the client's own futures (not through ``client.get_executor()``, whose
+    futures log a traceback each when cancelled)."""
+    from distributed import as_completed
+
+    futures = [client.submit(fn, item, pure=False) for item in items]
+    where = {f.key: i for i, f in enumerate(futures)}
+    try:
+        for f in as_completed(futures):
+            i = where[f.key]
+            if f.status == "finished":
+                tracker.finish(i, f.result())
+                continue
+            exc = f.exception()
+            if _killed_worker(exc):
+                tracker.finish(i, _killed(tracker.labels[i], exc))
+            else:
+                raise exc
+    except BaseException:
+        client.cancel([f for f in futures if not f.done()])
+        for i, f in enumerate(futures):
+            if f.status == "finished":
+                tracker.finish(i, f.result())
+        raise
+
+
 # ---------------------------------------------------------------- the local pool
+
+
+def _main_importable() -> bool:
+    """Whether a spawned process can import this program's ``__main__`` (it always tries): no
+    file (``python -c``, an interactive session) or a file that exists. Else (a script read
+    from stdin) the jobs run in this process."""
+    path = getattr(sys.modules.get("__main__"), "__file__", None)
+    return path is None or os.path.isfile(path)
+
 
 _STARTED: Any = None
 """In a pool worker: the queue on which it says which job it starts (index, pid)."""

@@ -6,7 +6,7 @@ engines disagree.
 
 from __future__ import annotations
 
-from . import exceptions
+from . import engine_settings, exceptions
 from ._version import __version__
 from .exceptions import SimbridgeError
 from .profiles import PROFILES, Profile, get_profile
@@ -46,5 +46,6 @@ __all__ = [
     "available_backends",
     "register",
     "exceptions",
+    "engine_settings",
     "SimbridgeError",
 ]

@@ -436,3 +436,26 @@ class Backend(ABC):
         from .exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the time (set_state)")
+
+    # ---------------------------------------------------------------- pictures
+
+    def render(
+        self,
+        width: int,
+        height: int,
+        eye: Vec3,
+        target: Vec3,
+        up: Vec3,
+        fov: float,
+    ) -> np.ndarray:
+        """A picture of the world as it stands: a (height, width, 3) uint8 RGB array seen from
+        ``eye`` looking at ``target`` with ``up`` pointing up, ``fov`` degrees of vertical field
+        of view (checked by :meth:`simbridge.Sim.render`: finite, eye away from target, up not
+        along the line of sight)."""
+        from .exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(
+            self.name,
+            "rendering pictures (Sim.render)",
+            "render with the 'pybullet' backend, whose CPU renderer runs everywhere",
+        )

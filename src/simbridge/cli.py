@@ -139,6 +139,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
     p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    p.add_argument(
+        "--no-replay",
+        action="store_true",
+        help="skip the pictures of the runs (report.md's key frames and animation)",
+    )
     from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE, DEFAULT_PERTURB, DEFAULT_SEED
 
     p.add_argument(
@@ -319,12 +324,12 @@ def _compare(args: argparse.Namespace) -> int:
             fresh=args.fresh,
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
-        path = report(result, out, plots=not args.no_plots)
-    from simbridge.compare.report import headline, summary
+        path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)
+    from simbridge.compare.report import summary
+    from simbridge.compare.report.brief import brief
 
-    print("\n".join(line.replace("**", "") for line in headline(summary(result))))
-    cli_study.finish_resolve(resolver, out)
-    print(f"report: {path}")
+    cli_study.finish_resolve(resolver, out)  # --resolve: its table, and a line here
+    print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
     return 0
 
 

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import profiles
 from .exceptions import InvalidArgumentError, InvalidEngineSettingError
 from .registry import backend_spec
 
@@ -167,6 +168,9 @@ def _jsonable(value: Any) -> Any:
 
 
 _CACHE: dict[tuple[str, str], dict[str, Setting]] = {}
+# a settings module's check_together(values) -> (key, detail) | None: settings that must agree
+# with each other (PhysX's rest offset below its contact offset), given or at their defaults
+_TOGETHER: dict[tuple[str, str], Any] = {}
 
 
 def settings_for(backend: str) -> Mapping[str, Setting]:
@@ -185,6 +189,9 @@ def settings_for(backend: str) -> Mapping[str, Setting]:
         module_name, _, attr = spec.settings.partition(":")
         module = importlib.import_module(module_name)
         declared = getattr(module, attr or "SETTINGS")
+        together = getattr(module, "check_together", None)
+        if callable(together):
+            _TOGETHER[(spec.name, spec.settings)] = together
         for s in declared:
             if not isinstance(s, Setting) or s.kind not in KINDS:
                 raise TypeError(f"backend {backend!r}: {s!r} is not a Setting")
@@ -213,7 +220,15 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
             raise InvalidEngineSettingError(
                 backend, str(key), f"unknown setting; valid settings of {backend!r}: {valid}"
             )
-    return {key: known[key].check(backend, mapping[key]) for key in known if key in mapping}
+    checked = {key: known[key].check(backend, mapping[key]) for key in known if key in mapping}
+    spec = backend_spec(backend)
+    together = _TOGETHER.get((spec.name, spec.settings))
+    if together is not None and checked:
+        values = {k: s.default for k, s in known.items() if not callable(s.default)}
+        problem = together({**values, **checked})
+        if problem is not None:
+            raise InvalidEngineSettingError(backend, *problem)
+    return checked
 
 
 def effective(backend: str, profile: Profile) -> dict[str, Any]:
@@ -293,3 +308,6 @@ def merge(*layers: Mapping[str, Mapping[str, Any]] | None) -> dict[str, dict[str
         for backend, values in (layer or {}).items():
             out.setdefault(backend, {}).update(values)
     return out
+
+
+profiles.ENGINE_SETTINGS_CHECK = freeze  # Profile(engines=...) and with_engine check here

@@ -17,15 +17,21 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, Literal
 
 import numpy as np
 
-from .engine_settings import freeze, thaw
 from .exceptions import InvalidArgumentError, InvalidProfileError
 
 __all__ = ["Profile", "PROFILES", "get_profile", "derived_profile"]
+
+
+# Engine settings are checked by simbridge.engine_settings (against the backends' declared
+# settings, found through the registry), which sets this when it is imported (simbridge's
+# __init__ imports it): the profiles stay below the registry in the import graph.
+ENGINE_SETTINGS_CHECK: Callable[[Any, str], Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -68,7 +74,11 @@ class Profile:
         for f in fields(self):
             if f.name != "engines":
                 _check_entry(f.name, getattr(self, f.name))
-        object.__setattr__(self, "engines", freeze(self.engines, "profile.engines"))
+        if self.engines or not isinstance(self.engines, tuple):
+            assert ENGINE_SETTINGS_CHECK is not None  # set by simbridge.engine_settings
+            object.__setattr__(
+                self, "engines", ENGINE_SETTINGS_CHECK(self.engines, "profile.engines")
+            )
 
     def with_(self, **changes: Any) -> Profile:
         """A copy with some entries changed (``gravity``, ``timestep`` ...)."""
@@ -97,7 +107,10 @@ class Profile:
 
     def engine_settings(self) -> dict[str, dict[str, Any]]:
         """Every engine setting this profile sets, by backend (JSON-able)."""
-        return thaw(self.engines)
+        return {
+            b: {k: list(v) if isinstance(v, tuple) else v for k, v in values}
+            for b, values in self.engines
+        }
 
     def as_dict(self) -> dict[str, Any]:
         """The entries, JSON-able; ``engines`` only where some engine setting is set."""

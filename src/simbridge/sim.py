@@ -17,7 +17,8 @@ This module holds the Sim's construction, lifecycle, loading and stepping; its o
 live in parts composed here, one job each: :mod:`simbridge.sim_lookups` (ids, names, tables,
 state reads), :mod:`simbridge.sim_control` (teleports, motor and bound commands),
 :mod:`simbridge.sim_multi_dof` (spherical joints), :mod:`simbridge.sim_state` (contacts,
-get_state and set_state); the argument checks are :mod:`simbridge.arguments`.
+get_state and set_state), :mod:`simbridge.sim_render` (pictures); the argument checks are
+:mod:`simbridge.arguments`.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from .registry import available_backends, load_backend
 from .sim_control import Control
 from .sim_lookups import Lookups, _Body, _Closed
 from .sim_multi_dof import MultiDof
+from .sim_render import Pictures
 from .sim_state import WorldStates
 
 if TYPE_CHECKING:
@@ -51,7 +53,7 @@ __all__ = ["DIVERGENCE_CHECKS", "Sim"]
 DIVERGENCE_CHECKS = ("periodic", "every_step")  # Sim(divergence_check=...)
 
 
-class Sim(Control, MultiDof, WorldStates, Lookups):
+class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
     """A simulated world on one backend.
 
     Args:

@@ -132,11 +132,34 @@ def test_compare_writes_the_report(tmp_path, capsys):
     ]
     assert main(argv) == 0
     stdout = capsys.readouterr().out
-    assert stdout.splitlines()[-1] == f"report: {out / 'report.md'}"
+    lines = stdout.splitlines()
+    assert lines[-1] == f"report: {out / 'report.md'}"
     summary = json.loads((out / "summary.json").read_text())
     assert summary["profiles"] == ["pybullet", "urdf"]
     assert summary["manifest"]["command_line"] == ["simbridge", *argv]
-    assert summary["headline"]["text"][0].replace("**", "") == stdout.splitlines()[0]
+    # the short headline: the verdict first, the key figures, the path; the paragraphs in the
+    # report alone
+    assert len(lines) <= 6
+    assert lines[0].startswith("pendulum, pybullet (pybullet) against pybullet (urdf): ")
+    assert summary["verdict"]["verdict"].upper() in lines[0]
+    assert lines[1].startswith("Nominal runs end ")
+    assert "The nominal runs (no offset) end" not in stdout
+    assert "The nominal runs (no offset) end" in (out / "report.md").read_text()
+    assert (out / "frames" / "replay.gif").is_file()
+
+
+def test_no_replay_draws_no_pictures(tmp_path, capsys):
+    out = tmp_path / "rep"
+    argv = ["compare", "pendulum", "--backends", "pybullet", "mujoco", "--duration", "0.05",
+            "--ensemble", "1", "--resync-every", "0", "--no-plots", "--no-replay", "--out",
+            str(out)]  # fmt: skip
+    assert main(argv) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) <= 6 and lines[-1] == f"report: {out / 'report.md'}"
+    assert "AGREE, the gap below 1 cm" in lines[0]
+    assert not (out / "frames").exists()
+    text = (out / "report.md").read_text()
+    assert "## The runs, seen" not in text and ".gif" not in text
 
 
 def test_default_out_dir_is_reports_scenario(tmp_path, monkeypatch):
@@ -237,10 +260,11 @@ def test_a_duration_that_cuts_a_phase_reports_what_was_not_measured(
     out = tmp_path / "rep"
     argv = ["compare", scenario, "--duration", "1", "--ensemble", "1", "--resync-every", "0"]
     assert main([*argv, "--no-plots", "--out", str(out)]) == 0
-    headline = capsys.readouterr().out.splitlines()
+    headline = capsys.readouterr().out
     report_lines = (out / "report.md").read_text().splitlines()
-    for lines, s, e in ((report_lines, start, end), (headline, start.replace("**", ""), end)):
-        assert [x for x in lines if x.startswith(s) and x.endswith(e)], s
+    assert [x for x in report_lines if x.startswith(start) and x.endswith(end)], start
+    assert start.replace("**", "") in headline and end in headline  # its outcomes line
+    assert len(headline.splitlines()) <= 6
 
     def no_nan(text: str) -> float:
         raise AssertionError(f"{text} in summary.json")

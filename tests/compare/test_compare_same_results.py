@@ -94,7 +94,7 @@ def _produce(case: str, out: Path) -> Path:
     options = dict(options)
     plots = options.pop("plots", False)
     result = compare(scenario, ["pybullet", "mujoco"], command_line=["simbridge"], **options)
-    report(result, out, plots=plots, trajectories=False)
+    report(result, out, plots=plots, trajectories=False, replay=False)  # figures, not pictures
     return out
 
 

@@ -35,6 +35,8 @@ def _faulty(x: str) -> str:
         ctypes.string_at(0)  # reads address 0: SIGSEGV
     if x == "abort":
         os.abort()
+    if x == "oom":  # what the kernel's out-of-memory killer sends
+        os.kill(os.getpid(), signal.SIGKILL)
     if x == "raise":
         raise ValueError("a bug in the job")
     return x.upper()
@@ -111,8 +113,9 @@ def test_a_job_that_kills_its_worker_is_job_failed_and_the_others_complete() -> 
     assert out[0] == "A" and out[2] == "B" and out[3] == "C"
     assert out[1] == JobFailed("job-segv", "SIGSEGV", 2)  # its worker died twice
     assert "SIGSEGV" in str(out[1]) and "2 times" in str(out[1])
-    out = run_all(_faulty, ["abort", "a"], workers=1, max_attempts=1)
-    assert out == [JobFailed("job 0", "SIGABRT", 1), "A"]
+    out = run_all(_faulty, ["abort", "a", "oom"], workers=1, max_attempts=1)
+    assert out[:2] == [JobFailed("job 0", "SIGABRT", 1), "A"]
+    assert out[2] == JobFailed("job 2", "SIGKILL (killed: out of memory?)", 1)
 
 
 def test_a_worker_killed_mid_study_has_its_job_rerun(tmp_path: Path) -> None:
@@ -169,8 +172,9 @@ if __name__ == "__main__":
     def on_result(i, r):
         got.append(r)
         print("result", i, r[1], flush=True)
+    where = {"scheduler": sys.argv[1]} if len(sys.argv) > 1 else {"workers": 2}
     try:
-        run_all(slow, list(range(12)), workers=2, on_result=on_result)
+        run_all(slow, list(range(12)), on_result=on_result, **where)
         print("finished", flush=True)
     except KeyboardInterrupt:
         print("interrupted", len(got), len(multiprocessing.active_children()), flush=True)
@@ -179,10 +183,20 @@ if __name__ == "__main__":
 
 
 def test_ctrl_c_stops_cleanly_after_delivering_finished_jobs(tmp_path: Path) -> None:
+    results = _interrupt(tmp_path)
+    for pid in {int(ln.split()[2]) for ln in results}:
+        deadline = time.monotonic() + 5
+        while _alive(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(pid), f"worker {pid} outlived the study"
+
+
+def _interrupt(tmp_path: Path, *args: str) -> list[str]:
+    """Run _INTERRUPTED with ``args``, Ctrl-C it after its first result: its result lines."""
     script = tmp_path / "study.py"
     script.write_text(textwrap.dedent(_INTERRUPTED))
     proc = subprocess.Popen(
-        [sys.executable, str(script)],
+        [sys.executable, str(script), *args],
         stdout=subprocess.PIPE,
         text=True,
         start_new_session=True,  # its own process group, as a terminal's foreground job
@@ -200,12 +214,8 @@ def test_ctrl_c_stops_cleanly_after_delivering_finished_jobs(tmp_path: Path) -> 
     last = lines[-1].split()
     assert last[0] == "interrupted"
     assert int(last[1]) == len(results) and 1 <= len(results) < 12
-    assert last[2] == "0"  # no worker left
-    for pid in {int(ln.split()[2]) for ln in results}:
-        deadline = time.monotonic() + 5
-        while _alive(pid) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert not _alive(pid), f"worker {pid} outlived the study"
+    assert last[2] == "0"  # no worker process left
+    return results
 
 
 def _alive(pid: int) -> bool:
@@ -234,7 +244,7 @@ def cluster():
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
-            dashboard_address=None,
+            dashboard_address=":0",  # any free port, none taken from another cluster
             silence_logs=logging.CRITICAL,
         )
     try:
@@ -283,3 +293,18 @@ def test_the_default_progress_is_a_bar_on_a_terminal_and_silent_elsewhere(
         assert [r[0] for r in run_all(_square, [1, 2, 3], workers=0, labels="abc")] == [1, 4, 9]
         text = stream.getvalue()
         assert ("/3 [" in text and "job/s" in text) is shown and (text == "") is not shown
+
+
+def test_ctrl_c_on_dask_cancels_the_clusters_pending_tasks(cluster, tmp_path: Path) -> None:
+    from distributed import Client
+
+    _interrupt(tmp_path, cluster.scheduler_address)
+    with Client(cluster.scheduler_address) as client:
+        deadline = time.monotonic() + 10  # a task running when cancelled ends first
+
+        def left() -> int:
+            return client.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks))
+
+        while left() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert left() == 0
