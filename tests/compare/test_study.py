@@ -256,3 +256,31 @@ def test_explain_has_nothing_to_explain_where_the_engines_agree():
     (pair,) = e.pairs
     assert pair.before.verdict == "agree" and not pair.ranked
     assert "there is no gap to explain" in pair.conclusion
+
+
+def test_sweep_cli_grid_runs_every_combination(tmp_path, capsys):
+    out = tmp_path / "grid"
+    argv = ["sweep", str(SLIDE), "--backends", "pybullet", "pybullet", "--grid"]
+    argv += ["--vary", "lateral_friction@2=0.5,0.4", "--vary", "timestep=1/240,1/120"]
+    argv += ["--duration", "0.25", "--ensemble", "2", "--workers", "0", "--out", str(out)]
+    assert main(argv) == 0
+    data = json.loads((out / "summary.json").read_text())
+    combos = [(p["values"]["lateral_friction@2"], p["timestep"]) for p in data["points"]]
+    assert combos == [(0.5, 1 / 240), (0.5, 1 / 120), (0.4, 1 / 240), (0.4, 1 / 120)]
+    gaps = {c: p["pairs"][0]["gap"]["value"] for c, p in zip(combos, data["points"], strict=True)}
+    assert gaps[(0.4, 1 / 240)] > 1e3 * gaps[(0.5, 1 / 240)]  # friction, not the step, parts them
+    assert {"sweep_lateral_friction_2.png", "sweep_timestep.png"} <= set(data["files"])
+    assert capsys.readouterr().out.count(": agree") == 2
+
+
+def test_sweep_cli_refuses_an_unknown_setting(capsys):
+    assert main(["sweep", "pendulum", "--vary", "friction=1,2"]) == 2
+    assert "unknown setting 'friction'" in capsys.readouterr().err
+
+
+def test_an_engine_setting_changes_its_backend_alone():
+    profs, _ = apply_setting(("pybullet", "mujoco"), ("pybullet",) * 2, None, "mujoco.impratio", 10)
+    assert profs == ("pybullet", "pybullet+mujoco.impratio=10")
+    assert get_profile(profs[1]).engine("mujoco") == {"impratio": 10.0}
+    with pytest.raises(InvalidArgumentError, match="engine 1 is 'pybullet'"):
+        apply_setting(("pybullet", "mujoco"), ("pybullet",) * 2, None, "mujoco.impratio@1", 10)
