@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from simbridge.exceptions import InvalidArgumentError
+from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 from simbridge.profiles import get_profile
 
 from ..analysis.verdict import BOOTSTRAP_RESAMPLES, CONFIDENCE, Interval
@@ -134,6 +134,8 @@ class PairExplanation:
     gap: Interval  # before, at that instant
     ranked: list[CandidateResult] = field(default_factory=list)
     not_tested: list[tuple[str, str]] = field(default_factory=list)  # (departure, why)
+    failed: list[tuple[Candidate, str]] = field(default_factory=list)
+    """Candidates whose rerun stopped with an error (a diverged engine...), with it."""
     note: str = ""  # why nothing was run (no gap to explain)
 
     @property
@@ -151,6 +153,11 @@ class PairExplanation:
         a, b = self.labels
         if self.note:
             return self.note
+        if not self.ranked and self.failed:
+            return (
+                f"Every candidate's rerun for {a} - {b} failed ({len(self.failed)}): nothing "
+                "tested explains the gap."
+            )
         if not self.ranked:
             return f"No setting could be moved for {a} - {b}: nothing tested explains the gap."
         best = self.ranked[0]
@@ -208,6 +215,7 @@ class Explanation:
                         for r in p.ranked
                     ],
                     "not_tested": [{"departure": k, "why": w} for k, w in p.not_tested],
+                    "failed": [{**c.as_dict(p.labels), "error": err} for c, err in p.failed],
                 }
             )
         return {
@@ -567,15 +575,19 @@ def explain(
             if on_run is not None:
                 on_run(f"{labels[0]} - {labels[1]}: {cand.describe(labels)}")
             t0 = _time.perf_counter()
-            c = compare(
-                sc,
-                list(names),
-                profile=moved,
-                timesteps=[dt],
-                ensemble=ensemble,
-                seed=seed,
-                **compare_args,
-            )
+            try:
+                c = compare(
+                    sc,
+                    list(names),
+                    profile=moved,
+                    timesteps=[dt],
+                    ensemble=ensemble,
+                    seed=seed,
+                    **compare_args,
+                )
+            except SimbridgeError as exc:  # the moved setting broke a run: say so, go on
+                pe.failed.append((cand, str(exc)))
+                continue
             v = c.pairs[0].verdict
             assert v is not None
             k = _at(c.ensembles[0].time, t)
@@ -664,6 +676,11 @@ def explanation_lines(e: Explanation) -> list[str]:
             lines.append(f"| {c.name} | {c.describe(p.labels)} | {c.source} | {c.why} |")
         for key, why in p.not_tested:
             lines.append(f"| (departure: {key}) | not tested | departure applies | {why} |")
+        for c, err in p.failed:
+            lines.append(
+                f"| {c.name} | {c.describe(p.labels)} | {c.source} | {c.why}; **the rerun "
+                f"failed**: {err} |"
+            )
         if p.ranked:
             lines += [
                 "",

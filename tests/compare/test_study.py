@@ -284,3 +284,33 @@ def test_an_engine_setting_changes_its_backend_alone():
     assert get_profile(profs[1]).engine("mujoco") == {"impratio": 10.0}
     with pytest.raises(InvalidArgumentError, match="engine 1 is 'pybullet'"):
         apply_setting(("pybullet", "mujoco"), ("pybullet",) * 2, None, "mujoco.impratio@1", 10)
+
+
+def test_explain_goes_on_past_a_rerun_that_fails(monkeypatch):
+    import importlib
+
+    from simbridge.exceptions import SimulationDivergedError
+
+    ex = importlib.import_module("simbridge.compare.study.explain")  # the package binds explain()
+
+    real = ex.compare
+
+    def compare(sc, backends, *, profile=None, **kw):
+        if profile is not None and "linear_damping" in profile[0]:
+            raise SimulationDivergedError("pybullet", 0.1, "base position")
+        return real(sc, backends, profile=profile, **kw)
+
+    monkeypatch.setattr(ex, "compare", compare)
+    e = ex.explain(
+        SLIDE,
+        ["pybullet", "pybullet"],
+        profile=["pybullet", "pybullet+linear_damping=0.045+lateral_friction=0.3"],
+        duration=0.25,
+        ensemble=2,
+        workers=0,
+    )
+    (pair,) = e.pairs
+    assert [r.candidate.name for r in pair.ranked] == ["lateral_friction"]
+    ((cand, err),) = pair.failed
+    assert cand.name == "linear_damping" and "diverged" in err
+    assert e.as_dict()["pairs"][0]["failed"][0]["error"] == err
