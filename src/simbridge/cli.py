@@ -7,6 +7,10 @@
   simbridge compare r2d2 --workers 8 --cache /tmp/sbcache
                                               runs as jobs on 8 processes, cached by content
   simbridge report reports/r2d2               the report again, from the cache: nothing runs
+  simbridge compare minitaur.toml --resolve   halve the time step until the verdict resolves
+  simbridge sweep r2d2-gentle --vary lateral_friction=0.3,0.5,0.9
+                                              the gap and spreads against a setting's values
+  simbridge explain r2d2-gentle               which setting explains the gap
   simbridge scenarios                         the shipped scenarios, one line each
   simbridge joints r2d2.urdf --movable        the joint table as a backend loads it
   simbridge joints r2d2.urdf --json           the same, every field, for machines
@@ -104,6 +108,8 @@ def build_parser() -> argparse.ArgumentParser:
         "the trajectories of every pair and write report.md, summary.json, figures and "
         "trajectories.",
     )
+    from simbridge import cli_study
+
     p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
     p.add_argument(
         "--backends",
@@ -119,8 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--profile",
         nargs="+",
         metavar="PROFILE",
-        choices=sorted(PROFILES),
-        help="profile for every backend, or one per backend (default: the scenario's)",
+        type=cli_study.profile_name,
+        help="profile for every backend, or one per backend (default: the scenario's; one of "
+        f"{', '.join(sorted(PROFILES))}, or one with changes: pybullet+lateral_friction=0.9)",
     )
     p.add_argument(
         "--timestep",
@@ -173,6 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_set_option(p)
     _jobs_arguments(p)
+    cli_study.add_resolve_arguments(p)
     _verbose(p)
 
     r = sub.add_parser(
@@ -233,6 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
     _verbose(add_settings_parser(sub, backends))
+    cli_study.add_commands(sub, _verbose, _jobs_arguments)
     return parser
 
 
@@ -311,10 +320,13 @@ def _compare(args: argparse.Namespace) -> int:
     engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
+    from simbridge import cli_study
+
+    resolver = cli_study.resolver_of(args)  # --resolve: compare, halving dt while unresolved
     with ProgressBar() as bar:
         if args.log is not None:
             args.log.bar = bar  # a record clears the bar's line first
-        result = compare(
+        result = (resolver or compare)(
             scenario,
             args.backends,
             profile=args.profile,
@@ -336,6 +348,7 @@ def _compare(args: argparse.Namespace) -> int:
     from simbridge.compare.report import summary
     from simbridge.compare.report.brief import brief
 
+    cli_study.finish_resolve(resolver, out)  # --resolve: its table, and a line here
     print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
     return 0
 
@@ -509,14 +522,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 2 on bad usage, 0 after --help
         return exc.code if isinstance(exc.code, int) else 2
     args.argv = None if argv is None else list(argv)
-    handler = {
-        "compare": _compare,
-        "report": _report,
-        "scenarios": _scenarios,
-        "joints": _joints,
-        "replay": _replay,
-        "settings": _settings,
-    }[args.command]
+    handler = (
+        getattr(args, "handler", None)
+        or {
+            "compare": _compare,
+            "report": _report,
+            "scenarios": _scenarios,
+            "joints": _joints,
+            "replay": _replay,
+            "settings": _settings,
+        }[args.command]
+    )
     log = logging.getLogger("simbridge")
     level = log.level
     args.log = _StderrLog() if args.verbose else None

@@ -25,7 +25,7 @@ import numpy as np
 
 from .exceptions import InvalidArgumentError, InvalidProfileError
 
-__all__ = ["Profile", "PROFILES", "get_profile"]
+__all__ = ["Profile", "PROFILES", "get_profile", "derived_profile"]
 
 
 # Engine settings are checked by simbridge.engine_settings (against the backends' declared
@@ -251,10 +251,80 @@ PROFILES: dict[str, Profile] = {
 
 
 def get_profile(profile: str | Profile) -> Profile:
-    """Return the named profile, or ``profile`` itself when it already is one."""
+    """Return the named profile, or ``profile`` itself when it already is one.
+
+    A name may carry changes after the profile's: ``"pybullet+lateral_friction=0.9"`` is the
+    ``pybullet`` profile with that entry changed, and once engine settings exist
+    ``"pybullet+mujoco.impratio=10"`` sets one (:func:`derived_profile`). Such a name travels
+    wherever a profile name does (worker processes, saved trajectories) and is the profile's
+    name."""
     if isinstance(profile, Profile):
         return profile
+    if isinstance(profile, str) and SPEC_SEPARATOR in profile:
+        return _parse_derived(profile)
     try:
         return PROFILES[profile]
     except (KeyError, TypeError):
         raise InvalidProfileError(profile, PROFILES) from None
+
+
+SPEC_SEPARATOR = "+"
+"""Separates a profile's name from the changes made to it (:func:`derived_profile`)."""
+
+
+def _literal(text: str) -> Any:
+    """A change's value: a Python literal (number, bool, None, tuple) or else the text."""
+    import ast
+
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def _value_text(value: Any) -> str:
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        return "(" + ",".join(_value_text(v) for v in value) + ("," if len(value) == 1 else ")")
+    return str(value) if isinstance(value, str) else repr(value)
+
+
+def derived_profile(base: str, changes: dict[str, Any]) -> str:
+    """The name of profile ``base`` with ``changes`` made (``{"lateral_friction": 0.9}``, or an
+    engine setting ``{"mujoco.impratio": 10}``): ``"pybullet+lateral_friction=0.9"``. Checked
+    here: a bad entry or value raises as :func:`get_profile` would."""
+    name = base
+    for key, value in changes.items():
+        name += f"{SPEC_SEPARATOR}{key}={_value_text(value)}"
+    get_profile(name)
+    return name
+
+
+def _parse_derived(spec: str) -> Profile:
+    base, *parts = spec.split(SPEC_SEPARATOR)
+    prof = get_profile(base)
+    # the time step and gravity are the scenario's (a Sim sets both on its profile)
+    entries = {f.name for f in fields(Profile)} - {"name", "engines", "timestep", "gravity"}
+    changes: dict[str, Any] = {}
+    for part in parts:
+        key, eq, text = part.partition("=")
+        key = key.strip()
+        if not eq or not key:
+            raise InvalidArgumentError(
+                "profile", f"expected NAME+KEY=VALUE+..., got {spec!r} (part {part!r})"
+            )
+        value = _literal(text.strip())
+        if "." in key:
+            backend, setting = key.split(".", 1)
+            with_engine = getattr(prof, "with_engine", None)
+            if with_engine is None:
+                raise InvalidArgumentError("profile", f"engine settings are not supported: {key!r}")
+            prof = with_engine(backend, **{setting: value})
+        elif key in entries:
+            changes[key] = value
+        else:
+            raise InvalidArgumentError(
+                "profile", f"unknown entry {key!r} in {spec!r}; valid: {sorted(entries)}"
+            )
+    return replace(prof, name=spec, **changes)

@@ -223,8 +223,11 @@ def _noise(args: list[str], out: Path) -> list[str]:
     )
     assert done.returncode == 0, done.stderr
     text = done.stdout + done.stderr
-    headline = json.loads((out / "summary.json").read_text())["headline"]["text"]
-    keep = {line.replace("**", "") for line in headline} | {f"report: {out / 'report.md'}"}
+    from simbridge.compare.report.brief import brief
+
+    # what the command prints on purpose: its short headline of summary.json (the paragraphs
+    # are in report.md)
+    keep = set(brief(json.loads((out / "summary.json").read_text()), out / "report.md"))
     return sorted(line for line in text.splitlines() if line not in keep)
 
 

@@ -213,7 +213,9 @@ def _interrupt(tmp_path: Path, *args: str) -> list[str]:
     results = [ln for ln in lines if ln.startswith("result")]
     last = lines[-1].split()
     assert last[0] == "interrupted"
-    assert int(last[1]) == len(results) and 1 <= len(results) < 12
+    # every result printed was delivered; the Ctrl-C may land inside on_result itself, between
+    # its append and its print (seen once in a full-suite run): one more delivered than printed
+    assert len(results) <= int(last[1]) <= len(results) + 1 and 1 <= len(results) < 12
     assert last[2] == "0"  # no worker process left
     return results
 

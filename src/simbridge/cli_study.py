@@ -1,0 +1,368 @@
+"""The studies' command lines: ``simbridge compare --resolve``, ``simbridge sweep`` and
+``simbridge explain`` (:mod:`simbridge.compare.study`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "add_resolve_arguments",
+    "add_commands",
+    "resolver_of",
+    "finish_resolve",
+    "profile_name",
+]
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
+    return value
+
+
+def _int(low: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected an integer >= {low}, got {text!r}"
+            ) from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}")
+        return value
+
+    return parse
+
+
+def _nonnegative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not (value >= 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
+def _timestep(text: str) -> float:
+    from simbridge.compare.scenario import parse_timestep
+
+    try:
+        return parse_timestep(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def profile_name(text: str) -> str:
+    from simbridge.exceptions import SimbridgeError
+    from simbridge.profiles import get_profile
+
+    try:
+        get_profile(text)
+    except SimbridgeError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def _vary(text: str) -> Any:
+    from simbridge.compare.study import parse_vary
+    from simbridge.exceptions import SimbridgeError
+
+    try:
+        return parse_vary(text)
+    except SimbridgeError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
+    """``--resolve`` and ``--resolve-limit`` on ``simbridge compare``."""
+    from simbridge.compare.study import DEFAULT_LIMIT
+
+    p.add_argument(
+        "--resolve",
+        action="store_true",
+        help="where the verdict is unresolved because the gap lies within an engine's own "
+        "time-step error, halve the time step until it resolves (the report shows the verdict "
+        "at each step size)",
+    )
+    p.add_argument(
+        "--resolve-limit",
+        type=_int(0),
+        metavar="N",
+        help=f"halvings at most with --resolve (default: {DEFAULT_LIMIT}; implies --resolve)",
+    )
+
+
+def resolver_of(args: argparse.Namespace) -> Any:
+    """The :class:`~simbridge.compare.study.Resolver` ``--resolve`` asks for, else None."""
+    if not (getattr(args, "resolve", False) or getattr(args, "resolve_limit", None) is not None):
+        return None
+    from simbridge.compare.study import DEFAULT_LIMIT, Resolver
+
+    limit = args.resolve_limit
+    return Resolver(DEFAULT_LIMIT if limit is None else limit)
+
+
+def finish_resolve(resolver: Any, out: Path) -> None:
+    """Add the resolve table to the report in ``out`` and say on stdout how it went."""
+    if resolver is None or resolver.resolution is None:
+        return
+    from simbridge.compare.study import write_resolution
+    from simbridge.compare.study.report import resolution_headline
+
+    write_resolution(resolver.resolution, out)
+    print(resolution_headline(resolver.resolution))
+
+
+def _common(p: argparse.ArgumentParser, backends: list[str], ensemble: int) -> None:
+    from simbridge.compare.run.ensemble import DEFAULT_PERTURB, DEFAULT_SEED
+
+    p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
+    p.add_argument(
+        "--backends",
+        nargs="+",
+        metavar="NAME",
+        default=None,
+        choices=backends,
+        help="two or more backends (default: every installed one; the same one twice compares "
+        f"two profiles of it; registered: {', '.join(backends)})",
+    )
+    p.add_argument(
+        "--profile",
+        nargs="+",
+        type=profile_name,
+        metavar="PROFILE",
+        help="profile for every backend, or one per backend; a profile with changes reads "
+        "pybullet+lateral_friction=0.9 (default: the scenario's)",
+    )
+    p.add_argument(
+        "--timestep", type=_timestep, metavar="DT", help="time step (default: the scenario's)"
+    )
+    p.add_argument(
+        "--duration", type=_positive_float, metavar="SECONDS", help="only the first SECONDS"
+    )
+    p.add_argument(
+        "--ensemble",
+        type=_int(1),
+        default=ensemble,
+        metavar="N",
+        help=f"runs per engine in every comparison (default: {ensemble})",
+    )
+    p.add_argument(
+        "--perturb",
+        type=_nonnegative,
+        default=DEFAULT_PERTURB,
+        metavar="EPS",
+        help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
+    )
+    p.add_argument(
+        "--seed",
+        type=_int(0),
+        default=DEFAULT_SEED,
+        metavar="S",
+        help=f"seed of the offsets and the bootstrap (default: {DEFAULT_SEED})",
+    )
+    p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>-<study>/)")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    from simbridge.cli_settings import add_set_option
+
+    add_set_option(p)
+
+
+def add_commands(
+    sub: Any,
+    verbose: Callable[[argparse.ArgumentParser], None],
+    jobs_arguments: Callable[[argparse.ArgumentParser], None] | None = None,
+) -> None:
+    """``simbridge sweep`` and ``simbridge explain`` (each parser's ``handler`` set), with
+    ``jobs_arguments`` (``--workers``, ``--cache`` ...) added to each when given."""
+    from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE
+    from simbridge.compare.study.explain import DEFAULT_ENSEMBLE as EXPLAIN_ENSEMBLE
+    from simbridge.registry import available_backends
+
+    backends = list(available_backends())
+    s = sub.add_parser(
+        "sweep",
+        help="compare a scenario over the values of settings: the gap and spreads against each",
+        description="One comparison per value of each --vary setting (the time step, a profile "
+        "entry such as lateral_friction, an engine setting BACKEND.KEY), one setting at a time "
+        "or, with --grid, every combination: report.md with a table and plots of the "
+        "cross-engine gap (with its interval) and each engine's spread against each value, and "
+        "summary.json.",
+    )
+    _common(s, backends, DEFAULT_ENSEMBLE)
+    s.add_argument(
+        "--vary",
+        action="append",
+        type=_vary,
+        required=True,
+        metavar="KEY=V1,V2,...",
+        help="a setting and its values (repeatable): timestep=1/240,1/480, "
+        "lateral_friction=0.3,0.5,0.9, mujoco.impratio=1,10",
+    )
+    s.add_argument("--grid", action="store_true", help="every combination of the values")
+    s.set_defaults(handler=_sweep)
+    if jobs_arguments is not None:
+        jobs_arguments(s)
+    verbose(s)
+
+    e = sub.add_parser(
+        "explain",
+        help="rank the settings that could explain the gap between engines",
+        description="For each pair of engines and each setting that could explain their gap in "
+        "this scenario (profile entries on which their profiles differ, the profile departures "
+        "that apply here and that a setting moves), rerun with that setting moved toward the "
+        "other engine's behaviour and rank the settings by the share of the gap each removes "
+        "(95% bootstrap intervals over the ensembles). report.md and summary.json.",
+    )
+    _common(e, backends, EXPLAIN_ENSEMBLE)
+    e.set_defaults(handler=_explain)
+    if jobs_arguments is not None:
+        jobs_arguments(e)
+    verbose(e)
+
+
+def _bar_for(args: argparse.Namespace) -> Any:
+    from simbridge.compare.report.progress import ProgressBar
+
+    bar = ProgressBar()
+    if getattr(args, "log", None) is not None:
+        args.log.bar = bar
+    return bar
+
+
+def _out(args: argparse.Namespace, name: str, study: str) -> Path:
+    out = args.out if args.out is not None else Path("reports") / f"{name}-{study}"
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"report folder {str(out)!r} exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def _check_profiles(args: argparse.Namespace) -> None:
+    n = len(args.backends) if args.backends is not None else None
+    if args.backends is not None and len(args.backends) < 2:
+        raise _usage("--backends takes two or more backends")
+    if args.profile is not None and n is not None and len(args.profile) not in (1, n):
+        raise _usage(f"--profile takes one profile, or one per backend ({n})")
+
+
+def _jobs(args: argparse.Namespace) -> dict[str, Any]:
+    """compare()'s job options from ``--workers``, ``--scheduler``, ``--cache`` ..."""
+    out: dict[str, Any] = {}
+    if getattr(args, "workers", None) is not None:
+        out["workers"] = args.workers
+    if getattr(args, "scheduler", None) is not None:
+        out["scheduler"] = args.scheduler
+    if getattr(args, "no_cache", False):
+        out["cache"] = False
+    elif getattr(args, "cache", None) is not None:
+        out["cache"] = args.cache
+    if getattr(args, "fresh", False):
+        out["fresh"] = True
+    return out
+
+
+def _engine_settings(args: argparse.Namespace) -> Any:
+    from simbridge.cli_settings import settings_from_args
+
+    return settings_from_args(args.engine_settings)
+
+
+def _usage(text: str) -> Exception:
+    from simbridge.exceptions import InvalidArgumentError
+
+    return InvalidArgumentError("command line", text)
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from simbridge.compare import load_scenario
+    from simbridge.compare.scenario import format_timestep
+    from simbridge.compare.study import sweep, write_sweep
+    from simbridge.compare.study.points import format_value
+
+    _check_profiles(args)
+    sc = load_scenario(args.scenario)
+    out = _out(args, sc.name, "sweep")
+    prefix = [""]
+    with _bar_for(args) as bar:
+
+        def on_point(i: int, n: int, values: dict[str, Any]) -> None:
+            prefix[0] = f"{i + 1}/{n} " + ",".join(
+                f"{k}={format_value(v) if k != 'timestep' else format_timestep(v)}"
+                for k, v in values.items()
+            )
+
+        result = sweep(
+            sc,
+            args.backends,
+            args.vary,
+            grid=args.grid,
+            profile=args.profile,
+            timestep=args.timestep,
+            on_point=on_point,
+            duration=args.duration,
+            ensemble=args.ensemble,
+            perturb=args.perturb,
+            seed=args.seed,
+            engine_settings=_engine_settings(args),
+            **_jobs(args),
+            progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
+        )
+        path = write_sweep(result, out, plots=not args.no_plots)
+    for p in result.points:
+        head = p.pairs[0]
+        values = ", ".join(f"{k}={format_value(v)}" for k, v in p.values.items())
+        print(
+            f"{values}: {head.verdict}, gap {head.gap.value:.4g} {head.unit} "
+            f"[{_f(head.gap.low)}, {_f(head.gap.high)}]"
+        )
+    print(f"report: {path}")
+    return 0
+
+
+def _f(x: float | None) -> str:
+    return "n/a" if x is None else f"{x:.4g}"
+
+
+def _explain(args: argparse.Namespace) -> int:
+    from simbridge.compare import load_scenario
+    from simbridge.compare.study import explain, write_explanation
+
+    _check_profiles(args)
+    sc = load_scenario(args.scenario)
+    out = _out(args, sc.name, "explain")
+    prefix = [""]
+    with _bar_for(args) as bar:
+
+        def on_run(what: str) -> None:
+            prefix[0] = what
+
+        result = explain(
+            sc,
+            args.backends,
+            profile=args.profile,
+            timestep=args.timestep,
+            ensemble=args.ensemble,
+            seed=args.seed,
+            on_run=on_run,
+            duration=args.duration,
+            perturb=args.perturb,
+            engine_settings=_engine_settings(args),
+            **_jobs(args),
+            progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
+        )
+        path = write_explanation(result, out, plots=not args.no_plots)
+    for p in result.pairs:
+        print(p.conclusion)
+    print(f"report: {path}")
+    return 0

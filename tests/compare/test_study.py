@@ -1,0 +1,316 @@
+"""The studies (simbridge.compare.study): --resolve, sweep and explain, on cases whose answer is
+known by construction.
+
+- resolve: the double pendulum on PyBullet twice, the second with linear_damping 0.12 in place
+  of the profile's 0.04: at dt = 1/30 s the 1.3 cm gap at the end lies within each run's own
+  time-step error (1.8 cm), which halves with dt while the gap stays: unresolved at 1/30 and
+  1/60, differ at 1/120 (measured: gap 1.17 cm, own errors 4.1 and 4.0 mm).
+- sweep and explain: tests/compare/data/incline-slide.toml, a box sliding down a 30-degree
+  incline; friction mu makes it accelerate at g (sin 30 - mu cos 30), so two runs with frictions
+  mu1 and mu2 are 0.5 g cos 30 |mu1 - mu2| t^2 apart after t seconds.
+
+Runs in this process (workers=0), small ensembles, short durations: about a minute in all.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from simbridge.cli import main
+from simbridge.compare.analysis.verdict import Interval
+from simbridge.compare.study import explain, parse_vary, resolve, sweep, write_sweep
+from simbridge.compare.study.explain import (
+    Candidate,
+    CandidateResult,
+    PairExplanation,
+    candidates,
+    share_removed,
+)
+from simbridge.compare.study.points import apply_setting
+from simbridge.exceptions import InvalidArgumentError, InvalidProfileError
+from simbridge.profiles import derived_profile, get_profile
+
+DATA = Path(__file__).parent / "data"
+SLIDE = DATA / "incline-slide.toml"
+G_COS30 = 9.8 * math.cos(math.radians(30))
+
+
+# ---------------------------------------------------------------- no engine
+
+
+def test_a_profile_with_changes_travels_as_its_name():
+    name = derived_profile("pybullet", {"lateral_friction": 0.9, "max_joint_velocity": None})
+    assert name == "pybullet+lateral_friction=0.9+max_joint_velocity=None"
+    p = get_profile(name)
+    assert (p.name, p.lateral_friction, p.max_joint_velocity) == (name, 0.9, None)
+    assert p.linear_damping == get_profile("pybullet").linear_damping  # the rest unchanged
+    with pytest.raises(InvalidArgumentError, match="unknown entry 'friction'.*lateral_friction"):
+        get_profile("pybullet+friction=1")
+    with pytest.raises(InvalidArgumentError, match="lateral_friction"):
+        get_profile("pybullet+lateral_friction=-1")
+    with pytest.raises(InvalidArgumentError, match="unknown entry 'timestep'"):
+        get_profile("pybullet+timestep=0.01")  # the scenario's, not the profile's
+    with pytest.raises(InvalidProfileError, match="valid profiles"):
+        get_profile("nosuch+lateral_friction=1")
+
+
+def test_vary_parses_and_applies_per_engine():
+    s = parse_vary("timestep=1/240,1/480")
+    assert s.values == (1 / 240, 1 / 480)
+    s = parse_vary("lateral_friction@2=0.3, 0.5")
+    assert (s.key, s.values) == ("lateral_friction@2", (0.3, 0.5))
+    profs, dt = apply_setting(("pybullet", "mujoco"), ("pybullet", "urdf"), None, s.key, 0.3)
+    assert profs == ("pybullet", "urdf+lateral_friction=0.3") and dt is None
+    profs, _ = apply_setting(("pybullet", "mujoco"), ("pybullet",) * 2, None, "restitution", 0.1)
+    assert profs == ("pybullet+restitution=0.1",) * 2
+    with pytest.raises(InvalidArgumentError, match="unknown setting 'friction'.*lateral_friction"):
+        parse_vary("friction=1,2")
+    with pytest.raises(InvalidArgumentError, match="KEY=V1,V2"):
+        parse_vary("lateral_friction")
+    with pytest.raises(InvalidArgumentError, match="profile.lateral_friction"):
+        parse_vary("lateral_friction=0.5,-1")
+    with pytest.raises(InvalidArgumentError, match="there are 2 engines"):
+        apply_setting(("pybullet", "mujoco"), ("pybullet",) * 2, None, "restitution@3", 0.1)
+
+
+def test_share_removed_and_its_interval():
+    rng = np.random.default_rng(1)
+    a = rng.normal(0.0, 1e-3, (6, 3))
+    before = (a, a + [1.0, 0, 0])  # 1 m apart
+    after = (a, a + [0.25, 0, 0])  # 0.25 m apart
+    gb, ga, share = share_removed("base_distance", before, after)
+    assert gb.value == pytest.approx(1.0, abs=5e-3)
+    assert ga.value == pytest.approx(0.25, abs=5e-3)
+    assert share.value == pytest.approx(0.75, abs=5e-3)
+    assert share.low is not None and share.high is not None
+    assert share.low <= share.value <= share.high and share.high - share.low < 0.05
+
+
+def test_conclusion_says_when_nothing_explains_the_gap():
+    labels = ("pybullet", "mujoco")
+    before = SimpleNamespace(verdict="differ", engines=[])
+    c = Candidate("solver_iterations", ((0, "solver_iterations", 200),), "departure: motors", "")
+
+    def result(share: float, low: float, high: float) -> CandidateResult:
+        return CandidateResult(
+            c, ("a", "b"), Interval(1.0), Interval(share, low, high), before, 1.0
+        )  # type: ignore[arg-type]
+
+    pe = PairExplanation(0, 1, labels, before, 1.0, Interval(1.0))  # type: ignore[arg-type]
+    pe.ranked = [result(0.05, -0.1, 0.2)]
+    assert pe.ranked[0].explains == "no"
+    assert pe.conclusion.startswith("Nothing tested explains the gap between pybullet and mujoco")
+    pe.ranked = [result(0.3, 0.1, 0.5)]
+    assert pe.ranked[0].explains == "partly" and "explains part of the gap" in pe.conclusion
+    pe.ranked = [result(0.9, 0.8, 0.95)]
+    assert pe.ranked[0].explains == "yes" and "explains most of the gap" in pe.conclusion
+    pe.before = SimpleNamespace(verdict="chaotic", engines=["pybullet"])  # type: ignore[assignment]
+    assert pe.conclusion.endswith(
+        "within pybullet's own spread: part of it is chaos, which no setting removes.)"
+    )
+
+
+def test_candidates_follow_the_departures_that_apply():
+    deps = {
+        "pybullet": {"apply": [], "left_out": []},
+        "mujoco": {
+            "apply": [
+                {"key": "speed clamp"},
+                {"key": "motors"},
+                {"key": "cylinder"},
+                {"key": "restitution"},
+            ],
+            "left_out": [],
+        },
+    }
+    cands, not_tested = candidates(
+        ("pybullet", "mujoco"), ("pybullet", "pybullet"), ("pybullet", "mujoco"), deps
+    )
+    names = [c.name for c in cands]
+    assert names == ["max_joint_velocity", "solver_iterations", "read_urdf_contact"]
+    assert cands[1].moves == ((0, "solver_iterations", 200),)  # PyBullet's, toward exact rows
+    assert [k for k, _ in not_tested] == ["cylinder"]
+    # contacts: the engine settings that move one engine's contact toward the other's
+    deps["mujoco"]["apply"] = [{"key": "contact"}]
+    cands, _ = candidates(
+        ("pybullet", "mujoco"), ("pybullet",) * 2, ("pybullet", "mujoco"), deps, 1 / 240
+    )
+    moves = {c.name: c.moves for c in cands}
+    assert list(moves) == [
+        "solver_iterations",
+        "mujoco.solref",
+        "mujoco.cone",
+        "pybullet.enableConeFriction",
+        "mujoco.noslip_iterations",
+    ]
+    assert moves["mujoco.solref"] == ((1, "mujoco.solref", (1 / 240 / 0.08, 1.0)),)  # contactERP
+    assert moves["pybullet.enableConeFriction"] == ((0, "pybullet.enableConeFriction", False),)
+    assert moves["mujoco.cone"] == ((1, "mujoco.cone", "elliptic"),)  # each toward the other
+    # the same engine twice: only what the profiles set differently
+    cands, _ = candidates(
+        ("pybullet", "pybullet"),
+        ("pybullet", "pybullet+lateral_friction=0.3"),
+        ("a", "b"),
+        deps,
+    )
+    assert [(c.name, c.moves) for c in cands] == [
+        ("lateral_friction", ((0, "lateral_friction", 0.3),))
+    ]
+
+
+# ---------------------------------------------------------------- engines
+
+
+def test_resolve_halves_the_time_step_until_the_verdict_resolves():
+    r = resolve(
+        "double-pendulum",
+        ["pybullet", "pybullet"],
+        profile=["pybullet", "pybullet+linear_damping=0.12"],
+        timesteps=["1/30"],
+        ensemble=4,
+        workers=0,
+        resync_every=0,
+    )
+    verdicts = [(round(1 / s.timestep), s.headline.verdict) for s in r.steps]
+    assert verdicts == [(30, "unresolved"), (60, "unresolved"), (120, "differ")]
+    assert r.outcome == "resolved" and r.halvings == 2
+    assert all(s.headline.reason == "within own time-step error" for s in r.steps[:2])
+    # the gap stays (an engine difference) while the own error halves with dt
+    gaps = [s.headline.gap.value for s in r.steps]
+    assert max(gaps) / min(gaps) < 1.2
+    for s, t in zip(r.steps, r.steps[1:], strict=False):
+        assert 0.4 < max(t.headline.own_errors) / max(s.headline.own_errors) < 0.6
+    assert r.final.timestep == r.steps[-1].timestep
+
+
+def test_compare_resolve_cli_stops_at_the_limit(tmp_path, capsys):
+    out = tmp_path / "rep"
+    argv = ["compare", "double-pendulum", "--backends", "pybullet", "pybullet"]
+    argv += ["--profile", "pybullet", "pybullet+linear_damping=0.12", "--timestep", "1/30"]
+    argv += ["--ensemble", "4", "--resync-every", "0", "--no-plots", "--resolve-limit", "1"]
+    assert main([*argv, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "resolve (limit, 1 halving(s)): unresolved at 1/30 s -> unresolved at 1/60 s" in printed
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["resolve"]["outcome"] == "limit"
+    assert [s["timestep"] for s in summary["resolve"]["steps"]] == [1 / 30, 1 / 60]
+    report = (out / "report.md").read_text()
+    assert "## Resolve: the verdict at each time step" in report
+    assert "| 1/60 | unresolved (within own time-step error, marginal) | 1.2 cm" in report
+
+
+def test_sweep_over_friction_gap_grows_as_the_physics_says(tmp_path):
+    duration = 0.5
+    s = sweep(
+        SLIDE,
+        ["pybullet", "pybullet"],
+        ["lateral_friction@2=0.5,0.4,0.3"],
+        duration=duration,
+        ensemble=3,
+        workers=0,
+        resync_every=0,
+    )
+    gaps = [p.pairs[0].gap.value for p in s.points]
+    assert s.points[0].pairs[0].verdict == "agree"  # the same friction: no gap
+    assert gaps[0] < 1e-6 < gaps[1] < gaps[2]
+    for p, dmu in zip(s.points[1:], (0.1, 0.2), strict=True):
+        expected = 0.5 * G_COS30 * dmu * duration**2
+        assert p.pairs[0].gap.value == pytest.approx(expected, rel=0.1)
+        assert p.profiles == ("pybullet", f"pybullet+lateral_friction={0.5 - dmu:.1f}")
+    path = write_sweep(s, tmp_path)
+    data = json.loads((tmp_path / "summary.json").read_text())
+    assert [pt["values"]["lateral_friction@2"] for pt in data["points"]] == [0.5, 0.4, 0.3]
+    assert (tmp_path / "sweep_lateral_friction_2.png").stat().st_size > 1000
+    rows = [r for r in path.read_text().splitlines() if r.startswith("| 0.")]
+    verdicts = [r.split(" | ")[2] for r in rows]  # 3 runs each: too few to say "differ"
+    assert verdicts == ["agree", "unresolved", "unresolved"]
+
+
+def test_explain_ranks_the_friction_made_different_first(tmp_path, capsys):
+    out = tmp_path / "explain"
+    argv = ["explain", str(SLIDE), "--backends", "pybullet", "pybullet", "--profile", "pybullet"]
+    argv += ["pybullet+linear_damping=0.045+lateral_friction=0.3", "--duration", "0.5"]
+    argv += ["--ensemble", "4", "--out", str(out)]
+    assert main(argv) == 0
+    assert "lateral_friction explains most of the gap" in capsys.readouterr().out
+    data = json.loads((out / "summary.json").read_text())
+    (pair,) = data["pairs"]
+    first, second = pair["ranking"]
+    assert first["name"] == "lateral_friction" and first["explains"] == "yes"
+    assert first["share_removed"]["value"] > 0.95 and first["share_removed"]["low"] > 0.9
+    assert first["verdict_after"] == "agree"
+    assert second["name"] == "linear_damping" and second["share_removed"]["value"] < 0.1
+    assert pair["before"]["verdict"] == "differ"
+    report = (out / "report.md").read_text()
+    assert "### Ranking" in report and "ensembles of 4 runs per engine" in report
+
+
+def test_explain_has_nothing_to_explain_where_the_engines_agree():
+    e = explain("double-pendulum", ["pybullet", "mujoco"], duration=0.5, ensemble=2, workers=0)
+    (pair,) = e.pairs
+    assert pair.before.verdict == "agree" and not pair.ranked
+    assert "there is no gap to explain" in pair.conclusion
+
+
+def test_sweep_cli_grid_runs_every_combination(tmp_path, capsys):
+    out = tmp_path / "grid"
+    argv = ["sweep", str(SLIDE), "--backends", "pybullet", "pybullet", "--grid"]
+    argv += ["--vary", "lateral_friction@2=0.5,0.4", "--vary", "timestep=1/240,1/120"]
+    argv += ["--duration", "0.25", "--ensemble", "2", "--workers", "0", "--out", str(out)]
+    assert main(argv) == 0
+    data = json.loads((out / "summary.json").read_text())
+    combos = [(p["values"]["lateral_friction@2"], p["timestep"]) for p in data["points"]]
+    assert combos == [(0.5, 1 / 240), (0.5, 1 / 120), (0.4, 1 / 240), (0.4, 1 / 120)]
+    gaps = {c: p["pairs"][0]["gap"]["value"] for c, p in zip(combos, data["points"], strict=True)}
+    assert gaps[(0.4, 1 / 240)] > 1e3 * gaps[(0.5, 1 / 240)]  # friction, not the step, parts them
+    assert {"sweep_lateral_friction_2.png", "sweep_timestep.png"} <= set(data["files"])
+    assert capsys.readouterr().out.count(": agree") == 2
+
+
+def test_sweep_cli_refuses_an_unknown_setting(capsys):
+    assert main(["sweep", "pendulum", "--vary", "friction=1,2"]) == 2
+    assert "unknown setting 'friction'" in capsys.readouterr().err
+
+
+def test_an_engine_setting_changes_its_backend_alone():
+    profs, _ = apply_setting(("pybullet", "mujoco"), ("pybullet",) * 2, None, "mujoco.impratio", 10)
+    assert profs == ("pybullet", "pybullet+mujoco.impratio=10")
+    assert get_profile(profs[1]).engine("mujoco") == {"impratio": 10.0}
+    with pytest.raises(InvalidArgumentError, match="engine 1 is 'pybullet'"):
+        apply_setting(("pybullet", "mujoco"), ("pybullet",) * 2, None, "mujoco.impratio@1", 10)
+
+
+def test_explain_goes_on_past_a_rerun_that_fails(monkeypatch):
+    import importlib
+
+    from simbridge.exceptions import SimulationDivergedError
+
+    ex = importlib.import_module("simbridge.compare.study.explain")  # the package binds explain()
+
+    real = ex.compare
+
+    def compare(sc, backends, *, profile=None, **kw):
+        if profile is not None and "linear_damping" in profile[0]:
+            raise SimulationDivergedError("pybullet", 0.1, "base position")
+        return real(sc, backends, profile=profile, **kw)
+
+    monkeypatch.setattr(ex, "compare", compare)
+    e = ex.explain(
+        SLIDE,
+        ["pybullet", "pybullet"],
+        profile=["pybullet", "pybullet+linear_damping=0.045+lateral_friction=0.3"],
+        duration=0.25,
+        ensemble=2,
+        workers=0,
+    )
+    (pair,) = e.pairs
+    assert [r.candidate.name for r in pair.ranked] == ["lateral_friction"]
+    ((cand, err),) = pair.failed
+    assert cand.name == "linear_damping" and "diverged" in err
+    assert e.as_dict()["pairs"][0]["failed"][0]["error"] == err
