@@ -295,9 +295,9 @@ def _stage_breaches(graph: dict[str, dict[str, int]]) -> list[str]:
 
 
 def test_compare_stages_import_only_the_stages_before_them():
-    """scenario < run < analysis < pipeline < report < study: each stage of simbridge.compare imports
-    only its own stage and those before it, never the package's __init__ (which imports every
-    stage), and every module of compare/ is in a stage."""
+    """scenario < run < analysis < pipeline < report < study: each stage of simbridge.compare
+    imports only its own stage and those before it, never the package's __init__ (which imports
+    every stage), and every module of compare/ is in a stage."""
     modules = _modules()
     assert {f"simbridge.compare.{s}" for s in STAGES} <= set(modules)
     breaches = _stage_breaches(_edges(modules))
