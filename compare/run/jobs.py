@@ -292,6 +292,26 @@ def run_job(job: Job) -> JobResult:
     return JobResult(job.kind, value, handler.records, _time.perf_counter() - start, os.getpid())
 
 
+def run_job_registered(specs: tuple[Any, ...], job: Job) -> JobResult:
+    """:func:`run_job` in a worker process, after registering each backend of ``specs``
+    (:class:`simbridge.registry.BackendSpec`) it does not know: a backend registered at run
+    time in the study's process (``simbridge.register`` in a script or a test) is unknown to a
+    spawned worker, which sees only the entry points."""
+    from simbridge import registry
+
+    known = set(registry.available_backends())
+    for spec in specs:
+        if spec.name not in known:
+            registry.register(
+                spec.name,
+                spec.entry_point,
+                requires=spec.requires,
+                pip_name=spec.pip_name,
+                settings=spec.settings,
+            )
+    return run_job(job)
+
+
 def _resync(job: Job, sc: Scenario) -> tuple[Any, float]:
     """A resync job: the Direction from ``job.backend``'s states into ``job.target`` (its
     worst points found) and the largest magnitude of the quantity's source on that run (the

@@ -7,6 +7,7 @@ whether it ran now or was read from the cache: a cached study gives the same fig
 
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import time as _time
@@ -33,7 +34,7 @@ from .ensemble import (
     perturbed,
 )
 from .executors import JobFailed, run_all
-from .jobs import Job, JobResult, file_hashes, run_job
+from .jobs import Job, JobResult, file_hashes, run_job_registered
 from .quantities import QUANTITIES
 from .resync import FLOOR_RELATIVE, Resync
 from .trajectory import Trajectory
@@ -227,8 +228,11 @@ def run_jobs(
                     log.warning("cannot write the cache entry of %s: %s", job.label, exc)
             finished(job)
 
+        from simbridge.registry import available_backends, backend_spec
+
+        specs = tuple(backend_spec(name) for name in available_backends())
         out = run_all(
-            run_job,
+            functools.partial(run_job_registered, specs),
             missing,
             labels=[j.label for j in missing],
             workers=workers,

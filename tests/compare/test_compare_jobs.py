@@ -18,6 +18,7 @@ import pytest
 import simbridge
 from simbridge.cli import main
 from simbridge.compare import compare, load_scenario, report
+from simbridge.compare.run import jobs as jobs_module
 from simbridge.compare.run import studyjobs
 from simbridge.compare.run.cache import Cache, default_dir
 from simbridge.compare.run.jobs import Job, run_job
@@ -141,13 +142,13 @@ def test_a_rerun_runs_no_job_and_gives_the_same_figures(tmp_path, monkeypatch):
     assert (first.jobs.total, first.jobs.ran, first.jobs.cached) == (8, 8, 0)
     assert len(list((cache / "jobs").rglob("*.pkl"))) == 8
     calls = []
-    real = studyjobs.run_job
+    real = jobs_module.run_job
 
     def counted(job):
         calls.append(job.key)
         return real(job)
 
-    monkeypatch.setattr(studyjobs, "run_job", counted)
+    monkeypatch.setattr(jobs_module, "run_job", counted)  # what a study's worker calls
     again = compare("pendulum", BACKENDS, cache=cache, **SMALL)
     assert calls == [] and again.jobs is not None
     assert (again.jobs.ran, again.jobs.cached) == (0, 8)
