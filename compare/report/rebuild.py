@@ -13,7 +13,7 @@ from ..pipeline import compare
 from ..run.cache import Cache
 from ..run.studyjobs import scenario_of
 from . import report
-from .study import STUDY_FILE, read_study
+from .study import STUDY_FILE, read_study, resolution_of
 
 __all__ = ["rebuild"]
 
@@ -67,4 +67,9 @@ def rebuild(
         comparison.study["arguments"]["backends_named"] = False
     kwargs = dict(record.get("report", {}))
     kwargs.update(options)
-    return report(comparison, folder, **kwargs)
+    path = report(comparison, folder, **kwargs)
+    if record.get("resolve") is not None:  # `compare --resolve`: the verdict at each step
+        from ..study.report import write_resolution
+
+        write_resolution(resolution_of(record["resolve"], comparison), folder)
+    return path

@@ -118,6 +118,9 @@ def write_resolution(r: Resolution, out: str | Path) -> None:
     data = json.loads(sj.read_text(encoding="utf-8")) if sj.exists() else {}
     data["resolve"] = r.as_dict()
     _dump(sj, data)
+    from ..report.study import record_resolution
+
+    record_resolution(out, data["resolve"])  # for `simbridge report DIR`
 
 
 # ---------------------------------------------------------------- sweep
