@@ -16,6 +16,7 @@ from typing import Any
 from simbridge.exceptions import InvalidArgumentError, ScenarioError, SimbridgeError
 
 from .analysis.diff import Divergence, diff
+from .analysis.judged import judged
 from .analysis.verdict import Verdict
 from .run.cache import Cache
 from .run.ensemble import (
@@ -32,7 +33,6 @@ from .run.studyjobs import (
     JobFailed,
     Plan,
     ensembles_of,
-    judged,
     resync_of,
     run_jobs,
     study_record,

@@ -13,7 +13,7 @@ from ..pipeline import compare
 from ..run.cache import Cache
 from ..run.studyjobs import scenario_of
 from . import report
-from .study import STUDY_FILE, read_study, resolution_of
+from .study import STUDY_FILE, add_resolution, read_study
 
 __all__ = ["rebuild"]
 
@@ -68,8 +68,13 @@ def rebuild(
     kwargs = dict(record.get("report", {}))
     kwargs.update(options)
     path = report(comparison, folder, **kwargs)
-    if record.get("resolve") is not None:  # `compare --resolve`: the verdict at each step
-        from ..study.report import write_resolution
-
-        write_resolution(resolution_of(record["resolve"], comparison), folder)
+    resolved = record.get("resolve")
+    if resolved is not None:  # `compare --resolve`: the verdict at each step, as recorded
+        try:
+            summary, lines = dict(resolved["summary"]), [str(x) for x in resolved["markdown"]]
+        except (KeyError, TypeError, ValueError) as exc:
+            raise SimbridgeError(
+                f"{folder / STUDY_FILE}: its resolve record is not one this version reads ({exc!r})"
+            ) from None
+        add_resolution(folder, summary, lines)
     return path

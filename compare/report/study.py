@@ -3,8 +3,8 @@
 :func:`write_study` records what :func:`~simbridge.compare.compare` was asked (the scenario's
 canonical TOML and its file, the backends, profiles, time steps, ensemble, seed, tolerance,
 resync interval), the key of every job, and the options :func:`~simbridge.compare.report` was
-given; after ``--resolve``, :func:`record_resolution` adds the verdict at each time step
-(``resolve``: :meth:`~simbridge.compare.study.Resolution.as_dict`), the report's resolve table.
+given; after ``--resolve``, :func:`add_resolution` adds the verdict at each time step
+(``resolve``: the report's resolve table and summary.json's ``resolve``).
 :func:`~simbridge.compare.report.rebuild.rebuild` (``simbridge report DIR [--cache
 DIR]``) makes the comparison again
 from those jobs' cached results, running no engine, and writes the whole report again; a job
@@ -14,7 +14,6 @@ missing from the cache is a :class:`~simbridge.exceptions.CacheEntryMissingError
 from __future__ import annotations
 
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any
@@ -24,7 +23,7 @@ from simbridge.exceptions import SimbridgeError
 from ..pipeline import Comparison
 from ..run.studyjobs import STUDY_FORMAT
 
-__all__ = ["STUDY_FILE", "write_study", "read_study", "record_resolution", "resolution_of"]
+__all__ = ["STUDY_FILE", "write_study", "read_study", "add_resolution"]
 
 STUDY_FILE = "study.json"
 
@@ -34,7 +33,7 @@ def write_study(comparison: Comparison, out: Path, options: dict[str, Any]) -> P
     if comparison.study is None:
         return None
     record = dict(comparison.study)
-    record.pop("resolve", None)  # a resolve study adds its own (record_resolution)
+    record.pop("resolve", None)  # a resolve study adds its own (add_resolution)
     record["wall_time"] = comparison.wall_time
     record["report"] = dict(options)
     path = out / STUDY_FILE
@@ -67,16 +66,27 @@ def read_study(folder: str | os.PathLike[str]) -> dict[str, Any]:
     return record
 
 
-def record_resolution(out: str | os.PathLike[str], resolution: dict[str, Any]) -> None:
-    """Add a resolve study's steps (``Resolution.as_dict()``) to ``out/study.json`` (written by
-    the report of its last comparison), for :func:`resolution_of` when the report is rebuilt."""
-    path = Path(out) / STUDY_FILE
-    if not path.is_file():
-        return
-    record = json.loads(path.read_text(encoding="utf-8"))
-    record["resolve"] = resolution
-    text = json.dumps(record, indent=2, allow_nan=True, default=_plain)
-    path.write_text(text + "\n", encoding="utf-8")
+def add_resolution(
+    out: str | os.PathLike[str], resolution: dict[str, Any], lines: list[str]
+) -> None:
+    """Add a resolve study to the report in ``out``: its table (``lines``) to report.md, its
+    steps (``Resolution.as_dict()``) to summary.json under ``resolve``, and both to
+    study.json, from which :func:`~simbridge.compare.report.rebuild.rebuild` adds them again
+    (the table is the study's: its verdicts and wall times at each step, not made again)."""
+    out = Path(out)
+    md = out / "report.md"
+    text = md.read_text(encoding="utf-8") if md.exists() else ""
+    md.write_text(text.rstrip("\n") + "\n" + "\n".join(lines) + "\n", "utf-8")
+    sj = out / "summary.json"
+    data = json.loads(sj.read_text(encoding="utf-8")) if sj.exists() else {}
+    data["resolve"] = resolution
+    sj.write_text(json.dumps(data, indent=2, default=_plain) + "\n", encoding="utf-8")
+    path = out / STUDY_FILE
+    if path.is_file():
+        record = json.loads(path.read_text(encoding="utf-8"))
+        record["resolve"] = {"summary": resolution, "markdown": list(lines)}
+        text = json.dumps(record, indent=2, allow_nan=True, default=_plain)
+        path.write_text(text + "\n", encoding="utf-8")
 
 
 def _plain(obj: Any) -> Any:
@@ -84,50 +94,3 @@ def _plain(obj: Any) -> Any:
     if tolist is not None:
         return tolist()
     return str(obj)
-
-
-def resolution_of(data: dict[str, Any], final: Comparison) -> Any:
-    """The :class:`~simbridge.compare.study.Resolution` that ``study.json``'s ``resolve`` records,
-    ``final`` its last comparison (the figures per step as recorded; their gap series, which the
-    resolve table does not show, left empty)."""
-    import numpy as np
-
-    from ..analysis.verdict import Interval
-    from ..study.points import PairFigures
-    from ..study.resolve import Resolution, ResolveStep
-
-    def interval(d: dict[str, Any]) -> Interval:
-        value = d.get("value")
-        return Interval(math.nan if value is None else float(value), d.get("low"), d.get("high"))
-
-    def pair(d: dict[str, Any]) -> PairFigures:
-        return PairFigures(
-            labels=(d["labels"][0], d["labels"][1]),
-            verdict=d["verdict"],
-            reason=d["reason"],
-            engines=list(d["engines"]),
-            marginal=bool(d["marginal"]),
-            quantity=d["quantity"],
-            unit=d["unit"],
-            tolerance=d["tolerance"],
-            judged_time=d["judged_time"],
-            judged_at=d["judged_at"],
-            gap=interval(d["gap"]),
-            gap_end=interval(d["gap_end"]),
-            spreads=(interval(d["spreads"][0]), interval(d["spreads"][1])),
-            own_errors=(d["own_errors"][0], d["own_errors"][1]),
-            p_value=d["p_value"],
-            gap_series=np.empty(0),
-            time=np.empty(0),
-        )
-
-    try:
-        steps = [
-            ResolveStep(s["timestep"], [pair(p) for p in s["pairs"]], s["wall_time"])
-            for s in data["steps"]
-        ]
-        return Resolution(steps=steps, limit=data["limit"], final=final, outcome=data["outcome"])
-    except (KeyError, IndexError, TypeError, ValueError) as exc:
-        raise SimbridgeError(
-            f"{STUDY_FILE}: its resolve record is not one this version reads ({exc!r})"
-        ) from None

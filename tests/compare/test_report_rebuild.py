@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 
 from simbridge.cli import main
+from simbridge.compare.analysis.judged import judged
 from simbridge.compare.report import derived as derived_module
 from simbridge.compare.report import frames as frames_module
 from simbridge.compare.report import plots as plots_module
 from simbridge.compare.run import cache as cache_module
-from simbridge.compare.run import studyjobs
 from simbridge.compare.run.cache import Cache, derived_key
-from simbridge.compare.run.studyjobs import JobCounts, judged
+from simbridge.compare.run.studyjobs import JobCounts
 
 TIMING_KEYS = ("wall_time", "wall_per_sim_second", "seconds", "command_line")
 
@@ -171,10 +171,13 @@ def test_rebuild_keeps_the_resolve_table(tmp_path, capsys):
     cache, out = tmp_path / "cache", tmp_path / "rep"
     _compare(cache, out, "--no-plots", "--no-replay", "--resolve-limit", "1")
     recorded = json.loads((out / "study.json").read_text())
-    assert [s["timestep"] for s in recorded["resolve"]["steps"]] == [1 / 30, 1 / 60]
+    steps = recorded["resolve"]["summary"]["steps"]
+    assert [s["timestep"] for s in steps] == [1 / 30, 1 / 60]
     md = (out / "report.md").read_text()
     summary = json.loads((out / "summary.json").read_text())
     assert "## Resolve: the verdict at each time step" in md
+    assert "\n".join(recorded["resolve"]["markdown"]) in md
+    assert summary["resolve"] == recorded["resolve"]["summary"]
     assert main(["report", str(out), "--cache", str(cache), "--no-plots", "--no-replay"]) == 0
     assert (out / "report.md").read_text() == md  # the wall times are the recorded ones
     again = json.loads((out / "summary.json").read_text())
@@ -182,7 +185,7 @@ def test_rebuild_keeps_the_resolve_table(tmp_path, capsys):
     assert _masked(again) == _masked(summary)
     assert json.loads((out / "study.json").read_text())["resolve"] == recorded["resolve"]
     # the table's timings are the study's own, not the rebuild's
-    assert recorded["resolve"]["steps"][0]["wall_time"] > 0
+    assert steps[0]["wall_time"] > 0
 
 
 def test_a_study_json_without_resolve_rebuilds_without_the_table(tmp_path):
@@ -199,4 +202,3 @@ def test_judged_without_a_cache_judges_here(monkeypatch):
     m = [rng.normal(size=(3, 5, 3)), rng.normal(size=(3, 5, 3))]
     v = judged(counts, np.arange(5.0), "base_distance", ("a", "b"), m, [np.ones(5)] * 2)
     assert v.labels == ("a", "b")
-    assert studyjobs.judged is judged
