@@ -78,23 +78,27 @@ def phases(folder: Path, cache: Path) -> dict[str, tuple[float, float]]:
     from simbridge.compare.report import html
     from simbridge.compare.report.rebuild import rebuild
 
-    report_module = sys.modules["simbridge.compare.report"]  # the package, not its function
+    report_module: Any = sys.modules["simbridge.compare.report"]  # the package, not `report`
 
     spent["imports"] = [time.perf_counter() - t0, time.process_time() - c0]
-    pipeline.run_jobs = timed("read the jobs' entries", pipeline.run_jobs)
-    pipeline.judged = timed("verdicts", pipeline.judged)
+
+    def wrap(module: Any, name: str, phase: str) -> None:
+        setattr(module, name, timed(phase, getattr(module, name)))
+
+    wrap(pipeline, "run_jobs", "read the jobs' entries")
+    wrap(pipeline, "judged", "verdicts")
     # its engines imported, for their state's floating-point type (registry.state_dtype)
-    pipeline.EnsembleRunner = timed("ensemble offsets", pipeline.EnsembleRunner)
-    pipeline.diff = timed("diffs", pipeline.diff)
-    report_module.summary = timed("summary.json", report_module.summary)
-    report_module.markdown = timed("report.md", report_module.markdown)
+    wrap(pipeline, "EnsembleRunner", "ensemble offsets")
+    wrap(pipeline, "diff", "diffs")
+    wrap(report_module, "summary", "summary.json")
+    wrap(report_module, "markdown", "report.md")
+    wrap(html, "write_html", "report.html")
     real_memo = report_module.memo_files
 
     def memo(c: Any, kind: str, *a: Any, **k: Any) -> Any:
         return timed(kind, real_memo)(c, kind, *a, **k)
 
     report_module.memo_files = memo
-    html.write_html = timed("report.html", html.write_html)
     t0, c0 = time.perf_counter(), time.process_time()
     rebuild(folder, cache=cache, plots=True, replay=True)
     total = [time.perf_counter() - t0, time.process_time() - c0]
