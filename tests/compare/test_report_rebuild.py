@@ -5,7 +5,10 @@ trajectory files) and when they are made again, and the resolve table of ``--res
 from __future__ import annotations
 
 import json
+import os
 import pickle
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -202,3 +205,21 @@ def test_judged_without_a_cache_judges_here(monkeypatch):
     m = [rng.normal(size=(3, 5, 3)), rng.normal(size=(3, 5, 3))]
     v = judged(counts, np.arange(5.0), "base_distance", ("a", "b"), m, [np.ones(5)] * 2)
     assert v.labels == ("a", "b")
+
+
+def test_the_rebuild_bench_runs(tmp_path):
+    """bench/rebuild.py on a small study prints its rows and phases (speed not asserted)."""
+    root = Path(__file__).resolve().parents[2]
+    cache, out = tmp_path / "cache", tmp_path / "rep"
+    _compare(cache, out, "--no-replay")
+    done = subprocess.run(
+        [sys.executable, str(root / "bench" / "rebuild.py"), "--folder", str(out)]
+        + ["--cache", str(cache), "--repeat", "1"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={**os.environ, "HOME": str(tmp_path)},
+    )
+    assert done.returncode == 0, done.stderr
+    for row in ("cold (no derived entries)", "warm", "imports", "verdicts", "figures"):
+        assert row in done.stdout
