@@ -40,7 +40,7 @@ def report_key(c: Any, kind: str, *parts: Any) -> str | None:
         kind,
         study["scenario"]["toml"],
         study["arguments"],
-        sorted(study.get("left_out", {}).items()),
+        sorted(dict(getattr(c, "left_out", {})).items()),
         keys,
         digests,
         list(c.labels),

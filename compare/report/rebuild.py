@@ -62,6 +62,7 @@ def rebuild(
             "simbridge version; run the study again (simbridge compare)"
         )
     comparison.left_out = dict(record.get("left_out", {}))
+    comparison.study["left_out"] = dict(comparison.left_out)  # kept for the next rebuild too
     comparison.wall_time = float(record.get("wall_time", comparison.wall_time))
     if not args.get("backends_named", True):
         comparison.study["arguments"]["backends_named"] = False

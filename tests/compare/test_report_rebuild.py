@@ -223,3 +223,17 @@ def test_the_rebuild_bench_runs(tmp_path):
     assert done.returncode == 0, done.stderr
     for row in ("cold (no derived entries)", "warm", "imports", "verdicts", "figures"):
         assert row in done.stdout
+
+
+def test_engines_left_out_stay_in_the_report_rebuild_after_rebuild(tmp_path):
+    cache, out = tmp_path / "cache", tmp_path / "rep"
+    _compare(cache, out, "--no-plots", "--no-replay")
+    path = out / "study.json"
+    record = json.loads(path.read_text())
+    record["left_out"] = {"nosuch": "not installed here"}  # as a study of every engine records
+    path.write_text(json.dumps(record))
+    for _ in range(2):
+        argv = ["report", str(out), "--cache", str(cache), "--no-plots", "--no-replay"]
+        assert main(argv) == 0
+        assert json.loads(path.read_text())["left_out"] == {"nosuch": "not installed here"}
+        assert "nosuch" in (out / "report.md").read_text()
