@@ -48,7 +48,9 @@ CASES: tuple[tuple[str, dict[str, object]], ...] = (
 )
 
 
-def deceleration(backend: str, settings: dict[str, object], direction: tuple[float, float]) -> float:
+def deceleration(
+    backend: str, settings: dict[str, object], direction: tuple[float, float]
+) -> float:
     """The box's deceleration over g while it slides along ``direction``."""
     with simbridge.Sim(backend, engine_settings=settings) as sim:
         sim.load_urdf("plane.urdf")
