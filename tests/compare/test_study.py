@@ -39,6 +39,7 @@ from simbridge.profiles import derived_profile, get_profile
 DATA = Path(__file__).parent / "data"
 SLIDE = DATA / "incline-slide.toml"
 G_COS30 = 9.8 * math.cos(math.radians(30))
+LINK_DAMPING = ("linear_damping", "angular_damping")
 
 
 # ---------------------------------------------------------------- no engine
@@ -152,6 +153,33 @@ def test_candidates_follow_the_departures_that_apply():
     assert moves["mujoco.solref"] == ((1, "mujoco.solref", (1 / 240 / 0.08, 1.0)),)  # contactERP
     assert moves["pybullet.enableConeFriction"] == ((0, "pybullet.enableConeFriction", False),)
     assert moves["mujoco.cone"] == ((1, "mujoco.cone", "elliptic"),)  # each toward the other
+    # PhysX: its rest distance already PyBullet's (no rest_offset move); both engines iterate
+    # (both at 200); its cone is PyBullet's (no cone move); link damping by another law
+    deps = {"pybullet": {"apply": []}, "physx": {"apply": [{"key": "contact"}]}}
+    deps["physx"]["apply"] += [{"key": "link damping"}, {"key": "precision"}]
+    cands, not_tested = candidates(
+        ("pybullet", "physx"), ("pybullet",) * 2, ("pybullet", "physx"), deps, 1 / 240
+    )
+    assert [(c.name, c.moves) for c in cands] == [
+        ("solver_iterations", ((0, "solver_iterations", 200), (1, "solver_iterations", 200))),
+        ("link damping", tuple((s, k, 0.0) for s in (0, 1) for k in LINK_DAMPING)),
+    ]
+    assert [k for k, _ in not_tested] == ["precision"]
+    # against MuJoCo: PhysX alone at 200 iterations, MuJoCo given PhysX's cone, PhysX's contacts
+    # made near its rest distance as MuJoCo's within its margin
+    deps = {"mujoco": {"apply": []}, "physx": {"apply": [{"key": "contact"}]}}
+    cands, _ = candidates(("mujoco", "physx"), ("pybullet",) * 2, ("mujoco", "physx"), deps)
+    moves = {c.name: c.moves for c in cands}
+    assert moves["solver_iterations"] == ((1, "solver_iterations", 200),)
+    assert moves["mujoco.cone"] == ((0, "mujoco.cone", "elliptic"),)
+    assert moves["physx.contact_offset"] == ((1, "physx.contact_offset", 0.001),)
+    assert "physx.rest_offset" not in moves  # 2 x 0.5 mm = MuJoCo's 1 mm margin
+    # a rest offset set apart from the other engine's rest distance is moved back to it
+    prof = "pybullet+physx.rest_offset=0.0"
+    cands, _ = candidates(("physx", "pybullet"), (prof, "pybullet"), ("physx", "pybullet"), deps)
+    assert ("physx.rest_offset", ((0, "physx.rest_offset", 0.0005),)) in [
+        (c.name, c.moves) for c in cands
+    ]
     # the same engine twice: only what the profiles set differently
     cands, _ = candidates(
         ("pybullet", "pybullet"),
