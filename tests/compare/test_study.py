@@ -14,6 +14,7 @@ Runs in this process (workers=0), small ensembles, short durations: about a minu
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 from pathlib import Path
@@ -40,6 +41,7 @@ DATA = Path(__file__).parent / "data"
 SLIDE = DATA / "incline-slide.toml"
 G_COS30 = 9.8 * math.cos(math.radians(30))
 LINK_DAMPING = ("linear_damping", "angular_damping")
+SAPIEN = importlib.util.find_spec("sapien") is not None
 
 
 # ---------------------------------------------------------------- no engine
@@ -277,6 +279,28 @@ def test_explain_ranks_the_friction_made_different_first(tmp_path, capsys):
     assert pair["before"]["verdict"] == "differ"
     report = (out / "report.md").read_text()
     assert "### Ranking" in report and "ensembles of 4 runs per engine" in report
+
+
+@pytest.mark.skipif(not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'")
+def test_explain_ranks_a_friction_made_different_on_physx_first():
+    """PhysX given friction 0.3 against PyBullet's 0.5 on the incline: PhysX given 0.5 must
+    remove the gap, and the candidates PhysX's departures bring must not."""
+    e = explain(
+        SLIDE,
+        ["physx", "pybullet"],
+        profile=["pybullet+lateral_friction=0.3", "pybullet"],
+        duration=0.5,
+        ensemble=3,
+        workers=0,
+    )
+    (pair,) = e.pairs
+    assert pair.before.verdict == "differ"
+    # 0.5 g cos 30 (0.5 - 0.3) t^2 = 21 cm at 0.5 s
+    assert pair.gap.value == pytest.approx(0.5 * G_COS30 * 0.2 * 0.5**2, rel=0.1)
+    first, *rest = pair.ranked
+    assert first.candidate.moves == ((0, "lateral_friction", 0.5),)
+    assert first.explains == "yes" and first.share.value > 0.9
+    assert rest and all(r.share.value < 0.2 for r in rest)
 
 
 def test_explain_has_nothing_to_explain_where_the_engines_agree():
