@@ -294,13 +294,19 @@ def test_explain_ranks_a_friction_made_different_on_physx_first():
         workers=0,
     )
     (pair,) = e.pairs
-    assert pair.before.verdict == "differ"
-    # 0.5 g cos 30 (0.5 - 0.3) t^2 = 21 cm at 0.5 s
-    assert pair.gap.value == pytest.approx(0.5 * G_COS30 * 0.2 * 0.5**2, rel=0.1)
+    # 3 runs per engine (about 45 s in all) are too few for the permutation test to call the
+    # runs separated (p = 0.1: "unresolved"); the gap itself is the physics' (measured 21.15 cm):
+    # 0.5 g cos 30 (0.5 - 0.3) t^2 = 21.2 cm at 0.5 s
+    assert pair.before.verdict != "agree"
+    assert pair.gap.value == pytest.approx(0.5 * G_COS30 * 0.2 * 0.5**2, rel=0.05)
     first, *rest = pair.ranked
     assert first.candidate.moves == ((0, "lateral_friction", 0.5),)
-    assert first.explains == "yes" and first.share.value > 0.9
-    assert rest and all(r.share.value < 0.2 for r in rest)
+    assert first.explains == "yes" and first.share.low > 0.95  # measured 99.35%
+    assert first.after.verdict == "agree"
+    # PhysX's departures bring both engines at 200 iterations and both without link damping:
+    # neither touches the friction (measured 0.0% and -1.2%)
+    assert {r.candidate.name for r in rest} == {"solver_iterations", "link damping"}
+    assert all(abs(r.share.value) < 0.1 for r in rest)
 
 
 def test_explain_has_nothing_to_explain_where_the_engines_agree():
