@@ -379,7 +379,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             "reads are float32 values as float64"
         ),
         "contact": (
-            "PhysX's contact (TGS solver, 1 cm contact offset, rest offset 0) instead of "
+            "PhysX's contact (PGS solver, contacts made within the shapes' 1 cm contact "
+            "offsets, two shapes at rest 1 mm apart, twice the 0.5 mm rest offset) instead of "
             "PyBullet's sequential impulse with a 1 mm collision margin"
         ),
         "rolling/spinning friction": "PhysX has none: <contact> rolling and spinning friction "
@@ -474,7 +475,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                 )
         return {
             "backend": self.name,
-            "engine": "PhysX 5 (reduced-coordinate articulations, TGS) through SAPIEN",
+            "engine": "PhysX 5 (reduced-coordinate articulations, PGS) through SAPIEN",
             "engine_version": f"SAPIEN {sapien.__version__}",
             "native_defaults": self.NATIVE_DEFAULTS,
             "departures": departures,
