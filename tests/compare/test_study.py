@@ -53,6 +53,10 @@ def test_a_profile_with_changes_travels_as_its_name():
     p = get_profile(name)
     assert (p.name, p.lateral_friction, p.max_joint_velocity) == (name, 0.9, None)
     assert p.linear_damping == get_profile("pybullet").linear_damping  # the rest unchanged
+    # a bool as TOML and --set write it ("expected true or false, got 'false'" before)
+    cone = get_profile("pybullet+pybullet.enableConeFriction=false").engine("pybullet")
+    assert cone == {"enableConeFriction": False}
+    assert parse_vary("pybullet.enableConeFriction=true,False").values == (True, False)
     with pytest.raises(InvalidArgumentError, match="unknown entry 'friction'.*lateral_friction"):
         get_profile("pybullet+friction=1")
     with pytest.raises(InvalidArgumentError, match="lateral_friction"):
