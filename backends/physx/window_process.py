@@ -31,7 +31,8 @@ HEADER = 3  # the counter, the close flag, the world's generation
 SIZE = (800, 600)  # the window, pixels
 NEAR_M, FAR_M = 0.02, 500.0  # the camera's clipping distances
 FOV_Y = math.radians(50.0)
-YAW, PITCH = math.radians(-130.0), math.radians(25.0)  # the view: from the side, looking down
+YAW, PITCH = math.radians(-130.0), math.radians(25.0)  # the first view: from the side, down
+TURN_PER_PIXEL = 0.005  # rad of a mouse drag
 MIN_DISTANCE = 1.0  # metres
 DISTANCE = 1.3  # the camera's distance from the robots, times their size
 GROUND_SIZE = 50.0  # a part wider than this (a ground plane) is not aimed at
@@ -128,17 +129,47 @@ def _shape(render: Any, np: Any, s: dict[str, Any]) -> Any:
     return shape
 
 
-def _look(window: Any, sapien: Any, target: list[float], distance: float) -> None:
-    """The camera ``distance`` from ``target``, at the window's angle (SAPIEN's camera looks
-    along its x axis, z up)."""
-    cy, sy = math.cos(YAW), math.sin(YAW)
-    cp, sp = math.cos(PITCH), math.sin(PITCH)
-    forward = (cp * cy, cp * sy, -sp)
-    eye = [t - distance * f for t, f in zip(target, forward, strict=True)]
-    yaw = (math.cos(YAW / 2), 0.0, 0.0, math.sin(YAW / 2))
-    pitch = (math.cos(PITCH / 2), 0.0, math.sin(PITCH / 2), 0.0)
-    q = _qmul(yaw, pitch)
-    window.set_camera_pose(sapien.Pose(eye, list(q)))
+class Camera:
+    """An orbit camera: ``distance`` from ``target`` at ``yaw`` and ``pitch`` (rad, pitch
+    down). The robots' motion moves the target; a drag with the left button turns the camera
+    (SAPIEN's wheel delta did not reach this loop: no zoom)."""
+
+    def __init__(self, window: Any, sapien: Any) -> None:
+        self.window, self.sapien = window, sapien
+        self.target = [0.0, 0.0, 0.0]
+        self.distance, self.yaw, self.pitch = 2.0 * DISTANCE, YAW, PITCH
+
+    def aim(self, aimed: tuple[list[float], float] | None) -> None:
+        """At the robots (after a new world), from a distance that fits them."""
+        if aimed is not None:
+            self.target, self.distance = aimed[0], max(MIN_DISTANCE, DISTANCE * aimed[1])
+        self.place()
+
+    def follow(self, aimed: tuple[list[float], float] | None) -> None:
+        if aimed is not None:
+            self.target = aimed[0]
+            self.place()
+
+    def mouse(self) -> bool:
+        """The user's drag since the last frame; whether the view changed."""
+        w = self.window
+        dx, dy = (float(v) for v in w.mouse_delta)
+        if not (w.mouse_down(0) and (dx or dy)):
+            return False
+        self.yaw -= TURN_PER_PIXEL * dx
+        self.pitch = min(1.5, max(-1.5, self.pitch + TURN_PER_PIXEL * dy))
+        self.place()
+        return True
+
+    def place(self) -> None:
+        """SAPIEN's camera looks along its x axis, z up."""
+        cy, sy = math.cos(self.yaw), math.sin(self.yaw)
+        cp, sp = math.cos(self.pitch), math.sin(self.pitch)
+        forward = (cp * cy, cp * sy, -sp)
+        eye = [t - self.distance * f for t, f in zip(self.target, forward, strict=True)]
+        yaw = (math.cos(self.yaw / 2), 0.0, 0.0, math.sin(self.yaw / 2))
+        pitch = (math.cos(self.pitch / 2), 0.0, math.sin(self.pitch / 2), 0.0)
+        self.window.set_camera_pose(self.sapien.Pose(eye, list(_qmul(yaw, pitch))))
 
 
 def main() -> None:
@@ -155,15 +186,14 @@ def main() -> None:
         window = sapien.render.RenderWindow(SIZE[0], SIZE[1], SHADERS)
         window.set_scene(scene.scene)
         window.set_camera_parameters(NEAR_M, FAR_M, FOV_Y)
-        aimed = scene.centre()
-        target, size = aimed if aimed is not None else ([0.0, 0.0, 0.0], 2.0)
-        _look(window, sapien, target, max(MIN_DISTANCE, DISTANCE * size))
+        camera = Camera(window, sapien)
+        camera.aim(scene.centre())
         window.render("Color", [])
     except Exception as exc:  # noqa: BLE001 - told to the simulation, which raises it
         print(f"error: {type(exc).__name__}: {exc}".replace("\n", " "), flush=True)
         os._exit(1)
     print("ready", flush=True)
-    seen, drawn = header[0], time.monotonic()
+    seen, drawn, busy = header[0], time.monotonic(), False
     while header[1] == 0.0 and not window.should_close and os.getppid() == parent:
         new = int(header[2])
         if new != generation:
@@ -173,28 +203,19 @@ def main() -> None:
                 time.sleep(FRAME_S)
                 continue
             generation = new
-            eye = window.get_camera_pose()
             window.set_scene(scene.scene)  # which resets the camera
             window.set_camera_parameters(NEAR_M, FAR_M, FOV_Y)
-            window.set_camera_pose(eye)
-            aimed = scene.centre()
-            if aimed is not None:
-                target, size = aimed
-                _look(window, sapien, target, max(MIN_DISTANCE, DISTANCE * size))
+            camera.aim(scene.centre())
             seen = -1.0
-        if header[0] != seen or time.monotonic() - drawn > IDLE_REDRAW_S:
+        # the window reads its input when it draws: drawn every frame while the user acts
+        if busy or header[0] != seen or time.monotonic() - drawn > IDLE_REDRAW_S:
             if header[0] != seen:
                 seen = header[0]
                 scene.place()
-                aimed = scene.centre()
-                if aimed is not None:  # follow the robots, keeping the distance
-                    moved = [a - b for a, b in zip(aimed[0], target, strict=True)]
-                    target = aimed[0]
-                    eye = window.get_camera_pose()
-                    at = [e + m for e, m in zip(eye.p.tolist(), moved, strict=True)]
-                    window.set_camera_pose(sapien.Pose(at, eye.q))
+                camera.follow(scene.centre())
             window.render("Color", [])
             drawn = time.monotonic()
+            busy = camera.mouse() or window.mouse_down(0)
         time.sleep(FRAME_S)
     os._exit(0)
 
