@@ -110,7 +110,7 @@ def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):
         while backend == "pybullet" and _unopened(done) and unopened < OPEN_RETRIES:
             unopened += 1  # the X connection failed before any window: not close's doing
             done, ended = _run(display, backend, "close")
-        assert done.returncode == 0, (run, done.returncode, done.stderr[-2000:])
+        assert done.returncode == 0, (run, done.returncode, done.stdout[-500:], done.stderr[-2000:])
         closing = [line for line in done.stdout.splitlines() if line.startswith("closing ")]
         assert closing, (run, done.stdout[-2000:])
         assert ended - float(closing[-1].split()[1]) < EXIT_S, run

@@ -42,6 +42,9 @@ __all__ = ["Window", "VULKAN_NEEDED"]
 
 OPEN_WAIT_S = 60.0  # the window's first frame: seconds on a loaded 2-core machine under Mesa
 CLOSE_WAIT_S = 3.0  # then the window's process is killed
+# a window whose process fails to open it is started once more: 1 of about 70 openings under a
+# busy Xvfb (2 loaded cores) ended with SAPIEN finding no device, the ones around it opened
+OPEN_RETRIES = 1
 HEADER = 3  # the counter, the close flag, the world's generation (window_process.py)
 DEFAULT_RGBA = (1.0, 1.0, 1.0, 1.0)  # a visual without a colour (as the MuJoCo backend's)
 _SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "window_process.py")
@@ -156,6 +159,25 @@ class Window:
         self._poses: np.ndarray | None = None
         self._pose_map: mmap.mmap | None = None
         self.show([])
+        for _attempt in range(1 + OPEN_RETRIES):
+            detail = self._start()
+            if detail is None:
+                break
+        if detail is not None:
+            shutil.rmtree(self._folder, ignore_errors=True)
+            del self._poses, self._header
+            if self._pose_map is not None:
+                self._pose_map.close()
+            self._header_map.close()
+            if any(word in detail.lower() for word in _NO_DEVICE):
+                raise BackendUnsupportedError(
+                    backend, "gui=True here", f"{VULKAN_NEEDED} (SAPIEN: {detail})"
+                )
+            raise DisplayError(backend, detail)
+
+    def _start(self) -> str | None:
+        """Start the window's process; None once it has drawn, else why it failed (the
+        process ended)."""
         with tempfile.TemporaryFile() as err:  # the window's messages, told if it fails
             self._proc = subprocess.Popen(
                 [sys.executable, "-P", _SCRIPT, self._folder, str(os.getpid())],
@@ -165,16 +187,16 @@ class Window:
             )
             self._closer = weakref.finalize(self, _end, self._proc, self._header_map, self._folder)
             problem = self._handshake()
-            if problem is not None:
-                self.close()
-                err.seek(0)
-                tail = err.read().decode(errors="replace").strip().splitlines()[-3:]
-                detail = "; ".join([problem, *tail])
-                if any(word in detail.lower() for word in _NO_DEVICE):
-                    raise BackendUnsupportedError(
-                        backend, "gui=True here", f"{VULKAN_NEEDED} (SAPIEN: {detail})"
-                    )
-                raise DisplayError(backend, detail)
+            if problem is None:
+                return None
+            self._closer.detach()
+            self._proc.kill()
+            self._proc.wait()
+            if self._proc.stdout is not None:
+                self._proc.stdout.close()
+            err.seek(0)
+            tail = err.read().decode(errors="replace").strip().splitlines()[-3:]
+            return "; ".join([problem, *tail])
 
     def _handshake(self) -> str | None:
         """Wait for the window's first line; None once it has drawn its first frame."""
