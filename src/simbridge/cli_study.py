@@ -8,7 +8,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from simbridge.cli import _count, _duration, _job_options, _seed, _size, _timestep
+from simbridge.cli_args import (
+    duration,
+    job_options,
+    nonnegative_float,
+    nonnegative_int,
+    positive_int,
+    timestep,
+)
 
 __all__ = [
     "add_resolve_arguments",
@@ -54,7 +61,7 @@ def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--resolve-limit",
-        type=_seed,
+        type=nonnegative_int,
         metavar="N",
         help=f"halvings at most with --resolve (default: {DEFAULT_LIMIT}; implies --resolve)",
     )
@@ -105,26 +112,26 @@ def add_study_options(p: argparse.ArgumentParser, backends: list[str], ensemble:
         "pybullet+lateral_friction=0.9 (default: the scenario's)",
     )
     p.add_argument(
-        "--timestep", type=_timestep, metavar="DT", help="time step (default: the scenario's)"
+        "--timestep", type=timestep, metavar="DT", help="time step (default: the scenario's)"
     )
-    p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
+    p.add_argument("--duration", type=duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument(
         "--ensemble",
-        type=_count,
+        type=positive_int,
         default=ensemble,
         metavar="N",
         help=f"runs per engine in every comparison (default: {ensemble})",
     )
     p.add_argument(
         "--perturb",
-        type=_size,
+        type=nonnegative_float,
         default=DEFAULT_PERTURB,
         metavar="EPS",
         help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
     )
     p.add_argument(
         "--seed",
-        type=_seed,
+        type=nonnegative_int,
         default=DEFAULT_SEED,
         metavar="S",
         help=f"seed of the offsets and the bootstrap (default: {DEFAULT_SEED})",
@@ -233,7 +240,7 @@ def _run_options(args: argparse.Namespace, bar: Any, prefix: list[str]) -> dict[
         perturb=args.perturb,
         seed=args.seed,
         engine_settings=settings_from_args(args.engine_settings),
-        **_job_options(args),
+        **job_options(args),
         progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
     )
 
