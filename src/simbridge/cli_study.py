@@ -8,14 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from simbridge.cli_args import (
-    duration,
-    job_options,
-    nonnegative_float,
-    nonnegative_int,
-    positive_int,
-    timestep,
-)
+from simbridge import cli_args
 
 __all__ = [
     "add_resolve_arguments",
@@ -61,7 +54,7 @@ def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--resolve-limit",
-        type=nonnegative_int,
+        type=cli_args.nonnegative_int,
         metavar="N",
         help=f"halvings at most with --resolve (default: {DEFAULT_LIMIT}; implies --resolve)",
     )
@@ -112,26 +105,31 @@ def add_study_options(p: argparse.ArgumentParser, backends: list[str], ensemble:
         "pybullet+lateral_friction=0.9 (default: the scenario's)",
     )
     p.add_argument(
-        "--timestep", type=timestep, metavar="DT", help="time step (default: the scenario's)"
+        "--timestep",
+        type=cli_args.timestep,
+        metavar="DT",
+        help="time step (default: the scenario's)",
     )
-    p.add_argument("--duration", type=duration, metavar="SECONDS", help="only the first SECONDS")
+    p.add_argument(
+        "--duration", type=cli_args.duration, metavar="SECONDS", help="only the first SECONDS"
+    )
     p.add_argument(
         "--ensemble",
-        type=positive_int,
+        type=cli_args.positive_int,
         default=ensemble,
         metavar="N",
         help=f"runs per engine in every comparison (default: {ensemble})",
     )
     p.add_argument(
         "--perturb",
-        type=nonnegative_float,
+        type=cli_args.nonnegative_float,
         default=DEFAULT_PERTURB,
         metavar="EPS",
         help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
     )
     p.add_argument(
         "--seed",
-        type=nonnegative_int,
+        type=cli_args.nonnegative_int,
         default=DEFAULT_SEED,
         metavar="S",
         help=f"seed of the offsets and the bootstrap (default: {DEFAULT_SEED})",
@@ -240,7 +238,7 @@ def _run_options(args: argparse.Namespace, bar: Any, prefix: list[str]) -> dict[
         perturb=args.perturb,
         seed=args.seed,
         engine_settings=settings_from_args(args.engine_settings),
-        **job_options(args),
+        **cli_args.job_options(args),
         progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
     )
 
