@@ -27,64 +27,24 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from simbridge.cli_args import (
+    add_job_options,
+    duration,
+    job_options,
+    nonnegative_float,
+    nonnegative_int,
+    positive_int,
+    timestep,
+)
+
 __all__ = ["main", "build_parser"]
 
 PROG = "simbridge"
-
-
-def _timestep(text: str) -> float:
-    from simbridge.compare.scenario import parse_timestep
-
-    try:
-        return parse_timestep(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def _duration(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
-    return value
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return value
-
-
-def _size(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
-    if not (value >= 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
-    return value
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -132,13 +92,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--timestep",
         nargs="+",
-        type=_timestep,
+        type=timestep,
         metavar="DT",
         help="time step(s) in seconds or as 1/240; several make a sweep, the first one is the "
         "headline's (default: the scenario's)",
     )
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
-    p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
+    p.add_argument("--duration", type=duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     p.add_argument(
         "--no-replay",
@@ -150,7 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p.add_argument(
         "--ensemble",
-        type=_count,
+        type=positive_int,
         default=DEFAULT_ENSEMBLE,
         metavar="N",
         help="runs per engine, the nominal one and N-1 from perturbed spawn poses, in parallel "
@@ -158,28 +118,28 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--perturb",
-        type=_size,
+        type=nonnegative_float,
         default=DEFAULT_PERTURB,
         metavar="EPS",
         help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
     )
     p.add_argument(
         "--seed",
-        type=_seed,
+        type=nonnegative_int,
         default=DEFAULT_SEED,
         metavar="S",
         help=f"seed of the offsets, bootstrap and test (default: {DEFAULT_SEED})",
     )
     p.add_argument(
         "--resync-every",
-        type=_seed,  # an integer >= 0
+        type=nonnegative_int,
         metavar="K",
         help="every K steps set each engine's state into the other engine (and into a second "
         "Sim of its own, the floor) and step once: the one-step model error; 0: none "
         "(default: about 150 points per run)",
     )
     add_set_option(p)
-    _jobs_arguments(p)
+    add_job_options(p)
     cli_study.add_resolve_arguments(p)
     _verbose(p)
 
@@ -241,38 +201,11 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
     _verbose(add_settings_parser(sub, backends))
-    cli_study.add_commands(sub, _verbose, _jobs_arguments)
+    cli_study.add_commands(sub, _verbose, add_job_options)
     from simbridge import cli_cache
 
     cli_cache.add_commands(sub, _verbose)
     return parser
-
-
-def _jobs_arguments(p: argparse.ArgumentParser) -> None:
-    """Where and how a study's runs (jobs) run, and their cache."""
-    p.add_argument(
-        "--workers",
-        type=_seed,  # an integer >= 0
-        metavar="N",
-        help="processes running the study's runs on this machine (default: the CPU count; 0: "
-        "all in this process)",
-    )
-    p.add_argument(
-        "--scheduler",
-        metavar="tcp://HOST:PORT",
-        help="run the study's runs on this Dask cluster (needs simbridge[cluster])",
-    )
-    p.add_argument(
-        "--cache",
-        type=Path,
-        metavar="DIR",
-        help="keep every run's result here, by content, and reuse it (default: "
-        "$XDG_CACHE_HOME/simbridge, else ~/.cache/simbridge)",
-    )
-    p.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
-    p.add_argument(
-        "--fresh", action="store_true", help="run everything again (the cache's entries replaced)"
-    )
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -341,10 +274,7 @@ def _compare(args: argparse.Namespace) -> int:
             seed=args.seed,
             resync_every=args.resync_every,
             engine_settings=engine_settings,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            cache=False if args.no_cache else args.cache,
-            fresh=args.fresh,
+            **job_options(args),
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)
