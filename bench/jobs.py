@@ -70,6 +70,9 @@ def _cpu() -> float:
 
 
 def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) -> dict:
+    """Serial and pool timings of ``backend``'s ensemble; CPU per job as each job measured it
+    (:attr:`JobResult.cpu_time`), so pool / serial CPU per job is what running ``workers``
+    jobs at once costs each of them on this machine."""
     from simbridge.compare.run.cache import Cache
     from simbridge.compare.run.executors import run_all
     from simbridge.compare.run.jobs import run_job
@@ -77,12 +80,19 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
     jobs = ensemble_jobs(backend, size)
     out: dict = {"backend": backend, "jobs": len(jobs), "workers": workers}
     if serial:
+        run_job(jobs[1])  # warm-up: the engine loaded, as in a pool's worker after its first job
         t0, c0 = time.perf_counter(), time.process_time()
-        for job in jobs:
-            run_job(job)
+        done = [run_job(job) for job in jobs]
         out["serial"] = time.perf_counter() - t0
         out["serial_cpu"] = time.process_time() - c0
+        out["serial_job_cpu"] = sum(r.cpu_time for r in done) / len(done)
     store = Cache(cache)
+    arrived: list[float] = []
+
+    def keep(i: int, r: object) -> None:
+        arrived.append(time.perf_counter())
+        store.put(jobs[i].key, r)
+
     c0 = _cpu()
     t0 = time.perf_counter()
     results = run_all(
@@ -91,11 +101,15 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
         labels=[j.label for j in jobs],
         workers=workers,
         progress=lambda *_: None,
-        on_result=lambda i, r: store.put(jobs[i].key, r),
+        on_result=keep,
     )
     out["wall"] = time.perf_counter() - t0
     out["pool_cpu"] = _cpu() - c0
     out["in_jobs"] = sum(r.wall_time for r in results)
+    out["pool_job_cpu"] = sum(r.cpu_time for r in results) / len(results)
+    # the first job's start, seen from here: the pool's start and its worker's imports
+    first = min(range(len(results)), key=lambda i: arrived[i])
+    out["start"] = arrived[first] - t0 - results[first].wall_time
     if serial:
         out["efficiency"] = out["serial"] / (out["wall"] * workers)
     return out
@@ -134,17 +148,19 @@ def main(argv: list[str] | None = None) -> int:
         cache = args.cache or Path(tmp) / "cache"
         print(f"cpus {os.cpu_count()}, load average before {os.getloadavg()[0]:.1f}")
         print(
-            "engine    runs  workers  serial s  pool wall s  in-jobs s  efficiency  load"
-            "  serial cpu s  pool cpu s"
+            "engine    runs  workers  serial s  pool wall s  efficiency  start s  in-jobs s"
+            "  CPU/job serial s  CPU/job pool s  pool/serial  CPU serial s  CPU pool s  load"
         )
         for backend in [] if args.rebuild_only else args.backends:
             r = measure(backend, args.size, args.workers, cache, not args.no_serial)
-            serial = f"{r['serial']:8.1f}" if "serial" in r else "       -"
-            eff = f"{r['efficiency']:10.2f}" if "efficiency" in r else "         -"
+            nan = float("nan")
+            sj = r.get("serial_job_cpu", nan)
             print(
-                f"{backend:<9} {r['jobs']:4d}  {r['workers']:7d}  {serial}  {r['wall']:11.1f}"
-                f"  {r['in_jobs']:9.1f}  {eff}  {os.getloadavg()[0]:4.1f}"
-                f"  {r.get('serial_cpu', float('nan')):12.1f}  {r['pool_cpu']:10.1f}",
+                f"{backend:<9} {r['jobs']:4d}  {r['workers']:7d}  {r.get('serial', nan):8.1f}"
+                f"  {r['wall']:11.1f}  {r.get('efficiency', nan):10.2f}  {r['start']:7.1f}"
+                f"  {r['in_jobs']:9.1f}  {sj:16.3f}  {r['pool_job_cpu']:14.3f}"
+                f"  {r['pool_job_cpu'] / sj:11.2f}  {r.get('serial_cpu', nan):12.1f}"
+                f"  {r['pool_cpu']:10.1f}  {os.getloadavg()[0]:4.1f}",
                 flush=True,
             )
         if not args.no_rebuild:
