@@ -11,7 +11,8 @@ jobs, which must give the same end points:
 - serial: every job in this process, one after the other (``workers=0``), the engines
   already loaded (one warm-up run per engine before the clock starts);
 - pool: the local pool of ``--workers`` processes (default the CPU count), its start and the
-  workers' imports included; parallel efficiency = serial / (wall x workers);
+  workers' imports included; parallel efficiency = serial / (wall x workers); then "warm":
+  the same jobs again on that pool, which ``run_all`` keeps for the next call;
 - Dask: a LocalCluster of ``--workers`` worker processes, one thread each, started before the
   clock (a standing cluster); its workers load the engines on their first job, inside the
   timing; the ratio is Dask's wall / the pool's.
@@ -26,6 +27,7 @@ imports, pickling, Dask's scheduler).
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import os
 import platform
 import resource
@@ -34,7 +36,7 @@ import time
 
 from simbridge.compare import load_scenario
 from simbridge.compare.run.ensemble import end_point, offsets, perturbed
-from simbridge.compare.run.executors import JobFailed, run_all
+from simbridge.compare.run.executors import JobFailed, run_all, shutdown_pool
 from simbridge.compare.run.trajectory import run
 from simbridge.compare.scenario import Scenario
 
@@ -52,6 +54,20 @@ def cpu() -> float:
     own = resource.getrusage(resource.RUSAGE_SELF)
     kids = resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def workers_cpu(pids: set[int]) -> float:
+    """CPU seconds (user + system) so far of the running processes ``pids`` (Linux's /proc):
+    the kept pool's workers, which are not reaped when a call ends."""
+    total = 0.0
+    for pid in pids:
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    return total
 
 
 def main() -> int:
@@ -74,10 +90,18 @@ def main() -> int:
     serial = run_all(member, items, workers=0, **quiet)
     t_serial, c_serial = time.perf_counter() - t0, cpu() - c0
 
+    shutdown_pool()  # a pool started for these jobs: its start in the wall
     t0, c0 = time.perf_counter(), cpu()
     pooled = run_all(member, items, workers=args.workers, **quiet)
-    t_pool, c_pool = time.perf_counter() - t0, cpu() - c0
+    t_pool = time.perf_counter() - t0
+    kept = {p.pid for p in multiprocessing.active_children()}  # its workers, kept warm
+    c_pool = cpu() - c0 + workers_cpu(kept)
     assert pooled == serial, "the pool's end points differ from the serial ones"
+    t0, c0 = time.perf_counter(), cpu() + workers_cpu(kept)
+    warm = run_all(member, items, workers=args.workers, **quiet)
+    t_warm, c_warm = time.perf_counter() - t0, cpu() + workers_cpu(kept) - c0
+    assert warm == serial, "the warm pool's end points differ from the serial ones"
+    shutdown_pool()
 
     t_dask = c_dask = None
     if not args.no_dask:
@@ -118,6 +142,11 @@ def main() -> int:
     print(
         f"| local pool | {args.workers} | {t_pool:.2f} | {t_pool * per:.0f} | "
         f"{c_pool:.1f} ({c_pool / c_serial:.2f}) | parallel efficiency {eff:.2f} |"
+    )
+    print(
+        f"| local pool, warm (kept from the call above) | {args.workers} | {t_warm:.2f} | "
+        f"{t_warm * per:.0f} | {c_warm:.1f} ({c_warm / c_serial:.2f}) | parallel efficiency "
+        f"{t_serial / (t_warm * args.workers):.2f} |"
     )
     if t_dask is not None and c_dask is not None:
         print(

@@ -1,10 +1,15 @@
 """A study's runs as jobs on the local process pool, and a report rebuilt from the cache.
 
 1. Per engine, a ``--size``-run ensemble of r2d2 (the nominal run and ``size - 1`` perturbed
-   members: the very jobs ``simbridge compare r2d2 --ensemble SIZE`` makes) run twice: one after
-   the other in this process (the serial time), then on a local pool of ``--workers``
-   processes (its wall time, process start included). Parallel efficiency = serial / (wall x
-   workers); the issue's target is >= 0.85 on 2 cores.
+   members: the very jobs ``simbridge compare r2d2 --ensemble SIZE`` makes) run three times: one
+   after the other in this process (the serial time, after one warm-up run), then on a local
+   pool of ``--workers`` processes started for them ("cold": the pool's start and its workers'
+   imports in the wall), then again on that pool, which ``run_all`` keeps ("warm": what a
+   study's next call, a sweep's next point, gets). Parallel efficiency = serial / (wall x
+   workers); the issue's target is >= 0.85 on 2 cores. CPU per job is what each job measured
+   where it ran (``JobResult.cpu_time``): pool / serial above 1 is what running ``workers``
+   jobs at once costs each of them on this machine (``bench/contention.py`` measures it for
+   plain loops too).
 2. ``compare("r2d2", ensemble=SIZE)`` into the same cache (its members are already there: only
    the nominal, half-step and resync runs run), its report written, then the report rebuilt
    from the cache alone (``simbridge report DIR``: no engine runs): its wall time; the target
@@ -29,6 +34,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -59,31 +65,64 @@ def ensemble_jobs(backend: str, size: int, seed: int = 0) -> list:
     return jobs
 
 
-def _cpu() -> float:
-    """CPU seconds (user + system) of this process and its reaped children (the pool's
-    workers, once shut down): what the machine's load does not move."""
-    import resource
-
-    me = resource.getrusage(resource.RUSAGE_SELF)
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
-
-
 def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) -> dict:
+    """Serial and pool timings of ``backend``'s ensemble; CPU per job as each job measured it
+    (:attr:`JobResult.cpu_time`), so pool / serial CPU per job is what running ``workers``
+    jobs at once costs each of them on this machine."""
     from simbridge.compare.run.cache import Cache
-    from simbridge.compare.run.executors import run_all
+    from simbridge.compare.run.executors import shutdown_pool
     from simbridge.compare.run.jobs import run_job
 
     jobs = ensemble_jobs(backend, size)
     out: dict = {"backend": backend, "jobs": len(jobs), "workers": workers}
     if serial:
+        run_job(jobs[1])  # warm-up: the engine loaded, as in a pool's worker after its first job
         t0, c0 = time.perf_counter(), time.process_time()
-        for job in jobs:
-            run_job(job)
+        done = [run_job(job) for job in jobs]
         out["serial"] = time.perf_counter() - t0
         out["serial_cpu"] = time.process_time() - c0
+        out["serial_job_cpu"] = sum(r.cpu_time for r in done) / len(done)
     store = Cache(cache)
-    c0 = _cpu()
+    shutdown_pool()  # cold: the pool's start and its workers' imports in the wall
+    out["cold"] = _pool(jobs, workers, store, set())
+    out["warm"] = _pool(jobs, workers, store, out["cold"]["pids"])  # the pool kept from it
+    if serial:
+        for mode in ("cold", "warm"):
+            out[mode]["efficiency"] = out["serial"] / (out[mode]["wall"] * workers)
+    return out
+
+
+def _proc_cpu(pids: set[int]) -> float:
+    """CPU seconds (user + system) of the running processes ``pids`` so far (Linux's /proc):
+    the kept pool's workers, which are not reaped when a call ends."""
+    total = 0.0
+    for pid in pids:
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    return total
+
+
+def _pool(jobs: list, workers: int, store: Any, known: set[int]) -> dict:
+    """The jobs on the local pool (``known``: its workers' pids when it is kept from a previous
+    call): wall, CPU (this process and the workers), the sum of the jobs' own wall times and
+    their CPU per job, and when the first job started."""
+    import resource
+
+    from simbridge.compare.run.executors import run_all
+    from simbridge.compare.run.jobs import run_job
+
+    arrived: list[float] = [0.0] * len(jobs)
+
+    def keep(i: int, r: Any) -> None:
+        arrived[i] = time.perf_counter()
+        store.put(jobs[i].key, r)
+
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    c0 = me.ru_utime + me.ru_stime + _proc_cpu(known)
     t0 = time.perf_counter()
     results = run_all(
         run_job,
@@ -91,13 +130,18 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
         labels=[j.label for j in jobs],
         workers=workers,
         progress=lambda *_: None,
-        on_result=lambda i, r: store.put(jobs[i].key, r),
+        on_result=keep,
     )
-    out["wall"] = time.perf_counter() - t0
-    out["pool_cpu"] = _cpu() - c0
+    wall = time.perf_counter() - t0
+    pids = known | {r.pid for r in results}
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    out: dict = {"wall": wall, "cpu": me.ru_utime + me.ru_stime + _proc_cpu(pids) - c0}
+    out["pids"] = pids
     out["in_jobs"] = sum(r.wall_time for r in results)
-    if serial:
-        out["efficiency"] = out["serial"] / (out["wall"] * workers)
+    out["job_cpu"] = sum(r.cpu_time for r in results) / len(results)
+    # the first job's start, seen from here: the pool's start and its worker's imports
+    first = min(range(len(results)), key=lambda i: arrived[i])
+    out["start"] = arrived[first] - t0 - results[first].wall_time
     return out
 
 
@@ -134,19 +178,24 @@ def main(argv: list[str] | None = None) -> int:
         cache = args.cache or Path(tmp) / "cache"
         print(f"cpus {os.cpu_count()}, load average before {os.getloadavg()[0]:.1f}")
         print(
-            "engine    runs  workers  serial s  pool wall s  in-jobs s  efficiency  load"
-            "  serial cpu s  pool cpu s"
+            "engine    runs  workers  pool  serial s  wall s  efficiency  start s  in-jobs s"
+            "  CPU/job serial s  CPU/job pool s  pool/serial  CPU serial s  CPU pool s  load"
         )
+        nan = float("nan")
         for backend in [] if args.rebuild_only else args.backends:
             r = measure(backend, args.size, args.workers, cache, not args.no_serial)
-            serial = f"{r['serial']:8.1f}" if "serial" in r else "       -"
-            eff = f"{r['efficiency']:10.2f}" if "efficiency" in r else "         -"
-            print(
-                f"{backend:<9} {r['jobs']:4d}  {r['workers']:7d}  {serial}  {r['wall']:11.1f}"
-                f"  {r['in_jobs']:9.1f}  {eff}  {os.getloadavg()[0]:4.1f}"
-                f"  {r.get('serial_cpu', float('nan')):12.1f}  {r['pool_cpu']:10.1f}",
-                flush=True,
-            )
+            sj = r.get("serial_job_cpu", nan)
+            for mode in ("cold", "warm"):
+                m = r[mode]
+                print(
+                    f"{backend:<9} {r['jobs']:4d}  {r['workers']:7d}  {mode}"
+                    f"  {r.get('serial', nan):8.1f}  {m['wall']:6.1f}"
+                    f"  {m.get('efficiency', nan):10.2f}  {m['start']:7.2f}  {m['in_jobs']:9.1f}"
+                    f"  {sj:16.3f}  {m['job_cpu']:14.3f}  {m['job_cpu'] / sj:11.2f}"
+                    f"  {r.get('serial_cpu', nan):12.1f}  {m['cpu']:10.1f}"
+                    f"  {os.getloadavg()[0]:4.1f}",
+                    flush=True,
+                )
         if not args.no_rebuild:
             pair = args.backends if len(args.backends) >= 2 else ["pybullet", "mujoco"]
             r = rebuild_time(pair, args.size, args.workers, cache)

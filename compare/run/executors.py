@@ -17,6 +17,11 @@ It knows nothing of what a job computes. What it adds to an executor:
   pool's workers (none is left behind), calls ``on_result`` for every job that finished, and
   raises ``KeyboardInterrupt`` again. The local pool's workers ignore SIGINT (the terminal
   sends it to the whole process group): the caller decides.
+- **Warm workers**: the local pool is kept after a call that ran to the end, its workers
+  started and their imports done (simbridge, the engines: about half a second of each
+  worker's start), and the next call with the same ``workers`` reuses it: a sweep or an
+  ``explain`` makes one call per point. :func:`shutdown_pool` ends it (the interpreter's exit
+  does too).
 - **Progress** over jobs: a tqdm bar with the ETA on stderr when stderr is a terminal, silent
   otherwise; or a callable ``progress(done, total, label)``.
 
@@ -30,6 +35,7 @@ import contextlib
 import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
@@ -43,7 +49,15 @@ from simbridge.exceptions import (
     SimbridgeError,
 )
 
-__all__ = ["JobFailed", "run_all", "describe_exit", "DEFAULT_ATTEMPTS", "Progress", "OnResult"]
+__all__ = [
+    "JobFailed",
+    "run_all",
+    "shutdown_pool",
+    "describe_exit",
+    "DEFAULT_ATTEMPTS",
+    "Progress",
+    "OnResult",
+]
 
 DEFAULT_ATTEMPTS = 2
 """A job is given up (:class:`JobFailed`) once its worker died this many times while running
@@ -95,8 +109,9 @@ def run_all(
         fn: a picklable top-level function of one argument.
         items: its arguments, picklable.
         labels: one short name per item (progress, :class:`JobFailed`); default ``"job i"``.
-        workers: 0 runs every job here, serially; N > 0 a local pool of N processes (spawned);
-            default the CPU count. Never more processes than jobs.
+        workers: 0 runs every job here, serially; N > 0 a local pool of N processes (spawned,
+            kept for the next call: :func:`shutdown_pool`); default the CPU count. Never more
+            processes than jobs.
         scheduler: ``"tcp://HOST:PORT"``: a Dask scheduler (the extra ``simbridge[cluster]``).
         executor: any :class:`concurrent.futures.Executor` (``client.get_executor()`` of a
             Dask client, a thread pool...), used as given and not shut down here.
@@ -154,7 +169,7 @@ def run_all(
             if count == 0 or not _main_importable():
                 _run_here(fn, items, tracker)
             else:
-                _run_pool(fn, items, min(count, n), max_attempts, tracker)
+                _run_pool(fn, items, count, max_attempts, tracker)
     finally:
         tracker.close()
     return [tracker.results[i] for i in range(n)]
@@ -401,6 +416,86 @@ def _stop(pool: Any) -> None:
         pool.shutdown(wait=True)
 
 
+class _WarmPool:
+    """The local pool kept between :func:`run_all` calls of this process: its workers have
+    started and imported what the jobs import (simbridge, the engines), so the next call's jobs
+    start at once (a study's sweep or ``explain`` makes one call per point). One per process
+    (a forked child does not use its parent's) and per worker count; a call that finds it in
+    use by another thread gets a pool of its own. A pool that broke or was stopped (Ctrl-C, a
+    job's exception) is not kept. Its idle workers hold their engines' memory until
+    :func:`shutdown_pool` or the interpreter's exit."""
+
+    lock = threading.Lock()
+    pool: Any = None
+    started: Any = None
+    workers = 0
+    pid = 0
+
+
+def shutdown_pool() -> None:
+    """End the local pool's idle workers kept by :func:`run_all` (they are ended at exit)."""
+    with _WarmPool.lock:
+        _drop_warm()
+
+
+def _drop_warm() -> None:
+    pool, started = _WarmPool.pool, _WarmPool.started
+    _WarmPool.pool = _WarmPool.started = None
+    if pool is not None and _WarmPool.pid == os.getpid():
+        pool.shutdown(wait=True)
+        started.close()
+
+
+def _new_pool(ctx: Any, workers: int) -> tuple[Any, Any]:
+    from concurrent.futures import ProcessPoolExecutor
+
+    started_q = ctx.SimpleQueue()
+    pool = ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=ctx,
+        initializer=_worker_init,
+        initargs=(os.getpid(), started_q),
+    )
+    return pool, started_q
+
+
+def _take_pool(ctx: Any, workers: int) -> tuple[Any, Any, bool]:
+    """``(pool, its started-queue, warm)``: the kept pool of ``workers`` processes when it is
+    free and whole (``warm``: give it back with :func:`_keep`), else a new one of the caller's
+    own (shut down by the caller) when the kept one is in use."""
+    if not _WarmPool.lock.acquire(blocking=False):
+        return (*_new_pool(ctx, workers), False)
+    if _WarmPool.pid != os.getpid():  # a forked child: its parent's pool is not its own
+        _WarmPool.pool = _WarmPool.started = None
+    pool = _WarmPool.pool
+    if pool is not None and (_WarmPool.workers != workers or getattr(pool, "_broken", False)):
+        _drop_warm()
+        pool = None
+    if pool is None:
+        _WarmPool.pool, _WarmPool.started = _new_pool(ctx, workers)
+        _WarmPool.workers, _WarmPool.pid = workers, os.getpid()
+    started = _WarmPool.started
+    while not started.empty():  # what a previous call's jobs said
+        started.get()
+    return _WarmPool.pool, started, True
+
+
+def _release(pool: Any, started: Any, warm: bool, keep: bool) -> None:
+    """After a call: the kept pool stays for the next call when ``keep`` (its jobs ran to the
+    end); any other pool is shut down (the kept one dropped)."""
+    try:
+        if warm and keep:
+            return
+        if warm and _WarmPool.pool is pool:
+            _WarmPool.pool = _WarmPool.started = None
+        with contextlib.suppress(Exception):
+            pool.shutdown(wait=True)
+        started.close()
+    finally:
+        if warm:
+            _WarmPool.lock.release()
+
+
 def _run_pool(
     fn: Callable[[Any], Any],
     items: list[Any],
@@ -409,7 +504,6 @@ def _run_pool(
     tracker: _Tracker,
 ) -> None:
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
     ctx = multiprocessing.get_context("spawn")
@@ -417,17 +511,13 @@ def _run_pool(
     todo = list(range(len(items)))
     blameless = 0
     while todo:
-        started_q = ctx.SimpleQueue()
-        pool = ProcessPoolExecutor(
-            max_workers=min(workers, len(todo)),
-            mp_context=ctx,
-            initializer=_worker_init,
-            initargs=(os.getpid(), started_q),
-        )
-        futures = {pool.submit(_call, fn, items[i], i, tracker.labels[i]): i for i in todo}
-        pending = set(futures)
+        pool, started_q, warm = _take_pool(ctx, workers)
+        futures: dict[Future[Any], int] = {}
         broken = False
         try:
+            for i in todo:
+                futures[pool.submit(_call, fn, items[i], i, tracker.labels[i])] = i
+            pending = set(futures)
             while pending and not broken:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for f in done:
@@ -438,14 +528,15 @@ def _run_pool(
                         broken = True
                     else:
                         raise exc
+        except BrokenProcessPool:  # a kept pool whose idle worker died: submit refused
+            broken = True
         except BaseException:
             _stop(pool)
             _deliver_done(futures, tracker)
-            started_q.close()
+            _release(pool, started_q, warm, keep=False)
             raise
         if not broken:
-            pool.shutdown(wait=True)
-            started_q.close()
+            _release(pool, started_q, warm, keep=True)
             break
         # A worker died: every job the pool held failed with BrokenProcessPool; the pool
         # ended its other workers (SIGTERM). Which job ran in the dead one?
@@ -456,7 +547,7 @@ def _run_pool(
         while not started_q.empty():
             index, pid = started_q.get()
             started[index] = pid
-        started_q.close()
+        _release(pool, started_q, warm, keep=False)
         codes = {pid: p.exitcode for pid, p in processes.items()}
         unfinished = [i for i in todo if i not in tracker.results]
         running = {i: codes.get(started[i]) for i in unfinished if i in started}

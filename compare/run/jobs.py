@@ -286,13 +286,14 @@ class Job:
 class JobResult:
     """What a job gives back: ``value`` (a Trajectory, a Member, or a resync ``(Direction,
     scale)``), the ``simbridge`` log records of the run (logger, level, message), its wall
-    time (s) and the process it ran in."""
+    time (s), the process it ran in and the CPU time (s, user + system) the run took there."""
 
     kind: str
     value: Any
     log: list[tuple[str, int, str]] = field(default_factory=list)
     wall_time: float = 0.0
     pid: int = 0
+    cpu_time: float = 0.0
 
 
 class _Collect(logging.Handler):
@@ -313,7 +314,7 @@ def run_job(job: Job) -> JobResult:
     from .ensemble import member_of
     from .trajectory import run
 
-    start = _time.perf_counter()
+    start, cpu = _time.perf_counter(), _time.process_time()
     log = logging.getLogger("simbridge")
     level = log.level
     handler = _Collect()
@@ -336,7 +337,14 @@ def run_job(job: Job) -> JobResult:
     finally:
         log.removeHandler(handler)
         log.setLevel(level)
-    return JobResult(job.kind, value, handler.records, _time.perf_counter() - start, os.getpid())
+    return JobResult(
+        job.kind,
+        value,
+        handler.records,
+        _time.perf_counter() - start,
+        os.getpid(),
+        _time.process_time() - cpu,
+    )
 
 
 def run_job_registered(specs: tuple[Any, ...], job: Job) -> JobResult:

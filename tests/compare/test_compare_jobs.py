@@ -331,7 +331,8 @@ def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path):
 
 
 def test_the_jobs_bench_runs(tmp_path):
-    """bench/jobs.py on a 2-run ensemble of one engine prints its row (speed not asserted)."""
+    """bench/jobs.py on a 2-run ensemble of one engine prints its rows, the pool started for
+    the jobs and the pool kept from it, each with the jobs' CPU (speed not asserted)."""
     import subprocess
     import sys
 
@@ -344,8 +345,9 @@ def test_the_jobs_bench_runs(tmp_path):
         timeout=600,
     )
     assert done.returncode == 0, done.stderr
-    row = [line for line in done.stdout.splitlines() if line.startswith("mujoco")]
-    assert len(row) == 1 and row[0].split()[1:3] == ["2", "2"]
+    rows = [line.split() for line in done.stdout.splitlines() if line.startswith("mujoco")]
+    assert [r[1:4] for r in rows] == [["2", "2", "cold"], ["2", "2", "warm"]], done.stdout
+    assert all(float(r[9]) > 0 and float(r[10]) > 0 for r in rows)  # CPU per job, each mode
     assert len(list((tmp_path / "cache" / "jobs").rglob("*.pkl"))) == 2
 
 

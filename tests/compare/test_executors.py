@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from simbridge.compare.run.executors import JobFailed, describe_exit, run_all
+from simbridge.compare.run.executors import JobFailed, describe_exit, run_all, shutdown_pool
 from simbridge.exceptions import (
     ExtraNotInstalledError,
     InvalidArgumentError,
@@ -155,6 +155,21 @@ def test_a_worker_killed_mid_study_has_its_job_rerun(tmp_path: Path) -> None:
     runs = (tmp_path / "victim-runs").read_text().split()
     assert len(runs) == 2 and runs[0] != runs[1]  # a second worker ran it
     assert (tmp_path / "killed").read_text() == runs[0]
+
+
+def test_the_pool_is_kept_warm_for_the_next_call_and_survives_an_idle_worker_killed() -> None:
+    shutdown_pool()
+    first = {r[1] for r in run_all(_square, [1, 2, 3, 4], workers=2)}
+    second = {r[1] for r in run_all(_square, [5, 6, 7, 8], workers=2)}
+    assert second <= first  # the same, already started, processes
+    for pid in first:  # an idle worker dies between calls: the next call starts a new pool
+        os.kill(pid, signal.SIGKILL)
+    time.sleep(0.2)
+    third = run_all(_square, [2, 3], workers=2)
+    assert [r[0] for r in third] == [4, 9] and not {r[1] for r in third} & first
+    shutdown_pool()
+    for pid in {r[1] for r in third}:
+        assert not _alive(pid), f"worker {pid} outlived shutdown_pool"
 
 
 def test_describe_exit() -> None:
