@@ -17,12 +17,13 @@ lock itself.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any, TypeVar
 
 from simbridge.exceptions import SimBusyError, SimClosedError
 
-__all__ = ["WAIT_LIMIT_S", "WAIT_SLICE_S", "exclusive", "wait_for_lock"]
+__all__ = ["WAIT_LIMIT_S", "WAIT_SLICE_S", "exclusive", "reading", "wait_for_lock"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -67,3 +68,17 @@ def exclusive(method: _F) -> _F:
             lock.release()
 
     return call  # type: ignore[return-value]
+
+
+@contextmanager
+def reading(backend: Any) -> Iterator[None]:
+    """``Backend.reading`` of every built-in backend (``reading = locking.reading`` in its
+    class): the Sim's lock held for a read (or a write) of several calls, re-entrant (its
+    calls pass), so that no step in another thread lands between its parts."""
+    lock = backend._stepping
+    if not lock.acquire(False):
+        wait_for_lock(backend)
+    try:
+        yield
+    finally:
+        lock.release()

@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, NoReturn
 
 import mujoco
@@ -39,6 +38,7 @@ from simbridge.types import (
 )
 from simbridge.urdf import UrdfModel
 
+from .. import locking
 from ..locking import exclusive, wait_for_lock
 from . import kernel as kernel_loader
 from . import model as build
@@ -285,17 +285,7 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         self._free_ids.append(body)
         self._recompile("<remove>")
 
-    @contextmanager
-    def reading(self) -> Iterator[None]:
-        """Hold the Sim's lock for a read (or a write) of several calls (re-entrant: its
-        calls pass): no step in another thread lands between its parts."""
-        lock = self._stepping
-        if not lock.acquire(False):
-            wait_for_lock(self)
-        try:
-            yield
-        finally:
-            lock.release()
+    reading = locking.reading
 
     def set_divergence_check(self, every_step: bool) -> None:
         """Nothing to set: MuJoCo checks positions, speeds and accelerations at every step

@@ -84,19 +84,7 @@ class StateAccess:
         return len(self._robots[body].table)
 
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
-        robot = self._robots[body]
-        ine = robot.spec.inertials[link + 1]
-        ct = robot.spec.plan.link(link).contact
-        return DynamicsInfo(
-            ine.mass,
-            ct.lateral_friction,
-            ine.diagonal,
-            ine.position,
-            ine.orientation,
-            ct.restitution,
-            ct.rolling_friction,
-            ct.spinning_friction,
-        )
+        return self._robots[body].spec.plan.dynamics_info(link)
 
     # ---------------------------------------------------------------- state
 

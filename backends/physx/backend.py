@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -31,6 +30,7 @@ from simbridge.profiles import Profile
 from simbridge.types import Quat, Vec3
 from simbridge.urdf import UrdfModel
 
+from .. import locking
 from ..locking import exclusive, wait_for_lock
 from .ball import BallJoints, default_ball_motor
 from .combine import product_combine_available
@@ -272,15 +272,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         self._steps = 0
         self._new_world()
 
-    @contextmanager
-    def reading(self) -> Iterator[None]:
-        lock = self._stepping
-        if not lock.acquire(False):
-            wait_for_lock(self)
-        try:
-            yield
-        finally:
-            lock.release()
+    reading = locking.reading
 
     def set_divergence_check(self, every_step: bool) -> None:
         self._every_step = every_step

@@ -38,6 +38,35 @@ SPEED_UNCAPPED = 1e6  # rad/s, m/s: a joint speed PhysX never reaches
 _POSITION = int(MotorMode.POSITION)  # as a plain int: an Enum member costs a lookup per use
 
 
+def _set_drives(
+    robot: Robot, slots: np.ndarray, max_force: list[float], target: list[float] | None = None
+) -> None:
+    """The drives of motor ``slots`` as ``_apply`` sets them: the force limit, the least of
+    ``max_force`` and the joint's effort, set only where it changes (0: the drive off); a
+    spherical joint's velocity target 0; with ``target`` (velocity motors), the other joints'
+    velocity targets. One loop of plain Python values: the commands' hot path."""
+    m = robot.motors
+    calls = robot.slot_calls(slots, m["effort"], m["ball"])
+    velocity = target is not None
+    # a position motor's targets are set before each step: the slots stand in, unread
+    targets = target if target is not None else calls[0]
+    drive = robot.drive_force
+    for s, joint, effort, ball, t, mf in zip(*calls, targets, max_force, strict=True):
+        f = mf if mf < effort else effort
+        if f <= 0.0:
+            if drive[s] != 0.0:
+                joint.set_drive_properties(0.0, 0.0, 0.0, "force")
+                drive[s] = 0.0
+            continue
+        if drive[s] != f:
+            joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
+            drive[s] = f
+        if ball:
+            joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+        elif velocity:
+            joint.set_drive_velocity_target(t)
+
+
 class MotorCommands:
     """The ``Backend`` motor methods (a part of :class:`PhysxBackend`)."""
 
@@ -239,23 +268,7 @@ class MotorCommands:
         m["max_force"][slots] = max_force
         m["kp"][slots] = 0.0
         m["kd"][slots] = 1.0
-        drive = robot.drive_force
-        for s, joint, effort, ball, t, mf in zip(
-            *robot.slot_calls(slots, m["effort"], m["ball"]), target, max_force, strict=True
-        ):
-            f = mf if mf < effort else effort
-            if f <= 0.0:
-                if drive[s] != 0.0:
-                    joint.set_drive_properties(0.0, 0.0, 0.0, "force")
-                    drive[s] = 0.0
-                continue
-            if drive[s] != f:
-                joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
-                drive[s] = f
-            if ball:
-                joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
-            else:
-                joint.set_drive_velocity_target(t)
+        _set_drives(robot, slots, max_force, target)
         if was_position:  # a position motor replaced: the step may have less to do
             self._refresh_active()
 
@@ -287,23 +300,9 @@ class MotorCommands:
         m["max_force"][slots] = max_force
         m["kp"][slots] = kp
         m["kd"][slots] = kd
-        # the drive as _apply sets it for a position motor (its velocity target is set before
-        # each step): changed only where the force limit changes
-        drive = robot.drive_force
-        for s, joint, effort, ball, mf in zip(
-            *robot.slot_calls(slots, m["effort"], m["ball"]), max_force, strict=True
-        ):
-            f = mf if mf < effort else effort
-            if f <= 0.0:
-                if drive[s] != 0.0:
-                    joint.set_drive_properties(0.0, 0.0, 0.0, "force")
-                    drive[s] = 0.0
-                continue
-            if drive[s] != f:
-                joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
-                drive[s] = f
-            if ball:
-                joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
+        # the drives as _apply sets them for a position motor (its velocity target is set
+        # before each step)
+        _set_drives(robot, slots, max_force)
         if not robot.has_position:  # the robot's step gains the position law
             self._refresh_active()
 

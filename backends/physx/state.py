@@ -76,20 +76,9 @@ class StateAccess:
         return len(self._robots[body].table)
 
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
-        robot = self._robots[body]
-        ine = robot.built.inertials[link + 1]
-        assert robot.built.plan is not None
-        ct = robot.built.plan.link(link).contact
-        return DynamicsInfo(
-            ine.mass,
-            ct.lateral_friction,
-            ine.diagonal,
-            ine.position,
-            ine.orientation,
-            ct.restitution,
-            ct.rolling_friction,
-            ct.spinning_friction,
-        )
+        plan = self._robots[body].built.plan
+        assert plan is not None
+        return plan.dynamics_info(link)
 
     # ---------------------------------------------------------------- reads
 

@@ -42,6 +42,7 @@ from simbridge.types import (
 )
 from simbridge.urdf import UrdfModel, resolve_mesh
 
+from .. import locking
 from .commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands
 from .common import (
     _all_finite,
@@ -521,16 +522,7 @@ class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
         self._next_check = self._check_every
         self._checked_at = 0.0
 
-    @contextmanager
-    def reading(self) -> Iterator[None]:
-        """Hold the Sim's lock for a read of several calls (re-entrant: its calls pass)."""
-        lock = self._stepping
-        if not lock.acquire(False):
-            wait_for_lock(self)
-        try:
-            yield
-        finally:
-            lock.release()
+    reading = locking.reading
 
     def set_divergence_check(self, every_step: bool) -> None:
         self._check_every = 1 if every_step else _CHECK_EVERY

@@ -39,7 +39,7 @@ from .load_options import LoadOptions, self_collision_exclusions
 from .meshes import read_mesh
 from .profiles import Profile
 from .transforms import IDENTITY_QUAT, quat_rotate, transform_multiply
-from .types import Quat, Vec3
+from .types import DynamicsInfo, Quat, Vec3
 from .urdf_model import Geometry, Joint, Link, UrdfModel
 
 __all__ = [
@@ -257,6 +257,22 @@ class BuildPlan:
     def link(self, index: int) -> LinkPlan:
         """The link by PyBullet index (-1 = base)."""
         return self.links[index + 1]
+
+    def dynamics_info(self, index: int) -> DynamicsInfo:
+        """``Backend.dynamics_info`` of the link by PyBullet index (-1 = base): its inertial
+        and contact values, as every engine built from this plan simulates them."""
+        link = self.links[index + 1]
+        ine, ct = link.inertial, link.contact
+        return DynamicsInfo(
+            ine.mass,
+            ct.lateral_friction,
+            ine.diagonal,
+            ine.position,
+            ine.orientation,
+            ct.restitution,
+            ct.rolling_friction,
+            ct.spinning_friction,
+        )
 
     @property
     def joints(self) -> tuple[JointPlan, ...]:

@@ -272,6 +272,22 @@ def _jobs_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _job_options(args: argparse.Namespace) -> dict[str, Any]:
+    """compare()'s job options from the options above, those not given left out."""
+    out: dict[str, Any] = {}
+    if getattr(args, "workers", None) is not None:
+        out["workers"] = args.workers
+    if getattr(args, "scheduler", None) is not None:
+        out["scheduler"] = args.scheduler
+    if getattr(args, "no_cache", False):
+        out["cache"] = False
+    elif getattr(args, "cache", None) is not None:
+        out["cache"] = args.cache
+    if getattr(args, "fresh", False):
+        out["fresh"] = True
+    return out
+
+
 def _report(args: argparse.Namespace) -> int:
     from simbridge.compare.report.rebuild import rebuild
 
@@ -338,10 +354,7 @@ def _compare(args: argparse.Namespace) -> int:
             seed=args.seed,
             resync_every=args.resync_every,
             engine_settings=engine_settings,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            cache=False if args.no_cache else args.cache,
-            fresh=args.fresh,
+            **_job_options(args),
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)

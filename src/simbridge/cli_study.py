@@ -4,62 +4,20 @@
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from simbridge.cli import _count, _duration, _job_options, _seed, _size, _timestep
+
 __all__ = [
     "add_resolve_arguments",
     "add_commands",
+    "add_study_options",
     "resolver_of",
     "finish_resolve",
     "profile_name",
 ]
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
-    return value
-
-
-def _int(low: int) -> Callable[[str], int]:
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"expected an integer >= {low}, got {text!r}"
-            ) from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}")
-        return value
-
-    return parse
-
-
-def _nonnegative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
-    if not (value >= 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
-    return value
-
-
-def _timestep(text: str) -> float:
-    from simbridge.compare.scenario import parse_timestep
-
-    try:
-        return parse_timestep(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def profile_name(text: str) -> str:
@@ -96,7 +54,7 @@ def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--resolve-limit",
-        type=_int(0),
+        type=_seed,
         metavar="N",
         help=f"halvings at most with --resolve (default: {DEFAULT_LIMIT}; implies --resolve)",
     )
@@ -123,7 +81,9 @@ def finish_resolve(resolver: Any, out: Path) -> None:
     print(resolution_headline(resolver.resolution))
 
 
-def _common(p: argparse.ArgumentParser, backends: list[str], ensemble: int) -> None:
+def add_study_options(p: argparse.ArgumentParser, backends: list[str], ensemble: int) -> None:
+    """The options of every study command: the scenario, its engines, the runs and the report
+    folder (``ensemble``: the default of ``--ensemble``)."""
     from simbridge.compare.run.ensemble import DEFAULT_PERTURB, DEFAULT_SEED
 
     p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
@@ -147,26 +107,24 @@ def _common(p: argparse.ArgumentParser, backends: list[str], ensemble: int) -> N
     p.add_argument(
         "--timestep", type=_timestep, metavar="DT", help="time step (default: the scenario's)"
     )
-    p.add_argument(
-        "--duration", type=_positive_float, metavar="SECONDS", help="only the first SECONDS"
-    )
+    p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument(
         "--ensemble",
-        type=_int(1),
+        type=_count,
         default=ensemble,
         metavar="N",
         help=f"runs per engine in every comparison (default: {ensemble})",
     )
     p.add_argument(
         "--perturb",
-        type=_nonnegative,
+        type=_size,
         default=DEFAULT_PERTURB,
         metavar="EPS",
         help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
     )
     p.add_argument(
         "--seed",
-        type=_int(0),
+        type=_seed,
         default=DEFAULT_SEED,
         metavar="S",
         help=f"seed of the offsets and the bootstrap (default: {DEFAULT_SEED})",
@@ -199,7 +157,7 @@ def add_commands(
         "cross-engine gap (with its interval) and each engine's spread against each value, and "
         "summary.json.",
     )
-    _common(s, backends, DEFAULT_ENSEMBLE)
+    add_study_options(s, backends, DEFAULT_ENSEMBLE)
     s.add_argument(
         "--vary",
         action="append",
@@ -210,10 +168,6 @@ def add_commands(
         "lateral_friction=0.3,0.5,0.9, mujoco.impratio=1,10",
     )
     s.add_argument("--grid", action="store_true", help="every combination of the values")
-    s.set_defaults(handler=_sweep)
-    if jobs_arguments is not None:
-        jobs_arguments(s)
-    verbose(s)
 
     e = sub.add_parser(
         "explain",
@@ -224,11 +178,12 @@ def add_commands(
         "other engine's behaviour and rank the settings by the share of the gap each removes "
         "(95% bootstrap intervals over the ensembles). report.md and summary.json.",
     )
-    _common(e, backends, EXPLAIN_ENSEMBLE)
-    e.set_defaults(handler=_explain)
-    if jobs_arguments is not None:
-        jobs_arguments(e)
-    verbose(e)
+    add_study_options(e, backends, EXPLAIN_ENSEMBLE)
+    for p, handler in ((s, _sweep), (e, _explain)):
+        p.set_defaults(handler=handler)
+        if jobs_arguments is not None:
+            jobs_arguments(p)
+        verbose(p)
 
 
 def _bar_for(args: argparse.Namespace) -> Any:
@@ -256,26 +211,31 @@ def _check_profiles(args: argparse.Namespace) -> None:
         raise _usage(f"--profile takes one profile, or one per backend ({n})")
 
 
-def _jobs(args: argparse.Namespace) -> dict[str, Any]:
-    """compare()'s job options from ``--workers``, ``--scheduler``, ``--cache`` ..."""
-    out: dict[str, Any] = {}
-    if getattr(args, "workers", None) is not None:
-        out["workers"] = args.workers
-    if getattr(args, "scheduler", None) is not None:
-        out["scheduler"] = args.scheduler
-    if getattr(args, "no_cache", False):
-        out["cache"] = False
-    elif getattr(args, "cache", None) is not None:
-        out["cache"] = args.cache
-    if getattr(args, "fresh", False):
-        out["fresh"] = True
-    return out
+def _start(args: argparse.Namespace, study: str) -> tuple[Any, Path]:
+    """The scenario of a study command and its report folder, the options checked first."""
+    from simbridge.compare import load_scenario
+
+    _check_profiles(args)
+    sc = load_scenario(args.scenario)
+    return sc, _out(args, sc.name, study)
 
 
-def _engine_settings(args: argparse.Namespace) -> Any:
+def _run_options(args: argparse.Namespace, bar: Any, prefix: list[str]) -> dict[str, Any]:
+    """The arguments every study takes from ``add_study_options`` and the job options; the
+    progress bar's lines start with ``prefix[0]`` (the point or run under way)."""
     from simbridge.cli_settings import settings_from_args
 
-    return settings_from_args(args.engine_settings)
+    return dict(
+        profile=args.profile,
+        timestep=args.timestep,
+        duration=args.duration,
+        ensemble=args.ensemble,
+        perturb=args.perturb,
+        seed=args.seed,
+        engine_settings=settings_from_args(args.engine_settings),
+        **_job_options(args),
+        progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
+    )
 
 
 def _usage(text: str) -> Exception:
@@ -285,14 +245,11 @@ def _usage(text: str) -> Exception:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from simbridge.compare import load_scenario
     from simbridge.compare.scenario import format_timestep
     from simbridge.compare.study import sweep, write_sweep
     from simbridge.compare.study.points import format_value
 
-    _check_profiles(args)
-    sc = load_scenario(args.scenario)
-    out = _out(args, sc.name, "sweep")
+    sc, out = _start(args, "sweep")
     prefix = [""]
     with _bar_for(args) as bar:
 
@@ -307,16 +264,8 @@ def _sweep(args: argparse.Namespace) -> int:
             args.backends,
             args.vary,
             grid=args.grid,
-            profile=args.profile,
-            timestep=args.timestep,
             on_point=on_point,
-            duration=args.duration,
-            ensemble=args.ensemble,
-            perturb=args.perturb,
-            seed=args.seed,
-            engine_settings=_engine_settings(args),
-            **_jobs(args),
-            progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
+            **_run_options(args, bar, prefix),
         )
         path = write_sweep(result, out, plots=not args.no_plots)
     for p in result.points:
@@ -335,32 +284,16 @@ def _f(x: float | None) -> str:
 
 
 def _explain(args: argparse.Namespace) -> int:
-    from simbridge.compare import load_scenario
     from simbridge.compare.study import explain, write_explanation
 
-    _check_profiles(args)
-    sc = load_scenario(args.scenario)
-    out = _out(args, sc.name, "explain")
+    sc, out = _start(args, "explain")
     prefix = [""]
     with _bar_for(args) as bar:
 
         def on_run(what: str) -> None:
             prefix[0] = what
 
-        result = explain(
-            sc,
-            args.backends,
-            profile=args.profile,
-            timestep=args.timestep,
-            ensemble=args.ensemble,
-            seed=args.seed,
-            on_run=on_run,
-            duration=args.duration,
-            perturb=args.perturb,
-            engine_settings=_engine_settings(args),
-            **_jobs(args),
-            progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
-        )
+        result = explain(sc, args.backends, on_run=on_run, **_run_options(args, bar, prefix))
         path = write_explanation(result, out, plots=not args.no_plots)
     for p in result.pairs:
         print(p.conclusion)
