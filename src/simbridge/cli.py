@@ -1,13 +1,13 @@
 """simbridge: run robot scenarios on several physics engines and report where they disagree.
 
-  simbridge compare r2d2                      PyBullet against MuJoCo, into reports/r2d2/
+  simbridge compare r2d2                      every installed engine, into reports/r2d2/
   simbridge compare r2d2 --timestep 1/240 1/480 1/960
                                               speed against accuracy over time steps
   simbridge compare my_scenario.toml --out reports/mine
   simbridge compare r2d2 --workers 8 --cache /tmp/sbcache
                                               runs as jobs on 8 processes, cached by content
   simbridge report reports/r2d2               the report again, from the cache: nothing runs
-  simbridge compare minitaur.toml --resolve   halve the time step until the verdict resolves
+  simbridge compare r2d2-gentle --resolve     halve the time step until the verdict resolves
   simbridge sweep r2d2-gentle --vary lateral_friction=0.3,0.5,0.9
                                               the gap and spreads against a setting's values
   simbridge explain r2d2-gentle               which setting explains the gap
@@ -87,12 +87,28 @@ def _seed(text: str) -> int:
     return value
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, whose 'invalid choice' error names the closest choice ("did you mean
+    'mujoco'?"); its commands' parsers are of this class too."""
+
+    def _check_value(self, action: argparse.Action, value: Any) -> None:
+        try:
+            super()._check_value(action, value)
+        except argparse.ArgumentError as exc:
+            from simbridge.exceptions import did_you_mean
+
+            hint = did_you_mean(str(value), [str(c) for c in action.choices or ()])
+            if not hint:
+                raise
+            raise argparse.ArgumentError(action, f"{exc.message}{hint}") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     from simbridge import PROFILES, available_backends
     from simbridge.cli_settings import add_set_option, add_settings_parser
 
     backends = available_backends()
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     from simbridge import __version__
@@ -312,9 +328,8 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 def _compare(args: argparse.Namespace) -> int:
     from simbridge.cli_settings import settings_from_args
-    from simbridge.compare import compare, load_scenario, report
+    from simbridge.compare import compare, report
     from simbridge.compare.report.progress import ProgressBar
-    from simbridge.exceptions import ScenarioError
 
     if args.backends is None:  # every installed backend: compare() records those left out
         from simbridge.compare import installed_backends
@@ -327,12 +342,7 @@ def _compare(args: argparse.Namespace) -> int:
     if args.profile is not None and len(args.profile) not in (1, n):
         many = "two" if n == 2 else str(n)
         raise _Usage(f"--profile takes one profile, or one per backend ({many})")
-    try:
-        scenario = load_scenario(args.scenario)
-    except ScenarioError as exc:
-        if exc.key is None and not Path(args.scenario).exists():  # neither a file nor a name
-            raise _Usage(str(exc)) from None
-        raise
+    scenario = scenario_argument(args.scenario)
     engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
@@ -364,6 +374,20 @@ def _compare(args: argparse.Namespace) -> int:
     cli_study.finish_resolve(resolver, out)  # --resolve: its table, and a line here
     print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
     return 0
+
+
+def scenario_argument(text: str) -> Any:
+    """The scenario a command line names: bad usage (exit 2) when it is neither a file nor a
+    shipped scenario's name; an invalid file's error as it is."""
+    from simbridge.compare import load_scenario
+    from simbridge.exceptions import ScenarioError
+
+    try:
+        return load_scenario(text)
+    except ScenarioError as exc:
+        if exc.key is None and not Path(text).exists():  # neither a file nor a name
+            raise _Usage(str(exc)) from None
+        raise
 
 
 def _settings(args: argparse.Namespace) -> int:
@@ -560,14 +584,23 @@ def main(argv: Sequence[str] | None = None) -> int:
             log.setLevel(level)
 
 
+def _command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
+    """The parser of the command ``args`` ran (``simbridge compare``'s), else ``parser``."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return action.choices.get(str(getattr(args, "command", "")), parser)
+    return parser
+
+
 def _run(handler: Any, args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from simbridge.exceptions import SimbridgeError
 
     try:
         return int(handler(args))
-    except _Usage as exc:
-        parser.print_usage(sys.stderr)
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+    except _Usage as exc:  # as argparse says it: the command's usage, then the error
+        command = _command_parser(parser, args)
+        command.print_usage(sys.stderr)
+        print(f"{command.prog}: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # stdout closed early (`simbridge joints r2d2 | head`)
         import os

@@ -213,10 +213,10 @@ def _check_profiles(args: argparse.Namespace) -> None:
 
 def _start(args: argparse.Namespace, study: str) -> tuple[Any, Path]:
     """The scenario of a study command and its report folder, the options checked first."""
-    from simbridge.compare import load_scenario
+    from simbridge.cli import scenario_argument
 
     _check_profiles(args)
-    sc = load_scenario(args.scenario)
+    sc = scenario_argument(args.scenario)
     return sc, _out(args, sc.name, study)
 
 
@@ -239,9 +239,9 @@ def _run_options(args: argparse.Namespace, bar: Any, prefix: list[str]) -> dict[
 
 
 def _usage(text: str) -> Exception:
-    from simbridge.exceptions import InvalidArgumentError
+    from simbridge.cli import _Usage
 
-    return InvalidArgumentError("command line", text)
+    return _Usage(text)  # exit 2, the command's usage and the text, as argparse says it
 
 
 def _sweep(args: argparse.Namespace) -> int:
