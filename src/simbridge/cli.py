@@ -27,80 +27,26 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from simbridge.cli_args import (
+    add_job_options,
+    duration,
+    job_options,
+    nonnegative_float,
+    nonnegative_int,
+    positive_int,
+    timestep,
+)
+from simbridge.cli_usage import ChoiceParser, command_parser, scenario_argument
+from simbridge.cli_usage import Usage as _Usage
+
 __all__ = ["main", "build_parser"]
 
 PROG = "simbridge"
-
-
-def _timestep(text: str) -> float:
-    from simbridge.compare.scenario import parse_timestep
-
-    try:
-        return parse_timestep(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def _duration(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
-    return value
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return value
-
-
-def _size(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
-    if not (value >= 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
-    return value
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse's parser, whose 'invalid choice' error names the closest choice ("did you mean
-    'mujoco'?"); its commands' parsers are of this class too."""
-
-    def _check_value(self, action: argparse.Action, value: Any) -> None:
-        try:
-            super()._check_value(action, value)
-        except argparse.ArgumentError as exc:
-            from simbridge.exceptions import did_you_mean
-
-            hint = did_you_mean(str(value), [str(c) for c in action.choices or ()])
-            if not hint:
-                raise
-            raise argparse.ArgumentError(action, f"{exc.message}{hint}") from None
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -108,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     from simbridge.cli_settings import add_set_option, add_settings_parser
 
     backends = available_backends()
-    parser = _Parser(
+    parser = ChoiceParser(
         prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     from simbridge import __version__
@@ -148,13 +94,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--timestep",
         nargs="+",
-        type=_timestep,
+        type=timestep,
         metavar="DT",
         help="time step(s) in seconds or as 1/240; several make a sweep, the first one is the "
         "headline's (default: the scenario's)",
     )
     p.add_argument("--out", type=Path, help="report folder (default: reports/<scenario>/)")
-    p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
+    p.add_argument("--duration", type=duration, metavar="SECONDS", help="only the first SECONDS")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     p.add_argument(
         "--no-replay",
@@ -166,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p.add_argument(
         "--ensemble",
-        type=_count,
+        type=positive_int,
         default=DEFAULT_ENSEMBLE,
         metavar="N",
         help="runs per engine, the nominal one and N-1 from perturbed spawn poses, in parallel "
@@ -174,28 +120,28 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--perturb",
-        type=_size,
+        type=nonnegative_float,
         default=DEFAULT_PERTURB,
         metavar="EPS",
         help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
     )
     p.add_argument(
         "--seed",
-        type=_seed,
+        type=nonnegative_int,
         default=DEFAULT_SEED,
         metavar="S",
         help=f"seed of the offsets, bootstrap and test (default: {DEFAULT_SEED})",
     )
     p.add_argument(
         "--resync-every",
-        type=_seed,  # an integer >= 0
+        type=nonnegative_int,
         metavar="K",
         help="every K steps set each engine's state into the other engine (and into a second "
         "Sim of its own, the floor) and step once: the one-step model error; 0: none "
         "(default: about 150 points per run)",
     )
     add_set_option(p)
-    _jobs_arguments(p)
+    add_job_options(p)
     cli_study.add_resolve_arguments(p)
     _verbose(p)
 
@@ -257,51 +203,8 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
     _verbose(add_settings_parser(sub, backends))
-    cli_study.add_commands(sub, _verbose, _jobs_arguments)
+    cli_study.add_commands(sub, _verbose, add_job_options)
     return parser
-
-
-def _jobs_arguments(p: argparse.ArgumentParser) -> None:
-    """Where and how a study's runs (jobs) run, and their cache."""
-    p.add_argument(
-        "--workers",
-        type=_seed,  # an integer >= 0
-        metavar="N",
-        help="processes running the study's runs on this machine (default: the CPU count; 0: "
-        "all in this process)",
-    )
-    p.add_argument(
-        "--scheduler",
-        metavar="tcp://HOST:PORT",
-        help="run the study's runs on this Dask cluster (needs simbridge[cluster])",
-    )
-    p.add_argument(
-        "--cache",
-        type=Path,
-        metavar="DIR",
-        help="keep every run's result here, by content, and reuse it (default: "
-        "$XDG_CACHE_HOME/simbridge, else ~/.cache/simbridge)",
-    )
-    p.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
-    p.add_argument(
-        "--fresh", action="store_true", help="run everything again (the cache's entries replaced)"
-    )
-
-
-def _job_options(args: argparse.Namespace) -> dict[str, Any]:
-    """compare()'s job options from the options above, those not given left out."""
-    out: dict[str, Any] = {}
-    if getattr(args, "workers", None) is not None:
-        out["workers"] = args.workers
-    if getattr(args, "scheduler", None) is not None:
-        out["scheduler"] = args.scheduler
-    if getattr(args, "no_cache", False):
-        out["cache"] = False
-    elif getattr(args, "cache", None) is not None:
-        out["cache"] = args.cache
-    if getattr(args, "fresh", False):
-        out["fresh"] = True
-    return out
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -364,7 +267,7 @@ def _compare(args: argparse.Namespace) -> int:
             seed=args.seed,
             resync_every=args.resync_every,
             engine_settings=engine_settings,
-            **_job_options(args),
+            **job_options(args),
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)
@@ -374,20 +277,6 @@ def _compare(args: argparse.Namespace) -> int:
     cli_study.finish_resolve(resolver, out)  # --resolve: its table, and a line here
     print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
     return 0
-
-
-def scenario_argument(text: str) -> Any:
-    """The scenario a command line names: bad usage (exit 2) when it is neither a file nor a
-    shipped scenario's name; an invalid file's error as it is."""
-    from simbridge.compare import load_scenario
-    from simbridge.exceptions import ScenarioError
-
-    try:
-        return load_scenario(text)
-    except ScenarioError as exc:
-        if exc.key is None and not Path(text).exists():  # neither a file nor a name
-            raise _Usage(str(exc)) from None
-        raise
 
 
 def _settings(args: argparse.Namespace) -> int:
@@ -533,10 +422,6 @@ def _joints(args: argparse.Namespace) -> int:
     return 0
 
 
-class _Usage(Exception):
-    pass
-
-
 class _StderrLog(logging.StreamHandler):
     """The simbridge log on stderr (--verbose), clearing a progress bar drawn there first."""
 
@@ -584,21 +469,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             log.setLevel(level)
 
 
-def _command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
-    """The parser of the command ``args`` ran (``simbridge compare``'s), else ``parser``."""
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            return action.choices.get(str(getattr(args, "command", "")), parser)
-    return parser
-
-
 def _run(handler: Any, args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from simbridge.exceptions import SimbridgeError
 
     try:
         return int(handler(args))
     except _Usage as exc:  # as argparse says it: the command's usage, then the error
-        command = _command_parser(parser, args)
+        command = command_parser(parser, args)
         command.print_usage(sys.stderr)
         print(f"{command.prog}: error: {exc}", file=sys.stderr)
         return 2

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from simbridge.cli import _count, _duration, _job_options, _seed, _size, _timestep
+from simbridge import cli_args
 
 __all__ = [
     "add_resolve_arguments",
@@ -54,7 +54,7 @@ def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--resolve-limit",
-        type=_seed,
+        type=cli_args.nonnegative_int,
         metavar="N",
         help=f"halvings at most with --resolve (default: {DEFAULT_LIMIT}; implies --resolve)",
     )
@@ -105,26 +105,31 @@ def add_study_options(p: argparse.ArgumentParser, backends: list[str], ensemble:
         "pybullet+lateral_friction=0.9 (default: the scenario's)",
     )
     p.add_argument(
-        "--timestep", type=_timestep, metavar="DT", help="time step (default: the scenario's)"
+        "--timestep",
+        type=cli_args.timestep,
+        metavar="DT",
+        help="time step (default: the scenario's)",
     )
-    p.add_argument("--duration", type=_duration, metavar="SECONDS", help="only the first SECONDS")
+    p.add_argument(
+        "--duration", type=cli_args.duration, metavar="SECONDS", help="only the first SECONDS"
+    )
     p.add_argument(
         "--ensemble",
-        type=_count,
+        type=cli_args.positive_int,
         default=ensemble,
         metavar="N",
         help=f"runs per engine in every comparison (default: {ensemble})",
     )
     p.add_argument(
         "--perturb",
-        type=_size,
+        type=cli_args.nonnegative_float,
         default=DEFAULT_PERTURB,
         metavar="EPS",
         help=f"spawn-pose offset of each perturbed run, m and rad (default: {DEFAULT_PERTURB:g})",
     )
     p.add_argument(
         "--seed",
-        type=_seed,
+        type=cli_args.nonnegative_int,
         default=DEFAULT_SEED,
         metavar="S",
         help=f"seed of the offsets and the bootstrap (default: {DEFAULT_SEED})",
@@ -213,7 +218,7 @@ def _check_profiles(args: argparse.Namespace) -> None:
 
 def _start(args: argparse.Namespace, study: str) -> tuple[Any, Path]:
     """The scenario of a study command and its report folder, the options checked first."""
-    from simbridge.cli import scenario_argument
+    from simbridge.cli_usage import scenario_argument
 
     _check_profiles(args)
     sc = scenario_argument(args.scenario)
@@ -233,15 +238,15 @@ def _run_options(args: argparse.Namespace, bar: Any, prefix: list[str]) -> dict[
         perturb=args.perturb,
         seed=args.seed,
         engine_settings=settings_from_args(args.engine_settings),
-        **_job_options(args),
+        **cli_args.job_options(args),
         progress=lambda what, d, t: bar(f"{prefix[0]}: {what}", d, t),
     )
 
 
 def _usage(text: str) -> Exception:
-    from simbridge.cli import _Usage
+    from simbridge.cli_usage import Usage
 
-    return _Usage(text)  # exit 2, the command's usage and the text, as argparse says it
+    return Usage(text)  # exit 2, the command's usage and the text, as argparse says it
 
 
 def _sweep(args: argparse.Namespace) -> int:
