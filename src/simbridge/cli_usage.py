@@ -33,10 +33,13 @@ class ChoiceParser(argparse.ArgumentParser):
 
 
 def command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
-    """The parser of the command ``args`` ran (``simbridge compare``'s), else ``parser``."""
+    """The parser of the command ``args`` ran (``simbridge compare``'s, ``simbridge cache
+    prune``'s), else ``parser``."""
     for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            return action.choices.get(str(getattr(args, "command", "")), parser)
+        if isinstance(action, argparse._SubParsersAction) and action.dest:
+            found = action.choices.get(str(getattr(args, action.dest, "")))
+            if found is not None:
+                return command_parser(found, args)
     return parser
 
 
