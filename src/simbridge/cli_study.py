@@ -37,8 +37,8 @@ def _vary(text: str) -> Any:
 
     try:
         return parse_vary(text)
-    except SimbridgeError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    except SimbridgeError as exc:  # argparse names the option: "argument --vary: ..."
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("argument 'vary': ")) from None
 
 
 def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
