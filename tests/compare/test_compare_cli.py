@@ -74,8 +74,8 @@ def test_unknown_scenario_is_bad_usage(capsys):
     # the command's usage (as argparse prints it), then one line
     assert err.startswith("usage: simbridge compare ") and err.count(": error: ") == 1
     assert err.splitlines()[-1].startswith(
-        "simbridge compare: error: no-such-scenario: no such scenario file, and not a shipped scenario; "
-        "shipped scenarios: ant-gait, double-pendulum, kuka-reach, laikago-stand, pendulum,"
+        "simbridge compare: error: no-such-scenario: no such scenario file, and not a shipped "
+        "scenario; shipped scenarios: ant-gait, double-pendulum, kuka-reach, laikago-stand,"
     )
 
 
