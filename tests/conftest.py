@@ -1,13 +1,44 @@
 """Fixtures for every test: the result cache of compare() (``$XDG_CACHE_HOME/simbridge`` by
 default) points into a temporary folder for the whole session, so that no test (nor a
-command-line run a test starts, which inherits the environment) writes the user's own cache."""
+command-line run a test starts, which inherits the environment) writes the user's own cache.
+
+And the order of the suite under ``pytest -n 2 --dist loadfile`` (README): pytest-xdist hands
+out whole modules, those with the most tests first, so a long module of one test (the soak,
+about 155 s) came last and ran alone while the other worker stood idle. The modules in
+:data:`SCHEDULED_FIRST` are handed out before all others; the rest keep xdist's order."""
 
 from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
+
+SCHEDULED_FIRST = ("tests/test_soak.py",)
+"""Modules (paths from the repository root) that take minutes as a whole: handed out first
+under ``--dist loadfile``, so that the other worker runs the rest of the suite meanwhile."""
+
+
+@pytest.hookimpl(optionalhook=True)  # a pytest-xdist hook: without xdist it is never called
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """Under ``--dist loadfile``, xdist's own scheduler with :data:`SCHEDULED_FIRST` moved to
+    the front of its queue (xdist keeps its queue of modules in an ordered dict and hands out
+    its first entry); any other ``--dist`` keeps xdist's scheduler."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class LongModulesFirst(LoadFileScheduling):
+        def _assign_work_unit(self, node: Any) -> None:
+            queue = getattr(self, "workqueue", None)
+            if queue is not None and hasattr(queue, "move_to_end"):
+                for module in reversed(SCHEDULED_FIRST):
+                    if module in queue:
+                        queue.move_to_end(module, last=False)
+            super()._assign_work_unit(node)
+
+    return LongModulesFirst(config, log)
 
 
 @pytest.fixture(scope="session", autouse=True)

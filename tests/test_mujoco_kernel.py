@@ -665,6 +665,62 @@ def test_choosing_the_python_loop_does_not_warn(monkeypatch):
         simbridge.Sim("mujoco").close()
 
 
+_FIRST_SIMS_IN_THREADS = """
+import json, threading, warnings
+import simbridge
+from simbridge.backends.mujoco import kernel
+from simbridge.registry import load_backend
+
+load_backend("mujoco")  # the backend imported: the threads meet at the loop's loader
+barrier = threading.Barrier(4)
+loops = [None] * 4
+
+def first_sim(i):
+    barrier.wait()
+    try:
+        with simbridge.Sim("mujoco") as sim:
+            loops[i] = sim.manifest()["step_loop"]
+    except Exception as exc:
+        loops[i] = f"{type(exc).__name__}: {exc}"
+
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    threads = [threading.Thread(target=first_sim, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+slow = [w for w in caught if w.category.__name__ == "SlowStepWarning"]
+print(json.dumps({"loops": loops, "reason": kernel.reason(), "warnings": len(slow)}))
+"""
+
+
+def test_first_sims_made_at_once_in_threads_all_get_the_loop(tmp_path):
+    """The first MuJoCo Sims of a process, made at once in four threads, each get the step loop
+    one Sim alone gets, and at most one warning. Before the loader took a lock, the threads that
+    came in while the first imported the compiled loop read a half-made answer: a raw
+    KeyError('reason') in 5 runs of 5 (or, a moment later, a Sim on the Python loop). In a
+    child process: the loader's answer is made once per process."""
+    import json
+    import subprocess
+
+    env = dict(os.environ)
+    env.pop(mujoco_kernel.ENV, None)
+    run = subprocess.run(
+        [sys.executable, "-c", _FIRST_SIMS_IN_THREADS],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    alone = "compiled (" if out["reason"] == "" else f"Python ({out['reason']})"
+    assert all(str(loop).startswith(alone) for loop in out["loops"]), out
+    assert out["warnings"] == (0 if out["reason"] == "" else 1), out
+
+
 @requires_kernel
 def test_a_step_begun_since_a_reads_mark_refuses_the_read():
     """The mark a read takes (check_idle) and checks at its end (check_since): a step begun

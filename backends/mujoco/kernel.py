@@ -14,6 +14,7 @@ import ctypes
 import glob
 import importlib
 import os
+import threading
 import warnings
 from typing import Any
 
@@ -44,6 +45,7 @@ _FUNCTIONS = (
     "_mjPRIVATE_getGlobalLogHandler",
 )
 _state: dict[str, Any] = {}
+_lock = threading.Lock()  # one loader at a time (_load)
 _REBUILD = (
     "rebuild it against the installed MuJoCo: `pip install setuptools wheel`, then `pip install "
     "--no-build-isolation --no-deps --force-reinstall -e .` in simbridge's folder (for an "
@@ -56,28 +58,27 @@ def _version(header: int) -> str:
     return f"{header // 100}.{header // 10 % 10}.{header % 10}"
 
 
-def _load() -> None:
-    if _state:
-        return
-    _state["class"] = None
-    _state["functions"] = ()
+def _find() -> dict[str, Any]:
+    """The loader's answer: the ``Kernel`` type (or None), MuJoCo's function addresses, and
+    why the kernel is not used ("" when it is)."""
+    found: dict[str, Any] = {"class": None, "functions": ()}
     try:
         _mjkernel = importlib.import_module(f"{__package__}._mjkernel")  # the C extension
     except ImportError as exc:
-        _state["reason"] = (
+        found["reason"] = (
             f"the compiled step loop is not installed ({exc}); it is built at install where a "
             f"C compiler exists: {_REBUILD}"
         )
-        return
+        return found
     if mujoco.mj_version() != _mjkernel.HEADER_VERSION:
-        _state["reason"] = (
+        found["reason"] = (
             f"the compiled step loop was built for MuJoCo {_version(_mjkernel.HEADER_VERSION)}, "
             f"this is MuJoCo {mujoco.__version__}: {_REBUILD}"
         )
-        return
+        return found
     if not hasattr(_mjkernel.Kernel, "check_since"):  # built from an older source
-        _state["reason"] = f"the compiled step loop is older than this simbridge: {_REBUILD}"
-        return
+        found["reason"] = f"the compiled step loop is older than this simbridge: {_REBUILD}"
+        return found
     folder = os.path.dirname(mujoco.__file__)
     files = sorted(
         glob.glob(os.path.join(folder, "libmujoco.so*"))
@@ -85,22 +86,39 @@ def _load() -> None:
         + glob.glob(os.path.join(folder, "mujoco.dll"))
     )
     if not files:
-        _state["reason"] = f"no MuJoCo library file in {folder}"
-        return
+        found["reason"] = f"no MuJoCo library file in {folder}"
+        return found
     try:
         lib = ctypes.CDLL(files[0])
         lib.mj_version.restype = ctypes.c_int
         if lib.mj_version() != mujoco.mj_version():
-            _state["reason"] = f"{files[0]} is not the MuJoCo the bindings run"
-            return
+            found["reason"] = f"{files[0]} is not the MuJoCo the bindings run"
+            return found
         addresses = tuple(ctypes.cast(getattr(lib, f), ctypes.c_void_p).value for f in _FUNCTIONS)
     except (OSError, AttributeError) as exc:
-        _state["reason"] = f"cannot read MuJoCo's functions from {files[0]}: {exc}"
-        return
+        found["reason"] = f"cannot read MuJoCo's functions from {files[0]}: {exc}"
+        return found
     _mjkernel.set_busy_error(SimBusyError)
-    _state["class"] = _mjkernel.Kernel
-    _state["functions"] = addresses
-    _state["reason"] = ""
+    found["class"] = _mjkernel.Kernel
+    found["functions"] = addresses
+    found["reason"] = ""
+    return found
+
+
+def _load() -> None:
+    """Fill ``_state`` once per process. Sims made at once in several threads wait for the first
+    to finish: the answer is published whole (its "reason" last), never half made (before, a
+    thread that came in while another imported the extension read ``class`` None without a
+    ``reason``: a raw KeyError, or a Sim on the 12x slower Python loop)."""
+    if "reason" in _state:
+        return
+    with _lock:
+        if "reason" in _state:
+            return
+        found = _find()
+        _state["class"] = found["class"]
+        _state["functions"] = found["functions"]
+        _state["reason"] = found["reason"]
 
 
 def kernel_class() -> Any:
@@ -131,10 +149,12 @@ def warn_if_lost() -> None:
     if _state.get("warned") or os.environ.get(ENV, "").strip().lower() == "python":
         return
     _load()
-    if _state["class"] is None:
+    with _lock:  # Sims made at once in several threads: one of them warns
+        if _state.get("warned") or _state["class"] is not None:
+            return
         _state["warned"] = True
-        warnings.warn(
-            f"MuJoCo steps in Python, about 12x slower: {_state['reason']}",
-            SlowStepWarning,
-            stacklevel=4,
-        )
+    warnings.warn(
+        f"MuJoCo steps in Python, about 12x slower: {_state['reason']}",
+        SlowStepWarning,
+        stacklevel=4,
+    )
