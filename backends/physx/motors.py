@@ -324,7 +324,7 @@ class MotorCommands:
     def joint_commands(self, body: int) -> JointCommands:
         robot = self._robots[body]
         n = len(robot.table)
-        mode = np.full(n, int(MotorMode.NONE))
+        mode = np.full(n, int(MotorMode.NONE), dtype=np.int8)
         target = np.zeros(n)
         max_force = np.zeros(n)
         kp = np.zeros(n)

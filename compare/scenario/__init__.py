@@ -65,9 +65,10 @@ in seconds (see :meth:`Scenario.with_timestep`).
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-from simbridge.exceptions import ScenarioError
+from simbridge.exceptions import ScenarioError, did_you_mean
 
 from .controllers import ControllerSpec
 
@@ -124,11 +125,16 @@ def load_scenario(scenario: str | Path | Scenario) -> Scenario:
         path = shipped[scenario]
     elif text_path.is_file():
         path = text_path
+    elif "/" in str(scenario) or os.sep in str(scenario) or text_path.suffix in (".toml", ".tml"):
+        # a path, not a name: say which file is missing (a typo of a file name is no name)
+        raise ScenarioError(str(scenario), None, f"file not found: {text_path.resolve()}")
     else:
         raise ScenarioError(
             str(scenario),
             None,
-            "no such scenario file, and not a shipped scenario; shipped scenarios: "
+            "no such scenario file, and not a shipped scenario"
+            + did_you_mean(str(scenario), shipped)
+            + "; shipped scenarios: "
             + ", ".join(shipped),
         )
     try:

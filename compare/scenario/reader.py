@@ -16,7 +16,7 @@ from typing import Any
 import simbridge
 from simbridge.engine_settings import freeze
 from simbridge.engine_settings import validate as validate_settings
-from simbridge.exceptions import InvalidEngineSettingError, ScenarioError
+from simbridge.exceptions import InvalidEngineSettingError, ScenarioError, did_you_mean
 from simbridge.transforms import quat_from_rpy
 
 from .controllers import ControllerSpec, RefError, absolute_ref, load_object
@@ -515,8 +515,9 @@ class _Reader:
             if backend not in simbridge.available_backends():
                 raise self.error(
                     path,
-                    f"unknown backend {backend!r}; registered backends: "
-                    f"{', '.join(simbridge.available_backends())}",
+                    f"unknown backend {backend!r}"
+                    f"{did_you_mean(backend, simbridge.available_backends())}; "
+                    f"registered backends: {', '.join(simbridge.available_backends())}",
                 )
             if not isinstance(values, dict):
                 raise self.error(path, f"expected a table of key = value, got {values!r}")

@@ -105,7 +105,7 @@ def setting_kind(key: str) -> str:
         "vary",
         f"unknown setting {key!r}; valid: 'timestep', a profile entry "
         f"({', '.join(PROFILE_ENTRIES)}) or an engine setting BACKEND.KEY with BACKEND one of "
-        f"{_registered()} (simbridge.engine_settings lists the keys)",
+        f"{_registered()} (`simbridge settings [BACKEND]` lists the keys)",
     )
 
 

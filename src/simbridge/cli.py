@@ -1,13 +1,13 @@
 """simbridge: run robot scenarios on several physics engines and report where they disagree.
 
-  simbridge compare r2d2                      PyBullet against MuJoCo, into reports/r2d2/
+  simbridge compare r2d2                      every installed engine, into reports/r2d2/
   simbridge compare r2d2 --timestep 1/240 1/480 1/960
                                               speed against accuracy over time steps
   simbridge compare my_scenario.toml --out reports/mine
   simbridge compare r2d2 --workers 8 --cache /tmp/sbcache
                                               runs as jobs on 8 processes, cached by content
   simbridge report reports/r2d2               the report again, from the cache: nothing runs
-  simbridge compare minitaur.toml --resolve   halve the time step until the verdict resolves
+  simbridge compare r2d2-gentle --resolve     halve the time step until the verdict resolves
   simbridge sweep r2d2-gentle --vary lateral_friction=0.3,0.5,0.9
                                               the gap and spreads against a setting's values
   simbridge explain r2d2-gentle               which setting explains the gap
@@ -41,6 +41,8 @@ from simbridge.cli_args import (
     positive_int,
     timestep,
 )
+from simbridge.cli_usage import ChoiceParser, command_parser, scenario_argument
+from simbridge.cli_usage import Usage as _Usage
 
 __all__ = ["main", "build_parser"]
 
@@ -52,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     from simbridge.cli_settings import add_set_option, add_settings_parser
 
     backends = available_backends()
-    parser = argparse.ArgumentParser(
+    parser = ChoiceParser(
         prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     from simbridge import __version__
@@ -232,9 +234,8 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 def _compare(args: argparse.Namespace) -> int:
     from simbridge.cli_settings import settings_from_args
-    from simbridge.compare import compare, load_scenario, report
+    from simbridge.compare import compare, report
     from simbridge.compare.report.progress import ProgressBar
-    from simbridge.exceptions import ScenarioError
 
     if args.backends is None:  # every installed backend: compare() records those left out
         from simbridge.compare import installed_backends
@@ -247,12 +248,7 @@ def _compare(args: argparse.Namespace) -> int:
     if args.profile is not None and len(args.profile) not in (1, n):
         many = "two" if n == 2 else str(n)
         raise _Usage(f"--profile takes one profile, or one per backend ({many})")
-    try:
-        scenario = load_scenario(args.scenario)
-    except ScenarioError as exc:
-        if exc.key is None and not Path(args.scenario).exists():  # neither a file nor a name
-            raise _Usage(str(exc)) from None
-        raise
+    scenario = scenario_argument(args.scenario)
     engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
@@ -429,10 +425,6 @@ def _joints(args: argparse.Namespace) -> int:
     return 0
 
 
-class _Usage(Exception):
-    pass
-
-
 class _StderrLog(logging.StreamHandler):
     """The simbridge log on stderr (--verbose), clearing a progress bar drawn there first."""
 
@@ -485,9 +477,10 @@ def _run(handler: Any, args: argparse.Namespace, parser: argparse.ArgumentParser
 
     try:
         return int(handler(args))
-    except _Usage as exc:
-        parser.print_usage(sys.stderr)
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+    except _Usage as exc:  # as argparse says it: the command's usage, then the error
+        command = command_parser(parser, args)
+        command.print_usage(sys.stderr)
+        print(f"{command.prog}: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # stdout closed early (`simbridge joints r2d2 | head`)
         import os

@@ -115,13 +115,11 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _prune(args: argparse.Namespace) -> int:
+    from simbridge.cli_usage import Usage
     from simbridge.compare.run.cache import Cache
-    from simbridge.exceptions import InvalidArgumentError
 
-    if args.older_than is None and args.max_size is None:
-        raise InvalidArgumentError(
-            "--older-than", "give --older-than DAYS or --max-size SIZE (or both): what to remove"
-        )
+    if args.older_than is None and args.max_size is None:  # bad usage: exit 2
+        raise Usage("give --older-than DAYS or --max-size SIZE (or both): what to remove")
     done = Cache(args.cache).prune(
         older_than=args.older_than, max_size=args.max_size, dry_run=args.dry_run
     )

@@ -20,10 +20,24 @@ def add_set_option(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="BACKEND.KEY=VALUE",
         dest="engine_settings",
+        type=_assignment,
         help="an engine setting for every run of that engine, on top of the scenario's "
         "[engines.*] tables; repeatable (--set mujoco.impratio=10 --set "
         "'mujoco.solref=[0.01, 1]'); `simbridge settings` lists them",
     )
+
+
+def _assignment(text: str) -> str:
+    """``--set``'s argument, checked as it is parsed (bad usage, exit 2, on a bad key or
+    value); :func:`settings_from_args` reads it."""
+    from .exceptions import SimbridgeError
+
+    try:
+        backend, key, value = parse_assignment(text)
+        validate(backend, {key: value})
+    except SimbridgeError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
 
 
 def settings_from_args(assignments: Sequence[str] | None) -> dict[str, dict[str, Any]] | None:

@@ -37,8 +37,8 @@ def _vary(text: str) -> Any:
 
     try:
         return parse_vary(text)
-    except SimbridgeError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    except SimbridgeError as exc:  # argparse names the option: "argument --vary: ..."
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("argument 'vary': ")) from None
 
 
 def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
@@ -218,10 +218,10 @@ def _check_profiles(args: argparse.Namespace) -> None:
 
 def _start(args: argparse.Namespace, study: str) -> tuple[Any, Path]:
     """The scenario of a study command and its report folder, the options checked first."""
-    from simbridge.compare import load_scenario
+    from simbridge.cli_usage import scenario_argument
 
     _check_profiles(args)
-    sc = load_scenario(args.scenario)
+    sc = scenario_argument(args.scenario)
     return sc, _out(args, sc.name, study)
 
 
@@ -244,9 +244,9 @@ def _run_options(args: argparse.Namespace, bar: Any, prefix: list[str]) -> dict[
 
 
 def _usage(text: str) -> Exception:
-    from simbridge.exceptions import InvalidArgumentError
+    from simbridge.cli_usage import Usage
 
-    return InvalidArgumentError("command line", text)
+    return Usage(text)  # exit 2, the command's usage and the text, as argparse says it
 
 
 def _sweep(args: argparse.Namespace) -> int:

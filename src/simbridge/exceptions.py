@@ -45,6 +45,14 @@ __all__ = [
 ]
 
 
+def did_you_mean(name: str, valid: Iterable[str]) -> str:
+    """``" (did you mean 'r2d2'?)"`` for the valid name closest to ``name``, or ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(name, list(valid), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
 def _choices(valid: Iterable[object], limit: int = 40) -> str:
     items = [repr(v) for v in valid]
     if len(items) > limit:
@@ -92,7 +100,8 @@ class UnknownBackendError(BackendError, LookupError):
         self.name = name
         self.available = sorted(available)
         super().__init__(
-            f"unknown backend {name!r}; available backends: {_choices(self.available)}"
+            f"unknown backend {name!r}{did_you_mean(name, self.available)}; available backends: "
+            f"{_choices(self.available)}"
         )
 
 
@@ -222,24 +231,52 @@ class UnknownBodyError(SimbridgeError, LookupError):
         super().__init__(f"unknown body {body!r}; bodies in this Sim: {_choices(valid)}")
 
 
+def _body_label(body_name: str, body: int | None, source: str | None) -> str:
+    """``body 1 ('physics', r2d2.urdf)``: the id, the name inside the file, the file; without
+    an id, ``body 'physics'``."""
+    if body is None:
+        return f"body {body_name!r}"
+    where = f", {os.path.basename(source)}" if source else ""
+    return f"body {body} ({body_name!r}{where})"
+
+
 class UnknownJointError(SimbridgeError, LookupError):
-    def __init__(self, body_name: str, joint: object, valid_names: Iterable[str]):
+    def __init__(
+        self,
+        body_name: str,
+        joint: object,
+        valid_names: Iterable[str],
+        *,
+        body: int | None = None,
+        source: str | None = None,
+    ):
         names = list(valid_names)
+        label = _body_label(body_name, body, source)
         if not names:
-            super().__init__(f"body {body_name!r} has no joint {joint!r}: it has no joints")
+            super().__init__(f"{label} has no joint {joint!r}: it has no joints")
             return
+        hint = did_you_mean(joint, names) if isinstance(joint, str) else ""
         super().__init__(
-            f"body {body_name!r} has no joint {joint!r}; valid joints are indices "
+            f"{label} has no joint {joint!r}{hint}; valid joints are indices "
             f"0..{len(names) - 1} or names {_choices(names)}"
         )
 
 
 class UnknownLinkError(SimbridgeError, LookupError):
-    def __init__(self, body_name: str, link: object, valid_names: Iterable[str]):
+    def __init__(
+        self,
+        body_name: str,
+        link: object,
+        valid_names: Iterable[str],
+        *,
+        body: int | None = None,
+        source: str | None = None,
+    ):
         names = list(valid_names)
+        hint = did_you_mean(link, names) if isinstance(link, str) else ""
         super().__init__(
-            f"body {body_name!r} has no link {link!r}; valid links are -1 (base), indices "
-            f"0..{len(names) - 1} or names {_choices(names)}"
+            f"{_body_label(body_name, body, source)} has no link {link!r}{hint}; valid links "
+            f"are -1 (base), indices 0..{len(names) - 1} or names {_choices(names)}"
         )
 
 

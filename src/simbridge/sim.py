@@ -135,6 +135,18 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
 
     # ---------------------------------------------------------------- lifecycle
 
+    def __getattr__(self, name: str) -> Any:
+        # only for a name the class lacks: a PyBullet name gets simbridge's in its message
+        from .pybullet_names import equivalent
+
+        found = equivalent(name)
+        if found is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        raise AttributeError(
+            f"{type(self).__name__!r} object has no attribute {name!r}; simbridge's "
+            f"equivalent of PyBullet's {found[0]} is {found[1]} (README: 'The interface')"
+        )
+
     def __reduce_ex__(self, protocol: Any) -> Any:
         """copy.copy, copy.deepcopy and pickle all come here: refused (SimNotCopyableError)."""
         raise SimNotCopyableError()
@@ -445,6 +457,14 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
             delay = self._wall_start + self._b.time - _time.perf_counter()
             if delay > 0:
                 _time.sleep(delay)
+
+
+# The methods the Sim takes from its parts say Sim.NAME in their errors (a missing argument's
+# TypeError names the function's __qualname__): the name users call, not the part's.
+for _part in (Control, MultiDof, WorldStates, Pictures, Lookups):
+    for _name, _member in vars(_part).items():
+        if not _name.startswith("_") and callable(_member) and hasattr(_member, "__qualname__"):
+            _member.__qualname__ = f"Sim.{_name}"
 
 
 def backends() -> list[str]:

@@ -85,11 +85,15 @@ class Lookups:
             try:
                 return b.joint_index[joint]
             except KeyError:
-                raise UnknownJointError(b.name, joint, b.joint_names) from None
+                raise UnknownJointError(
+                    b.name, joint, b.joint_names, body=int(body), source=b.load.get("source")
+                ) from None
         if isinstance(joint, (int, np.integer)) and not isinstance(joint, bool):
             if 0 <= joint < len(b.joint_names):
                 return int(joint)
-        raise UnknownJointError(b.name, joint, b.joint_names)
+        raise UnknownJointError(
+            b.name, joint, b.joint_names, body=int(body), source=b.load.get("source")
+        )
 
     def link_index(self, body: int, link: LinkArg) -> int:
         """The index of a link given by index or name (-1 or the root's name = base)."""
@@ -98,11 +102,15 @@ class Lookups:
             try:
                 return b.link_index[link]
             except KeyError:
-                raise UnknownLinkError(b.name, link, b.link_names) from None
+                raise UnknownLinkError(
+                    b.name, link, b.link_names, body=int(body), source=b.load.get("source")
+                ) from None
         if isinstance(link, (int, np.integer)) and not isinstance(link, bool):
             if -1 <= link < len(b.link_names):
                 return int(link)
-        raise UnknownLinkError(b.name, link, b.link_names)
+        raise UnknownLinkError(
+            b.name, link, b.link_names, body=int(body), source=b.load.get("source")
+        )
 
     def _joints(self, body: int, joints: JointsArg | None, movable: bool) -> np.ndarray:
         """Resolve a joints argument to an index array (cached per body and argument)."""

@@ -157,26 +157,28 @@ def quat_from_matrix_bullet(m: Sequence[Sequence[float]] | np.ndarray) -> Quat:
     largest diagonal entry positive (the first of equal ones, in Bullet's order of tests).
     Bullet turns every rotation it composes into a quaternion this way, so this sign, not
     :func:`quat_from_matrix`'s w >= 0, is the one PyBullet reports (``getJointInfo``)."""
-    m = np.asarray(m, dtype=float)
-    trace = m[0, 0] + m[1, 1] + m[2, 2]  # Bullet's order: (m00 + m11) + m22
+    # Python floats, not numpy scalars: the same double arithmetic, and the quaternion it
+    # returns holds plain floats (the joint table reports it as PyBullet does)
+    m = np.asarray(m, dtype=float).tolist()
+    trace = m[0][0] + m[1][1] + m[2][2]  # Bullet's order: (m00 + m11) + m22
     q = [0.0, 0.0, 0.0, 0.0]
     if trace > 0.0:
         s = math.sqrt(trace + 1.0)
         q[3] = s * 0.5
         s = 0.5 / s
-        q[0] = (m[2, 1] - m[1, 2]) * s
-        q[1] = (m[0, 2] - m[2, 0]) * s
-        q[2] = (m[1, 0] - m[0, 1]) * s
+        q[0] = (m[2][1] - m[1][2]) * s
+        q[1] = (m[0][2] - m[2][0]) * s
+        q[2] = (m[1][0] - m[0][1]) * s
     else:
-        big = m[1, 1] if m[0, 0] < m[1, 1] else m[0, 0]
-        i = 2 if big < m[2, 2] else (1 if m[0, 0] < m[1, 1] else 0)
+        big = m[1][1] if m[0][0] < m[1][1] else m[0][0]
+        i = 2 if big < m[2][2] else (1 if m[0][0] < m[1][1] else 0)
         j, k = (i + 1) % 3, (i + 2) % 3
-        s = math.sqrt(m[i, i] - m[j, j] - m[k, k] + 1.0)
+        s = math.sqrt(m[i][i] - m[j][j] - m[k][k] + 1.0)
         q[i] = s * 0.5
         s = 0.5 / s
-        q[3] = (m[k, j] - m[j, k]) * s
-        q[j] = (m[j, i] + m[i, j]) * s
-        q[k] = (m[k, i] + m[i, k]) * s
+        q[3] = (m[k][j] - m[j][k]) * s
+        q[j] = (m[j][i] + m[i][j]) * s
+        q[k] = (m[k][i] + m[i][k]) * s
     return (q[0], q[1], q[2], q[3])
 
 

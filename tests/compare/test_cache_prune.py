@@ -151,8 +151,13 @@ def test_cli_info_and_prune(tmp_path, capsys):
 
 def test_cli_prune_bad_arguments(tmp_path, capsys):
     cache, paths = _cache(tmp_path, [40], now=time.time())
-    assert main(["cache", "prune", "--cache", str(cache.dir)]) == 1
-    assert "--older-than DAYS or --max-size SIZE" in capsys.readouterr().err
+    assert main(["cache", "prune", "--cache", str(cache.dir)]) == 2  # bad usage
+    err = capsys.readouterr().err
+    assert err.startswith("usage: simbridge cache prune ")
+    assert err.splitlines()[-1] == (
+        "simbridge cache prune: error: give --older-than DAYS or --max-size SIZE (or both): "
+        "what to remove"
+    )
     assert main(["cache", "prune", "--cache", str(cache.dir), "--max-size", "12Q"]) == 2
     assert "500M" in capsys.readouterr().err
     assert main(["cache", "prune", "--cache", str(cache.dir), "--older-than", "-2"]) == 2

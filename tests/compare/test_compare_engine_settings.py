@@ -151,7 +151,7 @@ def test_the_command_line_sets_and_lists_settings(tmp_path, capsys):
     summary = json.loads((tmp_path / "r" / "summary.json").read_text("utf-8"))
     assert set(summary["engine_settings"]["mujoco"]) == {"margin", "cone"}
     capsys.readouterr()
-    assert main([*argv, "--set", "mujoco.stiffness=3"]) == 1
+    assert main([*argv, "--set", "mujoco.stiffness=3"]) == 2  # bad usage, before any run
     assert "mujoco.stiffness" in capsys.readouterr().err
     assert main(["settings", "mujoco"]) == 0
     listed = capsys.readouterr().out

@@ -130,16 +130,16 @@ def test_unknown_names_list_the_valid_ones(make_sim, private_tmp):
     body = sim.load_urdf("pendulum.urdf", fixed_base=True)
     with pytest.raises(
         exc.UnknownJointError,
-        match=r"body 'pendulum' has no joint 'elbow'; valid joints are indices 0\.\.0 or "
-        r"names \['hinge'\]",
+        match=r"body 0 \('pendulum', pendulum\.urdf\) has no joint 'elbow'; valid joints are "
+        r"indices 0\.\.0 or names \['hinge'\]",
     ):
         sim.joint_info(body, "elbow")
     with pytest.raises(exc.UnknownJointError, match=r"has no joint 1;"):
         sim.set_joint_velocity(body, 1, 0.0, max_force=1.0)
     with pytest.raises(
         exc.UnknownLinkError,
-        match=r"body 'pendulum' has no link 'arm'; valid links are -1 \(base\), indices "
-        r"0\.\.0 or names \['bob'\]",
+        match=r"body 0 \('pendulum', pendulum\.urdf\) has no link 'arm'; valid links are -1 "
+        r"\(base\), indices 0\.\.0 or names \['bob'\]",
     ):
         sim.link_state(body, "arm")
     with pytest.raises(exc.UnknownLinkError, match=r"has no link -2"):
@@ -389,7 +389,9 @@ def test_repr_never_raises(make_sim):
 def test_a_joint_of_a_body_without_joints(make_sim):
     sim = make_sim()
     cube = sim.load_urdf("cube.urdf")
-    with pytest.raises(exc.UnknownJointError, match=r"body '.*' has no joint 0: it has no joints"):
+    with pytest.raises(
+        exc.UnknownJointError, match=r"body 0 \('.*', cube\.urdf\) has no joint 0: it has no joints"
+    ):
         sim.joint_info(cube, 0)
 
 

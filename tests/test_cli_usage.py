@@ -1,0 +1,126 @@
+"""Bad usage on the command line: exit 2, the command's usage and one argparse-style line
+(``simbridge COMMAND: error: ...``), before any engine runs; close matches suggested; and the
+Python API's own errors for PyBullet's names and missing arguments."""
+
+from __future__ import annotations
+
+import pytest
+
+import simbridge
+from simbridge.cli import main
+from simbridge.exceptions import UnknownJointError, UnknownLinkError
+
+
+def _usage(capsys: pytest.CaptureFixture[str], argv: list[str], command: str) -> str:
+    """Run ``argv``, check it is bad usage of ``command``, return the error line."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"usage: simbridge {command} "), err
+    last = err.rstrip("\n").splitlines()[-1]
+    assert last.startswith(f"simbridge {command}: error: "), err
+    return last
+
+
+@pytest.mark.parametrize(
+    "assignment, says",
+    [
+        ("mujoco.stiffness=3", "argument --set: engine setting mujoco.stiffness: unknown setting"),
+        ("mujoco.impratio=abc", "argument --set: engine setting mujoco.impratio: expected"),
+        ("nosuch.impratio=1", "argument --set: "),
+    ],
+)
+def test_a_bad_set_is_bad_usage(capsys, assignment, says):
+    line = _usage(capsys, ["compare", "pendulum", "--set", assignment], "compare")
+    assert says in line
+
+
+@pytest.mark.parametrize("command", ["compare", "sweep", "explain"])
+def test_one_backend_is_bad_usage_in_every_study(capsys, command):
+    argv = [command, "pendulum", "--backends", "pybullet"]
+    if command == "sweep":
+        argv += ["--vary", "timestep=1/240,1/480"]
+    line = _usage(capsys, argv, command)
+    assert line == f"simbridge {command}: error: --backends takes two or more backends"
+
+
+def test_the_sweep_key_error_names_the_settings_command(capsys):
+    line = _usage(capsys, ["sweep", "pendulum", "--vary", "mujoco_x=1,2"], "sweep")
+    assert "(`simbridge settings [BACKEND]` lists the keys)" in line
+
+
+@pytest.mark.parametrize("name", ["./kuka-hold.tml", "no/such/dir/r2d2", "kuka-reach.toml"])
+def test_a_missing_file_is_named_by_its_absolute_path(capsys, monkeypatch, tmp_path, name):
+    monkeypatch.chdir(tmp_path)
+    line = _usage(capsys, ["compare", name], "compare")
+    assert line.endswith(f"file not found: {(tmp_path / name).resolve()}"), line
+    assert "shipped scenarios" not in line
+
+
+def test_an_unknown_scenario_name_suggests_the_closest(capsys):
+    line = _usage(capsys, ["explain", "r2d3"], "explain")
+    assert "not a shipped scenario (did you mean 'r2d2'?); shipped scenarios: " in line
+
+
+def test_an_unknown_backend_suggests_the_closest(capsys):
+    line = _usage(capsys, ["compare", "r2d2", "--backends", "mujco", "pybullet"], "compare")
+    assert "invalid choice: 'mujco'" in line and line.endswith("(did you mean 'mujoco'?)")
+    with pytest.raises(simbridge.exceptions.UnknownBackendError, match="did you mean 'physx'"):
+        simbridge.Sim("physics")
+
+
+def test_help_says_bad_usage_is_2(capsys):
+    assert main(["--help"]) == 0
+    assert "2 on bad usage" in capsys.readouterr().out
+
+
+@pytest.fixture
+def r2d2():
+    sim = simbridge.Sim("pybullet")
+    sim.load_urdf("plane.urdf")
+    body = sim.load_urdf("r2d2.urdf")
+    yield sim, body
+    sim.close()
+
+
+@pytest.mark.parametrize(
+    "name, ours",
+    [
+        ("getLinkState", "sim.link_state"),
+        ("get_link_state", "sim.link_state"),
+        ("getJointInfo", "sim.joint_info"),
+        ("setJointMotorControl2", "sim.set_joint_velocity"),
+        ("stepSimulation", "sim.step"),
+        ("step_simulation", "sim.step"),
+    ],
+)
+def test_a_pybullet_name_names_simbridges(r2d2, name, ours):
+    sim, _ = r2d2
+    with pytest.raises(AttributeError, match=rf"no attribute '{name}'; simbridge's .*{ours}"):
+        getattr(sim, name)
+
+
+def test_other_missing_attributes_stay_plain(r2d2):
+    sim, _ = r2d2
+    with pytest.raises(AttributeError, match=r"^'Sim' object has no attribute 'nosuch'$"):
+        sim.nosuch  # noqa: B018
+    assert not hasattr(sim, "nosuch")
+
+
+def test_a_missing_argument_names_the_sims_method(r2d2):
+    sim, body = r2d2
+    with pytest.raises(TypeError, match=r"^Sim\.set_joint_velocity\(\) missing 1 required "):
+        sim.set_joint_velocity(body, 2, 1.0)  # type: ignore[call-arg]
+    with pytest.raises(TypeError, match=r"^Sim\.set_joint_position\(\) missing"):
+        sim.set_joint_position(body, 2, 1.0)  # type: ignore[call-arg]
+    with pytest.raises(TypeError, match=r"^Sim\.link_state\(\) missing"):
+        sim.link_state(body)  # type: ignore[call-arg]
+
+
+def test_an_unknown_joint_names_the_body_by_id_name_and_file(r2d2):
+    sim, body = r2d2
+    with pytest.raises(UnknownJointError, match=r"^body 1 \('physics', r2d2\.urdf\) has no joint"):
+        sim.joint_info(body, "nosuch")
+    with pytest.raises(UnknownLinkError, match=r"^body 1 \('physics', r2d2\.urdf\) has no link 99"):
+        sim.link_state(body, 99)
+    with pytest.raises(UnknownJointError, match=r"'head_swivle' \(did you mean 'head_swivel'\?\)"):
+        sim.joint_index(body, "head_swivle")
