@@ -31,8 +31,14 @@ def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
     left = left_out_words(s)
     pairs = s.get("pairs") or []
     if len(s["labels"]) > 2 and len(pairs) > 1:
-        room = MAX_LINES - len(lines) - 1 - (left is not None) - (path is not None)
-        lines.append(_pairs_head(s))
+        room = MAX_LINES - len(lines) - 1 - (path is not None)  # for the pairs first
+        head = _pairs_head(s)
+        if left and room - len(pairs) < 1:  # no line left for it: named in the head
+            head += f" ({', '.join(s['left_out'])} left out: report.md)"
+            left = None
+        elif left:
+            room -= 1
+        lines.append(head)
         shown = pairs if len(pairs) <= room else pairs[: max(room - 1, 1)]
         lines += ["  " + pair_words(p, loud=True) + "." for p in shown]
         if len(shown) < len(pairs):
@@ -51,10 +57,13 @@ def _pairs_head(s: dict[str, Any]) -> str:
     over every pair of runs, 4 per engine, 95% interval):``"""
     labels = s["labels"]
     names = ", ".join(labels[:-1]) + f" and {labels[-1]}"
-    sizes = sorted({f["size"] for f in (s.get("verdict") or {}).get("engine_figures", {}).values()})
-    runs = f", {sizes[0]} per engine" if len(sizes) == 1 else ""
+    head = f"{s['scenario']} on {names}"
+    if not any(p["verdict"] for p in s["pairs"]):
+        return head + " (one run per engine: no pair judged, the nominal runs' gaps):"
+    size = (s.get("ensemble") or {}).get("size")
+    runs = f", {size} per engine" if size else ""
     return (
-        f"{s['scenario']} on {names}, every pair judged on the {s['headline']['title']} "
+        f"{head}, every pair judged on the {s['headline']['title']} "
         f"(median gap over every pair of runs{runs}, 95% interval):"
     )
 

@@ -22,7 +22,13 @@ from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
 from .parts import parts_words
 from .resync import resync_lines, resync_section
-from .verdict import pair_words, perturbation_words, verdict_lines, verdict_word
+from .verdict import (
+    interval_cell,
+    pair_words,
+    perturbation_words,
+    verdict_lines,
+    verdict_word,
+)
 
 __all__ = ["headline", "markdown"]
 
@@ -150,7 +156,7 @@ def pairs_section(s: dict[str, Any]) -> list[str]:
         if v:
             t = v["judged_at"]
             when = "end" if t["why"] == "end" else f"t = {fmt_time(t['time'])}"
-            judged = f"{_interval(v['gap'], unit)} ({when})"
+            judged = f"{interval_cell(v['gap'], unit)} ({when})"
         thr = p["headline"]["crossings"][0]
         if thr["time"] is None:
             born = f"never {fmt_threshold(thr['threshold'], unit)} apart"
@@ -192,14 +198,6 @@ def pairs_section(s: dict[str, Any]) -> list[str]:
     return lines
 
 
-def _interval(x: dict[str, Any], unit: str) -> str:
-    if x.get("low") is None:
-        return fmt_value(x["value"], unit)
-    return (
-        f"{fmt_value(x['value'], unit)} [{fmt_value(x['low'], unit)}, {fmt_value(x['high'], unit)}]"
-    )
-
-
 # ---------------------------------------------------------------- markdown
 
 
@@ -227,7 +225,9 @@ def markdown(
     many = len(s["labels"]) > 2 and len(s.get("pairs") or []) > 1
     of = f" ({a} and {b})" if many else ""  # a section on the first pair alone
     lines = [f"# {s['scenario']}: {title}", ""]
-    for statement in headline(s):  # a paragraph each (a bullet each for the pairs)
+    for statement in headline(s):  # a paragraph each; the pairs' bullets one list
+        if statement.startswith("- ") and lines[-2].startswith("- "):
+            lines.pop()
         lines += [statement, ""]
     left = left_out_words(s)
     if left:

@@ -9,7 +9,7 @@ from ..analysis.verdict import ALPHA, Marginal
 from ..run.ensemble import FLOAT_SPACINGS
 from .fmt import fmt_threshold, fmt_time, fmt_value
 
-__all__ = ["verdict_lines", "marginal_words", "verdict_word", "pair_words"]
+__all__ = ["verdict_lines", "marginal_words", "verdict_word", "pair_words", "interval_cell"]
 
 
 def marginal_words(m: Marginal) -> str:
@@ -77,6 +77,19 @@ def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
             reason = f"within {' and '.join(v['engines'])}'s own time-step error"
         line += f" ({reason})"
     return line
+
+
+def interval_cell(x: dict[str, Any], unit: str) -> str:
+    """``7.2 cm [7.1 cm, 7.3 cm]`` for a table, rounded as :func:`_iv` rounds (4 significant
+    digits where the report's rounding would make the three alike); the value alone without an
+    interval."""
+    v = fmt_value(x["value"], unit)
+    if x.get("low") is None:
+        return v
+    lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
+    if len({lo, v, hi}) < 3 and x["low"] != x["high"]:
+        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
+    return f"{v} [{lo}, {hi}]"
 
 
 def _x(r: float) -> str:
