@@ -418,8 +418,8 @@ def markdown(
     captions = {
         "paths": "Paths of every engine (phase starts marked, x = end).",
         "distance": "Distance over time (log scale) with the 1 cm / 10 cm / 1 m thresholds: "
-        "thick solid, each pair's nominal runs; thin solid, each pair's median gap over every "
-        "pair of runs (judged); dashed: each engine against itself at half the time step; "
+        "solid, each pair's nominal runs; dash-dotted, each pair's median gap over every pair "
+        "of runs (judged), in the pair's colour; dashed: each engine against itself at half the time step; "
         "dotted: the spread of each engine's perturbed runs.",
         "ensemble": "Where every run of each engine's ensemble ends (top and side views); the "
         "squares ring the nominal runs.",

@@ -204,8 +204,9 @@ def distance(c: Comparison, path: Path) -> Path:
                 p.verdict.time,
                 np.maximum(p.verdict.gap_series, floor),
                 color=PAIR_COLORS[k % len(PAIR_COLORS)] if len(pairs) > 1 else "0.45",
-                lw=1.2,
-                alpha=0.8,
+                lw=1.3,
+                ls="-.",
+                alpha=0.85,
                 label=f"{c.labels[p.a]} vs {c.labels[p.b]}: median gap over every pair of runs "
                 "(judged)",
             )
