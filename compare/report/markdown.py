@@ -419,8 +419,8 @@ def markdown(
         "paths": "Paths of every engine (phase starts marked, x = end).",
         "distance": "Distance over time (log scale) with the 1 cm / 10 cm / 1 m thresholds: "
         "solid, each pair's nominal runs; dash-dotted, each pair's median gap over every pair "
-        "of runs (judged), in the pair's colour; dashed: each engine against itself at half the time step; "
-        "dotted: the spread of each engine's perturbed runs.",
+        "of runs (judged), in the pair's colour; dashed: each engine against itself at half the "
+        "time step; dotted: the spread of each engine's perturbed runs.",
         "ensemble": "Where every run of each engine's ensemble ends (top and side views); the "
         "squares ring the nominal runs.",
         "height": "Height of the followed robot over time (against gravity; a fixed base's last "
