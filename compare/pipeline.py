@@ -16,7 +16,8 @@ from typing import Any
 from simbridge.exceptions import InvalidArgumentError, ScenarioError, SimbridgeError
 
 from .analysis.diff import Divergence, diff
-from .analysis.verdict import Verdict, judge
+from .analysis.judged import judged
+from .analysis.verdict import Verdict
 from .run.cache import Cache
 from .run.ensemble import (
     DEFAULT_ENSEMBLE,
@@ -349,7 +350,8 @@ def compare(
     rows = ensembles[0].rows
     pairs = []
     for a, b in _pairs(n):
-        verdict = judge(
+        verdict = judged(  # judge(), kept in the cache
+            counts,
             ensembles[0].time,
             quantity,
             (labels[a], labels[b]),

@@ -6,6 +6,9 @@ one JSON line with the robot-blue pixel counts, then closes the Sim.
 ``python _gui_window.py BACKEND close``: r2d2 alone in a window, stepped, drawn, then
 ``close()``; prints
 ``closing <time>`` just before it. Either way the process then ends as Python ends it.
+Where the backend cannot open a window on this machine (BackendUnsupportedError: PhysX without
+a Vulkan device SAPIEN accepts), the process prints ``unsupported: <why>`` and ends with
+status :data:`UNSUPPORTED`.
 """
 
 from __future__ import annotations
@@ -20,7 +23,9 @@ import numpy as np
 from PIL import Image, ImageGrab
 
 import simbridge
+from simbridge.exceptions import BackendUnsupportedError
 
+UNSUPPORTED = 3  # the exit status where the backend says it cannot open a window here
 WAIT_S = 20.0  # the most a window gets to draw a new state (llvmpipe on loaded cores)
 
 
@@ -61,7 +66,11 @@ def grab(until: Callable[[int, int], bool], out: str | None = None) -> tuple[int
 
 def main() -> None:
     backend, mode = sys.argv[1], sys.argv[2]
-    sim = simbridge.Sim(backend, gui=True)
+    try:
+        sim = simbridge.Sim(backend, gui=True)
+    except BackendUnsupportedError as exc:
+        print(f"unsupported: {exc}", flush=True)
+        sys.exit(UNSUPPORTED)
     if mode == "show":
         sim.load_urdf("plane.urdf")
     body = sim.load_urdf("r2d2.urdf", base_position=(0.0, 0.0, 0.5))

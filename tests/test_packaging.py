@@ -34,6 +34,9 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/backends/pybullet/backend.py",
         "simbridge/backends/mujoco/backend.py",
         "simbridge/backends/mujoco/loop.py",
+        "simbridge/backends/physx/window_process.py",  # PhysX's window and its shaders
+        "simbridge/backends/physx/window_shader/gbuffer.vert",
+        "simbridge/backends/physx/window_shader/gbuffer.frag",
         "simbridge/compare/__init__.py",
         "simbridge/compare/pipeline.py",
         "simbridge/compare/scenario/reader.py",  # every stage of the pipeline

@@ -11,6 +11,7 @@ from typing import Any
 
 from ..pipeline import Comparison
 from .brief import brief
+from .derived import memo_files
 from .fmt import fmt_distance, fmt_time, fmt_value
 from .markdown import headline, markdown
 from .resync import plot_resync
@@ -44,26 +45,33 @@ def report(
     figures = summary(comparison)
     files = ["summary.json"]
     if trajectories:
-        folder = out / "trajectories"
-        folder.mkdir(exist_ok=True)
-        for slot, label in enumerate(comparison.labels):
-            tr = comparison.runs[(slot, comparison.timestep)]
-            stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in label)
-            tr.save(folder / f"{stem}.npz")
-            tr.save_csv(folder / f"{stem}.csv")
-            files += [f"trajectories/{stem}.npz", f"trajectories/{stem}.csv"]
+
+        def save() -> tuple[list[str], list[str]]:
+            folder = out / "trajectories"
+            folder.mkdir(exist_ok=True)
+            names = []
+            for slot, label in enumerate(comparison.labels):
+                tr = comparison.runs[(slot, comparison.timestep)]
+                stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in label)
+                tr.save(folder / f"{stem}.npz")
+                tr.save_csv(folder / f"{stem}.csv")
+                names += [f"trajectories/{stem}.npz", f"trajectories/{stem}.csv"]
+            return names, names
+
+        files += memo_files(comparison, "trajectories", (), out, save)
     images = {}
     if plots:
-        from .plots import all_plots
-
-        images = all_plots(comparison, out)
-        if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
-            images["resync"] = out / "resync.png"
+        names = memo_files(comparison, "figures", (), out, lambda: _plots(comparison, out))
+        images = {k: out / v for k, v in names.items()}
     seen: list[str] = []
     if replay:
         from .frames import frames_section, write_frames
 
-        drawn = write_frames(comparison, figures, out)
+        def frames() -> tuple[Any, list[str]]:
+            drawn = write_frames(comparison, figures, out)
+            return drawn, list(drawn.files)
+
+        drawn = memo_files(comparison, "frames", (), out, frames)
         seen = frames_section(drawn, figures["subject"], comparison.labels)
         files += drawn.files
     figures["files"] = files + [p.name for p in images.values()]
@@ -84,6 +92,17 @@ def report(
 
         save_ghosts(engines, out)
     return path
+
+
+def _plots(comparison: Comparison, out: Path) -> tuple[dict[str, str], list[str]]:
+    """Draw the PNG figures into ``out``: their names by figure, and the files."""
+    from .plots import all_plots
+
+    images = all_plots(comparison, out)
+    if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
+        images["resync"] = out / "resync.png"
+    names = {k: Path(p).relative_to(out).as_posix() for k, p in images.items()}
+    return names, list(names.values())
 
 
 def _json_default(obj: Any) -> Any:

@@ -219,8 +219,10 @@ def write_html(
     engines = viewer = None
     note = ""
     if replay and rp.available():
+        from .derived import memo
+
         engines = rp.replay_engines(comparison)
-        viewer = rp.replay_html(engines)
+        viewer = memo(comparison, "replays", (), lambda: rp.replay_html(engines))
     elif replay:
         note = (
             "The 3D replay needs viser: pip install 'simbridge[report]', then "

@@ -13,7 +13,7 @@ from ..pipeline import compare
 from ..run.cache import Cache
 from ..run.studyjobs import scenario_of
 from . import report
-from .study import STUDY_FILE, read_study
+from .study import STUDY_FILE, add_resolution, read_study
 
 __all__ = ["rebuild"]
 
@@ -62,9 +62,20 @@ def rebuild(
             "simbridge version; run the study again (simbridge compare)"
         )
     comparison.left_out = dict(record.get("left_out", {}))
+    comparison.study["left_out"] = dict(comparison.left_out)  # kept for the next rebuild too
     comparison.wall_time = float(record.get("wall_time", comparison.wall_time))
     if not args.get("backends_named", True):
         comparison.study["arguments"]["backends_named"] = False
     kwargs = dict(record.get("report", {}))
     kwargs.update(options)
-    return report(comparison, folder, **kwargs)
+    path = report(comparison, folder, **kwargs)
+    resolved = record.get("resolve")
+    if resolved is not None:  # `compare --resolve`: the verdict at each step, as recorded
+        try:
+            summary, lines = dict(resolved["summary"]), [str(x) for x in resolved["markdown"]]
+        except (KeyError, TypeError, ValueError) as exc:
+            raise SimbridgeError(
+                f"{folder / STUDY_FILE}: its resolve record is not one this version reads ({exc!r})"
+            ) from None
+        add_resolution(folder, summary, lines)
+    return path

@@ -36,7 +36,12 @@ from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
 from dataclasses import dataclass
 from typing import Any
 
-from simbridge.exceptions import ExtraNotInstalledError, InvalidArgumentError, SimbridgeError
+from simbridge.exceptions import (
+    ExtraNotInstalledError,
+    InvalidArgumentError,
+    JobError,
+    SimbridgeError,
+)
 
 __all__ = ["JobFailed", "run_all", "describe_exit", "DEFAULT_ATTEMPTS", "Progress", "OnResult"]
 
@@ -339,9 +344,28 @@ def _worker_init(parent: int, started: Any) -> None:
     threading.Thread(target=watch, name="simbridge-parent-watch", daemon=True).start()
 
 
-def _call(fn: Callable[[Any], Any], item: Any, index: int) -> Any:
+def _call(fn: Callable[[Any], Any], item: Any, index: int, label: str) -> Any:
     _STARTED.put((index, os.getpid()))  # SimpleQueue: written before fn runs, no feeder thread
-    return fn(item)
+    try:
+        return fn(item)
+    except Exception as exc:
+        raise _sendable(exc, label) from None
+
+
+def _sendable(exc: Exception, label: str) -> Exception:
+    """``exc`` if it comes back through pickle as itself, else a :class:`JobError` carrying its
+    class, message and traceback as text (an error that does not unpickle in the parent breaks
+    the pool's result thread: the job would look like a dead worker)."""
+    import pickle
+    import traceback
+
+    try:
+        back = pickle.loads(pickle.dumps(exc))
+        if type(back) is type(exc) and str(back) == str(exc):
+            return exc
+    except Exception:  # noqa: S110 - any failure to round-trip means: send text instead
+        pass
+    return JobError(label, exc, "".join(traceback.format_exception(exc)))
 
 
 def describe_exit(code: int | None) -> str:
@@ -400,7 +424,7 @@ def _run_pool(
             initializer=_worker_init,
             initargs=(os.getpid(), started_q),
         )
-        futures = {pool.submit(_call, fn, items[i], i): i for i in todo}
+        futures = {pool.submit(_call, fn, items[i], i, tracker.labels[i]): i for i in todo}
         pending = set(futures)
         broken = False
         try:

@@ -12,12 +12,15 @@ on:
   files are read where the scenario names them);
 * the engine, the profile (its :meth:`~simbridge.Profile.as_dict`, so per-engine settings
   count), the time step, the ensemble seed and member number, the kind of run, and the
-  simbridge version.
+  simbridge version;
+* :func:`run_code_digest`: simbridge's code that makes a run (not its report) and the versions
+  of numpy and the engines, so that an edited backend, another checkout sharing the cache or
+  an engine upgrade never reuses another code's results.
 
 :attr:`Job.key` is the sha256 of those, so a result can be cached by it
 (:mod:`simbridge.compare.run.cache`): the same key means the same inputs. What the key does not
-see: files a robot file names in turn (meshes), a ``package.module`` controller's own imports,
-and the engines' versions (a new engine release needs ``--fresh``).
+see: files a robot file names in turn (meshes) and a ``package.module`` controller's own
+imports (``--fresh`` runs them again).
 
 :func:`run_job` runs a job in whatever process it is given to and returns a :class:`JobResult`:
 a nominal or half-step run's whole :class:`~simbridge.compare.run.trajectory.Trajectory`, an
@@ -28,6 +31,7 @@ produced, for the caller to show.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import json
@@ -53,6 +57,45 @@ step (the engine's own time-step error), a perturbed ensemble member, or a resyn
 (one engine's run with its states set into the other engine and into itself, one step each)."""
 
 FORMAT = "simbridge.compare.Job/1"
+
+
+# the parts of simbridge a run does not depend on: what is written or judged about it
+_NOT_RUN_CODE = ("compare/report/", "compare/analysis/", "compare/study/", "simbridge/cli")
+# the libraries a run's numbers come from
+_RUN_LIBRARIES = ("numpy", "pybullet", "mujoco", "sapien")
+
+
+@functools.lru_cache(maxsize=1)
+def run_code_digest() -> str:
+    """sha256 of the code a run's result depends on: simbridge's own Python files (the core, the
+    backends, compare's scenarios and runs; not its report, analysis, study or CLI code) and the
+    versions of numpy and the engines. In every job's key, so that a result made by other code
+    (an edited backend, another checkout sharing the cache, an engine upgrade) is never taken
+    for this code's."""
+    import importlib.metadata
+
+    import simbridge
+
+    roots = [Path(simbridge.__file__).resolve().parent, Path(__file__).resolve().parents[1]]
+    spec = importlib.util.find_spec("simbridge.backends")
+    if spec is not None and spec.submodule_search_locations:
+        roots += [Path(p).resolve() for p in spec.submodule_search_locations]
+    files: dict[str, Path] = {}
+    for root in dict.fromkeys(roots):
+        for f in root.rglob("*.py"):
+            name = f"{root.name}/{f.relative_to(root).as_posix()}"
+            if not any(part in f"/{name}" for part in _NOT_RUN_CODE):
+                files[name] = f
+    h = hashlib.sha256()
+    for name in sorted(files):
+        h.update(name.encode() + b"\0" + files[name].read_bytes() + b"\0")
+    for lib in _RUN_LIBRARIES:
+        try:
+            version = importlib.metadata.version(lib)
+        except importlib.metadata.PackageNotFoundError:
+            version = "-"
+        h.update(f"{lib}={version}\0".encode())
+    return h.hexdigest()
 
 
 def profile_dict(profile: Any) -> dict[str, Any]:
@@ -206,10 +249,14 @@ class Job:
             "version": self.version,
         }
 
+    def identity_with_code(self) -> dict[str, Any]:
+        """:meth:`identity` and :func:`run_code_digest` (what :attr:`key` hashes)."""
+        return {**self.identity(), "code": run_code_digest()}
+
     @cached_property
     def key(self) -> str:
         """sha256 (hex) of :meth:`identity`: equal for jobs whose results are equal."""
-        text = json.dumps(self.identity(), sort_keys=True, default=str, allow_nan=True)
+        text = json.dumps(self.identity_with_code(), sort_keys=True, default=str, allow_nan=True)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
     @property

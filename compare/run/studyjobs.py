@@ -13,7 +13,7 @@ import os
 import time as _time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +66,10 @@ class JobCounts:
     failed: int
     wall_time: float = 0.0
     cache: str | None = None  # the cache folder (None: no cache)
+    # per job key, the sha256 of its cache entry's bytes (jobs read or stored; none without a
+    # cache): what the report's derived entries (figures, frames) are keyed by
+    digests: dict[str, str] = field(default_factory=dict)
+    fresh: bool = False  # --fresh: derived entries are made again too
 
 
 class Plan:
@@ -189,6 +193,7 @@ def run_jobs(
         ran=0,
         failed=0,
         cache=str(store.dir) if store is not None else None,
+        fresh=fresh,
     )
     if offline and missing:
         raise CacheEntryMissingError(
@@ -249,6 +254,8 @@ def run_jobs(
         counts.wall_time = _time.perf_counter() - start
     elif progress is not None:
         progress("every run from the cache", done, total)
+    if store is not None:
+        counts.digests = {j.key: store.digests[j.key] for j in jobs if j.key in store.digests}
     log.info(
         "%d jobs: %d from the cache (%s), %d run, %d failed",
         counts.total,

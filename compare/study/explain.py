@@ -11,10 +11,13 @@ value it is moved to, with the reason it could explain the gap in this scenario
 - each profile departure that applies to this scenario (:func:`~simbridge.compare.report.
   departures.applicable`) and that a setting can move: the speed clamp (the engines apply it
   differently: run without it), the <contact> restitution and rolling/spinning friction MuJoCo
-  does not reproduce (run without the file's <contact>), the motor rows and contacts PyBullet's
-  50 solver iterations leave short where MuJoCo solves them exactly (PyBullet at 200);
-- a departure no setting moves (collision cylinders, joint limits, joint axes) is listed as not
-  tested, and why.
+  and PhysX do not reproduce (run without the file's <contact>), the motor rows and contacts an
+  iterative solve leaves short (PyBullet's or PhysX's at 200 iterations where MuJoCo solves
+  them exactly; both at 200 where both iterate), link damping PhysX applies by another law
+  (both run without it), and the contact settings that move one engine's contact toward the
+  other's (:func:`_engine_candidates`);
+- a departure no setting moves (collision cylinders, joint limits, joint axes, float32 state)
+  or that changes only what is reported is listed as not tested, and why.
 
 Each candidate is one :func:`~simbridge.compare.compare` of the pair with the setting moved.
 The **share of the gap removed** is ``1 - gap_after / gap_before``, both the median distance
@@ -287,7 +290,73 @@ UNTESTABLE = {
     "cylinder": "a collision shape, not a setting: no setting moves it",
     "joint limits": "the limit rule is each backend's own: no setting moves it",
     "joint axis": "the file's axis, not a setting",
+    "precision": "the engine's float32 state: no setting moves it",
+    "meshes": "collision shapes, not a setting: no setting moves it",
+    "spherical joints": "how the engine builds the joint: no setting moves it",
+    "self collision": "the engine's collision filter: no setting moves it",
+    "friction combine": "the engine's combine rule: no setting moves it",
+    "applied torques": "what is reported, not the motion: no rerun changes the gap",
+    "contact friction": "what is reported, not the motion: no rerun changes the gap",
+    "snapshot": "set_state and teleports only, which a compared run does not use",
 }
+
+# engines whose motor and contact rows are solved by iterations stopped at the profile's count
+_ITERATIVE = ("pybullet", "physx")
+
+
+def _iterations_candidate(
+    backends: tuple[str, str], labels: tuple[str, str], key: str
+) -> list[Candidate]:
+    """More solver iterations where an engine's solve stops short: on the iterative engine alone
+    where the other solves its rows exactly (MuJoCo), on both where both iterate."""
+    it = [s for s in (0, 1) if backends[s] in _ITERATIVE]
+    if not it:
+        return []
+    n = SOLVER_ITERATIONS_RAISED
+    if len(it) == 2:
+        return [
+            Candidate(
+                "solver_iterations",
+                ((0, "solver_iterations", n), (1, "solver_iterations", n)),
+                f"departure: {key}",
+                f"{labels[0]} and {labels[1]} both solve their motor and contact rows by "
+                "iterations stopped at the profile's count, each short of the exact solve in "
+                f"its own way: both given {n}, nearer the exact solve",
+            )
+        ]
+    k = it[0]
+    kind = "sequential impulses" if backends[k] == "pybullet" else "Gauss-Seidel iterations"
+    return [
+        Candidate(
+            "solver_iterations",
+            ((k, "solver_iterations", n),),
+            f"departure: {key}",
+            f"{labels[1 - k]} solves its motor and contact rows exactly; {labels[k]}'s {kind} "
+            f"stop after the profile's iterations: {n} bring {labels[k]} toward the exact solve",
+        )
+    ]
+
+
+def _damping_candidate(profiles: tuple[str, str], labels: tuple[str, str]) -> list[Candidate]:
+    """Both engines without link damping, where they apply it by different laws (PhysX's
+    v -= k v dt against PyBullet's added quadratic term)."""
+    moves = tuple(
+        (s, key, 0.0)
+        for s in (0, 1)
+        for key in ("linear_damping", "angular_damping")
+        if getattr(get_profile(profiles[s]), key)
+    )
+    if not moves:
+        return []
+    return [
+        Candidate(
+            "link damping",
+            moves,
+            "departure: link damping",
+            "the engines damp link velocities by different laws: both run without link damping",
+        )
+    ]
+
 
 NOSLIP_ITERATIONS = 10
 """MuJoCo's no-slip iterations in the candidate that removes its contacts' creep."""
@@ -302,6 +371,26 @@ def _effective(backend: str, profile: str) -> dict[str, Any]:
         return {}
 
 
+PYBULLET_MARGIN = 0.001
+"""m: PyBullet's collision margin on a URDF's shapes: two shapes rest this far apart."""
+CONTACT_OFFSET_NEAR = 0.001
+"""m per shape: PhysX's contact offset in the candidate that makes its contacts near the rest
+distance, as MuJoCo's margin does (PhysX's own 1 cm makes a pair's contacts 2 cm apart)."""
+
+
+def _cone(backend: str, settings: dict[str, Any]) -> bool:
+    """Whether this engine limits friction by a cone (the same friction in every direction).
+    Measured (bench/friction_cone.py, a box sliding on the plane at 2 m/s along x and along the
+    diagonal): PyBullet's cone 0.52 g both ways, its enableConeFriction = False a box (0.52 g
+    along x, 0.73 g on the diagonal); MuJoCo's pyramid 0.46 g along x, 0.27 g on the diagonal,
+    its elliptic cone 0.45 g both; PhysX 0.52 g both ways: a cone."""
+    if backend == "pybullet":
+        return bool(settings.get("enableConeFriction", True))
+    if backend == "mujoco":
+        return settings.get("cone") == "elliptic"
+    return backend == "physx"
+
+
 def _engine_candidates(
     backends: tuple[str, str], profiles: tuple[str, str], labels: tuple[str, str], dt: float
 ) -> list[Candidate]:
@@ -312,6 +401,7 @@ def _engine_candidates(
     eff = [_effective(b, p) for b, p in zip(backends, profiles, strict=True)]
     if "mujoco" in slot:
         m = slot["mujoco"]
+        o = 1 - m
         ms = eff[m]
         if "pybullet" in slot:
             bs = eff[slot["pybullet"]]
@@ -329,24 +419,28 @@ def _engine_candidates(
                         f"{float(ms['solref'][0]) * 1000:.3g} ms: {labels[m]} given PyBullet's",
                     )
                 )
-            cone = bs.get("enableConeFriction")
-            if cone is True and ms.get("cone") == "pyramidal":
-                p = slot["pybullet"]
-                why = f"{labels[p]} limits friction by a cone, {labels[m]} by a pyramid: "
-                out.append(
-                    Candidate(
-                        "mujoco.cone",
-                        ((m, "mujoco.cone", "elliptic"),),
-                        "departure: contact",
-                        why + f"{labels[m]} given the cone",
-                    )
+        if ms.get("cone") == "pyramidal" and _cone(backends[o], eff[o]):
+            why = (
+                f"{labels[o]} limits friction by a cone, {labels[m]} by a pyramid (measured on "
+                "a sliding box: the same friction along an axis, about half on the diagonal): "
+            )
+            out.append(
+                Candidate(
+                    "mujoco.cone",
+                    ((m, "mujoco.cone", "elliptic"),),
+                    "departure: contact",
+                    why + f"{labels[m]} given the cone",
                 )
+            )
+            if backends[o] == "pybullet":
                 out.append(
                     Candidate(
                         "pybullet.enableConeFriction",
-                        ((p, "pybullet.enableConeFriction", False),),
+                        ((o, "pybullet.enableConeFriction", False),),
                         "departure: contact",
-                        why + f"{labels[p]} given the pyramid",
+                        why + f"{labels[o]} given its per-direction friction (not MuJoCo's "
+                        "pyramid: a box, 1.4 times the cone's friction on the diagonal where "
+                        "the pyramid gives about half; bench/friction_cone.py)",
                     )
                 )
         if "noslip_iterations" in ms and not ms["noslip_iterations"]:
@@ -362,15 +456,41 @@ def _engine_candidates(
             )
     if "physx" in slot:
         x = slot["physx"]
-        rest = eff[x].get("rest_offset")
-        if rest:
+        o = 1 - x
+        xs = eff[x]
+        rest = float(xs.get("rest_offset", 0.0) or 0.0)
+        other = backends[o]
+        # the distance at which two shapes rest: PhysX the sum of their rest offsets, PyBullet
+        # its collision margin, MuJoCo its contacts' margin (r2d2 rests at z 0.47100 on all three)
+        if other == "pybullet":
+            rests_at: float | None = PYBULLET_MARGIN
+        elif other == "mujoco":
+            rests_at = float(eff[o].get("margin", 0.0) or 0.0)
+        else:
+            rests_at = None
+        if rests_at is not None and not math.isclose(2 * rest, rests_at, abs_tol=1e-9):
             out.append(
                 Candidate(
                     "physx.rest_offset",
-                    ((x, "physx.rest_offset", 0.0),),
+                    ((x, "physx.rest_offset", rests_at / 2),),
                     "departure: contact",
-                    f"PhysX rests each shape {float(rest) * 1000:.3g} mm off its contacts; the "
-                    f"other engines rest them touching: {labels[x]} given 0",
+                    f"PhysX rests two shapes {2 * rest * 1000:.3g} mm apart (twice its rest "
+                    f"offset), {labels[o]} {rests_at * 1000:.3g} mm: {labels[x]} given "
+                    f"{rests_at / 2 * 1000:.3g} mm per shape",
+                )
+            )
+        offset = float(xs.get("contact_offset", 0.0) or 0.0)
+        near = max(CONTACT_OFFSET_NEAR, rest + CONTACT_OFFSET_NEAR / 2)
+        if other == "mujoco" and offset > near:
+            out.append(
+                Candidate(
+                    "physx.contact_offset",
+                    ((x, "physx.contact_offset", near),),
+                    "departure: contact",
+                    f"PhysX makes a pair's contacts from {2 * offset * 1000:.3g} mm apart "
+                    f"(twice its contact offset), {labels[o]} within its "
+                    f"{float(eff[o].get('margin', 0.0)) * 1000:.3g} mm margin: {labels[x]} given "
+                    f"{near * 1000:.3g} mm per shape",
                 )
             )
     return out
@@ -393,7 +513,6 @@ def candidates(
         for d in (departures or {}).get(label, {}).get("apply", []):
             applying.setdefault(d["key"], []).append(slot)
     if backends[0] != backends[1]:
-        pyb = [s for s in (0, 1) if backends[s] == "pybullet"]
         for key in applying:
             if key == "speed clamp":
                 out.append(
@@ -419,21 +538,13 @@ def candidates(
                     )
                 )
             elif key in ("motors", "contact"):
-                if pyb and not any(c.name == "solver_iterations" for c in out):
-                    k = pyb[0]
-                    out.append(
-                        Candidate(
-                            "solver_iterations",
-                            ((k, "solver_iterations", SOLVER_ITERATIONS_RAISED),),
-                            f"departure: {key}",
-                            f"{labels[1 - k]} solves its motor and contact rows exactly; "
-                            "PyBullet's sequential impulses stop after the profile's "
-                            f"iterations: {SOLVER_ITERATIONS_RAISED} bring {labels[k]} toward "
-                            "the exact solve",
-                        )
-                    )
+                if not any(c.name == "solver_iterations" for c in out):
+                    out += _iterations_candidate(backends, labels, key)
                 if key == "contact":
                     out += _engine_candidates(backends, profiles, labels, timestep)
+            elif key == "link damping":
+                if not any(c.name == "link damping" for c in out):
+                    out += _damping_candidate(profiles, labels)
             elif key in UNTESTABLE:
                 not_tested.append((key, UNTESTABLE[key]))
             else:

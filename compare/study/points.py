@@ -214,6 +214,8 @@ def _with_change(profile: str, key: str, value: Any) -> str:
 
 
 def _literal(text: str) -> Any:
+    if text.lower() in ("true", "false"):  # as TOML and --set write a bool
+        return text.lower() == "true"
     try:
         return ast.literal_eval(text)
     except (ValueError, SyntaxError):

@@ -131,14 +131,9 @@ def resolution_headline(r: Resolution) -> str:
 def write_resolution(r: Resolution, out: str | Path) -> None:
     """Add the resolve table to ``out``'s report.md and ``resolve`` to its summary.json (the
     comparison's report written there first)."""
-    out = Path(out)
-    md = out / "report.md"
-    text = md.read_text(encoding="utf-8") if md.exists() else ""
-    md.write_text(text.rstrip("\n") + "\n" + "\n".join(resolution_lines(r)) + "\n", "utf-8")
-    sj = out / "summary.json"
-    data = json.loads(sj.read_text(encoding="utf-8")) if sj.exists() else {}
-    data["resolve"] = r.as_dict()
-    _dump(sj, data)
+    from ..report.study import add_resolution  # also into study.json, for `simbridge report`
+
+    add_resolution(out, r.as_dict(), resolution_lines(r))
 
 
 # ---------------------------------------------------------------- sweep

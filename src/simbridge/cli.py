@@ -242,6 +242,9 @@ def build_parser() -> argparse.ArgumentParser:
     _verbose(j)
     _verbose(add_settings_parser(sub, backends))
     cli_study.add_commands(sub, _verbose, _jobs_arguments)
+    from simbridge import cli_cache
+
+    cli_cache.add_commands(sub, _verbose)
     return parser
 
 

@@ -40,6 +40,7 @@ __all__ = [
     "ScenarioError",
     "TrajectoryFileError",
     "CacheEntryMissingError",
+    "JobError",
     "SlowStepWarning",
 ]
 
@@ -51,8 +52,32 @@ def _choices(valid: Iterable[object], limit: int = 40) -> str:
     return "[" + ", ".join(items) + "]"
 
 
+def _rebuilt(cls: type[BaseException], args: tuple[object, ...], state: dict[str, object]):
+    """An error of class ``cls`` as pickled: its message and attributes, its ``__init__`` not
+    called again (:meth:`SimbridgeError.__reduce__`)."""
+    err = None
+    for base in cls.__mro__:  # the built-in base whose layout it has (OSError's, for one)
+        if base.__module__ == "builtins":
+            try:
+                err = base.__new__(cls)  # type: ignore[call-overload]
+                break
+            except TypeError:
+                continue
+    assert err is not None  # BaseException.__new__ takes every exception class
+    err.args = args
+    err.__dict__.update(state)
+    return err
+
+
 class SimbridgeError(Exception):
-    """Base class of every simbridge error."""
+    """Base class of every simbridge error.
+
+    Every one pickles (an error raised in a worker process reaches the process that waits for
+    it): the message and the attributes travel, not the arguments its ``__init__`` takes.
+    """
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (_rebuilt, (type(self), self.args, dict(self.__dict__)))
 
 
 # ---------------------------------------------------------------- backends
@@ -350,6 +375,20 @@ class CacheEntryMissingError(SimbridgeError, LookupError):
             f"{job} (key {key[:16]}); name the cache the study used (--cache DIR), or run the "
             "study again (simbridge compare): a changed robot, controller or scenario file, or "
             "another simbridge version, makes new jobs"
+        )
+
+
+class JobError(SimbridgeError, RuntimeError):
+    """A job run in another process raised an error that cannot be sent back as it is (its
+    class does not pickle): its class, message and the worker's traceback, as text."""
+
+    def __init__(self, job: str, error: BaseException, traceback: str):
+        self.job = job
+        self.error_type = f"{type(error).__module__}.{type(error).__qualname__}"
+        self.traceback = traceback
+        super().__init__(
+            f"job {job!r} raised {self.error_type}: {error} (the error could not be sent back "
+            f"from the worker process as it is; the worker's traceback:\n{traceback})"
         )
 
 

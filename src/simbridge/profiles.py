@@ -273,9 +273,12 @@ SPEC_SEPARATOR = "+"
 
 
 def _literal(text: str) -> Any:
-    """A change's value: a Python literal (number, bool, None, tuple) or else the text."""
+    """A change's value: a Python literal (number, bool, None, tuple), ``true``/``false`` as
+    TOML and ``--set`` write them, or else the text."""
     import ast
 
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
     try:
         return ast.literal_eval(text)
     except (ValueError, SyntaxError):

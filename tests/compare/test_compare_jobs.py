@@ -110,6 +110,21 @@ def test_job_key_is_its_content(tmp_path):
     )
 
 
+def test_job_key_sees_the_code_that_runs_it(monkeypatch):
+    """Another checkout's backend (the cache is shared by every checkout of a user) or another
+    engine version makes another key: the key holds run_code_digest, which reads simbridge's
+    run code and the engines' versions, not its report code."""
+    from simbridge.compare.run import jobs as jobs_module
+
+    sc = load_scenario("pendulum").truncated(0.1)
+    key = Job.of("nominal", sc, "pybullet", "pybullet").key
+    digest = jobs_module.run_code_digest()
+    jobs_module.run_code_digest.cache_clear()
+    assert jobs_module.run_code_digest() == digest  # read again: the same files, same digest
+    monkeypatch.setattr(jobs_module, "run_code_digest", lambda: "an edited backend")
+    assert Job.of("nominal", sc, "pybullet", "pybullet").key != key
+
+
 def test_cache_put_get_and_a_corrupt_entry(tmp_path, caplog):
     cache = Cache(tmp_path / "c")
     key = "ab" * 32

@@ -21,7 +21,12 @@ from pathlib import Path
 import pytest
 
 from simbridge.compare.run.executors import JobFailed, describe_exit, run_all
-from simbridge.exceptions import ExtraNotInstalledError, InvalidArgumentError
+from simbridge.exceptions import (
+    ExtraNotInstalledError,
+    InvalidArgumentError,
+    JobError,
+    UrdfNotFoundError,
+)
 
 # ---------------------------------------------------------------- job functions
 
@@ -39,7 +44,18 @@ def _faulty(x: str) -> str:
         os.kill(os.getpid(), signal.SIGKILL)
     if x == "raise":
         raise ValueError("a bug in the job")
+    if x == "missing":  # a simbridge error whose __init__ takes more than its message
+        raise UrdfNotFoundError("robots/typo.urdf", ["/a", "/b"])
+    if x == "unpicklable":
+        raise _Unpicklable("a", "b")
     return x.upper()
+
+
+class _Unpicklable(Exception):
+    """An error whose class cannot be rebuilt from its pickle (``__init__`` takes two)."""
+
+    def __init__(self, a: str, b: str) -> None:
+        super().__init__(f"{a} and {b}")
 
 
 def _killer(args: tuple[str, int, str]) -> str:
@@ -104,6 +120,19 @@ def test_an_exception_in_a_job_propagates() -> None:
         run_all(_faulty, ["a", "raise", "b"], workers=1)
     with pytest.raises(ValueError, match="a bug in the job"):
         run_all(_faulty, ["a", "raise", "b"], workers=0)
+
+
+def test_an_error_from_a_worker_reaches_the_caller_as_it_is_or_as_a_job_error() -> None:
+    """Every simbridge error pickles, so a worker's reaches the caller with its class and
+    attributes (a UrdfNotFoundError did not unpickle: the pool took the job for a dead worker
+    and the study failed with 'SIGTERM'); an error of a class that does not pickle comes back
+    as a JobError naming its class and carrying the worker's traceback."""
+    with pytest.raises(UrdfNotFoundError, match="typo.urdf") as info:
+        run_all(_faulty, ["a", "missing"], workers=1, labels=["ok", "bad robot"])
+    assert info.value.source == "robots/typo.urdf"
+    with pytest.raises(JobError, match=r"job 'odd' raised .*_Unpicklable: a and b") as raised:
+        run_all(_faulty, ["unpicklable"], workers=1, labels=["odd"])
+    assert "Traceback" in raised.value.traceback and "_faulty" in raised.value.traceback
 
 
 def test_a_job_that_kills_its_worker_is_job_failed_and_the_others_complete() -> None:
