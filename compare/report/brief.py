@@ -10,6 +10,7 @@ from typing import Any
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .markdown import left_out_words
 from .outcomes import outcome_lines
+from .verdict import pair_words, verdict_word
 
 __all__ = ["brief", "MAX_LINES"]
 
@@ -18,30 +19,53 @@ MAX_LINES = 6
 
 
 def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
-    """The verdict (line 1), how far apart the nominal runs end and when they part (line 2),
-    the scenario's outcomes, the other pairs and the engines left out (a line each, where
-    there are any), and ``report: <path>`` last (with ``path``)."""
-    unit = s["headline"]["unit"]
-    lines = [_verdict(s), _figures(s)]
+    """The scenario's outcomes first (one line, where it declares any: what it calls success),
+    then the verdict: with two engines, the verdict (a line) and how far apart the nominal runs
+    end and when they part (a line); with more, a line naming the engines and one line per pair,
+    each with the same judged figure (:func:`~.verdict.pair_words`). Then the engines left out
+    (a line, where there are any) and ``report: <path>`` last (with ``path``)."""
+    lines: list[str] = []
     outcomes = [x.replace("**", "") for x in outcome_lines(s)]
     if outcomes:
         lines.append(" ".join(outcomes))
+    left = left_out_words(s)
     pairs = s.get("pairs") or []
     if len(s["labels"]) > 2 and len(pairs) > 1:
-        words = []
-        for p in pairs[1:]:
-            v = p["verdict"]
-            what = v["verdict"] if v else "not judged"
-            words.append(
-                f"{' and '.join(p['labels'])} {what}, {fmt_value(p['headline']['final'], unit)}"
-            )
-        lines.append("Other pairs: " + "; ".join(words) + ".")
-    left = left_out_words(s)
+        room = MAX_LINES - len(lines) - 1 - (path is not None)  # for the pairs first
+        head = _pairs_head(s)
+        if left and room - len(pairs) < 1:  # no line left for it: named in the head
+            head += f" ({', '.join(s['left_out'])} left out: report.md)"
+            left = None
+        elif left:
+            room -= 1
+        lines.append(head)
+        shown = pairs if len(pairs) <= room else pairs[: max(room - 1, 1)]
+        lines += ["  " + pair_words(p, loud=True) + "." for p in shown]
+        if len(shown) < len(pairs):
+            lines.append(f"  and {len(pairs) - len(shown)} more pairs: report.md.")
+    else:
+        lines += [_verdict(s), _figures(s)]
     if left:
         lines.append(left)
     if path is not None:
         lines.append(f"report: {path}")
     return lines[: MAX_LINES - 1] + lines[-1:] if len(lines) > MAX_LINES else lines
+
+
+def _pairs_head(s: dict[str, Any]) -> str:
+    """``r2d2 on pybullet, mujoco and physx, every pair judged on the base position (median gap
+    over every pair of runs, 4 per engine, 95% interval):``"""
+    labels = s["labels"]
+    names = ", ".join(labels[:-1]) + f" and {labels[-1]}"
+    head = f"{s['scenario']} on {names}"
+    if not any(p["verdict"] for p in s["pairs"]):
+        return head + " (one run per engine: no pair judged, the nominal runs' gaps):"
+    size = (s.get("ensemble") or {}).get("size")
+    runs = f", {size} per engine" if size else ""
+    return (
+        f"{head}, every pair judged on the {s['headline']['title']} "
+        f"(median gap over every pair of runs{runs}, 95% interval):"
+    )
 
 
 def _verdict(s: dict[str, Any]) -> str:
@@ -61,24 +85,25 @@ def _verdict(s: dict[str, Any]) -> str:
         if v["judged_at"]["why"] == "end"
         else (f"at t = {fmt_time(v['judged_at']['time'])}")
     )
-    marginal = " (marginal)" if v["marginal"] else ""
+    word = verdict_word(v)  # report.md's words: "chaotic (pybullet; marginal)"
+    word = v["verdict"].upper() + word[len(v["verdict"]) :]
     kind = v["verdict"]
     if kind == "agree":
         return (
-            head + f"AGREE{marginal}, the gap below {fmt_threshold(v['tolerance'], unit)} all "
+            head + f"{word}, the gap below {fmt_threshold(v['tolerance'], unit)} all "
             f"along (largest {fmt_value(v['max_gap']['value'], unit)})."
         )
     if kind == "chaotic":
         who = " and ".join(v["engines"])
         spread = fmt_value(figs[v["engines"][0]]["spread"]["value"], unit)
         return (
-            head + f"CHAOTIC ({who}){marginal}: runs {gap} apart {when}, within {who}'s own "
+            head + f"{word}: runs {gap} apart {when}, within {who}'s own "
             f"spread ({spread}); the gap says nothing about the physics."
         )
     if kind == "differ":
         t = v["test"]
         return (
-            head + f"DIFFER{marginal}: runs {gap} apart {when}, beyond each engine's spread and "
+            head + f"{word}: runs {gap} apart {when}, beyond each engine's spread and "
             f"own time-step error (p = {t['p_value']:.2g})."
         )
     reason = v["reason"]
@@ -90,7 +115,7 @@ def _verdict(s: dict[str, Any]) -> str:
         why = "one run per engine cannot tell chaos from a difference; rerun with --ensemble 8"
     else:
         why = "the runs are not told apart; a larger --ensemble may"
-    return head + f"UNRESOLVED{marginal}: runs {gap} apart {when}, {why}."
+    return head + f"{word}: runs {gap} apart {when}, {why}."
 
 
 def _figures(s: dict[str, Any]) -> str:

@@ -22,18 +22,43 @@ from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
 from .parts import parts_words
 from .resync import resync_lines, resync_section
-from .verdict import perturbation_words, verdict_lines
+from .verdict import (
+    interval_cell,
+    pair_words,
+    perturbation_words,
+    verdict_lines,
+    verdict_word,
+)
 
 __all__ = ["headline", "markdown"]
 
 
 def headline(summary: dict[str, Any]) -> list[str]:
-    """The report's opening sentences, from ``summary.json``'s figures alone: the verdict
-    (:func:`~simbridge.compare.verdict.verdict_lines`), then the nominal runs' figures."""
+    """The report's opening statements (one paragraph each, or one bullet), from
+    ``summary.json``'s figures alone. Two engines: the scenario's outcomes, the verdict
+    (:func:`~simbridge.compare.verdict.verdict_lines`), then the nominal runs' figures. More:
+    the outcomes, then every pair's verdict with its judged gap, one bullet each; the first
+    pair's figures follow in their own section (:func:`first_pair_lines`)."""
+    lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
+    if len(summary["labels"]) > 2 and len(summary.get("pairs") or []) > 1:
+        lines += pairs_lines(summary)
+    else:
+        lines += first_pair_lines(summary)
+    raised = perturbation_words(summary.get("ensemble"))  # a float32 engine's own offsets
+    if raised:
+        lines.append(raised)
+    return lines
+
+
+def first_pair_lines(summary: dict[str, Any]) -> list[str]:
+    """The first pair's verdict in words and its nominal runs' figures: when they part, which
+    quantity goes first, what halving the time step changes, the one-step error."""
     h = summary["headline"]
     unit = h["unit"]
     subject = summary["subject"]
-    lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
+    many = len(summary["labels"]) > 2
+    a, b = summary["labels"][:2]
+    lines: list[str] = []
     if summary.get("verdict"):
         lines += verdict_lines(summary)
     if h["quantity"] == "base_distance":
@@ -45,8 +70,9 @@ def headline(summary: dict[str, Any]) -> list[str]:
         )
     else:
         apart = f"{fmt_value(h['final'], unit)} apart (the {h['title']} of {subject}"
+    runs = f"The nominal runs of {a} and {b}" if many else "The nominal runs"
     lines += [
-        f"The nominal runs (no offset) end {apart}, after {summary['duration']:.3g} s of "
+        f"{runs} (no offset) end {apart}, after {summary['duration']:.3g} s of "
         f"simulated time at dt = {summary['timestep_text']} s; the largest gap on the way was "
         f"{fmt_value(h['max'], unit)})."
     ]
@@ -85,13 +111,6 @@ def headline(summary: dict[str, Any]) -> list[str]:
     parts = [f"moves {label}'s end by {fmt_value(e['final'], unit)}" for label, e in own.items()]
     lines.append("Halving the time step " + "; it ".join(parts) + ".")
     lines += resync_lines(summary)  # one step from the same state: the model error
-    lines += pairs_lines(summary)  # more than two engines: every pair's verdict
-    raised = perturbation_words(summary.get("ensemble"))  # a float32 engine's own offsets
-    if raised:
-        lines.append(raised)
-    left = left_out_words(summary)
-    if left:
-        lines.append(left)
     return lines
 
 
@@ -106,49 +125,75 @@ def left_out_words(summary: dict[str, Any]) -> str | None:
 
 
 def pairs_lines(summary: dict[str, Any]) -> list[str]:
-    """With more than two engines, every pair's verdict in one sentence (the lines above speak
-    of the first pair); empty with two."""
+    """With more than two engines, every pair's verdict with its judged gap: a lead and one
+    bullet per pair (:func:`~.verdict.pair_words`); empty with two."""
     pairs = summary.get("pairs") or []
     if len(summary["labels"]) <= 2 or not pairs:
         return []
-    unit = summary["headline"]["unit"]
-    words = []
-    for p in pairs:
-        a, b = p["labels"]
-        v = p["verdict"]
-        what = v["verdict"] if v else "not judged"
-        if v and v["engines"]:
-            what += " (" + " and ".join(v["engines"]) + ")"
-        gap = fmt_value(p["headline"]["final"], unit)
-        words.append(f"{a} and {b} {what}, {gap} apart at the end")
-    return [f"Every pair of the {len(summary['labels'])} engines: " + "; ".join(words) + "."]
+    ens = summary.get("ensemble") or {}
+    runs = f", {ens['size']} per engine" if ens.get("size", 1) > 1 else ""
+    return [
+        f"Every pair of the {len(summary['labels'])} engines, judged on the "
+        f"{summary['headline']['title']} (the median gap over every pair of runs{runs}, "
+        "with its 95% interval; the table below has each pair's nominal gap and where it is "
+        "born):"
+    ] + [f"- {pair_words(p)}." for p in pairs]
 
 
 def pairs_section(s: dict[str, Any]) -> list[str]:
-    """With more than two engines, the engine-by-engine verdict table: row engine against column
-    engine, each cell the pair's verdict and its nominal runs' gap at the end; empty with two."""
+    """With more than two engines, the pair table: one row per pair with its verdict, its judged
+    gap and interval, its nominal runs' gap at the end, where that gap is born and the test's
+    p-value; empty with two."""
     pairs = s.get("pairs") or []
     labels = s["labels"]
     if len(labels) <= 2 or not pairs:
         return []
     unit = s["headline"]["unit"]
-    cell: dict[tuple[str, str], str] = {}
+    rows = []
     for p in pairs:
         a, b = p["labels"]
         v = p["verdict"]
-        what = v["verdict"] + (" (marginal)" if v["marginal"] else "") if v else "not judged"
-        if v and v["engines"]:
-            what += ": " + ", ".join(v["engines"])
-        cell[(a, b)] = cell[(b, a)] = f"{what}; {fmt_value(p['headline']['final'], unit)}"
-    rows = [[x] + [cell.get((x, y), "") for y in labels] for x in labels]
+        if v:
+            t = v["judged_at"]
+            when = "end" if t["why"] == "end" else f"t = {fmt_time(t['time'])}"
+            judged = f"{interval_cell(v['gap'], unit)} ({when})"
+        thr = p["headline"]["crossings"][0]
+        if thr["time"] is None:
+            born = f"never {fmt_threshold(thr['threshold'], unit)} apart"
+        else:
+            born = f"t = {fmt_time(thr['time'])} ({fmt_threshold(thr['threshold'], unit)})"
+            words = parting_words(p.get("parting") or {})
+            born += f", {words}" if words else ""
+        rows.append(
+            [
+                f"{a} and {b}",
+                verdict_word(v) if v else "not judged",
+                judged if v else "n/a",
+                fmt_value(p["headline"]["final"], unit),
+                born,
+                "n/a" if not v or v["test"] is None else f"{v['test']['p_value']:.2g}",
+            ]
+        )
     lines = ["## Every pair of engines", ""]
     lines += [
-        f"Each pair is judged as the first pair above is ({s['headline']['title']}: the verdict, "
-        "the engines it names, the nominal runs' gap at the end); every figure is in "
-        "`summary.json` under `pairs`.",
+        f"Each pair is judged as the first pair below is, on the {s['headline']['title']}: the "
+        "judged gap is the median over every pair of runs (one of each engine) at the judged "
+        "instant, with its 95% bootstrap interval; the nominal gap is that of the runs with no "
+        "offset at the end; the p-value is the two-sample test's, where it ran. Every figure is "
+        "in `summary.json` under `pairs`.",
         "",
     ]
-    lines += _table(["engine"] + labels, rows)
+    lines += _table(
+        [
+            "pair",
+            "verdict",
+            "judged gap [95%] (when)",
+            "nominal gap (end)",
+            "where the nominal gap is born",
+            "p",
+        ],
+        rows,
+    )
     lines += [""]
     return lines
 
@@ -177,17 +222,28 @@ def markdown(
         title = ", ".join(s["labels"][:-1]) + f" and {s['labels'][-1]}"
     else:
         title = f"{a} against {b}"
+    many = len(s["labels"]) > 2 and len(s.get("pairs") or []) > 1
+    of = f" ({a} and {b})" if many else ""  # a section on the first pair alone
     lines = [f"# {s['scenario']}: {title}", ""]
-    lines += headline(s)
-    lines += [""]
+    for statement in headline(s):  # a paragraph each; the pairs' bullets one list
+        if statement.startswith("- ") and lines[-2].startswith("- "):
+            lines.pop()
+        lines += [statement, ""]
+    left = left_out_words(s)
+    if left:
+        lines += [f"*{left}*", ""]
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
     lines += pictures or []
     # -- verdict
     lines += outcomes_section(s)
     lines += pairs_section(s)
+    if many:
+        lines += [f"## {a} and {b}, the first pair", ""]
+        for statement in first_pair_lines(s):
+            lines += [statement, ""]
     if s.get("verdict"):
-        lines += _verdict_section(s)
+        lines += _verdict_section(s, of)
     # -- setup
     lines += ["## Setup", ""]
     rows = []
@@ -212,17 +268,24 @@ def markdown(
             "time step",
             "steps",
             "wall per sim. second",
-            "profile departures here",
+            "profile departures that apply here",
         ],
         rows,
     )
-    lines += ["", f"Scenario file: `{s['scenario_file']}`. Followed robot: `{s['subject']}`.", ""]
-    left = left_out_words(s)
-    if left:
-        lines += [left, ""]
+    lines += [
+        "",
+        "A profile departure is a documented place where an engine cannot reproduce the "
+        "chosen profile (every one is in the README's departures table and in `summary.json` "
+        "under `manifest`); the count is those that apply to this scenario out of the engine's "
+        "all, each named in [Profile departures that apply here]"
+        "(#profile-departures-that-apply-here).",
+        "",
+        f"Scenario file: `{s['scenario_file']}`. Followed robot: `{s['subject']}`.",
+        "",
+    ]
     lines += settings_section(s)
     # -- over time
-    lines += ["## When each quantity parts", ""]
+    lines += [f"## When each quantity parts{of}", ""]
     rows = []
     for key, q in QUANTITIES.items():
         if key not in cross.series:
@@ -244,7 +307,7 @@ def markdown(
         "",
     ]
     # -- phases
-    lines += ["## Per phase", ""]
+    lines += [f"## Per phase{of}", ""]
     rows = []
     keys = [k for k in QUANTITIES if k in cross.series]
     for p in cross.phases:
@@ -264,30 +327,23 @@ def markdown(
     lines += resync_section(s, images.pop("resync", None))  # its figure here, not in Figures
     # -- final poses
     lines += ["## Final poses", ""]
-    pa, pb = cross.final_pose["a"], cross.final_pose["b"]
+    poses = _final_poses(c)
 
     def xyz(v: list[float]) -> str:
         return "(" + ", ".join(f"{x:.4f}" for x in v) + ")"
 
     rows = [
-        ["base position (m)", xyz(pa.position), xyz(pb.position)],
-        ["base orientation (x, y, z, w)", xyz(pa.orientation), xyz(pb.orientation)],
-        ["heading (yaw)", f"{pa.yaw / DEG:.2f}°", f"{pb.yaw / DEG:.2f}°"],
-        [
-            "tilt from its spawn orientation",
-            _tilt_cell(pa),
-            _tilt_cell(pb),
-        ],
+        ["base position (m)"] + [xyz(x.position) for x in poses],
+        ["base orientation (x, y, z, w)"] + [xyz(x.orientation) for x in poses],
+        ["heading (yaw)"] + [f"{x.yaw / DEG:.2f}°" for x in poses],
+        ["tilt from its spawn orientation"] + [_tilt_cell(x) for x in poses],
     ]
-    for j, name in enumerate(pa.joint_names):
+    for j, name in enumerate(poses[0].joint_names):
         rows.append(
-            [
-                f"joint `{name}`: position, velocity",
-                f"{pa.joint_positions[j]:.4g}, {pa.joint_velocities[j]:.4g}",
-                f"{pb.joint_positions[j]:.4g}, {pb.joint_velocities[j]:.4g}",
-            ]
+            [f"joint `{name}`: position, velocity"]
+            + [f"{x.joint_positions[j]:.4g}, {x.joint_velocities[j]:.4g}" for x in poses]
         )
-    lines += _table([f"at t = {cross.time[-1]:.3f} s", a, b], rows)
+    lines += _table([f"at t = {cross.time[-1]:.3f} s"] + list(s["labels"]), rows)
     lines += [""]
     # -- own error
     q = s["headline_quantity"]
@@ -301,37 +357,45 @@ def markdown(
         "",
     ]
     rows = []
-    for label, e in s["headline"]["own_error"].items():
+    for label in s["labels"]:
+        e = s["own"][label]
+        rows.append([label, fmt_value(e["final"][q], unit), fmt_value(e["max"][q], unit), "", ""])
+    for p in s.get("pairs") or [{"labels": [a, b], "headline": s["headline"]}]:
+        h = p["headline"]
+        ratios = [e["gap_ratio"] for e in h["own_error"].values()]
+        ratio = "n/a" if None in ratios else f"{min(ratios):.3g}"
         rows.append(
             [
-                label,
-                fmt_value(e["final"], unit),
-                fmt_value(e["max"], unit),
-                "n/a" if e["gap_ratio"] is None else f"{e['gap_ratio']:.3g}",
-                "yes" if e["gap_exceeds"] else "**no**",
+                " vs ".join(p["labels"]),
+                fmt_value(h["final"], unit),
+                fmt_value(h["max"], unit),
+                ratio,
+                "yes" if h["gap_exceeds_all_own_errors"] else "**no**",
             ]
         )
-    rows.append(
-        [
-            f"{a} vs {b}",
-            fmt_value(s["headline"]["final"], unit),
-            fmt_value(s["headline"]["max"], unit),
-            "",
-            "",
-        ]
-    )
     lines += _table(
-        ["", f"{QUANTITIES[q].title}: end", "largest", "cross-engine gap / this", "gap larger?"],
+        [
+            "",
+            f"{QUANTITIES[q].title}: end",
+            "largest",
+            "gap / the pair's larger own error",
+            "gap larger than both?",
+        ],
         rows,
     )
-    lines += [""]
+    lines += [
+        "",
+        "One row per engine (its own error: dt against dt/2), then one per pair (the "
+        "cross-engine gap of the nominal runs).",
+        "",
+    ]
     # -- sweep
     if len(c.timesteps) > 1:
         lines += ["## Time-step sweep", ""]
         header = ["time step"]
         for label in s["labels"]:
             header += [f"{label}: wall per sim. s", f"{label}: own error (end)"]
-        header += ["cross-engine gap (end)", "largest gap"]
+        header += [f"cross-engine gap{of} (end)", "largest gap"]
         rows = []
         for r in s["sweep"]:
             cells = [f"{format_timestep(r['timestep'])} s"]
@@ -352,15 +416,16 @@ def markdown(
         ]
     # -- figures
     captions = {
-        "paths": "Paths of both engines (phase starts marked, x = end).",
-        "distance": "Distance over time (log scale) with the 1 cm / 10 cm / 1 m thresholds; "
-        "dashed: each engine against itself at half the time step; dotted: the spread of each "
-        "engine's perturbed runs.",
+        "paths": "Paths of every engine (phase starts marked, x = end).",
+        "distance": "Distance over time (log scale) with the 1 cm / 10 cm / 1 m thresholds: "
+        "solid, each pair's nominal runs; dash-dotted, each pair's median gap over every pair "
+        "of runs (judged), in the pair's colour; dashed: each engine against itself at half the "
+        "time step; dotted: the spread of each engine's perturbed runs.",
         "ensemble": "Where every run of each engine's ensemble ends (top and side views); the "
         "squares ring the nominal runs.",
         "height": "Height of the followed robot over time (against gravity; a fixed base's last "
         "link), with the instant the gap first reaches its threshold.",
-        "heading": "Heading of each engine and their difference.",
+        "heading": "Heading of each engine and, below, each pair's difference.",
         "events": "Each engine's events: bars last as long as the condition, markers are "
         "instants; the dash-dotted line is where the gap first reaches its threshold.",
         "joints_velocity": "Velocity-commanded joints: speed against the target.",
@@ -368,7 +433,7 @@ def markdown(
         "joints_torque": "Torque-commanded joints: speed under the commanded torque (dotted, "
         "right axis).",
         "motors": "Velocity- and position-commanded joints: motor force against its max_force.",
-        "sweep": "Speed against self-consistency, and the cross-engine gap against the time step.",
+        "sweep": "Speed against self-consistency, and each pair's gap against the time step.",
     }
     if images:
         lines += ["## Figures", ""]
@@ -403,6 +468,20 @@ def markdown(
     return "\n".join(lines)
 
 
+def _final_poses(c: Comparison) -> list[FinalPose]:
+    """Every engine's final pose, in ``c.labels`` order, from the pairs' diffs (each pose is
+    the engine's own, whichever pair holds it)."""
+    poses: dict[int, FinalPose] = {}
+    for p in c.pairs or []:
+        cross = p.cross[c.timestep]
+        poses.setdefault(p.a, cross.final_pose["a"])
+        poses.setdefault(p.b, cross.final_pose["b"])
+    cross = c.cross[c.timestep]
+    poses.setdefault(0, cross.final_pose["a"])
+    poses.setdefault(1, cross.final_pose["b"])
+    return [poses[k] for k in sorted(poses)]
+
+
 def _tilt_cell(pose: FinalPose) -> str:
     t = pose.tilt_from_spawn
     return f"{t / DEG:.1f}°" + (" (tipped over)" if t > TIP_ANGLE else "")
@@ -413,7 +492,7 @@ def _departure_count(s: dict[str, Any], label: str, manifest: dict[str, Any]) ->
     deps = (s.get("departures") or {}).get(label)
     if deps is None:
         return str(total)
-    return f"{len(deps['apply'])} of {total}"
+    return f"[{len(deps['apply'])} of {total}](#profile-departures-that-apply-here)"
 
 
 MAX_EVENT_ROWS = 40
@@ -429,6 +508,13 @@ def _born_section(s: dict[str, Any]) -> list[str]:
     p = s.get("parting") or {}
     q = QUANTITIES[s["headline_quantity"]]
     lines = ["## Where the gap is born", ""]
+    if len(s["labels"]) > 2:
+        lines += [
+            f"The gap between {' and '.join(s['labels'][:2])}, the first pair (every pair's: "
+            "the table [Every pair of engines](#every-pair-of-engines)); the events are every "
+            "engine's.",
+            "",
+        ]
     if p.get("time") is not None:
         lines += [
             f"The {q.title} first reaches {fmt_threshold(p['threshold'], q.unit)} at "
@@ -522,7 +608,11 @@ def _parts_section(s: dict[str, Any]) -> list[str]:
     parts = s.get("parts")
     if not parts:
         return []
-    lines = ["## Which part parts first", ""]
+    lines = [
+        "## Which part parts first"
+        + (f" ({' and '.join(s['labels'][:2])})" if len(s["labels"]) > 2 else ""),
+        "",
+    ]
     lines += [parts_words(parts), ""]
     rows = []
     for k, p in enumerate(parts[:MAX_PART_ROWS]):
@@ -596,7 +686,7 @@ def failed_members_lines(e: dict[str, Any]) -> list[str]:
     return lines
 
 
-def _verdict_section(s: dict[str, Any]) -> list[str]:
+def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
     """The judgement in a table: each engine's spread, own error and their ratios to the gap,
     the test, the instants of each kind, the horizons."""
     v = s["verdict"]
@@ -615,7 +705,7 @@ def _verdict_section(s: dict[str, Any]) -> list[str]:
         )
 
     lines = [
-        f"## Verdict: {v['verdict']}" + (" (marginal)" if v["marginal"] else ""),
+        f"## Verdict{of}: {verdict_word(v)}",
         "",
     ]
     if e:

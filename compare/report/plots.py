@@ -23,7 +23,7 @@ from ..scenario import format_timestep
 from .fmt import fmt_threshold
 
 if TYPE_CHECKING:
-    from ..pipeline import Comparison
+    from ..pipeline import Comparison, Pair
 
 __all__ = [
     "paths",
@@ -40,6 +40,8 @@ __all__ = [
 ]
 
 COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+PAIR_COLORS = ("k", "tab:purple", "tab:brown", "tab:olive", "tab:cyan", "tab:pink", "0.5")
+"""A pair's gap, one colour each (the first pair black), apart from the engines' first four."""
 LINES = ("-", (0, (5, 3)), (0, (1, 2)), "-.", (0, (3, 1, 1, 1)), (0, (5, 1)))
 MARKERS = ("o", "s", "^", "D", "v", "P")
 """Engine slot -> its colour, line and marker (a comparison of more engines than this cycles)."""
@@ -116,6 +118,18 @@ def _save(fig: Any, path: Path) -> Path:
     return path
 
 
+def _pairs(c: Comparison) -> list[Pair]:
+    """Every pair of ``c`` (one made by hand without ``pairs``: engines 0 and 1)."""
+    from ..pipeline import Pair
+
+    return c.pairs or [Pair(0, 1, c.cross, c.verdict)]
+
+
+def _first_pair(c: Comparison) -> str:
+    """`` (pybullet - mujoco)`` with more than two engines: the pair a first-pair mark is of."""
+    return f" ({c.labels[0]} - {c.labels[1]})" if len(c.labels) > 2 else ""
+
+
 def paths(c: Comparison, path: Path) -> Path:
     """Top-down paths (x, y) of the subject's base, both engines, with phase markers. For a
     fixed-base subject: the side view (x, z) of its last link instead."""
@@ -161,15 +175,17 @@ def distance(c: Comparison, path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(8, 5.4))
     v = c.verdict
     floor = max(v.floor, 1e-12) if v is not None else 1e-9
-    d = c.cross[dt]
+    pairs = _pairs(c)
     lowest = [1e-7]
-    ax.semilogy(
-        d.time,
-        np.maximum(d.series[q], floor),
-        color="k",
-        lw=2.6,
-        label=f"{c.labels[0]} vs {c.labels[1]}",
-    )
+    for k, p in enumerate(pairs):  # every pair's nominal gap, thick
+        d = p.cross[dt]
+        ax.semilogy(
+            d.time,
+            np.maximum(d.series[q], floor),
+            color=PAIR_COLORS[k % len(PAIR_COLORS)],
+            lw=2.6 if k == 0 else 2.0,
+            label=f"{c.labels[p.a]} vs {c.labels[p.b]}: nominal runs",
+        )
     for slot, label in enumerate(c.labels):
         own = c.own[(slot, dt)]
         ax.semilogy(
@@ -181,13 +197,19 @@ def distance(c: Comparison, path: Path) -> Path:
             label=f"{label}: own error (dt vs dt/2)",
         )
     if v is not None and c.ensembles and c.ensembles[0].size > 1:
-        ax.semilogy(
-            v.time,
-            np.maximum(v.gap_series, floor),
-            color="0.45",
-            lw=1.2,
-            label="median gap over every pair of runs (judged)",
-        )
+        for k, p in enumerate(pairs):  # every pair's judged gap, thin
+            if p.verdict is None:
+                continue
+            ax.semilogy(
+                p.verdict.time,
+                np.maximum(p.verdict.gap_series, floor),
+                color=PAIR_COLORS[k % len(PAIR_COLORS)] if len(pairs) > 1 else "0.45",
+                lw=1.3,
+                ls="-.",
+                alpha=0.85,
+                label=f"{c.labels[p.a]} vs {c.labels[p.b]}: median gap over every pair of runs "
+                "(judged)",
+            )
         for slot, e in enumerate(c.ensembles):
             spread = v.spreads[slot] if slot < 2 else e.spread  # the first pair's, the others'
             ax.semilogy(
@@ -215,7 +237,8 @@ def distance(c: Comparison, path: Path) -> Path:
             color="tab:red",
         )
     highest = max(
-        float(np.max(x.series[q])) for x in [d] + [c.own[(k, dt)] for k in range(len(c.labels))]
+        float(np.max(x.series[q]))
+        for x in [p.cross[dt] for p in pairs] + [c.own[(k, dt)] for k in range(len(c.labels))]
     )
     top = max(QUANTITIES[q].thresholds[-1] * 1.5, highest * 2)
     ax.set_ylim(max(min(lowest), floor), top)
@@ -245,8 +268,16 @@ def heading(c: Comparison, path: Path) -> Path | None:
             label=label,
             **_style(slot, len(tr.time)),
         )
-    d = c.cross[c.timestep]
-    ax2.plot(d.time, d.series["heading"] / DEG, color="k", lw=1.2)
+    pairs = _pairs(c)
+    for k, p in enumerate(pairs):
+        d = p.cross[c.timestep]
+        ax2.plot(
+            d.time,
+            d.series["heading"] / DEG,
+            color=PAIR_COLORS[k % len(PAIR_COLORS)],
+            lw=1.2,
+            label=f"|{c.labels[p.a]} - {c.labels[p.b]}|" if len(pairs) > 1 else None,
+        )
     for thr in QUANTITIES["heading"].thresholds:
         ax2.axhline(thr / DEG, color="tab:red", lw=0.7, alpha=0.6)
     ax.ticklabel_format(axis="y", useOffset=False)  # no "+1.8e2" over the phase names
@@ -256,7 +287,8 @@ def heading(c: Comparison, path: Path) -> Path | None:
     ax.set_title(f"{c.scenario.name}: heading of {c.scenario.subject}", pad=14)
     ax.grid(alpha=0.3)
     ax2.grid(alpha=0.3)
-    ax2.plot([], [], color="k", lw=1.2, label="|difference|")
+    if len(pairs) == 1:
+        ax2.plot([], [], color="k", lw=1.2, label="|difference|")
     ax2.plot([], [], color="tab:red", lw=0.7, label="1° and 10°")
     _phase_lines(ax, c)
     handles, labels = ax.get_legend_handles_labels()
@@ -465,7 +497,10 @@ def height(c: Comparison, path: Path) -> Path:
             color="tab:red",
             lw=1.0,
             ls="-.",
-            label=(f"the gap reaches {fmt_threshold(thr, QUANTITIES[q].unit)} (t = {t:.3f} s)"),
+            label=(
+                f"the gap{_first_pair(c)} reaches {fmt_threshold(thr, QUANTITIES[q].unit)} "
+                f"(t = {t:.3f} s)"
+            ),
         )
     _phase_lines(ax, c)
     what = f"{c.runs[(0, c.timestep)].body.link_names[-1]}'s centre of mass" if fixed else "base"
@@ -550,7 +585,10 @@ def events(c: Comparison, path: Path) -> Path | None:
             color="tab:red",
             lw=1.0,
             ls="-.",
-            label=(f"the gap reaches {fmt_threshold(thr, QUANTITIES[q].unit)} (t = {t:.3f} s)"),
+            label=(
+                f"the gap{_first_pair(c)} reaches {fmt_threshold(thr, QUANTITIES[q].unit)} "
+                f"(t = {t:.3f} s)"
+            ),
         )
     ax.plot([], [], "v", color="0.3", label="contact made")
     ax.plot([], [], "^", color="0.3", mfc="none", label="contact lost")
@@ -587,12 +625,27 @@ def sweep(c: Comparison, path: Path) -> Path | None:
     ax.set_title("speed against self-consistency")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    gap = [max(c.cross[t].final[q], floor) for t in c.timesteps]
-    gmax = [max(c.cross[t].maximum[q], floor) for t in c.timesteps]
-    ax2.loglog(c.timesteps, gap, "o-", color="k", label="final")
-    ax2.loglog(c.timesteps, gmax, "s--", color="0.5", label="largest")
+    pairs = _pairs(c)
+    for k, p in enumerate(pairs):
+        gap = [max(p.cross[t].final[q], floor) for t in c.timesteps]
+        gmax = [max(p.cross[t].maximum[q], floor) for t in c.timesteps]
+        color = PAIR_COLORS[k % len(PAIR_COLORS)]
+        name = f"{c.labels[p.a]} vs {c.labels[p.b]}: " if len(pairs) > 1 else ""
+        ax2.loglog(c.timesteps, gap, "o-", color=color, label=f"{name}final")
+        ax2.loglog(
+            c.timesteps,
+            gmax,
+            "s--",
+            color=color if len(pairs) > 1 else "0.5",
+            alpha=0.6 if len(pairs) > 1 else 1.0,
+            label=f"{name}largest",
+        )
     ax2.set_xlabel("time step (s)")
-    ax2.set_ylabel(f"{c.labels[0]} vs {c.labels[1]} ({QUANTITIES[q].unit})")
+    ax2.set_ylabel(
+        f"{c.labels[0]} vs {c.labels[1]} ({QUANTITIES[q].unit})"
+        if len(pairs) == 1
+        else f"{QUANTITIES[q].title} between each pair ({QUANTITIES[q].unit})"
+    )
     ax2.set_title("cross-engine gap against the time step")
     ax2.grid(alpha=0.3, which="both")
     ax2.legend(fontsize=8)
@@ -642,7 +695,7 @@ def ensemble(c: Comparison, path: Path) -> Path | None:
     what = "last link" if fixed else "base"
     v = c.verdict
     title = f"{c.scenario.name}: where each run ends ({c.scenario.subject}'s {what})"
-    if v is not None:
+    if v is not None and len(_pairs(c)) == 1:  # more pairs: their verdicts are report.md's
         title += f"; verdict: {v.verdict}"
     fig.suptitle(title, fontsize=10)
     fig.tight_layout(rect=(0, 0.1, 1, 1))

@@ -41,7 +41,8 @@ def resync_lines(summary: dict[str, Any]) -> list[str]:
     )
     line = (
         f"One step from the same state, the engines differ by up to "
-        f"{fmt_value(big['value'], unit)} ({each}; their own floors: {floors})"
+        f"{fmt_value(big['value'], unit)} ({each}; each engine's own floor, at its largest: "
+        f"{floors})"
     )
     born = r["born"]
     same = born is not None and (born["time"], born["source"]) == (big["time"], big["source"])
@@ -56,7 +57,7 @@ def resync_lines(summary: dict[str, Any]) -> list[str]:
         line += (
             f": the model error is born {'and largest ' if same else ''}{where} "
             f"({born['source']} -> {born['target']} {fmt_value(born['error'], unit)} against "
-            f"a floor of {fmt_value(born['floor'], unit)})"
+            f"{born['source']}'s own floor of {fmt_value(born['floor'], unit)} at that step)"
         )
         if not same:
             line += f" and is largest in '{big['phase']}' at t = {fmt_time(big['time'])}"

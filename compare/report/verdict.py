@@ -9,7 +9,7 @@ from ..analysis.verdict import ALPHA, Marginal
 from ..run.ensemble import FLOAT_SPACINGS
 from .fmt import fmt_threshold, fmt_time, fmt_value
 
-__all__ = ["verdict_lines", "marginal_words"]
+__all__ = ["verdict_lines", "marginal_words", "verdict_word", "pair_words", "interval_cell"]
 
 
 def marginal_words(m: Marginal) -> str:
@@ -33,6 +33,63 @@ def _iv(x: dict[str, Any], unit: str, *, inner: bool = False) -> str:
     if len({lo, v, hi}) < 3:  # too close for the report's rounding: 4 significant digits
         v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
     return f"{v}, 95% interval {lo} to {hi}" if inner else f"{v} (95% interval {lo} to {hi})"
+
+
+def verdict_word(v: dict[str, Any]) -> str:
+    """The verdict as every writer names it: ``agree``, ``differ``, ``unresolved``,
+    ``chaotic (pybullet)``, ``agree (marginal)``, ``chaotic (mujoco; marginal)``."""
+    notes = []
+    if v["verdict"] == "chaotic" and v["engines"]:
+        notes.append(" and ".join(v["engines"]))
+    if v["marginal"]:
+        notes.append("marginal")
+    return v["verdict"] + (f" ({'; '.join(notes)})" if notes else "")
+
+
+def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
+    """One pair of ``summary.json``'s ``pairs`` in one line, the same figure for every pair:
+    ``pybullet and mujoco: chaotic (pybullet), a median 4.09 m (95% interval 3.50 m to 4.60 m)
+    apart at the end; p = 0.03`` (``loud``: the verdict in capitals, for the terminal). Without
+    an ensemble verdict, the nominal runs' gap, named as such."""
+    a, b = pair["labels"]
+    v = pair["verdict"]
+    h = pair["headline"]
+    if not v:
+        return (
+            f"{a} and {b}: not judged (no ensemble); the nominal runs end "
+            f"{fmt_value(h['final'], h['unit'])} apart"
+        )
+    unit = v["unit"]
+    word = verdict_word(v)
+    if loud:
+        word = v["verdict"].upper() + word[len(v["verdict"]) :]
+    t = v["judged_at"]
+    when = "at the end" if t["why"] == "end" else f"at t = {fmt_time(t['time'])}"
+    line = f"{a} and {b}: {word}, a median {_iv(v['gap'], unit)} apart {when}"
+    if v["test"] is not None:
+        line += f"; {_p(v['test'])}"
+    if v["verdict"] == "unresolved":
+        reason = {
+            "single run": "one run per engine",
+            "not separated": "the runs are not told apart",
+        }.get(v["reason"], v["reason"])
+        if v["reason"] == "within own time-step error":
+            reason = f"within {' and '.join(v['engines'])}'s own time-step error"
+        line += f" ({reason})"
+    return line
+
+
+def interval_cell(x: dict[str, Any], unit: str) -> str:
+    """``7.2 cm [7.1 cm, 7.3 cm]`` for a table, rounded as :func:`_iv` rounds (4 significant
+    digits where the report's rounding would make the three alike); the value alone without an
+    interval."""
+    v = fmt_value(x["value"], unit)
+    if x.get("low") is None:
+        return v
+    lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
+    if len({lo, v, hi}) < 3 and x["low"] != x["high"]:
+        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
+    return f"{v} [{lo}, {hi}]"
 
 
 def _x(r: float) -> str:

@@ -10,15 +10,22 @@ from typing import TYPE_CHECKING, Any
 
 from ..analysis.verdict import Interval
 from ..report.fmt import fmt_value
+from ..report.verdict import verdict_word
 from ..scenario import format_timestep
-from .points import PairFigures, format_value
+from .points import PairFigures, format_value, split_slot
 
 if TYPE_CHECKING:
     from .explain import Explanation
     from .resolve import Resolution
-    from .sweep import Sweep
+    from .sweep import Sweep, SweepPoint
 
-__all__ = ["write_resolution", "resolution_lines", "write_sweep", "write_explanation"]
+__all__ = [
+    "write_resolution",
+    "resolution_lines",
+    "write_sweep",
+    "write_explanation",
+    "point_line",
+]
 
 
 def _iv(x: Interval, unit: str) -> str:
@@ -34,7 +41,21 @@ def _ratio(a: float, b: float) -> str:
 
 
 def _verdict(p: PairFigures) -> str:
-    return p.verdict + (" (marginal)" if p.marginal else "")
+    """The verdict in the comparison report's words: ``agree (marginal)``, ``chaotic
+    (pybullet)``."""
+    return verdict_word({"verdict": p.verdict, "engines": p.engines, "marginal": p.marginal})
+
+
+def point_line(p: SweepPoint) -> str:
+    """A sweep point in one terminal line, in report.md's words and units:
+    ``solver_iterations=10: agree (marginal), gap 8.17 mm [7.90 mm, 8.40 mm]`` (more than one
+    pair: each named)."""
+    values = ", ".join(f"{k}={format_value(v)}" for k, v in p.values.items())
+    words = []
+    for (a, b), f in zip(_pairs(len(p.labels)), p.pairs, strict=False):
+        who = f"{p.labels[a]} - {p.labels[b]} " if len(p.pairs) > 1 else ""
+        words.append(f"{who}{_verdict(f)}, gap {_iv(f.gap, f.unit)}")
+    return f"{values}: " + "; ".join(words)
 
 
 def _dump(path: Path, data: Any) -> None:
@@ -209,8 +230,11 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
         + f"; {s.wall_time:.0f} s in all.",
         "",
         "Varied: "
-        + "; ".join(f"`{x.key}` = {', '.join(map(format_value, x.values))}" for x in s.settings)
-        + " (KEY@N: on the N-th engine alone). Engines: "
+        + "; ".join(
+            f"`{x.key}` = {', '.join(map(format_value, x.values))}{_on_whom(x.key, names)}"
+            for x in s.settings
+        )
+        + ". Engines: "
         + ", ".join(f"{n} (profile {p})" for n, p in zip(names, s.profiles, strict=True))
         + ".",
         "",
@@ -248,6 +272,14 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _on_whom(key: str, names: tuple[str, ...]) -> str:
+    """`` (on mujoco alone)`` for a key changed on one engine (``KEY@N``); empty otherwise."""
+    slot = split_slot(key)[1]
+    if slot is None or slot >= len(names):
+        return ""
+    return f" (on {names[slot]} alone)"
 
 
 def _pairs(n: int) -> list[tuple[int, int]]:

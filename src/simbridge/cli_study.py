@@ -253,6 +253,7 @@ def _sweep(args: argparse.Namespace) -> int:
     from simbridge.compare.scenario import format_timestep
     from simbridge.compare.study import sweep, write_sweep
     from simbridge.compare.study.points import format_value
+    from simbridge.compare.study.report import point_line
 
     sc, out = _start(args, "sweep")
     prefix = [""]
@@ -274,18 +275,9 @@ def _sweep(args: argparse.Namespace) -> int:
         )
         path = write_sweep(result, out, plots=not args.no_plots)
     for p in result.points:
-        head = p.pairs[0]
-        values = ", ".join(f"{k}={format_value(v)}" for k, v in p.values.items())
-        print(
-            f"{values}: {head.verdict}, gap {head.gap.value:.4g} {head.unit} "
-            f"[{_f(head.gap.low)}, {_f(head.gap.high)}]"
-        )
+        print(point_line(p))  # report.md's verdict words and units
     print(f"report: {path}")
     return 0
-
-
-def _f(x: float | None) -> str:
-    return "n/a" if x is None else f"{x:.4g}"
 
 
 def _explain(args: argparse.Namespace) -> int:

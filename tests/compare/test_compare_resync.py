@@ -170,7 +170,11 @@ def test_summary_report_and_docs(tmp_path):
     assert "## One step from the same state" in text and "](resync.png)" in text
     assert (tmp_path / "resync.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     line = next(x for x in text.splitlines() if x.startswith("One step from the same state"))
-    assert re.search(r"their own floors: pybullet .+, mujoco .+\): the model error is born", line)
+    assert re.search(
+        r"each engine's own floor, at its largest: pybullet .+, mujoco .+\): the model error is "
+        r"born .+ against (pybullet|mujoco)'s own floor of .+ at that step\)",
+        line,
+    )
     assert text.count("](resync.png)") == 1
     written = json.loads((tmp_path / "summary.json").read_text())
     assert "resync.png" in written["files"] and written["resync"]["every"] == 1

@@ -332,7 +332,17 @@ def test_sweep_cli_grid_runs_every_combination(tmp_path, capsys):
     gaps = {c: p["pairs"][0]["gap"]["value"] for c, p in zip(combos, data["points"], strict=True)}
     assert gaps[(0.4, 1 / 240)] > 1e3 * gaps[(0.5, 1 / 240)]  # friction, not the step, parts them
     assert {"sweep_lateral_friction_2.png", "sweep_timestep.png"} <= set(data["files"])
-    assert capsys.readouterr().out.count(": agree") == 2
+    printed = capsys.readouterr().out
+    assert printed.count(": agree") == 2
+    # the terminal speaks as report.md does: its verdict words and its units, every row
+    report = (out / "report.md").read_text()
+    rows = [r.split(" | ") for r in report.splitlines() if r.startswith("| 0.")]
+    lines = [x for x in printed.splitlines() if x.startswith("lateral_friction@2=")]
+    assert len(lines) == len(rows) == 4
+    for line, row in zip(lines, rows, strict=True):
+        assert line.split(": ", 1)[1] == f"{row[3]}, gap {row[4]}"
+    assert "`lateral_friction@2` = 0.5, 0.4 (on pybullet #2 alone)" in report
+    assert "KEY@N" not in report
 
 
 def test_sweep_cli_refuses_an_unknown_setting(capsys):

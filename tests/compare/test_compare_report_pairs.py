@@ -1,0 +1,189 @@
+"""The report of three engines judges every pair alike: the terminal's headline, report.md's
+opening, its pair table, final poses, own-error table and figures, on PyBullet, MuJoCo and PhysX
+(r2d2, a short run with small ensembles)."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import json
+import re
+from dataclasses import replace
+
+import pytest
+
+from simbridge.compare import compare, report
+from simbridge.compare.report import brief, plots
+from simbridge.compare.report.fmt import fmt_value
+from simbridge.compare.report.verdict import pair_words, verdict_word
+
+SAPIEN = importlib.util.find_spec("sapien") is not None
+pytestmark = pytest.mark.skipif(
+    not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'"
+)
+LEFT = {"ghost": "No module named 'ghost'"}
+
+
+@pytest.fixture(scope="module")
+def three():
+    c = compare("r2d2", ["pybullet", "mujoco", "physx"], duration=0.5, ensemble=3, workers=0)
+    return replace(c, left_out=dict(LEFT))  # as if a registered engine were not installed
+
+
+@pytest.fixture(scope="module")
+def written(three, tmp_path_factory):
+    out = tmp_path_factory.mktemp("three")
+    path = report(three, out, trajectories=False, replay=False)
+    s = json.loads((out / "summary.json").read_text("utf-8"))
+    return path.read_text("utf-8"), s
+
+
+def _judged(p: dict) -> str:
+    """The judged gap of a pair as the writers print it: in the report's unit, or to 4
+    significant digits where its interval is too narrow for the report's rounding."""
+    v = p["verdict"]
+    g = v["gap"]
+    shown = fmt_value(g["value"], v["unit"])
+    if g["low"] is not None and g["low"] != g["high"]:
+        if len({fmt_value(g[k], v["unit"]) for k in ("low", "value", "high")}) < 3:
+            return f"{g['value']:.4g} {v['unit']}"
+    return shown
+
+
+def test_the_terminal_gives_every_pair_the_same_judged_figure(written):
+    _, s = written
+    lines = brief(s, "out/report.md")
+    assert len(lines) <= 6 and lines[-1] == "report: out/report.md"
+    assert lines[0].startswith("r2d2 on pybullet, mujoco and physx, every pair judged on the")
+    body = lines[1:4]
+    for line, p in zip(body, s["pairs"], strict=True):
+        a, b = p["labels"]
+        v = p["verdict"]
+        assert line.startswith(f"  {a} and {b}: {v['verdict'].upper()}"), line
+        assert f"a median {_judged(p)}" in line
+        if v["gap"]["low"] is not None and v["gap"]["low"] != v["gap"]["high"]:
+            assert "95% interval" in line
+        if v["verdict"] == "chaotic":  # the engine named, as report.md names it
+            assert f"CHAOTIC ({' and '.join(v['engines'])}" in line
+        if v["test"] is not None:
+            assert "p " in line
+        assert "nominal" not in line  # the nominal runs' gap is not the pair's figure
+    assert "ghost (No module named 'ghost')" in lines[4]
+
+
+def test_the_terminal_leads_with_the_outcomes(written, monkeypatch):
+    _, s = written
+    module = importlib.import_module("simbridge.compare.report.brief")
+    monkeypatch.setattr(module, "outcome_lines", lambda s: ["**goal**: reached 3/3"])
+    lines = brief(s, "r.md")
+    assert lines[0] == "goal: reached 3/3" and len(lines) <= 6
+    assert lines[1].startswith("r2d2 on pybullet") and lines[-1] == "report: r.md"
+    # every pair still shown; the engine left out named in a word, its reason in report.md
+    assert [x.split(":")[0] for x in lines[2:5]] == [
+        "  pybullet and mujoco",
+        "  pybullet and physx",
+        "  mujoco and physx",
+    ]
+    assert lines[1].endswith("(ghost left out: report.md)")
+
+
+def test_the_opening_is_paragraphs_and_a_bullet_per_pair(written):
+    text, s = written
+    head = text.split("\n## ", 1)[0]
+    paragraphs = head.split("\n\n")
+    assert paragraphs[0].startswith("# r2d2: pybullet, mujoco and physx")
+    (bullets,) = [x for x in paragraphs if x.startswith("- ")]  # one list, a pair a line
+    assert bullets.splitlines() == [f"- {pair_words(p)}." for p in s["pairs"]]
+    others = [x for x in paragraphs[1:] if x != bullets]
+    assert all("\n" not in x.strip("\n") for x in others), "a statement per paragraph"
+    # the engines left out: a line below the headline, not in it
+    n = len(s["headline"]["text"]) - (len(s["pairs"]) - 1)  # paragraphs: the list is one
+    assert "\n".join(paragraphs[1 : 1 + n]).splitlines() == s["headline"]["text"]
+    assert paragraphs[1 + n] == "*Registered engines left out, not installed here: " + (
+        "ghost (No module named 'ghost').*"
+    )
+    assert not any("left out" in x for x in s["headline"]["text"])
+    assert text.count("Registered engines left out") == 1
+
+
+def test_the_pair_table_has_one_row_per_pair(written):
+    text, s = written
+    section = text.split("## Every pair of engines\n", 1)[1].split("\n## ", 1)[0]
+    rows = [r for r in section.splitlines() if r.startswith("| ")]
+    assert rows[0] == (
+        "| pair | verdict | judged gap [95%] (when) | nominal gap (end) "
+        "| where the nominal gap is born | p |"
+    )
+    body = [r.strip("| ").split(" | ") for r in rows[1:]]
+    assert len(body) == 3
+    for cells, p in zip(body, s["pairs"], strict=True):
+        v = p["verdict"]
+        assert cells[0] == " and ".join(p["labels"])
+        assert cells[1] == verdict_word(v)
+        assert cells[2].startswith(_judged(p))
+        if v["gap"]["low"] is not None:
+            assert re.match(r"\S+ \S+ \[\S+ \S+, \S+ \S+\] \((end|t = .+)\)", cells[2])
+        assert cells[3] == fmt_value(p["headline"]["final"], v["unit"])
+        crossing = p["headline"]["crossings"][0]["time"]
+        assert cells[4].startswith("never" if crossing is None else f"t = {crossing:.3f} s")
+        assert cells[5] == ("n/a" if v["test"] is None else f"{v['test']['p_value']:.2g}")
+
+
+def test_final_poses_and_own_errors_show_every_engine(written):
+    text, s = written
+    poses = text.split("## Final poses\n", 1)[1].split("\n## ", 1)[0]
+    header = next(r for r in poses.splitlines() if r.startswith("| at t = "))
+    assert header.endswith("| pybullet | mujoco | physx |")
+    row = next(r for r in poses.splitlines() if r.startswith("| base position (m) |"))
+    assert row.count("(") == 4  # the row's title and one position per engine
+    own = text.split("## Each engine against itself at half the time step\n", 1)[1]
+    own = own.split("\n## ", 1)[0]
+    names = [r.split(" | ")[0].strip("| ") for r in own.splitlines() if r.startswith("| ")][1:]
+    assert names == [
+        "pybullet",
+        "mujoco",
+        "physx",
+        "pybullet vs mujoco",
+        "pybullet vs physx",
+        "mujoco vs physx",
+    ]
+
+
+def test_first_pair_sections_name_their_pair_and_departures_link(written):
+    text, s = written
+    v = s["verdict"]
+    assert f"## Verdict (pybullet and mujoco): {verdict_word(v)}" in text
+    assert "## pybullet and mujoco, the first pair" in text
+    assert "## When each quantity parts (pybullet and mujoco)" in text
+    setup = text.split("## Setup\n", 1)[1].split("\n## ", 1)[0]
+    assert "(#profile-departures-that-apply-here)" in setup
+    assert "## Profile departures that apply here" in text
+
+
+def test_the_one_step_floors_agree(written):
+    text, s = written
+    r = s["resync"]
+    line = next(x for x in text.splitlines() if x.startswith("One step from the same state"))
+    assert "each engine's own floor, at its largest: " in line
+    if r["born"] is not None:  # the floor at the born step, named as that step's
+        b = r["born"]
+        assert (
+            f"against {b['source']}'s own floor of {fmt_value(b['floor'], r['unit'])} at that "
+            "step" in line
+        )
+    assert "against a floor of" not in text
+
+
+def test_distance_draws_every_pair(three, tmp_path, monkeypatch):
+    seen: list[str] = []
+
+    def keep(fig, path):
+        seen.extend(line.get_label() for ax in fig.axes for line in ax.get_lines())
+        fig.clf()
+        return path
+
+    monkeypatch.setattr(plots, "_save", keep)
+    plots.distance(three, tmp_path / "distance.png")
+    for a, b in (("pybullet", "mujoco"), ("pybullet", "physx"), ("mujoco", "physx")):
+        assert f"{a} vs {b}: nominal runs" in seen
+        assert any(re.match(f"{a} vs {b}: median gap", x) for x in seen)
