@@ -58,8 +58,9 @@ def rebuild(
         changed = sum(1 for a, b in zip(now, then, strict=False) if a != b)
         raise SimbridgeError(
             f"{folder / STUDY_FILE}: the study's arguments now make other jobs than it recorded "
-            f"({changed} of {len(then)} differ): a file it names changed since, or another "
-            "simbridge version; run the study again (simbridge compare)"
+            f"({changed} of {len(then)} differ): a file it names changed since, or simbridge's "
+            "code that makes a run or an engine's version did; run the study again "
+            "(simbridge compare)"
         )
     comparison.left_out = dict(record.get("left_out", {}))
     comparison.study["left_out"] = dict(comparison.left_out)  # kept for the next rebuild too
