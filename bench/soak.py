@@ -23,8 +23,9 @@ folder.
 ``--limit`` kB per cycle of its RSS after the warm-up (the allocator moves RSS by a few MB either
 way: measured, MuJoCo's create-close over 1500 cycles stays within -10..+9 MB of it; a real leak
 is r2d2's removeBody's 620 kB per cycle), with as many open files as after the warm-up and no
-temporary file. Memory figures are the process's own (not timings): the machine's load does not
-change them.
+temporary file. Memory figures are the process's own (not timings); each row runs with glibc's
+mmap threshold fixed (FIXED_MALLOC: its one-time step in RSS otherwise lands in the measured
+cycles in some runs and not others).
 
 ``--threads N``: each row runs its pattern on N threads at once in its process (N Sims; every
 thread warms up, then all are measured over the same cycles): what one process that makes and
@@ -63,6 +64,17 @@ TEXT_ROBOT = (
     '<inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>'
     '<joint name="j" type="continuous"><parent link="a"/><child link="b"/></joint></robot>'
 )
+
+
+# glibc's malloc raises its mmap threshold each time a large mmapped block is freed (up to
+# 32 MB), after which blocks of that size come from the heap, whose pages it keeps: a one-time
+# step in RSS, at a cycle that varies from run to run. Measured on PyBullet's create-close (400
+# cycles, 3 busy processes beside it): RSS 73.2 MB after the warm-up (the step inside it); in a
+# suite run it came after the warm-up instead (42.6 -> 76.2 MB over 900 cycles: 38.2 kB/cycle,
+# failing --check); with the threshold fixed, 42.9 -> 45.4 MB. A leak grows either way; the
+# rows run with the threshold fixed at glibc's default so that the step cannot land in the
+# measured cycles.
+FIXED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "131072"}
 
 
 def _rss_mb() -> float:
@@ -221,6 +233,7 @@ def main(argv: list[str] | None = None) -> int:
                 + ["--threads", str(args.threads), "--one", pattern, backend],
                 capture_output=True,
                 text=True,
+                env={**os.environ, **FIXED_MALLOC},
             )
             if child.returncode != 0:
                 print(child.stderr[-3000:], file=sys.stderr)
