@@ -119,7 +119,8 @@ def test_unknown_backend_lists_the_registered_ones(private_tmp):
     listed = ", ".join(re.escape(repr(n)) for n in sorted(names))
     with pytest.raises(
         exc.UnknownBackendError,
-        match=rf"unknown backend 'bullet'; available backends: \[{listed}\]",
+        match=rf"unknown backend 'bullet' \(did you mean 'pybullet'\?\); available backends: "
+        rf"\[{listed}\]",
     ):
         simbridge.Sim("bullet")
     assert list(private_tmp.iterdir()) == []
