@@ -15,12 +15,9 @@ from typing import Any
 
 import pytest
 
-SCHEDULED_FIRST = ("tests/test_soak.py", "tests/test_gui.py")
+SCHEDULED_FIRST = ("tests/test_soak.py",)
 """Modules (paths from the repository root) that take minutes as a whole: handed out first
-under ``--dist loadfile``, so that the other worker runs the rest of the suite meanwhile. The
-windows' module (about 3 min, mostly waiting on windows to open and close: a clean-clone run
-ended with it, the two workers at 20-26% of a core for its last 3.5 min) overlaps so with the
-rest."""
+under ``--dist loadfile``, so that the other worker runs the rest of the suite meanwhile."""
 
 
 @pytest.hookimpl(optionalhook=True)  # a pytest-xdist hook: without xdist it is never called
