@@ -36,6 +36,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executors import workers_cpu  # bench/executors.py, beside this file
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -92,20 +94,6 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
     return out
 
 
-def _proc_cpu(pids: set[int]) -> float:
-    """CPU seconds (user + system) of the running processes ``pids`` so far (Linux's /proc):
-    the kept pool's workers, which are not reaped when a call ends."""
-    total = 0.0
-    for pid in pids:
-        try:
-            with open(f"/proc/{pid}/stat") as f:
-                fields = f.read().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-    return total
-
-
 def _pool(jobs: list, workers: int, store: Any, known: set[int]) -> dict:
     """The jobs on the local pool (``known``: its workers' pids when it is kept from a previous
     call): wall, CPU (this process and the workers), the sum of the jobs' own wall times and
@@ -122,7 +110,7 @@ def _pool(jobs: list, workers: int, store: Any, known: set[int]) -> dict:
         store.put(jobs[i].key, r)
 
     me = resource.getrusage(resource.RUSAGE_SELF)
-    c0 = me.ru_utime + me.ru_stime + _proc_cpu(known)
+    c0 = me.ru_utime + me.ru_stime + workers_cpu(known)
     t0 = time.perf_counter()
     results = run_all(
         run_job,
@@ -135,7 +123,7 @@ def _pool(jobs: list, workers: int, store: Any, known: set[int]) -> dict:
     wall = time.perf_counter() - t0
     pids = known | {r.pid for r in results}
     me = resource.getrusage(resource.RUSAGE_SELF)
-    out: dict = {"wall": wall, "cpu": me.ru_utime + me.ru_stime + _proc_cpu(pids) - c0}
+    out: dict = {"wall": wall, "cpu": me.ru_utime + me.ru_stime + workers_cpu(pids) - c0}
     out["pids"] = pids
     out["in_jobs"] = sum(r.wall_time for r in results)
     out["job_cpu"] = sum(r.cpu_time for r in results) / len(results)
