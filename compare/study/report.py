@@ -227,12 +227,15 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
     ticks = [format_value(p.values[key]) for p in pts]
     tags = list(dict.fromkeys(x["others"] for x in lines))
     pair_labels = [f"{names[a]} and {names[b]}" for a, b in _pairs(len(names))]
+    spots = [v for x in lines for v in x["x"]]
+    dodge = 0.06 if not numeric else 0.012 * ((max(spots) - min(spots)) or 1.0)
     for x in lines:
         color: str | None
         base = x["name"]
         g = tags.index(x["others"])
         if x["panel"] == "gap":
-            ax, color = ax1, PAIR_COLORS[pair_labels.index(base) % len(PAIR_COLORS)]
+            ax, slot = ax1, 0
+            color = PAIR_COLORS[pair_labels.index(base) % len(PAIR_COLORS)]
             if not many:
                 color = None  # two engines: matplotlib's colours, as before
         else:
@@ -243,9 +246,9 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
         lo = [v - (v if low is None else low) for v, low in zip(x["value"], x["low"], strict=True)]
         hi = [(v if h is None else h) - v for v, h in zip(x["value"], x["high"], strict=True)]
         xs = x["x"]
-        if many and not numeric and x["panel"] == "gap":  # side by side at each value
-            k = pair_labels.index(base)
-            xs = [v + 0.06 * (k - (len(pair_labels) - 1) / 2) for v in xs]
+        if many:  # side by side at each value: equal lines stay visible
+            k, n = (pair_labels.index(base), len(pair_labels)) if ax is ax1 else (slot, len(names))
+            xs = [v + dodge * (k - (n - 1) / 2) for v in xs]
         ax.errorbar(
             xs,
             x["value"],
@@ -353,7 +356,8 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
             lines += [
                 "",
                 f"Left, each pair's gap against `{key}`; right, each engine's spread (its "
-                "first pair's, at that pair's judged instant). The figure's lines are in "
+                "first pair's, at that pair's judged instant); the lines are drawn side by side "
+                "at each value, so that equal ones stay in sight. Their figures are in "
                 f"`summary.json` under `figures.{key}`.",
             ]
     path = out / "report.md"
