@@ -12,7 +12,7 @@ from ..analysis.verdict import Interval
 from ..report.fmt import fmt_value
 from ..report.verdict import verdict_word
 from ..scenario import format_timestep
-from .points import PairFigures, format_value, split_slot
+from .points import PairFigures, format_value, interval_dict, split_slot
 
 if TYPE_CHECKING:
     from .explain import Explanation
@@ -188,8 +188,8 @@ def sweep_lines(s: Sweep, key: str) -> list[dict[str, Any]]:
                     for p in group
                 ],
                 "value": [x.value for x in xi],
-                "low": [x.low for x in xi],
-                "high": [x.high for x in xi],
+                "low": [interval_dict(x)["low"] for x in xi],  # None: none, or not finite
+                "high": [interval_dict(x)["high"] for x in xi],
             }
         )
 
