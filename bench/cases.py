@@ -72,7 +72,9 @@ def _layer_sim(backend: str) -> tuple[simbridge.Sim, int]:
     return sim, robot
 
 
-def layer_drive(backend: str, record: bool) -> Callable[[], float]:
+def layer_drive(backend: str, record: bool, final: list | None = None) -> Callable[[], float]:
+    """The tutorial's drive through the Sim; with ``final`` (PhysX), each run appends the
+    articulation's state after it (:func:`physx_final_state`)."""
     wheels = np.array(WHEELS)
 
     def run() -> float:
@@ -98,7 +100,10 @@ def layer_drive(backend: str, record: bool) -> Callable[[], float]:
                     wheel_state[k, :4] = js.positions
                     wheel_state[k, 4:8] = js.velocities
                     wheel_state[k, 8:] = js.applied_torques
-            return time.perf_counter() - t0
+            elapsed = time.perf_counter() - t0
+            if final is not None:
+                final.append(physx_final_state(sim, robot))
+            return elapsed
         finally:
             sim.close()
 
@@ -298,12 +303,32 @@ def _physx_raw_world(sim: simbridge.Sim, robot: int, native_damping: bool = True
     return inspect.scene(sim), r, joints, DRIVE_DAMPING
 
 
-def physx_raw_drive(record: bool, pybullet_damping: bool = False) -> Callable[[], float]:
+def physx_final_state(sim: simbridge.Sim, robot: int) -> tuple[np.ndarray, ...]:
+    """The robot's articulation state as PhysX holds it (float32): joint positions and
+    velocities, the root link's pose and velocities."""
+    from simbridge.backends.physx import inspect
+
+    r = inspect.robot(sim, robot)
+    art, root = r.built.articulation, r.built.links[0]
+    pose = root.entity_pose
+    return (art.qpos, art.qvel, pose.p, pose.q, root.linear_velocity, root.angular_velocity)
+
+
+def physx_raw_drive(
+    record: bool,
+    pybullet_damping: bool = False,
+    speed_clamp: bool = False,
+    final: list | None = None,
+) -> Callable[[], float]:
     """Raw SAPIEN, written the fast idiomatic way: ``set_drive_velocity_target`` per wheel and
     ``scene.step()`` (:func:`_physx_raw_world`). With ``pybullet_damping``, PhysX's own link
     damping is off and the raw code applies PyBullet's law itself, as few engine calls as it
     takes (each moving link's two velocities read, one ``add_force_torque``, per step): the
-    floor of any layer that gives PhysX PyBullet's link damping."""
+    floor of any layer that gives PhysX PyBullet's link damping. With ``speed_clamp`` too, it
+    clamps the joint speeds after each step to the profile's 100 rad/s as PyBullet does (PhysX
+    lets r2d2's driven wheels end a step a little past it: 212 of the drive's 980 steps), one
+    ``qvel`` read per step and a write where a speed is past the cap: the same trajectory as
+    the layer's, bit for bit (:func:`physx_floor_matches_layer`)."""
 
     def run() -> float:
         sim, robot = _layer_sim("physx")
@@ -327,6 +352,8 @@ def physx_raw_drive(record: bool, pybullet_damping: bool = False) -> Callable[[]
             base = np.empty((980, 13))
             wheel_state = np.empty((980, 12))
             turn, forward = TURN.tolist(), FORWARD.tolist()
+            cap = p.max_joint_velocity
+            assert cap is not None and float(np.float32(cap)) == cap  # clamps in plain floats
             t0 = time.perf_counter()
             for k in range(980):
                 if k in (TURN_FROM, FORWARD_FROM):
@@ -342,6 +369,11 @@ def physx_raw_drive(record: bool, pybullet_damping: bool = False) -> Callable[[]
                     for add, a, b in adds:
                         add(a, b, "acceleration")
                 scene.step()
+                if speed_clamp:
+                    speeds = art.qvel.tolist()
+                    if max(map(abs, speeds)) > cap:
+                        clipped = [-cap if x < -cap else cap if x > cap else x for x in speeds]
+                        art.qvel = np.array(clipped, dtype=np.float32)
                 if record:
                     pose = root.entity_pose * root.cmass_local_pose
                     base[k, :3] = pose.p
@@ -351,20 +383,44 @@ def physx_raw_drive(record: bool, pybullet_damping: bool = False) -> Callable[[]
                     wheel_state[k, :4] = art.qpos[dofs]
                     wheel_state[k, 4:8] = art.qvel[dofs]
                     wheel_state[k, 8:] = art.get_link_incoming_joint_forces()[wheel_links, 3]
-            return time.perf_counter() - t0
+            elapsed = time.perf_counter() - t0
+            if final is not None:
+                final.append(physx_final_state(sim, robot))
+            return elapsed
         finally:
             sim.close()
 
     return run
 
 
-# the layer's PhysX drive against raw SAPIEN that applies PyBullet's link damping itself
+def physx_floor_matches_layer(speed_clamp: bool = True) -> bool:
+    """Whether raw SAPIEN applying PyBullet's link damping (and, with ``speed_clamp``, its
+    speed clamp) ends the drive in the layer's state, bit for bit."""
+    raw: list = []
+    lay: list = []
+    physx_raw_drive(False, pybullet_damping=True, speed_clamp=speed_clamp, final=raw)()
+    layer_drive("physx", False, final=lay)()
+    return all(np.array_equal(a, b) for a, b in zip(raw[0], lay[0], strict=True))
+
+
+# the layer's PhysX drive against raw SAPIEN that applies PyBullet's link damping itself, and
+# against raw SAPIEN that does all the layer's per-step PyBullet work (damping and speed clamp)
 DAMPED_FLOOR: Case | None = (
     Case(
         "drive vs raw with PyBullet's damping law",
         physx_raw_drive(False, pybullet_damping=True),
         layer_drive("physx", False),
         None,
+    )
+    if "physx" in BACKENDS
+    else None
+)
+CLAMPED_FLOOR: Case | None = (
+    Case(
+        "drive vs raw with PyBullet's damping law and speed clamp",
+        physx_raw_drive(False, pybullet_damping=True, speed_clamp=True),
+        layer_drive("physx", False),
+        1.10,
     )
     if "physx" in BACKENDS
     else None

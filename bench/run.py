@@ -136,6 +136,19 @@ def main(argv: list[str] | None = None) -> int:
                     "the floor: raw + 2 reads, 1 write per link",
                 )
             )
+        clamped = cases.CLAMPED_FLOOR if backend == "physx" else None
+        if clamped is not None:  # and PyBullet's speed clamp: the layer's trajectory exactly
+            same = "same" if cases.physx_floor_matches_layer() else "NOT the same"
+            raw, lay = interleave(clamped.raw, clamped.layer, reps)
+            row = Row(
+                f"{backend}: same drive, raw with PyBullet's damping and speed clamp",
+                "µs/step",
+                [t / 980 for t in raw],
+                [t / 980 for t in lay],
+                clamped.target,
+            )
+            row.note = f"{row.verdict()}; the floor + the clamp: {same} end state, bit for bit"
+            rows.append(row)
         bound = cases.BOUND_DRIVES[backend]
         raw, lay = interleave(bound.raw, bound.layer, reps)
         rows.append(

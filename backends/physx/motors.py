@@ -227,8 +227,15 @@ class MotorCommands:
         at 40 rad/s kicked by a torque worth 150 rad/s read 189.7 after the step, unclamped."""
         art = robot.built.articulation
         v = art.qvel
-        if float(np.abs(v).max()) > cap:
-            art.qvel = np.clip(v, -cap, cap)
+        speeds = v.tolist()
+        # in plain floats (on a few joints a fraction of numpy's reduction and clip): without a
+        # NaN the list's maximum is numpy's exactly; with one, numpy's is NaN and never clamps,
+        # so numpy has the last word whenever the plain test would clamp
+        if max(map(abs, speeds)) > cap and float(np.abs(v).max()) > cap:
+            hi = float(np.float32(cap))  # np.clip's bound on float32 values: the cap in float32
+            lo = -hi
+            clipped = [lo if x < lo else hi if x > hi else x for x in speeds]
+            art.qvel = np.array(clipped, dtype=np.float32)
 
     def _after_step(self, robot: Robot) -> None:
         if robot.qf_set:  # PhysX keeps joint forces until changed: they last this step only
