@@ -302,7 +302,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                 system.step()
                 self._steps += 1
                 for robot in active:
-                    self._after_step(robot)
+                    if robot.qf_set or robot.pending:  # else _after_step has nothing to do
+                        self._after_step(robot)
                 if cap is not None:
                     for robot in self._clamped:
                         self._clamp_speeds(robot, cap)

@@ -268,13 +268,17 @@ class MotorCommands:
         robot = self._robots[body]
         m = robot.motors
         slots = self._slots(robot, joints)
+        m["target"][slots] = target
+        m["max_force"][slots] = max_force
+        if robot.velocity_slots is slots:  # these slots' last command, nothing else since
+            _set_drives(robot, slots, max_force, target)
+            return
         # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
         was_position = robot.has_position and bool(m["mode"][slots].any())
         m["mode"][slots] = 0
-        m["target"][slots] = target
-        m["max_force"][slots] = max_force
         m["kp"][slots] = 0.0
         m["kd"][slots] = 1.0
+        robot.velocity_slots = slots
         _set_drives(robot, slots, max_force, target)
         if was_position:  # a position motor replaced: the step may have less to do
             self._refresh_active()
@@ -292,6 +296,7 @@ class MotorCommands:
         robot = self._robots[body]
         m = robot.motors
         slots = self._slots(robot, joints)
+        robot.velocity_slots = None  # modes and gains change
         if len(set(slots.tolist())) < len(slots):  # a joint named twice: the last one holds
             for s, t, f, p_, d_ in zip(slots, target, max_force, kp, kd, strict=True):
                 m["mode"][s] = MotorMode.POSITION
@@ -358,6 +363,7 @@ class MotorCommands:
     @exclusive
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
         robot = self._robots[body]
+        robot.velocity_slots = None  # modes and gains change
         m = robot.motors
         for s, j in enumerate(robot.movable):
             if robot.table[j].type == JointType.SPHERICAL:

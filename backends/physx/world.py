@@ -43,6 +43,9 @@ class Robot:
     qf_set: bool = False  # joint forces were handed to PhysX for the coming step
     drive_force: list[float] = field(default_factory=list)  # per slot, as set (NaN: not yet)
     has_position: bool = False  # a position motor needs its velocity target every step
+    # the slots array of the last velocity command while nothing else has changed a motor's
+    # mode or gains since: those slots are velocity motors with kp 0 and kd 1 already
+    velocity_slots: np.ndarray | None = None
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
     ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
     dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
