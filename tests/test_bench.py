@@ -108,6 +108,24 @@ def test_calls_table_times_every_call_on_every_engine():
         assert len(bounds) == 1 and all(float(c) > 0 for c in bounds[0].split("|")[2:5])
 
 
+def test_physx_floor_row_ends_the_drive_in_the_layers_state():
+    """bench/run.py's PhysX floor (raw SAPIEN applying PyBullet's link damping and speed clamp
+    itself) does the layer's physics: the same drive ends in the layer's state bit for bit, so
+    the ratio against it is the layer's own cost."""
+    if "physx" not in _usable_engines():
+        pytest.skip("the physx extra is not installed")
+    code = "import cases; print(cases.physx_floor_matches_layer())"
+    proc = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=ROOT / "bench",
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.split()[-1] == "True", proc.stdout
+
+
 def _usable_engines() -> list[str]:
     from simbridge.registry import unavailable_reason
 
