@@ -11,15 +11,17 @@ idiomatic way (``setJointMotorControlArray``; ``d.ctrl[:] = array``). The N-envi
 give the wall-clock time per env-step (the target 1.11x is PERFORMANCE.md's "at least 0.9x the
 raw throughput").
 
-PhysX's drive misses its 1.10x target, and cannot meet it while the layer gives PhysX PyBullet's
-link damping law (``f = -m k (1 + |v|) v``; PhysX's own damping is linear in v): SAPIEN 3.0.3's
-CPU articulation reads link velocities one link at a time, so the law costs two velocity reads
-and one ``add_force_torque`` per moving link per step (r2d2: 16 links, 48 engine calls). The row
-"raw applying PyBullet's link damping" is that floor: raw SAPIEN doing only those calls, as few
-as they can be (bound methods, one preallocated buffer). Measured on the shared 2-core machine
-(``python bench/run.py --backends physx``, medians): the floor is 1.41-1.60x raw SAPIEN with
-its native damping, the layer 1.43-1.47x the floor and 2.0-2.2x raw (2.1-2.3x before the
-damping and set_joint_velocity paths were trimmed, same-run interleaved medians and minima).
+PhysX's drive misses its 1.10x target against raw SAPIEN with PhysX's own (linear) link damping:
+the layer gives PhysX PyBullet's link damping law (``f = -m k (1 + |v|) v``) and PyBullet's
+clamp of joint speeds, both in Python at every step. SAPIEN 3.0.3's CPU articulation reads
+link velocities one link at a time, so the law costs two velocity reads and one
+``add_force_torque`` per moving link per step (r2d2: 16 links, 48 engine calls); the clamp a
+``qvel`` read per step and a write where a speed is past it (212 of the drive's 980 steps). The
+row "raw applying PyBullet's link damping" is raw SAPIEN doing only the law's calls (bound
+methods, one preallocated buffer); "raw with PyBullet's damping and speed clamp" does the clamp
+too and ends the drive in the layer's state bit for bit (the row's note checks it): the floor
+of the layer's work. Whole drives a second apart see the shared machine's load change; the same
+comparison step by step in pairs is bench/physx_drive_pairs.py (README, PhysX speed).
 """
 
 from __future__ import annotations
