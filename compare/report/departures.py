@@ -127,7 +127,7 @@ def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[
         deps = tr.manifest.get("departures") or {}
         apply, left = [], []
         for key, text in deps.items():
-            why, measured = _judge(key, c, facts, touched, events)
+            why, measured = _judge(key, c, facts, touched, events, slot)
             if why is None:
                 left.append(key)
             else:
@@ -144,10 +144,16 @@ def _judge(
     facts: dict[str, Any],
     touched: list[dict[str, list[str]]],
     events: list[EngineEvents],
+    slot: int = 0,
 ) -> tuple[str | None, str | None]:
-    """(why it applies, measured) or (None, None) when it does not apply."""
+    """(why it applies, measured) or (None, None) when it does not apply, for the engine in
+    ``slot``: its figures quoted beside the first engine's (the reference), never a third
+    engine's."""
+    shown = sorted({0, slot})  # with two engines: both, in either's rows
     labels = c.labels
     subject = c.scenario.subject
+    touched = [touched[k] for k in shown]
+    events = [events[k] for k in shown]
     any_touch = any(touched)
 
     def touching_with(kind: str) -> list[str]:
@@ -164,7 +170,7 @@ def _judge(
             return None, None
         bodies = sorted({b for t in touched for b in t})
         why = "contacts in this run (" + ", ".join(bodies) + ")"
-        return why, _contact_figures(c, events)
+        return why, _contact_figures(c, events, shown)
     if key in ("cylinder", "restitution", "rolling/spinning friction"):
         hits = touching_with(key)
         if not hits:
@@ -214,8 +220,9 @@ def _judge(
     if key == "speed clamp":
         rows = []
         hit = False
-        for slot, label in enumerate(labels):
-            tr = c.runs[(slot, c.timestep)]
+        for k in shown:
+            label = labels[k]
+            tr = c.runs[(k, c.timestep)]
             clamp = (tr.manifest.get("profile") or {}).get("max_joint_velocity")
             if not clamp:
                 continue
@@ -246,12 +253,13 @@ def _judge(
     return "not checked against this scenario", None
 
 
-def _contact_figures(c: ComparisonView, events: list[EngineEvents]) -> str:
-    """This run's own contact figures: the followed robot's base height at the end of the
-    first phase, how often its links made or lost contact, its highest hop."""
+def _contact_figures(c: ComparisonView, events: list[EngineEvents], slots: list[int]) -> str:
+    """This run's own contact figures of the engines in ``slots`` (``events`` theirs): the
+    followed robot's base height at the end of the first phase, how often its links made or
+    lost contact, its highest hop."""
     phase = c.runs[(0, c.timestep)].phases[0][0]
     heights, changes, hops = [], [], []
-    for slot, e in enumerate(events):
+    for slot, e in zip(slots, events, strict=True):
         tr = c.runs[(slot, c.timestep)]
         row = tr.phases[0][2]
         h = float(tr.body.base_position[row] @ e.up)

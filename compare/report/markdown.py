@@ -16,6 +16,7 @@ from ..analysis.diff import DEG, QUANTITIES, Divergence, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
+from .engine_figures import engines_section, pair_reasons
 from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
 from .fmt import fmt_threshold, fmt_time, fmt_value
@@ -238,7 +239,8 @@ def markdown(
     lines += pictures or []
     # -- verdict
     lines += outcomes_section(s)
-    lines += pairs_section(s)
+    lines += pairs_section(s) + pair_reasons(s)  # with more than two: what decides each
+    lines += engines_section(s)  # and every engine's own figures
     if many:
         lines += [f"## {a} and {b}, the first pair", ""]
         for statement in first_pair_lines(s):
@@ -293,7 +295,7 @@ def markdown(
     # -- where the gap is born, which part
     lines += _born_section(s)
     lines += parts_section(s) if many else _parts_section(s)
-    lines += resync_section(s, images.pop("resync", None))  # its figure here, not in Figures
+    lines += resync_section(s, images.pop("resync", None), of)  # its figure here, not in Figures
     # -- final poses
     lines += ["## Final poses", ""]
     poses = _final_poses(c)
@@ -738,7 +740,7 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
             "",
         ]
         raised = perturbation_words(e)
-        if raised:
+        if raised and not of:  # with more engines, said in *Every engine*
             lines += [raised, ""]
         lines += failed_members_lines(e)
     rows = []
