@@ -9,7 +9,7 @@ from typing import Any
 
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .markdown import left_out_words
-from .outcomes import outcome_lines
+from .outcomes import outcome_brief
 from .verdict import pair_words, verdict_word
 
 __all__ = ["brief", "MAX_LINES"]
@@ -25,9 +25,9 @@ def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
     each with the same judged figure (:func:`~.verdict.pair_words`). Then the engines left out
     (a line, where there are any) and ``report: <path>`` last (with ``path``)."""
     lines: list[str] = []
-    outcomes = [x.replace("**", "") for x in outcome_lines(s)]
+    outcomes = outcome_brief(s)  # bounded; the figures in report.md's Outcomes
     if outcomes:
-        lines.append(" ".join(outcomes))
+        lines.append(outcomes)
     left = left_out_words(s)
     pairs = s.get("pairs") or []
     if len(s["labels"]) > 2 and len(pairs) > 1:

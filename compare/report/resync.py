@@ -77,9 +77,7 @@ def resync_lines(summary: dict[str, Any]) -> list[str]:
     return [line]
 
 
-def resync_section(
-    summary: dict[str, Any], image: Path | None = None, of: str = ""
-) -> list[str]:
+def resync_section(summary: dict[str, Any], image: Path | None = None, of: str = "") -> list[str]:
     """The report's section ``## One step from the same state`` (markdown lines); ``of``: the
     pair it runs between, `` (pybullet and mujoco)``, named in the title with more than two
     engines (resync runs between the first pair alone)."""
