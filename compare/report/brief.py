@@ -60,11 +60,12 @@ def _pairs_head(s: dict[str, Any]) -> str:
     head = f"{s['scenario']} on {names}"
     if not any(p["verdict"] for p in s["pairs"]):
         return head + " (one run per engine: no pair judged, the nominal runs' gaps):"
-    size = (s.get("ensemble") or {}).get("size")
-    runs = f", {size} per engine" if size else ""
+    size = (s.get("ensemble") or {}).get("size") or 1
+    if size < 2:  # one run per engine: one gap, no interval
+        return f"{head}, every pair judged on the {s['headline']['title']} (one run per engine):"
     return (
         f"{head}, every pair judged on the {s['headline']['title']} "
-        f"(median gap over every pair of runs{runs}, 95% interval):"
+        f"(median gap over every pair of runs, {size} per engine, 95% interval):"
     )
 
 

@@ -133,12 +133,16 @@ def pairs_lines(summary: dict[str, Any]) -> list[str]:
     if len(summary["labels"]) <= 2 or not pairs:
         return []
     ens = summary.get("ensemble") or {}
-    runs = f", {ens['size']} per engine" if ens.get("size", 1) > 1 else ""
+    gap = "the gap of the one run per engine, no interval"  # --ensemble 1
+    if ens.get("size", 1) > 1:
+        gap = (
+            f"the median gap over every pair of runs, {ens['size']} per engine, with its 95% "
+            "interval"
+        )
     return [
         f"Every pair of the {len(summary['labels'])} engines, judged on the "
-        f"{summary['headline']['title']} (the median gap over every pair of runs{runs}, "
-        "with its 95% interval; the table below has each pair's nominal gap and where it is "
-        "born):"
+        f"{summary['headline']['title']} ({gap}; the table below has each pair's nominal gap "
+        "and where it is born):"
     ] + [f"- {pair_words(p)}." for p in pairs]
 
 

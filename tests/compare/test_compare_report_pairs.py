@@ -77,6 +77,21 @@ def test_the_terminal_gives_every_pair_the_same_judged_figure(written):
     assert "ghost (No module named 'ghost')" in lines[4]
 
 
+def test_one_run_per_engine_claims_no_interval(written):
+    import copy
+
+    from simbridge.compare.report.markdown import pairs_lines
+
+    _, s = written
+    one = copy.deepcopy(s)
+    one["ensemble"]["size"] = 1
+    head = brief(one, "r.md")[0]
+    assert head.endswith("(one run per engine):") and "interval" not in head
+    lead = pairs_lines(one)[0]
+    assert "the gap of the one run per engine, no interval" in lead and "95%" not in lead
+    assert "3 per engine, with its 95% interval" in pairs_lines(s)[0]
+
+
 def test_the_terminal_leads_with_the_outcomes(written, monkeypatch):
     _, s = written
     module = importlib.import_module("simbridge.compare.report.brief")
@@ -418,5 +433,7 @@ def test_a_sweep_of_three_engines_draws_every_pair(tmp_path, monkeypatch):
     for slot, x in zip((0, 1, 2), lines[3:], strict=True):  # each engine's, from its first pair
         k, side = {0: (0, 0), 1: (0, 1), 2: (1, 1)}[slot]
         assert x["value"] == [pt["pairs"][k]["spreads"][side]["value"] for pt in data["points"]]
-    rows = [r for r in path.read_text("utf-8").splitlines() if r.startswith("| 0.")]
+    text = path.read_text("utf-8")
+    assert "The gap is the median base position distance between" in text  # not its key
+    rows = [r for r in text.splitlines() if r.startswith("| 0.")]
     assert len(rows) == 2 * 3  # a row per pair at each value
