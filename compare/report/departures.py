@@ -147,9 +147,9 @@ def _judge(
     slot: int = 0,
 ) -> tuple[str | None, str | None]:
     """(why it applies, measured) or (None, None) when it does not apply, for the engine in
-    ``slot``: its figures quoted beside the first engine's (the reference), never a third
-    engine's."""
-    shown = sorted({0, slot})  # with two engines: both, in either's rows
+    ``slot``: with two engines, both engines' figures; with more, its own beside the first
+    engine's (the reference), never a third engine's."""
+    shown = list(range(len(c.labels))) if len(c.labels) <= 2 else sorted({0, slot})
     labels = c.labels
     subject = c.scenario.subject
     touched = [touched[k] for k in shown]
