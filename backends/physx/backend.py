@@ -125,6 +125,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         self._diverged = None
         self._generation = getattr(self, "_generation", 0) + 1  # a new world: old snapshots void
         self._contacts_cache: list[Any] | None = None
+        self._restored: list[Robot] = []  # robots whose link velocities a restore put back
         self._active: list[Robot] = []  # robots that need work before or after a step
         self._clamped: list[Robot] = []  # robots whose joint speeds the profile clamps
 
@@ -175,6 +176,10 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             robot.moving_links = [
                 comp for comp, lp in zip(built.links, plan.links, strict=False) if not lp.static
             ]
+            robot.moving_rows = np.array(  # their rows in built.links
+                [i for i, lp in enumerate(plan.links[: len(built.links)]) if not lp.static],
+                dtype=np.intp,
+            )
             self._configure(robot)
         except BaseException:
             for entity in built.entities:
@@ -300,6 +305,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                     self._before_step(robot)
                 system.step()
                 self._steps += 1
+                if self._restored:  # PhysX's own link velocities from here on
+                    self._forget_restored()
                 for robot in active:
                     self._after_step(robot)
                 if cap is not None:
@@ -314,6 +321,12 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         finally:
             self._in_step = False
             lock.release()
+
+    def _forget_restored(self) -> None:
+        """The link velocities a restore put back end at a step or a write of the state."""
+        for robot in self._restored:
+            robot.restored_velocities = None
+        self._restored = []
 
     def _check_world(self) -> None:
         """SimulationDivergedError when any robot's state is not finite."""
@@ -334,23 +347,38 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
     @exclusive
     def snapshot(self) -> Any:
         """PhysX's own record of the world (``PhysxCpuSystem.pack``: every body's pose and
-        velocities, the articulations' joint state), for this world as it is now."""
-        return (id(self), self._generation, self._system.pack())
+        velocities, the articulations' joint state), for this world as it is now, with every
+        moving link's velocities as PhysX reports them: unpack recomputes those from the joint
+        velocities, and they are the link damping law's input (DEPARTURES["snapshot"])."""
+        velocities = {
+            body: np.array(
+                [(link.linear_velocity, link.angular_velocity) for link in robot.built.links],
+                dtype=np.float32,
+            )
+            if robot.restored_velocities is None
+            else robot.restored_velocities.copy()
+            for body, robot in self._robots.items()
+            if not robot.static
+        }
+        return (id(self), self._generation, self._system.pack(), velocities)
 
     @exclusive
     def restore(self, native: Any) -> bool:
         """Unpack a snapshot of this very world (no load, remove or reset since). PhysX keeps
-        its contact and solver caches out of the blob: the next step is not a bitwise
-        continuation (see DEPARTURES["snapshot"])."""
+        its contact caches out of the blob: with contacts the next step is not a bitwise
+        continuation; without, it is (see DEPARTURES["snapshot"])."""
         self._check_idle()
         self._contacts_cache = None
         if (
             isinstance(native, tuple)
-            and len(native) == 3
+            and len(native) == 4
             and native[0] == id(self)
             and native[1] == self._generation
         ):
             self._system.unpack(native[2])
+            for body, velocities in native[3].items():
+                self._robots[body].restored_velocities = velocities.copy()
+            self._restored = [self._robots[body] for body in native[3]]
             self._diverged = None
             if self._window is not None:
                 self._window.sync()
