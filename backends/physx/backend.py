@@ -364,9 +364,10 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
 
     @exclusive
     def restore(self, native: Any) -> bool:
-        """Unpack a snapshot of this very world (no load, remove or reset since). PhysX keeps
-        its contact caches out of the blob: with contacts the next step is not a bitwise
-        continuation; without, it is (see DEPARTURES["snapshot"])."""
+        """Unpack a snapshot of this very world (no load, remove or reset since), and put
+        back the link velocities it kept. PhysX keeps its contact caches out of the blob, and
+        unpack derives a floating base's link poses afresh: with a fixed base and no contacts
+        the next step is the same bits, else not (see DEPARTURES["snapshot"])."""
         self._check_idle()
         self._contacts_cache = None
         if (
@@ -441,14 +442,24 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         ),
         "snapshot": (
             "get_state/set_state put back positions and velocities (float32; exact=True: "
-            "PhysX's pack/unpack) and the motors, but not PhysX's contact state: any write of "
-            "joint positions or of the root pose (a teleport, set_state, even of the same "
-            "values) makes PhysX start the next step's contacts afresh. Measured on r2d2 "
-            "driving at 2 rad/s: the step after a write of the unchanged positions differs "
-            "from the uninterrupted one by 2.3 rad/s on a wheel (velocities alone: 0); "
-            "on conformance test_state's r2d2 drive (wheels at -5 rad/s, max_force 10) the "
-            "largest one-step difference after set_state is 4.52 (same sim, portable state: "
-            "3.41; from another sim: 2.28); not a bitwise continuation"
+            "PhysX's pack/unpack), the motors, and every link's velocities as PhysX reported "
+            "them: unpack recomputes those from the joint velocities (0.25 rad/s away from the "
+            "ones its step left on a swinging kuka_iiwa), and they are the input of PyBullet's "
+            "link damping law. With a fixed base and no contacts the next steps are the same "
+            "bits (conformance test_state.py; before the link velocities were kept: 5.96e-8 rad "
+            "10 steps after set_state on kuka_iiwa swinging from rest, brake off). Not put back, "
+            "as SAPIEN 3.0.3 sets neither: (1) a floating base's link poses, which PhysX's step "
+            "carries forward in float32 and unpack, as any write of joint positions or of the "
+            "root pose (a teleport, even of the same values), derives afresh from the root pose "
+            "and the joint positions, 1.5e-8 m away: r2d2 tumbling in the air is 6.0e-8 off 10 "
+            "steps after set_state, humanoid.urdf 1.2e-6 (raw SAPIEN on a 7-link chain: 2.1e-6 "
+            "rad; bench/physx_snapshot.py); (2) contacts: such a write makes PhysX start the "
+            "next step's contacts afresh. Measured on r2d2 driving at 2 rad/s: the step after a "
+            "write of the unchanged positions differs from the uninterrupted one by 2.3 rad/s on "
+            "a wheel (velocities alone: 0); on conformance test_state's r2d2 drive (wheels at "
+            "-5 rad/s, max_force 10) the largest one-step difference after set_state is 4.52 "
+            "(same sim, portable state: 3.41; from another sim: 2.28); not a bitwise "
+            "continuation where a floating base moves or anything touches"
         ),
         "contact friction": (
             "PhysX reports no friction impulse per contact point (SAPIEN 3.0.3): "
