@@ -53,14 +53,17 @@ def story_words(s: dict[str, Any]) -> str | None:
     if deepest is not None and deepest["depth"] >= START_DEPTH:
         into = " and ".join(deepest["others"]) if deepest["others"] else "its own links"
         parts.append(f"{subject} starts {fmt_distance(deepest['depth'])} inside {into}")
-    peaks = {lab: _highest(events[lab]) for lab in labels}
-    thrown = [lab for lab, p in peaks.items() if p and p["figures"]["rise"] >= THROW]
+    thrown: dict[str, float] = {}  # label: the highest peak's height, m
+    for lab in labels:
+        peak = _highest(events[lab])
+        if peak is not None and peak["figures"]["rise"] >= THROW:
+            thrown[lab] = peak["figures"]["height"]
     if thrown:
         heights = [
-            f"{lab} throws it to a height of {fmt_distance(peaks[lab]['figures']['height'])}"
+            f"{lab} throws it to a height of {fmt_distance(h)}"
             if k == 0
-            else f"{lab} to {fmt_distance(peaks[lab]['figures']['height'])}"
-            for k, lab in enumerate(thrown)
+            else f"{lab} to {fmt_distance(h)}"
+            for k, (lab, h) in enumerate(thrown.items())
         ]
         kept = [lab for lab in labels if lab not in thrown]
         throw = ", ".join(heights)
@@ -68,16 +71,16 @@ def story_words(s: dict[str, Any]) -> str | None:
             throw += f" ({_names(kept)}: no throw of {fmt_distance(THROW)} or more)"
         parts.append(throw if parts else f"{subject} is thrown: {throw}")
     elif not parts:
-        tipped = {
-            lab: next(
-                (x for x in events[lab].get("events", []) if x["kind"] == "tipped_over"), None
-            )
-            for lab in labels
-        }
-        over = [lab for lab, x in tipped.items() if x]
+        tipped: dict[str, float] = {}  # label: when it first tipped over, s
+        for lab in labels:
+            for x in events[lab].get("events", []):
+                if x["kind"] == "tipped_over":
+                    tipped[lab] = x["time"]
+                    break
+        over = list(tipped)
         if not over:
             return None
-        when = ", ".join(f"{lab} at t = {fmt_time(tipped[lab]['time'])}" for lab in over)
+        when = ", ".join(f"{lab} at t = {fmt_time(t)}" for lab, t in tipped.items())
         upright = [lab for lab in labels if lab not in over]
         parts.append(
             f"{subject} tips over ({when})"
