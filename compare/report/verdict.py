@@ -278,8 +278,9 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
             also_words += (
                 f" Chaos is named first: at this time step {who}'s own runs {when} as far apart "
                 "as the two engines, so no single run here can show an engine difference. But "
-                f"over the run {share}: there the gap is of the size of what halving the time "
-                "step changes, not of chaos; a smaller --timestep tells whether it closes."
+                f"over the run {share}: for most of the run the gap is of the size of what "
+                "halving the time step changes, not of chaos; a smaller --timestep tells whether "
+                "it closes."
             )
         lines.append(
             f"The two engines' runs {when} a median {_iv(v['gap'], unit)} apart, {ratio} own "
