@@ -16,7 +16,7 @@ from ..analysis.diff import DEG, QUANTITIES, Divergence, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
-from .engine_figures import engines_section, pair_reasons
+from .engine_figures import engines_section, p_words, pair_reasons
 from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
 from .fmt import fmt_threshold, fmt_time, fmt_value
@@ -790,8 +790,8 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         "not run (the gap stays below the tolerance, or one run per engine)"
         if test is None
         else f"{test['name']}: statistic {test['statistic']:.3g}, p = {test['p_value']:.3g} "
-        f"({'every split' if test['exact'] else str(test['resamples']) + ' random splits'}; "
-        f"alpha {test['alpha']:g})"
+        f"({'every split' if test['exact'] else str(test['resamples']) + ' random splits'}"
+        f"{_floor_words(test)}; alpha {test['alpha']:g})"
     )
     n = v["instants"]
     lines += [
@@ -816,3 +816,13 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
     if v["marginal_reasons"]:
         lines += ["Marginal: " + "; ".join(v["marginal_reasons"]) + ".", ""]
     return lines
+
+
+def _floor_words(test: dict[str, Any]) -> str:
+    """``, the smallest p-value 3 and 3 runs can give`` where the exact test's p-value is its
+    floor (:func:`~.engine_figures.p_words`), else empty."""
+    words = p_words(test)
+    if "(" not in words:
+        return ""
+    n, m = test["sizes"]
+    return f", the smallest p-value {n} and {m} runs can give"
