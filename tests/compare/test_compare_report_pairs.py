@@ -437,3 +437,18 @@ def test_a_sweep_of_three_engines_draws_every_pair(tmp_path, monkeypatch):
     assert "The gap is the median base position distance between" in text  # not its key
     rows = [r for r in text.splitlines() if r.startswith("| 0.")]
     assert len(rows) == 2 * 3  # a row per pair at each value
+
+
+def test_a_p_value_at_the_exact_tests_floor_says_so():
+    from simbridge.compare.report.engine_figures import p_words
+
+    def test(p, n, m, splits, exact=True):
+        return {"p_value": p, "sizes": [n, m], "resamples": splits, "exact": exact}
+
+    # 4 and 4 runs: 70 splits, a split and its mirror alike: 2/70 is the smallest p
+    assert p_words(test(2 / 70, 4, 4, 70)) == (
+        "p = 0.029 (the smallest this test can give with 4 and 4 runs)"
+    )
+    assert p_words(test(4 / 70, 4, 4, 70)) == "p = 0.057"
+    assert p_words(test(1 / 10, 2, 3, 10)).endswith("with 2 and 3 runs)")  # no mirror: 1/10
+    assert p_words(test(1e-4, 9, 9, 9999, exact=False)) == "p < 0.001"
