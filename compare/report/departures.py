@@ -39,7 +39,11 @@ from .fmt import fmt_distance
 if TYPE_CHECKING:
     from ..analysis.view import ComparisonView
 
-__all__ = ["GENERAL_CUT", "applicable"]
+__all__ = ["GENERAL_CUT", "NOT_CHECKED", "applicable", "checked"]
+
+NOT_CHECKED = "not checked against this scenario"
+"""The ``why`` of a departure no rule here checks against the scenario (listed as the backend
+wrote it, not said to apply)."""
 
 GENERAL_CUT = {
     "contact": ": ",
@@ -136,6 +140,12 @@ def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[
                 )
         out[label] = {"apply": apply, "left_out": left}
     return out
+
+
+def checked(entry: dict[str, Any]) -> bool:
+    """Whether one of :func:`applicable`'s ``apply`` entries was found to apply here (not merely
+    listed as :data:`NOT_CHECKED`)."""
+    return entry.get("why") != NOT_CHECKED
 
 
 def _judge(
@@ -243,7 +253,7 @@ def _judge(
         return "joints with an axis not of length 1: " + ", ".join(hits), None
     if key.startswith("body "):
         return "it names a body of this world", None
-    return "not checked against this scenario", None
+    return NOT_CHECKED, None
 
 
 def _contact_figures(c: ComparisonView, events: list[EngineEvents]) -> str:
