@@ -44,9 +44,9 @@ from simbridge.profiles import get_profile
 
 from ..analysis.verdict import BOOTSTRAP_RESAMPLES, CONFIDENCE, Interval
 from ..pipeline import Comparison, compare
+from ..report.departures import checked
 from ..run.quantities import distance
 from ..scenario import format_timestep, load_scenario
-from ..report.departures import checked
 from .points import PROFILE_ENTRIES, PairFigures, _with_change, format_value, pair_figures
 
 __all__ = [

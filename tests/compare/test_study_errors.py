@@ -48,7 +48,9 @@ SMALL = dict(duration=0.5, ensemble=2, workers=0, cache=False)
 
 def test_a_setting_of_an_engine_not_run_is_refused_before_any_run():
     for call in (
-        lambda: compare(RACECAR, TWO, engine_settings={"physx": {"contact_offset": 0.001}}, **SMALL),
+        lambda: compare(
+            RACECAR, TWO, engine_settings={"physx": {"contact_offset": 0.001}}, **SMALL
+        ),
         lambda: sweep(RACECAR, TWO, ["physx.contact_offset=0.001,0.002"], **SMALL),
         lambda: sweep(
             RACECAR,
@@ -144,7 +146,9 @@ def test_did_you_mean_for_keys_profiles_and_settings(tmp_path, capsys):
         parse_vary("lateral_fricton=0.5")
     with pytest.raises(InvalidArgumentError, match=r"did you mean 'mujoco.impratio'\?"):
         parse_vary("mujoco.impratoi=1,10")
-    code, _, err = _cli(["sweep", str(RACECAR), "--profile", "pybulet", "--vary", "restitution=0.1"], capsys)
+    code, _, err = _cli(
+        ["sweep", str(RACECAR), "--profile", "pybulet", "--vary", "restitution=0.1"], capsys
+    )
     assert code == 2 and "did you mean 'pybullet'?" in err
     code, _, err = _cli(["sweep", str(RACECAR), "--vary", "lateral_fricton=0.5"], capsys)
     assert code == 2 and "did you mean 'lateral_friction'?" in err
