@@ -18,6 +18,7 @@ friction``             touched something
 ``speed clamp``        a joint speed or the base's speed reached 99 % of the profile's
                        ``max_joint_velocity``
 ``joint axis``         a movable joint's ``<axis>`` is not of length 1 (by more than 1e-6)
+``link damping``       a profile's ``linear_damping`` or ``angular_damping`` is not 0
 ====================== ===============================================================
 
 A departure naming a body of this world (``body 1 mass bound``) applies as the backend wrote
@@ -54,6 +55,7 @@ GENERAL_CUT = {
 """Where a known departure's text stops being general: what follows quotes another robot."""
 
 SPEED_CLAMP_FRACTION = 0.99
+LINK_DAMPING = ("linear_damping", "angular_damping")
 
 
 def _general(key: str, text: str) -> str:
@@ -251,6 +253,16 @@ def _judge(
         if not hits:
             return None, None
         return "joints with an axis not of length 1: " + ", ".join(hits), None
+    if key == "link damping":
+        damped = []
+        for slot, label in enumerate(labels):
+            prof = c.runs[(slot, c.timestep)].manifest.get("profile") or {}
+            found = [f"{k} {prof[k]:g}" for k in LINK_DAMPING if prof.get(k)]
+            if found:
+                damped.append(f"{label}: " + ", ".join(found))
+        if not damped:
+            return None, None
+        return "the profiles damp link velocities: " + "; ".join(damped), None
     if key.startswith("body "):
         return "it names a body of this world", None
     return NOT_CHECKED, None
