@@ -47,6 +47,7 @@ class Robot:
     # mode or gains since: those slots are velocity motors with kp 0 and kd 1 already
     velocity_slots: np.ndarray | None = None
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
+    moving_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # theirs
     ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
     dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
     balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
@@ -63,6 +64,12 @@ class Robot:
     # link), the float32 factors -k_lin, -k_ang per row, the (2n, 3) buffer they are read into,
     # and per link its bound add_force_torque with the views of its two rows
     damping_calls: tuple[list[Any], np.ndarray, np.ndarray, list[Any]] | None = None
+    # after an exact restore, until the next step or write: every link's (linear, angular)
+    # velocity as PhysX reported it when the snapshot was taken, shape (links, 2, 3) float32.
+    # PhysX recomputes link velocities from the joint velocities at unpack, and those differ
+    # from the ones its step left (backend.DEPARTURES["snapshot"]); the link damping law and
+    # link_state read these instead, so that the next step is the uninterrupted one
+    restored_velocities: np.ndarray | None = None
 
     @property
     def static(self) -> bool:

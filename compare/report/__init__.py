@@ -99,7 +99,11 @@ def _plots(comparison: Comparison, out: Path) -> tuple[dict[str, str], list[str]
     from .plots import all_plots
 
     images = all_plots(comparison, out)
-    if comparison.resync is not None and plot_resync(comparison.resync, out / "resync.png"):
+    labels = list(comparison.labels)
+    pair = f"{labels[0]} and {labels[1]}" if len(labels) > 2 else None  # resync's pair alone
+    if comparison.resync is not None and plot_resync(
+        comparison.resync, out / "resync.png", pair=pair
+    ):
         images["resync"] = out / "resync.png"
     names = {k: Path(p).relative_to(out).as_posix() for k, p in images.items()}
     return names, list(names.values())

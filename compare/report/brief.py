@@ -9,8 +9,9 @@ from typing import Any
 
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .markdown import left_out_words
-from .outcomes import outcome_lines
-from .verdict import pair_words, verdict_word
+from .outcomes import outcome_brief
+from .story import story_words
+from .verdict import pair_words, time_step_share, verdict_word
 
 __all__ = ["brief", "MAX_LINES"]
 
@@ -22,12 +23,14 @@ def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
     """The scenario's outcomes first (one line, where it declares any: what it calls success),
     then the verdict: with two engines, the verdict (a line) and how far apart the nominal runs
     end and when they part (a line); with more, a line naming the engines and one line per pair,
-    each with the same judged figure (:func:`~.verdict.pair_words`). Then the engines left out
-    (a line, where there are any) and ``report: <path>`` last (with ``path``)."""
+    each with the same judged figure (:func:`~.verdict.pair_words`). Then what happens to the
+    robot (a line, where its events tell a story, :func:`~.story.story_words`, and a line is
+    left for it), the engines left out (a line, where there are any) and ``report: <path>``
+    last (with ``path``)."""
     lines: list[str] = []
-    outcomes = [x.replace("**", "") for x in outcome_lines(s)]
+    outcomes = outcome_brief(s)  # bounded; the figures in report.md's Outcomes
     if outcomes:
-        lines.append(" ".join(outcomes))
+        lines.append(outcomes)
     left = left_out_words(s)
     pairs = s.get("pairs") or []
     if len(s["labels"]) > 2 and len(pairs) > 1:
@@ -45,6 +48,9 @@ def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
             lines.append(f"  and {len(pairs) - len(shown)} more pairs: report.md.")
     else:
         lines += [_verdict(s), _figures(s)]
+    story = story_words(s)
+    if story and len(lines) + 1 + bool(left) + (path is not None) <= MAX_LINES:
+        lines.append(story)
     if left:
         lines.append(left)
     if path is not None:
@@ -60,11 +66,12 @@ def _pairs_head(s: dict[str, Any]) -> str:
     head = f"{s['scenario']} on {names}"
     if not any(p["verdict"] for p in s["pairs"]):
         return head + " (one run per engine: no pair judged, the nominal runs' gaps):"
-    size = (s.get("ensemble") or {}).get("size")
-    runs = f", {size} per engine" if size else ""
+    size = (s.get("ensemble") or {}).get("size") or 1
+    if size < 2:  # one run per engine: one gap, no interval
+        return f"{head}, every pair judged on the {s['headline']['title']} (one run per engine):"
     return (
         f"{head}, every pair judged on the {s['headline']['title']} "
-        f"(median gap over every pair of runs{runs}, 95% interval):"
+        f"(median gap over every pair of runs, {size} per engine, 95% interval):"
     )
 
 
@@ -96,9 +103,12 @@ def _verdict(s: dict[str, Any]) -> str:
     if kind == "chaotic":
         who = " and ".join(v["engines"])
         spread = fmt_value(figs[v["engines"][0]]["spread"]["value"], unit)
+        share = time_step_share(v)
         return (
             head + f"{word}: runs {gap} apart {when}, within {who}'s own "
-            f"spread ({spread}); the gap says nothing about the physics."
+            f"spread ({spread}); "
+            + (f"{share}: at this time step " if share else "")
+            + "the gap says nothing about the physics."
         )
     if kind == "differ":
         t = v["test"]

@@ -18,6 +18,7 @@ friction``             touched something
 ``speed clamp``        a joint speed or the base's speed reached 99 % of the profile's
                        ``max_joint_velocity``
 ``joint axis``         a movable joint's ``<axis>`` is not of length 1 (by more than 1e-6)
+``link damping``       a profile's ``linear_damping`` or ``angular_damping`` is not 0
 ====================== ===============================================================
 
 A departure naming a body of this world (``body 1 mass bound``) applies as the backend wrote
@@ -39,7 +40,11 @@ from .fmt import fmt_distance
 if TYPE_CHECKING:
     from ..analysis.view import ComparisonView
 
-__all__ = ["GENERAL_CUT", "applicable"]
+__all__ = ["GENERAL_CUT", "NOT_CHECKED", "applicable", "checked"]
+
+NOT_CHECKED = "not checked against this scenario"
+"""The ``why`` of a departure no rule here checks against the scenario (listed as the backend
+wrote it, not said to apply)."""
 
 GENERAL_CUT = {
     "contact": ": ",
@@ -50,6 +55,7 @@ GENERAL_CUT = {
 """Where a known departure's text stops being general: what follows quotes another robot."""
 
 SPEED_CLAMP_FRACTION = 0.99
+LINK_DAMPING = ("linear_damping", "angular_damping")
 
 
 def _general(key: str, text: str) -> str:
@@ -127,7 +133,7 @@ def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[
         deps = tr.manifest.get("departures") or {}
         apply, left = [], []
         for key, text in deps.items():
-            why, measured = _judge(key, c, facts, touched, events)
+            why, measured = _judge(key, c, facts, touched, events, slot)
             if why is None:
                 left.append(key)
             else:
@@ -138,16 +144,28 @@ def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[
     return out
 
 
+def checked(entry: dict[str, Any]) -> bool:
+    """Whether one of :func:`applicable`'s ``apply`` entries was found to apply here (not merely
+    listed as :data:`NOT_CHECKED`)."""
+    return entry.get("why") != NOT_CHECKED
+
+
 def _judge(
     key: str,
     c: ComparisonView,
     facts: dict[str, Any],
     touched: list[dict[str, list[str]]],
     events: list[EngineEvents],
+    slot: int = 0,
 ) -> tuple[str | None, str | None]:
-    """(why it applies, measured) or (None, None) when it does not apply."""
+    """(why it applies, measured) or (None, None) when it does not apply, for the engine in
+    ``slot``: with two engines, both engines' figures; with more, its own beside the first
+    engine's (the reference), never a third engine's."""
+    shown = list(range(len(c.labels))) if len(c.labels) <= 2 else sorted({0, slot})
     labels = c.labels
     subject = c.scenario.subject
+    touched = [touched[k] for k in shown]
+    events = [events[k] for k in shown]
     any_touch = any(touched)
 
     def touching_with(kind: str) -> list[str]:
@@ -164,7 +182,7 @@ def _judge(
             return None, None
         bodies = sorted({b for t in touched for b in t})
         why = "contacts in this run (" + ", ".join(bodies) + ")"
-        return why, _contact_figures(c, events)
+        return why, _contact_figures(c, events, shown)
     if key in ("cylinder", "restitution", "rolling/spinning friction"):
         hits = touching_with(key)
         if not hits:
@@ -214,8 +232,9 @@ def _judge(
     if key == "speed clamp":
         rows = []
         hit = False
-        for slot, label in enumerate(labels):
-            tr = c.runs[(slot, c.timestep)]
+        for k in shown:
+            label = labels[k]
+            tr = c.runs[(k, c.timestep)]
             clamp = (tr.manifest.get("profile") or {}).get("max_joint_velocity")
             if not clamp:
                 continue
@@ -241,17 +260,28 @@ def _judge(
         if not hits:
             return None, None
         return "joints with an axis not of length 1: " + ", ".join(hits), None
+    if key == "link damping":
+        damped = []
+        for slot, label in enumerate(labels):
+            prof = c.runs[(slot, c.timestep)].manifest.get("profile") or {}
+            found = [f"{k} {prof[k]:g}" for k in LINK_DAMPING if prof.get(k)]
+            if found:
+                damped.append(f"{label}: " + ", ".join(found))
+        if not damped:
+            return None, None
+        return "the profiles damp link velocities: " + "; ".join(damped), None
     if key.startswith("body "):
         return "it names a body of this world", None
-    return "not checked against this scenario", None
+    return NOT_CHECKED, None
 
 
-def _contact_figures(c: ComparisonView, events: list[EngineEvents]) -> str:
-    """This run's own contact figures: the followed robot's base height at the end of the
-    first phase, how often its links made or lost contact, its highest hop."""
+def _contact_figures(c: ComparisonView, events: list[EngineEvents], slots: list[int]) -> str:
+    """This run's own contact figures of the engines in ``slots`` (``events`` theirs): the
+    followed robot's base height at the end of the first phase, how often its links made or
+    lost contact, its highest hop."""
     phase = c.runs[(0, c.timestep)].phases[0][0]
     heights, changes, hops = [], [], []
-    for slot, e in enumerate(events):
+    for slot, e in zip(slots, events, strict=True):
         tr = c.runs[(slot, c.timestep)]
         row = tr.phases[0][2]
         h = float(tr.body.base_position[row] @ e.up)

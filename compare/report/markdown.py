@@ -16,6 +16,7 @@ from ..analysis.diff import DEG, QUANTITIES, Divergence, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
+from .engine_figures import engines_section, p_words, pair_reasons
 from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
 from .fmt import fmt_threshold, fmt_time, fmt_value
@@ -23,12 +24,14 @@ from .outcomes import outcome_lines, outcomes_section
 from .pair_sections import crossings_section, parting_lines, parts_section, phases_section
 from .parts import parts_words
 from .resync import resync_lines, resync_section
+from .story import story_words
 from .verdict import (
     interval_cell,
     pair_words,
     perturbation_words,
     verdict_lines,
     verdict_word,
+    within_words,
 )
 
 __all__ = ["headline", "markdown"]
@@ -41,19 +44,21 @@ def headline(summary: dict[str, Any]) -> list[str]:
     the outcomes, then every pair's verdict with its judged gap, one bullet each; the first
     pair's figures follow in their own section (:func:`first_pair_lines`)."""
     lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
+    story = story_words(summary)  # what happens to the robot, after the verdict
     if len(summary["labels"]) > 2 and len(summary.get("pairs") or []) > 1:
-        lines += pairs_lines(summary)
+        lines += pairs_lines(summary) + ([story] if story else [])
     else:
-        lines += first_pair_lines(summary)
+        lines += first_pair_lines(summary, story=story)
     raised = perturbation_words(summary.get("ensemble"))  # a float32 engine's own offsets
     if raised:
         lines.append(raised)
     return lines
 
 
-def first_pair_lines(summary: dict[str, Any]) -> list[str]:
-    """The first pair's verdict in words and its nominal runs' figures: when they part, which
-    quantity goes first, what halving the time step changes, the one-step error."""
+def first_pair_lines(summary: dict[str, Any], story: str | None = None) -> list[str]:
+    """The first pair's verdict in words (then ``story``, where given: what happens to the
+    robot) and its nominal runs' figures: when they part, which quantity goes first, what
+    halving the time step changes, the one-step error."""
     h = summary["headline"]
     unit = h["unit"]
     subject = summary["subject"]
@@ -62,6 +67,8 @@ def first_pair_lines(summary: dict[str, Any]) -> list[str]:
     lines: list[str] = []
     if summary.get("verdict"):
         lines += verdict_lines(summary)
+    if story:
+        lines.append(story)
     if h["quantity"] == "base_distance":
         apart = f"{fmt_value(h['final'], unit)} apart ({subject}'s base position"
     elif h["quantity"] == "link_distance":
@@ -132,12 +139,16 @@ def pairs_lines(summary: dict[str, Any]) -> list[str]:
     if len(summary["labels"]) <= 2 or not pairs:
         return []
     ens = summary.get("ensemble") or {}
-    runs = f", {ens['size']} per engine" if ens.get("size", 1) > 1 else ""
+    gap = "the gap of the one run per engine, no interval"  # --ensemble 1
+    if ens.get("size", 1) > 1:
+        gap = (
+            f"the median gap over every pair of runs, {ens['size']} per engine, with its 95% "
+            "interval"
+        )
     return [
         f"Every pair of the {len(summary['labels'])} engines, judged on the "
-        f"{summary['headline']['title']} (the median gap over every pair of runs{runs}, "
-        "with its 95% interval; the table below has each pair's nominal gap and where it is "
-        "born):"
+        f"{summary['headline']['title']} ({gap}; the table below has each pair's nominal gap "
+        "and where it is born):"
     ] + [f"- {pair_words(p)}." for p in pairs]
 
 
@@ -238,7 +249,8 @@ def markdown(
     lines += pictures or []
     # -- verdict
     lines += outcomes_section(s)
-    lines += pairs_section(s)
+    lines += pairs_section(s) + pair_reasons(s)  # with more than two: what decides each
+    lines += engines_section(s)  # and every engine's own figures
     if many:
         lines += [f"## {a} and {b}, the first pair", ""]
         for statement in first_pair_lines(s):
@@ -293,7 +305,7 @@ def markdown(
     # -- where the gap is born, which part
     lines += _born_section(s)
     lines += parts_section(s) if many else _parts_section(s)
-    lines += resync_section(s, images.pop("resync", None))  # its figure here, not in Figures
+    lines += resync_section(s, images.pop("resync", None), of)  # its figure here, not in Figures
     # -- final poses
     lines += ["## Final poses", ""]
     poses = _final_poses(c)
@@ -738,7 +750,7 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
             "",
         ]
         raised = perturbation_words(e)
-        if raised:
+        if raised and not of:  # with more engines, said in *Every engine*
             lines += [raised, ""]
         lines += failed_members_lines(e)
     rows = []
@@ -778,8 +790,8 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         "not run (the gap stays below the tolerance, or one run per engine)"
         if test is None
         else f"{test['name']}: statistic {test['statistic']:.3g}, p = {test['p_value']:.3g} "
-        f"({'every split' if test['exact'] else str(test['resamples']) + ' random splits'}; "
-        f"alpha {test['alpha']:g})"
+        f"({'every split' if test['exact'] else str(test['resamples']) + ' random splits'}"
+        f"{_floor_words(test)}; alpha {test['alpha']:g})"
     )
     n = v["instants"]
     lines += [
@@ -793,8 +805,10 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         f"Two-sample test on the runs' states {where}: {test_words}.",
         "",
         f"Instants: {n['agree']} below the tolerance, {n['chaotic']} within an engine's spread, "
-        f"{n['unresolved']} within an engine's own time-step error, {n['differ']} beyond every "
-        f"one of them (of {n['total']}). A ratio between {v['marginal_range'][0]:g} and "
+        f"{n['unresolved']} within an engine's own time-step error (and no spread), "
+        f"{n['differ']} beyond every one of them (of {n['total']}). "
+        + (f"{within} " if (within := within_words(v)) else "")
+        + f"A ratio between {v['marginal_range'][0]:g} and "
         f"{v['marginal_range'][1]:g} is near 1: the gap is not clearly larger, and the verdict "
         "says marginal.",
         "",
@@ -802,3 +816,13 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
     if v["marginal_reasons"]:
         lines += ["Marginal: " + "; ".join(v["marginal_reasons"]) + ".", ""]
     return lines
+
+
+def _floor_words(test: dict[str, Any]) -> str:
+    """``, the smallest p-value 3 and 3 runs can give`` where the exact test's p-value is its
+    floor (:func:`~.engine_figures.p_words`), else empty."""
+    words = p_words(test)
+    if "(" not in words:
+        return ""
+    n, m = test["sizes"]
+    return f", the smallest p-value {n} and {m} runs can give"

@@ -197,3 +197,71 @@ def outcomes_section(summary: Mapping[str, Any]) -> list[str]:
         lines.append(f"- `{decl['name']}`: {decl['kind']}" + (f" ({words})" if words else ""))
     lines.append("")
     return lines
+
+
+MAX_BRIEF_CHARS = 160
+"""The longest outcome line of the terminal's headline (:func:`outcome_brief`) before its
+pointer to report.md."""
+
+
+def _brief_one(decl: Mapping[str, Any], per: dict[str, Mapping[str, Any]]) -> tuple[str, str]:
+    """The outcome's name and its state: ``every run on every engine``, ``3/4 on mujoco, 0/4 on
+    physx (every run on pybullet)``, ``measured``, ``not evaluated``."""
+    name = decl["name"]
+    stats = list(per.values())
+    if all(p["success"] is None and p["value"] is None for p in stats):
+        return name, "not evaluated"
+    if any(p["success"] is None for p in stats):
+        return name, "measured"
+    short = [
+        (lab, p["success"])
+        for lab, p in per.items()
+        if p["success"]["successes"] < p["success"]["runs"]
+    ]
+    if not short:
+        return name, "every run on every engine"
+    if all(s["successes"] == 0 for _, s in short) and len(short) == len(per):
+        return name, "no run on any engine"
+    words = ", ".join(f"{s['successes']}/{s['runs']} on {lab}" for lab, s in short)
+    full = [lab for lab in per if lab not in dict(short)]
+    if full:
+        words += f" (every run on {' and '.join(full)})"
+    return name, words
+
+
+def outcome_brief(summary: Mapping[str, Any]) -> str | None:
+    """The terminal's outcome line, bounded (:data:`MAX_BRIEF_CHARS` before its pointer): per
+    outcome, whether every run of every engine succeeded or which engines fell short (their
+    counts), outcomes in the same state named together (``every run on every engine: settles
+    at A, settles at B``), as many as fit and how many more; the figures stay in report.md's
+    *Outcomes*. None when the scenario declares no outcome."""
+    out = summary.get("outcomes")
+    if not out or not out.get("declared"):
+        return None
+    labels = list(out["engines"])
+    groups: dict[str, list[str]] = {}  # a state shared by several outcomes: their names
+    for decl in out["declared"]:
+        name, state = _brief_one(decl, {lab: out["engines"][lab][decl["name"]] for lab in labels})
+        key = state if state in _SHARED else f"{name}: {state}"
+        groups.setdefault(key, []).append(name)
+    said = [
+        (
+            f"{key}: {', '.join(names)}"
+            if key in _SHARED and len(names) > 1
+            else f"{names[0]}: {key}"
+        )
+        if key in _SHARED
+        else key
+        for key, names in groups.items()
+    ]
+    shown: list[str] = []
+    for k, words in enumerate(said):
+        if shown and len("; ".join([*shown, words])) > MAX_BRIEF_CHARS:
+            rest = sum(len(names) for names in list(groups.values())[k:])
+            shown.append(f"and {rest} more")
+            break
+        shown.append(words)
+    return "outcomes: " + "; ".join(shown) + " (figures: report.md, Outcomes)"
+
+
+_SHARED = ("every run on every engine", "no run on any engine", "not evaluated", "measured")

@@ -77,14 +77,16 @@ def resync_lines(summary: dict[str, Any]) -> list[str]:
     return [line]
 
 
-def resync_section(summary: dict[str, Any], image: Path | None = None) -> list[str]:
-    """The report's section ``## One step from the same state`` (markdown lines)."""
+def resync_section(summary: dict[str, Any], image: Path | None = None, of: str = "") -> list[str]:
+    """The report's section ``## One step from the same state`` (markdown lines); ``of``: the
+    pair it runs between, `` (pybullet and mujoco)``, named in the title with more than two
+    engines (resync runs between the first pair alone)."""
     r = summary.get("resync")
     if not r:
         return []
     unit = r["unit"]
     title = QUANTITIES[r["quantity"]].title
-    lines = ["## One step from the same state", ""]
+    lines = [f"## One step from the same state{of}", ""]
     lines += resync_lines(summary)
     lines += [
         "",
@@ -186,10 +188,12 @@ def _md_table(header: list[str], rows: list[list[str]]) -> list[str]:
 _COLORS = ("tab:blue", "tab:orange")
 
 
-def plot_resync(r: Resync, path: str | Path) -> Path | None:
+def plot_resync(r: Resync, path: str | Path, *, pair: str | None = None) -> Path | None:
     """``resync.png``: the one-step error over time, log scale, both directions (solid) and
     both floors (dashed), phases marked, the legend below the axes; a second panel with the
-    largest joint velocity error when the subject has joints. None when there is no point."""
+    largest joint velocity error when the subject has joints. ``pair``: the engines it runs
+    between (``pybullet and mujoco``), named in the title where the study has more. None when
+    there is no point."""
     if not any(len(d.rows) for d in r.directions):
         return None
     import matplotlib
@@ -260,8 +264,9 @@ def plot_resync(r: Resync, path: str | Path) -> Path | None:
                 color="0.4",
                 va="top",
             )
+    between = f" ({pair})" if pair else ""
     axes[0, 0].set_title(
-        f"One step from the same state, every {r.every} steps (log scale)", fontsize=10
+        f"One step from the same state{between}, every {r.every} steps (log scale)", fontsize=10
     )
     axes[-1, 0].set_xlabel("time of the state the step starts from (s)")
     handles, labels = axes[0, 0].get_legend_handles_labels()

@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..analysis.diff import QUANTITIES
 from ..analysis.verdict import Interval
 from ..report.fmt import fmt_value
 from ..report.verdict import verdict_word
@@ -324,7 +325,7 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     if s.points and s.points[0].pairs:
         head = s.points[0].pairs[0]
         lines += [
-            f"The gap is the median {head.quantity} between the two engines' runs"
+            f"The gap is the median {_title(head.quantity)} between the two engines' runs"
             + (" of a pair" if len(names) > 2 else "")
             + " at the judged instant (the end, or the largest gap when the end is below the "
             "tolerance), with its 95% bootstrap interval; a spread is the 90th percentile of "
@@ -396,3 +397,9 @@ def write_explanation(e: Explanation, out: str | Path, *, plots: bool = True) ->
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def _title(quantity: str) -> str:
+    """``base position distance`` for ``base_distance``: a quantity as the reports name it."""
+    q = QUANTITIES.get(quantity)
+    return quantity.replace("_", " ") if q is None else q.title

@@ -20,7 +20,7 @@ from simbridge.compare.report.events import parting_words
 from simbridge.compare.report.fmt import fmt_threshold, fmt_time, fmt_value
 from simbridge.compare.report.pair_sections import MAX_PART_ROWS
 from simbridge.compare.report.parts import parts_words
-from simbridge.compare.report.verdict import pair_words, verdict_word
+from simbridge.compare.report.verdict import interval_cell, pair_words, verdict_word
 from simbridge.compare.study import sweep, write_sweep
 
 SAPIEN = importlib.util.find_spec("sapien") is not None
@@ -77,10 +77,25 @@ def test_the_terminal_gives_every_pair_the_same_judged_figure(written):
     assert "ghost (No module named 'ghost')" in lines[4]
 
 
+def test_one_run_per_engine_claims_no_interval(written):
+    import copy
+
+    from simbridge.compare.report.markdown import pairs_lines
+
+    _, s = written
+    one = copy.deepcopy(s)
+    one["ensemble"]["size"] = 1
+    head = brief(one, "r.md")[0]
+    assert head.endswith("(one run per engine):") and "interval" not in head
+    lead = pairs_lines(one)[0]
+    assert "the gap of the one run per engine, no interval" in lead and "95%" not in lead
+    assert "3 per engine, with its 95% interval" in pairs_lines(s)[0]
+
+
 def test_the_terminal_leads_with_the_outcomes(written, monkeypatch):
     _, s = written
     module = importlib.import_module("simbridge.compare.report.brief")
-    monkeypatch.setattr(module, "outcome_lines", lambda s: ["**goal**: reached 3/3"])
+    monkeypatch.setattr(module, "outcome_brief", lambda s: "goal: reached 3/3")
     lines = brief(s, "r.md")
     assert lines[0] == "goal: reached 3/3" and len(lines) <= 6
     assert lines[1].startswith("r2d2 on pybullet") and lines[-1] == "report: r.md"
@@ -167,6 +182,101 @@ def test_first_pair_sections_name_their_pair_and_departures_link(written):
     setup = text.split("## Setup\n", 1)[1].split("\n## ", 1)[0]
     assert "(#profile-departures-that-apply-here)" in setup
     assert "## Profile departures that apply here" in text
+
+
+def test_every_engine_has_its_own_figures(written):
+    text, s = written
+    section = _section(text, "Every engine")
+    rows = _rows(section)
+    assert [r[0] for r in rows] == ["pybullet", "mujoco", "physx"]
+    for cells, label in zip(rows, s["labels"], strict=True):
+        e = s["ensemble"]["engines"][label]
+        pert = e["perturbation"]
+        assert cells[1] == str(s["ensemble"]["size"])
+        assert cells[2] == (
+            f"{pert['position']:.3g} m / {pert['orientation']:.3g} rad ({pert['state_dtype']})"
+        )
+        assert cells[3] == interval_cell(e["spread_end"], "m")
+        assert cells[4] == ", ".join(
+            f"{fmt_threshold(h['threshold'], 'm')}: {fmt_time(h['time'])}" for h in e["horizons"]
+        )
+        assert cells[5] == fmt_value(s["own"][label]["final"]["base_distance"], "m")
+    # PhysX's figures (float32: offsets raised) are in report.md, and the same as its pairs'
+    physx = s["pairs"][1]["verdict"]["engine_figures"]["physx"]
+    assert interval_cell(physx["spread_end"], "m") == rows[2][3]
+    assert "(float32)" in rows[2][2] and "(float64)" in rows[0][2]
+    # the float32 sentence: in the opening and here, not in the first pair's verdict
+    assert "An engine keeping its state in float32" in section
+    assert "An engine keeping its state in float32" in text.split("\n## ", 1)[0]
+    assert text.count("An engine keeping its state in float32") == 2
+    verdict = text.split("\n## Verdict (pybullet and mujoco)", 1)[1].split("\n## ", 1)[0]
+    assert "physx" not in verdict
+
+
+def test_each_pair_says_what_decides_its_verdict(written):
+    text, s = written
+    section = _section(text, "Every pair of engines")
+    bullets = [x for x in section.splitlines() if x.startswith("- ")]
+    assert len(bullets) == 3
+    for b, p in zip(bullets, s["pairs"], strict=True):
+        v = p["verdict"]
+        assert b.startswith(f"- {' and '.join(p['labels'])}, {verdict_word(v)}: the gap ")
+        for lab, f in v["engine_figures"].items():  # each engine's ratios and figures
+            assert f"{lab}'s spread ({fmt_value(f['spread']['value'], 'm')})" in b
+            assert f"its own error ({fmt_value(f['own_error'], 'm')})" in b
+            assert f"{f['gap_over_own_error']:.3g}x its own error" in b
+        for reason in v["marginal_reasons"]:
+            assert reason in b
+        if v["test"] is not None:
+            assert f"p = {v['test']['p_value']:.2g}" in b
+            # 3 runs against 3: 20 splits, a split and its mirror alike: 0.1 is the floor
+            floor = v["test"]["p_value"] <= 2 / v["test"]["resamples"] * (1 + 1e-9)
+            assert ("the smallest this test can give with 3 and 3 runs" in b) == floor
+
+
+def test_resync_names_its_pair(written):
+    text, s = written
+    assert "\n## One step from the same state (pybullet and mujoco)\n" in text
+    assert "\n## One step from the same state\n" not in text
+
+
+def test_the_resync_figure_names_its_pair(three, tmp_path, monkeypatch):
+    import matplotlib.figure
+
+    from simbridge.compare.report.resync import plot_resync
+
+    titles: list[str] = []
+    save = matplotlib.figure.Figure.savefig
+
+    def spy(fig, *args, **kwargs):
+        titles.extend(ax.get_title() for ax in fig.axes)
+        return save(fig, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", spy)
+    assert plot_resync(three.resync, tmp_path / "r.png", pair="pybullet and mujoco")
+    assert titles[0].startswith("One step from the same state (pybullet and mujoco), every ")
+    titles.clear()
+    plot_resync(three.resync, tmp_path / "r.png")  # two engines: the title as it was
+    assert titles[0].startswith("One step from the same state, every ")
+
+
+def test_each_engines_departures_quote_its_own_figures(written):
+    text, s = written
+    section = _section(text, "Profile departures that apply here")
+    blocks = dict(
+        (label, section.split(f"\n{label}:\n", 1)[1].split("\n\n", 1)[0])
+        for label in ("mujoco", "physx")
+        if f"\n{label}:\n" in section
+    )
+    assert set(blocks) == {"mujoco", "physx"}
+    for label, other in (("mujoco", "physx"), ("physx", "mujoco")):
+        rows = _rows(blocks[label])
+        measured = [r[3] for r in rows if r[3] != "none"]
+        assert measured, blocks[label]
+        for cell in measured:
+            assert f"({other})" not in cell and f"{other} " not in cell, cell
+        contact = next(r[3] for r in rows if r[0] == "`contact`")
+        assert f"({label})" in contact and "(pybullet)" in contact
 
 
 def test_the_one_step_floors_agree(written):
@@ -323,5 +433,22 @@ def test_a_sweep_of_three_engines_draws_every_pair(tmp_path, monkeypatch):
     for slot, x in zip((0, 1, 2), lines[3:], strict=True):  # each engine's, from its first pair
         k, side = {0: (0, 0), 1: (0, 1), 2: (1, 1)}[slot]
         assert x["value"] == [pt["pairs"][k]["spreads"][side]["value"] for pt in data["points"]]
-    rows = [r for r in path.read_text("utf-8").splitlines() if r.startswith("| 0.")]
+    text = path.read_text("utf-8")
+    assert "The gap is the median base position distance between" in text  # not its key
+    rows = [r for r in text.splitlines() if r.startswith("| 0.")]
     assert len(rows) == 2 * 3  # a row per pair at each value
+
+
+def test_a_p_value_at_the_exact_tests_floor_says_so():
+    from simbridge.compare.report.engine_figures import p_words
+
+    def test(p, n, m, splits, exact=True):
+        return {"p_value": p, "sizes": [n, m], "resamples": splits, "exact": exact}
+
+    # 4 and 4 runs: 70 splits, a split and its mirror alike: 2/70 is the smallest p
+    assert p_words(test(2 / 70, 4, 4, 70)) == (
+        "p = 0.029 (the smallest this test can give with 4 and 4 runs)"
+    )
+    assert p_words(test(4 / 70, 4, 4, 70)) == "p = 0.057"
+    assert p_words(test(1 / 10, 2, 3, 10)).endswith("with 2 and 3 runs)")  # no mirror: 1/10
+    assert p_words(test(1e-4, 9, 9, 9999, exact=False)) == "p < 0.001"
