@@ -45,6 +45,7 @@ from .trajectory import BodyTrajectory, Trajectory
 
 __all__ = [
     "LimitAtStart",
+    "StartDepth",
     "KINDS",
     "BRIDGE",
     "TIP_ANGLE",
@@ -127,13 +128,24 @@ class LimitAtStart(NamedTuple):
     end: float | None  # s, the last instant it held (None: to the end of the run)
 
 
+class StartDepth(NamedTuple):
+    """How far the robot starts inside something (not an event:
+    :attr:`EngineEvents.start_depth`): the deepest point of its first step's contacts, found at
+    the spawn pose."""
+
+    link: str  # the link that went deepest
+    depth: float  # m, > 0
+    others: tuple[str, ...]  # the other bodies touching then (empty: its own links)
+
+
 @dataclass
 class EngineEvents:
     """The events of one engine's run (one body, ``body``), in time order (ties in
     :data:`KINDS` order). ``up`` is the world's up (against gravity, unit), ``spawn`` the
     base orientation the tilt is measured from (x, y, z, w), ``initial_contacts`` the links
     touching something at the first step, ``initial_limits`` the joints at a limit from the
-    start (``{joint, side, end}``, ``end`` as an event's)."""
+    start (``{joint, side, end}``, ``end`` as an event's), ``start_depth`` how far it starts
+    inside something (None: apart or resting on a surface, or no depth recorded)."""
 
     label: str
     body: str
@@ -144,6 +156,7 @@ class EngineEvents:
     has_contacts: bool
     """Whether contacts were recorded at all (False for a trajectory recorded without them)."""
     initial_limits: list[LimitAtStart] = field(default_factory=list)
+    start_depth: StartDepth | None = None
 
     def counts(self) -> dict[str, int]:
         return {k: sum(e.kind == k for e in self.events) for k in KINDS}
@@ -232,7 +245,17 @@ def find_events(
         initial_contacts=initial,
         has_contacts=has_contacts,
         initial_limits=initial_limits,
+        start_depth=_start_depth(tr, name, b),
     )
+
+
+def _start_depth(tr: Trajectory, name: str, b: BodyTrajectory) -> StartDepth | None:
+    """The deepest contact of the first step (row 1: the contacts found at the spawn pose)."""
+    d = b.contact_depths
+    if d is None or len(d) < 2 or not (d[1] > 0).any():
+        return None
+    k = int(np.argmax(d[1]))
+    return StartDepth(b.link_names[k], float(d[1, k]), _touching_others(tr, name, 1))
 
 
 def _touching_others(tr: Trajectory, name: str, row: int) -> tuple[str, ...]:
