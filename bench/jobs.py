@@ -23,7 +23,10 @@
 Timings depend on what else the machine runs: the serial and the pool runs are taken back to
 back, each engine in turn, and the load average is printed beside them, with the CPU seconds
 of each (this process and its workers), which the load does not move: pool CPU over serial CPU
-is what the pool costs on top of the runs.
+is what the pool costs on top of the runs. Below the table, per engine and pool: the workers' CPU
+outside the jobs, per worker (a cold pool's start: the interpreter, the imports; each job's
+unpickling), each worker's first job's CPU against the median of the others (a first job imports
+the engine), and the CPU of a fresh interpreter importing what a job needs.
 """
 
 from __future__ import annotations
@@ -76,6 +79,8 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
     from simbridge.compare.run.jobs import run_job
 
     jobs = ensemble_jobs(backend, size)
+    for job in jobs:  # their cache keys, made before the clock as compare()'s plan makes them
+        job.key  # noqa: B018 - a cached property
     out: dict = {"backend": backend, "jobs": len(jobs), "workers": workers}
     if serial:
         run_job(jobs[1])  # warm-up: the engine loaded, as in a pool's worker after its first job
