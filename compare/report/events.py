@@ -79,5 +79,11 @@ def parting_words(p: dict[str, Any]) -> str:
     if p["relation"] == "during":
         return words + sep + f"while {with_start(what, e['time'])}"
     since = p["since"]
-    when = "in the same step as" if since <= 0 else f"{fmt_time(since)} after"
+    step = float(p.get("step") or 0.0)
+    if since > 0:
+        when = f"{fmt_time(since)} after"
+    elif step > 0 and since <= -step * (1 - 1e-6):  # the event is stamped a step after it parts
+        when = f"{fmt_time(-since)} before"
+    else:
+        when = "in the same step as"
     return words + sep + f"{when} {what}"
