@@ -11,6 +11,7 @@ Backends are registered by ``"module:Class"`` strings and imported on first use,
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import logging
 import warnings
 from dataclasses import dataclass
@@ -164,16 +165,21 @@ STATE_DTYPES = ("float64", "float32")
 def state_dtype(name: str) -> str:
     """The floating-point type backend ``name`` keeps its state in (its class's
     :attr:`~simbridge.backend.Backend.state_dtype`, ``"float64"`` unless it declares another):
-    as registered (``register(..., state_dtype=)``: imports nothing, the shipped backends), else
-    read from its class, which imports the backend; makes no engine.
+    as registered (``register(..., state_dtype=)``, the shipped backends: its engine modules are
+    looked for, not imported), else read from its class, which imports the backend; makes no
+    engine.
 
     Raises:
         UnknownBackendError, BackendNotInstalledError: as :func:`load_backend`.
         BackendError: the backend declares a type not in :data:`STATE_DTYPES`.
     """
-    declared = backend_spec(name).state_dtype
-    if declared:
-        return declared
+    spec = backend_spec(name)
+    if spec.state_dtype:
+        for required in spec.requires:
+            if importlib.util.find_spec(required) is None:
+                missing = ModuleNotFoundError(f"No module named {required!r}", name=required)
+                raise BackendNotInstalledError(name, required, spec.pip_name, missing)
+        return spec.state_dtype
     value = getattr(load_backend(name), "state_dtype", "float64")
     if value not in STATE_DTYPES:
         raise BackendError(

@@ -15,7 +15,7 @@ import pytest
 import simbridge.compare as compare_package
 from simbridge import registry
 from simbridge.cli import main
-from simbridge.exceptions import BackendError, InvalidArgumentError
+from simbridge.exceptions import BackendError, BackendNotInstalledError, InvalidArgumentError
 
 ENGINES = ("pybullet", "mujoco", "sapien")
 
@@ -98,6 +98,12 @@ def test_a_declared_state_type_is_checked(monkeypatch):
     assert registry.state_dtype("liar") == "float32"  # as declared: nothing imported
     with pytest.raises(BackendError, match="registered with state_dtype 'float32'"):
         registry.load_backend("liar")
+    # declared, its engine not installed: said so as when the class is imported
+    registry.register(
+        "absent", "absent_pkg.backend:B", requires=("absent_engine_xyz",), state_dtype="float64"
+    )
+    with pytest.raises(BackendNotInstalledError, match="absent_engine_xyz"):
+        registry.state_dtype("absent")
 
 
 def test_a_rebuild_imports_no_engine(tmp_path: Path):
