@@ -28,12 +28,15 @@ def event_words(e: dict[str, Any], label: str) -> str:
             f"{who}'s {e['part']} chattered on {others} (lost and regained contact "
             f"{f['losses']:.0f} times in {f['duration']:.3g} s)"
         )
+    if kind == "airborne" and f.get("from_start"):
+        return f"{who} starts in the air (falls for {f['duration']:.3g} s before touching down)"
     if kind == "airborne":
         return f"{who} left the ground (airborne for {f['duration']:.3g} s)"
     if kind == "peak_height":
         return (
             f"{who} peaked at a height of {fmt_distance(f['height'])} "
-            f"({fmt_distance(f['rise'])} above where it left the ground)"
+            f"({fmt_distance(f['rise'])} above "
+            + ("its spawn height)" if f.get("from_start") else "where it left the ground)")
         )
     if kind == "tipped_over":
         return (

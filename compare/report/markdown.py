@@ -23,12 +23,14 @@ from .outcomes import outcome_lines, outcomes_section
 from .pair_sections import crossings_section, parting_lines, parts_section, phases_section
 from .parts import parts_words
 from .resync import resync_lines, resync_section
+from .story import story_words
 from .verdict import (
     interval_cell,
     pair_words,
     perturbation_words,
     verdict_lines,
     verdict_word,
+    within_words,
 )
 
 __all__ = ["headline", "markdown"]
@@ -41,19 +43,21 @@ def headline(summary: dict[str, Any]) -> list[str]:
     the outcomes, then every pair's verdict with its judged gap, one bullet each; the first
     pair's figures follow in their own section (:func:`first_pair_lines`)."""
     lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
+    story = story_words(summary)  # what happens to the robot, after the verdict
     if len(summary["labels"]) > 2 and len(summary.get("pairs") or []) > 1:
-        lines += pairs_lines(summary)
+        lines += pairs_lines(summary) + ([story] if story else [])
     else:
-        lines += first_pair_lines(summary)
+        lines += first_pair_lines(summary, story=story)
     raised = perturbation_words(summary.get("ensemble"))  # a float32 engine's own offsets
     if raised:
         lines.append(raised)
     return lines
 
 
-def first_pair_lines(summary: dict[str, Any]) -> list[str]:
-    """The first pair's verdict in words and its nominal runs' figures: when they part, which
-    quantity goes first, what halving the time step changes, the one-step error."""
+def first_pair_lines(summary: dict[str, Any], story: str | None = None) -> list[str]:
+    """The first pair's verdict in words (then ``story``, where given: what happens to the
+    robot) and its nominal runs' figures: when they part, which quantity goes first, what
+    halving the time step changes, the one-step error."""
     h = summary["headline"]
     unit = h["unit"]
     subject = summary["subject"]
@@ -62,6 +66,8 @@ def first_pair_lines(summary: dict[str, Any]) -> list[str]:
     lines: list[str] = []
     if summary.get("verdict"):
         lines += verdict_lines(summary)
+    if story:
+        lines.append(story)
     if h["quantity"] == "base_distance":
         apart = f"{fmt_value(h['final'], unit)} apart ({subject}'s base position"
     elif h["quantity"] == "link_distance":
@@ -793,8 +799,10 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         f"Two-sample test on the runs' states {where}: {test_words}.",
         "",
         f"Instants: {n['agree']} below the tolerance, {n['chaotic']} within an engine's spread, "
-        f"{n['unresolved']} within an engine's own time-step error, {n['differ']} beyond every "
-        f"one of them (of {n['total']}). A ratio between {v['marginal_range'][0]:g} and "
+        f"{n['unresolved']} within an engine's own time-step error (and no spread), "
+        f"{n['differ']} beyond every one of them (of {n['total']}). "
+        + (f"{within} " if (within := within_words(v)) else "")
+        + f"A ratio between {v['marginal_range'][0]:g} and "
         f"{v['marginal_range'][1]:g} is near 1: the gap is not clearly larger, and the verdict "
         "says marginal.",
         "",
