@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from simbridge.engine_settings import require_engines
 from simbridge.exceptions import InvalidArgumentError, ScenarioError, SimbridgeError
 
 from .analysis.diff import Divergence, diff
@@ -251,6 +252,7 @@ def compare(
     Raises:
         ScenarioError, SimbridgeError: a bad scenario or time step, a backend that fails.
         InvalidArgumentError: a bad ensemble size, perturbation, seed or worker count.
+        EngineNotInStudyError: ``engine_settings`` for an engine not among ``backends``.
         CacheEntryMissingError: ``offline`` and a job is not in the cache.
     """
     start = _time.perf_counter()
@@ -274,6 +276,7 @@ def compare(
             "backends", f"expected two or more backend names, got {backends!r}"
         )
     names = tuple(backends)
+    require_engines("engine_settings", engine_settings, names)  # one not run changes nothing
     n = len(names)
     if profile is None:
         profiles = (sc.profile,) * n

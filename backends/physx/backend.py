@@ -125,6 +125,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         self._diverged = None
         self._generation = getattr(self, "_generation", 0) + 1  # a new world: old snapshots void
         self._contacts_cache: list[Any] | None = None
+        self._restored: list[Robot] = []  # robots whose link velocities a restore put back
         self._active: list[Robot] = []  # robots that need work before or after a step
         self._clamped: list[Robot] = []  # robots whose joint speeds the profile clamps
 
@@ -175,6 +176,10 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             robot.moving_links = [
                 comp for comp, lp in zip(built.links, plan.links, strict=False) if not lp.static
             ]
+            robot.moving_rows = np.array(  # their rows in built.links
+                [i for i, lp in enumerate(plan.links[: len(built.links)]) if not lp.static],
+                dtype=np.intp,
+            )
             self._configure(robot)
         except BaseException:
             for entity in built.entities:
@@ -300,6 +305,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                     self._before_step(robot)
                 system.step()
                 self._steps += 1
+                if self._restored:  # PhysX's own link velocities from here on
+                    self._forget_restored()
                 for robot in active:
                     self._after_step(robot)
                 if cap is not None:
@@ -314,6 +321,12 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         finally:
             self._in_step = False
             lock.release()
+
+    def _forget_restored(self) -> None:
+        """The link velocities a restore put back end at a step or a write of the state."""
+        for robot in self._restored:
+            robot.restored_velocities = None
+        self._restored = []
 
     def _check_world(self) -> None:
         """SimulationDivergedError when any robot's state is not finite."""
@@ -334,23 +347,39 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
     @exclusive
     def snapshot(self) -> Any:
         """PhysX's own record of the world (``PhysxCpuSystem.pack``: every body's pose and
-        velocities, the articulations' joint state), for this world as it is now."""
-        return (id(self), self._generation, self._system.pack())
+        velocities, the articulations' joint state), for this world as it is now, with every
+        moving link's velocities as PhysX reports them: unpack recomputes those from the joint
+        velocities, and they are the link damping law's input (DEPARTURES["snapshot"])."""
+        velocities = {
+            body: np.array(
+                [(link.linear_velocity, link.angular_velocity) for link in robot.built.links],
+                dtype=np.float32,
+            )
+            if robot.restored_velocities is None
+            else robot.restored_velocities.copy()
+            for body, robot in self._robots.items()
+            if not robot.static
+        }
+        return (id(self), self._generation, self._system.pack(), velocities)
 
     @exclusive
     def restore(self, native: Any) -> bool:
-        """Unpack a snapshot of this very world (no load, remove or reset since). PhysX keeps
-        its contact and solver caches out of the blob: the next step is not a bitwise
-        continuation (see DEPARTURES["snapshot"])."""
+        """Unpack a snapshot of this very world (no load, remove or reset since), and put
+        back the link velocities it kept. PhysX keeps its contact caches out of the blob, and
+        unpack derives a floating base's link poses afresh: with a fixed base and no contacts
+        the next step is the same bits, else not (see DEPARTURES["snapshot"])."""
         self._check_idle()
         self._contacts_cache = None
         if (
             isinstance(native, tuple)
-            and len(native) == 3
+            and len(native) == 4
             and native[0] == id(self)
             and native[1] == self._generation
         ):
             self._system.unpack(native[2])
+            for body, velocities in native[3].items():
+                self._robots[body].restored_velocities = velocities.copy()
+            self._restored = [self._robots[body] for body in native[3]]
             self._diverged = None
             if self._window is not None:
                 self._window.sync()
@@ -413,14 +442,24 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         ),
         "snapshot": (
             "get_state/set_state put back positions and velocities (float32; exact=True: "
-            "PhysX's pack/unpack) and the motors, but not PhysX's contact state: any write of "
-            "joint positions or of the root pose (a teleport, set_state, even of the same "
-            "values) makes PhysX start the next step's contacts afresh. Measured on r2d2 "
-            "driving at 2 rad/s: the step after a write of the unchanged positions differs "
-            "from the uninterrupted one by 2.3 rad/s on a wheel (velocities alone: 0); "
-            "on conformance test_state's r2d2 drive (wheels at -5 rad/s, max_force 10) the "
-            "largest one-step difference after set_state is 4.52 (same sim, portable state: "
-            "3.41; from another sim: 2.28); not a bitwise continuation"
+            "PhysX's pack/unpack), the motors, and every link's velocities as PhysX reported "
+            "them: unpack recomputes those from the joint velocities (0.25 rad/s away from the "
+            "ones its step left on a swinging kuka_iiwa), and they are the input of PyBullet's "
+            "link damping law. With a fixed base and no contacts the next steps are the same "
+            "bits (conformance test_state.py; before the link velocities were kept: 5.96e-8 rad "
+            "10 steps after set_state on kuka_iiwa swinging from rest, brake off). Not put back, "
+            "as SAPIEN 3.0.3 sets neither: (1) a floating base's link poses, which PhysX's step "
+            "carries forward in float32 and unpack, as any write of joint positions or of the "
+            "root pose (a teleport, even of the same values), derives afresh from the root pose "
+            "and the joint positions, 1.5e-8 m away: r2d2 tumbling in the air is 6.0e-8 off 10 "
+            "steps after set_state, humanoid.urdf 1.2e-6 (raw SAPIEN on a 7-link chain: 2.1e-6 "
+            "rad; bench/physx_snapshot.py); (2) contacts: such a write makes PhysX start the "
+            "next step's contacts afresh. Measured on r2d2 driving at 2 rad/s: the step after a "
+            "write of the unchanged positions differs from the uninterrupted one by 2.3 rad/s on "
+            "a wheel (velocities alone: 0); on conformance test_state's r2d2 drive (wheels at "
+            "-5 rad/s, max_force 10) the largest one-step difference after set_state is 4.52 "
+            "(same sim, portable state: 3.41; from another sim: 2.28); not a bitwise "
+            "continuation where a floating base moves or anything touches"
         ),
         "contact friction": (
             "PhysX reports no friction impulse per contact point (SAPIEN 3.0.3): "

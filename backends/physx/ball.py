@@ -160,6 +160,7 @@ class BallJoints:
                 v[d] = vel[0]
         art.qpos = q
         art.qvel = v
+        robot.restored_velocities = None  # PhysX's, from the joint velocities written
 
     @exclusive
     def set_joint_motor_multi_dof(
@@ -280,5 +281,6 @@ class BallJoints:
         if positions:
             art.qpos = q
             art.qvel = v
+            robot.restored_velocities = None  # PhysX's, from the joint velocities written
         robot.pending = robot.pending or any(any(m["torque"]) for m in robot.balls.values())
         self._refresh_active()

@@ -188,7 +188,10 @@ class MotorCommands:
                 ]
                 calls = robot.damping_calls = (getters, k, buf, adds)
             getters, k, buf, adds = calls
-            buf[:] = [f() for f in getters]  # (2n, 3) float32
+            if robot.restored_velocities is None:
+                buf[:] = [f() for f in getters]  # (2n, 3) float32
+            else:  # the velocities the step before the snapshot left (the backend's restore)
+                buf[:] = robot.restored_velocities[robot.moving_rows].reshape(-1, 3)
             buf *= (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
             for add, a_lin, a_ang in adds:
                 add(a_lin, a_ang, "acceleration")

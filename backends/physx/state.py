@@ -105,8 +105,11 @@ class StateAccess:
         p = comp.entity_pose
         x, y, z = p.p.tolist()
         qw, qx, qy, qz = p.q.tolist()
-        lin = tuple(comp.linear_velocity.tolist())
-        ang = tuple(comp.angular_velocity.tolist())
+        if robot.restored_velocities is None:
+            lin = tuple(comp.linear_velocity.tolist())
+            ang = tuple(comp.angular_velocity.tolist())
+        else:  # set back by a restore (the backend's), until the next step or write
+            lin, ang = (tuple(v) for v in robot.restored_velocities[link + 1].tolist())
         if self._diverged is not None or not math.isfinite(
             x + y + z + qw + qx + qy + qz + sum(lin) + sum(ang)  # a NaN or inf anywhere
         ):
@@ -194,6 +197,7 @@ class StateAccess:
             v[d] = u
         art.qpos = q
         art.qvel = v
+        robot.restored_velocities = None  # PhysX's, from the joint velocities written
         self._contacts_cache = None
 
     @exclusive
@@ -236,6 +240,7 @@ class StateAccess:
             # joint state: one write now, so that reads see the teleport whole
             art.qpos = art.qpos
             art.qvel = art.qvel
+        robot.restored_velocities = None  # PhysX's, from the state written
         self._contacts_cache = None
 
     def set_time(self, time: float) -> None:

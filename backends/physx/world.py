@@ -44,6 +44,7 @@ class Robot:
     drive_force: list[float] = field(default_factory=list)  # per slot, as set (NaN: not yet)
     has_position: bool = False  # a position motor needs its velocity target every step
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
+    moving_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # theirs
     ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
     dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
     balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
@@ -60,6 +61,12 @@ class Robot:
     # link), the float32 factors -k_lin, -k_ang per row, the (2n, 3) buffer they are read into,
     # and per link its bound add_force_torque with the views of its two rows
     damping_calls: tuple[list[Any], np.ndarray, np.ndarray, list[Any]] | None = None
+    # after an exact restore, until the next step or write: every link's (linear, angular)
+    # velocity as PhysX reported it when the snapshot was taken, shape (links, 2, 3) float32.
+    # PhysX recomputes link velocities from the joint velocities at unpack, and those differ
+    # from the ones its step left (backend.DEPARTURES["snapshot"]); the link damping law and
+    # link_state read these instead, so that the next step is the uninterrupted one
+    restored_velocities: np.ndarray | None = None
 
     @property
     def static(self) -> bool:

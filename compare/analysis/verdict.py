@@ -183,6 +183,21 @@ class Verdict:
         """How many instants fall in each class (:data:`VERDICTS`)."""
         return {k: int(np.sum(self.classes == v)) for k, v in _CODES.items()}
 
+    def within(self) -> dict[str, dict[str, int]]:
+        """Per engine label, at how many instants the gap (at least the tolerance) lies within
+        its spread (``spread``) and within its own time-step error (``own_error``), each counted
+        alone: an instant can count for both, and for both engines (the classes of
+        :meth:`counts` give each instant one)."""
+        apart = self.gap_series >= self.tolerance
+        reach = MARGINAL[1] * np.maximum(
+            np.stack([self.spreads, self.own_errors]), self.floor
+        )  # (2 kinds, 2 engines, T)
+        inside = apart & (self.gap_series <= reach)
+        return {
+            label: {"spread": int(inside[0, k].sum()), "own_error": int(inside[1, k].sum())}
+            for k, label in enumerate(self.labels)
+        }
+
     def timeline(self) -> list[Segment]:
         """The run cut where the per-instant class changes."""
         names = {v: k for k, v in _CODES.items()}

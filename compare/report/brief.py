@@ -10,7 +10,8 @@ from typing import Any
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .markdown import left_out_words
 from .outcomes import outcome_lines
-from .verdict import pair_words, verdict_word
+from .story import story_words
+from .verdict import pair_words, time_step_share, verdict_word
 
 __all__ = ["brief", "MAX_LINES"]
 
@@ -22,8 +23,10 @@ def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
     """The scenario's outcomes first (one line, where it declares any: what it calls success),
     then the verdict: with two engines, the verdict (a line) and how far apart the nominal runs
     end and when they part (a line); with more, a line naming the engines and one line per pair,
-    each with the same judged figure (:func:`~.verdict.pair_words`). Then the engines left out
-    (a line, where there are any) and ``report: <path>`` last (with ``path``)."""
+    each with the same judged figure (:func:`~.verdict.pair_words`). Then what happens to the
+    robot (a line, where its events tell a story, :func:`~.story.story_words`, and a line is
+    left for it), the engines left out (a line, where there are any) and ``report: <path>``
+    last (with ``path``)."""
     lines: list[str] = []
     outcomes = [x.replace("**", "") for x in outcome_lines(s)]
     if outcomes:
@@ -45,6 +48,9 @@ def brief(s: dict[str, Any], path: str | Path | None = None) -> list[str]:
             lines.append(f"  and {len(pairs) - len(shown)} more pairs: report.md.")
     else:
         lines += [_verdict(s), _figures(s)]
+    story = story_words(s)
+    if story and len(lines) + 1 + bool(left) + (path is not None) <= MAX_LINES:
+        lines.append(story)
     if left:
         lines.append(left)
     if path is not None:
@@ -96,9 +102,12 @@ def _verdict(s: dict[str, Any]) -> str:
     if kind == "chaotic":
         who = " and ".join(v["engines"])
         spread = fmt_value(figs[v["engines"][0]]["spread"]["value"], unit)
+        share = time_step_share(v)
         return (
             head + f"{word}: runs {gap} apart {when}, within {who}'s own "
-            f"spread ({spread}); the gap says nothing about the physics."
+            f"spread ({spread}); "
+            + (f"{share}: at this time step " if share else "")
+            + "the gap says nothing about the physics."
         )
     if kind == "differ":
         t = v["test"]

@@ -18,6 +18,7 @@ friction``             touched something
 ``speed clamp``        a joint speed or the base's speed reached 99 % of the profile's
                        ``max_joint_velocity``
 ``joint axis``         a movable joint's ``<axis>`` is not of length 1 (by more than 1e-6)
+``link damping``       a profile's ``linear_damping`` or ``angular_damping`` is not 0
 ====================== ===============================================================
 
 A departure naming a body of this world (``body 1 mass bound``) applies as the backend wrote
@@ -39,7 +40,11 @@ from .fmt import fmt_distance
 if TYPE_CHECKING:
     from ..analysis.view import ComparisonView
 
-__all__ = ["GENERAL_CUT", "applicable"]
+__all__ = ["GENERAL_CUT", "NOT_CHECKED", "applicable", "checked"]
+
+NOT_CHECKED = "not checked against this scenario"
+"""The ``why`` of a departure no rule here checks against the scenario (listed as the backend
+wrote it, not said to apply)."""
 
 GENERAL_CUT = {
     "contact": ": ",
@@ -50,6 +55,7 @@ GENERAL_CUT = {
 """Where a known departure's text stops being general: what follows quotes another robot."""
 
 SPEED_CLAMP_FRACTION = 0.99
+LINK_DAMPING = ("linear_damping", "angular_damping")
 
 
 def _general(key: str, text: str) -> str:
@@ -136,6 +142,12 @@ def applicable(c: ComparisonView, events: list[EngineEvents]) -> dict[str, dict[
                 )
         out[label] = {"apply": apply, "left_out": left}
     return out
+
+
+def checked(entry: dict[str, Any]) -> bool:
+    """Whether one of :func:`applicable`'s ``apply`` entries was found to apply here (not merely
+    listed as :data:`NOT_CHECKED`)."""
+    return entry.get("why") != NOT_CHECKED
 
 
 def _judge(
@@ -241,9 +253,19 @@ def _judge(
         if not hits:
             return None, None
         return "joints with an axis not of length 1: " + ", ".join(hits), None
+    if key == "link damping":
+        damped = []
+        for slot, label in enumerate(labels):
+            prof = c.runs[(slot, c.timestep)].manifest.get("profile") or {}
+            found = [f"{k} {prof[k]:g}" for k in LINK_DAMPING if prof.get(k)]
+            if found:
+                damped.append(f"{label}: " + ", ".join(found))
+        if not damped:
+            return None, None
+        return "the profiles damp link velocities: " + "; ".join(damped), None
     if key.startswith("body "):
         return "it names a body of this world", None
-    return "not checked against this scenario", None
+    return NOT_CHECKED, None
 
 
 def _contact_figures(c: ComparisonView, events: list[EngineEvents]) -> str:

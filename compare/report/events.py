@@ -28,12 +28,15 @@ def event_words(e: dict[str, Any], label: str) -> str:
             f"{who}'s {e['part']} chattered on {others} (lost and regained contact "
             f"{f['losses']:.0f} times in {f['duration']:.3g} s)"
         )
+    if kind == "airborne" and f.get("from_start"):
+        return f"{who} starts in the air (falls for {f['duration']:.3g} s before touching down)"
     if kind == "airborne":
         return f"{who} left the ground (airborne for {f['duration']:.3g} s)"
     if kind == "peak_height":
         return (
             f"{who} peaked at a height of {fmt_distance(f['height'])} "
-            f"({fmt_distance(f['rise'])} above where it left the ground)"
+            f"({fmt_distance(f['rise'])} above "
+            + ("its spawn height)" if f.get("from_start") else "where it left the ground)")
         )
     if kind == "tipped_over":
         return (
@@ -79,5 +82,11 @@ def parting_words(p: dict[str, Any]) -> str:
     if p["relation"] == "during":
         return words + sep + f"while {with_start(what, e['time'])}"
     since = p["since"]
-    when = "in the same step as" if since <= 0 else f"{fmt_time(since)} after"
+    step = float(p.get("step") or 0.0)
+    if since > 0:
+        when = f"{fmt_time(since)} after"
+    elif step > 0 and since <= -step * (1 - 1e-6):  # the event is stamped a step after it parts
+        when = f"{fmt_time(-since)} before"
+    else:
+        when = "in the same step as"
     return words + sep + f"{when} {what}"

@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..analysis.diff import DEG, QUANTITIES, FinalPose
+from ..analysis.diff import DEG, QUANTITIES, Divergence, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
@@ -20,14 +20,17 @@ from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
+from .pair_sections import crossings_section, parting_lines, parts_section, phases_section
 from .parts import parts_words
 from .resync import resync_lines, resync_section
+from .story import story_words
 from .verdict import (
     interval_cell,
     pair_words,
     perturbation_words,
     verdict_lines,
     verdict_word,
+    within_words,
 )
 
 __all__ = ["headline", "markdown"]
@@ -40,19 +43,21 @@ def headline(summary: dict[str, Any]) -> list[str]:
     the outcomes, then every pair's verdict with its judged gap, one bullet each; the first
     pair's figures follow in their own section (:func:`first_pair_lines`)."""
     lines: list[str] = outcome_lines(summary)  # what the scenario calls success, first
+    story = story_words(summary)  # what happens to the robot, after the verdict
     if len(summary["labels"]) > 2 and len(summary.get("pairs") or []) > 1:
-        lines += pairs_lines(summary)
+        lines += pairs_lines(summary) + ([story] if story else [])
     else:
-        lines += first_pair_lines(summary)
+        lines += first_pair_lines(summary, story=story)
     raised = perturbation_words(summary.get("ensemble"))  # a float32 engine's own offsets
     if raised:
         lines.append(raised)
     return lines
 
 
-def first_pair_lines(summary: dict[str, Any]) -> list[str]:
-    """The first pair's verdict in words and its nominal runs' figures: when they part, which
-    quantity goes first, what halving the time step changes, the one-step error."""
+def first_pair_lines(summary: dict[str, Any], story: str | None = None) -> list[str]:
+    """The first pair's verdict in words (then ``story``, where given: what happens to the
+    robot) and its nominal runs' figures: when they part, which quantity goes first, what
+    halving the time step changes, the one-step error."""
     h = summary["headline"]
     unit = h["unit"]
     subject = summary["subject"]
@@ -61,6 +66,8 @@ def first_pair_lines(summary: dict[str, Any]) -> list[str]:
     lines: list[str] = []
     if summary.get("verdict"):
         lines += verdict_lines(summary)
+    if story:
+        lines.append(story)
     if h["quantity"] == "base_distance":
         apart = f"{fmt_value(h['final'], unit)} apart ({subject}'s base position"
     elif h["quantity"] == "link_distance":
@@ -285,45 +292,13 @@ def markdown(
     ]
     lines += settings_section(s)
     # -- over time
-    lines += [f"## When each quantity parts{of}", ""]
-    rows = []
-    for key, q in QUANTITIES.items():
-        if key not in cross.series:
-            continue
-        cells = [q.title]
-        cells += [
-            f"{fmt_threshold(thr, q.unit)}: {fmt_time(cross.crossings[key][thr])}"
-            for thr in q.thresholds
-        ]
-        cells += [""] * (3 - len(q.thresholds))
-        cells += [fmt_value(cross.final[key], q.unit), fmt_value(cross.maximum[key], q.unit)]
-        rows.append(cells)
-    lines += _table(["quantity", "first crossing", "", "", "at the end", "largest"], rows)
-    lines += [
-        "",
-        "A threshold is crossed at the first recorded step whose value reaches it. Joint RMS "
-        "is over the subject's movable joints (angles unwrapped: a wheel a turn ahead counts "
-        "2π). Heading is meaningful while the robot is upright.",
-        "",
-    ]
-    # -- phases
-    lines += [f"## Per phase{of}", ""]
-    rows = []
-    keys = [k for k in QUANTITIES if k in cross.series]
-    for p in cross.phases:
-        rows.append(
-            [p.name, f"{p.start:.3f} – {p.end:.3f} s"]
-            + [
-                f"{fmt_value(p.at_end[k], QUANTITIES[k].unit)} "
-                f"(max {fmt_value(p.max[k], QUANTITIES[k].unit)})"
-                for k in keys
-            ]
-        )
-    lines += _table(["phase", "time"] + [QUANTITIES[k].title + " at end" for k in keys], rows)
-    lines += [""]
+    if many:  # a row per pair in each (:mod:`.pair_sections`)
+        lines += crossings_section(s) + phases_section(s)
+    else:
+        lines += _over_time(cross)
     # -- where the gap is born, which part
     lines += _born_section(s)
-    lines += _parts_section(s)
+    lines += parts_section(s) if many else _parts_section(s)
     lines += resync_section(s, images.pop("resync", None))  # its figure here, not in Figures
     # -- final poses
     lines += ["## Final poses", ""]
@@ -468,6 +443,48 @@ def markdown(
     return "\n".join(lines)
 
 
+def _over_time(cross: Divergence) -> list[str]:
+    """*When each quantity parts* and *Per phase* of two engines' nominal runs (``cross``)."""
+    lines: list[str] = []
+    lines += ["## When each quantity parts", ""]
+    rows = []
+    for key, q in QUANTITIES.items():
+        if key not in cross.series:
+            continue
+        cells = [q.title]
+        cells += [
+            f"{fmt_threshold(thr, q.unit)}: {fmt_time(cross.crossings[key][thr])}"
+            for thr in q.thresholds
+        ]
+        cells += [""] * (3 - len(q.thresholds))
+        cells += [fmt_value(cross.final[key], q.unit), fmt_value(cross.maximum[key], q.unit)]
+        rows.append(cells)
+    lines += _table(["quantity", "first crossing", "", "", "at the end", "largest"], rows)
+    lines += [
+        "",
+        "A threshold is crossed at the first recorded step whose value reaches it. Joint RMS "
+        "is over the subject's movable joints (angles unwrapped: a wheel a turn ahead counts "
+        "2π). Heading is meaningful while the robot is upright.",
+        "",
+    ]
+    # -- phases
+    lines += ["## Per phase", ""]
+    rows = []
+    keys = [k for k in QUANTITIES if k in cross.series]
+    for p in cross.phases:
+        rows.append(
+            [p.name, f"{p.start:.3f} – {p.end:.3f} s"]
+            + [
+                f"{fmt_value(p.at_end[k], QUANTITIES[k].unit)} "
+                f"(max {fmt_value(p.max[k], QUANTITIES[k].unit)})"
+                for k in keys
+            ]
+        )
+    lines += _table(["phase", "time"] + [QUANTITIES[k].title + " at end" for k in keys], rows)
+    lines += [""]
+    return lines
+
+
 def _final_poses(c: Comparison) -> list[FinalPose]:
     """Every engine's final pose, in ``c.labels`` order, from the pairs' diffs (each pose is
     the engine's own, whichever pair holds it)."""
@@ -508,30 +525,35 @@ def _born_section(s: dict[str, Any]) -> list[str]:
     p = s.get("parting") or {}
     q = QUANTITIES[s["headline_quantity"]]
     lines = ["## Where the gap is born", ""]
-    if len(s["labels"]) > 2:
+    many = len(s["labels"]) > 2 and len(s.get("pairs") or []) > 1
+    first = " and ".join(s["labels"][:2])
+    if many:  # every pair's parting, a bullet each; the events are every engine's
         lines += [
-            f"The gap between {' and '.join(s['labels'][:2])}, the first pair (every pair's: "
-            "the table [Every pair of engines](#every-pair-of-engines)); the events are every "
+            f"Where each pair's {q.title} first comes "
+            f"{fmt_threshold(q.thresholds[0], q.unit)} apart, and after what (each pair's "
+            "figures: `summary.json` under `pairs[].parting`); the events below are every "
             "engine's.",
             "",
         ]
+        lines += parting_lines(s) + [""]
     if p.get("time") is not None:
-        lines += [
-            f"The {q.title} first reaches {fmt_threshold(p['threshold'], q.unit)} at "
-            f"t = {fmt_time(p['time'])}, {parting_words(p)}.",
-            "",
-        ]
+        if not many:
+            lines += [
+                f"The {q.title} first reaches {fmt_threshold(p['threshold'], q.unit)} at "
+                f"t = {fmt_time(p['time'])}, {parting_words(p)}.",
+                "",
+            ]
         if p["ongoing"]:
             shown = [with_start(event_words(o, o["label"]), o["time"]) for o in p["ongoing"][:6]]
             more = len(p["ongoing"]) - len(shown)
             lines += [
-                "Going on at that instant: "
+                (f"Going on when {first} part: " if many else "Going on at that instant: ")
                 + "; ".join(shown)
                 + (f"; and {more} more" if more > 0 else "")
                 + ".",
                 "",
             ]
-    else:
+    elif not many:
         lines += [f"The {q.title} never reaches {fmt_threshold(q.thresholds[0], q.unit)}.", ""]
     rows = [
         [kind.replace("_", " ")] + [str(events[lab]["counts"][kind]) for lab in labels]
@@ -576,7 +598,8 @@ def _born_section(s: dict[str, Any]) -> list[str]:
         for time, _, lab, e in chosen:
             words = event_words(e, lab)
             if mark and mark["label"] == lab and {**e, "label": lab} == mark:
-                words = f"**{words}** (the gap parts {p['relation']} this)"
+                whose = f" between {first}" if many else ""
+                words = f"**{words}** (the gap{whose} parts {p['relation']} this)"
             until = (
                 ""
                 if e["end"] is None
@@ -776,8 +799,10 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         f"Two-sample test on the runs' states {where}: {test_words}.",
         "",
         f"Instants: {n['agree']} below the tolerance, {n['chaotic']} within an engine's spread, "
-        f"{n['unresolved']} within an engine's own time-step error, {n['differ']} beyond every "
-        f"one of them (of {n['total']}). A ratio between {v['marginal_range'][0]:g} and "
+        f"{n['unresolved']} within an engine's own time-step error (and no spread), "
+        f"{n['differ']} beyond every one of them (of {n['total']}). "
+        + (f"{within} " if (within := within_words(v)) else "")
+        + f"A ratio between {v['marginal_range'][0]:g} and "
         f"{v['marginal_range'][1]:g} is near 1: the gap is not clearly larger, and the verdict "
         "says marginal.",
         "",

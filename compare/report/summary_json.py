@@ -290,7 +290,7 @@ def verdict_dict(v: Verdict) -> dict[str, Any]:
         "max_gap": {"value": v.max_gap[0], "time": v.max_gap[1]},
         "test": None if v.test is None else _test(v.test),
         "engine_figures": {e.label: _judgement(e) for e in v.per_engine},
-        "instants": {"total": len(v.classes), **v.counts()},
+        "instants": {"total": len(v.classes), **v.counts(), "within": v.within()},
         "timeline": [
             {"class": s.verdict, "start": s.start, "end": s.end, "instants": s.instants}
             for s in v.timeline()
@@ -455,6 +455,13 @@ def engine_events_dict(e: EngineEvents, limit: int = 500) -> dict[str, Any]:
         "initial_limits": [
             {"joint": x.joint, "side": x.side, "end": x.end} for x in e.initial_limits
         ],
+        "start_depth": None
+        if e.start_depth is None
+        else {
+            "link": e.start_depth.link,
+            "depth": e.start_depth.depth,
+            "others": list(e.start_depth.others),
+        },
         "counts": e.counts(),
         "total": len(e.events),
         "events": [event_dict(x) for x in e.events[:limit]],

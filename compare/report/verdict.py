@@ -9,7 +9,15 @@ from ..analysis.verdict import ALPHA, Marginal
 from ..run.ensemble import FLOAT_SPACINGS
 from .fmt import fmt_threshold, fmt_time, fmt_value
 
-__all__ = ["verdict_lines", "marginal_words", "verdict_word", "pair_words", "interval_cell"]
+__all__ = [
+    "verdict_lines",
+    "marginal_words",
+    "verdict_word",
+    "pair_words",
+    "interval_cell",
+    "time_step_share",
+    "within_words",
+]
 
 
 def marginal_words(m: Marginal) -> str:
@@ -19,6 +27,51 @@ def marginal_words(m: Marginal) -> str:
     if m.what == "spread":
         return f"the gap is {m.ratio:.3g}x {m.label}'s spread"
     return f"the gap is {m.ratio:.3g}x {m.label}'s own time-step error"
+
+
+def time_step_share(v: dict[str, Any]) -> str | None:
+    """Where the verdict is ``chaotic`` but the gap lies within an engine's own time-step error
+    at more instants than within the chaotic engines' spread: ``the gap lies within mujoco's own
+    time-step error at 980 of 981 instants (within pybullet's spread at 210)``; else None.
+
+    Chaos is named first (at the judged instant the chaotic engine's own runs are as far apart
+    as the engines, so its single runs cannot show an engine difference at this time step);
+    this says which share of the run the time step covers, that the headline not read as if
+    chaos were the whole story."""
+    within = (v.get("instants") or {}).get("within")
+    if v["verdict"] != "chaotic" or not within:
+        return None
+    chaos = max(within[lab]["spread"] for lab in v["engines"])
+    own = max(within, key=lambda lab: within[lab]["own_error"])
+    n = within[own]["own_error"]
+    if n <= chaos:
+        return None
+    spread = f"{v['engines'][0]}'s spread" if len(v["engines"]) == 1 else "a spread"
+    return (
+        f"the gap lies within {own}'s own time-step error at {n} of {v['instants']['total']} "
+        f"instants (within {spread} at {chaos})"
+    )
+
+
+def within_words(v: dict[str, Any]) -> str | None:
+    """``Counted alone (an instant may count for both, and for both engines): the gap lies
+    within pybullet's spread at 210 instants and its own time-step error at 259; within
+    mujoco's spread at 0 and its own time-step error at 980.``; None without the counts, or
+    where the gap stays below the tolerance all along."""
+    within = (v.get("instants") or {}).get("within")
+    if not within or v["instants"]["agree"] == v["instants"]["total"]:
+        return None
+    each = [
+        f"within {lab}'s spread at {w['spread']}"
+        + (" instants" if k == 0 else "")
+        + f" and its own time-step error at {w['own_error']}"
+        for k, (lab, w) in enumerate(within.items())
+    ]
+    return (
+        "Counted alone (an instant may count for both, and for both engines): the gap lies "
+        + "; ".join(each)
+        + "."
+    )
 
 
 def _iv(x: dict[str, Any], unit: str, *, inner: bool = False) -> str:
@@ -76,6 +129,9 @@ def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
         if v["reason"] == "within own time-step error":
             reason = f"within {' and '.join(v['engines'])}'s own time-step error"
         line += f" ({reason})"
+    share = time_step_share(v)
+    if share:
+        line += f"; {share}"
     return line
 
 
@@ -216,6 +272,15 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
                     for lab in also
                 )
                 + " as well."
+            )
+        share = time_step_share(v)
+        if share:
+            also_words += (
+                f" Chaos is named first: at this time step {who}'s own runs {when} as far apart "
+                "as the two engines, so no single run here can show an engine difference. But "
+                f"over the run {share}: for most of the run the gap is of the size of what "
+                "halving the time step changes, not of chaos; a smaller --timestep tells whether "
+                "it closes."
             )
         lines.append(
             f"The two engines' runs {when} a median {_iv(v['gap'], unit)} apart, {ratio} own "

@@ -12,8 +12,11 @@ Kinds of :class:`Event` (:data:`KINDS`), each at the first recorded instant it h
 ``contact_chatter``   a link that keeps touching loses and regains its contact at least
                       :data:`CHATTER_LOSSES` (3) times, each loss shorter than the bridge
 ``airborne``          no link of the robot touches anything (a mobile base that touched
-                      something at some time of the run)
-``peak_height``       the highest point of the base during an airborne stretch
+                      something at some time of the run); one from the first step, before
+                      any contact (a robot spawned in the air), has the figure
+                      ``from_start`` (1.0): it falls, it did not leave the ground
+``peak_height``       the highest point of the base during an airborne stretch (none in one
+                      from the start unless the base rose above its spawn height)
 ``tipped_over``       the base turned more than :data:`TIP_ANGLE` (45°) from the way it stood
                       at spawn: the angle between the base axis that pointed up (against
                       gravity) at spawn and where that axis points now (a y-up URDF spawned
@@ -45,6 +48,7 @@ from .trajectory import BodyTrajectory, Trajectory
 
 __all__ = [
     "LimitAtStart",
+    "StartDepth",
     "KINDS",
     "BRIDGE",
     "TIP_ANGLE",
@@ -100,8 +104,9 @@ class Event:
     ``contact_made``: ``normal_force`` (N, the link's sum at that instant);
     ``contact_chatter``: ``losses`` (how many times the contact was lost and regained) and
     ``duration`` (s); ``airborne``:
-    ``duration`` (s); ``peak_height``: ``height`` (m, of the base link frame along the world's
-    up) and ``rise`` (m, above where it left the ground); ``tipped_over``: ``tilt`` (rad, the
+    ``duration`` (s) and, from the first step before any contact, ``from_start`` (1.0);
+    ``peak_height``: ``height`` (m, of the base link frame along the world's up) and ``rise``
+    (m, above where it left the ground, or its spawn height); ``tipped_over``: ``tilt`` (rad, the
     largest while over); ``joint_limit``: ``limit`` (rad or m) and ``beyond`` (how far past it
     the joint went, rad or m; negative: it stayed short of it); ``motor_saturated``:
     ``max_force`` (N·m or N) and ``duration`` (s)."""
@@ -127,13 +132,24 @@ class LimitAtStart(NamedTuple):
     end: float | None  # s, the last instant it held (None: to the end of the run)
 
 
+class StartDepth(NamedTuple):
+    """How far the robot starts inside something (not an event:
+    :attr:`EngineEvents.start_depth`): the deepest point of its first step's contacts, found at
+    the spawn pose."""
+
+    link: str  # the link that went deepest
+    depth: float  # m, > 0
+    others: tuple[str, ...]  # the other bodies touching then (empty: its own links)
+
+
 @dataclass
 class EngineEvents:
     """The events of one engine's run (one body, ``body``), in time order (ties in
     :data:`KINDS` order). ``up`` is the world's up (against gravity, unit), ``spawn`` the
     base orientation the tilt is measured from (x, y, z, w), ``initial_contacts`` the links
     touching something at the first step, ``initial_limits`` the joints at a limit from the
-    start (``{joint, side, end}``, ``end`` as an event's)."""
+    start (``{joint, side, end}``, ``end`` as an event's), ``start_depth`` how far it starts
+    inside something (None: apart or resting on a surface, or no depth recorded)."""
 
     label: str
     body: str
@@ -144,6 +160,7 @@ class EngineEvents:
     has_contacts: bool
     """Whether contacts were recorded at all (False for a trajectory recorded without them)."""
     initial_limits: list[LimitAtStart] = field(default_factory=list)
+    start_depth: StartDepth | None = None
 
     def counts(self) -> dict[str, int]:
         return {k: sum(e.kind == k for e in self.events) for k in KINDS}
@@ -232,7 +249,17 @@ def find_events(
         initial_contacts=initial,
         has_contacts=has_contacts,
         initial_limits=initial_limits,
+        start_depth=_start_depth(tr, name, b),
     )
+
+
+def _start_depth(tr: Trajectory, name: str, b: BodyTrajectory) -> StartDepth | None:
+    """The deepest contact of the first step (row 1: the contacts found at the spawn pose)."""
+    d = b.contact_depths
+    if d is None or len(d) < 2 or not (d[1] > 0).any():
+        return None
+    k = int(np.argmax(d[1]))
+    return StartDepth(b.link_names[k], float(d[1, k]), _touching_others(tr, name, 1))
 
 
 def _touching_others(tr: Trajectory, name: str, row: int) -> tuple[str, ...]:
@@ -334,8 +361,14 @@ def _airborne_events(
             continue
         a, z = first + 1, last + 1  # rows
         duration = float(time[min(z + 1, rows - 1)] - time[a])
-        out.append(ev("airborne", a, end=end_of(z), figures={"duration": duration}))
+        figures = {"duration": duration}
+        from_start = first == 0  # spawned in the air: it never left the ground
+        if from_start:
+            figures["from_start"] = 1.0
+        out.append(ev("airborne", a, end=end_of(z), figures=figures))
         top = a + int(np.argmax(height[a : z + 1]))
+        if from_start and height[top] <= height[a - 1]:
+            continue  # no higher than its spawn: falling from the start is not a peak
         out.append(
             ev(
                 "peak_height",
@@ -343,6 +376,7 @@ def _airborne_events(
                 figures={
                     "height": float(height[top]),
                     "rise": float(height[top] - height[a - 1]),
+                    **({"from_start": 1.0} if from_start else {}),
                 },
             )
         )

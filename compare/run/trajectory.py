@@ -48,7 +48,7 @@ _BODY_ARRAYS = (
 )
 # Recorded beside _BODY_ARRAYS, saved and loaded alike, but kept out of that tuple: the
 # trajectory hashes (tests/_trajectory_hashes.py) cover _BODY_ARRAYS alone.
-_CONTACT_ARRAYS = ("contact_counts", "contact_normal_forces")
+_CONTACT_ARRAYS = ("contact_counts", "contact_normal_forces", "contact_depths")
 # Likewise outside the hashes: what the events (compare/events.py) need of the joints.
 _JOINT_EXTRAS = ("joint_limits", "joint_max_forces")
 
@@ -86,6 +86,10 @@ class BodyTrajectory:
     trajectory recorded without them."""
     contact_normal_forces: np.ndarray | None = None
     """(T, L) N: the sum of those points' normal forces."""
+    contact_depths: np.ndarray | None = None
+    """(T, L) m: how deep the link's deepest point of that step went into what it touched (minus
+    the smallest ``ContactPoint.distance``; 0 where it stayed apart or touched nothing). Row 1
+    holds the contacts found at the spawn pose: how far the robot starts inside something."""
     joint_types: list[str] | None = None
     """(J,) ``revolute``, ``continuous`` or ``prismatic``; None in an older trajectory."""
     joint_limits: np.ndarray | None = None
@@ -583,6 +587,7 @@ class _Recorder:
         self.links_xyz = np.empty((rows, n_l, 3))
         self.contact_counts = np.zeros((rows, n_l), dtype=np.int32)
         self.contact_forces = np.zeros((rows, n_l))
+        self.contact_depths = np.zeros((rows, n_l))
         self.max_forces = np.full((rows, n_j), np.nan)
         self.held_force = np.full(n_j, np.nan)  # the max_force of the command in force
         self._col = {int(j): i for i, j in enumerate(self.joint_indices)}
@@ -608,12 +613,15 @@ class _Recorder:
             self.v[row] = js.velocities
             self.f[row] = js.applied_torques
         counts, forces = self.contact_counts[row], self.contact_forces[row]
+        depths = self.contact_depths[row]
         for c in sim.contact_points(body):  # A is this body; B another or this one again
             counts[c.link_a + 1] += 1
             forces[c.link_a + 1] += c.normal_force
+            depths[c.link_a + 1] = max(depths[c.link_a + 1], -c.distance)
             if c.body_b == body:
                 counts[c.link_b + 1] += 1
                 forces[c.link_b + 1] += c.normal_force
+                depths[c.link_b + 1] = max(depths[c.link_b + 1], -c.distance)
 
     def finish(self, name: str) -> BodyTrajectory:
         return BodyTrajectory(
@@ -634,6 +642,7 @@ class _Recorder:
             link_positions=self.links_xyz,
             contact_counts=self.contact_counts,
             contact_normal_forces=self.contact_forces,
+            contact_depths=self.contact_depths,
             joint_types=self.joint_types,
             joint_limits=self.joint_limits,
             joint_max_forces=self.max_forces,

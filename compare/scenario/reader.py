@@ -107,6 +107,32 @@ def _keystr(path: Sequence[str | int]) -> str:
     return out
 
 
+PYBULLET_KEYS = {
+    "basePosition": "position",
+    "base_position": "position",
+    "baseOrientation": "orientation",
+    "base_orientation": "orientation",
+    "useFixedBase": "fixed_base",
+    "use_fixed_base": "fixed_base",
+    "fileName": "urdf",
+    "urdf_path": "urdf",
+    "timeStep": "timestep",
+    "time_step": "timestep",
+    "fixedTimeStep": "timestep",
+}
+"""The names PyBullet's calls and tutorials give a scenario's keys (``p.loadURDF(fileName,
+basePosition, baseOrientation, useFixedBase)``, ``p.setTimeStep(timeStep)``) -> the scenario's."""
+
+
+def _suggest(key: str, allowed: Sequence[str]) -> str:
+    """`` (did you mean 'position'?)`` for an unknown key: PyBullet's name of a key allowed
+    here (:data:`PYBULLET_KEYS`, saying so), else the closest allowed key, else ``""``."""
+    ours = PYBULLET_KEYS.get(key)
+    if ours is not None and ours in allowed:
+        return f" (did you mean {ours!r}? the scenario's name for PyBullet's {key})"
+    return did_you_mean(key, allowed)
+
+
 class _Reader:
     """Validates the parsed TOML, raising ScenarioError with the key's line."""
 
@@ -121,7 +147,9 @@ class _Reader:
         for key in table:
             if key not in allowed:
                 raise self.error(
-                    [*path, key], f"unknown key; valid keys here: {', '.join(allowed)}"
+                    [*path, key],
+                    f"unknown key{_suggest(str(key), allowed)}; valid keys here: "
+                    f"{', '.join(allowed)}",
                 )
 
     def require(self, table: dict[str, Any], path: list[str | int], key: str) -> Any:

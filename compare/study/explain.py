@@ -44,6 +44,7 @@ from simbridge.profiles import get_profile
 
 from ..analysis.verdict import BOOTSTRAP_RESAMPLES, CONFIDENCE, Interval
 from ..pipeline import Comparison, compare
+from ..report.departures import checked
 from ..run.quantities import distance
 from ..scenario import format_timestep, load_scenario
 from .points import PROFILE_ENTRIES, PairFigures, _with_change, format_value, pair_figures
@@ -58,6 +59,7 @@ __all__ = [
     "Explanation",
     "candidates",
     "explain",
+    "not_checked",
     "share_removed",
 ]
 
@@ -137,6 +139,8 @@ class PairExplanation:
     gap: Interval  # before, at that instant
     ranked: list[CandidateResult] = field(default_factory=list)
     not_tested: list[tuple[str, str]] = field(default_factory=list)  # (departure, why)
+    not_checked: list[str] = field(default_factory=list)
+    """Departures the engines list that are not checked against this scenario: not tested."""
     failed: list[tuple[Candidate, str]] = field(default_factory=list)
     """Candidates whose rerun stopped with an error (a diverged engine...), with it."""
     note: str = ""  # why nothing was run (no gap to explain)
@@ -218,6 +222,7 @@ class Explanation:
                         for r in p.ranked
                     ],
                     "not_tested": [{"departure": k, "why": w} for k, w in p.not_tested],
+                    "not_checked": list(p.not_checked),
                     "failed": [{**c.as_dict(p.labels), "error": err} for c, err in p.failed],
                 }
             )
@@ -496,6 +501,23 @@ def _engine_candidates(
     return out
 
 
+def not_checked(
+    labels: tuple[str, str], departures: dict[str, dict[str, Any]] | None = None
+) -> list[str]:
+    """The departures of this pair's engines that no rule checks against the scenario (the
+    compare report's "not checked against this scenario") and none found to apply: neither a
+    candidate nor said to apply, only counted."""
+    found: set[str] = set()
+    unchecked: list[str] = []
+    for label in labels:
+        for d in (departures or {}).get(label, {}).get("apply", []):
+            if checked(d):
+                found.add(d["key"])
+            else:
+                unchecked.append(d["key"])
+    return [k for k in dict.fromkeys(unchecked) if k not in found]
+
+
 def candidates(
     backends: tuple[str, str],
     profiles: tuple[str, str],
@@ -511,7 +533,8 @@ def candidates(
     applying: dict[str, list[int]] = {}
     for slot, label in enumerate(labels):
         for d in (departures or {}).get(label, {}).get("apply", []):
-            applying.setdefault(d["key"], []).append(slot)
+            if checked(d):  # one the compare report marks "not checked" does not apply here
+                applying.setdefault(d["key"], []).append(slot)
     if backends[0] != backends[1]:
         for key in applying:
             if key == "speed clamp":
@@ -638,7 +661,8 @@ def explain(
             ``perturb``, ``workers``...; ``resync_every`` defaults to 0 here: not needed).
 
     Raises:
-        InvalidArgumentError: a bad ensemble size; what compare raises.
+        InvalidArgumentError: a bad ensemble size; what compare raises (an
+            ``engine_settings`` for an engine not run: EngineNotInStudyError, before any run).
     """
     if isinstance(ensemble, bool) or not isinstance(ensemble, int) or ensemble < 1:
         raise InvalidArgumentError("ensemble", f"expected an integer >= 1, got {ensemble!r}")
@@ -678,6 +702,7 @@ def explain(
             )
             continue
         cands, pe.not_tested = candidates(names, profs, labels, deps, dt)
+        pe.not_checked = not_checked(labels, deps)
         results = []
         for cand in cands:
             moved = list(profs)
@@ -792,6 +817,16 @@ def explanation_lines(e: Explanation) -> list[str]:
                 f"| {c.name} | {c.describe(p.labels)} | {c.source} | {c.why}; **the rerun "
                 f"failed**: {err} |"
             )
+        if p.not_checked:
+            n = len(p.not_checked)
+            lines += [
+                "",
+                f"Left out: {n} departure{'s' if n != 1 else ''} the engines list but that "
+                f"{'are' if n != 1 else 'is'} not checked against this scenario (as the compare "
+                f"report marks {'them' if n != 1 else 'it'}), not tested: "
+                + ", ".join(p.not_checked)
+                + ".",
+            ]
         if p.ranked:
             lines += [
                 "",

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from simbridge.exceptions import InvalidArgumentError
+from simbridge.exceptions import InvalidArgumentError, did_you_mean
 from simbridge.profiles import SPEC_SEPARATOR, Profile, derived_profile
 
 from ..analysis.verdict import Interval, Verdict
@@ -38,6 +38,7 @@ __all__ = [
     "setting_kind",
     "split_slot",
     "apply_setting",
+    "check_vary",
     "PairFigures",
     "pair_figures",
     "format_value",
@@ -101,9 +102,13 @@ def setting_kind(key: str) -> str:
     backend, dot, name = key.partition(".")
     if dot and name and backend in _registered():
         return "engine"
+    from simbridge.engine_settings import settings_for
+
+    known = ["timestep", *PROFILE_ENTRIES]
+    known += [f"{b}.{k}" for b in _registered() for k in settings_for(b)]
     raise InvalidArgumentError(
         "vary",
-        f"unknown setting {key!r}; valid: 'timestep', a profile entry "
+        f"unknown setting {key!r}{did_you_mean(key, known)}; valid: 'timestep', a profile entry "
         f"({', '.join(PROFILE_ENTRIES)}) or an engine setting BACKEND.KEY with BACKEND one of "
         f"{_registered()} (`simbridge settings [BACKEND]` lists the keys)",
     )
@@ -162,6 +167,35 @@ def parse_vary(text: str) -> Setting:
         if kind == "profile" or kind == "engine":
             derived_profile("pybullet", {name: v})  # raises on a bad value
     return Setting(key, values)
+
+
+def check_vary(settings: Sequence[Setting | str], backends: Sequence[str]) -> None:
+    """Each setting of a study over ``backends`` changes something: an engine setting's
+    backend is one of them, a ``KEY@N``'s N within them (and its backend's, for an engine
+    setting). Found before any run.
+
+    Raises:
+        EngineNotInStudyError: ``BACKEND.KEY`` for a backend not among ``backends``.
+        InvalidArgumentError: ``KEY@N`` past the last engine, or naming another backend's.
+    """
+    from simbridge.exceptions import EngineNotInStudyError
+
+    for s in settings:
+        key = s.key if isinstance(s, Setting) else s.partition("=")[0].strip()
+        name, only = split_slot(key)
+        backend = name.split(".", 1)[0] if setting_kind(key) == "engine" else None
+        if backend is not None and backend not in backends:
+            raise EngineNotInStudyError("vary", name, backend, backends)
+        if only is not None and only >= len(backends):
+            raise InvalidArgumentError(
+                "vary",
+                f"{key!r}: there are {len(backends)} engines ({', '.join(backends)}): N is 1 "
+                f"to {len(backends)}",
+            )
+        if only is not None and backend is not None and backend != backends[only]:
+            raise InvalidArgumentError(
+                "vary", f"{key!r}: engine {only + 1} is {backends[only]!r}, not {backend!r}"
+            )
 
 
 def apply_setting(

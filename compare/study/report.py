@@ -12,7 +12,7 @@ from ..analysis.verdict import Interval
 from ..report.fmt import fmt_value
 from ..report.verdict import verdict_word
 from ..scenario import format_timestep
-from .points import PairFigures, format_value, split_slot
+from .points import PairFigures, format_value, interval_dict, split_slot
 
 if TYPE_CHECKING:
     from .explain import Explanation
@@ -25,6 +25,7 @@ __all__ = [
     "write_sweep",
     "write_explanation",
     "point_line",
+    "sweep_lines",
 ]
 
 
@@ -139,15 +140,26 @@ def write_resolution(r: Resolution, out: str | Path) -> None:
 # ---------------------------------------------------------------- sweep
 
 
-def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
-    import matplotlib
+PAIR_COLORS = ("k", "tab:purple", "tab:brown", "tab:olive", "tab:cyan", "tab:pink", "0.5")
+"""A pair's colour in a sweep's figure (as the comparison's ``distance.png`` colours them)."""
+ENGINE_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+GROUP_MARKERS = ("o", "s", "^", "D", "v", "P")
+"""A grid's other settings (one line each) by marker and dash."""
+GROUP_LINES = ("-", "--", ":", "-.")
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def sweep_lines(s: Sweep, key: str) -> list[dict[str, Any]]:
+    """What a sweep's figure of ``key`` draws, a dict per line: ``panel`` (``gap`` or
+    ``spread``), ``name`` (a gap's: its pair, ``pybullet and mujoco``; a spread's: ``spread of
+    mujoco``), ``others`` (on a grid, the other settings' values of the line, else empty),
+    ``label`` (the legend's: the name, and the others in brackets), ``x`` (the values; their
+    places for values that are not numbers), ``value``, ``low`` and ``high`` (the 95%
+    interval; None where there is none). One gap line per pair of engines and one spread line
+    per engine, each for every combination of the other settings on a grid. A spread is the
+    engine's in the first pair that holds it (at that pair's judged instant)."""
     pts = s.points_of(key)
     if not pts or not pts[0].pairs:
-        return False
+        return []
     numeric = all(
         isinstance(p.values[key], (int, float)) and not isinstance(p.values[key], bool) for p in pts
     )
@@ -156,34 +168,103 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
     for p in pts:
         tag = ", ".join(f"{k}={format_value(p.values[k])}" for k in others)
         groups.setdefault(tag, []).append(p)
+    ticks = [format_value(p.values[key]) for p in pts]
+    names = _engine_names(s)
+    pairs = _pairs(len(names))
+    holder = {}  # engine slot -> (the first pair holding it, its place in that pair)
+    for k, (a, b) in reversed(list(enumerate(pairs))):
+        holder[a], holder[b] = (k, 0), (k, 1)
+    out: list[dict[str, Any]] = []
+
+    def line(panel: str, label: str, tag: str, group: list[Any], xi: list[Interval]) -> None:
+        out.append(
+            {
+                "panel": panel,
+                "name": label,
+                "others": tag,
+                "label": label + (f" ({tag})" if tag else ""),
+                "x": [
+                    p.values[key] if numeric else ticks.index(format_value(p.values[key]))
+                    for p in group
+                ],
+                "value": [x.value for x in xi],
+                "low": [interval_dict(x)["low"] for x in xi],  # None: none, or not finite
+                "high": [interval_dict(x)["high"] for x in xi],
+            }
+        )
+
+    for tag, group in groups.items():
+        for k, (a, b) in enumerate(pairs):
+            if all(len(p.pairs) > k for p in group):
+                line(
+                    "gap", f"{names[a]} and {names[b]}", tag, group, [p.pairs[k].gap for p in group]
+                )
+        for slot in range(len(names)):
+            k, side = holder[slot]
+            if all(len(p.pairs) > k for p in group):
+                sp = [p.pairs[k].spreads[side] for p in group]
+                line("spread", f"spread of {names[slot]}", tag, group, sp)
+    return out
+
+
+def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lines = sweep_lines(s, key)
+    if not lines:
+        return False
+    pts = s.points_of(key)
+    numeric = all(
+        isinstance(p.values[key], (int, float)) and not isinstance(p.values[key], bool) for p in pts
+    )
     head = pts[0].pairs[0]
     names = _engine_names(s)
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    many = len(names) > 2
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8) if many else (11, 4.2))
     ticks = [format_value(p.values[key]) for p in pts]
-    for tag, group in groups.items():
-        xs: list[Any] = [
-            p.values[key] if numeric else ticks.index(format_value(p.values[key])) for p in group
-        ]
-        g = [p.pairs[0].gap for p in group]
-        lo = [x.value - (x.low if x.low is not None else x.value) for x in g]
-        hi = [(x.high if x.high is not None else x.value) - x.value for x in g]
-        label = f"gap {names[0]} - {names[1]}" + (f" ({tag})" if tag else "")
-        ax1.errorbar(xs, [x.value for x in g], yerr=[lo, hi], marker="o", capsize=3, label=label)
-        for slot in (0, 1):
-            sp = [p.pairs[0].spreads[slot] for p in group]
-            ax2.errorbar(
-                xs,
-                [x.value for x in sp],
-                yerr=[
-                    [x.value - (x.low if x.low is not None else x.value) for x in sp],
-                    [(x.high if x.high is not None else x.value) - x.value for x in sp],
-                ],
-                marker="s" if slot else "o",
-                capsize=3,
-                label=f"spread of {names[slot]}" + (f" ({tag})" if tag else ""),
-            )
+    tags = list(dict.fromkeys(x["others"] for x in lines))
+    pair_labels = [f"{names[a]} and {names[b]}" for a, b in _pairs(len(names))]
+    spots = [v for x in lines for v in x["x"]]
+    dodge = 0.06 if not numeric else 0.012 * ((max(spots) - min(spots)) or 1.0)
+    for x in lines:
+        color: str | None
+        base = x["name"]
+        g = tags.index(x["others"])
+        if x["panel"] == "gap":
+            ax, slot = ax1, 0
+            color = PAIR_COLORS[pair_labels.index(base) % len(PAIR_COLORS)]
+            if not many:
+                color = None  # two engines: matplotlib's colours, as before
+        else:
+            ax = ax2
+            slot = [f"spread of {n}" for n in names].index(base)
+            color = ENGINE_COLORS[slot % len(ENGINE_COLORS)]
+            g = slot if len(tags) == 1 else g  # one line each: the engine's marker
+        lo = [v - (v if low is None else low) for v, low in zip(x["value"], x["low"], strict=True)]
+        hi = [(v if h is None else h) - v for v, h in zip(x["value"], x["high"], strict=True)]
+        xs = x["x"]
+        if many:  # side by side at each value: equal lines stay visible
+            k, n = (pair_labels.index(base), len(pair_labels)) if ax is ax1 else (slot, len(names))
+            xs = [v + dodge * (k - (n - 1) / 2) for v in xs]
+        ax.errorbar(
+            xs,
+            x["value"],
+            yerr=[lo, hi],
+            marker=GROUP_MARKERS[g % len(GROUP_MARKERS)],
+            ls=GROUP_LINES[g % len(GROUP_LINES)],
+            color=color,
+            capsize=3,
+            label=x["label"],
+        )
     ax1.axhline(head.tolerance, color="grey", ls=":", lw=1, label="tolerance")
-    for ax, title in ((ax1, "cross-engine gap (median, 95% interval)"), (ax2, "ensemble spread")):
+    gap_title = "cross-engine gap" + (", each pair" if many else "")
+    for ax, title in (
+        (ax1, f"{gap_title} (median, 95% interval)"),
+        (ax2, "ensemble spread" + (", each engine" if many else "")),
+    ):
         ax.set_xlabel(key)
         ax.set_ylabel(f"{head.quantity} ({head.unit})")
         ax.set_title(title, fontsize=10)
@@ -191,7 +272,7 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
             ax.set_xticks(range(len(ticks)), ticks)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    if all(p.pairs[0].gap.value > 0 for p in pts):
+    if all(v > 0 for x in lines if x["panel"] == "gap" for v in x["value"]):
         ax1.set_yscale("log")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -218,6 +299,7 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
             if _plot_sweep(s, setting.key, out / name):
                 images.append((setting.key, name))
     data = s.as_dict()
+    data["figures"] = {x.key: sweep_lines(s, x.key) for x in s.settings}
     data["files"] = ["summary.json", "report.md"] + [n for _, n in images]
     _dump(out / "summary.json", data)
     names = _engine_names(s)
@@ -242,10 +324,11 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     if s.points and s.points[0].pairs:
         head = s.points[0].pairs[0]
         lines += [
-            f"The gap is the median {head.quantity} between the two engines' runs at the judged "
-            "instant (the end, or the largest gap when the end is below the tolerance), with its "
-            "95% bootstrap interval; a spread is the 90th percentile of the distances between "
-            "one engine's runs.",
+            f"The gap is the median {head.quantity} between the two engines' runs"
+            + (" of a pair" if len(names) > 2 else "")
+            + " at the judged instant (the end, or the largest gap when the end is below the "
+            "tolerance), with its 95% bootstrap interval; a spread is the 90th percentile of "
+            "the distances between one engine's runs.",
             "",
         ]
     keys = [x.key for x in s.settings]
@@ -269,6 +352,14 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
             )
     for key, name in images:
         lines += ["", f"## {key}", "", f"![gap and spread against {key}]({name})"]
+        if len(names) > 2:
+            lines += [
+                "",
+                f"Left, each pair's gap against `{key}`; right, each engine's spread (its "
+                "first pair's, at that pair's judged instant); the lines are drawn side by side "
+                "at each value, so that equal ones stay in sight. Their figures are in "
+                f"`summary.json` under `figures.{key}`.",
+            ]
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path

@@ -15,11 +15,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from simbridge.engine_settings import require_engines
 from simbridge.exceptions import InvalidArgumentError
 
 from ..pipeline import compare
 from ..scenario import load_scenario
-from .points import PairFigures, Setting, all_pairs, apply_setting, parse_vary
+from .points import PairFigures, Setting, all_pairs, apply_setting, check_vary, parse_vary
 
 __all__ = ["SweepPoint", "Sweep", "sweep"]
 
@@ -108,7 +109,10 @@ def sweep(
         compare_args: passed to every call (``ensemble``, ``duration``, ``seed``...).
 
     Raises:
-        InvalidArgumentError: no setting, a setting given twice, a bad key or value.
+        InvalidArgumentError: no setting, a setting given twice, a bad key or value, a
+            ``KEY@N`` past the engines.
+        EngineNotInStudyError: ``BACKEND.KEY`` (or ``engine_settings``) for a backend the
+            sweep does not run.
     """
     start = _time.perf_counter()
     settings = [v if isinstance(v, Setting) else parse_vary(v) for v in vary]
@@ -125,6 +129,8 @@ def sweep(
 
         backends = installed_backends()[0]
     names = tuple(backends)
+    check_vary(settings, names)  # a setting that changes nothing: said before any run
+    require_engines("engine_settings", compare_args.get("engine_settings"), names)
     if profile is None:
         profiles = (sc.profile,) * len(names)
     elif isinstance(profile, str):

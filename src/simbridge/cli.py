@@ -248,11 +248,13 @@ def _compare(args: argparse.Namespace) -> int:
     if args.profile is not None and len(args.profile) not in (1, n):
         many = "two" if n == 2 else str(n)
         raise _Usage(f"--profile takes one profile, or one per backend ({many})")
+    from simbridge import cli_study
+
+    cli_study.check_engines(args)  # --set for an engine not run: bad usage
     scenario = scenario_argument(args.scenario)
     engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
-    from simbridge import cli_study
 
     resolver = cli_study.resolver_of(args)  # --resolve: compare, halving dt while unresolved
     with ProgressBar() as bar:

@@ -14,6 +14,7 @@ __all__ = [
     "add_resolve_arguments",
     "add_commands",
     "add_study_options",
+    "check_engines",
     "resolver_of",
     "finish_resolve",
     "profile_name",
@@ -216,11 +217,34 @@ def _check_profiles(args: argparse.Namespace) -> None:
         raise _usage(f"--profile takes one profile, or one per backend ({n})")
 
 
+def check_engines(args: argparse.Namespace) -> None:
+    """``--set`` and ``--vary`` against the engines the command runs (``--backends``, else
+    every installed one): a setting of an engine not run, or a ``KEY@N`` past them, is bad
+    usage (exit 2), said before any engine runs."""
+    from simbridge.cli_settings import settings_from_args
+    from simbridge.compare.study.points import check_vary
+    from simbridge.engine_settings import require_engines
+    from simbridge.exceptions import InvalidArgumentError
+
+    names = args.backends
+    if names is None:
+        from simbridge.compare import installed_backends
+
+        names = installed_backends()[0]
+    try:
+        require_engines("set", settings_from_args(args.engine_settings), names)
+        check_vary(getattr(args, "vary", None) or (), names)
+    except InvalidArgumentError as exc:  # as argparse names an option: "argument --set: ..."
+        text = str(exc).removeprefix(f"argument {exc.argument!r}: ")
+        raise _usage(f"argument --{exc.argument}: {text}") from None
+
+
 def _start(args: argparse.Namespace, study: str) -> tuple[Any, Path]:
     """The scenario of a study command and its report folder, the options checked first."""
     from simbridge.cli_usage import scenario_argument
 
     _check_profiles(args)
+    check_engines(args)
     sc = scenario_argument(args.scenario)
     return sc, _out(args, sc.name, study)
 

@@ -18,14 +18,14 @@ import importlib
 import math
 import numbers
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import profiles
-from .exceptions import InvalidArgumentError, InvalidEngineSettingError
+from .exceptions import InvalidArgumentError, InvalidEngineSettingError, did_you_mean
 from .registry import backend_spec
 
 if TYPE_CHECKING:
@@ -38,6 +38,7 @@ __all__ = [
     "effective",
     "parse_assignment",
     "merge",
+    "require_engines",
     "freeze",
     "thaw",
     "KINDS",
@@ -218,7 +219,10 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
         if key not in known:
             valid = ", ".join(known) if known else "none (this backend declares no settings)"
             raise InvalidEngineSettingError(
-                backend, str(key), f"unknown setting; valid settings of {backend!r}: {valid}"
+                backend,
+                str(key),
+                f"unknown setting{did_you_mean(str(key), known)}; valid settings of "
+                f"{backend!r}: {valid}",
             )
     checked = {key: known[key].check(backend, mapping[key]) for key in known if key in mapping}
     spec = backend_spec(backend)
@@ -299,6 +303,22 @@ def freeze(engines: Any, argument: str = "engine_settings") -> Frozen:
 def thaw(frozen: Frozen) -> dict[str, dict[str, Any]]:
     """:func:`freeze`'s pairs back as ``{backend: {key: value}}``, JSON-able (lists)."""
     return {b: {k: _jsonable(v) for k, v in values} for b, values in frozen}
+
+
+def require_engines(
+    argument: str, settings: Mapping[str, Mapping[str, Any]] | None, engines: Sequence[str]
+) -> None:
+    """Every backend ``settings`` sets something for is one of ``engines`` (the study's).
+
+    Raises:
+        EngineNotInStudyError: a setting for another engine, naming it and ``engines``.
+    """
+    from .exceptions import EngineNotInStudyError
+
+    for backend, values in (settings or {}).items():
+        if backend not in engines and values:
+            key = next(iter(values))
+            raise EngineNotInStudyError(argument, f"{backend}.{key}", backend, engines)
 
 
 def merge(*layers: Mapping[str, Mapping[str, Any]] | None) -> dict[str, dict[str, Any]]:

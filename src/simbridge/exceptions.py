@@ -31,6 +31,7 @@ __all__ = [
     "InvalidArgumentError",
     "InvalidProfileError",
     "InvalidEngineSettingError",
+    "EngineNotInStudyError",
     "SimulationDivergedError",
     "EngineError",
     "SimBusyError",
@@ -286,9 +287,29 @@ class InvalidArgumentError(SimbridgeError, ValueError):
         super().__init__(f"argument {argument!r}: {detail}")
 
 
+class EngineNotInStudyError(InvalidArgumentError):
+    """An engine setting (``--set``, ``engine_settings=``, a ``--vary BACKEND.KEY``) for an
+    engine the study does not run: it would change nothing. A scenario's own ``[engines.*]``
+    tables are not this: a scenario is written for every engine."""
+
+    def __init__(self, argument: str, setting: str, backend: str, engines: Sequence[str]):
+        self.setting = setting
+        self.backend = backend
+        self.engines = list(engines)
+        InvalidArgumentError.__init__(
+            self,
+            argument,
+            f"{setting} is a setting of {backend!r}, which this study does not run (its "
+            f"engines: {', '.join(map(repr, dict.fromkeys(engines)))}): it would change "
+            f"nothing; add {backend} to the backends or leave the setting out",
+        )
+
+
 class InvalidProfileError(SimbridgeError, ValueError):
     def __init__(self, profile: object, valid: Iterable[str]):
-        super().__init__(f"unknown profile {profile!r}; valid profiles: {_choices(valid)}")
+        valid = list(valid)
+        hint = did_you_mean(profile, valid) if isinstance(profile, str) else ""
+        super().__init__(f"unknown profile {profile!r}{hint}; valid profiles: {_choices(valid)}")
 
 
 class InvalidEngineSettingError(InvalidProfileError):

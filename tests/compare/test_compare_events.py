@@ -234,6 +234,10 @@ def test_parting_names_the_recent_event_then_the_ongoing_one_then_the_last_one()
     p = parting_dict(parting(1.195, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["event"]["kind"] == "contact_lost" and p["since"] < 0
     assert parting_words(p).startswith("during 'turn', in the same step as A's bot lost")
+    # the event stamped one whole step after the parting: said so, not "in the same step"
+    p = parting_dict(parting(1.19, 0.01, "base_distance", PHASES, [a], step=0.01))
+    assert p["event"]["kind"] == "contact_lost" and p["since"] == pytest.approx(-0.01)
+    assert parting_words(p).startswith("during 'turn', 0.010 s before A's bot lost")
     p = parting_dict(parting(1.0, 0.01, "base_distance", PHASES, [a], step=0.01))
     assert p["phase"] == "settle"  # at the boundary: the phase that led to it
     assert p["event"]["kind"] == "motor_saturated"

@@ -9,13 +9,19 @@ import importlib.util
 import json
 import re
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
 from simbridge.compare import compare, report
+from simbridge.compare.analysis.diff import QUANTITIES
 from simbridge.compare.report import brief, plots
-from simbridge.compare.report.fmt import fmt_value
+from simbridge.compare.report.events import parting_words
+from simbridge.compare.report.fmt import fmt_threshold, fmt_time, fmt_value
+from simbridge.compare.report.pair_sections import MAX_PART_ROWS
+from simbridge.compare.report.parts import parts_words
 from simbridge.compare.report.verdict import pair_words, verdict_word
+from simbridge.compare.study import sweep, write_sweep
 
 SAPIEN = importlib.util.find_spec("sapien") is not None
 pytestmark = pytest.mark.skipif(
@@ -154,7 +160,10 @@ def test_first_pair_sections_name_their_pair_and_departures_link(written):
     v = s["verdict"]
     assert f"## Verdict (pybullet and mujoco): {verdict_word(v)}" in text
     assert "## pybullet and mujoco, the first pair" in text
-    assert "## When each quantity parts (pybullet and mujoco)" in text
+    # the sections over time, per phase and per part carry every pair: no pair in their titles
+    for title in ("When each quantity parts", "Per phase", "Which part parts first"):
+        assert f"\n## {title}\n" in text
+        assert f"## {title} (" not in text
     setup = text.split("## Setup\n", 1)[1].split("\n## ", 1)[0]
     assert "(#profile-departures-that-apply-here)" in setup
     assert "## Profile departures that apply here" in text
@@ -187,3 +196,132 @@ def test_distance_draws_every_pair(three, tmp_path, monkeypatch):
     for a, b in (("pybullet", "mujoco"), ("pybullet", "physx"), ("mujoco", "physx")):
         assert f"{a} vs {b}: nominal runs" in seen
         assert any(re.match(f"{a} vs {b}: median gap", x) for x in seen)
+
+
+def _section(text: str, title: str) -> str:
+    return text.split(f"\n## {title}\n", 1)[1].split("\n## ", 1)[0]
+
+
+def _rows(section: str) -> list[list[str]]:
+    """A section's table, its header and separator left out: the cells of each row."""
+    rows = [r for r in section.splitlines() if r.startswith("| ")]
+    return [r.strip("| ").split(" | ") for r in rows[1:]]
+
+
+PAIRS = ["pybullet and mujoco", "pybullet and physx", "mujoco and physx"]
+
+
+def test_each_quantity_parts_in_a_row_per_pair(written):
+    text, s = written
+    section = _section(text, "When each quantity parts")
+    assert "| quantity | pair | first crossing |  |  | at the end | largest |" in section
+    rows = _rows(section)
+    quantities = [k for k in QUANTITIES if k in s["cross"]["final"]]
+    assert len(rows) == 3 * len(quantities)
+    for i, key in enumerate(quantities):
+        q = QUANTITIES[key]
+        for cells, p in zip(rows[3 * i : 3 * i + 3], s["pairs"], strict=True):
+            cross = p["cross"]  # the pair's own figures, from summary.json
+            assert cells[0] == q.title and cells[1] == " and ".join(p["labels"])
+            times = [c["time"] for c in cross["crossings"][key]]
+            assert cells[2 : 2 + len(times)] == [
+                f"{fmt_threshold(thr, q.unit)}: {fmt_time(t)}"
+                for thr, t in zip(q.thresholds, times, strict=True)
+            ]
+            assert cells[-2:] == [
+                fmt_value(cross["final"][key], q.unit),
+                fmt_value(cross["max"][key], q.unit),
+            ]
+    assert [r[1] for r in rows[:3]] == PAIRS
+    # the pairs' rows are their own: PhysX parts from the two others by another gap than they
+    # from each other (6.38 m, 1.76 m and 8.04 m apart at 0.5 s, measured)
+    finals = [p["cross"]["final"]["base_distance"] for p in s["pairs"]]
+    assert len({fmt_value(x, "m") for x in finals}) == 3
+
+
+def test_each_phase_has_a_row_per_pair(written):
+    text, s = written
+    rows = _rows(_section(text, "Per phase"))
+    phases = s["cross"]["phases"]
+    assert len(rows) == 3 * len(phases)
+    for i, ph in enumerate(phases):
+        for cells, p in zip(rows[3 * i : 3 * i + 3], s["pairs"], strict=True):
+            own = p["cross"]["phases"][i]
+            assert cells[:3] == [
+                ph["name"],
+                " and ".join(p["labels"]),
+                f"{own['start']:.3f} – {own['end']:.3f} s",
+            ]
+            assert cells[3] == (
+                f"{fmt_value(own['at_end']['base_distance'], 'm')} "
+                f"(max {fmt_value(own['max']['base_distance'], 'm')})"
+            )
+
+
+def test_which_part_parts_first_for_every_pair(written):
+    text, s = written
+    section = _section(text, "Which part parts first")
+    bullets = [x for x in section.splitlines() if x.startswith("- ")]
+    assert [b.split(": ", 1)[0] for b in bullets] == ["- " + x for x in PAIRS]
+    for b, p in zip(bullets, s["pairs"], strict=True):
+        words = parts_words(p["parts"])
+        assert b.split(": ", 1)[1] == words[0].lower() + words[1:]
+    rows = _rows(section)
+    each = max(3, MAX_PART_ROWS // 3)
+    assert [r[0] for r in rows] == [x for x in PAIRS for _ in range(each)]
+    for k, p in enumerate(s["pairs"]):
+        mine = rows[k * each : (k + 1) * each]
+        assert [r[1] for r in mine] == [str(n + 1) for n in range(each)]
+        assert [r[2] for r in mine] == [f"{x['kind']} `{x['name']}`" for x in p["parts"][:each]]
+    total = len(s["pairs"][0]["parts"])
+    assert f"The first {each} of {total} shown per pair" in section
+
+
+def test_where_the_gap_is_born_for_every_pair(written):
+    text, s = written
+    section = _section(text, "Where the gap is born")
+    bullets = [x for x in section.splitlines() if x.startswith("- ")]
+    assert [b.split(": ", 1)[0] for b in bullets] == ["- " + x for x in PAIRS]
+    for b, p in zip(bullets, s["pairs"], strict=True):
+        t = p["parting"]["time"]
+        assert b.split(": ", 1)[1].startswith("never" if t is None else "1 cm apart at t = ")
+        if t is not None:
+            assert f"t = {fmt_time(t)}, {parting_words(p['parting'])}." in b
+
+
+def test_a_sweep_of_three_engines_draws_every_pair(tmp_path, monkeypatch):
+    import matplotlib.figure
+
+    drawn: list[list[str]] = []
+    save = matplotlib.figure.Figure.savefig
+
+    def keep(fig, *args, **kwargs):
+        drawn.append([t.get_text() for ax in fig.axes for t in ax.get_legend().get_texts()])
+        return save(fig, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
+    slide = Path(__file__).parent / "data" / "incline-slide.toml"
+    s = sweep(
+        slide,
+        ["pybullet", "mujoco", "physx"],
+        ["lateral_friction=0.5,0.3"],
+        duration=0.5,
+        ensemble=3,
+        workers=0,
+        resync_every=0,
+    )
+    path = write_sweep(s, tmp_path)
+    (legends,) = drawn
+    spreads = ["spread of pybullet", "spread of mujoco", "spread of physx"]
+    assert legends == ["tolerance", *PAIRS, *spreads]
+    data = json.loads((tmp_path / "summary.json").read_text("utf-8"))
+    lines = data["figures"]["lateral_friction"]
+    assert [x["label"] for x in lines] == PAIRS + spreads
+    for k, x in enumerate(lines[:3]):
+        assert x["value"] == [pt["pairs"][k]["gap"]["value"] for pt in data["points"]]
+        assert x["low"] == [pt["pairs"][k]["gap"]["low"] for pt in data["points"]]
+    for slot, x in zip((0, 1, 2), lines[3:], strict=True):  # each engine's, from its first pair
+        k, side = {0: (0, 0), 1: (0, 1), 2: (1, 1)}[slot]
+        assert x["value"] == [pt["pairs"][k]["spreads"][side]["value"] for pt in data["points"]]
+    rows = [r for r in path.read_text("utf-8").splitlines() if r.startswith("| 0.")]
+    assert len(rows) == 2 * 3  # a row per pair at each value

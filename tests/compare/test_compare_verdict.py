@@ -219,7 +219,15 @@ def test_verdict_dict_is_json_ready():
     v = verdict(cloud(np.arange(4) * 1e-6), cloud(1.0 + np.arange(4) * 1e-6))
     d = json.loads(json.dumps(verdict_dict(v)))
     assert d["verdict"] == "differ" and d["test"]["p_value"] == pytest.approx(2 / 70)
-    assert d["instants"] == {"total": 3, "agree": 0, "chaotic": 0, "unresolved": 0, "differ": 3}
+    within = {"A": {"spread": 0, "own_error": 0}, "B": {"spread": 0, "own_error": 0}}
+    assert d["instants"] == {
+        "total": 3,
+        "agree": 0,
+        "chaotic": 0,
+        "unresolved": 0,
+        "differ": 3,
+        "within": within,  # every instant beyond both spreads and own errors
+    }
     assert set(d["engine_figures"]) == {"A", "B"}
 
 

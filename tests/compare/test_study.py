@@ -266,6 +266,53 @@ def test_sweep_over_friction_gap_grows_as_the_physics_says(tmp_path):
     assert verdicts == ["agree", "unresolved", "unresolved"]
 
 
+def test_a_sweep_of_three_engines_draws_every_pair(tmp_path, monkeypatch):
+    """PyBullet three times, the third given another friction: the first pair agrees at every
+    value, the two pairs with the third part by the physics' gap; the figure draws a gap line
+    per pair and a spread line per engine, named in the report's pair words."""
+    import matplotlib.figure
+
+    drawn: list[list[str]] = []
+    save = matplotlib.figure.Figure.savefig
+
+    def keep(fig, *args, **kwargs):
+        drawn.append([t.get_text() for ax in fig.axes for t in ax.get_legend().get_texts()])
+        return save(fig, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
+    duration = 0.5
+    s = sweep(
+        SLIDE,
+        ["pybullet"] * 3,
+        ["lateral_friction@3=0.5,0.4,0.3"],
+        duration=duration,
+        ensemble=3,
+        workers=0,
+        resync_every=0,
+    )
+    write_sweep(s, tmp_path)
+    pairs = ["pybullet #1 and pybullet #2", "pybullet #1 and pybullet #3"]
+    pairs += ["pybullet #2 and pybullet #3"]
+    spreads = [f"spread of pybullet #{k}" for k in (1, 2, 3)]
+    (legends,) = drawn
+    assert legends == ["tolerance", *pairs, *spreads]
+    data = json.loads((tmp_path / "summary.json").read_text())
+    lines = data["figures"]["lateral_friction@3"]
+    assert [x["name"] for x in lines] == pairs + spreads
+    assert [x["panel"] for x in lines] == ["gap"] * 3 + ["spread"] * 3
+    for x in lines:
+        assert x["x"] == [0.5, 0.4, 0.3]
+    for k, x in enumerate(lines[:3]):  # each pair's own gaps, not the first pair's
+        assert x["value"] == [pt["pairs"][k]["gap"]["value"] for pt in data["points"]]
+    first, with_third, also = (x["value"] for x in lines[:3])
+    assert max(first) < 1e-6  # the same engine, the same friction
+    for dmu, a, b in zip((0.1, 0.2), with_third[1:], also[1:], strict=True):
+        expected = 0.5 * G_COS30 * dmu * duration**2
+        assert a == pytest.approx(expected, rel=0.1) and b == pytest.approx(expected, rel=0.1)
+    report = (tmp_path / "report.md").read_text()
+    assert "Left, each pair's gap against `lateral_friction@3`" in report
+
+
 def test_explain_ranks_the_friction_made_different_first(tmp_path, capsys):
     out = tmp_path / "explain"
     argv = ["explain", str(SLIDE), "--backends", "pybullet", "pybullet", "--profile", "pybullet"]

@@ -1771,7 +1771,7 @@ def determinism() -> None:
         sim.set_state(state)
         sim.step(100)
         # a backend whose restore is not a bitwise continuation says so in its manifest (PhysX:
-        # its contact and solver caches are not in the state); its states must stay finite
+        # its contact state and a floating base's link poses are not); its states must stay finite
         if "snapshot" in sim.manifest()["departures"]:
             return None
         if np.array(sim.base_state(body).position).tobytes() != first:
