@@ -23,7 +23,10 @@
 Timings depend on what else the machine runs: the serial and the pool runs are taken back to
 back, each engine in turn, and the load average is printed beside them, with the CPU seconds
 of each (this process and its workers), which the load does not move: pool CPU over serial CPU
-is what the pool costs on top of the runs.
+is what the pool costs on top of the runs. Below the table, per engine and pool: the workers' CPU
+outside the jobs, per worker (a cold pool's start: the interpreter, the imports; each job's
+unpickling), each worker's first job's CPU against the median of the others (a first job imports
+the engine), and the CPU of a fresh interpreter importing what a job needs.
 """
 
 from __future__ import annotations
@@ -76,6 +79,8 @@ def measure(backend: str, size: int, workers: int, cache: Path, serial: bool) ->
     from simbridge.compare.run.jobs import run_job
 
     jobs = ensemble_jobs(backend, size)
+    for job in jobs:  # their cache keys, made before the clock as compare()'s plan makes them
+        job.key  # noqa: B018 - a cached property
     out: dict = {"backend": backend, "jobs": len(jobs), "workers": workers}
     if serial:
         run_job(jobs[1])  # warm-up: the engine loaded, as in a pool's worker after its first job
@@ -110,7 +115,8 @@ def _pool(jobs: list, workers: int, store: Any, known: set[int]) -> dict:
         store.put(jobs[i].key, r)
 
     me = resource.getrusage(resource.RUSAGE_SELF)
-    c0 = me.ru_utime + me.ru_stime + workers_cpu(known)
+    w0 = workers_cpu(known)
+    c0 = me.ru_utime + me.ru_stime + w0
     t0 = time.perf_counter()
     results = run_all(
         run_job,
@@ -123,8 +129,21 @@ def _pool(jobs: list, workers: int, store: Any, known: set[int]) -> dict:
     wall = time.perf_counter() - t0
     pids = known | {r.pid for r in results}
     me = resource.getrusage(resource.RUSAGE_SELF)
-    out: dict = {"wall": wall, "cpu": me.ru_utime + me.ru_stime + workers_cpu(pids) - c0}
+    w1 = workers_cpu(pids)
+    out: dict = {"wall": wall, "cpu": me.ru_utime + me.ru_stime + w1 - c0}
     out["pids"] = pids
+    # the workers' CPU outside the jobs, per worker: their start (interpreter, imports) when the
+    # pool is started for the call, and each job's unpickling and its result's pickling
+    used = {r.pid for r in results}
+    out["outside_jobs"] = (w1 - w0 - sum(r.cpu_time for r in results)) / len(used)
+    # each worker's first job (a worker runs its jobs one after the other: their arrival
+    # order) against the others: what a job's first run in a process costs (the engine's import)
+    by_pid: dict[int, list[float]] = {}
+    for i in sorted(range(len(results)), key=lambda i: arrived[i]):
+        by_pid.setdefault(results[i].pid, []).append(results[i].cpu_time)
+    out["first_cpu"] = [cpus[0] for cpus in by_pid.values()]
+    rest = sorted(c for cpus in by_pid.values() for c in cpus[1:])
+    out["rest_cpu"] = rest[len(rest) // 2] if rest else float("nan")
     out["in_jobs"] = sum(r.wall_time for r in results)
     out["job_cpu"] = sum(r.cpu_time for r in results) / len(results)
     # the first job's start, seen from here: the pool's start and its worker's imports
@@ -152,6 +171,26 @@ def rebuild_time(backends: list[str], size: int, workers: int, cache: Path) -> d
     return {"study": study, "ran": c.jobs.ran, "cached": c.jobs.cached, "rebuild": times}
 
 
+def _import_cpu(runs: int = 3) -> float:
+    """CPU seconds of importing what a job needs (its module, the run stage) in a fresh
+    interpreter, the least of ``runs``: a pool worker's imports before its first job."""
+    import subprocess
+
+    code = (
+        "import time; c = time.process_time(); import simbridge.compare.run.jobs, "
+        "simbridge.compare.run.trajectory, simbridge.compare.run.ensemble; "
+        "print(time.process_time() - c)"
+    )
+    return min(
+        float(
+            subprocess.run(
+                [sys.executable, "-c", code], capture_output=True, text=True, check=True
+            ).stdout
+        )
+        for _ in range(runs)
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--backends", nargs="+", default=["pybullet", "mujoco"])
@@ -170,6 +209,7 @@ def main(argv: list[str] | None = None) -> int:
             "  CPU/job serial s  CPU/job pool s  pool/serial  CPU serial s  CPU pool s  load"
         )
         nan = float("nan")
+        notes = []
         for backend in [] if args.rebuild_only else args.backends:
             r = measure(backend, args.size, args.workers, cache, not args.no_serial)
             sj = r.get("serial_job_cpu", nan)
@@ -184,6 +224,18 @@ def main(argv: list[str] | None = None) -> int:
                     f"  {os.getloadavg()[0]:4.1f}",
                     flush=True,
                 )
+                first = ", ".join(f"{c:.3f}" for c in m["first_cpu"])
+                notes.append(
+                    f"  {backend} {mode}: {m['outside_jobs']:.3f} s per worker outside the jobs; "
+                    f"first job per worker {first} s, median of the others {m['rest_cpu']:.3f} s"
+                )
+        if notes:
+            print(
+                "workers' CPU outside the jobs (a cold pool: the workers' start and imports; "
+                "each job's unpickling) and each worker's first job's CPU:"
+            )
+            print("\n".join(notes))
+            print(f"a worker's imports: {_import_cpu():.3f} s CPU (fresh interpreter, least of 3)")
         if not args.no_rebuild:
             pair = args.backends if len(args.backends) >= 2 else ["pybullet", "mujoco"]
             r = rebuild_time(pair, args.size, args.workers, cache)

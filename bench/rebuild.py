@@ -87,7 +87,7 @@ def phases(folder: Path, cache: Path) -> dict[str, tuple[float, float]]:
 
     wrap(pipeline, "run_jobs", "read the jobs' entries")
     wrap(pipeline, "judged", "verdicts")
-    # its engines imported, for their state's floating-point type (registry.state_dtype)
+    # each engine's state type (registry.state_dtype): declared in the registry, nothing imported
     wrap(pipeline, "EnsembleRunner", "ensemble offsets")
     wrap(pipeline, "diff", "diffs")
     wrap(report_module, "summary", "summary.json")

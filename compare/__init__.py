@@ -28,26 +28,32 @@ Only the :class:`simbridge.Sim` interface is used: no engine is imported here.
 
 from __future__ import annotations
 
-from .analysis.diff import Divergence, PhaseRow, diff
-from .analysis.verdict import Verdict, judge
-from .pipeline import Comparison, compare, installed_backends
-from .report import headline, report, summary
-from .run.ensemble import Ensemble, run_ensembles
-from .run.quantities import QUANTITIES, Quantity
-from .run.trajectory import BodyTrajectory, Trajectory, run
-from .scenario import (
-    Command,
-    Phase,
-    RobotSpec,
-    Scenario,
-    dumps_scenario,
-    list_scenarios,
-    load_scenario,
-    loads_scenario,
-    save_scenario,
-)
-from .scenario.controllers import ControllerError, ControllerSpec
-from .scenario.outcomes import Outcome
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .analysis.diff import Divergence, PhaseRow, diff
+    from .analysis.verdict import Verdict, judge
+    from .pipeline import Comparison, compare, installed_backends
+    from .report import headline, report, summary
+    from .run.ensemble import Ensemble, run_ensembles
+    from .run.quantities import QUANTITIES, Quantity
+    from .run.trajectory import BodyTrajectory, Trajectory, run
+    from .scenario import (
+        Command,
+        Phase,
+        RobotSpec,
+        Scenario,
+        dumps_scenario,
+        list_scenarios,
+        load_scenario,
+        loads_scenario,
+        save_scenario,
+    )
+    from .scenario.controllers import ControllerError, ControllerSpec
+    from .scenario.outcomes import Outcome
 
 __all__ = [
     "run",
@@ -81,3 +87,68 @@ __all__ = [
     "save_scenario",
     "list_scenarios",
 ]
+
+# The names above are imported on first use (PEP 562): a module that needs one stage only (a
+# pool worker running a job imports simbridge.compare.run.jobs, whose package this is) does not
+# pay for the others (the pipeline, the analysis, the report: about 0.2 s).
+_LAZY = {
+    "diff": ".analysis.diff",
+    "Divergence": ".analysis.diff",
+    "PhaseRow": ".analysis.diff",
+    "Verdict": ".analysis.verdict",
+    "judge": ".analysis.verdict",
+    "Comparison": ".pipeline",
+    "compare": ".pipeline",
+    "installed_backends": ".pipeline",
+    "headline": ".report",
+    "report": ".report",
+    "summary": ".report",
+    "Ensemble": ".run.ensemble",
+    "run_ensembles": ".run.ensemble",
+    "QUANTITIES": ".run.quantities",
+    "Quantity": ".run.quantities",
+    "BodyTrajectory": ".run.trajectory",
+    "Trajectory": ".run.trajectory",
+    "run": ".run.trajectory",
+    "Command": ".scenario",
+    "Phase": ".scenario",
+    "RobotSpec": ".scenario",
+    "Scenario": ".scenario",
+    "dumps_scenario": ".scenario",
+    "list_scenarios": ".scenario",
+    "load_scenario": ".scenario",
+    "loads_scenario": ".scenario",
+    "save_scenario": ".scenario",
+    "ControllerError": ".scenario.controllers",
+    "ControllerSpec": ".scenario.controllers",
+    "Outcome": ".scenario.outcomes",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+class _Package(types.ModuleType):
+    """This package's class: ``run`` and ``report`` are functions here (:func:`run`,
+    :func:`report`) and also the names of two of its subpackages. Importing a submodule sets
+    its name on the package (``import simbridge.compare.run.jobs`` would make ``compare.run``
+    the subpackage); here the function keeps the name, as when every stage was imported
+    eagerly. The subpackages stay in ``sys.modules`` and import as before."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in ("run", "report") and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

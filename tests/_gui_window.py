@@ -43,11 +43,12 @@ def robot_pixels(img: Image.Image) -> int:
 
 def scene_pixels(img: Image.Image) -> int:
     """Grey pixels (the ground plane: PyBullet's light grey, MuJoCo's dark grey), which a
-    window that has not drawn its scene yet (black, or MuJoCo's "LOADING...") lacks."""
-    rgb = img.convert("RGB")
-    return sum(
-        1 for r, g, b in rgb.getdata() if 50 <= r <= 235 and max(r, g, b) - min(r, g, b) < 12
-    )
+    window that has not drawn its scene yet (black, or MuJoCo's "LOADING...") lacks. Counted
+    with numpy: a loop over the 786,432 pixels in Python took 0.44 s of CPU a screenshot, taken
+    from the window drawing beside it while grab() polled."""
+    r, g, b = _channels(img)
+    spread = np.maximum(np.maximum(r, g), b) - np.minimum(np.minimum(r, g), b)
+    return int(((r >= 50) & (r <= 235) & (spread < 12)).sum())
 
 
 def grab(until: Callable[[int, int], bool], out: str | None = None) -> tuple[int, int]:

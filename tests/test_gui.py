@@ -70,7 +70,11 @@ def _run(display: str, *args: str) -> tuple[subprocess.CompletedProcess[str], fl
     return done, time.time()
 
 
-WINDOWED = ["pybullet", "mujoco", "physx"]
+WINDOWED = ["pybullet", "physx"]
+"""The backends whose rows this module runs. MuJoCo's rows are tests/test_gui_mujoco.py's (the
+same tests, under an Xvfb of its own): a module is one unit under ``--dist loadfile``, and the
+three backends' rows in one module, about 3.5 minutes mostly waiting on windows, were the
+longest unit of the suite and could end the run alone on one worker."""
 UNSUPPORTED = 3  # _gui_window.py's exit status where the backend cannot open a window here
 
 

@@ -363,6 +363,7 @@ def run_job_registered(specs: tuple[Any, ...], job: Job) -> JobResult:
                 requires=spec.requires,
                 pip_name=spec.pip_name,
                 settings=spec.settings,
+                state_dtype=spec.state_dtype,
             )
     return run_job(job)
 

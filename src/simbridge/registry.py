@@ -11,13 +11,19 @@ Backends are registered by ``"module:Class"`` strings and imported on first use,
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import logging
 import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from .engine_output import captured
-from .exceptions import BackendError, BackendNotInstalledError, UnknownBackendError
+from .exceptions import (
+    BackendError,
+    BackendNotInstalledError,
+    InvalidArgumentError,
+    UnknownBackendError,
+)
 
 if TYPE_CHECKING:
     from .backend import Backend
@@ -44,6 +50,7 @@ class BackendSpec:
     requires: tuple[str, ...] = ()  # importable module names the backend needs
     pip_name: str = ""  # what to pip install when one is missing
     settings: str = ""  # "module:ATTR": its engine settings (engine_settings.Setting), no engine
+    state_dtype: str = ""  # its class's state_dtype, declared; "": read from the class (imports it)
 
 
 _REGISTRY: dict[str, BackendSpec] = {}
@@ -58,14 +65,24 @@ def register(
     requires: tuple[str, ...] = (),
     pip_name: str = "",
     settings: str = "",
+    state_dtype: str = "",
 ) -> None:
     """Register a backend under ``name``; ``entry_point`` is ``"module:Class"``; ``settings``
     is ``"module:ATTR"``, a sequence of :class:`simbridge.engine_settings.Setting` in a module
-    that imports no engine (read when a profile or scenario sets one)."""
+    that imports no engine (read when a profile or scenario sets one); ``state_dtype``, one of
+    :data:`STATE_DTYPES`, declares the class's :attr:`~simbridge.backend.Backend.state_dtype`
+    so that :func:`state_dtype` imports no engine (a report rebuilt from the cache asks it of
+    every engine of the study); the class must agree (:func:`load_backend` checks)."""
     if ":" not in entry_point:
         raise BackendError(f"backend {name!r}: entry point {entry_point!r} is not 'module:Class'")
+    if state_dtype and state_dtype not in STATE_DTYPES:
+        raise InvalidArgumentError(
+            "state_dtype",
+            f"backend {name!r}: expected one of {list(STATE_DTYPES)} (or '' for the class's own), "
+            f"got {state_dtype!r}",
+        )
     _REGISTRY[name] = BackendSpec(
-        name, entry_point, requires, pip_name or " ".join(requires), settings
+        name, entry_point, requires, pip_name or " ".join(requires), settings, state_dtype
     )
     _LOADED.pop(name, None)
 
@@ -131,6 +148,12 @@ def load_backend(name: str) -> type[Backend]:
         logging.getLogger(f"simbridge.{name}").info(
             "importing: %s: %s", w.category.__name__, w.message
         )
+    declared = getattr(cls, "state_dtype", "float64")
+    if spec.state_dtype and declared != spec.state_dtype:
+        raise BackendError(
+            f"backend {name!r}: registered with state_dtype {spec.state_dtype!r}, but its class "
+            f"{spec.entry_point!r} declares {declared!r}"
+        )
     _LOADED[name] = cls
     return cls
 
@@ -142,12 +165,21 @@ STATE_DTYPES = ("float64", "float32")
 def state_dtype(name: str) -> str:
     """The floating-point type backend ``name`` keeps its state in (its class's
     :attr:`~simbridge.backend.Backend.state_dtype`, ``"float64"`` unless it declares another):
-    imports the backend, makes no engine.
+    as registered (``register(..., state_dtype=)``, the shipped backends: its engine modules are
+    looked for, not imported), else read from its class, which imports the backend; makes no
+    engine.
 
     Raises:
         UnknownBackendError, BackendNotInstalledError: as :func:`load_backend`.
         BackendError: the backend declares a type not in :data:`STATE_DTYPES`.
     """
+    spec = backend_spec(name)
+    if spec.state_dtype:
+        for required in spec.requires:
+            if importlib.util.find_spec(required) is None:
+                missing = ModuleNotFoundError(f"No module named {required!r}", name=required)
+                raise BackendNotInstalledError(name, required, spec.pip_name, missing)
+        return spec.state_dtype
     value = getattr(load_backend(name), "state_dtype", "float64")
     if value not in STATE_DTYPES:
         raise BackendError(
@@ -180,6 +212,7 @@ register(
     requires=("pybullet",),
     pip_name="pybullet",
     settings="simbridge.backends.settings_pybullet:SETTINGS",
+    state_dtype="float64",
 )
 register(
     "mujoco",
@@ -187,6 +220,7 @@ register(
     requires=("mujoco",),
     pip_name="'mujoco>=4'",
     settings="simbridge.backends.settings_mujoco:SETTINGS",
+    state_dtype="float64",
 )
 register(
     "physx",
@@ -194,4 +228,5 @@ register(
     requires=("sapien",),
     pip_name="'simbridge[physx]'",
     settings="simbridge.backends.settings_physx:SETTINGS",
+    state_dtype="float32",
 )

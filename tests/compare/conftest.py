@@ -8,6 +8,8 @@ turns that into a failure; a backend that is there but breaks on import fails.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -39,3 +41,13 @@ def other(request: pytest.FixtureRequest) -> str:
     """Each registered backend but PyBullet, the reference engine of the comparisons."""
     require("pybullet")
     return require(request.param)
+
+
+@pytest.fixture
+def _no_home_cache_writes() -> Iterator[None]:
+    """Nothing of the test lands in the user's own cache (~/.cache/simbridge)."""
+    home = Path.home() / ".cache" / "simbridge"
+    before = sorted(home.rglob("*")) if home.exists() else None
+    yield
+    after = sorted(home.rglob("*")) if home.exists() else None
+    assert after == before, "a test wrote the user's cache"

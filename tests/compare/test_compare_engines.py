@@ -40,7 +40,9 @@ def test_contact_free_scenarios_agree_across_engines(other, scenario, profile):
 
 
 def test_r2d2_report_records_the_divergence_from_the_trajectories(other, tmp_path):
-    c = compare("r2d2", ["pybullet", other], ensemble=4)
+    # two runs per engine: the report's figures are checked against the saved trajectories,
+    # which an ensemble's size does not change (4 took 47 s on PhysX on the loaded machine)
+    c = compare("r2d2", ["pybullet", other], ensemble=2)
     path = report(c, tmp_path, plots=False)
     summary = json.loads((tmp_path / "summary.json").read_text())
     h = summary["headline"]

@@ -30,16 +30,6 @@ SMALL: dict[str, Any] = {"duration": 0.2, "ensemble": 2, "workers": 0, "resync_e
 BACKENDS = ["pybullet", "mujoco"]
 
 
-@pytest.fixture
-def _no_home_cache_writes() -> Any:
-    """Nothing of these tests lands in the user's own cache (~/.cache/simbridge)."""
-    home = Path.home() / ".cache" / "simbridge"
-    before = sorted(home.rglob("*")) if home.exists() else None
-    yield
-    after = sorted(home.rglob("*")) if home.exists() else None
-    assert after == before, "a test wrote the user's cache"
-
-
 def _figures(summary: dict[str, Any]) -> dict[str, Any]:
     """summary.json without what changes from run to run (wall times, worker count)."""
 
@@ -301,33 +291,6 @@ def test_failed_members_are_carried_into_the_report(tmp_path, monkeypatch):
     monkeypatch.setattr(studyjobs, "run_all", real)
     again = compare("pendulum", BACKENDS, cache=cache, **{**SMALL, "ensemble": 3})
     assert again.jobs is not None and again.jobs.ran == 2 and not again.failed
-
-
-@pytest.mark.parametrize("case", ["pendulum", "r2d2-goto"])
-def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path):
-    """The same-results cases (tests/compare/test_compare_same_results.py) from a warm cache:
-    nothing runs, and summary.json and report.md are the recorded ones."""
-    import gzip
-
-    import test_compare_same_results as same
-
-    if same._environment() != json.loads((same.DATA / "recorded.json").read_text("utf-8")):
-        pytest.skip("the recorded figures are from another machine or engine version")
-    scenario, options = same.CASES[case]
-    options = {k: v for k, v in options.items() if k != "plots"}
-    cache = tmp_path / "cache"
-    compare(scenario, BACKENDS, command_line=["simbridge"], cache=cache, **options)
-    warm = compare(scenario, BACKENDS, command_line=["simbridge"], cache=cache, **options)
-    assert warm.jobs is not None and warm.jobs.ran == 0 and warm.jobs.cached == warm.jobs.total
-    out = tmp_path / case
-    report(warm, out, plots=False, trajectories=False, replay=False)
-    paths = same._paths(out)
-    summary = same._mask(json.loads((out / "summary.json").read_text("utf-8")), paths)
-    with gzip.open(same.DATA / case / "summary.json.gz", "rt", encoding="utf-8") as f:
-        expected = json.load(f)
-    assert not same._diff(expected, summary)
-    text = same._mask_report((out / "report.md").read_text("utf-8"), paths) + "\n"
-    assert text == (same.DATA / case / "report.md").read_text("utf-8")
 
 
 def test_the_jobs_bench_runs(tmp_path):

@@ -87,13 +87,15 @@ def _cpu_model() -> str:
     return found.group(1).strip() if found else platform.processor()
 
 
-def _produce(case: str, out: Path) -> Path:
+def _produce(case: str, out: Path, cache: Path | None = None) -> Path:
     from simbridge.compare import compare, report
 
     scenario, options = CASES[case]
     options = dict(options)
     plots = options.pop("plots", False)
-    result = compare(scenario, ["pybullet", "mujoco"], command_line=["simbridge"], **options)
+    result = compare(
+        scenario, ["pybullet", "mujoco"], command_line=["simbridge"], cache=cache, **options
+    )
     report(result, out, plots=plots, trajectories=False, replay=False)  # figures, not pictures
     return out
 
@@ -179,20 +181,55 @@ def _diff(expected: Any, got: Any, where: str = "") -> list[str]:
     return [f"{where}: {got!r}, recorded {expected!r}"]
 
 
+@pytest.fixture(scope="module")
+def module_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The cache of this module's studies: test_same_summary_and_report_as_recorded runs each
+    case's jobs into it, and test_a_warm_cache_gives_the_recorded_figures (after it) starts
+    from those jobs instead of running the same case's engines again."""
+    return tmp_path_factory.mktemp("same-results-cache")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case", list(CASES))
-def test_same_summary_and_report_as_recorded(case, tmp_path):
+def test_same_summary_and_report_as_recorded(case, tmp_path, module_cache):
     recorded = json.loads((DATA / "recorded.json").read_text("utf-8"))
     here = _environment()
     if here != recorded:
         pytest.skip(f"recorded on {recorded}, this is {here}: engine results may differ")
-    out = _produce(case, tmp_path / case)
+    out = _produce(case, tmp_path / case, module_cache)
     paths = _paths(out)
     summary = _mask(json.loads((out / "summary.json").read_text("utf-8")), paths)
     with gzip.open(DATA / case / "summary.json.gz", "rt", encoding="utf-8") as f:
         expected = json.load(f)
     differences = _diff(expected, summary)
     assert not differences, "summary.json differs:\n" + "\n".join(differences[:40])
+    text = _mask_report((out / "report.md").read_text("utf-8"), paths) + "\n"
+    assert text == (DATA / case / "report.md").read_text("utf-8")
+
+
+@pytest.mark.usefixtures("_no_home_cache_writes")
+@pytest.mark.parametrize("case", ["pendulum", "r2d2-goto"])
+def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path, module_cache):
+    """The recorded cases from a warm cache: nothing runs, and summary.json and report.md are
+    the recorded ones. The cache is the module's: where the case's own test ran before, its
+    jobs are there already and the first compare() runs none either."""
+    from simbridge.compare import compare, report
+
+    if _environment() != json.loads((DATA / "recorded.json").read_text("utf-8")):
+        pytest.skip("the recorded figures are from another machine or engine version")
+    scenario, options = CASES[case]
+    options = {k: v for k, v in options.items() if k != "plots"}
+    backends = ["pybullet", "mujoco"]
+    compare(scenario, backends, command_line=["simbridge"], cache=module_cache, **options)
+    warm = compare(scenario, backends, command_line=["simbridge"], cache=module_cache, **options)
+    assert warm.jobs is not None and warm.jobs.ran == 0 and warm.jobs.cached == warm.jobs.total
+    out = tmp_path / case
+    report(warm, out, plots=False, trajectories=False, replay=False)
+    paths = _paths(out)
+    summary = _mask(json.loads((out / "summary.json").read_text("utf-8")), paths)
+    with gzip.open(DATA / case / "summary.json.gz", "rt", encoding="utf-8") as f:
+        expected = json.load(f)
+    assert not _diff(expected, summary)
     text = _mask_report((out / "report.md").read_text("utf-8"), paths) + "\n"
     assert text == (DATA / case / "report.md").read_text("utf-8")
 
