@@ -59,7 +59,8 @@ def test_profiles_are_explicit_and_printable():
         assert entry in text
     with pytest.raises(
         exc.InvalidProfileError,
-        match=r"unknown profile 'bullet'; valid profiles: \['pybullet', 'urdf'\]",
+        match=r"unknown profile 'bullet' \(did you mean 'pybullet'\?\); valid profiles: "
+        r"\['pybullet', 'urdf'\]",
     ):
         simbridge.Sim("pybullet", profile="bullet")
 
