@@ -148,12 +148,20 @@ def test_gui_without_display_raises(monkeypatch):
         simbridge.Sim("mujoco", gui=True)
 
 
-def test_gui_with_an_unreachable_display_is_a_clear_error(monkeypatch):
+def test_gui_with_an_unreachable_display_is_a_clear_error(monkeypatch, tmp_path):
     """The window process cannot open its window: DisplayError with GLFW's reason, at once
-    (the window process is gone; nothing is left running)."""
+    (the window process is gone; nothing is left running), and no file left behind: MuJoCo
+    writes MUJOCO_LOG.TXT into the window process's working folder, which is its own."""
+    import tempfile
+
     monkeypatch.setenv("DISPLAY", ":77")  # no X server there
+    monkeypatch.chdir(tmp_path)
+    before = set(os.listdir(tempfile.gettempdir()))
     with pytest.raises(DisplayError, match="mujoco.*(display|GLFW)"):
         simbridge.Sim("mujoco", gui=True)
+    assert list(tmp_path.iterdir()) == []
+    left = set(os.listdir(tempfile.gettempdir())) - before
+    assert not [x for x in left if x.startswith("simbridge-mujoco-")], left
 
 
 class _Window:

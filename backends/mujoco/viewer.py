@@ -15,6 +15,7 @@ import mmap
 import os
 import pickle
 import select
+import shutil
 import struct
 import subprocess
 import sys
@@ -43,8 +44,9 @@ def check_display(backend: str) -> None:
         raise DisplayError(backend, "neither DISPLAY nor WAYLAND_DISPLAY is set")
 
 
-def _end(proc: subprocess.Popen[bytes], shared: mmap.mmap, path: str) -> None:
-    """Ask the window to close, wait for it, kill it if it stays; remove the shared file."""
+def _end(proc: subprocess.Popen[bytes], shared: mmap.mmap, path: str, cwd: str) -> None:
+    """Ask the window to close, wait for it, kill it if it stays; remove the shared file and
+    the window's working folder (where MuJoCo writes MUJOCO_LOG.TXT when GLFW fails)."""
     try:
         shared[8:16] = struct.pack("d", 1.0)  # the close flag
     except ValueError:  # the map is already closed
@@ -61,6 +63,7 @@ def _end(proc: subprocess.Popen[bytes], shared: mmap.mmap, path: str) -> None:
         os.unlink(path)
     except OSError:
         pass
+    shutil.rmtree(cwd, ignore_errors=True)
 
 
 class Viewer:
@@ -78,14 +81,18 @@ class Viewer:
             os.close(fd)
         self._values = np.frombuffer(self._map, dtype=np.float64)
         self._write()
+        # the window runs in a folder of its own: MuJoCo writes MUJOCO_LOG.TXT into the working
+        # folder when GLFW cannot start, which would be left in the user's
+        cwd = tempfile.mkdtemp(prefix="simbridge-mujoco-window-")
         with tempfile.TemporaryFile() as err:  # the window's messages, told if it fails
             self._proc = subprocess.Popen(
                 [sys.executable, "-P", _WINDOW, self._path, str(os.getpid())],
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
                 stderr=err,
+                cwd=cwd,
             )
-            self._closer = weakref.finalize(self, _end, self._proc, self._map, self._path)
+            self._closer = weakref.finalize(self, _end, self._proc, self._map, self._path, cwd)
             problem = self._handshake(m)
             if problem is not None:
                 self.close()
