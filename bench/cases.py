@@ -314,6 +314,54 @@ def physx_final_state(sim: simbridge.Sim, robot: int) -> tuple[np.ndarray, ...]:
     return (art.qpos, art.qvel, pose.p, pose.q, root.linear_velocity, root.angular_velocity)
 
 
+def physx_raw_stepper(
+    sim: simbridge.Sim, robot: int, pybullet_damping: bool, speed_clamp: bool
+) -> tuple[Callable[[int], None], Any]:
+    """Raw SAPIEN's step ``k`` of the drive on ``robot``'s articulation, written the fast
+    idiomatic way (``set_drive_velocity_target`` per wheel, ``scene.step()``), and the robot's
+    ``inspect.robot`` record: PyBullet's link damping law applied by hand with
+    ``pybullet_damping``, its speed clamp with ``speed_clamp`` (see :func:`physx_raw_drive`).
+    Also the raw side of ``bench/physx_drive_pairs.py``."""
+    scene, r, joints, damping = _physx_raw_world(sim, robot, not pybullet_damping)
+    getters = []
+    for link in r.moving_links:
+        getters += [link.get_linear_velocity, link.get_angular_velocity]
+    p = sim.profile
+    n = len(r.moving_links)
+    damp = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), n)
+    buf = np.empty((2 * n, 3), dtype=np.float32)
+    adds = [
+        (link.add_force_torque, buf[2 * i], buf[2 * i + 1]) for i, link in enumerate(r.moving_links)
+    ]
+    art = r.built.articulation
+    turn, forward = TURN.tolist(), FORWARD.tolist()
+    cap = p.max_joint_velocity
+    assert cap is not None and float(np.float32(cap)) == cap  # clamps in plain floats
+
+    def step(k: int) -> None:
+        nonlocal buf  # written in place: the views in ``adds`` stay on it
+        if k in (TURN_FROM, FORWARD_FROM):
+            force = 50.0 if k == TURN_FROM else 10.0
+            for j in joints:
+                j.set_drive_properties(0.0, damping, force, "force")
+        if k >= TURN_FROM:
+            for j, v in zip(joints, turn if k < FORWARD_FROM else forward, strict=True):
+                j.set_drive_velocity_target(v)
+        if pybullet_damping:
+            buf[:] = [f() for f in getters]
+            buf *= (damp * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
+            for add, a, b in adds:
+                add(a, b, "acceleration")
+        scene.step()
+        if speed_clamp:
+            speeds = art.qvel.tolist()
+            if max(map(abs, speeds)) > cap:
+                clipped = [-cap if x < -cap else cap if x > cap else x for x in speeds]
+                art.qvel = np.array(clipped, dtype=np.float32)
+
+    return step, r
+
+
 def physx_raw_drive(
     record: bool,
     pybullet_damping: bool = False,
@@ -333,47 +381,16 @@ def physx_raw_drive(
     def run() -> float:
         sim, robot = _layer_sim("physx")
         try:
-            scene, r, joints, damping = _physx_raw_world(sim, robot, not pybullet_damping)
-            getters = []
-            for link in r.moving_links:
-                getters += [link.get_linear_velocity, link.get_angular_velocity]
-            p = sim.profile
-            n = len(r.moving_links)
-            damp = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), n)
-            buf = np.empty((2 * n, 3), dtype=np.float32)
-            adds = [
-                (link.add_force_torque, buf[2 * i], buf[2 * i + 1])
-                for i, link in enumerate(r.moving_links)
-            ]
+            step, r = physx_raw_stepper(sim, robot, pybullet_damping, speed_clamp)
             art = r.built.articulation
             root = r.built.links[0]
             dofs = r.dof[WHEELS]
             wheel_links = [r.built.links[j + 1].index for j in WHEELS]  # PhysX's link order
             base = np.empty((980, 13))
             wheel_state = np.empty((980, 12))
-            turn, forward = TURN.tolist(), FORWARD.tolist()
-            cap = p.max_joint_velocity
-            assert cap is not None and float(np.float32(cap)) == cap  # clamps in plain floats
             t0 = time.perf_counter()
             for k in range(980):
-                if k in (TURN_FROM, FORWARD_FROM):
-                    force = 50.0 if k == TURN_FROM else 10.0
-                    for j in joints:
-                        j.set_drive_properties(0.0, damping, force, "force")
-                if k >= TURN_FROM:
-                    for j, v in zip(joints, turn if k < FORWARD_FROM else forward, strict=True):
-                        j.set_drive_velocity_target(v)
-                if pybullet_damping:
-                    buf[:] = [f() for f in getters]
-                    buf *= (damp * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
-                    for add, a, b in adds:
-                        add(a, b, "acceleration")
-                scene.step()
-                if speed_clamp:
-                    speeds = art.qvel.tolist()
-                    if max(map(abs, speeds)) > cap:
-                        clipped = [-cap if x < -cap else cap if x > cap else x for x in speeds]
-                        art.qvel = np.array(clipped, dtype=np.float32)
+                step(k)
                 if record:
                     pose = root.entity_pose * root.cmass_local_pose
                     base[k, :3] = pose.p

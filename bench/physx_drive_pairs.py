@@ -40,44 +40,10 @@ def paired_drive() -> tuple[np.ndarray, np.ndarray, bool]:
     lay_sim, lay_robot = cases._layer_sim("physx")
     raw_sim, raw_robot = cases._layer_sim("physx")
     try:
-        scene, r, joints, damping = cases._physx_raw_world(raw_sim, raw_robot, False)
-        getters = []
-        for link in r.moving_links:
-            getters += [link.get_linear_velocity, link.get_angular_velocity]
-        p = raw_sim.profile
-        n = len(r.moving_links)
-        damp = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), n)
-        buf = np.empty((2 * n, 3), dtype=np.float32)
-        adds = [
-            (link.add_force_torque, buf[2 * i], buf[2 * i + 1])
-            for i, link in enumerate(r.moving_links)
-        ]
-        art = r.built.articulation
-        cap = p.max_joint_velocity
-        assert cap is not None and float(np.float32(cap)) == cap  # clamps in plain floats
-        turn, forward = cases.TURN.tolist(), cases.FORWARD.tolist()
+        raw_step, _ = cases.physx_raw_stepper(raw_sim, raw_robot, True, True)
         wheels = np.array(cases.WHEELS)
         raw_t = np.empty(980)
         lay_t = np.empty(980)
-
-        def raw_step(k: int) -> None:
-            nonlocal buf
-            if k in (cases.TURN_FROM, cases.FORWARD_FROM):
-                force = 50.0 if k == cases.TURN_FROM else 10.0
-                for j in joints:
-                    j.set_drive_properties(0.0, damping, force, "force")
-            if k >= cases.TURN_FROM:
-                for j, v in zip(joints, turn if k < cases.FORWARD_FROM else forward, strict=True):
-                    j.set_drive_velocity_target(v)
-            buf[:] = [f() for f in getters]
-            buf *= (damp * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
-            for add, a, b in adds:
-                add(a, b, "acceleration")
-            scene.step()
-            speeds = art.qvel.tolist()
-            if max(map(abs, speeds)) > cap:
-                clipped = [-cap if x < -cap else cap if x > cap else x for x in speeds]
-                art.qvel = np.array(clipped, dtype=np.float32)
 
         def layer_step(k: int) -> None:
             if k >= cases.TURN_FROM:

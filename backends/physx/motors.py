@@ -43,15 +43,22 @@ def _set_drives(
 ) -> None:
     """The drives of motor ``slots`` as ``_apply`` sets them: the force limit, the least of
     ``max_force`` and the joint's effort, set only where it changes (0: the drive off); a
-    spherical joint's velocity target 0; with ``target`` (velocity motors), the other joints'
-    velocity targets. One loop of plain Python values: the commands' hot path."""
+    spherical joint's velocity target 0. With ``target`` (a velocity command), also the other
+    joints' velocity targets, and the targets and force limits written to the motor table (a
+    joint named twice: the last one holds, as in a numpy write). One loop of plain Python
+    values: the commands' hot path (after a PhysX step a numpy fancy-index write costs more
+    than the scalar writes of r2d2's four wheels)."""
     m = robot.motors
     calls = robot.slot_calls(slots, m["effort"], m["ball"])
     velocity = target is not None
+    table_target, table_force = m["target"], m["max_force"]
     # a position motor's targets are set before each step: the slots stand in, unread
     targets = target if target is not None else calls[0]
     drive = robot.drive_force
     for s, joint, effort, ball, t, mf in zip(*calls, targets, max_force, strict=True):
+        if velocity:
+            table_target[s] = t
+            table_force[s] = mf
         f = mf if mf < effort else effort
         if f <= 0.0:
             if drive[s] != 0.0:
@@ -64,35 +71,6 @@ def _set_drives(
         if ball:
             joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
         elif velocity:
-            joint.set_drive_velocity_target(t)
-
-
-def _velocity_drives(
-    robot: Robot, slots: np.ndarray, target: list[float], max_force: list[float]
-) -> None:
-    """A velocity command's targets and force limits, written to the motor table and set as
-    :func:`_set_drives` sets them, in one loop of plain values: after a PhysX step a numpy
-    fancy-index write costs more than the scalar writes of r2d2's four wheels. A joint named
-    twice: the last one holds, as in a numpy write."""
-    m = robot.motors
-    table_target, table_force = m["target"], m["max_force"]
-    calls = robot.slot_calls(slots, m["effort"], m["ball"])
-    drive = robot.drive_force
-    for s, joint, effort, ball, t, mf in zip(*calls, target, max_force, strict=True):
-        table_target[s] = t
-        table_force[s] = mf
-        f = mf if mf < effort else effort
-        if f <= 0.0:
-            if drive[s] != 0.0:
-                joint.set_drive_properties(0.0, 0.0, 0.0, "force")
-                drive[s] = 0.0
-            continue
-        if drive[s] != f:
-            joint.set_drive_properties(0.0, DRIVE_DAMPING, f, "force")
-            drive[s] = f
-        if ball:
-            joint.set_drive_velocity_target(np.zeros(3, dtype=np.float32))
-        else:
             joint.set_drive_velocity_target(t)
 
 
@@ -301,7 +279,7 @@ class MotorCommands:
         m = robot.motors
         slots = self._slots(robot, joints)
         if robot.velocity_slots is slots:  # these slots' last command, nothing else since
-            _velocity_drives(robot, slots, target, max_force)
+            _set_drives(robot, slots, max_force, target)
             return
         # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
         was_position = robot.has_position and bool(m["mode"][slots].any())
@@ -309,7 +287,7 @@ class MotorCommands:
         m["kp"][slots] = 0.0
         m["kd"][slots] = 1.0
         robot.velocity_slots = slots
-        _velocity_drives(robot, slots, target, max_force)
+        _set_drives(robot, slots, max_force, target)
         if was_position:  # a position motor replaced: the step may have less to do
             self._refresh_active()
 

@@ -21,7 +21,14 @@ from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .outcomes import outcome_lines, outcomes_section
-from .pair_sections import crossings_section, parting_lines, parts_section, phases_section
+from .pair_sections import (
+    CROSSINGS_NOTE,
+    PARTS_NOTE,
+    crossings_section,
+    parting_lines,
+    parts_section,
+    phases_section,
+)
 from .parts import parts_words
 from .resync import resync_lines, resync_section
 from .story import story_words
@@ -468,9 +475,7 @@ def _over_time(cross: Divergence) -> list[str]:
     lines += _table(["quantity", "first crossing", "", "", "at the end", "largest"], rows)
     lines += [
         "",
-        "A threshold is crossed at the first recorded step whose value reaches it. Joint RMS "
-        "is over the subject's movable joints (angles unwrapped: a wheel a turn ahead counts "
-        "2π). Heading is meaningful while the robot is upright.",
+        CROSSINGS_NOTE,
         "",
     ]
     # -- phases
@@ -657,9 +662,7 @@ def _parts_section(s: dict[str, Any]) -> list[str]:
     lines += _table(["rank", "part", "apart by", "largest gap", "at the end"], rows)
     lines += [
         "",
-        "A joint's gap is the difference of its positions (angles unwrapped), a link's the "
-        "distance between its centres of mass; parts that come apart rank first, earliest "
-        "first, then the rest by their largest gap over the threshold.",
+        PARTS_NOTE,
         "",
     ]
     if len(parts) > MAX_PART_ROWS:

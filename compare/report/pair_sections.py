@@ -13,6 +13,18 @@ from .events import parting_words
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .parts import parts_words
 
+# the notes under the crossings and the parts tables, one pair or many (markdown.py too)
+CROSSINGS_NOTE = (
+    "A threshold is crossed at the first recorded step whose value reaches it. Joint RMS "
+    "is over the subject's movable joints (angles unwrapped: a wheel a turn ahead counts "
+    "2π). Heading is meaningful while the robot is upright."
+)
+PARTS_NOTE = (
+    "A joint's gap is the difference of its positions (angles unwrapped), a link's the "
+    "distance between its centres of mass; parts that come apart rank first, earliest "
+    "first, then the rest by their largest gap over the threshold."
+)
+
 __all__ = [
     "MAX_PART_ROWS",
     "pair_name",
@@ -72,9 +84,7 @@ def crossings_section(s: dict[str, Any]) -> list[str]:
     lines += _table(["quantity", "pair", "first crossing", "", "", "at the end", "largest"], rows)
     lines += [
         "",
-        "A threshold is crossed at the first recorded step whose value reaches it. Joint RMS "
-        "is over the subject's movable joints (angles unwrapped: a wheel a turn ahead counts "
-        "2π). Heading is meaningful while the robot is upright.",
+        CROSSINGS_NOTE,
         "",
     ]
     return lines
@@ -144,9 +154,7 @@ def parts_section(s: dict[str, Any]) -> list[str]:
     lines += _table(["pair", "rank", "part", "apart by", "largest gap", "at the end"], rows)
     lines += [
         "",
-        "A joint's gap is the difference of its positions (angles unwrapped), a link's the "
-        "distance between its centres of mass; parts that come apart rank first, earliest "
-        "first, then the rest by their largest gap over the threshold.",
+        PARTS_NOTE,
         "",
     ]
     total = len(pairs[0]["parts"])
