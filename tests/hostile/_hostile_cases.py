@@ -1143,7 +1143,15 @@ def _busy(call: Callable[[simbridge.Sim, int], object]) -> Callable[[Ctx], objec
         t0 = sim.time
         t.start()
         started.wait()
-        time.sleep(0.01)  # the stepping thread is inside step() (20000 steps: 0.2 s and more)
+        # until the stepping thread is seen inside step(): a read is refused then, and waited
+        # for by a step that begins meanwhile (a step(0) probe would refuse that step). A fixed
+        # pause (10 ms) was a race on loaded cores: calls could reach the Sim before the
+        # step began (a close there failed the step)
+        while t.is_alive():
+            try:
+                sim.base_state(body)
+            except exc.SimBusyError:
+                break
         went_through = busy = 0
         while t.is_alive():
             try:
