@@ -1,0 +1,109 @@
+"""A scenario's robot files and joint references checked before any run starts:
+:func:`check_robots`. The static reader (:mod:`.reader`) sees the scenario file alone; what its
+robot files hold (that each exists, its joints' names and count) is read here without an engine,
+with the core's URDF and MJCF readers, so that ``joints = "hinje"`` or a misspelt ``urdf`` is
+told as ``FILE:LINE: key ...`` at once, not by the first run some seconds later."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+from simbridge.exceptions import ScenarioError, SimbridgeError, UnknownJointError
+
+from .model import JointRef, Scenario
+from .reader import _keystr, find_key_line
+
+__all__ = ["check_robots"]
+
+
+class _Quiet(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return False
+
+
+@contextmanager
+def _quiet() -> Iterator[None]:
+    """The readers' notes (a missing inertial, a lenient parse) are the run's to log, once."""
+    log, quiet = logging.getLogger("simbridge"), _Quiet()
+    handlers = [h for h in log.handlers]
+    log.addFilter(quiet)
+    for h in handlers:
+        h.addFilter(quiet)
+    try:
+        yield
+    finally:
+        log.removeFilter(quiet)
+        for h in handlers:
+            h.removeFilter(quiet)
+
+
+def _joint_names(sc: Scenario, index: int) -> list[str]:
+    """Joint names of robot ``index`` as its file makes them (PyBullet's order)."""
+    from simbridge.scene_files import parse_scene
+    from simbridge.urdf import parse_urdf
+    from simbridge.urdf_source import resolve_source
+
+    robot = sc.robots[index]
+    source = sc.resolve_urdf(robot)
+    if robot.kind == "mjcf":
+        bodies = parse_scene(source, "mjcf")
+        if not 0 <= robot.body < len(bodies):
+            return []  # the run says which bodies there are
+        return [j.name for j in bodies[robot.body].joints]
+    return [j.name for j in parse_urdf(resolve_source(source)).joints]
+
+
+def _valid(ref: JointRef, names: Sequence[str]) -> bool:
+    if isinstance(ref, str):
+        return ref in names
+    return isinstance(ref, int) and not isinstance(ref, bool) and 0 <= ref < len(names)
+
+
+def check_robots(sc: Scenario) -> None:
+    """Raise :class:`ScenarioError` naming the scenario file, the line and the key when a robot
+    file cannot be found or read, or a joint named (a command's, a robot's
+    ``joint_positions``, an outcome's) is not one of its robot's. A robot's fixed links merged
+    by a profile can only take joints away: a name valid here may still be refused by the run,
+    never the other way round."""
+    file = sc._where()
+    text = ""
+    if sc.source is not None:
+        try:
+            text = Path(sc.source).read_text(encoding="utf-8")
+        except OSError:
+            text = ""
+
+    def error(path: list[str | int], detail: str) -> ScenarioError:
+        line = find_key_line(text, path) if text else None
+        return ScenarioError(file, _keystr(path), detail, line)
+
+    names: dict[str, tuple[int, list[str]]] = {}
+    with _quiet():
+        for i, robot in enumerate(sc.robots):
+            try:
+                names[robot.name] = (i, _joint_names(sc, i))
+            except (SimbridgeError, OSError, ValueError) as exc:
+                raise error(["robots", i, "urdf"], str(exc)) from None
+
+    def check(robot: str, refs: Sequence[JointRef], path: list[str | int]) -> None:
+        if robot not in names:
+            return  # the reader checks robot names
+        i, joints = names[robot]
+        for ref in refs:
+            if not _valid(ref, joints):
+                r = sc.robots[i]
+                why = UnknownJointError(r.name, ref, joints, body=None, source=r.urdf)
+                raise error(path, f"{why} (in {r.urdf})")
+
+    for i, robot in enumerate(sc.robots):
+        for ref, _ in robot.joint_positions:
+            check(robot.name, [ref], ["robots", i, "joint_positions", str(ref)])
+    for p, phase in enumerate(sc.phases):
+        for c, command in enumerate(phase.commands):
+            check(command.robot, command.joints, ["phases", p, "commands", c, "joints"])
+    for o, outcome in enumerate(sc.outcomes):
+        if outcome.joints:
+            check(outcome.robot or sc.subject, outcome.joints, ["outcomes", o, "joints"])
