@@ -506,8 +506,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.log is not None:
         log.addHandler(args.log)
         log.setLevel(logging.DEBUG)
+    from simbridge.terminate import sigterm_raises
+
     try:
-        return _run(handler, args, parser)
+        with sigterm_raises():  # SIGTERM (kill, timeout) cleans up as Ctrl-C does
+            return _run(handler, args, parser)
     finally:
         if args.log is not None:
             log.removeHandler(args.log)
@@ -532,7 +535,12 @@ def _run(handler: Any, args: argparse.Namespace, parser: argparse.ArgumentParser
     except (SimbridgeError, OSError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
+        from simbridge.terminate import Terminated
+
+        if isinstance(exc, Terminated):
+            print(f"{PROG}: terminated", file=sys.stderr)
+            return 128 + 15  # SIGTERM's exit status as a shell reports it
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
 
