@@ -40,6 +40,11 @@ def _quiet() -> Iterator[None]:
             h.removeFilter(quiet)
 
 
+_READ: dict[tuple[object, ...], list[str]] = {}
+"""Joint names by robot file as read (a sweep checks its scenario at every point; a large
+robot's file takes about half a second to read)."""
+
+
 def _joint_names(sc: Scenario, index: int) -> list[str]:
     """Joint names of robot ``index`` as its file makes them (PyBullet's order)."""
     from simbridge.scene_files import parse_scene
@@ -48,12 +53,25 @@ def _joint_names(sc: Scenario, index: int) -> list[str]:
 
     robot = sc.robots[index]
     source = sc.resolve_urdf(robot)
-    if robot.kind == "mjcf":
+    src = resolve_source(source) if robot.kind != "mjcf" else None
+    found = src.path if src is not None else Path(source)
+    try:
+        stat = found.stat() if found is not None else None
+    except OSError:
+        stat = None
+    key = (robot.kind, robot.body, str(found), source, stat and (stat.st_mtime_ns, stat.st_size))
+    if stat is not None and key in _READ:
+        return _READ[key]
+    if src is None:
         bodies = parse_scene(source, "mjcf")
-        if not 0 <= robot.body < len(bodies):
-            return []  # the run says which bodies there are
-        return [j.name for j in bodies[robot.body].joints]
-    return [j.name for j in parse_urdf(resolve_source(source)).joints]
+        names = (
+            [] if not 0 <= robot.body < len(bodies) else [j.name for j in bodies[robot.body].joints]
+        )
+    else:
+        names = [j.name for j in parse_urdf(src).joints]
+    if stat is not None:
+        _READ[key] = names
+    return names
 
 
 def _valid(ref: JointRef, names: Sequence[str]) -> bool:

@@ -57,3 +57,18 @@ def test_a_right_scenario_passes_the_check():
 
     for name in ("pendulum", "double-pendulum", "r2d2", "kuka-reach", "ant-gait"):
         check_robots(load_scenario(name))
+
+
+def test_a_robot_file_changed_since_is_read_again(tmp_path):
+    """The joint names read are kept by file and its time and size: an edit is seen."""
+    from simbridge.compare.scenario.robot_check import check_robots
+
+    robots = Path(__file__).resolve().parents[2] / "robots"
+    urdf = (robots / "pendulum.urdf").read_text()
+    (tmp_path / "mine.urdf").write_text(urdf)
+    path = tmp_path / "mine.toml"
+    path.write_text(PENDULUM.replace('urdf = "pendulum.urdf"', 'urdf = "mine.urdf"', 1))
+    check_robots(load_scenario(path))
+    (tmp_path / "mine.urdf").write_text(urdf.replace('"hinge"', '"hinge2"'))
+    with pytest.raises(ScenarioError, match="did you mean 'hinge2'"):
+        check_robots(load_scenario(path))
