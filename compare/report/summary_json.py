@@ -103,7 +103,7 @@ def summary(c: Comparison) -> dict[str, Any]:
         "sweep": sweep,
         "verdict": first["verdict"],
         "ensemble": _ensemble_summary(c),
-        "resync": None if c.resync is None else resync_dict(c.resync),
+        "resync": None if c.resync is None else resync_dict(c.resync, _state_dtypes(c)),
         "outcomes": _outcomes_summary(c),
         "events": {e.label: engine_events_dict(e) for e in events},
         "parting": first["parting"],
@@ -130,7 +130,12 @@ def _without_settings(manifest: dict[str, Any]) -> dict[str, Any]:
 def _pairs_of(c: Comparison) -> list[Pair]:
     """Every pair of ``c`` (a Comparison made by hand without ``pairs``: its ``cross`` and
     ``verdict``, engines 0 and 1)."""
-    return c.pairs or [Pair(0, 1, c.cross, c.verdict)]
+    return c.pairs or [Pair(0, 1, c.cross, c.verdict, c.resync)]
+
+
+def _state_dtypes(c: Comparison) -> dict[str, str]:
+    """Per engine label, the type it keeps its state in (from its ensemble; none without)."""
+    return {e.label: e.state_dtype for e in c.ensembles}
 
 
 def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[str, Any]:
@@ -190,6 +195,7 @@ def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[st
             )
         ),
         "parts": [part_dict(part) for part in rank_parts(cross)],
+        "resync": None if p.resync is None else resync_dict(p.resync, _state_dtypes(c)),
     }
 
 
@@ -468,9 +474,11 @@ def engine_events_dict(e: EngineEvents, limit: int = 500) -> dict[str, Any]:
     }
 
 
-def resync_dict(r: Resync) -> dict[str, Any]:
-    """``summary.json``'s ``resync`` (docs/compare.md describes every field)."""
-    dirs = [_direction(d) for d in r.directions]
+def resync_dict(r: Resync, state_dtypes: Mapping[str, str] | None = None) -> dict[str, Any]:
+    """``summary.json``'s ``resync`` (docs/compare.md describes every field); ``state_dtypes``:
+    per engine label, the type it keeps its state in (each direction's ``set_loss`` names its
+    target's)."""
+    dirs = [_direction(d, (state_dtypes or {}).get(d.target)) for d in r.directions]
     floors = {d["source"]: d["floor_max"]["value"] for d in dirs}
     largest = max(dirs, key=lambda d: -1.0 if d["max"]["value"] is None else d["max"]["value"])
     born = r.born()
@@ -495,9 +503,19 @@ def resync_dict(r: Resync) -> dict[str, Any]:
     }
 
 
-def _direction(d: Direction) -> dict[str, Any]:
+def _direction(d: Direction, state_dtype: str | None = None) -> dict[str, Any]:
     def med(v: Any) -> float | None:
         return float(np.nanmedian(v)) if np.isfinite(v).any() else None
+
+    loss = None
+    if d.set_loss is not None and d.set_loss_parts is not None:  # a result that measured it
+        loss = {
+            "max": d.peak(d.set_loss).value,
+            "median": med(d.set_loss),
+            "parts": {k: d.peak(d.set_loss_parts[k]).value for k in PARTS},
+            "floor_max": None if d.floor_set_loss is None else d.peak(d.floor_set_loss).value,
+            "state_dtype": state_dtype,
+        }
 
     return {
         "source": d.source,
@@ -517,6 +535,7 @@ def _direction(d: Direction) -> dict[str, Any]:
             for k in PARTS
         },
         "phases": [_phase_errors(p) for p in d.by_phase()],
+        "set_loss": loss,
         "worst": [
             {
                 "time": w.time,

@@ -13,9 +13,14 @@ in force and pending torques) and its portable part is set
   solver warm start).
 
 The same is done from B's run (B -> A beside B -> B). Nothing accumulates: every comparison
-starts from the source engine's own state. Errors are measured on the followed robot (the
-scenario's subject): one distance in the scenario's headline quantity
-(:data:`~simbridge.compare.diff.QUANTITIES`) and each of :data:`PARTS`.
+starts from the source engine's own state. What B holds right after the state is set, before its
+step, is compared with the state set too (:attr:`Direction.set_loss`): 0 where B keeps its state
+in float64 as the source does; an engine that keeps float32 (PhysX) starts its step from the
+float32-rounded state, and its one-step error holds that rounding.
+
+Errors are measured on the followed robot (the scenario's subject): one distance in the
+scenario's headline quantity (:data:`~simbridge.compare.diff.QUANTITIES`) and each of
+:data:`PARTS`.
 
 Both target Sims step once per resync point and keep what their engine keeps between steps
 (PyBullet's contact caches from the previous resync point): a cross-engine step and the floor
@@ -171,6 +176,15 @@ class Direction:
     failed: int = 0
     """Resync points at which a target Sim refused the state or failed its step."""
     worst: list[WorstPoint] = field(default_factory=list)
+    set_loss: np.ndarray | None = None
+    """(P,) what setting the state into ``target`` lost before its step: the headline
+    quantity's distance between the state set and what ``target`` holds right after (0 for an
+    engine keeping float64 state; a float32 engine's rounding); None in a result made before it
+    was measured."""
+    set_loss_parts: dict[str, np.ndarray] | None = None
+    """Per :data:`PARTS` key, (P,): the same for each part."""
+    floor_set_loss: np.ndarray | None = None
+    """(P,) the same for the floor's Sim (``source``'s own states set into ``source``)."""
 
     def phase(self, k: int) -> str:
         """The phase of resync point ``k``'s step (the one whose commands were in force)."""
@@ -275,9 +289,14 @@ class _World:
             self.sim.close()
             raise
 
-    def step_from(self, state: simbridge.WorldState) -> dict[str, np.ndarray]:
-        """Set ``state``, step once, observe the subject."""
+    def step_from(
+        self, state: simbridge.WorldState, held: list[dict[str, np.ndarray]] | None = None
+    ) -> dict[str, np.ndarray]:
+        """Set ``state``, step once, observe the subject; ``held``: what the subject holds
+        once the state is set, before the step, appended to it."""
         self.sim.set_state(state)
+        if held is not None:
+            held.append(_observe(self.sim, self.body, self.joints, self.links))
         self.sim.step()
         return _observe(self.sim, self.body, self.joints, self.links)
 
@@ -368,6 +387,7 @@ def _direction(
         raise
     rows: list[int] = []
     got: list[list[dict[str, np.ndarray] | None]] = [[], []]
+    held: list[list[dict[str, np.ndarray] | None]] = [[], []]  # once set, before the step
     failed = [0]
 
     def hook(sim: simbridge.Sim, row: int) -> None:
@@ -377,12 +397,14 @@ def _direction(
         rows.append(row)
         bad = False
         for i in (0, 1):
+            seen: list[dict[str, np.ndarray]] = []
             try:
-                got[i].append(worlds[i].step_from(state))
+                got[i].append(worlds[i].step_from(state, seen))
             except SimbridgeError:  # refused or diverged: this point is lost, not the run
                 got[i].append(None)
                 worlds[i] = worlds[i].rebuilt()
                 bad = True
+            held[i].append(seen[0] if seen else None)
         failed[0] += bad
 
     try:
@@ -391,12 +413,15 @@ def _direction(
         for w in worlds:
             w.sim.close()
     n = len(rows)
-    err = np.full((2, n), np.nan)
-    parts = [{k: np.full(n, np.nan) for k in PARTS} for _ in (0, 1)]
+    err = np.full((4, n), np.nan)  # the target's, the floor's; each one's set loss
+    parts = [{k: np.full(n, np.nan) for k in PARTS} for _ in range(4)]
     for k, row in enumerate(rows):
-        truth = _truth(tr, row + 1)
-        for i in (0, 1):
-            obs = got[i][k]
+        for i, obs, truth in (
+            (0, got[0][k], _truth(tr, row + 1)),
+            (1, got[1][k], _truth(tr, row + 1)),
+            (2, held[0][k], _truth(tr, row)),  # the state set is the source's row
+            (3, held[1][k], _truth(tr, row)),
+        ):
             if obs is None:
                 continue
             err[i, k], p = _errors(quantity, obs, truth)
@@ -414,6 +439,9 @@ def _direction(
         floor_parts=parts[1],
         phases=list(tr.phases),
         failed=failed[0],
+        set_loss=err[2],
+        set_loss_parts=parts[2],
+        floor_set_loss=err[3],
     )
     return d, tr
 
