@@ -20,7 +20,7 @@ from .fmt import fmt_time, fmt_value
 __all__ = [
     "resync_lines",
     "resync_words",
-    "set_loss_words",
+    "rounding_words",
     "resync_section",
     "resync_file",
     "plot_resync",
@@ -101,50 +101,40 @@ def resync_words(r: dict[str, Any], pair: str | None = None) -> list[str]:
     return [line]
 
 
-def set_loss_words(r: dict[str, Any]) -> list[str]:
-    """Where a target does not hold the state set into it exactly (a float32 engine: PhysX),
-    a sentence per such direction: how much the rounding is, against its one-step error, and
-    what its own floor starts from; empty where every target holds it (to the precision
-    floor)."""
+def rounding_words(r: dict[str, Any]) -> list[str]:
+    """Where a target keeps its state in a narrower type than float64 (PhysX: float32), a
+    sentence per such direction: each state set into it is rounded first, by how much, against
+    the one-step error it is part of; empty where every target keeps float64."""
     unit = r["unit"]
-    title = QUANTITIES[r["quantity"]].title
     dirs = r["directions"]
     out = []
     for d in dirs:
-        loss = d.get("set_loss")
-        if not loss or loss["max"] is None or loss["max"] <= r["precision_floor"]:
+        rounding = d.get("rounding")
+        if not rounding:
             continue
         src, tgt = d["source"], d["target"]
-        dtype = loss.get("state_dtype")
-        keeps = (
-            f"{tgt} keeps its state in {dtype}"
-            if dtype and dtype != "float64"
-            else f"{tgt} does not hold a state set into it exactly"
+        parts = rounding["parts"]
+        size = ", ".join(
+            f"{PARTS[k][0]} {_fmt(parts[k], PARTS[k][1])}"
+            for k in ("base_position", "base_linear_velocity", "joint_velocities")
         )
-        parts = loss["parts"]
         line = (
-            f"{keeps}: each of {src}'s states is rounded as it is set into {tgt}, before the "
-            f"step, by up to {fmt_value(loss['max'], unit)} in the {title} (median "
-            f"{_fmt(loss['median'], unit)}; base linear velocity up to "
-            f"{_fmt(parts['base_linear_velocity'], 'm/s')}, joint velocity up to "
-            f"{_fmt(parts['joint_velocities'], 'rad/s')}), and {src} -> {tgt} holds that "
-            "rounding"
+            f"{tgt} keeps its state in {rounding['state_dtype']}: each of {src}'s states is "
+            f"rounded to it as it is set into {tgt}, so {src} -> {tgt} steps from the rounded "
+            f"state and its error holds the rounding (largest: {size})"
         )
-        med, lmed = d["median"], loss["median"]
-        if med is not None and lmed:
-            line += f": its median one-step error, {fmt_value(med, unit)}, is {med / lmed:.3g}x it"
-        back = next((o for o in dirs if o["source"] == tgt), None)
-        floor = (back or {}).get("set_loss") or {}
-        if floor.get("floor_max") is not None:
-            again = (
-                "exactly"
-                if floor["floor_max"] <= r["precision_floor"]
-                else f"to within {fmt_value(floor['floor_max'], unit)}"
-            )
+        med, rmed = d["median"], rounding["median"]
+        if med is not None and rmed:
+            title = QUANTITIES[r["quantity"]].title
             line += (
-                f". {tgt}'s own floor ({tgt} -> {tgt}) starts from its own states, set back {again}"
+                f"; in the {title} the rounding's median is {fmt_value(rmed, unit)}, the "
+                f"median one-step error {fmt_value(med, unit)} ({med / rmed:.3g}x)"
             )
-        out.append(line + ".")
+        line += (
+            f". {tgt}'s floor ({tgt} -> {tgt}) starts from its own states, which are "
+            f"{rounding['state_dtype']} already."
+        )
+        out.append(line)
     return out
 
 
@@ -187,7 +177,7 @@ def resync_section(summary: dict[str, Any], images: dict[str, Path] | None = Non
         lines = ["## One step from the same state", ""]
         lines += resync_lines(summary)
         lines += ["", _method(r["every"], title, "the other engine"), ""]
-        lines += _paragraphs(set_loss_words(r))
+        lines += _paragraphs(rounding_words(r))
         lines += _tables(r, 2 * WORST)
         lines += _figure(images.get("resync"))
         return lines
@@ -196,8 +186,8 @@ def resync_section(summary: dict[str, Any], images: dict[str, Path] | None = Non
         _method(r0["every"], title, "the other engine of each pair"),
         "",
         f"Every pair of the {len(summary['labels'])} engines, each way (largest and median "
-        f"over the resync points, {title}); what setting the state alone lost in the target "
-        "before its step (a float32 engine's rounding of a float64 state); each pair's "
+        f"over the resync points, {title}), and where the target keeps its state in float32 the "
+        "largest rounding of the state set into it, which its step starts from; each pair's "
         "figures are in `summary.json` under `pairs[].resync`:",
         "",
     ]
@@ -205,7 +195,7 @@ def resync_section(summary: dict[str, Any], images: dict[str, Path] | None = Non
     for labels, r in pairs:
         unit = r["unit"]
         for d in r["directions"]:
-            loss = d.get("set_loss") or {}
+            rounding = d.get("rounding")
             rows.append(
                 [
                     " and ".join(labels),
@@ -213,11 +203,13 @@ def resync_section(summary: dict[str, Any], images: dict[str, Path] | None = Non
                     _fmt(d["max"]["value"], unit),
                     _fmt(d["median"], unit),
                     _pair(d["floor_max"]["value"], d["floor_median"], unit),
-                    _fmt(loss.get("max"), unit) if loss else "n/a",
+                    "-"
+                    if not rounding
+                    else f"{rounding['state_dtype']}: {_fmt(rounding['max'], unit)}",
                 ]
             )
     lines += _md_table(
-        ["pair", "direction", "largest", "median", "floor: largest, median", "state set: lost"],
+        ["pair", "direction", "largest", "median", "floor: largest, median", "state set: rounded"],
         rows,
     )
     lines += [""]
@@ -225,7 +217,7 @@ def resync_section(summary: dict[str, Any], images: dict[str, Path] | None = Non
         name = " and ".join(labels)
         lines += [f"### {name}", ""]
         lines += resync_words(r, name) + [""]
-        lines += _paragraphs(set_loss_words(r))
+        lines += _paragraphs(rounding_words(r))
         lines += _tables(r, WORST)
         lines += _figure(images.get(Path(resync_file(labels, k == 0)).stem))
     return lines
@@ -344,6 +336,7 @@ def _md_table(header: list[str], rows: list[list[str]]) -> list[str]:
 # ---------------------------------------------------------------- the figure
 
 _COLORS = ("tab:blue", "tab:orange")
+_ENGINE_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 
 
 def _panels(
@@ -357,7 +350,11 @@ def _panels(
         for d in r.directions
     )
     panels: list[tuple[str, str, Callable[[Direction], tuple[np.ndarray, np.ndarray, Any]]]] = [
-        (QUANTITIES[r.quantity].title, r.unit, lambda d: (d.error, d.floor, d.set_loss))
+        (
+            QUANTITIES[r.quantity].title,
+            r.unit,
+            lambda d: (d.error, d.floor, (d.rounding or {}).get(FEATURE_SOURCES[r.quantity])),
+        )
     ]
     if joints:
         panels.append(
@@ -367,7 +364,7 @@ def _panels(
                 lambda d: (
                     d.parts["joint_velocities"],
                     d.floor_parts["joint_velocities"],
-                    None if d.set_loss_parts is None else d.set_loss_parts["joint_velocities"],
+                    None if d.rounding is None else d.rounding["joint_velocities"],
                 ),
             )
         )
@@ -406,10 +403,12 @@ def plot_resyncs(
     by key (the file's stem)."""
     folder = Path(folder)
     limits = _limits([r for r, _ in resyncs]) if len(resyncs) > 1 else None
+    engines = list(dict.fromkeys(label for r, _ in resyncs for label in r.labels))
+    colors = {label: _ENGINE_COLORS[k % len(_ENGINE_COLORS)] for k, label in enumerate(engines)}
     out = {}
     for k, (r, pair) in enumerate(resyncs):
         name = resync_file(r.labels, k == 0)
-        got = plot_resync(r, folder / name, pair=pair, ylims=limits)
+        got = plot_resync(r, folder / name, pair=pair, ylims=limits, colors=colors)
         if got is not None:
             out[Path(name).stem] = got
     return out
@@ -421,14 +420,17 @@ def plot_resync(
     *,
     pair: str | None = None,
     ylims: Sequence[tuple[float, float]] | None = None,
+    colors: dict[str, str] | None = None,
 ) -> Path | None:
     """``resync.png``: the one-step error over time, log scale, both directions (solid) and
     both floors (dashed), phases marked, the legend below the axes; a second panel with the
-    largest joint velocity error when the subject has joints. Where a target does not hold the
-    state set into it exactly (a float32 engine), what setting it lost before the step, dotted.
+    largest joint velocity error when the subject has joints. Where a target keeps its state in
+    float32, the rounding of each state set into it (which its step starts from), dotted.
     ``pair``: the engines it runs between (``pybullet and mujoco``), named in the title where
-    the study has more; ``ylims``: each panel's y limits (several pairs on one scale). None when
-    there is no point."""
+    the study has more; ``ylims``: each panel's y limits (several pairs on one scale);
+    ``colors``: per engine label, the colour of its states' lines (one engine one colour over
+    several pairs' figures; default blue for the first direction, orange for the second).
+    None when there is no point."""
     if not any(len(d.rows) for d in r.directions):
         return None
     import matplotlib
@@ -445,7 +447,7 @@ def plot_resync(
         lo = r.precision_floor
         for slot, d in enumerate(r.directions):
             err, flo, loss = pick(d)
-            c = _COLORS[slot % 2]
+            c = (colors or {}).get(d.source, _COLORS[slot % 2])
             ax.plot(
                 d.time,
                 np.maximum(err, lo),
@@ -466,8 +468,7 @@ def plot_resync(
                 alpha=0.8,
                 label=f"{d.source}'s states, stepped by {d.source} (floor)",
             )
-            head = d.set_loss
-            if loss is not None and head is not None and np.nanmax(head, initial=0.0) > lo:
+            if loss is not None and len(loss) == len(d.time):
                 ax.plot(
                     d.time,
                     np.maximum(loss, lo),
@@ -475,7 +476,7 @@ def plot_resync(
                     lw=0.9,
                     ls=":",
                     alpha=0.9,
-                    label=f"{d.source}'s states as {d.target} holds them, before the step",
+                    label=f"{d.source}'s states rounded to {d.target}'s {d.target_dtype}",
                 )
         ax.set_yscale("log")
         if ylims is not None:

@@ -32,6 +32,7 @@ from ..pipeline import Comparison, Pair
 from ..run.ensemble import SPREAD_PERCENTILE
 from ..run.events import EngineEvents, Event
 from ..run.outcomes import OutcomeRecord
+from ..run.quantities import FEATURE_SOURCES
 from ..run.resync import BORN_FACTOR, PARTS, Direction, Peak, PhaseErrors, Resync
 from ..scenario import Scenario, format_timestep
 from .departures import applicable
@@ -103,7 +104,7 @@ def summary(c: Comparison) -> dict[str, Any]:
         "sweep": sweep,
         "verdict": first["verdict"],
         "ensemble": _ensemble_summary(c),
-        "resync": None if c.resync is None else resync_dict(c.resync, _state_dtypes(c)),
+        "resync": None if c.resync is None else resync_dict(c.resync),
         "outcomes": _outcomes_summary(c),
         "events": {e.label: engine_events_dict(e) for e in events},
         "parting": first["parting"],
@@ -131,11 +132,6 @@ def _pairs_of(c: Comparison) -> list[Pair]:
     """Every pair of ``c`` (a Comparison made by hand without ``pairs``: its ``cross`` and
     ``verdict``, engines 0 and 1)."""
     return c.pairs or [Pair(0, 1, c.cross, c.verdict, c.resync)]
-
-
-def _state_dtypes(c: Comparison) -> dict[str, str]:
-    """Per engine label, the type it keeps its state in (from its ensemble; none without)."""
-    return {e.label: e.state_dtype for e in c.ensembles}
 
 
 def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[str, Any]:
@@ -195,7 +191,7 @@ def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[st
             )
         ),
         "parts": [part_dict(part) for part in rank_parts(cross)],
-        "resync": None if p.resync is None else resync_dict(p.resync, _state_dtypes(c)),
+        "resync": None if p.resync is None else resync_dict(p.resync),
     }
 
 
@@ -474,11 +470,9 @@ def engine_events_dict(e: EngineEvents, limit: int = 500) -> dict[str, Any]:
     }
 
 
-def resync_dict(r: Resync, state_dtypes: Mapping[str, str] | None = None) -> dict[str, Any]:
-    """``summary.json``'s ``resync`` (docs/compare.md describes every field); ``state_dtypes``:
-    per engine label, the type it keeps its state in (each direction's ``set_loss`` names its
-    target's)."""
-    dirs = [_direction(d, (state_dtypes or {}).get(d.target)) for d in r.directions]
+def resync_dict(r: Resync) -> dict[str, Any]:
+    """``summary.json``'s ``resync`` (docs/compare.md describes every field)."""
+    dirs = [_direction(d, r.quantity) for d in r.directions]
     floors = {d["source"]: d["floor_max"]["value"] for d in dirs}
     largest = max(dirs, key=lambda d: -1.0 if d["max"]["value"] is None else d["max"]["value"])
     born = r.born()
@@ -503,18 +497,18 @@ def resync_dict(r: Resync, state_dtypes: Mapping[str, str] | None = None) -> dic
     }
 
 
-def _direction(d: Direction, state_dtype: str | None = None) -> dict[str, Any]:
+def _direction(d: Direction, quantity: str = "") -> dict[str, Any]:
     def med(v: Any) -> float | None:
         return float(np.nanmedian(v)) if np.isfinite(v).any() else None
 
-    loss = None
-    if d.set_loss is not None and d.set_loss_parts is not None:  # a result that measured it
-        loss = {
-            "max": d.peak(d.set_loss).value,
-            "median": med(d.set_loss),
-            "parts": {k: d.peak(d.set_loss_parts[k]).value for k in PARTS},
-            "floor_max": None if d.floor_set_loss is None else d.peak(d.floor_set_loss).value,
-            "state_dtype": state_dtype,
+    rounding = None
+    if d.rounding is not None:  # a target keeping a narrower type: the state set, rounded
+        head = d.rounding.get(FEATURE_SOURCES[quantity]) if quantity else None
+        rounding = {
+            "state_dtype": d.target_dtype,
+            "max": None if head is None else d.peak(head).value,
+            "median": None if head is None else med(head),
+            "parts": {k: d.peak(d.rounding[k]).value for k in PARTS},
         }
 
     return {
@@ -535,7 +529,7 @@ def _direction(d: Direction, state_dtype: str | None = None) -> dict[str, Any]:
             for k in PARTS
         },
         "phases": [_phase_errors(p) for p in d.by_phase()],
-        "set_loss": loss,
+        "rounding": rounding,
         "worst": [
             {
                 "time": w.time,

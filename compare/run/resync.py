@@ -13,10 +13,10 @@ in force and pending torques) and its portable part is set
   solver warm start).
 
 The same is done from B's run (B -> A beside B -> B). Nothing accumulates: every comparison
-starts from the source engine's own state. What B holds right after the state is set, before its
-step, is compared with the state set too (:attr:`Direction.set_loss`): 0 where B keeps its state
-in float64 as the source does; an engine that keeps float32 (PhysX) starts its step from the
-float32-rounded state, and its one-step error holds that rounding.
+starts from the source engine's own state. An engine that keeps its state in float32 (PhysX,
+``Backend.state_dtype``) holds a state set into it rounded to float32: its step starts from the
+rounded state, and its one-step error holds that rounding, measured at each point
+(:attr:`Direction.rounding`: the state set against itself in the target's type).
 
 Errors are measured on the followed robot (the scenario's subject): one distance in the
 scenario's headline quantity (:data:`~simbridge.compare.diff.QUANTITIES`) and each of
@@ -35,12 +35,13 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 import simbridge
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
+from simbridge.registry import state_dtype
 from simbridge.types import JointType
 
 from ..scenario import Scenario, load_scenario
@@ -176,15 +177,13 @@ class Direction:
     failed: int = 0
     """Resync points at which a target Sim refused the state or failed its step."""
     worst: list[WorstPoint] = field(default_factory=list)
-    set_loss: np.ndarray | None = None
-    """(P,) what setting the state into ``target`` lost before its step: the headline
-    quantity's distance between the state set and what ``target`` holds right after (0 for an
-    engine keeping float64 state; a float32 engine's rounding); None in a result made before it
-    was measured."""
-    set_loss_parts: dict[str, np.ndarray] | None = None
-    """Per :data:`PARTS` key, (P,): the same for each part."""
-    floor_set_loss: np.ndarray | None = None
-    """(P,) the same for the floor's Sim (``source``'s own states set into ``source``)."""
+    target_dtype: str = "float64"
+    """The type ``target`` keeps its state in (:func:`simbridge.registry.state_dtype`)."""
+    rounding: dict[str, np.ndarray] | None = None
+    """Where ``target`` keeps a narrower type than float64 (PhysX: float32): per :data:`PARTS`
+    key, (P,), what rounding the state set into it to that type changes, the subject's base
+    (its centre of mass) and joints as the state carries them; None where nothing is rounded
+    (or in a result made before it was measured)."""
 
     def phase(self, k: int) -> str:
         """The phase of resync point ``k``'s step (the one whose commands were in force)."""
@@ -289,14 +288,9 @@ class _World:
             self.sim.close()
             raise
 
-    def step_from(
-        self, state: simbridge.WorldState, held: list[dict[str, np.ndarray]] | None = None
-    ) -> dict[str, np.ndarray]:
-        """Set ``state``, step once, observe the subject; ``held``: what the subject holds
-        once the state is set, before the step, appended to it."""
+    def step_from(self, state: simbridge.WorldState) -> dict[str, np.ndarray]:
+        """Set ``state``, step once, observe the subject."""
         self.sim.set_state(state)
-        if held is not None:
-            held.append(_observe(self.sim, self.body, self.joints, self.links))
         self.sim.step()
         return _observe(self.sim, self.body, self.joints, self.links)
 
@@ -387,24 +381,27 @@ def _direction(
         raise
     rows: list[int] = []
     got: list[list[dict[str, np.ndarray] | None]] = [[], []]
-    held: list[list[dict[str, np.ndarray] | None]] = [[], []]  # once set, before the step
     failed = [0]
+    dtype = state_dtype(target[0])
+    narrow = np.dtype(dtype) != np.float64
+    rounded: list[dict[str, float]] = []
+    subject = worlds[1].body  # the source's subject: loaded in the same order as in its run
 
     def hook(sim: simbridge.Sim, row: int) -> None:
         if row % every:
             return
         state = sim.get_state(exact=False)  # the portable state: nothing engine-specific
         rows.append(row)
+        if narrow:
+            rounded.append(_rounding(state, subject, dtype))
         bad = False
         for i in (0, 1):
-            seen: list[dict[str, np.ndarray]] = []
             try:
-                got[i].append(worlds[i].step_from(state, seen))
+                got[i].append(worlds[i].step_from(state))
             except SimbridgeError:  # refused or diverged: this point is lost, not the run
                 got[i].append(None)
                 worlds[i] = worlds[i].rebuilt()
                 bad = True
-            held[i].append(seen[0] if seen else None)
         failed[0] += bad
 
     try:
@@ -413,15 +410,12 @@ def _direction(
         for w in worlds:
             w.sim.close()
     n = len(rows)
-    err = np.full((4, n), np.nan)  # the target's, the floor's; each one's set loss
-    parts = [{k: np.full(n, np.nan) for k in PARTS} for _ in range(4)]
+    err = np.full((2, n), np.nan)
+    parts = [{k: np.full(n, np.nan) for k in PARTS} for _ in (0, 1)]
     for k, row in enumerate(rows):
-        for i, obs, truth in (
-            (0, got[0][k], _truth(tr, row + 1)),
-            (1, got[1][k], _truth(tr, row + 1)),
-            (2, held[0][k], _truth(tr, row)),  # the state set is the source's row
-            (3, held[1][k], _truth(tr, row)),
-        ):
+        truth = _truth(tr, row + 1)
+        for i in (0, 1):
+            obs = got[i][k]
             if obs is None:
                 continue
             err[i, k], p = _errors(quantity, obs, truth)
@@ -439,11 +433,44 @@ def _direction(
         floor_parts=parts[1],
         phases=list(tr.phases),
         failed=failed[0],
-        set_loss=err[2],
-        set_loss_parts=parts[2],
-        floor_set_loss=err[3],
+        target_dtype=dtype,
+        rounding=(
+            {k: np.array([x[k] for x in rounded], dtype=np.float64) for k in PARTS}
+            if narrow
+            else None
+        ),
     )
     return d, tr
+
+
+def _rounding(state: simbridge.WorldState, subject: int, dtype: str) -> dict[str, float]:
+    """Per :data:`PARTS` key, what rounding ``subject``'s part of ``state`` to ``dtype``
+    changes: as :func:`_errors` measures a part (the base position is the centre of mass's,
+    as the state carries it)."""
+    body = next(b for b in state.bodies if b.body == subject)
+    kind = np.dtype(dtype).type
+
+    def pair(v: Any) -> tuple[np.ndarray, np.ndarray]:
+        a = np.asarray(v, dtype=np.float64)
+        return a, a.astype(kind).astype(np.float64)
+
+    def norm(v: Any) -> float:
+        a, b = pair(v)
+        return float(np.linalg.norm(a - b))
+
+    def largest(v: Any) -> float:
+        a, b = pair(v)
+        return float(np.abs(a - b).max(initial=0.0))
+
+    q, q32 = pair(body.base_orientation)
+    return {
+        "base_position": norm(body.base_position),
+        "base_orientation": float(rotation_angle(q, q32 / np.linalg.norm(q32))),
+        "base_linear_velocity": norm(body.base_linear_velocity),
+        "base_angular_velocity": norm(body.base_angular_velocity),
+        "joint_positions": largest(body.joint_positions),
+        "joint_velocities": largest(body.joint_velocities),
+    }
 
 
 def _worst(d: Direction, tr: Trajectory, n: int = WORST) -> list[WorstPoint]:
