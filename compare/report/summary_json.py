@@ -104,7 +104,7 @@ def summary(c: Comparison) -> dict[str, Any]:
         "sweep": sweep,
         "verdict": first["verdict"],
         "ensemble": _ensemble_summary(c),
-        "resync": None if c.resync is None else resync_dict(c.resync),
+        "resync": _resync_or_none(c.resync),
         "outcomes": _outcomes_summary(c),
         "events": {e.label: engine_events_dict(e) for e in events},
         "parting": first["parting"],
@@ -136,7 +136,7 @@ def _pairs_of(c: Comparison) -> list[Pair]:
 
 def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[str, Any]:
     """``pairs[k]``: engines ``p.a`` and ``p.b``, their headline, cross diff, verdict, where the
-    gap is born and which part parts first."""
+    gap is born, which part parts first and, with more than two engines, their resync."""
     q = c.headline_quantity
     dt = c.timestep
     cross = p.cross[dt]
@@ -191,8 +191,13 @@ def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[st
             )
         ),
         "parts": [part_dict(part) for part in rank_parts(cross)],
-        "resync": None if p.resync is None else resync_dict(p.resync),
+        # more than two engines: each pair's one-step error (two: the top-level ``resync``)
+        **({"resync": _resync_or_none(p.resync)} if len(c.labels) > 2 else {}),
     }
+
+
+def _resync_or_none(r: Resync | None) -> dict[str, Any] | None:
+    return None if r is None else resync_dict(r)
 
 
 def _outcomes_summary(c: Comparison) -> dict[str, Any] | None:
@@ -529,7 +534,7 @@ def _direction(d: Direction, quantity: str = "") -> dict[str, Any]:
             for k in PARTS
         },
         "phases": [_phase_errors(p) for p in d.by_phase()],
-        "rounding": rounding,
+        **({"rounding": rounding} if rounding is not None else {}),  # a float32 target's
         "worst": [
             {
                 "time": w.time,
