@@ -130,11 +130,7 @@ def rounding_words(r: dict[str, Any]) -> list[str]:
                 f"; in the {title} the rounding's median is {fmt_value(rmed, unit)}, the "
                 f"median one-step error {fmt_value(med, unit)} ({med / rmed:.3g}x)"
             )
-        line += (
-            f". {tgt}'s floor ({tgt} -> {tgt}) starts from its own states, which are "
-            f"{rounding['state_dtype']} already."
-        )
-        out.append(line)
+        out.append(line + ".")
     return out
 
 

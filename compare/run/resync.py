@@ -465,7 +465,7 @@ def _rounding(state: simbridge.WorldState, subject: int, dtype: str) -> dict[str
     q, q32 = pair(body.base_orientation)
     return {
         "base_position": norm(body.base_position),
-        "base_orientation": float(rotation_angle(q, q32 / np.linalg.norm(q32))),
+        "base_orientation": float(rotation_angle(q, q32)),
         "base_linear_velocity": norm(body.base_linear_velocity),
         "base_angular_velocity": norm(body.base_angular_velocity),
         "joint_positions": largest(body.joint_positions),
