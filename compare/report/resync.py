@@ -128,7 +128,7 @@ def rounding_words(r: dict[str, Any]) -> list[str]:
             title = QUANTITIES[r["quantity"]].title
             line += (
                 f"; in the {title} the rounding's median is {fmt_value(rmed, unit)}, the "
-                f"median one-step error {fmt_value(med, unit)} ({med / rmed:.3g}x)"
+                f"median one-step error {fmt_value(med, unit)} ({_times(med / rmed)})"
             )
         out.append(line + ".")
     return out
@@ -314,6 +314,11 @@ def _tables(r: dict[str, Any], worst_rows: int) -> list[str]:
         )
         lines += [""]
     return lines
+
+
+def _times(ratio: float) -> str:
+    """``9.56x``, ``25,100x``."""
+    return f"{ratio:,.0f}x" if ratio >= 1000 else f"{ratio:.3g}x"
 
 
 def _pair(a: float | None, b: float | None, unit: str) -> str:
