@@ -28,7 +28,7 @@ from simbridge.types import (
 )
 
 from ..locking import exclusive, wait_for_lock
-from .model import _link_frame_in_base, pose
+from .model import _link_frame_in_base
 from .world import Robot
 
 __all__ = ["StateAccess"]
@@ -57,7 +57,9 @@ def _com_frame(
     x: float, y: float, z: float, qx: float, qy: float, qz: float, qw: float, local: Any
 ) -> tuple[Vec3, Quat]:
     """``transform_multiply(((x, y, z), (qx, qy, qz, qw)), local)`` with the very operations
-    of simbridge.transforms (quat_rotate, then quat_multiply) in one call: the same bits."""
+    of simbridge.transforms (quat_rotate, then quat_multiply) in one call: the same bits (a
+    link's centre-of-mass frame from its link frame, or the base's link frame from its new
+    centre-of-mass frame)."""
     vx, vy, vz = local[0]
     bx, by, bz, bw = local[1]
     tx = 2.0 * (qy * vz - qz * vy)
@@ -275,7 +277,6 @@ class StateAccess:
         robot.restored_velocities = None  # PhysX's, from the joint velocities written
         self._contacts_cache = None
 
-    @exclusive
     def reset_base_state(
         self,
         body: int,
@@ -284,39 +285,60 @@ class StateAccess:
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
-        self._check_idle()
-        robot = self._robots[body]
-        if robot.fixed:
-            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            self._check_idle()
+            robot = self._robots[body]
+            if robot.fixed and (linear_velocity is not None or angular_velocity is not None):
+                self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
+            if position is not None or orientation is not None:
+                self._move_base(robot, position, orientation)
+            if not robot.static:
+                art = robot.built.articulation
+                if linear_velocity is not None:
+                    art.root_linear_velocity = np.asarray(linear_velocity, dtype=np.float32)
+                if angular_velocity is not None:
+                    art.root_angular_velocity = np.asarray(angular_velocity, dtype=np.float32)
+                # the other links follow the root in PhysX only after a step or a write of the
+                # joint state: one write now, so that reads see the teleport whole
+                art.qpos = art.qpos
+                art.qvel = art.qvel
+            robot.restored_velocities = None  # PhysX's, from the state written
+            self._contacts_cache = None
+        finally:
+            lock.release()
+
+    def _move_base(self, robot: Robot, position: Vec3 | None, orientation: Quat | None) -> None:
+        """The base's centre of mass to ``position`` and ``orientation`` (None: as it is), in
+        float64 as PyBullet, then the root's link frame to SAPIEN (float32)."""
         ine = robot.built.inertials[0]
         local = (ine.position, ine.orientation)
-        if position is not None or orientation is not None:
+        if position is None or orientation is None:  # the current one needed
             if robot.static:
                 cur = _frame(robot.built.entities[0].pose)
             else:
-                cur = _frame(robot.built.links[0].entity_pose)
+                x, y, z, qw, qx, qy, qz = _pose_floats(robot.built.links[0].entity_pose)
+                cur = ((x, y, z), (qx, qy, qz, qw))
             com = transform_multiply(cur, local)
             new_com = (
                 position if position is not None else com[0],
                 orientation if orientation is not None else com[1],
             )
-            frame = transform_multiply(new_com, transform_inverse(local))
-            if robot.static:
-                robot.built.entities[0].pose = pose(*frame)
-            else:
-                robot.built.articulation.root_pose = pose(*frame)
-        if not robot.static:
-            art = robot.built.articulation
-            if linear_velocity is not None:
-                art.root_linear_velocity = np.asarray(linear_velocity, dtype=np.float32)
-            if angular_velocity is not None:
-                art.root_angular_velocity = np.asarray(angular_velocity, dtype=np.float32)
-            # the other links follow the root in PhysX only after a step or a write of the
-            # joint state: one write now, so that reads see the teleport whole
-            art.qpos = art.qpos
-            art.qvel = art.qvel
-        robot.restored_velocities = None  # PhysX's, from the state written
-        self._contacts_cache = None
+        else:
+            new_com = (position, orientation)
+        if robot.base_inverse is None:  # fixed at load
+            robot.base_inverse = transform_inverse(local)
+        (x, y, z), (qx, qy, qz, qw) = new_com
+        (x, y, z), (qx, qy, qz, qw) = _com_frame(x, y, z, qx, qy, qz, qw, robot.base_inverse)
+        # a Pose from floats rounds them to float32 as np.asarray(..., np.float32) does (the
+        # same bits over 20,000 random poses), without the two arrays
+        frame = sapien.Pose((x, y, z), (qw, qx, qy, qz))
+        if robot.static:
+            robot.built.entities[0].pose = frame
+        else:
+            robot.built.articulation.root_pose = frame
 
     def set_time(self, time: float) -> None:
         self._steps = round(time / self._dt)
