@@ -16,6 +16,7 @@ with ``max_force=0``).
 
 from __future__ import annotations
 
+import threading
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -23,7 +24,7 @@ import numpy as np
 from simbridge.profiles import Profile
 from simbridge.types import JointCommands, JointType, MotorMode
 
-from ..locking import exclusive
+from ..locking import exclusive, wait_for_lock
 from .world import Robot
 
 __all__ = ["MotorCommands", "DRIVE_DAMPING"]
@@ -85,6 +86,7 @@ class MotorCommands:
         _clamped: list[Robot]
         _generation: int
         _dt: float
+        _stepping: threading.RLock
 
         def _check_idle(self) -> None: ...
 
@@ -271,25 +273,59 @@ class MotorCommands:
         robot.slot_cache[key] = (joints, slots)
         return slots
 
-    @exclusive
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
-        robot = self._robots[body]
+        # the lock inline (locking.exclusive's body): this is a control loop's hot path
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            robot = self._robots[body]
+            plan = robot.velocity_plan
+            if (
+                plan is not None
+                and plan[0] is joints
+                and robot.velocity_slots is plan[1]
+                and plan[2] == max_force
+            ):
+                # the last command's joints and forces, no motor changed since: the drives'
+                # force limits and the table's forces stand, only the targets change
+                table = robot.motors["target"]
+                for s, joint, t in zip(plan[3], plan[4], target, strict=True):
+                    table[s] = t
+                    joint.set_drive_velocity_target(t)
+                return
+            self._velocity(robot, joints, target, max_force)
+        finally:
+            lock.release()
+
+    def _velocity(
+        self, robot: Robot, joints: np.ndarray, target: list[float], max_force: list[float]
+    ) -> None:
+        """A velocity command in full: the motor table's modes and gains, the drives, and the
+        shortcut for the next command on the same joints with the same forces."""
         m = robot.motors
         slots = self._slots(robot, joints)
-        if robot.velocity_slots is slots:  # these slots' last command, nothing else since
+        if robot.velocity_slots is not slots:
+            # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
+            was_position = robot.has_position and bool(m["mode"][slots].any())
+            m["mode"][slots] = 0
+            m["kp"][slots] = 0.0
+            m["kd"][slots] = 1.0
+            robot.velocity_slots = slots
             _set_drives(robot, slots, max_force, target)
-            return
-        # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
-        was_position = robot.has_position and bool(m["mode"][slots].any())
-        m["mode"][slots] = 0
-        m["kp"][slots] = 0.0
-        m["kd"][slots] = 1.0
-        robot.velocity_slots = slots
-        _set_drives(robot, slots, max_force, target)
-        if was_position:  # a position motor replaced: the step may have less to do
-            self._refresh_active()
+            if was_position:  # a position motor replaced: the step may have less to do
+                self._refresh_active()
+        else:  # these slots' last command, nothing else since
+            _set_drives(robot, slots, max_force, target)
+        robot.velocity_plan = None
+        slot_list, pjoints, _, ball = robot.slot_calls(slots, m["effort"], m["ball"])
+        drive = robot.drive_force
+        if len(set(slot_list)) == len(slot_list) and all(
+            not ball[i] and drive[s] > 0.0 for i, s in enumerate(slot_list)
+        ):
+            robot.velocity_plan = (joints, slots, list(max_force), slot_list, pjoints)
 
     @exclusive
     def set_joint_position(

@@ -46,6 +46,10 @@ class Robot:
     # the slots array of the last velocity command while nothing else has changed a motor's
     # mode or gains since: those slots are velocity motors with kp 0 and kd 1 already
     velocity_slots: np.ndarray | None = None
+    # a velocity command's shortcut (motors.py set_joint_velocity), valid while velocity_slots
+    # is its slots: (joints array, slots array, max_force as given, slots as a list, their
+    # PhysX joints). Made only where every slot is a distinct 1-DoF joint driven (force > 0)
+    velocity_plan: tuple[np.ndarray, np.ndarray, list[float], list[int], list[Any]] | None = None
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
     moving_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # theirs
     ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
