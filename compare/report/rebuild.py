@@ -119,6 +119,8 @@ def _changed(record: dict[str, Any]) -> list[str]:
 def _compare(record: dict[str, Any], cache: Any) -> Any:
     """The study of ``record`` made again from the cache alone."""
     args = record["arguments"]
+    n = len(args["backends"])
+    resynced = sum(1 for j in record["jobs"] if j.get("kind") == "resync") // 2
     return compare(
         scenario_of(record),
         args["backends"],
@@ -130,6 +132,8 @@ def _compare(record: dict[str, Any], cache: Any) -> Any:
         seed=args["seed"],
         tolerance=args["tolerance"],
         resync_every=args["resync_every"],
+        # a study recorded when the first pair alone had a resync: that pair's, as recorded
+        resync_pairs=resynced if 0 < resynced < n * (n - 1) // 2 else None,
         workers=args["workers"],
         command_line=record["command_line"],
         cache=cache,
