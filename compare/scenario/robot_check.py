@@ -19,25 +19,17 @@ from .reader import _keystr, find_key_line
 __all__ = ["check_robots"]
 
 
-class _Quiet(logging.Filter):
-    def filter(self, record: logging.LogRecord) -> bool:
-        return False
-
-
 @contextmanager
 def _quiet() -> Iterator[None]:
-    """The readers' notes (a missing inertial, a lenient parse) are the run's to log, once."""
-    log, quiet = logging.getLogger("simbridge"), _Quiet()
-    handlers = [h for h in log.handlers]
-    log.addFilter(quiet)
-    for h in handlers:
-        h.addFilter(quiet)
+    """The readers' notes (a lenient parse's warnings) are the run's to log, once: within the
+    block, the ``simbridge`` loggers' records go nowhere."""
+    log = logging.getLogger("simbridge")
+    handlers, propagate = log.handlers[:], log.propagate
+    log.handlers, log.propagate = [logging.NullHandler()], False
     try:
         yield
     finally:
-        log.removeFilter(quiet)
-        for h in handlers:
-            h.removeFilter(quiet)
+        log.handlers, log.propagate = handlers, propagate
 
 
 _READ: dict[tuple[object, ...], list[str]] = {}
