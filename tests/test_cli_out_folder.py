@@ -50,3 +50,14 @@ def test_a_stopped_study_leaves_no_folder(tmp_path, monkeypatch, capsys):
     assert main(["compare", "pendulum", *ARGS, "--out", str(out)]) == 130
     assert "interrupted" in capsys.readouterr().err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "study", [["sweep", "--vary", "lateral_friction=0.5,0.6"], ["explain"]], ids=lambda s: s[0]
+)
+def test_a_failed_sweep_or_explain_leaves_no_folder(tmp_path, capsys, study):
+    out = tmp_path / "reports" / "mine"
+    argv = [study[0], str(_bad(tmp_path)), *ARGS[:-2], *study[1:], "--out", str(out)]
+    assert main(argv) == 1, capsys.readouterr().err
+    assert "hinje" in capsys.readouterr().err
+    assert not (tmp_path / "reports").exists()
