@@ -169,8 +169,9 @@ def _jsonable(value: Any) -> Any:
 
 
 _CACHE: dict[tuple[str, str], dict[str, Setting]] = {}
-# a settings module's check_together(values) -> (key, detail) | None: settings that must agree
-# with each other (PhysX's rest offset below its contact offset), given or at their defaults
+# a settings module's check_together(values, given) -> (key, detail) | None: settings that must
+# agree with each other (PhysX's rest offset below its contact offset), given or at their
+# defaults; ``given``: the keys set, so that the message blames one of them
 _TOGETHER: dict[tuple[str, str], Any] = {}
 
 
@@ -229,7 +230,7 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
     together = _TOGETHER.get((spec.name, spec.settings))
     if together is not None and checked:
         values = {k: s.default for k, s in known.items() if not callable(s.default)}
-        problem = together({**values, **checked})
+        problem = together({**values, **checked}, frozenset(checked))
         if problem is not None:
             raise InvalidEngineSettingError(backend, *problem)
     return checked
