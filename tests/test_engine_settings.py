@@ -339,3 +339,14 @@ def test_a_contact_offset_below_the_default_rest_offset_blames_the_contact_offse
     with pytest.raises(InvalidEngineSettingError, match="physx.rest_offset: must be below"):
         es.validate("physx", {"contact_offset": 0.0004, "rest_offset": 0.001})
 
+
+def test_a_setting_of_another_engine_says_whose_it_is():
+    with pytest.raises(InvalidEngineSettingError) as err:
+        es.validate("mujoco", {"contact_offset": 0.002})
+    text = str(err.value)
+    assert "contact_offset is a physx setting; mujoco's are: " in text, text
+    assert all(key in text for key in es.settings_for("mujoco"))
+    # a key of no engine keeps its "did you mean"
+    with pytest.raises(InvalidEngineSettingError, match=r"did you mean 'impratio'") as err:
+        es.validate("mujoco", {"impratoi": 1})
+    assert "is a" not in str(err.value)

@@ -219,6 +219,14 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
     for key in mapping:
         if key not in known:
             valid = ", ".join(known) if known else "none (this backend declares no settings)"
+            owners = _owners(str(key), backend)
+            if owners:
+                raise InvalidEngineSettingError(
+                    backend,
+                    str(key),
+                    f"unknown setting: {key} is a {' and '.join(owners)} setting; {backend}'s "
+                    f"are: {valid}",
+                )
             raise InvalidEngineSettingError(
                 backend,
                 str(key),
@@ -234,6 +242,23 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
         if problem is not None:
             raise InvalidEngineSettingError(backend, *problem)
     return checked
+
+
+def _owners(key: str, backend: str) -> list[str]:
+    """The other registered backends that have a setting ``key`` (for the message of a key
+    given to the wrong engine); a backend whose settings module cannot be read is skipped."""
+    from .registry import available_backends
+
+    found = []
+    for other in available_backends():
+        if other == backend:
+            continue
+        try:
+            if key in settings_for(other):
+                found.append(other)
+        except Exception:  # noqa: BLE001 - only a hint: a broken registration is reported elsewhere
+            continue
+    return found
 
 
 def effective(backend: str, profile: Profile) -> dict[str, Any]:
