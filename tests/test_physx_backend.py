@@ -349,6 +349,22 @@ def test_manifest_lists_what_physx_cannot_match():
 
 
 @needs_sapien
+def test_the_speed_clamp_and_motor_departures_say_what_the_backend_does():
+    from simbridge.backends.physx.motors import DRIVE_DAMPING
+
+    with simbridge.Sim("physx") as sim:
+        dep = sim.manifest()["departures"]
+        cap = sim.profile.max_joint_velocity
+    # the backend clamps joint speeds after each step (motors.py _clamp_speeds)
+    assert "after each step" in dep["speed clamp"]
+    assert f"{cap:g} rad/s" in dep["speed clamp"]
+    assert "joint max velocity (inside its solver);" not in dep["speed clamp"]
+    # the drive's damping as a value, not a constant's name
+    assert "DRIVE_DAMPING" not in dep["motors"]
+    assert f"damping {DRIVE_DAMPING:g} " in dep["motors"]
+
+
+@needs_sapien
 def test_friction_is_the_product_of_the_two_materials():
     """A box (friction 0.5, the profile's) sliding on plane.urdf (friction 1): PyBullet's product
     0.5 slows it by 0.5 g per second; PhysX's own rule, the average, would give 0.75 g."""
