@@ -47,6 +47,9 @@ def test_physx_is_registered_and_says_how_to_install_it(monkeypatch):
     with pytest.raises(BackendNotInstalledError) as info:
         registry.load_backend("physx")
     assert "simbridge[physx]" in str(info.value)
+    # the line a report's "left out" note gives: from PyPI, and from a clone
+    both = "pip install 'simbridge[physx]' (from a clone: pip install -e '.[physx]')"
+    assert both in str(info.value)
     monkeypatch.delitem(registry._LOADED, "physx", raising=False)
 
 
