@@ -37,6 +37,7 @@ __all__ = [
     "SimBusyError",
     "SimClosedError",
     "SimNotCopyableError",
+    "NotOfferedError",
     "StaleCommandError",
     "ScenarioError",
     "TrajectoryFileError",
@@ -372,6 +373,22 @@ class SimNotCopyableError(SimbridgeError, TypeError):
             "a Sim holds an engine connection and cannot be copied or pickled: carry a world "
             "with sim.get_state() (a WorldState, which pickles) into another Sim loaded alike "
             "(sim.set_state()), or build a new Sim"
+        )
+
+
+class NotOfferedError(SimbridgeError, AttributeError):
+    """A PyBullet function the Sim does not offer (yet), asked for by its PyBullet name
+    (``sim.applyExternalForce``) or in snake case: says so, and what to use instead where
+    something exists (:data:`simbridge.pybullet_names.NOT_OFFERED`)."""
+
+    def __init__(self, attribute: str, pybullet_name: str, instead: str):
+        self.attribute = attribute
+        self.pybullet_name = pybullet_name
+        self.instead = instead
+        what = f"instead: {instead}" if instead else "nothing in simbridge does this yet"
+        super().__init__(
+            f"'Sim' object has no attribute {attribute!r}: simbridge does not offer PyBullet's "
+            f"{pybullet_name} yet; {what}"
         )
 
 

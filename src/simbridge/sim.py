@@ -36,7 +36,7 @@ from .arguments import flag, quat, vec, within
 from .backend import Backend
 from .bound import BoundCommand
 from .engine_settings import effective as effective_settings
-from .exceptions import InvalidArgumentError, SimBusyError, SimNotCopyableError
+from .exceptions import InvalidArgumentError, NotOfferedError, SimBusyError, SimNotCopyableError
 from .profiles import Profile, get_profile
 from .registry import available_backends, load_backend
 from .sim_control import Control
@@ -137,10 +137,13 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
 
     def __getattr__(self, name: str) -> Any:
         # only for a name the class lacks: a PyBullet name gets simbridge's in its message
-        from .pybullet_names import equivalent
+        from .pybullet_names import equivalent, not_offered
 
         found = equivalent(name)
         if found is None:
+            missing = not_offered(name)
+            if missing is not None:
+                raise NotOfferedError(name, *missing)
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         raise AttributeError(
             f"{type(self).__name__!r} object has no attribute {name!r}; simbridge's "
