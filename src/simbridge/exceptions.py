@@ -38,6 +38,7 @@ __all__ = [
     "SimClosedError",
     "SimNotCopyableError",
     "NotOfferedError",
+    "PyBulletKeywordError",
     "StaleCommandError",
     "ScenarioError",
     "TrajectoryFileError",
@@ -390,6 +391,16 @@ class NotOfferedError(SimbridgeError, AttributeError):
             f"'Sim' object has no attribute {attribute!r}: simbridge does not offer PyBullet's "
             f"{pybullet_name} yet; {what}"
         )
+
+
+class PyBulletKeywordError(SimbridgeError, TypeError):
+    """A Sim call given a keyword it does not take (often PyBullet's name of one of its
+    arguments, ``basePosition``), or missing a required argument: ``detail`` names the keyword
+    and simbridge's name for it, or the valid keywords."""
+
+    def __init__(self, call: str, detail: str):
+        self.call = call
+        super().__init__(f"{call} {detail}")
 
 
 class StaleCommandError(SimbridgeError, RuntimeError):

@@ -241,6 +241,7 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
         self_collision: bool | str | None = None,
         inertia_source: str | None = None,
         merge_fixed_links: bool = False,
+        **pybullet: Any,
     ) -> int:
         """Load a robot and return its body id.
 
@@ -270,7 +271,13 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
             UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
             UnsupportedJointError: the message names the file, the line and the element.
             InvalidArgumentError: a bad pose or option.
+            PyBulletKeywordError: a keyword it does not take (PyBullet's ``basePosition``,
+                ``useFixedBase``, ``flags``...: the message names simbridge's).
         """
+        if pybullet:
+            from .keywords import keyword_error
+
+            raise keyword_error(self.load_urdf, pybullet)
         pos = vec(base_position, 3, "base_position")
         within(pos, "base_position")
         orn = quat(base_orientation, "base_orientation", normalise=True)
