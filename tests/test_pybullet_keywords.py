@@ -121,3 +121,16 @@ def test_the_calls_work_as_before(r2d2):
     sim.set_joint_torque(body, 2, 0.5)
     sim.reset_joint_state(body, 2, 0.3, 0.0)
     assert sim.joint_states(body, 2).positions.tolist() == [0.3]
+
+
+def test_a_spherical_joint_missing_an_argument_says_so_too():
+    with simbridge.Sim("pybullet") as sim:
+        body = sim.load_urdf("spherical_pendulum.urdf", fixed_base=True)
+        ball = [j.index for j in sim.joints(body) if j.type == simbridge.JointType.SPHERICAL]
+        assert ball
+        with pytest.raises(PyBulletKeywordError, match=r"missing 1 required keyword-only "):
+            sim.set_joint_velocity(body, ball, 0.0)
+        with pytest.raises(PyBulletKeywordError, match=r"missing 1 required positional "):
+            sim.set_joint_position(body, ball, max_force=1.0)
+        with pytest.raises(PyBulletKeywordError, match=r"got PyBullet's keyword 'force'"):
+            sim.set_joint_velocity(body, ball, 0.0, force=1.0)
