@@ -128,7 +128,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         self._contacts_cache: list[Any] | None = None
         self._restored: list[Robot] = []  # robots whose link velocities a restore put back
         self._active: list[Robot] = []  # robots that need work before or after a step
-        self._clamped: list[Robot] = []  # robots whose joint speeds the profile clamps
+        self._clamped: list[Any] = []  # articulations whose joint speeds the profile clamps
 
     @property
     def time(self) -> float:
@@ -303,7 +303,10 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             window = self._window
             for _ in range(n):
                 for robot in active:
-                    self._before_step(robot)
+                    if robot.damping_only:
+                        robot.damper()  # type: ignore[misc]  # set with damping_only
+                    else:
+                        self._before_step(robot)
                 system.step()
                 self._steps += 1
                 if self._restored:  # PhysX's own link velocities from here on
@@ -311,9 +314,12 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                 for robot in active:
                     if robot.qf_set or robot.pending:  # else _after_step has nothing to do
                         self._after_step(robot)
-                if cap is not None:
-                    for robot in self._clamped:
-                        self._clamp_speeds(robot, cap)
+                if cap is not None:  # PyBullet's clamp of the joint speeds (_clamp_speeds)
+                    for art in self._clamped:
+                        v = art.qvel
+                        speeds = v.tolist()
+                        if max(map(abs, speeds)) > cap:
+                            self._clamp_speeds(art, v, speeds, cap)
                 if every or self._steps % CHECK_EVERY == 0:
                     self._check_world()
                 if window is not None:

@@ -6,11 +6,13 @@ every control loop: one joints lookup, one check per argument, one backend call.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from math import inf as _INF
+from math import isfinite
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .arguments import JointsArg, quat, state_vec
+from .arguments import _F64, JointsArg, quat, state_vec
 from .bound import BoundCommand
 from .exceptions import InvalidArgumentError
 from .keywords import Missing, keyword_error
@@ -134,18 +136,42 @@ class Control:
         naming simbridge's."""
         if pybullet:
             raise keyword_error(self.set_joint_velocity, pybullet)
-        idx = self._joints(body, joints, True)
+        # the hot path inline (a control loop's every step): joints already resolved, a float64
+        # array of targets and one force; anything else, or a value to refuse, takes the checks
+        # of every command (_joints, _values), which give the same results and errors
+        b = self._bodies.get(body) if type(body) is int else None
+        idx = None
+        if b is not None:
+            if type(joints) is np.ndarray:
+                idx = b.movable_cache.get((joints.dtype.char, joints.tobytes()))
+            elif type(joints) is list:
+                try:
+                    idx = b.movable_cache.get(tuple(joints))
+                except TypeError:  # an unhashable item: _joints says what is wrong
+                    pass
+        if idx is None:
+            idx = self._joints(body, joints, True)
         if self._multi_idx and id(idx) in self._multi_idx:
             return self._multi_dof_motor(body, idx, MotorMode.VELOCITY, target, max_force, 0, 1)
         if self._held:
             self._refuse_held(body, idx)
         n = len(idx)
-        self._b.set_joint_velocity(
-            body,
-            idx,
-            self._values(target, n, "target"),
-            self._values(max_force, n, "max_force", nonneg=True),
-        )
+        if (
+            type(target) is np.ndarray
+            and target.dtype is _F64
+            and target.ndim == 1
+            and len(target) == n
+        ):
+            targets = target.tolist()
+            if not isfinite(sum(targets)):  # an inf or a NaN (or an overflowing sum)
+                targets = self._values(target, n, "target")
+        else:
+            targets = self._values(target, n, "target")
+        if type(max_force) is float and 0.0 <= max_force < _INF:
+            forces = [max_force] * n
+        else:
+            forces = self._values(max_force, n, "max_force", nonneg=True)
+        self._b.set_joint_velocity(body, idx, targets, forces)
 
     def set_joint_position(
         self,
