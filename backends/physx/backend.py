@@ -36,7 +36,7 @@ from .ball import BallJoints, default_ball_motor
 from .combine import product_combine_available
 from .contacts import ContactReads
 from .model import build_robot
-from .motors import MotorCommands
+from .motors import DRIVE_DAMPING, MotorCommands
 from .state import StateAccess
 from .window import Window
 from .world import Robot, default_motors, movable_joints
@@ -435,13 +435,17 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             "PyBullet's adds the quadratic term k |v| v"
         ),
         "speed clamp": (
-            "joint speeds clamped by PhysX's joint max velocity (inside its solver); the base's "
-            "by its link's max linear and angular speed (the norm; PyBullet clamps each "
-            "coordinate after the step)"
+            "joint speeds clamped after each step to the profile's max_joint_velocity (100 rad/s "
+            "or m/s under 'pybullet'), each joint's speed on its own, as PyBullet does; PhysX's "
+            "joint max velocity is set to the same cap, which bounds its drives inside the "
+            "solver too. A free base's speed is clamped by its link's max linear and angular "
+            "speed (the norm of each, inside PhysX's solver; PyBullet clamps each coordinate "
+            "after the step)"
         ),
         "motors": (
             "PyBullet's velocity motor as a PhysX drive (stiffness 0, damping "
-            "DRIVE_DAMPING, force limit max_force); its position law as a velocity target "
+            f"{DRIVE_DAMPING:g} N·m·s/rad or N·s/m, force limit max_force); its position law "
+            "as a velocity target "
             "kp (q* - q) / dt + (1 - kd) v set before each step (v: the velocity at the start of "
             "the step, PyBullet's the velocity after the smooth forces)"
         ),
