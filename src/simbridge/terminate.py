@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-__all__ = ["Terminated", "sigterm_raises"]
+__all__ = ["Terminated", "raises_terminated", "sigterm_raises"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -24,6 +24,11 @@ class Terminated(KeyboardInterrupt):
 
 def _raise(signum: int, frame: FrameType | None) -> None:
     raise Terminated()
+
+
+def raises_terminated(handler: object) -> bool:
+    """Whether ``handler`` is the one :func:`sigterm_raises` installs."""
+    return handler is _raise
 
 
 @contextmanager
