@@ -16,6 +16,7 @@ from ..analysis.diff import DEG, QUANTITIES, Divergence, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
+from .departures import checked
 from .engine_figures import engines_section, p_words, pair_reasons
 from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
@@ -520,7 +521,8 @@ def _departure_count(s: dict[str, Any], label: str, manifest: dict[str, Any]) ->
     deps = (s.get("departures") or {}).get(label)
     if deps is None:
         return str(total)
-    return f"[{len(deps['apply'])} of {total}](#profile-departures-that-apply-here)"
+    found = sum(checked(x) for x in deps["apply"])  # one not checked is not said to apply
+    return f"[{found} of {total}](#profile-departures-that-apply-here)"
 
 
 MAX_EVENT_ROWS = 40
@@ -683,10 +685,10 @@ def _departures_section(s: dict[str, Any]) -> list[str]:
         if not d["apply"] and not d["left_out"]:
             lines += [f"{label}: none (it reproduces the profile).", ""]
             continue
-        if d["apply"]:
-            rows = [
-                [f"`{x['key']}`", x["text"], x["why"], x["measured"] or "none"] for x in d["apply"]
-            ]
+        found = [x for x in d["apply"] if checked(x)]
+        unchecked = [x["key"] for x in d["apply"] if not checked(x)]
+        if found:
+            rows = [[f"`{x['key']}`", x["text"], x["why"], x["measured"] or "none"] for x in found]
             lines += [f"{label}:", ""]
             lines += _table(
                 ["departure", "what", "why it applies here", "measured in this run"], rows
@@ -694,6 +696,15 @@ def _departures_section(s: dict[str, Any]) -> list[str]:
             lines += [""]
         else:
             lines += [f"{label}: none of its departures applies here.", ""]
+        if unchecked:
+            n = len(unchecked)
+            lines += [
+                f"Not checked for {label}: {n} departure{'s' if n != 1 else ''} no rule checks "
+                "against this scenario, not counted as applying: "
+                + ", ".join(f"`{k}`" for k in unchecked)
+                + ".",
+                "",
+            ]
         if d["left_out"]:
             lines += [
                 f"Left out for {label} (they do not apply to this scenario): "
