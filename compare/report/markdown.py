@@ -35,8 +35,10 @@ from .resync import resync_lines, resync_section
 from .story import story_words
 from .verdict import (
     interval_cell,
+    one_run,
     pair_words,
     perturbation_words,
+    spread_ratio,
     verdict_lines,
     verdict_word,
     within_words,
@@ -753,11 +755,16 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
     ]
     if e:
         pert = e["perturbation"]
-        lines += [
-            f"Each engine ran the scenario {e['size']} times: the nominal run and "
+        runs = (
+            "Each engine ran the scenario once (the nominal run: no offsets, no spread). The "
+            if e["size"] < 2
+            else f"Each engine ran the scenario {e['size']} times: the nominal run and "
             f"{e['size'] - 1} with every spawn pose moved by {pert['position']:g} m and turned "
             f"by {pert['orientation']:g} rad in random directions (seed {e['seed']}). The "
-            f"{q.title} is judged at every one of {v['instants']['total']} recorded instants "
+        )
+        lines += [
+            runs
+            + f"{q.title} is judged at every one of {v['instants']['total']} recorded instants "
             f"against each engine's own spread (the {v['spread_percentile']:g}th percentile of "
             "the distances between its runs) and its own time-step error (dt against dt/2); "
             f"figures below are {where}, with 95% bootstrap intervals in brackets.",
@@ -772,17 +779,18 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         hz = ", ".join(
             f"{fmt_threshold(h['threshold'], unit)}: {fmt_time(h['time'])}" for h in f["horizons"]
         )
+        one = f["size"] < 2  # one run: no spread, no ratio to it
         rows.append(
             [
                 label,
                 str(f["size"]),
-                iv(f["spread"]),
-                iv(f["spread_end"]),
-                fmt_value(f["largest_pair"], unit),
-                f"{f['gap_over_spread']:.3g}",
+                "n/a (one run)" if one else iv(f["spread"]),
+                "n/a" if one else iv(f["spread_end"]),
+                "n/a" if one else fmt_value(f["largest_pair"], unit),
+                f"{f['gap_over_spread']:.3g}" if spread_ratio(f, v["floor"]) else "n/a",
                 fmt_value(f["own_error"], unit),
-                f"{f['gap_over_own_error']:.3g}",
-                hz,
+                f"{f['gap_over_own_error']:.3g}" if f["own_error"] > v["floor"] else "n/a",
+                "n/a" if one else hz,
             ]
         )
     lines += _table(
@@ -810,8 +818,12 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
     n = v["instants"]
     lines += [
         "",
-        f"Gap between the engines (median over every pair of runs, one of each engine): "
-        f"{iv(v['gap'])}; the nominal runs' gap: {fmt_value(v['nominal_gap'], unit)}; largest "
+        (
+            "Gap between the engines (one run each): "
+            if one_run(v)
+            else "Gap between the engines (median over every pair of runs, one of each engine): "
+        )
+        + f"{iv(v['gap'])}; the nominal runs' gap: {fmt_value(v['nominal_gap'], unit)}; largest "
         f"on the way {fmt_value(v['max_gap']['value'], unit)} at t = "
         f"{fmt_time(v['max_gap']['time'])}. Tolerance for `agree`: "
         f"{fmt_threshold(v['tolerance'], unit)}; precision floor {v['floor']:.2g} {unit}.",

@@ -77,3 +77,41 @@ def test_a_departure_row_quotes_no_third_engines_figures(three):
     for d in rows:
         for field in ("why", "measured"):
             assert "mujoco" not in (d[field] or ""), (d["key"], field, d[field])
+
+
+# ---------------------------------------------------------------- one run per engine
+
+
+@pytest.fixture(scope="module")
+def single(tmp_path_factory):
+    """pendulum with --ensemble 1 on PyBullet, MuJoCo and (where installed) PhysX, a float32
+    engine whose perturbation would be raised."""
+    engines = ["pybullet", "mujoco"]
+    if registry.unavailable_reason("physx") is None:
+        engines.append("physx")
+    out = tmp_path_factory.mktemp("single")
+    c = compare("pendulum", engines, duration=0.5, ensemble=1, workers=0, resync_every=0)
+    path = report(c, out, trajectories=False)
+    return c, out, path.read_text(), json.loads((out / "summary.json").read_text())
+
+
+def test_one_run_reports_no_ratio_to_a_spread(single):
+    c, out, text, s = single
+    assert not re.search(r"x \S+'s (own )?spread", text), "a ratio to an absent spread"
+    for lab in c.labels:
+        assert f"{lab} has no spread (one run)" in text
+    verdict = _section(text, "Verdict")
+    rows = [r for r in verdict.splitlines() if r.startswith(("| pybullet |", "| mujoco |"))]
+    assert rows and all(r.split("|")[6].strip() == "n/a" for r in rows), rows  # gap / spread
+
+
+def test_one_run_says_the_gap_not_a_median_and_moves_nothing(single):
+    c, out, text, s = single
+    bullets = [x for x in text.splitlines() if x.startswith("- ") and " apart" in x or "gap" in x]
+    assert "a median" not in text.split("## ")[0]  # the opening
+    assert any(x.startswith("- pybullet and mujoco: agree, the gap ") for x in bullets)
+    assert "were moved" not in text and "Each engine ran the scenario once" in text
+    every = _section(text, "Every engine") if len(c.labels) > 2 else ""
+    for lab in c.labels[2:]:
+        row = next(r for r in every.splitlines() if r.startswith(f"| {lab} |"))
+        assert "none (one run)" in row, row
