@@ -7,7 +7,7 @@ from typing import Any
 
 from ..analysis.verdict import ALPHA, Marginal
 from ..run.ensemble import FLOAT_SPACINGS
-from .fmt import fmt_threshold, fmt_time, fmt_value
+from .fmt import fmt_apart, fmt_threshold, fmt_time, fmt_value
 
 __all__ = [
     "verdict_lines",
@@ -85,8 +85,8 @@ def _iv(x: dict[str, Any], unit: str, *, inner: bool = False) -> str:
     lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
     if x["low"] == x["high"]:
         return v
-    if len({lo, v, hi}) < 3:  # too close for the report's rounding: 4 significant digits
-        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
+    if len({lo, v, hi}) < 3:  # too close for the report's rounding: more digits, same units
+        v, lo, hi = fmt_apart([x["value"], x["low"], x["high"]], unit)
     return f"{v}, 95% interval {lo} to {hi}" if inner else f"{v} (95% interval {lo} to {hi})"
 
 
@@ -141,15 +141,15 @@ def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
 
 
 def interval_cell(x: dict[str, Any], unit: str) -> str:
-    """``7.2 cm [7.1 cm, 7.3 cm]`` for a table, rounded as :func:`_iv` rounds (4 significant
-    digits where the report's rounding would make the three alike); the value alone without an
-    interval."""
+    """``7.2 cm [7.1 cm, 7.3 cm]`` for a table, rounded as :func:`_iv` rounds (in the report's
+    units, with more digits where its rounding would make different ones alike); the value alone
+    without an interval."""
     v = fmt_value(x["value"], unit)
     if x.get("low") is None:
         return v
     lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
     if len({lo, v, hi}) < 3 and x["low"] != x["high"]:
-        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
+        v, lo, hi = fmt_apart([x["value"], x["low"], x["high"]], unit)
     return f"{v} [{lo}, {hi}]"
 
 

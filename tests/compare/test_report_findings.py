@@ -16,6 +16,7 @@ import pytest
 from simbridge import registry
 from simbridge.compare import compare, report
 from simbridge.compare.report.departures import NOT_CHECKED, checked
+from simbridge.compare.report.verdict import interval_cell
 
 
 def _section(text: str, title: str) -> str:
@@ -115,3 +116,31 @@ def test_one_run_says_the_gap_not_a_median_and_moves_nothing(single):
     for lab in c.labels[2:]:
         row = next(r for r in every.splitlines() if r.startswith(f"| {lab} |"))
         assert "none (one run)" in row, row
+
+
+# ---------------------------------------------------------------- lengths in one format
+
+
+@pytest.mark.parametrize(
+    ("interval", "cell"),
+    [  # the figures the Every engine table printed as 0.0001612 m and 0.02955 m
+        ((0.0001612, 2.806e-06, 0.0001612), "0.16 mm [2.8e-06 m, 0.16 mm]"),
+        ((0.02955, 0.0002329, 0.02965), "2.955 cm [0.23 mm, 2.965 cm]"),
+    ],
+)
+def test_an_interval_cell_writes_lengths_as_the_report_does(interval, cell):
+    value, low, high = interval
+    assert interval_cell({"value": value, "low": low, "high": high}, "m") == cell
+
+
+def test_every_engine_table_writes_lengths_as_the_report_does(three):
+    c, out, text, s = three
+    every = _section(text, "Every engine")
+    rows = [r for r in every.splitlines() if r.startswith(("| pybullet |", "| physx |"))]
+    assert len(rows) == 2
+    for r in rows:
+        spread, own = r.split("|")[4], r.split("|")[6]
+        for cell in (spread, own):
+            # the report's lengths: m from 1 m, cm, mm, or 1.2e-06 m; never 0.0001612 m
+            assert not re.search(r"(?<![\d.e-])0\.\d+ m\b", cell), r
+            assert not re.search(r"\d\.\d{3,}e-\d+ m", cell), r
