@@ -144,3 +144,30 @@ def test_every_engine_table_writes_lengths_as_the_report_does(three):
             # the report's lengths: m from 1 m, cm, mm, or 1.2e-06 m; never 0.0001612 m
             assert not re.search(r"(?<![\d.e-])0\.\d+ m\b", cell), r
             assert not re.search(r"\d\.\d{3,}e-\d+ m", cell), r
+
+
+# ---------------------------------------------------------------- key frames' headers
+
+
+def test_key_frame_headers_give_the_time_as_the_caption_does(three, tmp_path, monkeypatch):
+    """r2d2's first event is at t = 0.004 s: its panels read 't = 0.00 s' before, as the start's."""
+    from PIL import ImageDraw
+
+    from simbridge.compare.report.frames import write_frames
+
+    c, out, text, s = three
+    said: list[str] = []
+    real = ImageDraw.ImageDraw.text
+
+    def text_of(self, xy, words, *args, **kwargs):
+        said.append(str(words))
+        return real(self, xy, words, *args, **kwargs)
+
+    monkeypatch.setattr(ImageDraw.ImageDraw, "text", text_of)
+    f = write_frames(c, s, tmp_path)
+    captions = {k.time for k in f.key_frames}
+    for t in captions:
+        shown = f"t = {t:.3f} s"
+        assert sum(shown in x for x in said) >= len(c.labels), (shown, said[:6])
+    first = min(t for t in captions if t > 0)
+    assert f"{first:.2f}" == "0.00"  # the case the two-decimal header could not tell apart
