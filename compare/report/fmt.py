@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import math
+import re
 
 from ..run.quantities import DEG
 
-__all__ = ["fmt_apart", "fmt_distance", "fmt_time", "fmt_value", "fmt_threshold"]
+__all__ = ["file_stem", "fmt_apart", "fmt_distance", "fmt_time", "fmt_value", "fmt_threshold"]
 
 
 def fmt_distance(x: float | None, more: int = 0) -> str:
@@ -70,3 +71,10 @@ def fmt_threshold(x: float, unit: str) -> str:
     if unit == "rad":
         return f"{x / DEG:g}°"
     return f"{x:g} {unit}"
+
+
+def file_stem(label: str) -> str:
+    """An engine label as a file name: every run of other characters than letters, digits, ``-``
+    and ``_`` one ``-``, none at either end (``pybullet (2)``: ``pybullet-2``; ``mujoco
+    (urdf)``: ``mujoco-urdf``)."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "-", label).strip("-") or "engine"

@@ -32,6 +32,7 @@ from .pair_sections import (
 )
 from .parts import parts_words
 from .resync import resync_lines, resync_section
+from .self_check import self_check_words
 from .story import story_words
 from .verdict import (
     interval_cell,
@@ -254,6 +255,9 @@ def markdown(
     left = left_out_words(s)
     if left:
         lines += [f"*{left}*", ""]
+    same = self_check_words(s["backends"], s["profiles"], s["labels"])
+    if same:  # an engine compared with itself
+        lines += [f"**{same[0].upper()}{same[1:]}**", ""]
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
     lines += pictures or []

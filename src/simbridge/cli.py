@@ -255,6 +255,7 @@ def _compare(args: argparse.Namespace) -> int:
     engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     _check_writable(out)  # before the engines run, not after
+    _warn_self_check(args, scenario, n)
 
     resolver = cli_study.resolver_of(args)  # --resolve: compare, halving dt while unresolved
     with ProgressBar() as bar:
@@ -282,6 +283,21 @@ def _compare(args: argparse.Namespace) -> int:
     cli_study.finish_resolve(resolver, out)  # --resolve: its table, and a line here
     print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
     return 0
+
+
+def _warn_self_check(args: argparse.Namespace, scenario: Any, n: int) -> None:
+    """A line on stderr where two --backends entries are one engine under one profile (a null
+    comparison; the run goes on: a self-check is legitimate)."""
+    if args.backends is None:
+        return
+    from simbridge.compare.pipeline import engine_labels
+    from simbridge.compare.report.self_check import self_check_words
+
+    profiles = args.profile or [scenario.profile]
+    profiles = list(profiles) * n if len(profiles) == 1 else list(profiles)
+    words = self_check_words(args.backends, profiles, engine_labels(args.backends, profiles))
+    if words:
+        print(words, file=sys.stderr)
 
 
 def _settings(args: argparse.Namespace) -> int:

@@ -171,3 +171,37 @@ def test_key_frame_headers_give_the_time_as_the_caption_does(three, tmp_path, mo
         assert sum(shown in x for x in said) >= len(c.labels), (shown, said[:6])
     first = min(t for t in captions if t > 0)
     assert f"{first:.2f}" == "0.00"  # the case the two-decimal header could not tell apart
+
+
+# ---------------------------------------------------------------- an engine against itself
+
+
+def test_an_engine_against_itself_is_warned_of_and_still_judged(tmp_path, capsys):
+    from simbridge.cli import main
+    from simbridge.compare.report.replay import engines_from_report
+
+    out = tmp_path / "self"
+    argv = ["compare", "pendulum", "--backends", "pybullet", "pybullet", "--duration", "0.2"]
+    argv += ["--ensemble", "1", "--no-replay", "--no-plots", "--no-cache", "--out", str(out)]
+    assert main(argv) == 0  # a self-check is legitimate: it runs
+    printed = capsys.readouterr()
+    warned = [x for x in printed.err.splitlines() if x.startswith("warning: ")]
+    assert len(warned) == 1 and "pybullet and pybullet (2)" in warned[0]
+    assert "null comparison" in warned[0] and "same profile" in warned[0]
+    opening = (out / "report.md").read_text("utf-8").split("## ")[0]
+    assert "null comparison" in opening
+    names = sorted(p.name for p in (out / "trajectories").glob("*.npz"))
+    assert names == ["pybullet-2.npz", "pybullet.npz"]
+    assert [e.label for e in engines_from_report(out)] == ["pybullet", "pybullet (2)"]
+
+
+def test_two_profiles_of_one_engine_are_no_self_check(tmp_path, capsys):
+    from simbridge.cli import main
+
+    out = tmp_path / "two"
+    argv = ["compare", "pendulum", "--backends", "pybullet", "pybullet", "--profile"]
+    argv += ["pybullet", "urdf", "--duration", "0.2", "--ensemble", "1", "--no-replay"]
+    argv += ["--no-plots", "--no-cache", "--out", str(out)]
+    assert main(argv) == 0
+    assert "null comparison" not in capsys.readouterr().err
+    assert "null comparison" not in (out / "report.md").read_text("utf-8")
