@@ -16,7 +16,9 @@ It knows nothing of what a job computes. What it adds to an executor:
 - **Ctrl-C** (``KeyboardInterrupt`` in the caller) cancels the jobs not started, stops the
   pool's workers (none is left behind), calls ``on_result`` for every job that finished, and
   raises ``KeyboardInterrupt`` again. The local pool's workers ignore SIGINT (the terminal
-  sends it to the whole process group): the caller decides.
+  sends it to the whole process group): the caller decides. SIGTERM (``kill``, ``timeout``)
+  does the same while the local pool runs (:mod:`simbridge.terminate`): the pool is stopped,
+  its semaphores released, before ``Terminated`` (a ``KeyboardInterrupt``) is raised.
 - **Warm workers**: the local pool is kept after a call that ran to the end, its workers
   started and their imports done (simbridge, the engines: about half a second of each
   worker's start), and the next call with the same ``workers`` reuses it: a sweep or an
@@ -48,6 +50,7 @@ from simbridge.exceptions import (
     JobError,
     SimbridgeError,
 )
+from simbridge.terminate import sigterm_raises
 
 __all__ = [
     "JobFailed",
@@ -169,7 +172,8 @@ def run_all(
             if count == 0 or not _main_importable():
                 _run_here(fn, items, tracker)
             else:
-                _run_pool(fn, items, count, max_attempts, tracker)
+                with sigterm_raises():  # SIGTERM stops the pool as Ctrl-C does
+                    _run_pool(fn, items, count, max_attempts, tracker)
     finally:
         tracker.close()
     return [tracker.results[i] for i in range(n)]
