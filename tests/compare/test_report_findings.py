@@ -224,3 +224,28 @@ def test_docs_say_the_default_run_is_three_engines_with_physx_installed():
     para = text[start : text.index("###", start)]
     assert "three-engine run" in para and "`--backends pybullet mujoco`" in para
     assert "117 s" in para and "`physx` extra" in para
+
+
+# ---------------------------------------------------------------- a scenario's name as written
+
+
+def test_the_terminal_headline_keeps_a_hyphenated_name_as_written(tmp_path, capsys):
+    """A guard, passing before as after: the bytes printed start with the name as written
+    ('my-pendulum'); a display that capitalised the first character of a command's output
+    showed 'My-pendulum' (od -c of the same output: 'm y - p e n d ...')."""
+    from pathlib import Path
+
+    from simbridge.cli import main
+
+    shipped = Path(__file__).resolve().parents[2] / "compare" / "scenarios" / "pendulum.toml"
+    text = shipped.read_text("utf-8")
+    first = next(x for x in text.splitlines() if x.startswith("name"))
+    toml = tmp_path / "my-pendulum.toml"
+    toml.write_text(text.replace(first, 'name = "my-pendulum"', 1), "utf-8")
+    out = tmp_path / "out"
+    argv = ["compare", str(toml), "--backends", "pybullet", "mujoco", "--duration", "0.2"]
+    argv += ["--ensemble", "1", "--no-replay", "--no-plots", "--no-cache", "--out", str(out)]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith("my-pendulum, pybullet against mujoco: ")
+    assert (out / "report.md").read_text("utf-8").startswith("# my-pendulum: ")
