@@ -257,6 +257,7 @@ def _compare(args: argparse.Namespace) -> int:
     engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
     made = _check_writable(out)  # before the engines run, not after
+    _warn_self_check(args, scenario, n)
     try:
         path, resolver, result = _compare_into(args, scenario, engine_settings, out)
     except BaseException:  # an error, Ctrl-C, SIGTERM: no empty or half-written folder left
@@ -299,6 +300,21 @@ def _compare_into(
         )
         path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)
     return path, resolver, result
+
+
+def _warn_self_check(args: argparse.Namespace, scenario: Any, n: int) -> None:
+    """A line on stderr where two --backends entries are one engine under one profile (a null
+    comparison; the run goes on: a self-check is legitimate)."""
+    if args.backends is None:
+        return
+    from simbridge.compare.pipeline import engine_labels
+    from simbridge.compare.report.self_check import self_check_words
+
+    profiles = args.profile or [scenario.profile]
+    profiles = list(profiles) * n if len(profiles) == 1 else list(profiles)
+    words = self_check_words(args.backends, profiles, engine_labels(args.backends, profiles))
+    if words:
+        print(words, file=sys.stderr)
 
 
 def _settings(args: argparse.Namespace) -> int:
