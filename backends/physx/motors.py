@@ -96,6 +96,8 @@ class MotorCommands:
 
         def _ball_after_step(self, robot: Robot) -> None: ...
 
+        def _limit_rows(self, robot: Robot) -> None: ...
+
     # ---------------------------------------------------------------- set-up
 
     def _configure(self, robot: Robot) -> None:
@@ -168,7 +170,14 @@ class MotorCommands:
             r
             for r in self._robots.values()
             if not r.static
-            and (damped or r.pending or r.damping is not None or bool(r.balls) or r.has_position)
+            and (
+                damped
+                or r.pending
+                or r.damping is not None
+                or bool(r.balls)
+                or r.has_position
+                or r.past_limit
+            )
         ]
 
     def _before_step(self, robot: Robot) -> None:
@@ -230,6 +239,8 @@ class MotorCommands:
         if qf is not None:
             art.qf = qf.astype(np.float32)
             robot.qf_set = True
+        if robot.past_limit:  # after the motors and damping: they read the step's start
+            self._limit_rows(robot)
 
     def _clamp_speeds(self, robot: Robot, cap: float) -> None:
         """PyBullet's clamp of every joint speed after the step. PhysX's joint max velocity

@@ -61,6 +61,8 @@ class StateAccess:
 
         def _check_idle(self) -> None: ...
 
+        def _check_limits(self, robot: Robot) -> None: ...
+
         def _ball_state(self, robot: Robot, joint: int, q: Any, v: Any) -> tuple[Any, Any]: ...
 
         def refuse_fixed_base_velocity(
@@ -199,6 +201,7 @@ class StateAccess:
         art.qvel = v
         robot.restored_velocities = None  # PhysX's, from the joint velocities written
         self._contacts_cache = None
+        self._check_limits(robot)
 
     @exclusive
     def reset_base_state(
