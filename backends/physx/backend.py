@@ -314,6 +314,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
                 for robot in active:
                     if robot.qf_set or robot.pending:  # else _after_step has nothing to do
                         self._after_step(robot)
+                    if robot.held:  # a joint past its limit: PyBullet's limit row (limits.py)
+                        self._limit_rows_after(robot)
                 if cap is not None:
                     for robot in self._clamped:
                         self._clamp_speeds(robot, cap)
@@ -492,9 +494,13 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             "outward motion, within 0.04 of the limit push back at 0.2 depth/dt: limits.py). "
             "slider.urdf (limits +-0.4 m) reset at or past a limit, 60 steps: within 3.0e-7 m "
             "and 4.8e-7 m/s of PyBullet, 1.7e-6 m where the float32 position slides at 0.5 m/s "
-            "(PhysX's own limit: 1.10 m, 57.6 m/s off). The push "
-            "sets the joint's own speed: PyBullet's row impulse also moves the rest of a chain "
-            "through the mass matrix (not reproduced)"
+            "(PhysX's own limit: 1.10 m, 57.6 m/s off); a hinge loaded outside its range under "
+            "gravity 2.1e-7 rad. The row's push is written to that joint alone: in a free "
+            "two-hinge chain whose elbow is reset 0.039 rad past its limit the shoulder ends "
+            "2.4e-2 rad, the elbow 5.9e-4 rad from PyBullet (its impulse moves the whole "
+            "chain). A joint arriving at its limit from inside is stopped on it by PhysX; "
+            "PyBullet lets it pass by up to one step's travel and pushes it back (slider at "
+            "1 m/s: 0.4042 m, then back in at -0.2 m/s; 2.5e-2 m apart after 60 steps)"
         ),
         "spherical joints": (
             "three revolute joints about the child's inertial axes through two 1e-6 kg links "

@@ -12,16 +12,24 @@ one), so slider.urdf reset 0.3 m past its limit crosses to the far one at 57.6 m
 links' max depenetration velocity nor TGS gives PyBullet's law; a joint max velocity only caps
 the speed (bench/physx_limit_reset.py measures each).
 
-While a joint is past its limit the backend stands in for the row, before each step: where the
-joint moves out, or in slower than the row's target ``vt`` (``-LIMIT_ERP d / dt`` past the
-upper limit, 0 deeper than :data:`LIMIT_DEEP`), its speed is set to ``vt`` (the row's push),
-and PhysX's limit on that side is moved to where the row lets the joint be after the step,
-``q + vt dt``: PhysX's limit then stops what would carry the joint further out, as the row
-does. Once the joint is back within its range its limit is PhysX's own again. Only a write of
-the joint state (the load, ``reset_joint_state``, a restore) can leave a joint past its limit
-here: a robot is looked at after one, and steps as before unless a joint is past its limit.
-The push sets the joint's own speed; PyBullet's row impulse also moves the rest of a chain
-through the mass matrix (not reproduced: a departure, "joint limits").
+While a joint is past its limit the backend stands in for the row. Before the step, PhysX's
+limit on the violated side is moved to where the row lets the joint be after it, ``q + vt dt``
+(``vt``: ``-LIMIT_ERP d / dt`` past the upper limit, ``+`` past the lower one, 0 deeper than
+:data:`LIMIT_DEEP`): whatever would leave the joint further out is stopped there, as by the
+row. After the step, where that limit held the joint (it ends on the bound, or short of it: PhysX
+moves a joint it finds past a limit 0.8 of the way when other forces act on it, and keeps 0.8 of
+the correction as speed), the joint is put on the bound at the row's speed ``vt``; where the
+joint went further in on its own, it is left as PhysX left it (the row did not act). Once the
+joint is back within its range its limit is PhysX's own again. Only a write of the joint state
+(the load, ``reset_joint_state``, a restore) can leave a joint past its limit here: a robot is
+looked at after one, and steps as before unless a joint is past its limit.
+
+Departures: the fix after the step writes that joint's position and speed alone (PyBullet's row
+impulse also moves the rest of a chain through the mass matrix; PhysX's own limit impulse,
+0.8 of it, does move the rest); and a joint that arrives at its limit from inside is PhysX's
+(stopped on the limit; PyBullet's row, made only once a step starts at or past the limit, lets
+it pass by up to a step's travel and pushes it back: the slider at 1 m/s reaches 0.4042 m and
+returns at -0.2 m/s).
 """
 
 from __future__ import annotations
@@ -75,39 +83,57 @@ class LimitRows:
             self._refresh_active()
 
     def _limit_rows(self, robot: Robot) -> None:
-        """PyBullet's limit rows for this step on the joints past their limits (see above)."""
-        art = robot.built.articulation
-        q = art.qpos
-        v = art.qvel
+        """PyBullet's limit rows for this step on the joints past their limits (see above):
+        PhysX's limit on the violated side moved to ``q + vt dt``."""
+        q = robot.built.articulation.qpos
         dt = self._dt
-        write = False
-        past = False
+        held = robot.held
         moved = robot.moved
         for i, (d, joint, lo, hi) in enumerate(robot.limit_rows):
             x = float(q[d])
             if x > hi:
                 depth = x - hi
                 vt = -LIMIT_ERP * depth / dt if depth < LIMIT_DEEP else 0.0
-                if float(v[d]) > vt:
-                    v[d] = vt
-                    write = True
-                joint.limit = np.array([[lo, x + vt * dt]], dtype=np.float32)
+                bound = np.float32(x + vt * dt)
+                joint.limit = np.array([[lo, bound]], dtype=np.float32)
+                side = 1.0
             elif x < lo:
                 depth = lo - x
                 vt = LIMIT_ERP * depth / dt if depth < LIMIT_DEEP else 0.0
-                if float(v[d]) < vt:
-                    v[d] = vt
-                    write = True
-                joint.limit = np.array([[x + vt * dt, hi]], dtype=np.float32)
+                bound = np.float32(x + vt * dt)
+                joint.limit = np.array([[bound, hi]], dtype=np.float32)
+                side = -1.0
             else:
                 if i in moved:
                     joint.limit = np.array([[lo, hi]], dtype=np.float32)
                     moved.discard(i)
                 continue
             moved.add(i)
-            past = True
-        if write:
-            art.qvel = v
-        if not past:
+            held.append((d, float(bound), vt, side, 2.0 * float(np.spacing(bound))))
+        if not held:
             robot.past_limit = False
             self._refresh_active()
+
+    def _limit_rows_after(self, robot: Robot) -> None:
+        """After the step: where PhysX's moved limit held a joint (it ends on the bound, not
+        further in), the row's speed ``vt`` (PhysX keeps 0.8 of a correction as speed, the
+        row asks for all of it); where the joint went further in on its own, as PhysX left it."""
+        art = robot.built.articulation
+        q = art.qpos
+        v = art.qvel
+        write_q = write_v = False
+        for d, bound, vt, side, ulps in robot.held:
+            x = float(q[d])
+            if side * (x - bound) < -ulps:  # further in than the bound: the joint's own motion
+                continue
+            if x != bound:  # PhysX left it short of a bound it moved into the joint (0.8)
+                q[d] = bound
+                write_q = True
+            if float(v[d]) != vt:
+                v[d] = vt
+                write_v = True
+        robot.held = []
+        if write_q:
+            art.qpos = q
+        if write_q or write_v:
+            art.qvel = v

@@ -79,6 +79,9 @@ class Robot:
     limit_hi: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32))
     past_limit: bool = False
     moved: set[int] = field(default_factory=set)
+    # this step's rows (dof, the moved bound, the row's speed, 1 upper or -1 lower, 2 float32
+    # steps at the bound), for the fix after the step
+    held: list[tuple[int, float, float, float, float]] = field(default_factory=list)
 
     @property
     def static(self) -> bool:
