@@ -484,3 +484,51 @@ def test_restored_link_velocities_last_until_a_step_or_a_write():
         sim.reset_joint_state(arm, None, js.positions, js.velocities)
         recomputed = np.array([sim.link_state(arm, k)[6:8] for k in range(n)])
         assert float(np.abs(recomputed - kept).max()) > 1e-3
+
+
+@needs_sapien
+def test_reads_are_sapiens_arrays_and_pybullets_frame_maths_bit_for_bit():
+    """The reads' hot path (one pose call per link, the centre-of-mass frame in plain floats,
+    the joints gathered by flat index) gives exactly what SAPIEN's pose and velocity arrays
+    and simbridge.transforms give: r2d2 tumbling in the air, the KUKA swinging, every link."""
+    from simbridge.backends.physx.inspect import robot
+    from simbridge.transforms import transform_multiply
+
+    with simbridge.Sim("physx") as sim:
+        r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 2))
+        arm = sim.load_urdf("kuka_iiwa/model.urdf", base_position=(3, 0, 0), fixed_base=True)
+        sim.reset_base_state(r2d2, None, (0.1, 0.7, 0.1, 0.7), (0.3, -0.2, 1.0), (1.0, 2.0, 3.0))
+        sim.set_joint_velocity(arm, None, 0.0, max_force=0.0)
+        sim.reset_joint_state(arm, None, [0.4] * 7, [0.5] * 7)
+        sim.step(7)
+        for body in (r2d2, arm):
+            r = robot(sim, body)
+            for k in range(-1, sim.num_joints(body)):
+                link = r.built.links[k + 1]
+                pose = link.entity_pose
+                qw, qx, qy, qz = pose.q.tolist()
+                frame = (tuple(pose.p.tolist()), (qx, qy, qz, qw))
+                ine = r.built.inertials[k + 1]
+                com = transform_multiply(frame, (ine.position, ine.orientation))
+                lin = tuple(link.linear_velocity.tolist())
+                ang = tuple(link.angular_velocity.tolist())
+                # it moves (but the welded base): the test compares something
+                assert lin != (0.0, 0.0, 0.0) or (body, k) == (arm, -1)
+                want = (*com, ine.position, ine.orientation, *frame, lin, ang)
+                assert tuple(sim.link_state(body, k)) == want
+                if k == -1:
+                    assert tuple(sim.base_state(body)) == (*com, lin, ang)
+            art = r.built.articulation
+            movable = [j for j in range(sim.num_joints(body)) if r.dof[j] >= 0]
+            dofs = r.dof[movable]
+            forces = art.get_link_incoming_joint_forces()
+            axis = [0 if r.model.joints[j].type == "prismatic" else 3 for j in movable]
+            rows = [r.built.links[j + 1].index for j in movable]
+            for joints in (movable, movable[::-1]):
+                order = [movable.index(j) for j in joints]
+                js = sim.joint_states(body, joints)
+                assert js.positions.dtype == js.applied_torques.dtype == np.float64
+                np.testing.assert_array_equal(js.positions, art.qpos[dofs[order]])
+                np.testing.assert_array_equal(js.velocities, art.qvel[dofs[order]])
+                torques = [forces[rows[i], axis[i]] for i in order]
+                np.testing.assert_array_equal(js.applied_torques, torques)

@@ -52,6 +52,7 @@ class Robot:
     dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
     balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
     read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    base_inverse: Any = None  # the base's link frame in its centre-of-mass frame, once asked
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     call_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
