@@ -96,6 +96,8 @@ class StateAccess:
 
         def _check_idle(self) -> None: ...
 
+        def _check_limits(self, robot: Robot) -> None: ...
+
         def _ball_state(self, robot: Robot, joint: int, q: Any, v: Any) -> tuple[Any, Any]: ...
 
         def refuse_fixed_base_velocity(
@@ -276,6 +278,7 @@ class StateAccess:
         art.qvel = v
         robot.restored_velocities = None  # PhysX's, from the joint velocities written
         self._contacts_cache = None
+        self._check_limits(robot)
 
     def reset_base_state(
         self,
