@@ -50,6 +50,7 @@ def limit_rows(robot: Robot) -> None:
     """Record ``robot``'s limited 1-DoF joints: their dof, PhysX joint and limits as PhysX
     holds them (float32, so that a joint reset exactly at a limit is at it, not past)."""
     rows = []
+    limit_of = [(-np.inf, np.inf)] * len(robot.table)
     for j in robot.movable:
         joint = robot.joints[j]
         if j in robot.balls or joint is None:
@@ -57,7 +58,9 @@ def limit_rows(robot: Robot) -> None:
         lo, hi = (float(x) for x in joint.limit[0])
         if np.isfinite(lo) and np.isfinite(hi):
             rows.append((int(robot.dof[j]), joint, lo, hi))
+            limit_of[j] = (lo, hi)
     robot.limit_rows = rows
+    robot.limit_of = limit_of
     robot.limit_dofs = np.array([r[0] for r in rows], dtype=np.intp)
     robot.limit_lo = np.array([r[2] for r in rows], dtype=np.float32)
     robot.limit_hi = np.array([r[3] for r in rows], dtype=np.float32)

@@ -75,6 +75,7 @@ class Robot:
     # them, their dofs and limits as arrays; whether a joint is past its limit (the step
     # stands in for PyBullet's limit row) and which rows' PhysX limits are moved meanwhile
     limit_rows: list[tuple[int, Any, float, float]] = field(default_factory=list)
+    limit_of: list[tuple[float, float]] = field(default_factory=list)  # per joint (-inf, inf)
     limit_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
     limit_lo: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32))
     limit_hi: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32))
