@@ -61,9 +61,6 @@ def limit_rows(robot: Robot) -> None:
             limit_of[j] = (lo, hi)
     robot.limit_rows = rows
     robot.limit_of = limit_of
-    robot.limit_dofs = np.array([r[0] for r in rows], dtype=np.intp)
-    robot.limit_lo = np.array([r[2] for r in rows], dtype=np.float32)
-    robot.limit_hi = np.array([r[3] for r in rows], dtype=np.float32)
 
 
 class LimitRows:
@@ -79,10 +76,15 @@ class LimitRows:
         (or does a moved limit wait to be put back)?"""
         if not robot.limit_rows or robot.static:
             return
-        q = robot.built.articulation.qpos[robot.limit_dofs]
-        past = bool(np.any((q < robot.limit_lo) | (q > robot.limit_hi))) or bool(robot.moved)
-        if past != robot.past_limit:
-            robot.past_limit = past
+        q = robot.built.articulation.qpos.tolist()  # plain floats: cheaper than numpy here
+        past = bool(robot.moved)
+        for d, _, lo, hi in robot.limit_rows:
+            x = q[d]
+            if x < lo or x > hi:
+                past = True
+                break
+        if past and not robot.past_limit:  # let go at the next step when nothing is past
+            robot.past_limit = True
             self._refresh_active()
 
     def _limit_rows(self, robot: Robot) -> None:
