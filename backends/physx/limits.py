@@ -165,6 +165,7 @@ class LimitRows:
         for d, x, u in zip(rows, dx, du, strict=True):  # on the bound at the row's speed
             q[d] = np.float32(float(art.qpos[d]) + x)
             v[d] = np.float32(float(art.qvel[d]) + u)
-        art.qpos = q
+        if dx.any():  # a write of the positions makes PhysX derive the link poses afresh
+            art.qpos = q
         art.qvel = v
         robot.held = []
