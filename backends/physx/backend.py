@@ -37,7 +37,7 @@ from .combine import product_combine_available
 from .contacts import ContactReads
 from .limits import LimitRows, limit_rows
 from .model import build_robot
-from .motors import MotorCommands
+from .motors import DRIVE_DAMPING, MotorCommands
 from .state import StateAccess
 from .window import Window
 from .world import Robot, default_motors, movable_joints
@@ -129,7 +129,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
         self._contacts_cache: list[Any] | None = None
         self._restored: list[Robot] = []  # robots whose link velocities a restore put back
         self._active: list[Robot] = []  # robots that need work before or after a step
-        self._clamped: list[Robot] = []  # robots whose joint speeds the profile clamps
+        self._clamped: list[Any] = []  # articulations whose joint speeds the profile clamps
 
     @property
     def time(self) -> float:
@@ -306,7 +306,10 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             window = self._window
             for _ in range(n):
                 for robot in active:
-                    self._before_step(robot)
+                    if robot.damping_only:
+                        robot.damper()  # type: ignore[misc]  # set with damping_only
+                    else:
+                        self._before_step(robot)
                 system.step()
                 self._steps += 1
                 if self._restored:  # PhysX's own link velocities from here on
@@ -316,9 +319,12 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
                         self._after_step(robot)
                     if robot.held:  # a joint past its limit: PyBullet's limit row (limits.py)
                         self._limit_rows_after(robot)
-                if cap is not None:
-                    for robot in self._clamped:
-                        self._clamp_speeds(robot, cap)
+                if cap is not None:  # PyBullet's clamp of the joint speeds (_clamp_speeds)
+                    for art in self._clamped:
+                        v = art.qvel
+                        speeds = v.tolist()
+                        if max(map(abs, speeds)) > cap:
+                            self._clamp_speeds(art, v, speeds, cap)
                 if every or self._steps % CHECK_EVERY == 0:
                     self._check_world()
                 if window is not None:
@@ -436,13 +442,17 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             "PyBullet's adds the quadratic term k |v| v"
         ),
         "speed clamp": (
-            "joint speeds clamped by PhysX's joint max velocity (inside its solver); the base's "
-            "by its link's max linear and angular speed (the norm; PyBullet clamps each "
-            "coordinate after the step)"
+            "joint speeds clamped after each step to the profile's max_joint_velocity (100 rad/s "
+            "or m/s under 'pybullet'), each joint's speed on its own, as PyBullet does; PhysX's "
+            "joint max velocity is set to the same cap, which bounds its drives inside the "
+            "solver too. A free base's speed is clamped by its link's max linear and angular "
+            "speed (the norm of each, inside PhysX's solver; PyBullet clamps each coordinate "
+            "after the step)"
         ),
         "motors": (
             "PyBullet's velocity motor as a PhysX drive (stiffness 0, damping "
-            "DRIVE_DAMPING, force limit max_force); its position law as a velocity target "
+            f"{DRIVE_DAMPING:g} N·m·s/rad or N·s/m, force limit max_force); its position law "
+            "as a velocity target "
             "kp (q* - q) / dt + (1 - kd) v set before each step (v: the velocity at the start of "
             "the step, PyBullet's the velocity after the smooth forces)"
         ),

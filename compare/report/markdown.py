@@ -129,6 +129,11 @@ def first_pair_lines(summary: dict[str, Any], story: str | None = None) -> list[
     return lines
 
 
+def _is_resync(key: str) -> bool:
+    """A resync figure's key: ``resync`` (the first pair's), ``resync_<a>_<b>``."""
+    return key == "resync" or key.startswith("resync_")
+
+
 def left_out_words(summary: dict[str, Any]) -> str | None:
     """With the backends chosen by default: the registered engines left out and why, in one
     sentence; None when none was (or the backends were named)."""
@@ -312,7 +317,8 @@ def markdown(
     # -- where the gap is born, which part
     lines += _born_section(s)
     lines += parts_section(s) if many else _parts_section(s)
-    lines += resync_section(s, images.pop("resync", None), of)  # its figure here, not in Figures
+    resync_images = {k: images.pop(k) for k in list(images) if _is_resync(k)}
+    lines += resync_section(s, resync_images)  # their figures here, not in Figures
     # -- final poses
     lines += ["## Final poses", ""]
     poses = _final_poses(c)

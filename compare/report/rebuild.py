@@ -35,6 +35,8 @@ def rebuild(
     folder = Path(folder)
     record = read_study(folder)
     args = record["arguments"]
+    n = len(args["backends"])
+    resynced = sum(1 for j in record["jobs"] if j.get("kind") == "resync") // 2
     comparison = compare(
         scenario_of(record),
         args["backends"],
@@ -46,6 +48,8 @@ def rebuild(
         seed=args["seed"],
         tolerance=args["tolerance"],
         resync_every=args["resync_every"],
+        # a study recorded when the first pair alone had a resync: that pair's, as recorded
+        resync_pairs=resynced if 0 < resynced < n * (n - 1) // 2 else None,
         workers=args["workers"],
         command_line=record["command_line"],
         cache=cache,

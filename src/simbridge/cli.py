@@ -213,6 +213,10 @@ def build_parser() -> argparse.ArgumentParser:
 def _report(args: argparse.Namespace) -> int:
     from simbridge.compare.report.rebuild import rebuild
 
+    if not args.folder.exists():
+        raise _Usage(f"argument DIR: no such folder: {str(args.folder)!r}")
+    if not args.folder.is_dir():
+        raise _Usage(f"argument DIR: {str(args.folder)!r} is not a folder")
     path = rebuild(
         args.folder, cache=args.cache, plots=not args.no_plots, replay=not args.no_replay
     )

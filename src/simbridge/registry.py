@@ -226,7 +226,7 @@ register(
     "physx",
     "simbridge.backends.physx:PhysxBackend",
     requires=("sapien",),
-    pip_name="'simbridge[physx]'",
+    pip_name="'simbridge[physx]' (from a clone: pip install -e '.[physx]')",
     settings="simbridge.backends.settings_physx:SETTINGS",
     state_dtype="float32",
 )
