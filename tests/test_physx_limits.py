@@ -26,6 +26,21 @@ HINGE = """<robot name="h">
 </robot>"""
 
 
+# two hinges about y, the first free, the second limited to +-0.4 rad
+CHAIN = """<robot name="chain">
+<link name="base"><inertial><mass value="1"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+<link name="upper"><inertial><origin xyz="0.2 0 0"/><mass value="1"/>
+<inertia ixx="0.001" ixy="0" ixz="0" iyy="0.004" iyz="0" izz="0.004"/></inertial></link>
+<link name="lower"><inertial><origin xyz="0.2 0 0"/><mass value="0.5"/>
+<inertia ixx="0.001" ixy="0" ixz="0" iyy="0.002" iyz="0" izz="0.002"/></inertial></link>
+<joint name="shoulder" type="continuous"><parent link="base"/><child link="upper"/>
+<axis xyz="0 1 0"/></joint>
+<joint name="elbow" type="revolute"><parent link="upper"/><child link="lower"/>
+<origin xyz="0.4 0 0"/><axis xyz="0 1 0"/><limit lower="-0.4" upper="0.4" effort="1" velocity="5"/>
+</joint></robot>"""
+
+
 def _limit(sim: simbridge.Sim, body: int) -> list[float]:
     from simbridge.backends.physx import inspect
 
@@ -146,3 +161,27 @@ def test_a_hinge_loaded_outside_its_range_follows_pybullet(lower, upper):
     # measured: 2.1e-7 rad, 9.1e-7 rad/s (0 where held: -1 .. -0.5); PhysX's own limit threw
     # the 0.5 rad deep cases onto the limit within a step
     assert diff[0] < 1e-6 and diff[1] < 5e-6
+
+
+@pytest.mark.parametrize("start", [0.41, 0.439, 0.7])
+def test_the_push_back_moves_the_rest_of_the_chain_as_pybullet(start):
+    """The elbow of a free two-hinge chain (no gravity) reset past its limit: PyBullet's row
+    impulse turns the shoulder too. Measured over 60 steps (bench/physx_limit_reset.py):
+    shoulder 1.3e-6 / 2.1e-5 rad, 5.1e-6 / 8.4e-5 rad/s, elbow 1.4e-7 rad, 7.2e-7 rad/s (0.41
+    / 0.439); with the push written to the elbow alone the shoulder was 2.4e-2 rad off."""
+    runs = []
+    for backend in ("pybullet", "physx"):
+        with simbridge.Sim(backend, profile="urdf", gravity=(0, 0, 0)) as sim:
+            body = sim.load_urdf(CHAIN, fixed_base=True)
+            sim.set_joint_velocity(body, [0, 1], 0.0, max_force=0.0)
+            sim.reset_joint_state(body, 1, start, 0.0)
+            out = np.empty((60, 4))
+            for k in range(60):
+                sim.step()
+                js = sim.joint_states(body, [0, 1])
+                out[k] = *js.positions, *js.velocities
+            runs.append(out)
+    diff = np.abs(runs[0] - runs[1]).max(axis=0)
+    assert np.abs(runs[0][:, 0]).max() > (1e-3 if start < 0.44 else -1.0)  # it does turn
+    assert diff[0] < 1e-4 and diff[2] < 4e-4  # shoulder: 5x the worst
+    assert diff[1] < 1e-6 and diff[3] < 5e-6  # elbow

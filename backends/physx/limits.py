@@ -24,12 +24,16 @@ joint is back within its range its limit is PhysX's own again. Only a write of t
 (the load, ``reset_joint_state``, a restore) can leave a joint past its limit here: a robot is
 looked at after one, and steps as before unless a joint is past its limit.
 
-Departures: the fix after the step writes that joint's position and speed alone (PyBullet's row
-impulse also moves the rest of a chain through the mass matrix; PhysX's own limit impulse,
-0.8 of it, does move the rest); and a joint that arrives at its limit from inside is PhysX's
-(stopped on the limit; PyBullet's row, made only once a step starts at or past the limit, lets
-it pass by up to a step's travel and pushes it back: the slider at 1 m/s reaches 0.4042 m and
-returns at -0.2 m/s).
+The fix after the step is an impulse on the held joints: on a fixed base it moves the rest of
+the chain through the inverse mass matrix (PhysX's articulation at q, SAPIEN's Pinocchio model),
+as PyBullet's row impulse does (a free two-hinge chain, the elbow reset 0.039 rad past: the
+shoulder within 2.1e-5 rad of PyBullet, 2.4e-2 with that joint alone); on a floating base it is
+written to the held joints alone (the base's share is not reproduced).
+
+Departure: a joint that arrives at its limit from inside is PhysX's (stopped on the limit;
+PyBullet's row, made only once a step starts at or past the limit, lets it pass by up to a
+step's travel and pushes it back: the slider at 1 m/s reaches 0.4042 m and returns at -0.2
+m/s).
 """
 
 from __future__ import annotations
@@ -50,6 +54,7 @@ def limit_rows(robot: Robot) -> None:
     """Record ``robot``'s limited 1-DoF joints: their dof, PhysX joint and limits as PhysX
     holds them (float32, so that a joint reset exactly at a limit is at it, not past)."""
     rows = []
+    limit_of = [(-np.inf, np.inf)] * len(robot.table)
     for j in robot.movable:
         joint = robot.joints[j]
         if j in robot.balls or joint is None:
@@ -57,10 +62,9 @@ def limit_rows(robot: Robot) -> None:
         lo, hi = (float(x) for x in joint.limit[0])
         if np.isfinite(lo) and np.isfinite(hi):
             rows.append((int(robot.dof[j]), joint, lo, hi))
+            limit_of[j] = (lo, hi)
     robot.limit_rows = rows
-    robot.limit_dofs = np.array([r[0] for r in rows], dtype=np.intp)
-    robot.limit_lo = np.array([r[2] for r in rows], dtype=np.float32)
-    robot.limit_hi = np.array([r[3] for r in rows], dtype=np.float32)
+    robot.limit_of = limit_of
 
 
 class LimitRows:
@@ -76,10 +80,15 @@ class LimitRows:
         (or does a moved limit wait to be put back)?"""
         if not robot.limit_rows or robot.static:
             return
-        q = robot.built.articulation.qpos[robot.limit_dofs]
-        past = bool(np.any((q < robot.limit_lo) | (q > robot.limit_hi))) or bool(robot.moved)
-        if past != robot.past_limit:
-            robot.past_limit = past
+        q = robot.built.articulation.qpos.tolist()  # plain floats: cheaper than numpy here
+        past = bool(robot.moved)
+        for d, _, lo, hi in robot.limit_rows:
+            x = q[d]
+            if x < lo or x > hi:
+                past = True
+                break
+        if past and not robot.past_limit:  # let go at the next step when nothing is past
+            robot.past_limit = True
             self._refresh_active()
 
     def _limit_rows(self, robot: Robot) -> None:
@@ -115,25 +124,48 @@ class LimitRows:
             self._refresh_active()
 
     def _limit_rows_after(self, robot: Robot) -> None:
-        """After the step: where PhysX's moved limit held a joint (it ends on the bound, not
-        further in), the row's speed ``vt`` (PhysX keeps 0.8 of a correction as speed, the
-        row asks for all of it); where the joint went further in on its own, as PhysX left it."""
+        """After the step: where PhysX's moved limit held a joint (it ends on the bound, or
+        short of it), the joint on the bound at the row's speed ``vt`` (PhysX keeps 0.8 of a
+        correction as speed, the row asks for all of it), the rest of a fixed-base chain moved
+        as those joints' impulses move it; where the joint went further in on its own, as
+        PhysX left it."""
         art = robot.built.articulation
         q = art.qpos
         v = art.qvel
-        write_q = write_v = False
+        fixes = []  # (dof, position change, speed change) of each joint the limit held
         for d, bound, vt, side, ulps in robot.held:
             x = float(q[d])
             if side * (x - bound) < -ulps:  # further in than the bound: the joint's own motion
                 continue
-            if x != bound:  # PhysX left it short of a bound it moved into the joint (0.8)
-                q[d] = bound
-                write_q = True
-            if float(v[d]) != vt:
-                v[d] = vt
-                write_v = True
-        robot.held = []
-        if write_q:
+            if x != bound or float(v[d]) != vt:
+                fixes.append((d, bound - x, vt - float(v[d])))
+        if not fixes:
+            robot.held = []
+            return
+        rows = [f[0] for f in fixes]
+        dx = np.array([f[1] for f in fixes])
+        du = np.array([f[2] for f in fixes])
+        if robot.fixed and len(q) > len(rows):
+            # the change through the chain, as impulses on those joints move it: with the
+            # inverse mass matrix W (PhysX's articulation at q, through SAPIEN's Pinocchio
+            # model), impulses l with W[K, K] l = change move every joint by W[:, K] l
+            if robot.pinocchio is None:
+                robot.pinocchio = art.create_pinocchio_model()
+            w = np.linalg.inv(robot.pinocchio.compute_generalized_mass_matrix(q))
+            wk = w[np.ix_(rows, rows)]
+            dq = w[:, rows] @ np.linalg.solve(wk, dx)
+            dv = w[:, rows] @ np.linalg.solve(wk, du)
+        else:  # a floating base: those joints alone
+            dq = np.zeros(len(q))
+            dv = np.zeros(len(q))
+            dq[rows] = dx
+            dv[rows] = du
+        q = (q + dq).astype(np.float32)
+        v = (v + dv).astype(np.float32)
+        for d, x, u in zip(rows, dx, du, strict=True):  # on the bound at the row's speed
+            q[d] = np.float32(float(art.qpos[d]) + x)
+            v[d] = np.float32(float(art.qvel[d]) + u)
+        if dx.any():  # a write of the positions makes PhysX derive the link poses afresh
             art.qpos = q
-        if write_q or write_v:
-            art.qvel = v
+        art.qvel = v
+        robot.held = []

@@ -187,7 +187,7 @@ class MotorCommands:
                 r.damper = self._damper(r)
             # the link damping alone: the step calls the damper, not _before_step
             r.damping_only = damped and not (
-                r.pending or r.damping is not None or r.balls or r.has_position
+                r.pending or r.damping is not None or r.balls or r.has_position or r.past_limit
             )
 
     def _damper(self, robot: Robot) -> Callable[[], None]:

@@ -77,13 +77,12 @@ class Robot:
     # link_state read these instead, so that the next step is the uninterrupted one
     restored_velocities: np.ndarray | None = None
     # the limited 1-DoF joints (limits.py): (dof, PhysX joint, lower, upper) as PhysX holds
-    # them, their dofs and limits as arrays; whether a joint is past its limit (the step
-    # stands in for PyBullet's limit row) and which rows' PhysX limits are moved meanwhile
+    # them, and per joint its limits; whether a joint is past its limit (the step stands in
+    # for PyBullet's limit row) and which rows' PhysX limits are moved meanwhile
     limit_rows: list[tuple[int, Any, float, float]] = field(default_factory=list)
-    limit_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
-    limit_lo: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32))
-    limit_hi: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32))
+    limit_of: list[tuple[float, float]] = field(default_factory=list)  # per joint (-inf, inf)
     past_limit: bool = False
+    pinocchio: Any = None  # SAPIEN's Pinocchio model of the articulation, made when needed
     moved: set[int] = field(default_factory=set)
     # this step's rows (dof, the moved bound, the row's speed, 1 upper or -1 lower, 2 float32
     # steps at the bound), for the fix after the step
