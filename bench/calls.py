@@ -834,13 +834,15 @@ def _physx_bound_rows(
         scene.step()
         after()
 
+    pose_floats = sapien.Pose.__getstate__
+
     def js_forces(_: object) -> object:
         return art.qpos[dofs], art.qvel[dofs], art.get_link_incoming_joint_forces()[forces_at]
 
     def link_f64(_: object) -> object:
-        pose = link.entity_pose
-        x, y, z = pose.p.tolist()
-        qw, qx, qy, qz = pose.q.tolist()
+        # the pose's 7 floats in one call (its pickling state; p.tolist() and q.tolist() give
+        # the same values through two arrays, 1.3 µs more)
+        x, y, z, qw, qx, qy, qz = pose_floats(link.entity_pose)
         frame = ((x, y, z), (qx, qy, qz, qw))
         lin, ang = link.linear_velocity.tolist(), link.angular_velocity.tolist()
         return transform_multiply(frame, local), frame, lin, ang

@@ -75,6 +75,9 @@ class Pair:
     b: int
     cross: dict[float, Divergence]
     verdict: Verdict | None = None
+    resync: Resync | None = None
+    """The one-step error from each other's states and each engine's floor
+    (:mod:`simbridge.compare.run.resync`); None with ``resync_every=0`` or when a job failed."""
 
 
 @dataclass
@@ -102,7 +105,8 @@ class Comparison:
     verdict: Verdict | None = None
     resync: Resync | None = None
     """The one-step error from each other's states and each engine's floor, between the first
-    pair's engines (:mod:`simbridge.compare.run.resync`); None with ``resync_every=0``."""
+    pair's engines (:mod:`simbridge.compare.run.resync`); None with ``resync_every=0``. Every
+    pair's is its :attr:`Pair.resync`."""
     ensemble_settings: EnsembleSettings | None = None
     """How the ensembles were run (None in a Comparison made by hand)."""
     pairs: list[Pair] = field(default_factory=list)
@@ -195,6 +199,7 @@ def compare(
     workers: int | None = None,
     controller: Any = None,
     resync_every: int | None = None,
+    resync_pairs: int | None = None,
     engine_settings: Mapping[str, Mapping[str, Any]] | None = None,
     cache: Cache | str | os.PathLike[str] | bool | None = None,
     fresh: bool = False,
@@ -236,7 +241,10 @@ def compare(
         resync_every: every this many steps set each engine's state into the other engine
             and into a second Sim of its own, and step once (:mod:`~simbridge.compare.resync`);
             default about 150 points per run (:func:`~simbridge.compare.resync.default_every`);
-            0: none.
+            0: none. Every pair of engines gets its own (:attr:`Pair.resync`).
+        resync_pairs: only the first this many pairs get a resync (in the order of
+            :attr:`Comparison.pairs`); default every pair (``simbridge report DIR`` passes 1 for
+            a study recorded when the first pair alone had one).
         engine_settings: engine settings per backend, ``{"mujoco": {"impratio": 10}}``
             (:mod:`simbridge.engine_settings`), on top of the scenario's ``[engines.*]``
             tables, key by key; every run of the study uses them (ensemble members included).
@@ -251,7 +259,8 @@ def compare(
 
     Raises:
         ScenarioError, SimbridgeError: a bad scenario or time step, a backend that fails.
-        InvalidArgumentError: a bad ensemble size, perturbation, seed or worker count.
+        InvalidArgumentError: a bad ensemble size, perturbation, seed, worker count or
+            ``resync_pairs``.
         EngineNotInStudyError: ``engine_settings`` for an engine not among ``backends``.
         CacheEntryMissingError: ``offline`` and a job is not in the cache.
     """
@@ -327,8 +336,20 @@ def compare(
     )
     if executor is None and scheduler is None and workers != 0 and not _main_importable():
         workers = runner.workers = 0  # a script read from stdin: a spawned one cannot import it
+    if not offline:  # a robot file or joint named wrong: FILE:LINE now, not after a run
+        from .scenario.robot_check import check_robots
+
+        check_robots(sc)
     labels = engine_labels(names, profiles)
-    plan = Plan(scaled, dts, todo, names, profiles, labels, quantity, runner, resync_every)
+    if resync_pairs is not None and (
+        isinstance(resync_pairs, bool) or not isinstance(resync_pairs, int) or resync_pairs < 1
+    ):
+        raise InvalidArgumentError(
+            "resync_pairs", f"expected a whole number of pairs >= 1, got {resync_pairs!r}"
+        )
+    plan = Plan(
+        scaled, dts, todo, names, profiles, labels, quantity, runner, resync_every, resync_pairs
+    )
     results, failed, counts = run_jobs(
         plan.jobs,
         cache=cache,
@@ -345,9 +366,6 @@ def compare(
         if result is None:
             raise SimbridgeError(f"the run of {plan.by_key[key].label} failed: {failed[key].cause}")
         runs[(slot, d)] = result.value
-    resynced = None
-    if resync_every:
-        resynced = resync_of(plan, results, failed, runs, scaled[dts[0]].steps, tolerance)
     ensembles = ensembles_of(plan, results, runs)
     own = {(k, dt): diff(runs[(k, dt)], runs[(k, dt / 2)]) for k in range(n) for dt in dts}
     rows = ensembles[0].rows
@@ -364,7 +382,11 @@ def compare(
             seed=runner.seed,
         )
         cross = {dt: diff(runs[(a, dt)], runs[(b, dt)]) for dt in dts}
-        pairs.append(Pair(a, b, cross, verdict))
+        resynced = None
+        if (a, b) in plan.resync_pairs:
+            steps = scaled[dts[0]].steps
+            resynced = resync_of(plan, results, failed, runs, steps, tolerance, (a, b))
+        pairs.append(Pair(a, b, cross, verdict, resynced))
     return Comparison(
         scenario=sc,
         backends=names,
@@ -377,7 +399,7 @@ def compare(
         wall_time=_time.perf_counter() - start,
         ensembles=ensembles,
         verdict=pairs[0].verdict,
-        resync=resynced,
+        resync=pairs[0].resync,
         ensemble_settings=EnsembleSettings(
             size=runner.size,
             perturb=runner.eps,

@@ -47,6 +47,9 @@ def test_physx_is_registered_and_says_how_to_install_it(monkeypatch):
     with pytest.raises(BackendNotInstalledError) as info:
         registry.load_backend("physx")
     assert "simbridge[physx]" in str(info.value)
+    # the line a report's "left out" note gives: from PyPI, and from a clone
+    both = "pip install 'simbridge[physx]' (from a clone: pip install -e '.[physx]')"
+    assert both in str(info.value)
     monkeypatch.delitem(registry._LOADED, "physx", raising=False)
 
 
@@ -349,6 +352,22 @@ def test_manifest_lists_what_physx_cannot_match():
 
 
 @needs_sapien
+def test_the_speed_clamp_and_motor_departures_say_what_the_backend_does():
+    from simbridge.backends.physx.motors import DRIVE_DAMPING
+
+    with simbridge.Sim("physx") as sim:
+        dep = sim.manifest()["departures"]
+        cap = sim.profile.max_joint_velocity
+    # the backend clamps joint speeds after each step (motors.py _clamp_speeds)
+    assert "after each step" in dep["speed clamp"]
+    assert f"{cap:g} rad/s" in dep["speed clamp"]
+    assert "joint max velocity (inside its solver);" not in dep["speed clamp"]
+    # the drive's damping as a value, not a constant's name
+    assert "DRIVE_DAMPING" not in dep["motors"]
+    assert f"damping {DRIVE_DAMPING:g} " in dep["motors"]
+
+
+@needs_sapien
 def test_friction_is_the_product_of_the_two_materials():
     """A box (friction 0.5, the profile's) sliding on plane.urdf (friction 1): PyBullet's product
     0.5 slows it by 0.5 g per second; PhysX's own rule, the average, would give 0.75 g."""
@@ -484,3 +503,121 @@ def test_restored_link_velocities_last_until_a_step_or_a_write():
         sim.reset_joint_state(arm, None, js.positions, js.velocities)
         recomputed = np.array([sim.link_state(arm, k)[6:8] for k in range(n)])
         assert float(np.abs(recomputed - kept).max()) > 1e-3
+
+
+@needs_sapien
+def test_a_repeated_velocity_command_takes_the_shortcut_bit_for_bit():
+    """A velocity command on the joints and with the forces of the last one, with no motor
+    changed since, only writes the targets (motors.py's shortcut). Two r2d2 drives through the
+    same commands, one taking the shortcut wherever it may and one never (the shortcut forgotten
+    before every command), give the same motor table and state, bit for bit, at every step:
+    through target changes, a force change, a joint released (force 0), one wheel under a
+    position command, a one-step torque, the same joints as a new list and a subset."""
+    from simbridge.backends.physx import inspect
+
+    wheels = np.array([2, 3, 6, 7])
+    schedule = []
+    for k in range(60):
+        targets = np.array([-1.0, -1.0, 1.0, 1.0]) * (10.0 + k)
+        if k < 10:
+            schedule.append(("v", wheels, targets, 50.0))
+        elif k < 20:
+            schedule.append(("v", wheels, -targets, 10.0))
+        elif k == 20:
+            schedule.append(("v", wheels, targets, np.array([10.0, 0.0, 10.0, 10.0])))
+        elif k < 30:
+            schedule.append(("v", wheels, targets, 10.0))
+        elif k == 30:
+            schedule.append(("p", np.array([3]), np.array([0.5]), 20.0))
+        elif k == 35:
+            schedule.append(("t", np.array([6]), np.array([3.0]), None))
+        elif k < 45:
+            schedule.append(("v", wheels, targets, 10.0))
+        elif k < 50:
+            schedule.append(("v", [2, 3, 6, 7], targets, 10.0))
+        else:
+            schedule.append(("v", wheels[:2], targets[:2], 10.0))
+    sims = [simbridge.Sim("physx"), simbridge.Sim("physx")]
+    try:
+        bodies = []
+        for sim in sims:
+            sim.load_urdf("plane.urdf")
+            bodies.append(sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5)))
+            sim.step(50)
+        shortcuts = 0
+        for kind, joints, values, force in schedule:
+            for i, (sim, body) in enumerate(zip(sims, bodies, strict=True)):
+                robot = inspect.robot(sim, body)
+                if i == 1:
+                    robot.velocity_plan = None  # the full path every time
+                elif kind == "v" and robot.velocity_plan is not None:
+                    shortcuts += robot.velocity_plan[0] is sim._joints(body, joints, True)
+                if kind == "v":
+                    sim.set_joint_velocity(body, joints, values, max_force=force)
+                elif kind == "p":
+                    sim.set_joint_position(body, joints, values, max_force=force)
+                else:
+                    sim.set_joint_torque(body, joints, values)
+                sim.step()
+            a, b = (sim.joint_states(body) for sim, body in zip(sims, bodies, strict=True))
+            assert np.array_equal(a.positions, b.positions)
+            assert np.array_equal(a.velocities, b.velocities)
+            ca, cb = (
+                inspect.backend_of(sim).joint_commands(body)
+                for sim, body in zip(sims, bodies, strict=True)
+            )
+            for x, y in zip(ca, cb, strict=True):
+                assert np.array_equal(x, y)
+        assert shortcuts > 30  # a shortcut ready for the joints: measured 54 of 58 commands
+        last = inspect.backend_of(sims[0]).joint_commands(bodies[0])
+        assert list(last.target[[2, 3]]) == list(schedule[-1][2])
+    finally:
+        for sim in sims:
+            sim.close()
+
+
+def test_reads_are_sapiens_arrays_and_pybullets_frame_maths_bit_for_bit():
+    """The reads' hot path (one pose call per link, the centre-of-mass frame in plain floats,
+    the joints gathered by flat index) gives exactly what SAPIEN's pose and velocity arrays
+    and simbridge.transforms give: r2d2 tumbling in the air, the KUKA swinging, every link."""
+    from simbridge.backends.physx.inspect import robot
+    from simbridge.transforms import transform_multiply
+
+    with simbridge.Sim("physx") as sim:
+        r2d2 = sim.load_urdf("r2d2.urdf", base_position=(0, 0, 2))
+        arm = sim.load_urdf("kuka_iiwa/model.urdf", base_position=(3, 0, 0), fixed_base=True)
+        sim.reset_base_state(r2d2, None, (0.1, 0.7, 0.1, 0.7), (0.3, -0.2, 1.0), (1.0, 2.0, 3.0))
+        sim.set_joint_velocity(arm, None, 0.0, max_force=0.0)
+        sim.reset_joint_state(arm, None, [0.4] * 7, [0.5] * 7)
+        sim.step(7)
+        for body in (r2d2, arm):
+            r = robot(sim, body)
+            for k in range(-1, sim.num_joints(body)):
+                link = r.built.links[k + 1]
+                pose = link.entity_pose
+                qw, qx, qy, qz = pose.q.tolist()
+                frame = (tuple(pose.p.tolist()), (qx, qy, qz, qw))
+                ine = r.built.inertials[k + 1]
+                com = transform_multiply(frame, (ine.position, ine.orientation))
+                lin = tuple(link.linear_velocity.tolist())
+                ang = tuple(link.angular_velocity.tolist())
+                # it moves (but the welded base): the test compares something
+                assert lin != (0.0, 0.0, 0.0) or (body, k) == (arm, -1)
+                want = (*com, ine.position, ine.orientation, *frame, lin, ang)
+                assert tuple(sim.link_state(body, k)) == want
+                if k == -1:
+                    assert tuple(sim.base_state(body)) == (*com, lin, ang)
+            art = r.built.articulation
+            movable = [j for j in range(sim.num_joints(body)) if r.dof[j] >= 0]
+            dofs = r.dof[movable]
+            forces = art.get_link_incoming_joint_forces()
+            axis = [0 if r.model.joints[j].type == "prismatic" else 3 for j in movable]
+            rows = [r.built.links[j + 1].index for j in movable]
+            for joints in (movable, movable[::-1]):
+                order = [movable.index(j) for j in joints]
+                js = sim.joint_states(body, joints)
+                assert js.positions.dtype == js.applied_torques.dtype == np.float64
+                np.testing.assert_array_equal(js.positions, art.qpos[dofs[order]])
+                np.testing.assert_array_equal(js.velocities, art.qvel[dofs[order]])
+                torques = [forces[rows[i], axis[i]] for i in order]
+                np.testing.assert_array_equal(js.applied_torques, torques)

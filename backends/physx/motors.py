@@ -16,6 +16,8 @@ with ``max_force=0``).
 
 from __future__ import annotations
 
+import threading
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -23,7 +25,7 @@ import numpy as np
 from simbridge.profiles import Profile
 from simbridge.types import JointCommands, JointType, MotorMode
 
-from ..locking import exclusive
+from ..locking import exclusive, wait_for_lock
 from .world import Robot
 
 __all__ = ["MotorCommands", "DRIVE_DAMPING"]
@@ -82,9 +84,10 @@ class MotorCommands:
         profile: Profile
         _robots: dict[int, Robot]
         _active: list[Robot]
-        _clamped: list[Robot]
+        _clamped: list[Any]
         _generation: int
         _dt: float
+        _stepping: threading.RLock
 
         def _check_idle(self) -> None: ...
 
@@ -95,6 +98,8 @@ class MotorCommands:
         ) -> bool: ...
 
         def _ball_after_step(self, robot: Robot) -> None: ...
+
+        def _limit_rows(self, robot: Robot) -> None: ...
 
     # ---------------------------------------------------------------- set-up
 
@@ -159,7 +164,7 @@ class MotorCommands:
             r.has_position = bool((r.motors["mode"] == _POSITION).any())
         if getattr(self, "_clamped_for", None) != self._generation:  # robots loaded or removed
             self._clamped = (
-                [r for r in self._robots.values() if not r.static and r.ndof > 0]
+                [r.built.articulation for r in self._robots.values() if not r.static and r.ndof > 0]
                 if self.profile.max_joint_velocity is not None
                 else []
             )
@@ -168,40 +173,61 @@ class MotorCommands:
             r
             for r in self._robots.values()
             if not r.static
-            and (damped or r.pending or r.damping is not None or bool(r.balls) or r.has_position)
+            and (
+                damped
+                or r.pending
+                or r.damping is not None
+                or bool(r.balls)
+                or r.has_position
+                or r.past_limit
+            )
         ]
+        for r in self._active:
+            if damped and r.damper is None:
+                r.damper = self._damper(r)
+            # the link damping alone: the step calls the damper, not _before_step
+            r.damping_only = damped and not (
+                r.pending or r.damping is not None or r.balls or r.has_position or r.past_limit
+            )
+
+    def _damper(self, robot: Robot) -> Callable[[], None]:
+        """PyBullet's link damping on ``robot`` for the coming step, as one call made once per
+        robot: f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal axes), from the velocities
+        at the start of the step; as accelerations the inertia drops out of both. Two reads and
+        one write per link (SAPIEN's CPU articulation has no batched link velocities); the
+        bound methods, the float32 factors -k_lin, -k_ang per row and the (2n, 3) buffer the
+        velocities are read into (``add_force_torque`` takes views of its rows) are made here."""
+        links = robot.moving_links
+        getters = []
+        for link in links:  # interleaved: v0, w0, v1, w1, ...
+            getters += [link.get_linear_velocity, link.get_angular_velocity]
+        p = self.profile
+        k = np.tile(np.array([-p.linear_damping, -p.angular_damping], dtype=np.float32), len(links))
+        buf = np.empty((2 * len(links), 3), dtype=np.float32)
+        adds = [
+            (link.add_force_torque, buf[2 * i], buf[2 * i + 1])  # views of buf's rows
+            for i, link in enumerate(links)
+        ]
+        sqrt = np.sqrt
+
+        def damp() -> None:
+            nonlocal buf  # written in place: the views in ``adds`` stay on it
+            restored = robot.restored_velocities
+            if restored is None:
+                buf[:] = [f() for f in getters]  # (2n, 3) float32
+            else:  # the velocities the step before the snapshot left (the backend's restore)
+                buf[:] = restored[robot.moving_rows].reshape(-1, 3)
+            buf *= (k * (1.0 + sqrt((buf * buf).sum(axis=1))))[:, None]
+            for add, a_lin, a_ang in adds:
+                add(a_lin, a_ang, "acceleration")
+
+        return damp
 
     def _before_step(self, robot: Robot) -> None:
         m = robot.motors
         art = robot.built.articulation
-        k_lin, k_ang = self.profile.linear_damping, self.profile.angular_damping
-        if k_lin or k_ang:
-            # PyBullet's link damping f = -m k (1 + |v|) v, t = -I k (1 + |w|) w (principal
-            # axes), from the velocities at the start of the step: as accelerations the inertia
-            # drops out of both
-            # (two reads and one write per link and step: SAPIEN's CPU articulation has no
-            # batched link velocities; the bound methods are looked up once per robot)
-            calls = robot.damping_calls
-            if calls is None:
-                links = robot.moving_links
-                getters = []
-                for link in links:  # interleaved: v0, w0, v1, w1, ...
-                    getters += [link.get_linear_velocity, link.get_angular_velocity]
-                k = np.tile(np.array([-k_lin, -k_ang], dtype=np.float32), len(links))
-                buf = np.empty((2 * len(links), 3), dtype=np.float32)
-                adds = [
-                    (link.add_force_torque, buf[2 * i], buf[2 * i + 1])  # views of buf's rows
-                    for i, link in enumerate(links)
-                ]
-                calls = robot.damping_calls = (getters, k, buf, adds)
-            getters, k, buf, adds = calls
-            if robot.restored_velocities is None:
-                buf[:] = [f() for f in getters]  # (2n, 3) float32
-            else:  # the velocities the step before the snapshot left (the backend's restore)
-                buf[:] = robot.restored_velocities[robot.moving_rows].reshape(-1, 3)
-            buf *= (k * (1.0 + np.sqrt((buf * buf).sum(axis=1))))[:, None]
-            for add, a_lin, a_ang in adds:
-                add(a_lin, a_ang, "acceleration")
+        if robot.damper is not None:
+            robot.damper()
         if robot.has_position:
             position = np.flatnonzero((m["mode"] == _POSITION) & ~m["ball"])
             q = art.qpos
@@ -230,18 +256,20 @@ class MotorCommands:
         if qf is not None:
             art.qf = qf.astype(np.float32)
             robot.qf_set = True
+        if robot.past_limit:  # after the motors and damping: they read the step's start
+            self._limit_rows(robot)
 
-    def _clamp_speeds(self, robot: Robot, cap: float) -> None:
-        """PyBullet's clamp of every joint speed after the step. PhysX's joint max velocity
-        bounds the drives inside its solver, not what a joint force (a torque) adds: a wheel
-        at 40 rad/s kicked by a torque worth 150 rad/s read 189.7 after the step, unclamped."""
-        art = robot.built.articulation
-        v = art.qvel
-        speeds = v.tolist()
+    @staticmethod
+    def _clamp_speeds(art: Any, v: np.ndarray, speeds: list[float], cap: float) -> None:
+        """PyBullet's clamp of every joint speed after the step, where the step found one past
+        ``cap`` in ``speeds`` (the joint velocities ``v`` as floats; the step reads them and
+        compares their maximum, the common part, inline). PhysX's joint max velocity bounds
+        the drives inside its solver, not what a joint force (a torque) adds: a wheel at 40
+        rad/s kicked by a torque worth 150 rad/s read 189.7 after the step, unclamped."""
         # in plain floats (on a few joints a fraction of numpy's reduction and clip): without a
         # NaN the list's maximum is numpy's exactly; with one, numpy's is NaN and never clamps,
         # so numpy has the last word whenever the plain test would clamp
-        if max(map(abs, speeds)) > cap and float(np.abs(v).max()) > cap:
+        if float(np.abs(v).max()) > cap:
             hi = float(np.float32(cap))  # np.clip's bound on float32 values: the cap in float32
             lo = -hi
             clipped = [lo if x < lo else hi if x > hi else x for x in speeds]
@@ -271,25 +299,59 @@ class MotorCommands:
         robot.slot_cache[key] = (joints, slots)
         return slots
 
-    @exclusive
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
-        robot = self._robots[body]
+        # the lock inline (locking.exclusive's body): this is a control loop's hot path
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            robot = self._robots[body]
+            plan = robot.velocity_plan
+            if (
+                plan is not None
+                and plan[0] is joints
+                and robot.velocity_slots is plan[1]
+                and plan[2] == max_force
+            ):
+                # the last command's joints and forces, no motor changed since: the drives'
+                # force limits and the table's forces stand, only the targets change
+                table = robot.motors["target"]
+                for s, joint, t in zip(plan[3], plan[4], target, strict=True):
+                    table[s] = t
+                    joint.set_drive_velocity_target(t)
+                return
+            self._velocity(robot, joints, target, max_force)
+        finally:
+            lock.release()
+
+    def _velocity(
+        self, robot: Robot, joints: np.ndarray, target: list[float], max_force: list[float]
+    ) -> None:
+        """A velocity command in full: the motor table's modes and gains, the drives, and the
+        shortcut for the next command on the same joints with the same forces."""
         m = robot.motors
         slots = self._slots(robot, joints)
-        if robot.velocity_slots is slots:  # these slots' last command, nothing else since
+        if robot.velocity_slots is not slots:
+            # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
+            was_position = robot.has_position and bool(m["mode"][slots].any())
+            m["mode"][slots] = 0
+            m["kp"][slots] = 0.0
+            m["kd"][slots] = 1.0
+            robot.velocity_slots = slots
             _set_drives(robot, slots, max_force, target)
-            return
-        # POSITION is 2, VELOCITY 0: only a robot with a position motor can lose one here
-        was_position = robot.has_position and bool(m["mode"][slots].any())
-        m["mode"][slots] = 0
-        m["kp"][slots] = 0.0
-        m["kd"][slots] = 1.0
-        robot.velocity_slots = slots
-        _set_drives(robot, slots, max_force, target)
-        if was_position:  # a position motor replaced: the step may have less to do
-            self._refresh_active()
+            if was_position:  # a position motor replaced: the step may have less to do
+                self._refresh_active()
+        else:  # these slots' last command, nothing else since
+            _set_drives(robot, slots, max_force, target)
+        robot.velocity_plan = None
+        slot_list, pjoints, _, ball = robot.slot_calls(slots, m["effort"], m["ball"])
+        drive = robot.drive_force
+        if len(set(slot_list)) == len(slot_list) and all(
+            not ball[i] and drive[s] > 0.0 for i, s in enumerate(slot_list)
+        ):
+            robot.velocity_plan = (joints, slots, list(max_force), slot_list, pjoints)
 
     @exclusive
     def set_joint_position(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,12 +47,17 @@ class Robot:
     # the slots array of the last velocity command while nothing else has changed a motor's
     # mode or gains since: those slots are velocity motors with kp 0 and kd 1 already
     velocity_slots: np.ndarray | None = None
+    # a velocity command's shortcut (motors.py set_joint_velocity), valid while velocity_slots
+    # is its slots: (joints array, slots array, max_force as given, slots as a list, their
+    # PhysX joints). Made only where every slot is a distinct 1-DoF joint driven (force > 0)
+    velocity_plan: tuple[np.ndarray, np.ndarray, list[float], list[int], list[Any]] | None = None
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
     moving_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # theirs
     ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
     dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
     balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
     read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
+    base_inverse: Any = None  # the base's link frame in its centre-of-mass frame, once asked
     joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
     slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     call_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
@@ -60,16 +66,27 @@ class Robot:
     target_hi: np.ndarray = field(default_factory=lambda: np.zeros(0))
     # spherical joints with PyBullet's swing/twist <limit>, which the stand-in does not enforce
     unlimited_spherical: list[str] = field(default_factory=list)
-    # link damping, made once: the moving links' bound velocity getters (linear, angular, per
-    # link), the float32 factors -k_lin, -k_ang per row, the (2n, 3) buffer they are read into,
-    # and per link its bound add_force_torque with the views of its two rows
-    damping_calls: tuple[list[Any], np.ndarray, np.ndarray, list[Any]] | None = None
+    # PyBullet's link damping for the coming step, one call made once (motors.py _damper;
+    # None where the profile has none), and whether the step has nothing else to do before it
+    damper: Callable[[], None] | None = None
+    damping_only: bool = False
     # after an exact restore, until the next step or write: every link's (linear, angular)
     # velocity as PhysX reported it when the snapshot was taken, shape (links, 2, 3) float32.
     # PhysX recomputes link velocities from the joint velocities at unpack, and those differ
     # from the ones its step left (backend.DEPARTURES["snapshot"]); the link damping law and
     # link_state read these instead, so that the next step is the uninterrupted one
     restored_velocities: np.ndarray | None = None
+    # the limited 1-DoF joints (limits.py): (dof, PhysX joint, lower, upper) as PhysX holds
+    # them, and per joint its limits; whether a joint is past its limit (the step stands in
+    # for PyBullet's limit row) and which rows' PhysX limits are moved meanwhile
+    limit_rows: list[tuple[int, Any, float, float]] = field(default_factory=list)
+    limit_of: list[tuple[float, float]] = field(default_factory=list)  # per joint (-inf, inf)
+    past_limit: bool = False
+    pinocchio: Any = None  # SAPIEN's Pinocchio model of the articulation, made when needed
+    moved: set[int] = field(default_factory=set)
+    # this step's rows (dof, the moved bound, the row's speed, 1 upper or -1 lower, 2 float32
+    # steps at the bound), for the fix after the step
+    held: list[tuple[int, float, float, float, float]] = field(default_factory=list)
 
     @property
     def static(self) -> bool:

@@ -12,9 +12,9 @@ from typing import Any
 from ..pipeline import Comparison
 from .brief import brief
 from .derived import memo_files
-from .fmt import fmt_distance, fmt_time, fmt_value
+from .fmt import file_stem, fmt_distance, fmt_time, fmt_value
 from .markdown import headline, markdown
-from .resync import plot_resync
+from .resync import plot_resyncs
 from .study import write_study
 from .summary_json import summary
 
@@ -52,7 +52,7 @@ def report(
             names = []
             for slot, label in enumerate(comparison.labels):
                 tr = comparison.runs[(slot, comparison.timestep)]
-                stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in label)
+                stem = file_stem(label)  # pybullet (2): pybullet-2
                 tr.save(folder / f"{stem}.npz")
                 tr.save_csv(folder / f"{stem}.csv")
                 names += [f"trajectories/{stem}.npz", f"trajectories/{stem}.csv"]
@@ -99,12 +99,12 @@ def _plots(comparison: Comparison, out: Path) -> tuple[dict[str, str], list[str]
     from .plots import all_plots
 
     images = all_plots(comparison, out)
-    labels = list(comparison.labels)
-    pair = f"{labels[0]} and {labels[1]}" if len(labels) > 2 else None  # resync's pair alone
-    if comparison.resync is not None and plot_resync(
-        comparison.resync, out / "resync.png", pair=pair
-    ):
-        images["resync"] = out / "resync.png"
+    many = len(comparison.labels) > 2  # each resync figure names its pair
+    resyncs = [p.resync for p in comparison.pairs if p.resync is not None]
+    if not resyncs and comparison.resync is not None:  # a Comparison made without pairs
+        resyncs = [comparison.resync]
+    named = [(r, " and ".join(r.labels) if many else None) for r in resyncs]
+    images.update(plot_resyncs(named, out))  # resync.png, the first pair's; resync_<a>_<b>.png
     names = {k: Path(p).relative_to(out).as_posix() for k, p in images.items()}
     return names, list(names.values())
 

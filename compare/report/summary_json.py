@@ -32,6 +32,7 @@ from ..pipeline import Comparison, Pair
 from ..run.ensemble import SPREAD_PERCENTILE
 from ..run.events import EngineEvents, Event
 from ..run.outcomes import OutcomeRecord
+from ..run.quantities import FEATURE_SOURCES
 from ..run.resync import BORN_FACTOR, PARTS, Direction, Peak, PhaseErrors, Resync
 from ..scenario import Scenario, format_timestep
 from .departures import applicable
@@ -103,7 +104,7 @@ def summary(c: Comparison) -> dict[str, Any]:
         "sweep": sweep,
         "verdict": first["verdict"],
         "ensemble": _ensemble_summary(c),
-        "resync": None if c.resync is None else resync_dict(c.resync),
+        "resync": _resync_or_none(c.resync),
         "outcomes": _outcomes_summary(c),
         "events": {e.label: engine_events_dict(e) for e in events},
         "parting": first["parting"],
@@ -130,12 +131,12 @@ def _without_settings(manifest: dict[str, Any]) -> dict[str, Any]:
 def _pairs_of(c: Comparison) -> list[Pair]:
     """Every pair of ``c`` (a Comparison made by hand without ``pairs``: its ``cross`` and
     ``verdict``, engines 0 and 1)."""
-    return c.pairs or [Pair(0, 1, c.cross, c.verdict)]
+    return c.pairs or [Pair(0, 1, c.cross, c.verdict, c.resync)]
 
 
 def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[str, Any]:
     """``pairs[k]``: engines ``p.a`` and ``p.b``, their headline, cross diff, verdict, where the
-    gap is born and which part parts first."""
+    gap is born, which part parts first and, with more than two engines, their resync."""
     q = c.headline_quantity
     dt = c.timestep
     cross = p.cross[dt]
@@ -190,7 +191,13 @@ def _pair_summary(c: Comparison, p: Pair, events: list[EngineEvents]) -> dict[st
             )
         ),
         "parts": [part_dict(part) for part in rank_parts(cross)],
+        # more than two engines: each pair's one-step error (two: the top-level ``resync``)
+        **({"resync": _resync_or_none(p.resync)} if len(c.labels) > 2 else {}),
     }
+
+
+def _resync_or_none(r: Resync | None) -> dict[str, Any] | None:
+    return None if r is None else resync_dict(r)
 
 
 def _outcomes_summary(c: Comparison) -> dict[str, Any] | None:
@@ -470,7 +477,7 @@ def engine_events_dict(e: EngineEvents, limit: int = 500) -> dict[str, Any]:
 
 def resync_dict(r: Resync) -> dict[str, Any]:
     """``summary.json``'s ``resync`` (docs/compare.md describes every field)."""
-    dirs = [_direction(d) for d in r.directions]
+    dirs = [_direction(d, r.quantity) for d in r.directions]
     floors = {d["source"]: d["floor_max"]["value"] for d in dirs}
     largest = max(dirs, key=lambda d: -1.0 if d["max"]["value"] is None else d["max"]["value"])
     born = r.born()
@@ -495,9 +502,19 @@ def resync_dict(r: Resync) -> dict[str, Any]:
     }
 
 
-def _direction(d: Direction) -> dict[str, Any]:
+def _direction(d: Direction, quantity: str = "") -> dict[str, Any]:
     def med(v: Any) -> float | None:
         return float(np.nanmedian(v)) if np.isfinite(v).any() else None
+
+    rounding = None
+    if d.rounding is not None:  # a target keeping a narrower type: the state set, rounded
+        head = d.rounding.get(FEATURE_SOURCES[quantity]) if quantity else None
+        rounding = {
+            "state_dtype": d.target_dtype,
+            "max": None if head is None else d.peak(head).value,
+            "median": None if head is None else med(head),
+            "parts": {k: d.peak(d.rounding[k]).value for k in PARTS},
+        }
 
     return {
         "source": d.source,
@@ -517,6 +534,7 @@ def _direction(d: Direction) -> dict[str, Any]:
             for k in PARTS
         },
         "phases": [_phase_errors(p) for p in d.by_phase()],
+        **({"rounding": rounding} if rounding is not None else {}),  # a float32 target's
         "worst": [
             {
                 "time": w.time,

@@ -13,9 +13,14 @@ in force and pending torques) and its portable part is set
   solver warm start).
 
 The same is done from B's run (B -> A beside B -> B). Nothing accumulates: every comparison
-starts from the source engine's own state. Errors are measured on the followed robot (the
-scenario's subject): one distance in the scenario's headline quantity
-(:data:`~simbridge.compare.diff.QUANTITIES`) and each of :data:`PARTS`.
+starts from the source engine's own state. An engine that keeps its state in float32 (PhysX,
+``Backend.state_dtype``) holds a state set into it rounded to float32: its step starts from the
+rounded state, and its one-step error holds that rounding, measured at each point
+(:attr:`Direction.rounding`: the state set against itself in the target's type).
+
+Errors are measured on the followed robot (the scenario's subject): one distance in the
+scenario's headline quantity (:data:`~simbridge.compare.diff.QUANTITIES`) and each of
+:data:`PARTS`.
 
 Both target Sims step once per resync point and keep what their engine keeps between steps
 (PyBullet's contact caches from the previous resync point): a cross-engine step and the floor
@@ -30,12 +35,13 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 import simbridge
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
+from simbridge.registry import state_dtype
 from simbridge.types import JointType
 
 from ..scenario import Scenario, load_scenario
@@ -171,6 +177,13 @@ class Direction:
     failed: int = 0
     """Resync points at which a target Sim refused the state or failed its step."""
     worst: list[WorstPoint] = field(default_factory=list)
+    target_dtype: str = "float64"
+    """The type ``target`` keeps its state in (:func:`simbridge.registry.state_dtype`)."""
+    rounding: dict[str, np.ndarray] | None = None
+    """Where ``target`` keeps a narrower type than float64 (PhysX: float32): per :data:`PARTS`
+    key, (P,), what rounding the state set into it to that type changes, the subject's base
+    (its centre of mass) and joints as the state carries them; None where nothing is rounded
+    (or in a result made before it was measured)."""
 
     def phase(self, k: int) -> str:
         """The phase of resync point ``k``'s step (the one whose commands were in force)."""
@@ -369,12 +382,18 @@ def _direction(
     rows: list[int] = []
     got: list[list[dict[str, np.ndarray] | None]] = [[], []]
     failed = [0]
+    dtype = state_dtype(target[0])
+    narrow = np.dtype(dtype) != np.float64
+    rounded: list[dict[str, float]] = []
+    subject = worlds[1].body  # the source's subject: loaded in the same order as in its run
 
     def hook(sim: simbridge.Sim, row: int) -> None:
         if row % every:
             return
         state = sim.get_state(exact=False)  # the portable state: nothing engine-specific
         rows.append(row)
+        if narrow:
+            rounded.append(_rounding(state, subject, dtype))
         bad = False
         for i in (0, 1):
             try:
@@ -414,8 +433,44 @@ def _direction(
         floor_parts=parts[1],
         phases=list(tr.phases),
         failed=failed[0],
+        target_dtype=dtype,
+        rounding=(
+            {k: np.array([x[k] for x in rounded], dtype=np.float64) for k in PARTS}
+            if narrow
+            else None
+        ),
     )
     return d, tr
+
+
+def _rounding(state: simbridge.WorldState, subject: int, dtype: str) -> dict[str, float]:
+    """Per :data:`PARTS` key, what rounding ``subject``'s part of ``state`` to ``dtype``
+    changes: as :func:`_errors` measures a part (the base position is the centre of mass's,
+    as the state carries it)."""
+    body = next(b for b in state.bodies if b.body == subject)
+    kind = np.dtype(dtype).type
+
+    def pair(v: Any) -> tuple[np.ndarray, np.ndarray]:
+        a = np.asarray(v, dtype=np.float64)
+        return a, a.astype(kind).astype(np.float64)
+
+    def norm(v: Any) -> float:
+        a, b = pair(v)
+        return float(np.linalg.norm(a - b))
+
+    def largest(v: Any) -> float:
+        a, b = pair(v)
+        return float(np.abs(a - b).max(initial=0.0))
+
+    q, q32 = pair(body.base_orientation)
+    return {
+        "base_position": norm(body.base_position),
+        "base_orientation": float(rotation_angle(q, q32)),
+        "base_linear_velocity": norm(body.base_linear_velocity),
+        "base_angular_velocity": norm(body.base_angular_velocity),
+        "joint_positions": largest(body.joint_positions),
+        "joint_velocities": largest(body.joint_velocities),
+    }
 
 
 def _worst(d: Direction, tr: Trajectory, n: int = WORST) -> list[WorstPoint]:

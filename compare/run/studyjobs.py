@@ -75,8 +75,11 @@ class JobCounts:
 class Plan:
     """Every job of a comparison (each once: two runs with the same inputs are one job).
 
-    ``nominal[(slot, dt)]``, ``members[(slot, k)]`` and ``resync`` (A's states, B's) hold the
-    keys of the jobs whose results fill :attr:`Comparison.runs`, the ensembles and the resync.
+    ``nominal[(slot, dt)]``, ``members[(slot, k)]`` and ``resync_pairs[(a, b)]`` (a's states
+    into b, b's into a) hold the keys of the jobs whose results fill :attr:`Comparison.runs`,
+    the ensembles and each pair's resync; ``resync`` is the first pair's. Every pair of engines
+    gets its resync (the first ``resync_pairs`` pairs where given: a study recorded when only
+    the first pair had one), the first pair's jobs first, as with two engines.
     """
 
     def __init__(
@@ -90,6 +93,7 @@ class Plan:
         quantity: str,
         runner: EnsembleRunner,
         every: int,
+        resync_pairs: int | None = None,
     ):
         self.dts = list(dts)
         self.names, self.profiles, self.labels = list(names), list(profiles), list(labels)
@@ -107,20 +111,25 @@ class Plan:
             kind = "nominal" if d in self.dts else "half-step"
             job = Job.of(kind, scaled[d], names[slot], profiles[slot], hashes[d])
             self.nominal[(slot, d)] = self._add(job)
+        self.resync_pairs: dict[tuple[int, int], list[str]] = {}
         if every:
-            for i in (0, 1):
-                job = Job.of(
-                    "resync",
-                    head,
-                    names[i],
-                    profiles[i],
-                    files,
-                    target=(names[1 - i], profiles[1 - i]),
-                    labels=(labels[i], labels[1 - i]),
-                    every=every,
-                    quantity=quantity,
-                )
-                self.resync.append(self._add(job))
+            every_pair = [(a, b) for a in range(len(names)) for b in range(a + 1, len(names))]
+            for a, b in every_pair if resync_pairs is None else every_pair[:resync_pairs]:
+                keys = self.resync_pairs[(a, b)] = []
+                for i, j in ((a, b), (b, a)):
+                    job = Job.of(
+                        "resync",
+                        head,
+                        names[i],
+                        profiles[i],
+                        files,
+                        target=(names[j], profiles[j]),
+                        labels=(labels[i], labels[j]),
+                        every=every,
+                        quantity=quantity,
+                    )
+                    keys.append(self._add(job))
+            self.resync = self.resync_pairs.get((0, 1), [])
         for slot, k in runner.jobs:
             dpos, drot = runner.engine_offsets[slot]
             job = Job.of(
@@ -330,32 +339,39 @@ def resync_of(
     runs: dict[tuple[int, float], Trajectory],
     steps: int,
     tolerance: float | None,
+    pair: tuple[int, int] = (0, 1),
 ) -> Resync | None:
-    """The :class:`Resync` of the first two engines from its two jobs (None, with a warning,
-    when one failed)."""
+    """The :class:`Resync` of the engines of ``pair`` (slots, the first two by default) from
+    its two jobs (None, with a warning, when one failed or the plan has none for it)."""
+    a, b = pair
     directions, scales, wall = [], [1.0], 0.0
-    for key in plan.resync:
+    keys = plan.resync_pairs.get(pair, [])
+    for key in keys:
         r = results.get(key)
         if r is None:
             log.warning(
-                "%s failed (%s): the report has no one-step resync",
+                "%s failed (%s): the report has no one-step resync for %s and %s",
                 plan.by_key[key].label,
                 failed[key].cause if key in failed else "no result",
+                plan.labels[a],
+                plan.labels[b],
             )
             return None
         d, scale = r.value
         directions.append(d)
         scales.append(scale)
         wall += r.wall_time
+    if not directions:
+        return None
     q = plan.quantity
     return Resync(
         every=plan.every,
         quantity=q,
-        labels=(plan.labels[0], plan.labels[1]),
+        labels=(plan.labels[a], plan.labels[b]),
         directions=directions,
         precision_floor=FLOOR_RELATIVE * max(scales),
         significant=(tolerance or QUANTITIES[q].thresholds[0]) / max(1, steps),
-        trajectories=[runs[(0, plan.dts[0])], runs[(1, plan.dts[0])]],
+        trajectories=[runs[(a, plan.dts[0])], runs[(b, plan.dts[0])]],
         wall_time=wall,
     )
 

@@ -11,13 +11,14 @@ import re
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from simbridge.compare import compare, report
 from simbridge.compare.analysis.diff import QUANTITIES
 from simbridge.compare.report import brief, plots
 from simbridge.compare.report.events import parting_words
-from simbridge.compare.report.fmt import fmt_threshold, fmt_time, fmt_value
+from simbridge.compare.report.fmt import fmt_apart, fmt_threshold, fmt_time, fmt_value
 from simbridge.compare.report.pair_sections import MAX_PART_ROWS
 from simbridge.compare.report.parts import parts_words
 from simbridge.compare.report.verdict import interval_cell, pair_words, verdict_word
@@ -45,14 +46,14 @@ def written(three, tmp_path_factory):
 
 
 def _judged(p: dict) -> str:
-    """The judged gap of a pair as the writers print it: in the report's unit, or to 4
-    significant digits where its interval is too narrow for the report's rounding."""
+    """The judged gap of a pair as the writers print it: in the report's unit, with more digits
+    where its interval is too narrow for the report's rounding."""
     v = p["verdict"]
     g = v["gap"]
     shown = fmt_value(g["value"], v["unit"])
     if g["low"] is not None and g["low"] != g["high"]:
         if len({fmt_value(g[k], v["unit"]) for k in ("low", "value", "high")}) < 3:
-            return f"{g['value']:.4g} {v['unit']}"
+            return fmt_apart([g["value"], g["low"], g["high"]], v["unit"])[0]
     return shown
 
 
@@ -234,10 +235,35 @@ def test_each_pair_says_what_decides_its_verdict(written):
             assert ("the smallest this test can give with 3 and 3 runs" in b) == floor
 
 
-def test_resync_names_its_pair(written):
+def test_resync_judges_every_pair(three, written):
     text, s = written
-    assert "\n## One step from the same state (pybullet and mujoco)\n" in text
-    assert "\n## One step from the same state\n" not in text
+    section = _section(text, "One step from the same state")
+    first = s["pairs"][0]["resync"]
+    assert first == s["resync"]  # the top-level key: the first pair's, as with two engines
+    for k, p in enumerate(s["pairs"]):
+        a, b = p["labels"]
+        r = p["resync"]
+        assert [(d["source"], d["target"]) for d in r["directions"]] == [(a, b), (b, a)]
+        assert all(d["points"] > 0 for d in r["directions"])
+        assert f"\n### {a} and {b}\n" in section
+        assert f"One step from the same state, {a} and {b} differ by up to " in section
+        figure = "resync.png" if k == 0 else f"resync_{a}_{b}.png"
+        assert f"![resync]({figure})" in section
+        for d in r["directions"]:
+            rounding = d.get("rounding")
+            assert (rounding is not None) == (d["target"] == "physx")  # PhysX keeps float32
+            if rounding is None:
+                continue
+            assert rounding["state_dtype"] == "float32"
+            # at most half a float32 spacing per coordinate, at the source base's largest
+            # coordinates (r2d2 leaves the ground: MuJoCo throws it metres up)
+            tr = three.runs[(list(three.labels).index(d["source"]), three.timestep)]
+            top = np.abs(tr.body.link_positions[:, 0]).max(axis=0).astype(np.float32)
+            assert 0 < rounding["max"] <= 0.5 * np.linalg.norm(np.spacing(top).astype(float))
+            assert f"physx keeps its state in float32: each of {d['source']}'s states" in section
+    # the first pair's line in the opening section names its pair too
+    lines = [x for x in text.splitlines() if x.startswith("One step from the same state, ")]
+    assert lines[0].startswith("One step from the same state, pybullet and mujoco differ")
 
 
 def test_the_resync_figure_names_its_pair(three, tmp_path, monkeypatch):
