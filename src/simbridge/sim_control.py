@@ -171,20 +171,48 @@ class Control:
         what PyBullet's ``setJointMotorControlMultiDof`` calls ``damping``), ``max_force``,
         ``kp`` and ``kd`` per axis (a number, (3,), (n, 1) or (n, 3)); see
         :mod:`simbridge.multi_dof`."""
-        idx = self._joints(body, joints, True)
+        # the hot path inline, as set_joint_velocity's (one float each for the force and gains)
+        b = self._bodies.get(body) if type(body) is int else None
+        idx = None
+        if b is not None:
+            if type(joints) is np.ndarray:
+                idx = b.movable_cache.get((joints.dtype.char, joints.tobytes()))
+            elif type(joints) is list:
+                try:
+                    idx = b.movable_cache.get(tuple(joints))
+                except TypeError:  # an unhashable item: _joints says what is wrong
+                    pass
+        if idx is None:
+            idx = self._joints(body, joints, True)
         if self._multi_idx and id(idx) in self._multi_idx:
             return self._multi_dof_motor(body, idx, MotorMode.POSITION, target, max_force, kp, kd)
         if self._held:
             self._refuse_held(body, idx)
         n = len(idx)
-        self._b.set_joint_position(
-            body,
-            idx,
-            self._values(target, n, "target"),
-            self._values(max_force, n, "max_force", nonneg=True),
-            self._values(kp, n, "kp", nonneg=True),
-            self._values(kd, n, "kd", nonneg=True),
-        )
+        if (
+            type(target) is np.ndarray
+            and target.dtype is _F64
+            and target.ndim == 1
+            and len(target) == n
+        ):
+            targets = target.tolist()
+            if not isfinite(sum(targets)):  # an inf or a NaN (or an overflowing sum)
+                targets = self._values(target, n, "target")
+        else:
+            targets = self._values(target, n, "target")
+        if type(max_force) is float and 0.0 <= max_force < _INF:
+            forces = [max_force] * n
+        else:
+            forces = self._values(max_force, n, "max_force", nonneg=True)
+        if type(kp) is float and 0.0 <= kp < _INF:
+            kps = [kp] * n
+        else:
+            kps = self._values(kp, n, "kp", nonneg=True)
+        if type(kd) is float and 0.0 <= kd < _INF:
+            kds = [kd] * n
+        else:
+            kds = self._values(kd, n, "kd", nonneg=True)
+        self._b.set_joint_position(body, idx, targets, forces, kps, kds)
 
     # ---------------------------------------------------------------- bound commands
 
@@ -319,7 +347,19 @@ class Control:
 
         A spherical joint takes 3 torques about the axes of its child's (inertial) frame:
         shape (3,) or (n, 3); spherical joints are commanded apart from other joints."""
-        idx = self._joints(body, joints, True)
+        # the hot path inline, as set_joint_velocity's
+        b = self._bodies.get(body) if type(body) is int else None
+        idx = None
+        if b is not None:
+            if type(joints) is np.ndarray:
+                idx = b.movable_cache.get((joints.dtype.char, joints.tobytes()))
+            elif type(joints) is list:
+                try:
+                    idx = b.movable_cache.get(tuple(joints))
+                except TypeError:  # an unhashable item: _joints says what is wrong
+                    pass
+        if idx is None:
+            idx = self._joints(body, joints, True)
         if self._multi_idx and id(idx) in self._multi_idx:
             self._spherical_only(body, idx)
             from .multi_dof import per_axis
@@ -329,4 +369,16 @@ class Control:
                 body, idx, per_axis(torque, n, 3, "torque", scalar=False)
             )
             return
-        self._b.set_joint_torque(body, idx, self._values(torque, len(idx), "torque"))
+        n = len(idx)
+        if (
+            type(torque) is np.ndarray
+            and torque.dtype is _F64
+            and torque.ndim == 1
+            and len(torque) == n
+        ):
+            torques = torque.tolist()
+            if not isfinite(sum(torques)):  # an inf or a NaN (or an overflowing sum)
+                torques = self._values(torque, n, "torque")
+        else:
+            torques = self._values(torque, n, "torque")
+        self._b.set_joint_torque(body, idx, torques)
