@@ -76,6 +76,7 @@ def _set_drives(
             joint.set_drive_velocity_target(t)
 
 
+_INF_EFFORT = frozenset([float("inf")])  # the effort limits where torques need no clamp
 _PLANS = 4  # the commands' shortcuts kept per robot and mode (joint groups commanded in turn)
 
 
@@ -412,17 +413,31 @@ class MotorCommands:
         if not robot.has_position:  # the robot's step gains the position law
             self._refresh_active()
 
-    @exclusive
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
-        robot = self._robots[body]
-        m = robot.motors
-        slots = self._slots(robot, joints)
-        effort = m["effort"][slots]  # inf unless the profile enforces <limit effort>
-        # each command clamped, as PyBullet; np.add.at: a joint named twice adds twice
-        np.add.at(m["torque"], slots, np.minimum(np.maximum(torque, -effort), effort))
-        if not robot.pending:
-            robot.pending = True
-            self._refresh_active()
+        # the lock inline (locking.exclusive's body): a control loop's hot path
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            robot = self._robots[body]
+            m = robot.motors
+            slots = self._slots(robot, joints)
+            slot_list, _, efforts, _ = robot.slot_calls(slots, m["effort"], m["ball"])
+            table = m["torque"]
+            if _INF_EFFORT.issuperset(efforts):
+                # no effort limit (the common case): the clamp below leaves every finite
+                # torque as it is; added in order, as np.add.at (a joint named twice, twice)
+                for s, t in zip(slot_list, torque, strict=True):
+                    table[s] += t
+            else:
+                effort = m["effort"][slots]  # the profile enforces <limit effort>
+                # each command clamped, as PyBullet; np.add.at: a joint named twice adds twice
+                np.add.at(table, slots, np.minimum(np.maximum(torque, -effort), effort))
+            if not robot.pending:
+                robot.pending = True
+                self._refresh_active()
+        finally:
+            lock.release()
 
     # ---------------------------------------------------------------- state of the motors
 
