@@ -12,6 +12,8 @@ from typing import Any
 
 from simbridge.engine_settings import Setting
 
+REST_OFFSET_DEFAULT = 0.0005  # m, per shape
+
 SETTINGS = (
     Setting(
         "solver",
@@ -43,7 +45,7 @@ SETTINGS = (
     Setting(
         "rest_offset",
         "float",
-        0.0005,
+        REST_OFFSET_DEFAULT,
         "distance at which a shape comes to rest (per shape; a pair rests the sum apart); "
         "below contact_offset",
         unit="m",
@@ -90,13 +92,24 @@ SETTINGS = (
 )
 
 
-def check_together(values: dict[str, Any]) -> tuple[str, str] | None:
+def check_together(
+    values: dict[str, Any], given: frozenset[str] = frozenset()
+) -> tuple[str, str] | None:
     """PhysX makes a shape's contacts within its contact offset and rests it at its rest
-    offset: the rest offset must be below the contact offset."""
-    if values["rest_offset"] >= values["contact_offset"]:
+    offset: the rest offset must be below the contact offset. ``given``: the keys the user set
+    (the others are at their defaults); the message blames a setting the user set."""
+    rest, contact = values["rest_offset"], values["contact_offset"]
+    if rest < contact:
+        return None
+    if "contact_offset" in given and "rest_offset" not in given:
         return (
-            "rest_offset",
-            f"must be below contact_offset ({values['contact_offset']:g} m), "
-            f"got {values['rest_offset']:g}",
+            "contact_offset",
+            f"must be above rest_offset, got {contact:g} m: rest_offset, left at its default "
+            f"{REST_OFFSET_DEFAULT:g} m ({REST_OFFSET_DEFAULT * 1000:g} mm), must stay below "
+            f"contact_offset; give a contact_offset above {REST_OFFSET_DEFAULT:g} m, or set "
+            f"rest_offset below {contact:g} m too",
         )
-    return None
+    return (
+        "rest_offset",
+        f"must be below contact_offset ({contact:g} m), got {rest:g}",
+    )

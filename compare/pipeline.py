@@ -336,6 +336,10 @@ def compare(
     )
     if executor is None and scheduler is None and workers != 0 and not _main_importable():
         workers = runner.workers = 0  # a script read from stdin: a spawned one cannot import it
+    if not offline:  # a robot file or joint named wrong: FILE:LINE now, not after a run
+        from .scenario.robot_check import check_robots
+
+        check_robots(sc)
     labels = engine_labels(names, profiles)
     if resync_pairs is not None and (
         isinstance(resync_pairs, bool) or not isinstance(resync_pairs, int) or resync_pairs < 1

@@ -124,3 +124,36 @@ def test_an_unknown_joint_names_the_body_by_id_name_and_file(r2d2):
         sim.link_state(body, 99)
     with pytest.raises(UnknownJointError, match=r"'head_swivle' \(did you mean 'head_swivel'\?\)"):
         sim.joint_index(body, "head_swivle")
+
+
+def test_a_misspelt_entry_of_a_derived_profile_gets_a_did_you_mean():
+    from simbridge.exceptions import InvalidArgumentError
+
+    with pytest.raises(InvalidArgumentError, match=r"did you mean 'lateral_friction'\?"):
+        simbridge.get_profile("pybullet+lateral_frction=0.3")
+
+
+def test_a_vary_slot_of_another_engine_says_where_that_engine_is():
+    from simbridge.compare.study.points import check_vary, parse_vary
+    from simbridge.exceptions import InvalidArgumentError
+
+    backends = ["pybullet", "mujoco", "physx"]
+    with pytest.raises(InvalidArgumentError) as err:
+        check_vary([parse_vary("physx.solver@1=PGS,TGS")], backends)
+    text = str(err.value)
+    assert "engine 1 is 'pybullet', not 'physx'" in text
+    assert "'physx' is engine 3 (physx.solver@3)" in text
+
+
+@pytest.mark.parametrize("kind", ["missing", "file"])
+def test_report_of_a_missing_folder_says_so_with_the_report_prefix(capsys, tmp_path, kind):
+    folder = tmp_path / "nonexistent"
+    if kind == "file":
+        folder.write_text("")
+    line = _usage(capsys, ["report", str(folder)], "report")
+    expected = {
+        "missing": f"argument DIR: no such folder: {str(folder)!r}",
+        "file": f"argument DIR: {str(folder)!r} is not a folder",
+    }[kind]
+    assert line == f"simbridge report: error: {expected}", line
+    assert "study.json" not in line

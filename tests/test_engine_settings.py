@@ -324,3 +324,29 @@ def test_the_friction_cone_settings_meet_across_engines():
     # MuJoCo's frictional impedance moves the slide too (measured: x 0.66 m at impratio 10,
     # 0.48 m at 1, pyramidal cone)
     assert _slide("mujoco", impratio=10)[0] > _slide("mujoco")[0] + 0.05
+
+
+def test_a_contact_offset_below_the_default_rest_offset_blames_the_contact_offset():
+    # the user set contact_offset only: the message names it, and rest_offset's default
+    with pytest.raises(InvalidEngineSettingError) as err:
+        es.validate("physx", {"contact_offset": 0.0004})
+    text = str(err.value)
+    assert text.startswith("engine setting physx.contact_offset:"), text
+    assert err.value.key == "contact_offset"
+    assert "rest_offset" in text and "default 0.0005 m (0.5 mm)" in text
+    assert "must stay below contact_offset" in text and "got 0.0004" in text
+    # both set: the rest offset is the one to move, as before
+    with pytest.raises(InvalidEngineSettingError, match="physx.rest_offset: must be below"):
+        es.validate("physx", {"contact_offset": 0.0004, "rest_offset": 0.001})
+
+
+def test_a_setting_of_another_engine_says_whose_it_is():
+    with pytest.raises(InvalidEngineSettingError) as err:
+        es.validate("mujoco", {"contact_offset": 0.002})
+    text = str(err.value)
+    assert "contact_offset is a physx setting; mujoco's are: " in text, text
+    assert all(key in text for key in es.settings_for("mujoco"))
+    # a key of no engine keeps its "did you mean"
+    with pytest.raises(InvalidEngineSettingError, match=r"did you mean 'impratio'") as err:
+        es.validate("mujoco", {"impratoi": 1})
+    assert "is a" not in str(err.value)

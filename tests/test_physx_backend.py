@@ -47,6 +47,9 @@ def test_physx_is_registered_and_says_how_to_install_it(monkeypatch):
     with pytest.raises(BackendNotInstalledError) as info:
         registry.load_backend("physx")
     assert "simbridge[physx]" in str(info.value)
+    # the line a report's "left out" note gives: from PyPI, and from a clone
+    both = "pip install 'simbridge[physx]' (from a clone: pip install -e '.[physx]')"
+    assert both in str(info.value)
     monkeypatch.delitem(registry._LOADED, "physx", raising=False)
 
 
@@ -346,6 +349,22 @@ def test_manifest_lists_what_physx_cannot_match():
     for key in ("precision", "snapshot", "motors", "contact"):
         assert key in m["departures"]
     assert "friction combine" not in m["departures"]  # the product is reached (combine.py)
+
+
+@needs_sapien
+def test_the_speed_clamp_and_motor_departures_say_what_the_backend_does():
+    from simbridge.backends.physx.motors import DRIVE_DAMPING
+
+    with simbridge.Sim("physx") as sim:
+        dep = sim.manifest()["departures"]
+        cap = sim.profile.max_joint_velocity
+    # the backend clamps joint speeds after each step (motors.py _clamp_speeds)
+    assert "after each step" in dep["speed clamp"]
+    assert f"{cap:g} rad/s" in dep["speed clamp"]
+    assert "joint max velocity (inside its solver);" not in dep["speed clamp"]
+    # the drive's damping as a value, not a constant's name
+    assert "DRIVE_DAMPING" not in dep["motors"]
+    assert f"damping {DRIVE_DAMPING:g} " in dep["motors"]
 
 
 @needs_sapien

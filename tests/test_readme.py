@@ -90,3 +90,16 @@ def test_the_scenario_to_write_is_valid():
     scenario = loads_scenario(text, file="README.md")
     assert scenario.name == "my-pendulum"
     assert [p.name for p in scenario.phases] == ["push", "swing"]
+
+
+def test_the_physx_section_gives_the_rest_offset_and_both_install_lines():
+    from simbridge.engine_settings import settings_for
+
+    text = README.read_text(encoding="utf-8")
+    section = text[text.index("## The PhysX backend") :]
+    section = " ".join(section[: section.index("\n## ")].split())
+    per_shape = settings_for("physx")["rest_offset"].default  # m
+    assert f"rest offset 0 ({per_shape * 1000:g} mm per shape instead" in section
+    assert f"two shapes rest {2 * per_shape * 1000:g} mm apart" in section
+    assert "(1 mm between two shapes" not in section
+    assert "`pip install 'simbridge[physx]'` (from a clone: `pip install -e '.[physx]'`" in section

@@ -35,8 +35,9 @@ from ..locking import exclusive, wait_for_lock
 from .ball import BallJoints, default_ball_motor
 from .combine import product_combine_available
 from .contacts import ContactReads
+from .limits import LimitRows, limit_rows
 from .model import build_robot
-from .motors import MotorCommands
+from .motors import DRIVE_DAMPING, MotorCommands
 from .state import StateAccess
 from .window import Window
 from .world import Robot, default_motors, movable_joints
@@ -57,7 +58,7 @@ CHECK_EVERY = 8
 _SCENE_FLAGS = ("enable_pcm", "enable_friction_every_iteration", "enable_enhanced_determinism")
 
 
-class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend):
+class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRows, Backend):
     """`Sim` on PhysX 5 (SAPIEN 3.0.3, CPU)."""
 
     name = "physx"
@@ -182,6 +183,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                 dtype=np.intp,
             )
             self._configure(robot)
+            limit_rows(robot)
         except BaseException:
             for entity in built.entities:
                 self._scene.remove_entity(entity)
@@ -205,6 +207,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             self._free_ids.pop()
         else:
             self._next_id += 1
+        self._check_limits(robot)  # a joint whose range leaves out 0 starts past its limit
         self._refresh_active()
         self._show()
         return body
@@ -314,6 +317,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
                 for robot in active:
                     if robot.qf_set or robot.pending:  # else _after_step has nothing to do
                         self._after_step(robot)
+                    if robot.held:  # a joint past its limit: PyBullet's limit row (limits.py)
+                        self._limit_rows_after(robot)
                 if cap is not None:  # PyBullet's clamp of the joint speeds (_clamp_speeds)
                     for art in self._clamped:
                         v = art.qvel
@@ -396,6 +401,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             for body, velocities in native[3].items():
                 self._robots[body].restored_velocities = velocities.copy()
             self._restored = [self._robots[body] for body in native[3]]
+            for robot in self._robots.values():
+                self._check_limits(robot)
             self._diverged = None
             if self._window is not None:
                 self._window.sync()
@@ -435,13 +442,17 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
             "PyBullet's adds the quadratic term k |v| v"
         ),
         "speed clamp": (
-            "joint speeds clamped by PhysX's joint max velocity (inside its solver); the base's "
-            "by its link's max linear and angular speed (the norm; PyBullet clamps each "
-            "coordinate after the step)"
+            "joint speeds clamped after each step to the profile's max_joint_velocity (100 rad/s "
+            "or m/s under 'pybullet'), each joint's speed on its own, as PyBullet does; PhysX's "
+            "joint max velocity is set to the same cap, which bounds its drives inside the "
+            "solver too. A free base's speed is clamped by its link's max linear and angular "
+            "speed (the norm of each, inside PhysX's solver; PyBullet clamps each coordinate "
+            "after the step)"
         ),
         "motors": (
             "PyBullet's velocity motor as a PhysX drive (stiffness 0, damping "
-            "DRIVE_DAMPING, force limit max_force); its position law as a velocity target "
+            f"{DRIVE_DAMPING:g} N·m·s/rad or N·s/m, force limit max_force); its position law "
+            "as a velocity target "
             "kp (q* - q) / dt + (1 - kd) v set before each step (v: the velocity at the start of "
             "the step, PyBullet's the velocity after the smooth forces)"
         ),
@@ -488,11 +499,18 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, Backend
         ),
         "joint axis": "a non-unit <axis> is normalised (PyBullet moves |axis| rad per unit q)",
         "joint limits": (
-            "PhysX's hard joint limits, not PyBullet's limit rows: a joint reset past its limit "
-            "is pushed back at PhysX's depenetration speed, not at PyBullet's 0.2 depth/dt "
-            "within 0.04 of the limit. Measured on slider.urdf (limits +-0.4 m) over 60 steps: "
-            "0.36 m from PyBullet reset at 0.41, 0.63 at 0.439, 0.84 at 0.441, 1.10 at 0.7 "
-            "(the carriage lands on the far limit), 0.67 at -0.45 moving at 2 m/s"
+            "PhysX's hard joint limits; a joint past its limit (after a reset, a restore or "
+            "the load) gets PyBullet's limit row instead until it is back in range (stop "
+            "outward motion, within 0.04 of the limit push back at 0.2 depth/dt: limits.py). "
+            "slider.urdf (limits +-0.4 m) reset at or past a limit, 60 steps: within 3.0e-7 m "
+            "and 4.8e-7 m/s of PyBullet, 1.7e-6 m where the float32 position slides at 0.5 m/s "
+            "(PhysX's own limit: 1.10 m, 57.6 m/s off); a hinge loaded outside its range under "
+            "gravity 2.1e-7 rad; a free two-hinge chain whose elbow is reset 0.039 rad past "
+            "its limit 2.1e-5 rad (the row's impulse moves a fixed-base chain through the "
+            "inverse mass matrix; on a floating base only the held joint moves). A joint "
+            "arriving at its limit from inside is stopped on it by PhysX; "
+            "PyBullet lets it pass by up to one step's travel and pushes it back (slider at "
+            "1 m/s: 0.4042 m, then back in at -0.2 m/s; 2.5e-2 m apart after 60 steps)"
         ),
         "spherical joints": (
             "three revolute joints about the child's inertial axes through two 1e-6 kg links "

@@ -103,6 +103,8 @@ class BallJoints:
 
         def _refresh_active(self) -> None: ...
 
+        def _check_limits(self, robot: Robot) -> None: ...
+
     def _ball_state(self, robot: Robot, joint: int, q: Any, v: Any) -> tuple[Any, Any]:
         d0, d1, d2 = robot.ball_dofs[joint]
         a, b, c = float(q[d0]), float(q[d1]), float(q[d2])
@@ -161,6 +163,7 @@ class BallJoints:
         art.qpos = q
         art.qvel = v
         robot.restored_velocities = None  # PhysX's, from the joint velocities written
+        self._check_limits(robot)
 
     @exclusive
     def set_joint_motor_multi_dof(

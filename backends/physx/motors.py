@@ -116,6 +116,8 @@ class MotorCommands:
 
         def _ball_after_step(self, robot: Robot) -> None: ...
 
+        def _limit_rows(self, robot: Robot) -> None: ...
+
     # ---------------------------------------------------------------- set-up
 
     def _configure(self, robot: Robot) -> None:
@@ -188,14 +190,21 @@ class MotorCommands:
             r
             for r in self._robots.values()
             if not r.static
-            and (damped or r.pending or r.damping is not None or bool(r.balls) or r.has_position)
+            and (
+                damped
+                or r.pending
+                or r.damping is not None
+                or bool(r.balls)
+                or r.has_position
+                or r.past_limit
+            )
         ]
         for r in self._active:
             if damped and r.damper is None:
                 r.damper = self._damper(r)
             # the link damping alone: the step calls the damper, not _before_step
             r.damping_only = damped and not (
-                r.pending or r.damping is not None or r.balls or r.has_position
+                r.pending or r.damping is not None or r.balls or r.has_position or r.past_limit
             )
 
     def _damper(self, robot: Robot) -> Callable[[], None]:
@@ -264,6 +273,8 @@ class MotorCommands:
         if qf is not None:
             art.qf = qf.astype(np.float32)
             robot.qf_set = True
+        if robot.past_limit:  # after the motors and damping: they read the step's start
+            self._limit_rows(robot)
 
     @staticmethod
     def _clamp_speeds(art: Any, v: np.ndarray, speeds: list[float], cap: float) -> None:

@@ -96,6 +96,8 @@ class StateAccess:
 
         def _check_idle(self) -> None: ...
 
+        def _refresh_active(self) -> None: ...
+
         def _ball_state(self, robot: Robot, joint: int, q: Any, v: Any) -> tuple[Any, Any]: ...
 
         def refuse_fixed_base_velocity(
@@ -268,14 +270,22 @@ class StateAccess:
         art = robot.built.articulation
         q = art.qpos
         v = art.qvel
+        limits = robot.limit_of
+        past = False
         for j, x, u in zip(joints, positions, velocities, strict=True):
             d = robot.dof[j]
             q[d] = x
             v[d] = u
+            lo, hi = limits[j]
+            if x < lo or x > hi:  # past its limit (x just past a float32 limit: let go at
+                past = True  # the next step, as nothing is then past)
         art.qpos = q
         art.qvel = v
         robot.restored_velocities = None  # PhysX's, from the joint velocities written
         self._contacts_cache = None
+        if past and not robot.past_limit:  # PyBullet's limit row from the next step on
+            robot.past_limit = True
+            self._refresh_active()
 
     def reset_base_state(
         self,

@@ -84,6 +84,17 @@ class Robot:
     # from the ones its step left (backend.DEPARTURES["snapshot"]); the link damping law and
     # link_state read these instead, so that the next step is the uninterrupted one
     restored_velocities: np.ndarray | None = None
+    # the limited 1-DoF joints (limits.py): (dof, PhysX joint, lower, upper) as PhysX holds
+    # them, and per joint its limits; whether a joint is past its limit (the step stands in
+    # for PyBullet's limit row) and which rows' PhysX limits are moved meanwhile
+    limit_rows: list[tuple[int, Any, float, float]] = field(default_factory=list)
+    limit_of: list[tuple[float, float]] = field(default_factory=list)  # per joint (-inf, inf)
+    past_limit: bool = False
+    pinocchio: Any = None  # SAPIEN's Pinocchio model of the articulation, made when needed
+    moved: set[int] = field(default_factory=set)
+    # this step's rows (dof, the moved bound, the row's speed, 1 upper or -1 lower, 2 float32
+    # steps at the bound), for the fix after the step
+    held: list[tuple[int, float, float, float, float]] = field(default_factory=list)
 
     @property
     def static(self) -> bool:

@@ -12,7 +12,7 @@ from typing import Any
 from ..pipeline import Comparison
 from .brief import brief
 from .derived import memo_files
-from .fmt import fmt_distance, fmt_time, fmt_value
+from .fmt import file_stem, fmt_distance, fmt_time, fmt_value
 from .markdown import headline, markdown
 from .resync import plot_resyncs
 from .study import write_study
@@ -52,7 +52,7 @@ def report(
             names = []
             for slot, label in enumerate(comparison.labels):
                 tr = comparison.runs[(slot, comparison.timestep)]
-                stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in label)
+                stem = file_stem(label)  # pybullet (2): pybullet-2
                 tr.save(folder / f"{stem}.npz")
                 tr.save_csv(folder / f"{stem}.csv")
                 names += [f"trajectories/{stem}.npz", f"trajectories/{stem}.csv"]

@@ -19,6 +19,8 @@ friction``             touched something
                        ``max_joint_velocity``
 ``joint axis``         a movable joint's ``<axis>`` is not of length 1 (by more than 1e-6)
 ``link damping``       a profile's ``linear_damping`` or ``angular_damping`` is not 0
+``precision``          the engine keeps its state in a type other than float64 (float32):
+                       every scenario, as the ensemble's perturbation is raised for it
 ====================== ===============================================================
 
 A departure naming a body of this world (``body 1 mass bound``) applies as the backend wrote
@@ -260,10 +262,16 @@ def _judge(
         if not hits:
             return None, None
         return "joints with an axis not of length 1: " + ", ".join(hits), None
+    if key == "precision":
+        dtype = _state_dtype(c.runs[(slot, c.timestep)].manifest)
+        if dtype in (None, "float64"):
+            return NOT_CHECKED, None
+        return f"every scenario: {labels[slot]} keeps its state in {dtype}", None
     if key == "link damping":
         damped = []
-        for slot, label in enumerate(labels):
-            prof = c.runs[(slot, c.timestep)].manifest.get("profile") or {}
+        for k in shown:  # its own figures and the reference's, never a third engine's
+            label = labels[k]
+            prof = c.runs[(k, c.timestep)].manifest.get("profile") or {}
             found = [f"{k} {prof[k]:g}" for k in LINK_DAMPING if prof.get(k)]
             if found:
                 damped.append(f"{label}: " + ", ".join(found))
@@ -273,6 +281,20 @@ def _judge(
     if key.startswith("body "):
         return "it names a body of this world", None
     return NOT_CHECKED, None
+
+
+def _state_dtype(manifest: dict[str, Any]) -> str | None:
+    """The floating-point type the engine of ``manifest`` keeps its state in: its native
+    defaults' ``state``, else the registry's (None when neither says)."""
+    native = manifest.get("native_defaults") or {}
+    if isinstance(native, dict) and native.get("state"):
+        return str(native["state"])
+    from simbridge.registry import state_dtype
+
+    try:
+        return state_dtype(str(manifest.get("backend")))
+    except SimbridgeError:
+        return None
 
 
 def _contact_figures(c: ComparisonView, events: list[EngineEvents], slots: list[int]) -> str:

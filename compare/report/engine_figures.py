@@ -11,7 +11,7 @@ from typing import Any
 
 from ..analysis.diff import QUANTITIES
 from .fmt import fmt_threshold, fmt_time, fmt_value
-from .verdict import interval_cell, perturbation_words, verdict_word
+from .verdict import interval_cell, perturbation_words, spread_ratio, verdict_word
 
 __all__ = ["engines_section", "pair_reasons", "p_words"]
 
@@ -64,7 +64,7 @@ def engines_section(s: dict[str, Any]) -> list[str]:
     for label in labels:
         e = per.get(label) or {}
         pert = e.get("perturbation") or req
-        if pert is None:
+        if pert is None or ens.get("size", 1) < 2:  # one run: nothing was moved
             moved = "none (one run)"
         else:
             dtype = f" ({pert['state_dtype']})" if pert.get("state_dtype") else ""
@@ -107,6 +107,26 @@ def engines_section(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _against(lab: str, f: dict[str, Any], floor: float, unit: str) -> str:
+    """The judged gap against one engine's spread and own error, with no ratio to one that is
+    absent (one run) or at the precision floor."""
+    # no ratio to a spread or an error that is absent (one run) or at the float floor
+    if spread_ratio(f, floor):
+        spread = (
+            f"{_ratio(f['gap_over_spread'])} {lab}'s spread "
+            f"({fmt_value(f['spread']['value'], unit)})"
+        )
+    elif f["size"] < 2:
+        spread = f"{lab} has no spread (one run)"
+    else:
+        spread = f"{lab}'s spread is at the precision floor"
+    if f["own_error"] > floor:
+        own = f"{_ratio(f['gap_over_own_error'])} its own error ({fmt_value(f['own_error'], unit)})"
+    else:
+        own = "its own error is at the precision floor"
+    return f"{spread}, {own}" if not spread_ratio(f, floor) else f"{spread} and {own}"
+
+
 def pair_reasons(s: dict[str, Any]) -> list[str]:
     """A bullet per judged pair with the figures that decide its verdict: the judged gap over
     each engine's spread and over its own time-step error (with those figures), what makes it
@@ -123,15 +143,14 @@ def pair_reasons(s: dict[str, Any]) -> list[str]:
         figs = v["engine_figures"]
         t = v["judged_at"]
         when = "at the end" if t["why"] == "end" else f"at t = {fmt_time(t['time'])}"
-        each = "; ".join(
-            f"{_ratio(f['gap_over_spread'])} {lab}'s spread "
-            f"({fmt_value(f['spread']['value'], unit)}) and {_ratio(f['gap_over_own_error'])} "
-            f"its own error ({fmt_value(f['own_error'], unit)})"
-            for lab, f in figs.items()
-        )
+        floor = v["floor"]
+
+        each = "; ".join(_against(lab, f, floor, unit) for lab, f in figs.items())
         words = (
             f"- {p['labels'][0]} and {p['labels'][1]}, {verdict_word(v)}: the gap "
-            f"{interval_cell(v['gap'], unit)} {when} is {each}"
+            f"{interval_cell(v['gap'], unit)} {when}"
+            + (" is " if all(spread_ratio(f, floor) for f in figs.values()) else ": ")
+            + each
         )
         if v["marginal_reasons"]:
             words += "; marginal because " + " and ".join(v["marginal_reasons"])

@@ -35,6 +35,7 @@ __all__ = [
     "Frames",
     "KeyFrame",
     "write_frames",
+    "panel_header",
     "key_instants",
     "frames_section",
     "PANEL",
@@ -278,11 +279,17 @@ def _strip(c: Comparison, painter: _Painter, time: float, distance: float) -> An
         image.paste(Image.fromarray(painter.draw(target, distance)), (slot * w, HEADER))
         draw.rectangle((slot * w, 0, (slot + 1) * w - 1, HEADER - 1), fill=_colour(slot))
         height = float(tr.body.base_position[min(row, len(tr.body.base_position) - 1)] @ painter.up)
-        text = f"{label}  t = {tr.time[row]:.2f} s  base at {fmt_distance(height)}"
+        text = panel_header(label, float(tr.time[row]), height)
         draw.text((slot * w + 4, 2), text, fill=(255, 255, 255), font=font)
         if slot:
             draw.line((slot * w, 0, slot * w, h + HEADER), fill=(255, 255, 255), width=2)
     return image
+
+
+def panel_header(label: str, time: float, height: float) -> str:
+    """A panel's header: the engine, the time as the frame's caption writes it (to the
+    millisecond: two frames at different instants never read alike), the base's height."""
+    return f"{label}  t = {fmt_time(time)}  base at {fmt_distance(height)}"
 
 
 def _font(module: Any) -> Any:

@@ -16,6 +16,7 @@ from ..analysis.diff import DEG, QUANTITIES, Divergence, FinalPose
 from ..pipeline import Comparison
 from ..run.events import KINDS, TIP_ANGLE
 from ..scenario import format_timestep
+from .departures import checked
 from .engine_figures import engines_section, p_words, pair_reasons
 from .engine_settings import settings_section
 from .events import event_words, parting_words, with_start
@@ -31,11 +32,14 @@ from .pair_sections import (
 )
 from .parts import parts_words
 from .resync import resync_lines, resync_section
+from .self_check import self_check_words
 from .story import story_words
 from .verdict import (
     interval_cell,
+    one_run,
     pair_words,
     perturbation_words,
+    spread_ratio,
     verdict_lines,
     verdict_word,
     within_words,
@@ -256,6 +260,9 @@ def markdown(
     left = left_out_words(s)
     if left:
         lines += [f"*{left}*", ""]
+    same = self_check_words(s["backends"], s["profiles"], s["labels"])
+    if same:  # an engine compared with itself
+        lines += [f"**{same[0].upper()}{same[1:]}**", ""]
     if s["description"]:
         lines += [f"*Scenario:* {s['description']}", ""]
     lines += pictures or []
@@ -526,7 +533,8 @@ def _departure_count(s: dict[str, Any], label: str, manifest: dict[str, Any]) ->
     deps = (s.get("departures") or {}).get(label)
     if deps is None:
         return str(total)
-    return f"[{len(deps['apply'])} of {total}](#profile-departures-that-apply-here)"
+    found = sum(checked(x) for x in deps["apply"])  # one not checked is not said to apply
+    return f"[{found} of {total}](#profile-departures-that-apply-here)"
 
 
 MAX_EVENT_ROWS = 40
@@ -689,10 +697,10 @@ def _departures_section(s: dict[str, Any]) -> list[str]:
         if not d["apply"] and not d["left_out"]:
             lines += [f"{label}: none (it reproduces the profile).", ""]
             continue
-        if d["apply"]:
-            rows = [
-                [f"`{x['key']}`", x["text"], x["why"], x["measured"] or "none"] for x in d["apply"]
-            ]
+        found = [x for x in d["apply"] if checked(x)]
+        unchecked = [x["key"] for x in d["apply"] if not checked(x)]
+        if found:
+            rows = [[f"`{x['key']}`", x["text"], x["why"], x["measured"] or "none"] for x in found]
             lines += [f"{label}:", ""]
             lines += _table(
                 ["departure", "what", "why it applies here", "measured in this run"], rows
@@ -700,6 +708,15 @@ def _departures_section(s: dict[str, Any]) -> list[str]:
             lines += [""]
         else:
             lines += [f"{label}: none of its departures applies here.", ""]
+        if unchecked:
+            n = len(unchecked)
+            lines += [
+                f"Not checked for {label}: {n} departure{'s' if n != 1 else ''} no rule checks "
+                "against this scenario, not counted as applying: "
+                + ", ".join(f"`{k}`" for k in unchecked)
+                + ".",
+                "",
+            ]
         if d["left_out"]:
             lines += [
                 f"Left out for {label} (they do not apply to this scenario): "
@@ -748,11 +765,16 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
     ]
     if e:
         pert = e["perturbation"]
-        lines += [
-            f"Each engine ran the scenario {e['size']} times: the nominal run and "
+        runs = (
+            "Each engine ran the scenario once (the nominal run: no offsets, no spread). The "
+            if e["size"] < 2
+            else f"Each engine ran the scenario {e['size']} times: the nominal run and "
             f"{e['size'] - 1} with every spawn pose moved by {pert['position']:g} m and turned "
             f"by {pert['orientation']:g} rad in random directions (seed {e['seed']}). The "
-            f"{q.title} is judged at every one of {v['instants']['total']} recorded instants "
+        )
+        lines += [
+            runs
+            + f"{q.title} is judged at every one of {v['instants']['total']} recorded instants "
             f"against each engine's own spread (the {v['spread_percentile']:g}th percentile of "
             "the distances between its runs) and its own time-step error (dt against dt/2); "
             f"figures below are {where}, with 95% bootstrap intervals in brackets.",
@@ -767,17 +789,18 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         hz = ", ".join(
             f"{fmt_threshold(h['threshold'], unit)}: {fmt_time(h['time'])}" for h in f["horizons"]
         )
+        one = f["size"] < 2  # one run: no spread, no ratio to it
         rows.append(
             [
                 label,
                 str(f["size"]),
-                iv(f["spread"]),
-                iv(f["spread_end"]),
-                fmt_value(f["largest_pair"], unit),
-                f"{f['gap_over_spread']:.3g}",
+                "n/a (one run)" if one else iv(f["spread"]),
+                "n/a" if one else iv(f["spread_end"]),
+                "n/a" if one else fmt_value(f["largest_pair"], unit),
+                f"{f['gap_over_spread']:.3g}" if spread_ratio(f, v["floor"]) else "n/a",
                 fmt_value(f["own_error"], unit),
-                f"{f['gap_over_own_error']:.3g}",
-                hz,
+                f"{f['gap_over_own_error']:.3g}" if f["own_error"] > v["floor"] else "n/a",
+                "n/a" if one else hz,
             ]
         )
     lines += _table(
@@ -805,8 +828,12 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
     n = v["instants"]
     lines += [
         "",
-        f"Gap between the engines (median over every pair of runs, one of each engine): "
-        f"{iv(v['gap'])}; the nominal runs' gap: {fmt_value(v['nominal_gap'], unit)}; largest "
+        (
+            "Gap between the engines (one run each): "
+            if one_run(v)
+            else "Gap between the engines (median over every pair of runs, one of each engine): "
+        )
+        + f"{iv(v['gap'])}; the nominal runs' gap: {fmt_value(v['nominal_gap'], unit)}; largest "
         f"on the way {fmt_value(v['max_gap']['value'], unit)} at t = "
         f"{fmt_time(v['max_gap']['time'])}. Tolerance for `agree`: "
         f"{fmt_threshold(v['tolerance'], unit)}; precision floor {v['floor']:.2g} {unit}.",

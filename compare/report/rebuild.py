@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from simbridge.exceptions import SimbridgeError
+from simbridge.exceptions import CacheEntryMissingError, SimbridgeError
 
 from ..pipeline import compare
 from ..run.cache import Cache
@@ -15,7 +15,51 @@ from ..run.studyjobs import scenario_of
 from . import report
 from .study import STUDY_FILE, add_resolution, read_study
 
-__all__ = ["rebuild"]
+__all__ = ["rebuild", "study_inputs", "inputs_changed"]
+
+
+def study_inputs(record: dict[str, Any]) -> dict[str, Any]:
+    """What a study's job keys hold besides its arguments (``study.json`` records it as
+    ``inputs``): the versions of numpy and of its engines' libraries, the digest of
+    simbridge's code that makes a run, the hashes of the files its scenario names."""
+    from ..run.jobs import engine_versions, file_hashes, run_code_digest
+
+    try:
+        files = dict(file_hashes(scenario_of(record)))
+    except Exception:  # noqa: BLE001 - a scenario that no longer loads: its runs say why
+        files = {}
+    return {
+        "versions": engine_versions(*record["arguments"]["backends"]),
+        "code": run_code_digest(),
+        "files": files,
+    }
+
+
+def inputs_changed(then: dict[str, Any], now: dict[str, Any]) -> list[str]:
+    """What changed between two :func:`study_inputs`: ``"pybullet 3.2.6 -> 3.2.7"``,
+    ``"sapien: not installed -> 3.0.3"``, ``"urdf:robot.urdf changed"``, ``"simbridge's code
+    that makes a run changed"``."""
+    from ..run.jobs import NOT_INSTALLED
+
+    def shown(version: Any) -> str:
+        return "not installed" if version in (None, NOT_INSTALLED) else str(version)
+
+    out = []
+    was, is_ = dict(then.get("versions", {})), dict(now.get("versions", {}))
+    for dist in dict.fromkeys([*was, *is_]):
+        a, b = was.get(dist), is_.get(dist)
+        if a != b:
+            sep = ": " if NOT_INSTALLED in (a, b) or None in (a, b) else " "
+            out.append(f"{dist}{sep}{shown(a)} -> {shown(b)}")
+    files_then, files_now = dict(then.get("files", {})), dict(now.get("files", {}))
+    for ref in dict.fromkeys([*files_then, *files_now]):
+        a, b = files_then.get(ref), files_now.get(ref)
+        if a != b:
+            what = "not found" if not b else "is new" if a is None else "changed"
+            out.append(f"{ref} {what}")
+    if then.get("code") != now.get("code"):
+        out.append("simbridge's code that makes a run changed")
+    return out
 
 
 def rebuild(
@@ -34,10 +78,50 @@ def rebuild(
     """
     folder = Path(folder)
     record = read_study(folder)
+    try:
+        comparison = _compare(record, cache)
+    except CacheEntryMissingError as exc:  # the jobs are new ones: say what made them new
+        what = _changed(record)
+        if not what:
+            raise
+        raise SimbridgeError(
+            f"{folder / STUDY_FILE}: {exc.missing} of {exc.total} jobs of the study are not "
+            f"the ones it ran, and not in the cache: since it ran, {'; '.join(what)}; run the "
+            "study again (simbridge compare)"
+        ) from exc
+    assert comparison.study is not None
+    now = [j["key"] for j in comparison.study["jobs"]]
+    then = [j["key"] for j in record["jobs"]]
+    if now != then:
+        changed = sum(1 for a, b in zip(now, then, strict=False) if a != b)
+        what = _changed(record)
+        why = (
+            f"since: {'; '.join(what)}"
+            if what
+            else "a file it names changed since, or simbridge's code that makes a run or an "
+            "engine's version did"
+        )
+        raise SimbridgeError(
+            f"{folder / STUDY_FILE}: the study's arguments now make other jobs than it recorded "
+            f"({changed} of {len(then)} differ): {why}; run the study again "
+            "(simbridge compare)"
+        )
+    return _write(folder, record, comparison, options)
+
+
+def _changed(record: dict[str, Any]) -> list[str]:
+    """What changed since the study of ``record`` ran (:func:`inputs_changed`; [] for a
+    ``study.json`` that records no ``inputs``)."""
+    recorded = record.get("inputs")
+    return inputs_changed(recorded, study_inputs(record)) if recorded else []
+
+
+def _compare(record: dict[str, Any], cache: Any) -> Any:
+    """The study of ``record`` made again from the cache alone."""
     args = record["arguments"]
     n = len(args["backends"])
     resynced = sum(1 for j in record["jobs"] if j.get("kind") == "resync") // 2
-    comparison = compare(
+    return compare(
         scenario_of(record),
         args["backends"],
         profile=args["profile"],
@@ -55,17 +139,11 @@ def rebuild(
         cache=cache,
         offline=True,
     )
-    assert comparison.study is not None
-    now = [j["key"] for j in comparison.study["jobs"]]
-    then = [j["key"] for j in record["jobs"]]
-    if now != then:
-        changed = sum(1 for a, b in zip(now, then, strict=False) if a != b)
-        raise SimbridgeError(
-            f"{folder / STUDY_FILE}: the study's arguments now make other jobs than it recorded "
-            f"({changed} of {len(then)} differ): a file it names changed since, or simbridge's "
-            "code that makes a run or an engine's version did; run the study again "
-            "(simbridge compare)"
-        )
+
+
+def _write(folder: Path, record: dict[str, Any], comparison: Any, options: dict[str, Any]) -> Path:
+    """The report of ``comparison`` (made again) written in ``folder`` as ``record`` says."""
+    args = record["arguments"]
     comparison.left_out = dict(record.get("left_out", {}))
     comparison.study["left_out"] = dict(comparison.left_out)  # kept for the next rebuild too
     comparison.wall_time = float(record.get("wall_time", comparison.wall_time))

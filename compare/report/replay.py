@@ -35,6 +35,7 @@ import numpy as np
 
 from ..run.events import EngineEvents, find_events
 from ..run.trajectory import BodyTrajectory, Trajectory
+from .fmt import file_stem
 
 __all__ = [
     "ENGINE_COLOURS",
@@ -642,7 +643,7 @@ def engines_from_report(folder: str | Path) -> list[ReplayEngine]:
             ghosts = {k: z[k] for k in z.files}
     out = []
     for slot, label in enumerate(labels):
-        stem = _name(label)
+        stem = file_stem(label)
         path = folder / "trajectories" / f"{stem}.npz"
         if not path.is_file():
             continue

@@ -36,6 +36,10 @@ def write_study(comparison: Comparison, out: Path, options: dict[str, Any]) -> P
     record.pop("resolve", None)  # a resolve study adds its own (add_resolution)
     record["wall_time"] = comparison.wall_time
     record["report"] = dict(options)
+    if "inputs" not in record:  # what the jobs' keys hold besides the arguments
+        from .rebuild import study_inputs
+
+        record["inputs"] = study_inputs(record)
     path = out / STUDY_FILE
     path.write_text(json.dumps(record, indent=2, allow_nan=True) + "\n", encoding="utf-8")
     return path

@@ -7,7 +7,7 @@ from typing import Any
 
 from ..analysis.verdict import ALPHA, Marginal
 from ..run.ensemble import FLOAT_SPACINGS
-from .fmt import fmt_threshold, fmt_time, fmt_value
+from .fmt import fmt_apart, fmt_threshold, fmt_time, fmt_value
 
 __all__ = [
     "verdict_lines",
@@ -17,6 +17,8 @@ __all__ = [
     "interval_cell",
     "time_step_share",
     "within_words",
+    "one_run",
+    "spread_ratio",
 ]
 
 
@@ -83,8 +85,8 @@ def _iv(x: dict[str, Any], unit: str, *, inner: bool = False) -> str:
     lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
     if x["low"] == x["high"]:
         return v
-    if len({lo, v, hi}) < 3:  # too close for the report's rounding: 4 significant digits
-        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
+    if len({lo, v, hi}) < 3:  # too close for the report's rounding: more digits, same units
+        v, lo, hi = fmt_apart([x["value"], x["low"], x["high"]], unit)
     return f"{v}, 95% interval {lo} to {hi}" if inner else f"{v} (95% interval {lo} to {hi})"
 
 
@@ -118,7 +120,10 @@ def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
         word = v["verdict"].upper() + word[len(v["verdict"]) :]
     t = v["judged_at"]
     when = "at the end" if t["why"] == "end" else f"at t = {fmt_time(t['time'])}"
-    line = f"{a} and {b}: {word}, a median {_iv(v['gap'], unit)} apart {when}"
+    if one_run(v):  # one gap, no median of it
+        line = f"{a} and {b}: {word}, the gap {_iv(v['gap'], unit)} {when}"
+    else:
+        line = f"{a} and {b}: {word}, a median {_iv(v['gap'], unit)} apart {when}"
     if v["test"] is not None:
         line += f"; {_p(v['test'])}"
     if v["verdict"] == "unresolved":
@@ -136,16 +141,33 @@ def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
 
 
 def interval_cell(x: dict[str, Any], unit: str) -> str:
-    """``7.2 cm [7.1 cm, 7.3 cm]`` for a table, rounded as :func:`_iv` rounds (4 significant
-    digits where the report's rounding would make the three alike); the value alone without an
-    interval."""
+    """``7.2 cm [7.1 cm, 7.3 cm]`` for a table, rounded as :func:`_iv` rounds (in the report's
+    units, with more digits where its rounding would make different ones alike); the value alone
+    without an interval."""
     v = fmt_value(x["value"], unit)
     if x.get("low") is None:
         return v
     lo, hi = fmt_value(x["low"], unit), fmt_value(x["high"], unit)
     if len({lo, v, hi}) < 3 and x["low"] != x["high"]:
-        v, lo, hi = (f"{x[k]:.4g} {unit}" for k in ("value", "low", "high"))
+        v, lo, hi = fmt_apart([x["value"], x["low"], x["high"]], unit)
     return f"{v} [{lo}, {hi}]"
+
+
+def one_run(v: dict[str, Any]) -> bool:
+    """Whether a pair's verdict rests on one run per engine (``--ensemble 1``): no spread, no
+    median, no offsets."""
+    return any(f["size"] < 2 for f in v["engine_figures"].values())
+
+
+def spread_ratio(f: dict[str, Any], floor: float) -> bool:
+    """Whether a ratio of the gap to this engine's spread means anything: the engine ran more
+    than once and its spread is above the precision floor (else there is no denominator)."""
+    return f["size"] >= 2 and f["spread"]["value"] > floor
+
+
+def _median(v: dict[str, Any]) -> str:
+    """``a median `` over every pair of runs; nothing with one run per engine (one gap)."""
+    return "" if one_run(v) else "a median "
 
 
 def _x(r: float) -> str:
@@ -185,8 +207,8 @@ def _perturbation(ensemble: dict[str, Any] | None, label: str | None = None) -> 
 def perturbation_words(ensemble: dict[str, Any] | None) -> str | None:
     """A sentence naming each engine whose perturbation was raised above the requested one and
     the size it got; None when every engine got the requested one."""
-    if not ensemble:
-        return None
+    if not ensemble or ensemble.get("size", 1) < 2:
+        return None  # one run each: nothing was moved
     req = ensemble["perturbation"]
     raised = [
         f"{label} ({e['perturbation']['state_dtype']}) {e['perturbation']['position']:.3g} m "
@@ -283,7 +305,7 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
                 "it closes."
             )
         lines.append(
-            f"The two engines' runs {when} a median {_iv(v['gap'], unit)} apart, {ratio} own "
+            f"The two engines' runs {when} {_median(v)}{_iv(v['gap'], unit)} apart, {ratio} own "
             f"spread{near}: at this scale {who}'s outcome is not predictable, and the gap says "
             "nothing about the engines' physics." + also_words
         )
@@ -309,7 +331,7 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
             for lab, f in figs.items()
         )
         lines.append(
-            f"**{a} and {b} differ on this scenario**{marg}: their runs {when} a median "
+            f"**{a} and {b} differ on this scenario**{marg}: their runs {when} {_median(v)}"
             f"{_iv(v['gap'], unit)} apart; that is {parts}."
         )
         lines.append(
@@ -341,7 +363,7 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
                 f"({_p(t)}); a larger --ensemble may"
             )
         lines.append(
-            f"**Unresolved**{marg}: the engines' runs {when} a median {_iv(v['gap'], unit)} "
+            f"**Unresolved**{marg}: the engines' runs {when} {_median(v)}{_iv(v['gap'], unit)} "
             f"apart, {why}."
         )
     lines += _horizon_lines(v, unit) if v["verdict"] != "agree" else []

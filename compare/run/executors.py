@@ -16,7 +16,9 @@ It knows nothing of what a job computes. What it adds to an executor:
 - **Ctrl-C** (``KeyboardInterrupt`` in the caller) cancels the jobs not started, stops the
   pool's workers (none is left behind), calls ``on_result`` for every job that finished, and
   raises ``KeyboardInterrupt`` again. The local pool's workers ignore SIGINT (the terminal
-  sends it to the whole process group): the caller decides.
+  sends it to the whole process group): the caller decides. SIGTERM (``kill``, ``timeout``)
+  does the same while the local pool runs (:mod:`simbridge.terminate`): the pool is stopped,
+  its semaphores released, before ``Terminated`` (a ``KeyboardInterrupt``) is raised.
 - **Warm workers**: the local pool is kept after a call that ran to the end, its workers
   started and their imports done (simbridge, the engines: about half a second of each
   worker's start), and the next call with the same ``workers`` reuses it: a sweep or an
@@ -48,6 +50,7 @@ from simbridge.exceptions import (
     JobError,
     SimbridgeError,
 )
+from simbridge.terminate import sigterm_raises
 
 __all__ = [
     "JobFailed",
@@ -169,7 +172,8 @@ def run_all(
             if count == 0 or not _main_importable():
                 _run_here(fn, items, tracker)
             else:
-                _run_pool(fn, items, count, max_attempts, tracker)
+                with sigterm_raises():  # SIGTERM stops the pool as Ctrl-C does
+                    _run_pool(fn, items, count, max_attempts, tracker)
     finally:
         tracker.close()
     return [tracker.results[i] for i in range(n)]
@@ -238,11 +242,22 @@ def _killed_worker(exc: BaseException) -> bool:
 def _run_executor(
     fn: Callable[[Any], Any], items: list[Any], executor: Executor, tracker: _Tracker
 ) -> None:
+    with _HeldSignals() as held:
+        _run_executor_held(fn, items, executor, tracker, held)
+
+
+def _run_executor_held(
+    fn: Callable[[Any], Any],
+    items: list[Any],
+    executor: Executor,
+    tracker: _Tracker,
+    held: _HeldSignals,
+) -> None:
     futures: dict[Future[Any], int] = {executor.submit(fn, item): i for i, item in enumerate(items)}
     pending = set(futures)
     try:
         while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            done, pending = _wait_first(pending, held)
             for f in done:
                 i = futures[f]
                 if f.cancelled():
@@ -314,6 +329,77 @@ def _run_client(client: Any, fn: Callable[[Any], Any], items: list[Any], tracker
             if f.status == "finished":
                 tracker.finish(i, f.result())
         raise
+
+
+# ---------------------------------------------------------------- signals held around wait()
+
+WAIT_POLL_S = 0.25
+"""How long a wait for the first finished job lasts before it looks for a Ctrl-C or SIGTERM."""
+
+
+class _HeldSignals:
+    """Ctrl-C and SIGTERM recorded, not raised, while the jobs run: they are raised by
+    :meth:`check` between two waits. Raised from the handler, a ``KeyboardInterrupt`` can land
+    inside :func:`concurrent.futures.wait` while it holds the futures' locks one by one (with
+    hundreds of jobs pending most of the main thread's time is spent there): the locks it took
+    stay taken, the pool's result thread then blocks on them, and the pool's shutdown never
+    returns (a killed ``simbridge compare`` hung for 30 s and more under load). Only the main
+    thread handles signals, and only a handler that is Python's default (or
+    :mod:`simbridge.terminate`'s) is replaced; a caller's own handler is left alone."""
+
+    def __init__(self) -> None:
+        self.caught: BaseException | None = None
+        self.previous: dict[int, Any] = {}
+
+    def __enter__(self) -> _HeldSignals:
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        from simbridge.terminate import Terminated, raises_terminated
+
+        def hold_int(signum: int, frame: Any) -> None:
+            self.caught = self.caught or KeyboardInterrupt()
+
+        def hold_term(signum: int, frame: Any) -> None:
+            self.caught = self.caught or Terminated()
+
+        for sig, ours, default in (
+            (signal.SIGINT, hold_int, signal.default_int_handler),
+            (getattr(signal, "SIGTERM", None), hold_term, None),
+        ):
+            if sig is None:
+                continue
+            try:
+                now = signal.getsignal(sig)
+            except (AttributeError, ValueError):
+                continue
+            if now is default or (default is None and raises_terminated(now)):
+                self.previous[sig] = now
+                signal.signal(sig, ours)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler)
+        self.previous.clear()
+
+    def check(self) -> None:
+        """Raise the Ctrl-C or SIGTERM recorded since the jobs started, if any."""
+        if self.caught is not None:
+            caught, self.caught = self.caught, None
+            raise caught
+
+
+def _wait_first(
+    pending: set[Future[Any]], held: _HeldSignals
+) -> tuple[set[Future[Any]], set[Future[Any]]]:
+    """The futures done and those still pending, once at least one is done; a Ctrl-C or
+    SIGTERM recorded meanwhile is raised here, outside ``wait``'s locks."""
+    while True:
+        held.check()
+        done, rest = wait(pending, timeout=WAIT_POLL_S, return_when=FIRST_COMPLETED)
+        held.check()
+        if done:
+            return done, rest
 
 
 # ---------------------------------------------------------------- the local pool
@@ -503,6 +589,18 @@ def _run_pool(
     max_attempts: int,
     tracker: _Tracker,
 ) -> None:
+    with _HeldSignals() as held:
+        _run_pool_held(fn, items, workers, max_attempts, tracker, held)
+
+
+def _run_pool_held(
+    fn: Callable[[Any], Any],
+    items: list[Any],
+    workers: int,
+    max_attempts: int,
+    tracker: _Tracker,
+    held: _HeldSignals,
+) -> None:
     import multiprocessing
     from concurrent.futures.process import BrokenProcessPool
 
@@ -519,11 +617,12 @@ def _run_pool(
                 futures[pool.submit(_call, fn, items[i], i, tracker.labels[i])] = i
             pending = set(futures)
             while pending and not broken:
-                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                done, pending = _wait_first(pending, held)
                 for f in done:
                     exc = f.exception()
                     if exc is None:
                         tracker.finish(futures[f], f.result())
+                        held.check()
                     elif isinstance(exc, BrokenProcessPool):
                         broken = True
                     else:

@@ -13,9 +13,12 @@ on:
 * the engine, the profile (its :meth:`~simbridge.Profile.as_dict`, so per-engine settings
   count), the time step, the ensemble seed and member number, the kind of run, and the
   simbridge version;
-* :func:`run_code_digest`: simbridge's code that makes a run (not its report) and the versions
-  of numpy and the engines, so that an edited backend, another checkout sharing the cache or
-  an engine upgrade never reuses another code's results.
+* :func:`run_code_digest`: simbridge's code that makes a run (not its report), so that an
+  edited backend or another checkout sharing the cache never reuses another code's results;
+* :func:`engine_versions`: the versions of numpy and of the job's own engine library (and the
+  target engine's, for a resync job), as its backend's registration declares them
+  (``register(..., engine_dists=)``), so that an engine upgrade makes other keys, but
+  installing or upgrading another engine does not.
 
 :attr:`Job.key` is the sha256 of those, so a result can be cached by it
 (:mod:`simbridge.compare.run.cache`): the same key means the same inputs. What the key does not
@@ -49,7 +52,16 @@ from simbridge.exceptions import InvalidArgumentError
 
 from ..scenario import Scenario, dumps_scenario, format_timestep, loads_scenario
 
-__all__ = ["KINDS", "Job", "JobResult", "run_job", "file_hashes", "profile_dict"]
+__all__ = [
+    "KINDS",
+    "Job",
+    "JobResult",
+    "run_job",
+    "file_hashes",
+    "profile_dict",
+    "engine_versions",
+    "run_code_digest",
+]
 
 KINDS = ("nominal", "half-step", "member", "resync")
 """What a job runs: a nominal run at one of the study's time steps, the run at half a time
@@ -61,19 +73,45 @@ FORMAT = "simbridge.compare.Job/1"
 
 # the parts of simbridge a run does not depend on: what is written or judged about it
 _NOT_RUN_CODE = ("compare/report/", "compare/analysis/", "compare/study/", "simbridge/cli")
-# the libraries a run's numbers come from
-_RUN_LIBRARIES = ("numpy", "pybullet", "mujoco", "sapien")
+NOT_INSTALLED = "-"
+"""The version :func:`engine_versions` gives a distribution that is not installed."""
+
+
+@functools.cache
+def dist_version(dist: str) -> str:
+    """The installed version of distribution ``dist`` (:data:`NOT_INSTALLED`: none); read from
+    its metadata, importing nothing."""
+    import importlib.metadata
+
+    try:
+        return importlib.metadata.version(dist)
+    except importlib.metadata.PackageNotFoundError:
+        return NOT_INSTALLED
+
+
+def engine_versions(*backends: str) -> dict[str, str]:
+    """``{distribution: version}`` of what the runs of ``backends`` depend on besides simbridge:
+    numpy and each backend's engine distributions (:func:`simbridge.registry.engine_dists`); a
+    backend unknown here counts numpy alone (its run fails and says why)."""
+    from simbridge.exceptions import UnknownBackendError
+    from simbridge.registry import engine_dists
+
+    dists: list[str] = ["numpy"]
+    for name in backends:
+        try:
+            dists += engine_dists(name)
+        except UnknownBackendError:
+            pass
+    return {d: dist_version(d) for d in dict.fromkeys(dists)}
 
 
 @functools.lru_cache(maxsize=1)
 def run_code_digest() -> str:
     """sha256 of the code a run's result depends on: simbridge's own Python files (the core, the
-    backends, compare's scenarios and runs; not its report, analysis, study or CLI code) and the
-    versions of numpy and the engines. In every job's key, so that a result made by other code
-    (an edited backend, another checkout sharing the cache, an engine upgrade) is never taken
-    for this code's."""
-    import importlib.metadata
-
+    backends, compare's scenarios and runs; not its report, analysis, study or CLI code). In
+    every job's key, so that a result made by other code (an edited backend, another checkout
+    sharing the cache) is never taken for this code's; the engines' versions are the job's own
+    (:func:`engine_versions`)."""
     import simbridge
 
     roots = [Path(simbridge.__file__).resolve().parent, Path(__file__).resolve().parents[1]]
@@ -89,12 +127,6 @@ def run_code_digest() -> str:
     h = hashlib.sha256()
     for name in sorted(files):
         h.update(name.encode() + b"\0" + files[name].read_bytes() + b"\0")
-    for lib in _RUN_LIBRARIES:
-        try:
-            version = importlib.metadata.version(lib)
-        except importlib.metadata.PackageNotFoundError:
-            version = "-"
-        h.update(f"{lib}={version}\0".encode())
     return h.hexdigest()
 
 
@@ -249,9 +281,19 @@ class Job:
             "version": self.version,
         }
 
+    @property
+    def engines(self) -> tuple[str, ...]:
+        """The backends the job runs: its own and, for a resync job, its target's."""
+        return (self.backend,) if self.target is None else (self.backend, self.target[0])
+
     def identity_with_code(self) -> dict[str, Any]:
-        """:meth:`identity` and :func:`run_code_digest` (what :attr:`key` hashes)."""
-        return {**self.identity(), "code": run_code_digest()}
+        """:meth:`identity`, :func:`run_code_digest` and the :func:`engine_versions` of its
+        engines (what :attr:`key` hashes)."""
+        return {
+            **self.identity(),
+            "code": run_code_digest(),
+            "engine_versions": engine_versions(*self.engines),
+        }
 
     @cached_property
     def key(self) -> str:
@@ -364,6 +406,7 @@ def run_job_registered(specs: tuple[Any, ...], job: Job) -> JobResult:
                 pip_name=spec.pip_name,
                 settings=spec.settings,
                 state_dtype=spec.state_dtype,
+                engine_dists=spec.engine_dists,
             )
     return run_job(job)
 

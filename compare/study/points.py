@@ -194,8 +194,19 @@ def check_vary(settings: Sequence[Setting | str], backends: Sequence[str]) -> No
             )
         if only is not None and backend is not None and backend != backends[only]:
             raise InvalidArgumentError(
-                "vary", f"{key!r}: engine {only + 1} is {backends[only]!r}, not {backend!r}"
+                "vary",
+                f"{key!r}: engine {only + 1} is {backends[only]!r}, not {backend!r}"
+                f"{_where(name, backend, backends)}",
             )
+
+
+def _where(name: str, backend: str, backends: Sequence[str]) -> str:
+    """``"; 'physx' is engine 3 (physx.solver@3)"``: where ``backend`` is among the engines."""
+    places = [n + 1 for n, b in enumerate(backends) if b == backend]
+    if not places:
+        return f"; {backend!r} is not among the engines ({', '.join(backends)})"
+    at = " and ".join(str(n) for n in places)
+    return f"; {backend!r} is engine {at} ({name}@{places[0]})"
 
 
 def apply_setting(
@@ -222,7 +233,9 @@ def apply_setting(
         )
     if only is not None and kind == "engine" and name.split(".", 1)[0] != backends[only]:
         raise InvalidArgumentError(
-            "vary", f"{key!r}: engine {only + 1} is {backends[only]!r}, not that setting's backend"
+            "vary",
+            f"{key!r}: engine {only + 1} is {backends[only]!r}, not that setting's backend"
+            f"{_where(name, name.split('.', 1)[0], backends)}",
         )
     out = []
     for slot, (backend, prof) in enumerate(zip(backends, profiles, strict=True)):

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .exceptions import InvalidArgumentError
+from .keywords import Missing
 
 __all__ = [
     "MAX_STATE_VALUE",
@@ -149,6 +150,8 @@ def command_values(value: Any, n: int, argument: str, nonneg: bool = False) -> l
         except OverflowError:
             raise InvalidArgumentError(argument, _TOO_LARGE) from None
         except (TypeError, ValueError):
+            if type(value) is Missing:  # a required argument not given
+                raise value.error() from None
             raise InvalidArgumentError(
                 argument, f"expected a number or {n} numbers, got {value!r}"
             ) from None

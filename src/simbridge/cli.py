@@ -213,6 +213,10 @@ def build_parser() -> argparse.ArgumentParser:
 def _report(args: argparse.Namespace) -> int:
     from simbridge.compare.report.rebuild import rebuild
 
+    if not args.folder.exists():
+        raise _Usage(f"argument DIR: no such folder: {str(args.folder)!r}")
+    if not args.folder.is_dir():
+        raise _Usage(f"argument DIR: {str(args.folder)!r} is not a folder")
     path = rebuild(
         args.folder, cache=args.cache, plots=not args.no_plots, replay=not args.no_replay
     )
@@ -234,8 +238,6 @@ def _verbose(parser: argparse.ArgumentParser, default: Any = argparse.SUPPRESS) 
 
 def _compare(args: argparse.Namespace) -> int:
     from simbridge.cli_settings import settings_from_args
-    from simbridge.compare import compare, report
-    from simbridge.compare.report.progress import ProgressBar
 
     if args.backends is None:  # every installed backend: compare() records those left out
         from simbridge.compare import installed_backends
@@ -254,7 +256,28 @@ def _compare(args: argparse.Namespace) -> int:
     scenario = scenario_argument(args.scenario)
     engine_settings = settings_from_args(args.engine_settings)  # checked before any run
     out = args.out if args.out is not None else Path("reports") / scenario.name
-    _check_writable(out)  # before the engines run, not after
+    made = _check_writable(out)  # before the engines run, not after
+    _warn_self_check(args, scenario, n)
+    try:
+        path, resolver, result = _compare_into(args, scenario, engine_settings, out)
+    except BaseException:  # an error, Ctrl-C, SIGTERM: no empty or half-written folder left
+        _remove_made(made)
+        raise
+    from simbridge.compare.report import summary
+    from simbridge.compare.report.brief import brief
+
+    cli_study.finish_resolve(resolver, out)  # --resolve: its table, and a line here
+    print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
+    return 0
+
+
+def _compare_into(
+    args: argparse.Namespace, scenario: Any, engine_settings: Any, out: Path
+) -> tuple[Path, Any, Any]:
+    """``compare``'s study and its report in ``out``: (report.md, the resolver, the result)."""
+    from simbridge import cli_study
+    from simbridge.compare import compare, report
+    from simbridge.compare.report.progress import ProgressBar
 
     resolver = cli_study.resolver_of(args)  # --resolve: compare, halving dt while unresolved
     with ProgressBar() as bar:
@@ -276,12 +299,22 @@ def _compare(args: argparse.Namespace) -> int:
             command_line=[PROG, *sys.argv[1:]] if args.argv is None else [PROG, *args.argv],
         )
         path = report(result, out, plots=not args.no_plots, replay=not args.no_replay)
-    from simbridge.compare.report import summary
-    from simbridge.compare.report.brief import brief
+    return path, resolver, result
 
-    cli_study.finish_resolve(resolver, out)  # --resolve: its table, and a line here
-    print("\n".join(brief(summary(result), path)))  # the paragraphs are in report.md
-    return 0
+
+def _warn_self_check(args: argparse.Namespace, scenario: Any, n: int) -> None:
+    """A line on stderr where two --backends entries are one engine under one profile (a null
+    comparison; the run goes on: a self-check is legitimate)."""
+    if args.backends is None:
+        return
+    from simbridge.compare.pipeline import engine_labels
+    from simbridge.compare.report.self_check import self_check_words
+
+    profiles = args.profile or [scenario.profile]
+    profiles = list(profiles) * n if len(profiles) == 1 else list(profiles)
+    words = self_check_words(args.backends, profiles, engine_labels(args.backends, profiles))
+    if words:
+        print(words, file=sys.stderr)
 
 
 def _settings(args: argparse.Namespace) -> int:
@@ -291,15 +324,42 @@ def _settings(args: argparse.Namespace) -> int:
     return settings_command(args, available_backends())
 
 
-def _check_writable(out: Path) -> None:
-    """The report folder can be made and written to (an OSError naming it, else)."""
+def _check_writable(out: Path) -> list[Path]:
+    """The report folder can be made and written to (an OSError naming it, else). Returns the
+    folders it made (``out`` and its missing parents, deepest first: :func:`_remove_made`)."""
     import tempfile
 
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(f"report folder {str(out)!r} exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryFile(dir=out):
-        pass
+    made = []
+    for folder in (out, *out.absolute().parents):
+        if folder.exists():
+            break
+        made.append(folder)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except BaseException:
+        _remove_made(made)
+        raise
+    return made
+
+
+def _remove_made(made: list[Path]) -> None:
+    """Remove the folders :func:`_check_writable` made (a study that failed or was stopped
+    before its report was written): ``made[0]`` with what the study put in it, then each
+    parent it made while it is empty. A folder that was there before is never touched."""
+    import shutil
+
+    if not made:
+        return
+    shutil.rmtree(made[0], ignore_errors=True)
+    for folder in made[1:]:
+        try:
+            folder.rmdir()
+        except OSError:  # something else was written there meanwhile
+            break
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -466,8 +526,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.log is not None:
         log.addHandler(args.log)
         log.setLevel(logging.DEBUG)
+    from simbridge.terminate import sigterm_raises
+
     try:
-        return _run(handler, args, parser)
+        with sigterm_raises():  # SIGTERM (kill, timeout) cleans up as Ctrl-C does
+            return _run(handler, args, parser)
     finally:
         if args.log is not None:
             log.removeHandler(args.log)
@@ -492,7 +555,12 @@ def _run(handler: Any, args: argparse.Namespace, parser: argparse.ArgumentParser
     except (SimbridgeError, OSError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
+        from simbridge.terminate import Terminated
+
+        if isinstance(exc, Terminated):
+            print(f"{PROG}: terminated", file=sys.stderr)
+            return 128 + 15  # SIGTERM's exit status as a shell reports it
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
 

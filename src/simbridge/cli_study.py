@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -205,7 +206,11 @@ def _out(args: argparse.Namespace, name: str, study: str) -> Path:
     out = args.out if args.out is not None else Path("reports") / f"{name}-{study}"
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(f"report folder {str(out)!r} exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
+    # made by the study's writer when there is something to write: a study that fails or is
+    # stopped before leaves no empty folder; whether it can be made is checked now
+    there = next(p for p in (out, *out.absolute().parents) if p.exists())
+    if not there.is_dir() or not os.access(there, os.W_OK | os.X_OK):
+        raise PermissionError(f"report folder {str(out)!r} cannot be made in {str(there)!r}")
     return out
 
 

@@ -169,8 +169,9 @@ def _jsonable(value: Any) -> Any:
 
 
 _CACHE: dict[tuple[str, str], dict[str, Setting]] = {}
-# a settings module's check_together(values) -> (key, detail) | None: settings that must agree
-# with each other (PhysX's rest offset below its contact offset), given or at their defaults
+# a settings module's check_together(values, given) -> (key, detail) | None: settings that must
+# agree with each other (PhysX's rest offset below its contact offset), given or at their
+# defaults; ``given``: the keys set, so that the message blames one of them
 _TOGETHER: dict[tuple[str, str], Any] = {}
 
 
@@ -218,6 +219,14 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
     for key in mapping:
         if key not in known:
             valid = ", ".join(known) if known else "none (this backend declares no settings)"
+            owners = _owners(str(key), backend)
+            if owners:
+                raise InvalidEngineSettingError(
+                    backend,
+                    str(key),
+                    f"unknown setting: {key} is a {' and '.join(owners)} setting; {backend}'s "
+                    f"are: {valid}",
+                )
             raise InvalidEngineSettingError(
                 backend,
                 str(key),
@@ -229,10 +238,27 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
     together = _TOGETHER.get((spec.name, spec.settings))
     if together is not None and checked:
         values = {k: s.default for k, s in known.items() if not callable(s.default)}
-        problem = together({**values, **checked})
+        problem = together({**values, **checked}, frozenset(checked))
         if problem is not None:
             raise InvalidEngineSettingError(backend, *problem)
     return checked
+
+
+def _owners(key: str, backend: str) -> list[str]:
+    """The other registered backends that have a setting ``key`` (for the message of a key
+    given to the wrong engine); a backend whose settings module cannot be read is skipped."""
+    from .registry import available_backends
+
+    found = []
+    for other in available_backends():
+        if other == backend:
+            continue
+        try:
+            if key in settings_for(other):
+                found.append(other)
+        except Exception:  # noqa: BLE001 - only a hint: a broken registration is reported elsewhere
+            continue
+    return found
 
 
 def effective(backend: str, profile: Profile) -> dict[str, Any]:

@@ -37,6 +37,8 @@ __all__ = [
     "SimBusyError",
     "SimClosedError",
     "SimNotCopyableError",
+    "NotOfferedError",
+    "PyBulletKeywordError",
     "StaleCommandError",
     "ScenarioError",
     "TrajectoryFileError",
@@ -373,6 +375,32 @@ class SimNotCopyableError(SimbridgeError, TypeError):
             "with sim.get_state() (a WorldState, which pickles) into another Sim loaded alike "
             "(sim.set_state()), or build a new Sim"
         )
+
+
+class NotOfferedError(SimbridgeError, AttributeError):
+    """A PyBullet function the Sim does not offer (yet), asked for by its PyBullet name
+    (``sim.applyExternalForce``) or in snake case: says so, and what to use instead where
+    something exists (:data:`simbridge.pybullet_names.NOT_OFFERED`)."""
+
+    def __init__(self, attribute: str, pybullet_name: str, instead: str):
+        self.attribute = attribute
+        self.pybullet_name = pybullet_name
+        self.instead = instead
+        what = f"instead: {instead}" if instead else "nothing in simbridge does this yet"
+        super().__init__(
+            f"'Sim' object has no attribute {attribute!r}: simbridge does not offer PyBullet's "
+            f"{pybullet_name} yet; {what}"
+        )
+
+
+class PyBulletKeywordError(SimbridgeError, TypeError):
+    """A Sim call given a keyword it does not take (often PyBullet's name of one of its
+    arguments, ``basePosition``), or missing a required argument: ``detail`` names the keyword
+    and simbridge's name for it, or the valid keywords."""
+
+    def __init__(self, call: str, detail: str):
+        self.call = call
+        super().__init__(f"{call} {detail}")
 
 
 class StaleCommandError(SimbridgeError, RuntimeError):

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from .exceptions import InvalidArgumentError
+from .keywords import Missing
 
 __all__ = ["motor_error", "per_axis", "quaternions", "Q_SIZE", "U_SIZE"]
 
@@ -57,6 +58,8 @@ def per_axis(
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
+        if type(value) is Missing:  # a required argument not given
+            raise value.error() from None
         raise InvalidArgumentError(
             argument, f"expected numbers of shape ({width},) or ({n}, {width}), got {value!r}"
         ) from None
@@ -89,6 +92,8 @@ def quaternions(value: Any, n: int, argument: str) -> list[list[float]]:
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
+        if type(value) is Missing:  # a required argument not given
+            raise value.error() from None
         raise InvalidArgumentError(
             argument, f"expected quaternions (x, y, z, w), got {value!r}"
         ) from None

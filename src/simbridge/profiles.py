@@ -23,7 +23,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .exceptions import InvalidArgumentError, InvalidProfileError
+from .exceptions import InvalidArgumentError, InvalidProfileError, did_you_mean
 
 __all__ = ["Profile", "PROFILES", "get_profile", "derived_profile"]
 
@@ -328,6 +328,8 @@ def _parse_derived(spec: str) -> Profile:
             changes[key] = value
         else:
             raise InvalidArgumentError(
-                "profile", f"unknown entry {key!r} in {spec!r}; valid: {sorted(entries)}"
+                "profile",
+                f"unknown entry {key!r}{did_you_mean(key, entries)} in {spec!r}; valid: "
+                f"{sorted(entries)}",
             )
     return replace(prof, name=spec, **changes)

@@ -13,9 +13,10 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import logging
+import re
 import warnings
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .engine_output import captured
 from .exceptions import (
@@ -34,6 +35,7 @@ __all__ = [
     "available_backends",
     "load_backend",
     "backend_spec",
+    "engine_dists",
     "unavailable_reason",
     "state_dtype",
     "STATE_DTYPES",
@@ -51,6 +53,7 @@ class BackendSpec:
     pip_name: str = ""  # what to pip install when one is missing
     settings: str = ""  # "module:ATTR": its engine settings (engine_settings.Setting), no engine
     state_dtype: str = ""  # its class's state_dtype, declared; "": read from the class (imports it)
+    engine_dists: tuple[str, ...] = ()  # distributions whose versions its runs depend on
 
 
 _REGISTRY: dict[str, BackendSpec] = {}
@@ -66,13 +69,17 @@ def register(
     pip_name: str = "",
     settings: str = "",
     state_dtype: str = "",
+    engine_dists: tuple[str, ...] | None = None,
 ) -> None:
     """Register a backend under ``name``; ``entry_point`` is ``"module:Class"``; ``settings``
     is ``"module:ATTR"``, a sequence of :class:`simbridge.engine_settings.Setting` in a module
     that imports no engine (read when a profile or scenario sets one); ``state_dtype``, one of
     :data:`STATE_DTYPES`, declares the class's :attr:`~simbridge.backend.Backend.state_dtype`
     so that :func:`state_dtype` imports no engine (a report rebuilt from the cache asks it of
-    every engine of the study); the class must agree (:func:`load_backend` checks)."""
+    every engine of the study); the class must agree (:func:`load_backend` checks).
+    ``engine_dists``: the distributions (pip names) whose versions the backend's results depend
+    on (its engine library; numpy counts for every backend): a cached run is reused only while
+    their versions are the same (:func:`engine_dists`); None: the ``requires`` modules' names."""
     if ":" not in entry_point:
         raise BackendError(f"backend {name!r}: entry point {entry_point!r} is not 'module:Class'")
     if state_dtype and state_dtype not in STATE_DTYPES:
@@ -81,8 +88,21 @@ def register(
             f"backend {name!r}: expected one of {list(STATE_DTYPES)} (or '' for the class's own), "
             f"got {state_dtype!r}",
         )
+    if isinstance(engine_dists, str) or not all(
+        isinstance(d, str) and d for d in (engine_dists or ())
+    ):
+        raise InvalidArgumentError(
+            "engine_dists",
+            f"backend {name!r}: expected a tuple of distribution names, got {engine_dists!r}",
+        )
     _REGISTRY[name] = BackendSpec(
-        name, entry_point, requires, pip_name or " ".join(requires), settings, state_dtype
+        name,
+        entry_point,
+        requires,
+        pip_name or " ".join(requires),
+        settings,
+        state_dtype,
+        tuple(requires if engine_dists is None else engine_dists),
     )
     _LOADED.pop(name, None)
 
@@ -96,7 +116,39 @@ def _read_entry_points() -> None:
 
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         if ep.name not in _REGISTRY:
-            _REGISTRY[ep.name] = BackendSpec(ep.name, ep.value)
+            _REGISTRY[ep.name] = BackendSpec(ep.name, ep.value, engine_dists=_provider_dists(ep))
+
+
+def _provider_dists(ep: Any) -> tuple[str, ...]:
+    """An entry-point backend's engine distributions: the distribution that provides it and
+    the ones it requires (not under an extra or a marker; simbridge itself aside), which is how
+    a third-party backend declares its engine (its package's ``dependencies``)."""
+    dist = getattr(ep, "dist", None)
+    if dist is None:
+        return ()
+    names = [str(dist.metadata["Name"] or "")]
+    for req in dist.requires or ():
+        if ";" in req:  # an extra's or a platform's requirement
+            continue
+        name = re.split(r"[\s\[<>=!~(@]", req.strip(), maxsplit=1)[0]
+        if name and _normal(name) not in ("simbridge", _normal(names[0])):
+            names.append(name)
+    return tuple(n for n in dict.fromkeys(names) if n)
+
+
+def _normal(name: str) -> str:
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def engine_dists(name: str) -> tuple[str, ...]:
+    """The distributions whose versions backend ``name``'s results depend on: as registered
+    (``register(..., engine_dists=)``; an entry-point backend: its package and what that
+    requires), numpy first. Imports nothing of the backend.
+
+    Raises:
+        UnknownBackendError: as :func:`backend_spec`.
+    """
+    return tuple(dict.fromkeys(("numpy", *backend_spec(name).engine_dists)))
 
 
 def available_backends() -> list[str]:
@@ -213,6 +265,7 @@ register(
     pip_name="pybullet",
     settings="simbridge.backends.settings_pybullet:SETTINGS",
     state_dtype="float64",
+    engine_dists=("pybullet",),
 )
 register(
     "mujoco",
@@ -221,12 +274,14 @@ register(
     pip_name="'mujoco>=4'",
     settings="simbridge.backends.settings_mujoco:SETTINGS",
     state_dtype="float64",
+    engine_dists=("mujoco",),
 )
 register(
     "physx",
     "simbridge.backends.physx:PhysxBackend",
     requires=("sapien",),
-    pip_name="'simbridge[physx]'",
+    pip_name="'simbridge[physx]' (from a clone: pip install -e '.[physx]')",
     settings="simbridge.backends.settings_physx:SETTINGS",
     state_dtype="float32",
+    engine_dists=("sapien",),
 )

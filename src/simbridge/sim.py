@@ -36,7 +36,7 @@ from .arguments import flag, quat, vec, within
 from .backend import Backend
 from .bound import BoundCommand
 from .engine_settings import effective as effective_settings
-from .exceptions import InvalidArgumentError, SimBusyError, SimNotCopyableError
+from .exceptions import InvalidArgumentError, NotOfferedError, SimBusyError, SimNotCopyableError
 from .profiles import Profile, get_profile
 from .registry import available_backends, load_backend
 from .sim_control import Control
@@ -137,10 +137,13 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
 
     def __getattr__(self, name: str) -> Any:
         # only for a name the class lacks: a PyBullet name gets simbridge's in its message
-        from .pybullet_names import equivalent
+        from .pybullet_names import equivalent, not_offered
 
         found = equivalent(name)
         if found is None:
+            missing = not_offered(name)
+            if missing is not None:
+                raise NotOfferedError(name, *missing)
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         raise AttributeError(
             f"{type(self).__name__!r} object has no attribute {name!r}; simbridge's "
@@ -238,6 +241,7 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
         self_collision: bool | str | None = None,
         inertia_source: str | None = None,
         merge_fixed_links: bool = False,
+        **pybullet: Any,
     ) -> int:
         """Load a robot and return its body id.
 
@@ -267,7 +271,13 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
             UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
             UnsupportedJointError: the message names the file, the line and the element.
             InvalidArgumentError: a bad pose or option.
+            PyBulletKeywordError: a keyword it does not take (PyBullet's ``basePosition``,
+                ``useFixedBase``, ``flags``...: the message names simbridge's).
         """
+        if pybullet:
+            from .keywords import keyword_error
+
+            raise keyword_error(self.load_urdf, pybullet)
         pos = vec(base_position, 3, "base_position")
         within(pos, "base_position")
         orn = quat(base_orientation, "base_orientation", normalise=True)

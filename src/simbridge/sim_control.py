@@ -15,6 +15,7 @@ import numpy as np
 from .arguments import _F64, JointsArg, quat, state_vec
 from .bound import BoundCommand
 from .exceptions import InvalidArgumentError
+from .keywords import Missing, keyword_error
 from .sim_lookups import _Body, _Closed
 from .types import MotorMode
 
@@ -22,6 +23,14 @@ if TYPE_CHECKING:
     from .backend import Backend
 
 __all__ = ["Control"]
+
+# required arguments' defaults: a PyBullet keyword given in their place is named, not missed
+_RESET_POSITIONS = Missing("reset_joint_state", "positions")
+_VELOCITY_TARGET = Missing("set_joint_velocity", "target")
+_VELOCITY_MAX_FORCE = Missing("set_joint_velocity", "max_force", keyword_only=True)
+_POSITION_TARGET = Missing("set_joint_position", "target")
+_POSITION_MAX_FORCE = Missing("set_joint_position", "max_force", keyword_only=True)
+_TORQUE = Missing("set_joint_torque", "torque")
 
 
 class Control:
@@ -64,12 +73,16 @@ class Control:
         self,
         body: int,
         joints: JointsArg,
-        positions: Any,
+        positions: Any = _RESET_POSITIONS,
         velocities: Any = 0.0,
+        **pybullet: Any,
     ) -> None:
         """Teleport movable joints to ``positions`` with ``velocities`` (``resetJointState``).
         A spherical joint takes :meth:`reset_joint_state_multi_dof` (PyBullet's
-        ``resetJointState`` leaves one as it is: measured)."""
+        ``resetJointState`` leaves one as it is: measured). PyBullet's keywords
+        (``targetValue``...) raise PyBulletKeywordError naming simbridge's."""
+        if pybullet:
+            raise keyword_error(self.reset_joint_state, pybullet)
         idx = self._joints(body, joints, True)
         if self._multi_idx and id(idx) in self._multi_idx:
             self._refuse_multi_dof(body, idx, "reset_joint_state")
@@ -104,7 +117,13 @@ class Control:
     # ---------------------------------------------------------------- control
 
     def set_joint_velocity(
-        self, body: int, joints: JointsArg, target: Any, *, max_force: Any
+        self,
+        body: int,
+        joints: JointsArg,
+        target: Any = _VELOCITY_TARGET,
+        *,
+        max_force: Any = _VELOCITY_MAX_FORCE,
+        **pybullet: Any,
     ) -> None:
         """VELOCITY_CONTROL: drive ``joints`` towards ``target`` (rad/s or m/s) with at most
         ``max_force`` (N·m or N). Persists until replaced; ``max_force=0`` releases the joint
@@ -113,7 +132,10 @@ class Control:
         A spherical joint takes only the target 0 (PyBullet's spherical motor brakes; it drives
         no other velocity), and ``max_force`` per axis of the child's frame: a number, shape
         (3,), (n, 1) or (n, 3) (see :mod:`simbridge.multi_dof`); spherical joints are commanded
-        apart from other joints."""
+        apart from other joints. PyBullet's keywords (``force``...) raise PyBulletKeywordError
+        naming simbridge's."""
+        if pybullet:
+            raise keyword_error(self.set_joint_velocity, pybullet)
         # the hot path inline (a control loop's every step): joints already resolved, a float64
         # array of targets and one force; anything else, or a value to refuse, takes the checks
         # of every command (_joints, _values), which give the same results and errors
@@ -155,11 +177,12 @@ class Control:
         self,
         body: int,
         joints: JointsArg,
-        target: Any,
+        target: Any = _POSITION_TARGET,
         *,
-        max_force: Any,
+        max_force: Any = _POSITION_MAX_FORCE,
         kp: Any = 0.1,
         kd: Any = 1.0,
+        **pybullet: Any,
     ) -> None:
         """POSITION_CONTROL with PyBullet's law: each step the motor asks for the velocity
         change ``kp * (target - q) / dt - kd * v`` (so it depends on dt), its force clamped to
@@ -170,7 +193,10 @@ class Control:
         ``-kd v + 0.2 kp e / dt`` (e: the turn to the target as Bullet's XYZ Euler angles; kd is
         what PyBullet's ``setJointMotorControlMultiDof`` calls ``damping``), ``max_force``,
         ``kp`` and ``kd`` per axis (a number, (3,), (n, 1) or (n, 3)); see
-        :mod:`simbridge.multi_dof`."""
+        :mod:`simbridge.multi_dof`. PyBullet's keywords (``positionGain``...) raise
+        PyBulletKeywordError naming simbridge's."""
+        if pybullet:
+            raise keyword_error(self.set_joint_position, pybullet)
         # the hot path inline, as set_joint_velocity's (one float each for the force and gains)
         b = self._bodies.get(body) if type(body) is int else None
         idx = None
@@ -340,13 +366,22 @@ class Control:
             self._release_command(command)
             command._end(why)
 
-    def set_joint_torque(self, body: int, joints: JointsArg, torque: Any) -> None:
+    def set_joint_torque(
+        self,
+        body: int,
+        joints: JointsArg,
+        torque: Any = _TORQUE,
+        **pybullet: Any,
+    ) -> None:
         """TORQUE_CONTROL: add ``torque`` (N·m or N) during the next step only (commands before
         one step add up, as in PyBullet). The joint's motor stays; release the default brake
         first with ``set_joint_velocity(..., max_force=0)``.
 
         A spherical joint takes 3 torques about the axes of its child's (inertial) frame:
-        shape (3,) or (n, 3); spherical joints are commanded apart from other joints."""
+        shape (3,) or (n, 3); spherical joints are commanded apart from other joints.
+        PyBullet's keywords (``force``...) raise PyBulletKeywordError naming simbridge's."""
+        if pybullet:
+            raise keyword_error(self.set_joint_torque, pybullet)
         # the hot path inline, as set_joint_velocity's
         b = self._bodies.get(body) if type(body) is int else None
         idx = None

@@ -42,7 +42,7 @@ def test_files_exist(written):
     for name in names:
         assert (out / name).read_bytes()[:8] == PNG, name
         assert f"]({name})" in path.read_text()
-    for label in ("pybullet__pybullet_", "pybullet__urdf_"):
+    for label in ("pybullet-pybullet", "pybullet-urdf"):
         assert (out / "trajectories" / f"{label}.npz").is_file()
         assert (out / "trajectories" / f"{label}.csv").is_file()
     assert set(summary["files"]) >= {"summary.json", "distance.png"}
@@ -95,8 +95,8 @@ def test_summary_figures_match_the_divergence(written):
 
 def test_saved_trajectories_reproduce_the_summary(written):
     c, out, path, s = written
-    a = Trajectory.load(out / "trajectories" / "pybullet__pybullet_.npz")
-    b = Trajectory.load(out / "trajectories" / "pybullet__urdf_.npz")
+    a = Trajectory.load(out / "trajectories" / "pybullet-pybullet.npz")
+    b = Trajectory.load(out / "trajectories" / "pybullet-urdf.npz")
     assert diff(a, b).final == s["cross"]["final"]
     gap = float(np.linalg.norm(a.body.base_position[-1] - b.body.base_position[-1]))
     assert s["headline"]["final"] == gap

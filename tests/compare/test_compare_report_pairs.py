@@ -18,7 +18,7 @@ from simbridge.compare import compare, report
 from simbridge.compare.analysis.diff import QUANTITIES
 from simbridge.compare.report import brief, plots
 from simbridge.compare.report.events import parting_words
-from simbridge.compare.report.fmt import fmt_threshold, fmt_time, fmt_value
+from simbridge.compare.report.fmt import fmt_apart, fmt_threshold, fmt_time, fmt_value
 from simbridge.compare.report.pair_sections import MAX_PART_ROWS
 from simbridge.compare.report.parts import parts_words
 from simbridge.compare.report.verdict import interval_cell, pair_words, verdict_word
@@ -46,14 +46,14 @@ def written(three, tmp_path_factory):
 
 
 def _judged(p: dict) -> str:
-    """The judged gap of a pair as the writers print it: in the report's unit, or to 4
-    significant digits where its interval is too narrow for the report's rounding."""
+    """The judged gap of a pair as the writers print it: in the report's unit, with more digits
+    where its interval is too narrow for the report's rounding."""
     v = p["verdict"]
     g = v["gap"]
     shown = fmt_value(g["value"], v["unit"])
     if g["low"] is not None and g["low"] != g["high"]:
         if len({fmt_value(g[k], v["unit"]) for k in ("low", "value", "high")}) < 3:
-            return f"{g['value']:.4g} {v['unit']}"
+            return fmt_apart([g["value"], g["low"], g["high"]], v["unit"])[0]
     return shown
 
 

@@ -185,8 +185,10 @@ def test_explain_leaves_out_the_departures_not_checked_here(dropped):
     assert set(not_checked(labels, deps)) == marked  # counted instead
     # the racecar: revolute and fixed joints only, no teleports; the compare report's
     # departures that apply here (contact, its cylinders) are still the candidates' source
-    assert {"spherical joints", "snapshot", "self collision", "meshes", "precision"} <= marked
-    assert "cylinder" in {k for k, _ in not_tested}
+    assert {"spherical joints", "snapshot", "self collision", "meshes"} <= marked
+    # PhysX's float32 state applies to every scenario: said to apply, and no setting moves it
+    assert "precision" not in marked and "cylinder" in {k for k, _ in not_tested}
+    assert "precision" in {k for k, _ in not_tested}
     assert any(c.source == "departure: contact" for c in cands)
     # link damping is checked: it applies where a profile damps (pybullet's does), a candidate
     assert "link damping" not in marked
@@ -203,8 +205,10 @@ def test_explain_report_counts_them(tmp_path):
     e = explain(RACECAR, WITH_PHYSX, profile=damped, **{**SMALL, "duration": 0.3})
     path = write_explanation(e, tmp_path, plots=False)
     text = Path(path).read_text()
-    for key in ("spherical joints", "self collision", "snapshot", "meshes", "precision"):
+    for key in ("spherical joints", "self collision", "snapshot", "meshes"):
         assert f"(departure: {key})" not in text  # not said to apply
+    # PhysX's float32 state applies to every scenario: said to apply, and no setting moves it
+    assert "| (departure: precision) | not tested | departure applies |" in text
     (p,) = e.pairs
     assert not p.note and p.ranked[0].candidate.name == "linear_damping"  # a gap, explained
     assert {"spherical joints", "snapshot", "meshes"} <= set(p.not_checked)

@@ -219,16 +219,6 @@ def declared(table: Mapping[str, T], backend: str) -> T | None:
 # an assertion, and FAILS when it passes (strict: a fixed bug must leave this table); any other
 # error still fails. Keyed by bug, then backend.
 KNOWN_BUGS: dict[str, dict[str, str]] = {
-    # slider.urdf's carriage reset past its limit (test_cross_engine.py): PhysX corrects a limit
-    # violation at its depenetration speed and has one drive per joint (held by the motor), so
-    # PyBullet's limit row (push back at 0.2 x depth / dt within 0.04 m, only stop deeper) is not
-    # emulated. Measured over 60 steps: reset at 0.7 ends at -0.4 (PyBullet: stays at 0.7),
-    # 1.10 m and 57.6 m/s off; at 0.41, 0.36 m and 1.44 m/s. Listed in the manifest's departures
-    # ("joint limits").
-    "joint_reset_past_a_limit": {
-        "physx": "a joint reset past its limit is thrown back at PhysX's depenetration speed "
-        "(measured up to 1.10 m and 57.6 m/s from PyBullet over 60 steps)"
-    },
     # arms_urdf(8, 16) (test_limits.py): velocity motors at 0.5 rad/s, force 10, after 2 steps:
     # 110 of 128 joints read -0.79 .. 0.29. Cause: PhysX solves an articulation's drives one
     # joint at a time down the chain, and the arm's links have PyBullet's inertia for a link

@@ -147,23 +147,9 @@ def test_coupled_velocity_motors(backend, profile):
     assert dtau < 0.1
 
 
-_PAST = pytest.mark.known_bug("joint_reset_past_a_limit")  # at the limit (0.4) PhysX agrees
-
-
 @pytest.mark.parametrize(
     ("start", "speed"),
-    [(0.4, 1.0)]
-    + [
-        pytest.param(start, speed, marks=_PAST)
-        for start, speed in [
-            (0.41, 0.0),
-            (0.439, 0.0),
-            (0.441, 0.0),
-            (0.7, 0.0),
-            (0.7, -0.5),
-            (-0.45, 2.0),
-        ]
-    ],
+    [(0.4, 1.0), (0.41, 0.0), (0.439, 0.0), (0.441, 0.0), (0.7, 0.0), (0.7, -0.5), (-0.45, 2.0)],
 )
 def test_joint_limit_rows_follow_pybullets_rule(backend, profile, start, speed):
     """slider.urdf's carriage (limits +-0.4 m) reset at or past a limit: PyBullet's limit row
@@ -171,7 +157,12 @@ def test_joint_limit_rows_follow_pybullets_rule(backend, profile, start, speed):
     deeper it only stops (0.7: the carriage stays). MuJoCo's limit rows are given that law
     (backends/mujoco/motors.py). Measured over 60 steps, both profiles: 4.7e-7 m, 1.9e-6 m/s:
     MuJoCo's hardened limit row keeps a regulariser of 1e-6 of the speed change it asks for (the
-    motor rows are polished to exact, the limit rows are not). Tolerances ~2.5x."""
+    motor rows are polished to exact, the limit rows are not). Tolerances ~2.5x. PhysX's limit
+    threw the carriage back (1.10 m, 57.6 m/s off); the backend stands in for the row while the
+    joint is past its limit (backends/physx/limits.py): 3.0e-7 m, 4.8e-7 m/s, but 1.68e-6 m for
+    0.7 at -0.5 m/s under "urdf": the float32 position steps 0.5 / 240 m 60 times at ~0.6 m and
+    rounds the same way each time (2.8e-8 m a step; raw SAPIEN's slider the same,
+    bench/physx_limit_reset.py). Tolerance there: 4 x the float32 gap (1e-6 relative)."""
 
     def setup(sim: simbridge.Sim, body: int) -> None:
         sim.set_joint_velocity(body, 0, 0.0, max_force=0.0)  # no brake, no friction: free
@@ -184,7 +175,7 @@ def test_joint_limit_rows_follow_pybullets_rule(backend, profile, start, speed):
     elif abs(start) >= 0.4:  # at the limit or shallow: back towards it, never further out
         assert abs(a[-1, 0]) <= abs(start) + 1e-12
         assert np.all(np.abs(a[:, 0]) <= max(abs(start), abs(inside)) + 1e-12)
-    assert dq < 1.2e-6
+    assert dq < tolerance(backend, 1.2e-6, scale=4.0)
     assert dv < 5e-6
 
 

@@ -1,0 +1,86 @@
+"""SIGTERM (``kill``, ``timeout``) stops `simbridge compare` the way Ctrl-C does: its pool's
+workers are stopped and reaped and its semaphores released (the multiprocessing resource
+tracker reports no 'leaked semaphore objects'), the report folder it made is removed."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from simbridge.terminate import Terminated, sigterm_raises
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid:
+                out.append(int(entry.name))
+    return out
+
+
+def _cpu_s(pid: int) -> float:
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def test_sigterm_raises_terminated_within_the_block_only():
+    with sigterm_raises(), pytest.raises(Terminated):
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler raises before this ends
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    assert isinstance(Terminated(), KeyboardInterrupt)  # handled where Ctrl-C is
+
+
+def test_a_handler_of_the_caller_is_kept():
+    def mine(signum, frame):
+        raise RuntimeError("the caller's")
+
+    previous = signal.signal(signal.SIGTERM, mine)
+    try:
+        with sigterm_raises():
+            assert signal.getsignal(signal.SIGTERM) is mine
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc (Linux)")
+def test_sigterm_stops_the_pool_and_leaks_nothing(tmp_path):
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "simbridge", "compare", "pendulum", "--backends", "pybullet",
+         "pybullet", "--ensemble", "40", "--duration", "2", "--workers", "2", "--no-plots",
+         "--no-replay", "--cache", str(tmp_path / "cache"), "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:  # two workers past their imports, stepping
+            if sum(_cpu_s(c) > 1.5 for c in _children(proc.pid)) >= 2:
+                break
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.2)
+        else:
+            pytest.fail("the workers never got to stepping")
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert "leaked" not in err, err
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "terminated" in err
+    assert not out.exists()  # nothing was written: the folder the run made is gone
