@@ -507,18 +507,23 @@ def test_restored_link_velocities_last_until_a_step_or_a_write():
 
 @needs_sapien
 def test_a_repeated_velocity_command_takes_the_shortcut_bit_for_bit():
-    """A velocity command on the joints and with the forces of the last one, with no motor
-    changed since, only writes the targets (motors.py's shortcut). Two r2d2 drives through the
-    same commands, one taking the shortcut wherever it may and one never (the shortcut forgotten
-    before every command), give the same motor table and state, bit for bit, at every step:
-    through target changes, a force change, a joint released (force 0), one wheel under a
-    position command, a one-step torque, the same joints as a new list and a subset."""
+    """A velocity or position command on the joints and with the forces (and gains) of an
+    earlier one, with no motor of those joints changed since, only writes the targets
+    (motors.py's shortcuts, a few joint groups per robot). Two r2d2 drives through the same
+    commands, one taking the shortcuts wherever it may and one never (every shortcut forgotten
+    before every command), give the same motor table, drives and state, bit for bit, at every
+    step: through target changes, a force change, a joint released (force 0), one wheel under
+    a position command, a one-step torque, the same joints as a new list, a subset, two joint
+    groups in turn, a command on a joint of each group between them, position commands on two
+    groups in turn, a velocity command and a force change on one of them."""
     from simbridge.backends.physx import inspect
 
     wheels = np.array([2, 3, 6, 7])
+    left, right = np.array([2, 3]), np.array([6, 7])
     schedule = []
-    for k in range(60):
+    for k in range(110):
         targets = np.array([-1.0, -1.0, 1.0, 1.0]) * (10.0 + k)
+        side = left if k % 2 else right
         if k < 10:
             schedule.append(("v", wheels, targets, 50.0))
         elif k < 20:
@@ -535,8 +540,18 @@ def test_a_repeated_velocity_command_takes_the_shortcut_bit_for_bit():
             schedule.append(("v", wheels, targets, 10.0))
         elif k < 50:
             schedule.append(("v", [2, 3, 6, 7], targets, 10.0))
-        else:
+        elif k < 60:
             schedule.append(("v", wheels[:2], targets[:2], 10.0))
+        elif k == 70:  # a joint of each group: both groups' forces change
+            schedule.append(("v", np.array([3, 6]), targets[:2], 20.0))
+        elif k < 80:  # two groups in turn, each with its own force
+            schedule.append(("v", side, targets[:2], 10.0 if k % 2 else 30.0))
+        elif k == 90:
+            schedule.append(("v", left, targets[:2], 10.0))
+        elif k == 95:
+            schedule.append(("p", right, targets[:2] * 0.01, 40.0))
+        else:  # position commands on two groups in turn
+            schedule.append(("p", side, targets[:2] * 0.01, 20.0))
     sims = [simbridge.Sim("physx"), simbridge.Sim("physx")]
     try:
         bodies = []
@@ -544,14 +559,16 @@ def test_a_repeated_velocity_command_takes_the_shortcut_bit_for_bit():
             sim.load_urdf("plane.urdf")
             bodies.append(sim.load_urdf("r2d2.urdf", base_position=(0, 0, 0.5)))
             sim.step(50)
-        shortcuts = 0
+        shortcuts = {"v": 0, "p": 0, "t": 0}
         for kind, joints, values, force in schedule:
             for i, (sim, body) in enumerate(zip(sims, bodies, strict=True)):
                 robot = inspect.robot(sim, body)
-                if i == 1:
-                    robot.velocity_plan = None  # the full path every time
-                elif kind == "v" and robot.velocity_plan is not None:
-                    shortcuts += robot.velocity_plan[0] is sim._joints(body, joints, True)
+                if i == 1:  # the full path every time
+                    robot.velocity_plans.clear()
+                    robot.position_plans.clear()
+                elif kind != "t":
+                    plans = robot.velocity_plans if kind == "v" else robot.position_plans
+                    shortcuts[kind] += id(sim._joints(body, joints, True)) in plans
                 if kind == "v":
                     sim.set_joint_velocity(body, joints, values, max_force=force)
                 elif kind == "p":
@@ -568,7 +585,13 @@ def test_a_repeated_velocity_command_takes_the_shortcut_bit_for_bit():
             )
             for x, y in zip(ca, cb, strict=True):
                 assert np.array_equal(x, y)
-        assert shortcuts > 30  # a shortcut ready for the joints: measured 54 of 58 commands
+            da, db = (
+                inspect.robot(sim, body).drive_force for sim, body in zip(sims, bodies, strict=True)
+            )
+            assert da == db
+        # shortcuts ready for the joints: measured 69 of 79 velocity commands and 26 of 30
+        # position commands
+        assert shortcuts["v"] > 50 and shortcuts["p"] > 10
         last = inspect.backend_of(sims[0]).joint_commands(bodies[0])
         assert list(last.target[[2, 3]]) == list(schedule[-1][2])
     finally:

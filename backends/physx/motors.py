@@ -76,6 +76,23 @@ def _set_drives(
             joint.set_drive_velocity_target(t)
 
 
+_INF_EFFORT = frozenset([float("inf")])  # the effort limits where torques need no clamp
+_PLANS = 4  # the commands' shortcuts kept per robot and mode (joint groups commanded in turn)
+
+
+def _drop_plans(robot: Robot, slots: list[int]) -> None:
+    """Forget every shortcut that shares a motor slot with a command on ``slots`` (it changes
+    their modes, gains, forces or drives)."""
+    if robot.velocity_plans:
+        plans = robot.velocity_plans
+        for key in [k for k, v in plans.items() if not set(v[2]).isdisjoint(slots)]:
+            del plans[key]
+    if robot.position_plans:
+        held = robot.position_plans
+        for key in [k for k, p in held.items() if not set(p[4]).isdisjoint(slots)]:
+            del held[key]
+
+
 class MotorCommands:
     """The ``Backend`` motor methods (a part of :class:`PhysxBackend`)."""
 
@@ -308,17 +325,12 @@ class MotorCommands:
             wait_for_lock(self)
         try:
             robot = self._robots[body]
-            plan = robot.velocity_plan
-            if (
-                plan is not None
-                and plan[0] is joints
-                and robot.velocity_slots is plan[1]
-                and plan[2] == max_force
-            ):
-                # the last command's joints and forces, no motor changed since: the drives'
-                # force limits and the table's forces stand, only the targets change
+            plan = robot.velocity_plans.get(id(joints))
+            if plan is not None and plan[0] is joints and plan[1] == max_force:
+                # these joints' plan, no motor of theirs changed since: the drives' force
+                # limits and the table's forces stand, only the targets change
                 table = robot.motors["target"]
-                for s, joint, t in zip(plan[3], plan[4], target, strict=True):
+                for s, joint, t in zip(plan[2], plan[3], target, strict=True):
                     table[s] = t
                     joint.set_drive_velocity_target(t)
                 return
@@ -345,13 +357,16 @@ class MotorCommands:
                 self._refresh_active()
         else:  # these slots' last command, nothing else since
             _set_drives(robot, slots, max_force, target)
-        robot.velocity_plan = None
         slot_list, pjoints, _, ball = robot.slot_calls(slots, m["effort"], m["ball"])
+        _drop_plans(robot, slot_list)
         drive = robot.drive_force
         if len(set(slot_list)) == len(slot_list) and all(
             not ball[i] and drive[s] > 0.0 for i, s in enumerate(slot_list)
         ):
-            robot.velocity_plan = (joints, slots, list(max_force), slot_list, pjoints)
+            plans = robot.velocity_plans
+            if len(plans) >= _PLANS:
+                del plans[next(iter(plans))]  # the oldest
+            plans[id(joints)] = (joints, list(max_force), slot_list, pjoints)
 
     @exclusive
     def set_joint_position(
@@ -364,9 +379,30 @@ class MotorCommands:
         kd: list[float],
     ) -> None:
         robot = self._robots[body]
+        plan = robot.position_plans.get(id(joints))
+        if (
+            plan is not None
+            and plan[0] is joints
+            and plan[1] == max_force
+            and plan[2] == kp
+            and plan[3] == kd
+        ):
+            # these joints' plan, no motor of theirs changed since: modes, gains, forces and
+            # drives stand, only the targets change (read by the position law at each step)
+            table = robot.motors["target"]
+            for s, t in zip(plan[4], target, strict=True):
+                table[s] = t
+            return
         m = robot.motors
         slots = self._slots(robot, joints)
         robot.velocity_slots = None  # modes and gains change
+        slot_list, _, _, ball = robot.slot_calls(slots, m["effort"], m["ball"])
+        _drop_plans(robot, slot_list)
+        if len(set(slot_list)) == len(slot_list) and not any(ball):
+            plans = robot.position_plans
+            if len(plans) >= _PLANS:
+                del plans[next(iter(plans))]  # the oldest
+            plans[id(joints)] = (joints, list(max_force), list(kp), list(kd), slot_list)
         if len(set(slots.tolist())) < len(slots):  # a joint named twice: the last one holds
             for s, t, f, p_, d_ in zip(slots, target, max_force, kp, kd, strict=True):
                 m["mode"][s] = MotorMode.POSITION
@@ -388,17 +424,31 @@ class MotorCommands:
         if not robot.has_position:  # the robot's step gains the position law
             self._refresh_active()
 
-    @exclusive
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
-        robot = self._robots[body]
-        m = robot.motors
-        slots = self._slots(robot, joints)
-        effort = m["effort"][slots]  # inf unless the profile enforces <limit effort>
-        # each command clamped, as PyBullet; np.add.at: a joint named twice adds twice
-        np.add.at(m["torque"], slots, np.minimum(np.maximum(torque, -effort), effort))
-        if not robot.pending:
-            robot.pending = True
-            self._refresh_active()
+        # the lock inline (locking.exclusive's body): a control loop's hot path
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            robot = self._robots[body]
+            m = robot.motors
+            slots = self._slots(robot, joints)
+            slot_list, _, efforts, _ = robot.slot_calls(slots, m["effort"], m["ball"])
+            table = m["torque"]
+            if _INF_EFFORT.issuperset(efforts):
+                # no effort limit (the common case): the clamp below leaves every finite
+                # torque as it is; added in order, as np.add.at (a joint named twice, twice)
+                for s, t in zip(slot_list, torque, strict=True):
+                    table[s] += t
+            else:
+                effort = m["effort"][slots]  # the profile enforces <limit effort>
+                # each command clamped, as PyBullet; np.add.at: a joint named twice adds twice
+                np.add.at(table, slots, np.minimum(np.maximum(torque, -effort), effort))
+            if not robot.pending:
+                robot.pending = True
+                self._refresh_active()
+        finally:
+            lock.release()
 
     # ---------------------------------------------------------------- state of the motors
 
@@ -434,6 +484,8 @@ class MotorCommands:
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
         robot = self._robots[body]
         robot.velocity_slots = None  # modes and gains change
+        robot.velocity_plans.clear()
+        robot.position_plans.clear()
         m = robot.motors
         for s, j in enumerate(robot.movable):
             if robot.table[j].type == JointType.SPHERICAL:

@@ -47,10 +47,18 @@ class Robot:
     # the slots array of the last velocity command while nothing else has changed a motor's
     # mode or gains since: those slots are velocity motors with kp 0 and kd 1 already
     velocity_slots: np.ndarray | None = None
-    # a velocity command's shortcut (motors.py set_joint_velocity), valid while velocity_slots
-    # is its slots: (joints array, slots array, max_force as given, slots as a list, their
-    # PhysX joints). Made only where every slot is a distinct 1-DoF joint driven (force > 0)
-    velocity_plan: tuple[np.ndarray, np.ndarray, list[float], list[int], list[Any]] | None = None
+    # the commands' shortcuts (motors.py), per joints array (keyed by its id; a few at most):
+    # velocity: (joints array, max_force as given, slots as a list, their PhysX joints);
+    # position: (joints array, max_force, kp, kd as given, slots as a list). Each stands while
+    # no other command has changed a motor of its slots: a velocity or position command drops
+    # every plan that shares a slot with it, set_joint_commands all of them. Made only where
+    # every slot is a distinct 1-DoF joint driven (force > 0)
+    velocity_plans: dict[int, tuple[np.ndarray, list[float], list[int], list[Any]]] = field(
+        default_factory=dict
+    )
+    position_plans: dict[
+        int, tuple[np.ndarray, list[float], list[float], list[float], list[int]]
+    ] = field(default_factory=dict)
     moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
     moving_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # theirs
     ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints

@@ -197,20 +197,48 @@ class Control:
         PyBulletKeywordError naming simbridge's."""
         if pybullet:
             raise keyword_error(self.set_joint_position, pybullet)
-        idx = self._joints(body, joints, True)
+        # the hot path inline, as set_joint_velocity's (one float each for the force and gains)
+        b = self._bodies.get(body) if type(body) is int else None
+        idx = None
+        if b is not None:
+            if type(joints) is np.ndarray:
+                idx = b.movable_cache.get((joints.dtype.char, joints.tobytes()))
+            elif type(joints) is list:
+                try:
+                    idx = b.movable_cache.get(tuple(joints))
+                except TypeError:  # an unhashable item: _joints says what is wrong
+                    pass
+        if idx is None:
+            idx = self._joints(body, joints, True)
         if self._multi_idx and id(idx) in self._multi_idx:
             return self._multi_dof_motor(body, idx, MotorMode.POSITION, target, max_force, kp, kd)
         if self._held:
             self._refuse_held(body, idx)
         n = len(idx)
-        self._b.set_joint_position(
-            body,
-            idx,
-            self._values(target, n, "target"),
-            self._values(max_force, n, "max_force", nonneg=True),
-            self._values(kp, n, "kp", nonneg=True),
-            self._values(kd, n, "kd", nonneg=True),
-        )
+        if (
+            type(target) is np.ndarray
+            and target.dtype is _F64
+            and target.ndim == 1
+            and len(target) == n
+        ):
+            targets = target.tolist()
+            if not isfinite(sum(targets)):  # an inf or a NaN (or an overflowing sum)
+                targets = self._values(target, n, "target")
+        else:
+            targets = self._values(target, n, "target")
+        if type(max_force) is float and 0.0 <= max_force < _INF:
+            forces = [max_force] * n
+        else:
+            forces = self._values(max_force, n, "max_force", nonneg=True)
+        if type(kp) is float and 0.0 <= kp < _INF:
+            kps = [kp] * n
+        else:
+            kps = self._values(kp, n, "kp", nonneg=True)
+        if type(kd) is float and 0.0 <= kd < _INF:
+            kds = [kd] * n
+        else:
+            kds = self._values(kd, n, "kd", nonneg=True)
+        self._b.set_joint_position(body, idx, targets, forces, kps, kds)
 
     # ---------------------------------------------------------------- bound commands
 
@@ -354,7 +382,19 @@ class Control:
         PyBullet's keywords (``force``...) raise PyBulletKeywordError naming simbridge's."""
         if pybullet:
             raise keyword_error(self.set_joint_torque, pybullet)
-        idx = self._joints(body, joints, True)
+        # the hot path inline, as set_joint_velocity's
+        b = self._bodies.get(body) if type(body) is int else None
+        idx = None
+        if b is not None:
+            if type(joints) is np.ndarray:
+                idx = b.movable_cache.get((joints.dtype.char, joints.tobytes()))
+            elif type(joints) is list:
+                try:
+                    idx = b.movable_cache.get(tuple(joints))
+                except TypeError:  # an unhashable item: _joints says what is wrong
+                    pass
+        if idx is None:
+            idx = self._joints(body, joints, True)
         if self._multi_idx and id(idx) in self._multi_idx:
             self._spherical_only(body, idx)
             from .multi_dof import per_axis
@@ -364,4 +404,16 @@ class Control:
                 body, idx, per_axis(torque, n, 3, "torque", scalar=False)
             )
             return
-        self._b.set_joint_torque(body, idx, self._values(torque, len(idx), "torque"))
+        n = len(idx)
+        if (
+            type(torque) is np.ndarray
+            and torque.dtype is _F64
+            and torque.ndim == 1
+            and len(torque) == n
+        ):
+            torques = torque.tolist()
+            if not isfinite(sum(torques)):  # an inf or a NaN (or an overflowing sum)
+                torques = self._values(torque, n, "torque")
+        else:
+            torques = self._values(torque, n, "torque")
+        self._b.set_joint_torque(body, idx, torques)
