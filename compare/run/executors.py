@@ -350,37 +350,56 @@ class _HeldSignals:
     def __init__(self) -> None:
         self.caught: BaseException | None = None
         self.previous: dict[int, Any] = {}
+        self.active = False
 
     def __enter__(self) -> _HeldSignals:
         if threading.current_thread() is not threading.main_thread():
             return self
         from simbridge.terminate import Terminated, raises_terminated
 
+        # A handler of a block no longer active (one left installed by a signal that landed
+        # inside __enter__ itself) raises as the handler it replaced would: never a Ctrl-C lost.
         def hold_int(signum: int, frame: Any) -> None:
+            if not self.active:
+                raise KeyboardInterrupt
             self.caught = self.caught or KeyboardInterrupt()
 
         def hold_term(signum: int, frame: Any) -> None:
+            if not self.active:
+                raise Terminated()
             self.caught = self.caught or Terminated()
 
-        for sig, ours, default in (
-            (signal.SIGINT, hold_int, signal.default_int_handler),
-            (getattr(signal, "SIGTERM", None), hold_term, None),
-        ):
-            if sig is None:
-                continue
-            try:
-                now = signal.getsignal(sig)
-            except (AttributeError, ValueError):
-                continue
-            if now is default or (default is None and raises_terminated(now)):
-                self.previous[sig] = now
-                signal.signal(sig, ours)
+        self.active = True
+        try:
+            for sig, ours, default in (
+                (signal.SIGINT, hold_int, signal.default_int_handler),
+                (getattr(signal, "SIGTERM", None), hold_term, None),
+            ):
+                if sig is None:
+                    continue
+                try:
+                    now = signal.getsignal(sig)
+                except (AttributeError, ValueError):
+                    continue
+                if now is default or (default is None and raises_terminated(now)):
+                    self.previous[sig] = (now, ours)
+                    signal.signal(sig, ours)
+        except BaseException:
+            self._restore()
+            raise
         return self
 
-    def __exit__(self, *exc: object) -> None:
-        for sig, handler in self.previous.items():
-            signal.signal(sig, handler)
+    def _restore(self) -> None:
+        self.active = False
+        for sig, (handler, ours) in self.previous.items():
+            if signal.getsignal(sig) is ours:  # else another handler was set since: keep it
+                signal.signal(sig, handler)
         self.previous.clear()
+
+    def __exit__(self, kind: type[BaseException] | None, *exc: object) -> None:
+        self._restore()
+        if kind is None:  # a Ctrl-C or SIGTERM after the last check: raised, not lost
+            self.check()
 
     def check(self) -> None:
         """Raise the Ctrl-C or SIGTERM recorded since the jobs started, if any."""

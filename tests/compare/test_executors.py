@@ -386,26 +386,58 @@ def test_ctrl_c_while_waiting_on_many_jobs_leaves_no_future_locked(monkeypatch) 
 
     monkeypatch.setattr(executors, "WAIT_POLL_S", 0)
     rng = random.Random(0)
+
+    def taken(fs: set[Future[None]], out: list[bool]) -> None:
+        free = [f._condition.acquire(blocking=False) for f in fs]
+        for f, ok in zip(fs, free, strict=True):
+            if ok:
+                f._condition.release()
+        out.append(not all(free))
+
     locked = 0
-    for _ in range(30):
-        futures: set[Future[None]] = {Future() for _ in range(400)}
-        th.Timer(rng.uniform(0.01, 0.05), os.kill, (os.getpid(), signal.SIGINT)).start()
-        with pytest.raises(KeyboardInterrupt), executors._HeldSignals() as held:
-            while True:
-                executors._wait_first(futures, held)
-
-        out: list[bool] = []
-
-        def taken(fs: set[Future[None]] = futures, out: list[bool] = out) -> None:
-            free = [f._condition.acquire(blocking=False) for f in fs]
-            for f, ok in zip(fs, free, strict=True):
-                if ok:
-                    f._condition.release()
-            out.append(not all(free))
-
-        probe = th.Thread(target=taken)  # the main thread would re-enter its own RLocks
-        probe.start()
-        probe.join()
-        locked += out[0]
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        for _ in range(30):
+            futures: set[Future[None]] = {Future() for _ in range(400)}
+            th.Timer(rng.uniform(0.01, 0.05), os.kill, (os.getpid(), signal.SIGINT)).start()
+            deadline = time.monotonic() + 30  # a Ctrl-C lost fails the test, not hangs it
+            with pytest.raises(KeyboardInterrupt), executors._HeldSignals() as held:
+                while time.monotonic() < deadline:
+                    executors._wait_first(futures, held)
+            out: list[bool] = []
+            # from another thread: the main thread would re-enter its own RLocks
+            probe = th.Thread(target=taken, args=(futures, out))
+            probe.start()
+            probe.join()
+            locked += out[0]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert locked == 0, f"{locked} of 30 Ctrl-Cs left futures locked"
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.skipif(
+    threading.current_thread() is not threading.main_thread(),
+    reason="signals reach the main thread",
+)
+def test_a_held_ctrl_c_is_never_lost() -> None:
+    """A Ctrl-C after the last wait is raised when the block ends; a holding handler left
+    installed past its block (a signal landing inside the block's start) raises as Python's
+    own would."""
+    from simbridge.compare.run import executors
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt), executors._HeldSignals():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)  # the handler runs here: held, not raised
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+        held = executors._HeldSignals()
+        held.__enter__()
+        leaked = signal.getsignal(signal.SIGINT)
+        held.active = False  # as if __exit__ never ran
+        with pytest.raises(KeyboardInterrupt):
+            leaked(signal.SIGINT, None)
+    finally:
+        signal.signal(signal.SIGINT, previous)
