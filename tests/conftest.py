@@ -52,3 +52,18 @@ def _private_cache_home(tmp_path_factory: pytest.TempPathFactory) -> Iterator[No
             os.environ.pop("XDG_CACHE_HOME", None)
         else:
             os.environ["XDG_CACHE_HOME"] = old
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Ctrl-C raises KeyboardInterrupt in every test process. A shell without job control
+    starts a command put in the background (``cmd &``) with SIGINT ignored, which Python then
+    keeps (it installs its own handler only where SIGINT was left at its default), and every
+    process started from it inherits: the tests that stop a step, a pool or a command with
+    Ctrl-C then waited for ever (a clean-clone run started as ``(bash .ci/run &)`` hung in
+    test_world's and test_executors' Ctrl-C tests). The xdist workers and the commands the
+    tests start inherit the handler set here (an exec resets a handled signal to its
+    default)."""
+    import signal
+
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
