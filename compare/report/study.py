@@ -37,7 +37,7 @@ def write_study(comparison: Comparison, out: Path, options: dict[str, Any]) -> P
     record["wall_time"] = comparison.wall_time
     record["report"] = dict(options)
     if "inputs" not in record:  # what the jobs' keys hold besides the arguments
-        from .rebuild import study_inputs
+        from .inputs import study_inputs
 
         record["inputs"] = study_inputs(record)
     path = out / STUDY_FILE
