@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from _precision import float32
+from _procs import alive, children, cpu_s
 
 from simbridge.cli import main
 from simbridge.compare import compare, report
@@ -254,36 +254,6 @@ def test_a_script_read_from_stdin_runs_its_members_in_process():
     assert done.stdout.split() == ["agree", "0", "3"]
 
 
-def _children(pid: int) -> list[int]:
-    """The processes whose parent is ``pid`` (Linux /proc)."""
-    out = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[1]) == pid:
-                out.append(int(entry.name))
-    return out
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
-
-
-def _cpu_s(pid: int) -> float:
-    try:
-        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except OSError:
-        return 0.0
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
-
-
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc (Linux)")
 @pytest.mark.parametrize("when", ["starting", "running"])
 def test_workers_end_when_the_command_is_killed(tmp_path, when):
@@ -303,23 +273,23 @@ def test_workers_end_when_the_command_is_killed(tmp_path, when):
         workers: list[int] = []
         while time.monotonic() < deadline and len(workers) < 2:
             time.sleep(0.2)
-            workers = [c for c in _children(proc.pid) if _alive(c)]
+            workers = [c for c in children(proc.pid) if alive(c)]
         assert len(workers) >= 2, "the workers did not start"
         while when == "running":
             # read the children again each time: a spawn pool's first children can be its
             # resource tracker and one worker, and the tracker never steps (CI caught that race)
-            workers = sorted(set(workers) | {c for c in _children(proc.pid) if _alive(c)})
-            if sum(_cpu_s(w) > 2.0 for w in workers) >= 2:  # past their imports, stepping
+            workers = sorted(set(workers) | {c for c in children(proc.pid) if alive(c)})
+            if sum(cpu_s(w) > 2.0 for w in workers) >= 2:  # past their imports, stepping
                 break
             assert time.monotonic() < deadline, "the workers never got to stepping"
             time.sleep(0.2)
-        workers = sorted(set(workers) | {c for c in _children(proc.pid) if _alive(c)})
+        workers = sorted(set(workers) | {c for c in children(proc.pid) if alive(c)})
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
         deadline = time.monotonic() + 10
-        while time.monotonic() < deadline and any(map(_alive, workers)):
+        while time.monotonic() < deadline and any(map(alive, workers)):
             time.sleep(0.1)
-        left = [w for w in workers if _alive(w)]
+        left = [w for w in workers if alive(w)]
         assert not left, f"workers {left} outlived the killed command"
     finally:
         if proc.poll() is None:

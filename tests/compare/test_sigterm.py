@@ -12,29 +12,9 @@ import time
 from pathlib import Path
 
 import pytest
+from _procs import children, cpu_s
 
 from simbridge.terminate import Terminated, sigterm_raises
-
-
-def _children(pid: int) -> list[int]:
-    out = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[1]) == pid:
-                out.append(int(entry.name))
-    return out
-
-
-def _cpu_s(pid: int) -> float:
-    try:
-        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except OSError:
-        return 0.0
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def test_sigterm_raises_terminated_within_the_block_only():
@@ -69,7 +49,7 @@ def test_sigterm_stops_the_pool_and_leaks_nothing(tmp_path):
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:  # two workers past their imports, stepping
-            if sum(_cpu_s(c) > 1.5 for c in _children(proc.pid)) >= 2:
+            if sum(cpu_s(c) > 1.5 for c in children(proc.pid)) >= 2:
                 break
             assert proc.poll() is None, proc.communicate()
             time.sleep(0.2)
