@@ -121,7 +121,13 @@ if __name__ == "__main__":
     differ = {k for k, v in json.loads(python_loop).items() if compiled[k] != v}
     if differ:
         sys.exit(f"the Python step loop differs from the compiled loop on {sorted(differ)}")
-    record: dict[str, object] = {"engines": engine_versions(), "compiled": compiled}
+    from _machine import libm  # beside this file
+
+    record: dict[str, object] = {
+        "engines": engine_versions(),
+        "libm": libm(),
+        "compiled": compiled,
+    }
     sapien_version = physx_version()
     if sapien_version is not None:
         # PhysX's hashes, recorded apart: they need the physx extra and SAPIEN's exact build

@@ -50,30 +50,35 @@ def test_every_python_block_runs_on_its_own(line, code, tmp_path):
 
 
 def _recorded_here() -> str | None:
-    """Why this machine may not give the README's digits (None: it is the machine and engine
-    versions they were recorded with, tests/compare/data/baseline/recorded.json)."""
+    """Why this machine may not give the README's digits (None: its architecture, libm variant
+    and engine versions are those they were recorded with,
+    tests/compare/data/baseline/recorded.json; tests/_machine.py says why these decide)."""
     import json
+    import platform
 
     import mujoco
     import pybullet
 
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from _machine import libm
+
     data = Path(__file__).resolve().parent / "compare" / "data" / "baseline" / "recorded.json"
     recorded = json.loads(data.read_text(encoding="utf-8"))
-    model = re.search(r"^model name\s*:\s*(.+)$", Path("/proc/cpuinfo").read_text(), re.M)
     here = {
-        "processor": model.group(1).strip() if model else "",
+        "machine": platform.machine(),
+        "libm": libm(),
         "mujoco": mujoco.__version__,
         "pybullet": str(pybullet.getAPIVersion()),
     }
-    differ = {k: (recorded[k], v) for k, v in here.items() if recorded.get(k) != v}
+    differ = {k: (recorded.get(k), v) for k, v in here.items() if recorded.get(k) != v}
     return None if not differ else f"recorded with {differ} (recorded, here)"
 
 
 @pytest.mark.parametrize("backend", ["pybullet", "mujoco"])
 def test_the_quick_start_prints_what_the_readme_shows(backend, tmp_path):
-    # the engines' trajectories depend on the processor's floating-point kernels (see
-    # tests/compare/test_compare_same_results.py): the README's digits are held exactly on the
-    # machine and engine versions they were recorded with; PhysX's float32 state is not held
+    # the engines' trajectories are the same bits wherever libm takes the same variants and
+    # the engine versions are the same (tests/_machine.py): the README's digits are held
+    # exactly there; PhysX's float32 state is not held
     why = _recorded_here()
     if why is not None:
         pytest.skip(f"the README's quick-start digits were {why}")

@@ -4,11 +4,15 @@ and on both MuJoCo step loops, hash to what they did before the MuJoCo backend b
 tests/_trajectory_hashes.py). A deliberate change of behaviour records them again, in its own
 commit, saying why.
 
-The hashes are the same on every x86-64 processor: PyBullet and the compiled step loop are
-plain C arithmetic, and the Python step loop does the compiled loop's arithmetic in the same
-order without BLAS or LAPACK (backends/mujoco/solve.py, damping.py), so it gives the compiled
-loop's bits. :func:`test_the_same_bits_whatever_the_kernels` proves it in child processes under
-other OpenBLAS kernels and with numpy's SIMD dispatch turned off (the Python loop there, the
+The hashes are the same on every x86-64 processor with FMA and AVX2, whatever its OpenBLAS
+kernel and numpy's SIMD targets: PyBullet and the compiled step loop are plain C arithmetic,
+whose calls to libm (``sin``, ``cos``, ``atan2``...) take glibc's FMA variants on such a
+processor (on one without, 16 of the 20 compiled-loop and PyBullet hashes and 2 of PhysX's
+differ, measured with ``GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA``: tests/_machine.py), and
+the Python step loop does the compiled loop's arithmetic in the same order without BLAS or
+LAPACK (backends/mujoco/solve.py, damping.py), so it gives the compiled loop's bits.
+:func:`test_the_same_bits_whatever_the_kernels` proves it in child processes under other
+OpenBLAS kernels and with numpy's SIMD dispatch turned off (the Python loop there, the
 only path a kernel could move: its docstring says why); before, the Python loop's
 ``np.linalg.solve`` and ``@`` moved 7 of its 10 hashes on an AVX-512 machine (SkylakeX
 kernels) and 7 here under ``OPENBLAS_CORETYPE=Sandybridge``.
@@ -25,6 +29,7 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+from _machine import cpu_flags, libm, numpy_targets  # noqa: E402
 from _trajectory_hashes import (  # noqa: E402
     all_extras,
     all_hashes,
@@ -38,9 +43,10 @@ SCRIPT = Path(__file__).parent / "_trajectory_hashes.py"
 MUJOCO = {k: v for k, v in RECORD["compiled"].items() if k.endswith("/mujoco")}
 
 pytestmark = pytest.mark.skipif(
-    engine_versions() != RECORD["engines"],
-    reason=f"hashes were recorded on {RECORD['engines']}, this is {engine_versions()}: other "
-    "engine builds give other bits",
+    engine_versions() != RECORD["engines"] or libm() != RECORD["libm"],
+    reason=f"hashes were recorded on {RECORD['engines']} with libm's {RECORD['libm']!r} "
+    f"variants, this is {engine_versions()} with {libm()!r}: other engine builds, and libm's "
+    "other variants, give other bits",
 )
 
 
@@ -69,18 +75,7 @@ def test_python_step_loop_gives_the_compiled_loops_bits() -> None:
 
 def _cpu() -> dict[str, list[str]]:
     """The processor's flags, and numpy's SIMD targets dispatched at run time that it has."""
-    flags: list[str] = []
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("flags"):
-                flags = line.split(":", 1)[1].split()
-                break
-    except OSError:
-        pass
-    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
-
-    dispatched = [f for f in __cpu_dispatch__ if __cpu_features__.get(f)]
-    return {"flags": flags, "dispatched": dispatched}
+    return {"flags": sorted(cpu_flags()), "dispatched": numpy_targets()}
 
 
 def _variants() -> list[tuple[str, dict[str, str]]]:

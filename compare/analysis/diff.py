@@ -15,6 +15,7 @@ import numpy as np
 
 from simbridge.exceptions import SimbridgeError
 
+from ..run.portable import norm
 from ..run.quantities import (
     DEG,
     FEATURE_SOURCES,
@@ -77,7 +78,7 @@ def _resample_quat(t_src: np.ndarray, q: np.ndarray, t: np.ndarray) -> np.ndarra
     flip = np.cumprod(np.where(np.sum(q[1:] * q[:-1], axis=1) < 0, -1.0, 1.0))
     q[1:] *= flip[:, None]
     out = _resample(t_src, q, t)
-    return out / np.linalg.norm(out, axis=-1, keepdims=True)
+    return out / norm(out, keepdims=True)
 
 
 # ---------------------------------------------------------------- result
@@ -268,5 +269,5 @@ def diff(a: Trajectory, b: Trajectory) -> Divergence:
         ],
         joint_gaps=np.abs(sa["q"] - sb["q"]),
         link_names=list(ba.link_names),
-        link_gaps=np.linalg.norm(sa["links"] - sb["links"], axis=-1),
+        link_gaps=norm(sa["links"] - sb["links"]),
     )

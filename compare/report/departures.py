@@ -37,6 +37,7 @@ import numpy as np
 from simbridge.exceptions import SimbridgeError
 
 from ..run.events import EngineEvents
+from ..run.portable import dot, length, norm
 from .fmt import fmt_distance
 
 if TYPE_CHECKING:
@@ -101,9 +102,9 @@ def _urdf_facts(c: ComparisonView) -> dict[str, Any]:
                 if k.contact.rolling_friction or k.contact.spinning_friction
             },
             "joint axis": {
-                j.name: float(np.linalg.norm(j.axis))
+                j.name: length(j.axis)
                 for j in model.joints
-                if j.type != "fixed" and abs(float(np.linalg.norm(j.axis)) - 1.0) > 1e-6
+                if j.type != "fixed" and abs(length(j.axis) - 1.0) > 1e-6
             },
         }
     return facts
@@ -242,8 +243,8 @@ def _judge(
                 continue
             b = tr.body
             joint = float(np.abs(b.joint_velocities).max()) if b.joint_velocities.size else 0.0
-            base = float(np.linalg.norm(b.base_linear_velocity, axis=1).max())
-            spin = float(np.linalg.norm(b.base_angular_velocity, axis=1).max())
+            base = float(norm(b.base_linear_velocity).max())
+            spin = float(norm(b.base_angular_velocity).max())
             top = max(joint, base, spin)
             hit |= top >= SPEED_CLAMP_FRACTION * clamp
             rows.append(
@@ -306,7 +307,7 @@ def _contact_figures(c: ComparisonView, events: list[EngineEvents], slots: list[
     for slot, e in zip(slots, events, strict=True):
         tr = c.runs[(slot, c.timestep)]
         row = tr.phases[0][2]
-        h = float(tr.body.base_position[row] @ e.up)
+        h = float(dot(tr.body.base_position[row], e.up))
         heights.append(f"{fmt_distance(h)} ({e.label})")
         n = sum(x.kind in ("contact_made", "contact_lost") for x in e.events)
         changes.append(f"{n} ({e.label})")

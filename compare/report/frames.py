@@ -26,6 +26,7 @@ import numpy as np
 
 from ..analysis.diff import QUANTITIES
 from ..pipeline import Comparison
+from ..run.portable import dot
 from ..run.quantities import up_axis
 from ..run.trajectory import Trajectory
 from .events import event_words
@@ -278,7 +279,9 @@ def _strip(c: Comparison, painter: _Painter, time: float, distance: float) -> An
         target = _target(tr, row)
         image.paste(Image.fromarray(painter.draw(target, distance)), (slot * w, HEADER))
         draw.rectangle((slot * w, 0, (slot + 1) * w - 1, HEADER - 1), fill=_colour(slot))
-        height = float(tr.body.base_position[min(row, len(tr.body.base_position) - 1)] @ painter.up)
+        height = float(
+            dot(tr.body.base_position[min(row, len(tr.body.base_position) - 1)], painter.up)
+        )
         text = panel_header(label, float(tr.time[row]), height)
         draw.text((slot * w + 4, 2), text, fill=(255, 255, 255), font=font)
         if slot:

@@ -38,6 +38,7 @@ from simbridge.transforms import quat_multiply
 
 from ..scenario import Scenario
 from .outcomes import OutcomeRecord
+from .portable import length, norm
 from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features
 from .trajectory import BodyTrajectory, Trajectory, run
 
@@ -178,7 +179,7 @@ def horizons(
 
 def _unit_vectors(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
     v = rng.standard_normal(shape + (3,))
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / norm(v, keepdims=True)
 
 
 def directions(size: int, robots: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -250,7 +251,7 @@ def perturbed(scenario: Scenario, dpos: np.ndarray, drot: np.ndarray) -> Scenari
     spawn orientation)."""
     robots = []
     for r, spec in enumerate(scenario.robots):
-        angle = float(np.linalg.norm(drot[r]))
+        angle = length(drot[r])
         if angle > 0:
             axis = drot[r] / angle
             s = math.sin(angle / 2)

@@ -43,6 +43,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .portable import dot
 from .quantities import DEG, tilt_from, up_of
 from .trajectory import BodyTrajectory, Trajectory
 
@@ -355,7 +356,7 @@ def _airborne_events(
     gaps += [(z + 1, a - 1) for (_, z), (a, _) in zip(runs[:-1], runs[1:], strict=True)]
     if runs[-1][1] < len(any_contact) - 1:
         gaps.append((runs[-1][1] + 1, len(any_contact) - 1))
-    height = b.base_position @ up
+    height = dot(b.base_position, up)
     for first, last in gaps:
         if last - first + 1 < bridge:  # a start or an end shorter than the bridge
             continue

@@ -24,6 +24,7 @@ import numpy as np
 from simbridge.exceptions import ScenarioError, TrajectoryFileError
 
 from ..scenario.outcomes import KINDS, JointRef, Outcome
+from .portable import acos, dot, length, norm
 from .quantities import rotate
 
 if TYPE_CHECKING:
@@ -260,8 +261,8 @@ def tilt(orientation: np.ndarray) -> np.ndarray:
     conj = np.array([-q0[0], -q0[1], -q0[2], q0[3]])
     up_body = rotate(conj, np.array([0.0, 0.0, 1.0]))
     up = rotate(orientation, up_body)
-    up /= np.linalg.norm(up, axis=1, keepdims=True)
-    return np.arccos(np.clip(up[:, 2], -1.0, 1.0))
+    up /= norm(up, keepdims=True)
+    return acos(np.clip(up[:, 2], -1.0, 1.0))
 
 
 def _record(
@@ -342,14 +343,12 @@ def evaluate(
             if outcome.point is not None:
                 n = len(outcome.point)
                 pos = _positions(body, outcome.link)[b, :n]
-                err = float(np.linalg.norm(pos - np.asarray(outcome.point)))
+                err = length(pos - np.asarray(outcome.point))
             elif outcome.orientation is not None:
                 q = body.base_orientation[b]
                 target = np.asarray(outcome.orientation)
-                dot = abs(float(np.dot(q, target))) / float(
-                    np.linalg.norm(q) * np.linalg.norm(target)
-                )
-                err = 2.0 * math.acos(min(1.0, dot))
+                cos = abs(float(dot(q, target))) / (length(q) * length(target))
+                err = 2.0 * math.acos(min(1.0, cos))
             else:
                 cols = _joint_columns(body, outcome.joints)
                 q = body.joint_positions[b, cols]
@@ -391,7 +390,7 @@ def _reach(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray
     assert outcome.point is not None and outcome.within is not None
     n = len(outcome.point)
     pos = _positions(body, outcome.link)[a : b + 1, :n]
-    d = np.linalg.norm(pos - np.asarray(outcome.point), axis=1)
+    d = norm(pos - np.asarray(outcome.point))
     inside = d <= outcome.within
     if outcome.hold:
         outside = np.flatnonzero(~inside)
@@ -416,7 +415,7 @@ def _track(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray
         use = k >= 0
         if not use.any():
             return _record(outcome, None, None, TrackFigures(samples=0, max_error=None))
-        err = np.linalg.norm(pos[use, :n] - pts[k[use], 1:], axis=1)
+        err = norm(pos[use, :n] - pts[k[use], 1:])
     else:
         cols = (
             _joint_columns(body, outcome.joints)

@@ -22,6 +22,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from .portable import acos, dot, length, norm
+
 __all__ = [
     "DEG",
     "Quantity",
@@ -74,7 +76,7 @@ def yaw(q: np.ndarray) -> np.ndarray:
 def tilt(q: np.ndarray) -> np.ndarray:
     """Angle (rad) between the body's z axis and world z: 0 upright, pi/2 on its side."""
     x, y, _, _ = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
-    return np.arccos(np.clip(1.0 - 2.0 * (x * x + y * y), -1.0, 1.0))
+    return acos(np.clip(1.0 - 2.0 * (x * x + y * y), -1.0, 1.0))
 
 
 def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -90,7 +92,7 @@ def up_axis(gravity: Any) -> np.ndarray:
     """The unit vector against ``gravity`` (m/s², world); world z when gravity is zero or
     unknown (None)."""
     g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=np.float64)
-    n = float(np.linalg.norm(g))
+    n = length(g)
     return -g / n if n > 0 else np.array([0.0, 0.0, 1.0])
 
 
@@ -104,7 +106,7 @@ def tilt_from(q: np.ndarray, q_ref: np.ndarray, up: Any = (0.0, 0.0, 1.0)) -> np
     conj = q_ref * np.array([-1.0, -1.0, -1.0, 1.0])
     axis = rotate(conj, up)  # the body-frame axis that was up
     now = rotate(q, axis)
-    return np.arccos(np.clip(now @ up, -1.0, 1.0))
+    return acos(np.clip(dot(now, up), -1.0, 1.0))
 
 
 def rotation_angle(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
@@ -155,9 +157,9 @@ def distance(quantity: str, fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
     link (m), the wrapped yaw difference in [0, pi], the rotation angle between orientations,
     the RMS over joints (rad or m, rad/s or m/s). Shape: the features' less their own axes."""
     if quantity == "base_distance":
-        return np.linalg.norm(fa - fb, axis=-1)
+        return norm(fa - fb)
     if quantity == "link_distance":
-        return np.max(np.linalg.norm(fa - fb, axis=-1), axis=-1)
+        return np.max(norm(fa - fb), axis=-1)
     if quantity == "heading":
         return np.abs(_wrap(fa - fb))
     if quantity == "orientation":

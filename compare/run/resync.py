@@ -46,6 +46,7 @@ from simbridge.types import JointType
 
 from ..scenario import Scenario, load_scenario
 from .events import Event, find_events, phase_at
+from .portable import length
 from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features, rotation_angle
 from .trajectory import Trajectory, run
 
@@ -347,15 +348,13 @@ def _errors(
         return float(d.max(initial=0.0))
 
     parts = {
-        "base_position": float(np.linalg.norm(got["base_position"] - truth["base_position"])),
+        "base_position": length(got["base_position"] - truth["base_position"]),
         "base_orientation": float(
             rotation_angle(got["base_orientation"], truth["base_orientation"])
         ),
-        "base_linear_velocity": float(
-            np.linalg.norm(got["base_linear_velocity"] - truth["base_linear_velocity"])
-        ),
-        "base_angular_velocity": float(
-            np.linalg.norm(got["base_angular_velocity"] - truth["base_angular_velocity"])
+        "base_linear_velocity": length(got["base_linear_velocity"] - truth["base_linear_velocity"]),
+        "base_angular_velocity": length(
+            got["base_angular_velocity"] - truth["base_angular_velocity"]
         ),
         "joint_positions": largest("joint_positions"),
         "joint_velocities": largest("joint_velocities"),
@@ -456,7 +455,7 @@ def _rounding(state: simbridge.WorldState, subject: int, dtype: str) -> dict[str
 
     def norm(v: Any) -> float:
         a, b = pair(v)
-        return float(np.linalg.norm(a - b))
+        return length(a - b)
 
     def largest(v: Any) -> float:
         a, b = pair(v)

@@ -1,4 +1,5 @@
-"""Every shipped scenario gives the summary and report it gave when they were recorded.
+"""Every shipped scenario gives the summary and report it gave when they were recorded, bit for
+bit, on every machine that can give them.
 
 tests/compare/data/baseline/<case>/ holds ``summary.json`` (gzipped) and ``report.md`` as
 :func:`simbridge.compare.compare` and :func:`~simbridge.compare.report` wrote them for each case
@@ -9,10 +10,18 @@ section of the report). The test reruns each case and compares every figure of
 changes from one run or machine to the next: wall times, the simbridge and engine versions,
 absolute paths, the command line and the worker count.
 
-The engines' trajectories depend on the processor's floating-point kernels, so an exact
-comparison holds on the machine and engine versions that recorded them (``recorded.json``); on
-another the test is skipped with the reason. To record them again (a change of results that is
-deliberate, committed on its own with the reason)::
+Exactly, with no tolerance: the trajectories are the same bits on every x86-64 processor with
+FMA and AVX2 (tests/test_same_results.py), and so are the figures computed from them, which
+call no BLAS and none of numpy's processor-dispatched loops (compare/run/portable.py says
+which and why). As no figure can move, no printed digit can flip at a rounding boundary
+either. :func:`test_the_same_figures_whatever_the_kernels` proves it on the processor at hand,
+in child processes under other OpenBLAS kernels and numpy dispatch levels
+(tests/_machine.py). The record is keyed on what decides its bits (:func:`_environment`: the
+architecture, which libm variants the processor gets, and the versions of Python, numpy,
+scipy and the engines); elsewhere the tests skip, saying which differs.
+
+To record them again (a change of results that is deliberate, committed on its own with the
+reason)::
 
     .venv/bin/python tests/compare/test_compare_same_results.py
 """
@@ -22,13 +31,18 @@ from __future__ import annotations
 import gzip
 import json
 import math
+import os
 import platform
 import re
+import subprocess
 import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _machine import kernel_variants, libm  # noqa: E402
 
 DATA = Path(__file__).resolve().parent / "data" / "baseline"
 ROOT = Path(__file__).resolve().parents[2]
@@ -64,37 +78,49 @@ MASKED_KEYS = {
 
 
 def _environment() -> dict[str, str]:
+    """What the recorded bits depend on (tests/_machine.py): not the processor's name, its
+    OpenBLAS kernel nor numpy's dispatch targets, which the figures are proven free of."""
     import mujoco
     import numpy
     import pybullet
+    import scipy
 
     return {
         "machine": platform.machine(),
-        "processor": _cpu_model(),
+        "libm": libm(),
         "python": platform.python_version(),
         "numpy": numpy.__version__,
+        "scipy": scipy.__version__,
         "mujoco": mujoco.__version__,
         "pybullet": str(pybullet.getAPIVersion()),
     }
 
 
-def _cpu_model() -> str:
-    try:
-        text = Path("/proc/cpuinfo").read_text(encoding="utf-8")
-    except OSError:
-        return platform.processor()
-    found = re.search(r"^model name\s*:\s*(.+)$", text, re.M)
-    return found.group(1).strip() if found else platform.processor()
+def _unlike_the_record() -> str | None:
+    """Why this machine cannot give the recorded bits (None: it can)."""
+    recorded = json.loads((DATA / "recorded.json").read_text("utf-8"))
+    here = _environment()
+    differ = {k: (recorded.get(k), v) for k, v in here.items() if recorded.get(k) != v}
+    if not differ:
+        return None
+    return f"recorded with other bits' deciders, {differ} (recorded, here)"
 
 
-def _produce(case: str, out: Path, cache: Path | None = None) -> Path:
+def _produce(
+    case: str, out: Path, cache: Path | bool | None = None, workers: int | None = None
+) -> Path:
     from simbridge.compare import compare, report
 
     scenario, options = CASES[case]
     options = dict(options)
     plots = options.pop("plots", False)
     result = compare(
-        scenario, ["pybullet", "mujoco"], command_line=["simbridge"], cache=cache, **options
+        scenario,
+        ["pybullet", "mujoco"],
+        command_line=["simbridge"],
+        cache=cache,
+        workers=workers,
+        **options,
     )
     report(result, out, plots=plots, trajectories=False, replay=False)  # figures, not pictures
     return out
@@ -134,6 +160,18 @@ def _paths(out: Path) -> list[str]:
     return sorted({str(out), str(ROOT), str(Path.home())}, key=len, reverse=True)
 
 
+def _masked(
+    case: str, tmp: Path, cache: Path | bool | None = False, workers: int | None = None
+) -> tuple[Any, str]:
+    """``case``'s summary.json and report.md as recorded: masked, the report's text ending
+    in a newline (``cache=False``: every job runs, none comes from ~/.cache/simbridge)."""
+    out = _produce(case, tmp / case, cache, workers)
+    paths = _paths(out)
+    summary = _mask(json.loads((out / "summary.json").read_text("utf-8")), paths)
+    text = _mask_report((out / "report.md").read_text("utf-8"), paths) + "\n"
+    return summary, text
+
+
 def _record(cases: list[str]) -> None:
     """Record the named cases (all when none are named: ``python
     tests/compare/test_compare_same_results.py [CASE ...]``)."""
@@ -146,18 +184,39 @@ def _record(cases: list[str]) -> None:
     )
     for case in cases or CASES:
         with tempfile.TemporaryDirectory() as tmp:
-            out = _produce(case, Path(tmp) / case)
-            paths = _paths(out)
-            summary = _mask(json.loads((out / "summary.json").read_text("utf-8")), paths)
-            text = _mask_report((out / "report.md").read_text("utf-8"), paths)
+            summary, text = _masked(case, Path(tmp))
         folder = DATA / case
         if folder.exists():
             shutil.rmtree(folder)
         folder.mkdir()
         with gzip.open(folder / "summary.json.gz", "wt", encoding="utf-8") as f:
             f.write(json.dumps(summary, indent=0, allow_nan=True) + "\n")
-        (folder / "report.md").write_text(text + "\n", encoding="utf-8")
+        (folder / "report.md").write_text(text, encoding="utf-8")
         print(case, file=sys.stderr)
+
+
+def _produce_all(dest: Path) -> None:
+    """Every case's masked summary.json and report.md into ``dest`` (``CASE.json``,
+    ``CASE.md``), its jobs run in this process, and the numpy targets this process has in
+    ``targets.json``: what a child of :func:`test_the_same_figures_whatever_the_kernels`
+    does (``python tests/compare/test_compare_same_results.py --produce DIR``)."""
+    import tempfile
+
+    from _machine import numpy_targets
+
+    dest.mkdir(parents=True, exist_ok=True)
+    (dest / "targets.json").write_text(json.dumps(numpy_targets()), encoding="utf-8")
+    for case in CASES:
+        with tempfile.TemporaryDirectory() as tmp:
+            summary, text = _masked(case, Path(tmp), workers=0)
+        (dest / f"{case}.json").write_text(json.dumps(summary, allow_nan=True), "utf-8")
+        (dest / f"{case}.md").write_text(text, encoding="utf-8")
+
+
+def _recorded(case: str) -> tuple[Any, str]:
+    with gzip.open(DATA / case / "summary.json.gz", "rt", encoding="utf-8") as f:
+        summary = json.load(f)
+    return summary, (DATA / case / "report.md").read_text("utf-8")
 
 
 def _diff(expected: Any, got: Any, where: str = "") -> list[str]:
@@ -192,19 +251,14 @@ def module_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.mark.slow
 @pytest.mark.parametrize("case", list(CASES))
 def test_same_summary_and_report_as_recorded(case, tmp_path, module_cache):
-    recorded = json.loads((DATA / "recorded.json").read_text("utf-8"))
-    here = _environment()
-    if here != recorded:
-        pytest.skip(f"recorded on {recorded}, this is {here}: engine results may differ")
-    out = _produce(case, tmp_path / case, module_cache)
-    paths = _paths(out)
-    summary = _mask(json.loads((out / "summary.json").read_text("utf-8")), paths)
-    with gzip.open(DATA / case / "summary.json.gz", "rt", encoding="utf-8") as f:
-        expected = json.load(f)
+    why = _unlike_the_record()
+    if why is not None:
+        pytest.skip(why)
+    summary, text = _masked(case, tmp_path, module_cache)
+    expected, report_md = _recorded(case)
     differences = _diff(expected, summary)
     assert not differences, "summary.json differs:\n" + "\n".join(differences[:40])
-    text = _mask_report((out / "report.md").read_text("utf-8"), paths) + "\n"
-    assert text == (DATA / case / "report.md").read_text("utf-8")
+    assert text == report_md
 
 
 @pytest.mark.usefixtures("_no_home_cache_writes")
@@ -215,8 +269,9 @@ def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path, module_cache):
     jobs are there already and the first compare() runs none either."""
     from simbridge.compare import compare, report
 
-    if _environment() != json.loads((DATA / "recorded.json").read_text("utf-8")):
-        pytest.skip("the recorded figures are from another machine or engine version")
+    why = _unlike_the_record()
+    if why is not None:
+        pytest.skip(why)
     scenario, options = CASES[case]
     options = {k: v for k, v in options.items() if k != "plots"}
     backends = ["pybullet", "mujoco"]
@@ -234,5 +289,63 @@ def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path, module_cache):
     assert text == (DATA / case / "report.md").read_text("utf-8")
 
 
+@pytest.mark.slow
+def test_the_same_figures_whatever_the_kernels(tmp_path):
+    """Every case, in one child process per kernel choice (tests/_machine.py: numpy's
+    run-time targets turned down a level at a time, each with an OpenBLAS kernel of that
+    level), gives the recorded summary.json and report.md bit for bit, as the parent's
+    defaults do (test_same_summary_and_report_as_recorded): on an AVX-512 machine its AVX-512
+    paths are the defaults', its AVX2 and AVX paths the children's. The children run their
+    jobs in their own process (workers=0), side by side, and say which numpy targets they had
+    and which OpenBLAS kernel loaded (``OPENBLAS_VERBOSE=2``), so a variable that did not
+    take fails the test rather than proving nothing.
+
+    Measured before compare/run/portable.py (an AVX-512 machine, the figures recorded on an
+    AVX2 one): 61 figures of 9 cases moved in this test's AVX2 child, laikago-stand's report
+    by 30 lines; after it none, in either child. About 26 s of CPU a child."""
+    why = _unlike_the_record()
+    if why is not None:
+        pytest.skip(why)
+    variants = kernel_variants()
+    if not variants:
+        pytest.skip("the kernel variants are x86-64's")
+    children = []
+    for k, (name, extra) in enumerate(variants):
+        env = dict(os.environ, OPENBLAS_VERBOSE="2", **extra)
+        if "NPY_DISABLE_CPU_FEATURES" not in extra:
+            env.pop("NPY_DISABLE_CPU_FEATURES", None)
+        dest = tmp_path / f"variant{k}"
+        cmd = [sys.executable, str(Path(__file__).resolve()), "--produce", str(dest)]
+        proc = subprocess.Popen(
+            cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        children.append((name, extra, dest, proc))
+    failures = []
+    for name, extra, dest, proc in children:
+        _, err = proc.communicate(timeout=900)
+        if proc.returncode != 0:
+            failures.append(f"{name}: exit {proc.returncode}: {err[-2000:]}")
+            continue
+        core = re.search(r"^Core: (\S+)", err, re.M)
+        if core is None or core.group(1) != extra["OPENBLAS_CORETYPE"]:
+            failures.append(f"{name}: OpenBLAS loaded {core and core.group(1)!r}")
+        off = set(extra.get("NPY_DISABLE_CPU_FEATURES", "").split())
+        left = off & set(json.loads((dest / "targets.json").read_text("utf-8")))
+        if left:
+            failures.append(f"{name}: numpy still dispatched to {sorted(left)}")
+        for case in CASES:
+            expected, report_md = _recorded(case)
+            got = json.loads((dest / f"{case}.json").read_text("utf-8"))
+            moved = _diff(expected, got)
+            if moved:
+                failures.append(f"{name}: {case}: {len(moved)} figures moved: {moved[:3]}")
+            if (dest / f"{case}.md").read_text("utf-8") != report_md:
+                failures.append(f"{name}: {case}: report.md differs")
+    assert failures == [], "\n".join(failures)
+
+
 if __name__ == "__main__":
-    _record(sys.argv[1:])
+    if sys.argv[1:2] == ["--produce"]:
+        _produce_all(Path(sys.argv[2]))
+    else:
+        _record(sys.argv[1:])
