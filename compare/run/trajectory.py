@@ -28,6 +28,7 @@ from simbridge.types import JointType
 
 from ..scenario import Scenario, load_scenario, parse_timestep
 from ..scenario.controllers import PhaseControl
+from .gains import HeldGains
 from .outcomes import OutcomeRecord, evaluate_all
 
 __all__ = ["BodyTrajectory", "Trajectory", "run", "urdf_sha256"]
@@ -361,6 +362,12 @@ def run(
 
     sim_prof = sc.sim_profile(backend, prof)  # with the scenario's engine settings, if any
     with simbridge.Sim(backend, gravity=grav, timestep=sc.timestep, profile=sim_prof) as sim:
+        # what the phases and controllers command through: the scenario's position gains,
+        # written for its own step, sent as the same controller at this one
+        # (compare/run/gains.py); the Sim itself where the steps are the same
+        drive: Any = sim
+        if sc.gains_timestep is not None and sc.gains_timestep != sc.timestep:
+            drive = HeldGains(sim, sc.timestep / sc.gains_timestep)
         ids: dict[str, int] = {}
         hashes: dict[str, dict[str, str]] = {}
         for r in sc.robots:
@@ -408,7 +415,7 @@ def run(
             ctl = _start_control(
                 sc,
                 pi,
-                sim,
+                drive,
                 ids,
                 recorders,
                 row,
@@ -421,7 +428,7 @@ def run(
                         sim.set_joint_velocity(body, idx, c.target, max_force=c.max_force)
                     elif c.mode == "position":
                         kw = {k: v for k, v in (("kp", c.kp), ("kd", c.kd)) if v is not None}
-                        sim.set_joint_position(body, idx, c.target, max_force=c.max_force, **kw)
+                        drive.set_joint_position(body, idx, c.target, max_force=c.max_force, **kw)
                     else:
                         sim.set_joint_torque(body, idx, c.target)
                 if ctl is not None:

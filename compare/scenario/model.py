@@ -104,6 +104,11 @@ class Scenario:
     engines: Any = ()
     """Engine settings per backend (``[engines.mujoco]``: :mod:`simbridge.engine_settings`),
     checked and frozen; a mapping ``{backend: {key: value}}`` given here is frozen too."""
+    gains_timestep: float | None = None
+    """The time step the position gains (``kp``, ``kd`` of PyBullet's law, whose velocity
+    change has the step in it) were written for: the scenario's own, once
+    :meth:`with_timestep` moves it (None: the step it runs at). At another step a run sends the
+    gains that make the same controller (:mod:`simbridge.compare.run.gains`)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "engines", freeze(self.engines, "engines"))
@@ -228,7 +233,8 @@ class Scenario:
                     )
                 ctl = replace(ctl, every=int(round(every)))
             phases.append(replace(p, steps=int(round(steps)), controller=ctl))
-        return replace(self, timestep=float(timestep), phases=tuple(phases))
+        written = self.timestep if self.gains_timestep is None else self.gains_timestep
+        return replace(self, timestep=float(timestep), phases=tuple(phases), gains_timestep=written)
 
     def truncated(self, duration: float) -> Scenario:
         """The first ``duration`` seconds of the scenario (phases cut or dropped), rounded to
