@@ -18,19 +18,19 @@ At every instant:
 - spreads and own errors below the **floor** (float and recording precision: 1e-12 times the
   size of the recorded values, at least 1e-12) count as the floor, so that no ratio is absurd;
 - a ratio gap / spread or gap / own error between 0.5 and 2 is "near 1" (:data:`MARGINAL`): a
-  gap up to twice an engine's spread or own error is not clearly larger, so it counts as lying
-  within it;
+  gap up to twice an engine's spread or own error is not clearly larger, so it is covered by
+  it (the words say "within" only up to 1x, the ratio above);
 - the instant is ``agree`` (gap below the tolerance, by default the quantity's first threshold:
-  1 cm, 1°, 0.1 rad/s), else ``chaotic`` (the gap lies within an engine's spread), else
-  ``unresolved`` (within an engine's own time-step error), else ``differ``.
+  1 cm, 1°, 0.1 rad/s), else ``chaotic`` (the gap is at most twice an engine's spread), else
+  ``unresolved`` (at most twice an engine's own time-step error), else ``differ``.
 
 The verdict is ``agree`` when every instant is. Otherwise it is judged at one instant: the end
 when the gap there reaches the tolerance, else the instant of the largest gap. There it is
 ``chaotic`` (naming the engines whose spread covers the gap), ``differ`` (the gap is more than
 twice both engines' spreads and own errors, AND a permutation test on the energy distance
-between the two ensembles gives p < alpha), or ``unresolved`` (what is left: the gap lies
-within an engine's own time-step error, the test does not separate the ensembles, or an
-ensemble has one run). A deciding ratio between 0.5 and 2 makes the verdict ``marginal``
+between the two ensembles gives p < alpha), or ``unresolved`` (what is left: an engine's own
+time-step error covers the gap, the test does not separate the ensembles, or an ensemble has
+one run). A deciding ratio between 0.5 and 2 makes the verdict ``marginal``
 (``agree``: the largest gap is at least half the tolerance). The gap and the spreads carry
 bootstrap intervals (``scipy.stats.bootstrap``, percentile method, over the runs).
 """
@@ -53,6 +53,7 @@ __all__ = [
     "ALPHA",
     "CONFIDENCE",
     "MARGINAL",
+    "OWN_ERROR_REASONS",
     "FLOOR_RELATIVE",
     "Interval",
     "EngineJudgement",
@@ -76,6 +77,11 @@ TEST_RESAMPLES = 9999
 MARGINAL = (0.5, 2.0)
 """A deciding ratio within this range is "near 1": the verdict is called marginal. A gap up to
 ``MARGINAL[1]`` times a spread or own error is not clearly larger: it lies within it."""
+OWN_ERROR_REASONS = ("within own time-step error", "near own time-step error")
+"""An ``unresolved`` verdict's reason where an engine's own time-step error covers the gap:
+``within`` where the gap is at most 1x the smallest covering own error, ``near`` where it is
+larger but at most ``MARGINAL[1]`` times it (not clearly larger). A ``chaotic`` verdict's
+reason is likewise ``within spread`` or ``near spread``."""
 FLOOR_RELATIVE = 1e-12
 """The precision floor is this times the largest recorded magnitude (at least 1)."""
 
@@ -430,18 +436,18 @@ def judge(
         covering = [e for e in per_engine if e.gap_over_spread <= within]
         if covering:
             covering.sort(key=lambda e: -e.spread.value)
-            verdict, engines, reason = "chaotic", [e.label for e in covering], "within spread"
+            inside = min(e.gap_over_spread for e in covering) <= 1.0
+            reason = "within spread" if inside else "near spread"
+            verdict, engines = "chaotic", [e.label for e in covering]
             for e in covering:
                 if e.gap_over_spread >= lo_m:
                     marginal.append(Marginal("spread", e.gap_over_spread, e.label))
         else:
             own_cover = [e for e in per_engine if e.gap_over_own_error <= within]
             if own_cover:
-                verdict, engines, reason = (
-                    "unresolved",
-                    [e.label for e in own_cover],
-                    "within own time-step error",
-                )
+                inside = min(e.gap_over_own_error for e in own_cover) <= 1.0
+                reason = OWN_ERROR_REASONS[0 if inside else 1]
+                verdict, engines = "unresolved", [e.label for e in own_cover]
                 for e in own_cover:
                     if e.gap_over_own_error >= lo_m:
                         marginal.append(Marginal("own_error", e.gap_over_own_error, e.label))

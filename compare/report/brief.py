@@ -7,11 +7,19 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ..analysis.verdict import OWN_ERROR_REASONS
 from .fmt import fmt_threshold, fmt_time, fmt_value
 from .markdown import left_out_words
 from .outcomes import outcome_brief
 from .story import story_words
-from .verdict import pair_words, time_step_share, verdict_word
+from .verdict import (
+    against_words,
+    marginal_note,
+    own_error_words,
+    pair_words,
+    time_step_share,
+    verdict_word,
+)
 
 __all__ = ["brief", "MAX_LINES"]
 
@@ -94,6 +102,8 @@ def _verdict(s: dict[str, Any]) -> str:
     )
     word = verdict_word(v)  # report.md's words: "chaotic (pybullet; marginal)"
     word = v["verdict"].upper() + word[len(v["verdict"]) :]
+    if v["marginal"]:  # what marginal means, where it is said
+        word = word[: word.rindex("marginal")] + marginal_note(v) + ")"
     kind = v["verdict"]
     if kind == "agree":
         return (
@@ -101,12 +111,15 @@ def _verdict(s: dict[str, Any]) -> str:
             f"along (largest {fmt_value(v['max_gap']['value'], unit)})."
         )
     if kind == "chaotic":
-        who = " and ".join(v["engines"])
-        spread = fmt_value(figs[v["engines"][0]]["spread"]["value"], unit)
         share = time_step_share(v)
+        against = " and ".join(
+            against_words(figs[lab]["gap_over_spread"], f"{lab}'s own spread")
+            + f" ({fmt_value(figs[lab]['spread']['value'], unit)})"
+            for lab in v["engines"]
+        )
         return (
-            head + f"{word}: runs {gap} apart {when}, within {who}'s own "
-            f"spread ({spread}); "
+            head
+            + f"{word}: runs {gap} apart {when}, {against}; "
             + (f"{share}: at this time step " if share else "")
             + "the gap says nothing about the physics."
         )
@@ -117,10 +130,8 @@ def _verdict(s: dict[str, Any]) -> str:
             f"own time-step error (p = {t['p_value']:.2g})."
         )
     reason = v["reason"]
-    if reason == "within own time-step error":
-        who = " and ".join(v["engines"])
-        errs = ", ".join(f"{fmt_value(figs[x]['own_error'], unit)}" for x in v["engines"])
-        why = f"within {who}'s own time-step error ({errs}); rerun with a smaller --timestep"
+    if reason in OWN_ERROR_REASONS:
+        why = f"{own_error_words(v)}; rerun with a smaller --timestep"
     elif reason == "single run":
         why = "one run per engine cannot tell chaos from a difference; rerun with --ensemble 8"
     else:

@@ -162,8 +162,8 @@ def pair_reasons(s: dict[str, Any]) -> list[str]:
     lo, hi = pairs[0]["verdict"]["marginal_range"] if pairs[0]["verdict"] else (0.5, 2)
     return [
         "What decides each verdict: the judged gap against each engine's spread (its runs' "
-        "own scatter: chaotic where the gap lies within it) and against its own time-step "
-        "error (unresolved where the gap lies within it); a ratio between "
+        f"own scatter: chaotic where the gap is at most {hi:g}x it) and against its own "
+        f"time-step error (unresolved where the gap is at most {hi:g}x it); a ratio between "
         f"{lo:g} and {hi:g} makes the verdict marginal.",
         "",
         *out,

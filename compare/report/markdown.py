@@ -826,6 +826,7 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         f"{_floor_words(test)}; alpha {test['alpha']:g})"
     )
     n = v["instants"]
+    hi = v["marginal_range"][1]
     lines += [
         "",
         (
@@ -840,9 +841,10 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
         "",
         f"Two-sample test on the runs' states {where}: {test_words}.",
         "",
-        f"Instants: {n['agree']} below the tolerance, {n['chaotic']} within an engine's spread, "
-        f"{n['unresolved']} within an engine's own time-step error (and no spread), "
-        f"{n['differ']} beyond every one of them (of {n['total']}). "
+        f"Instants: {n['agree']} below the tolerance, {n['chaotic']} at most {hi:g}x an "
+        f"engine's spread, {n['unresolved']} at most {hi:g}x an engine's own time-step error "
+        f"(and over {hi:g}x both spreads), {n['differ']} beyond every one of them (of "
+        f"{n['total']}). "
         + (f"{within} " if (within := within_words(v)) else "")
         + f"A ratio between {v['marginal_range'][0]:g} and "
         f"{v['marginal_range'][1]:g} is near 1: the gap is not clearly larger, and the verdict "

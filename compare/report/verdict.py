@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..analysis.verdict import ALPHA, Marginal
+from ..analysis.verdict import ALPHA, MARGINAL, OWN_ERROR_REASONS, Marginal
 from ..run.ensemble import FLOAT_SPACINGS
 from .fmt import fmt_apart, fmt_threshold, fmt_time, fmt_value
 
@@ -17,6 +17,9 @@ __all__ = [
     "interval_cell",
     "time_step_share",
     "within_words",
+    "against_words",
+    "marginal_note",
+    "own_error_words",
     "one_run",
     "spread_ratio",
 ]
@@ -31,10 +34,53 @@ def marginal_words(m: Marginal) -> str:
     return f"the gap is {m.ratio:.3g}x {m.label}'s own time-step error"
 
 
+def against_words(ratio: float, figure: str) -> str:
+    """The gap against one figure in words its ratio makes true: ``within pybullet's own
+    time-step error`` at most 1x, else the ratio itself, ``1.13x pybullet's own time-step
+    error``."""
+    return f"within {figure}" if ratio <= 1.0 else f"{_x(ratio)} {figure}"
+
+
+def own_error_words(v: dict[str, Any], *, sizes: bool = True) -> str:
+    """An ``unresolved`` verdict's engines whose own time-step error covers the gap, each as
+    its ratio makes true: ``within mujoco's own time-step error (24.3 cm between dt and
+    dt/2)``, ``1.13x pybullet's own time-step error (2.0 cm between dt and dt/2) and 1.08x
+    physx's (2.1 cm between dt and dt/2)``; without ``sizes``, the words alone."""
+    unit = v["unit"]
+    figs = v["engine_figures"]
+    parts = []
+    for k, lab in enumerate(v["engines"]):
+        r = figs[lab]["gap_over_own_error"]
+        noun = f"{lab}'s own time-step error" if k == 0 else f"{lab}'s"
+        words = against_words(r, noun)
+        if sizes:
+            words += f" ({fmt_value(figs[lab]['own_error'], unit)} between dt and dt/2)"
+        parts.append(words)
+    return " and ".join(parts)
+
+
+def marginal_note(v: dict[str, Any]) -> str:
+    """Why a verdict is marginal and what that means: ``marginal: the gap is 1.1x pybullet's
+    spread; a ratio between 0.5x and 2x is near 1`` (empty where it is not)."""
+    if not v["marginal"]:
+        return ""
+    lo, hi = v.get("marginal_range") or MARGINAL
+    reasons = "; ".join(v["marginal_reasons"])
+    return f"marginal: {reasons}; a ratio between {lo:g}x and {hi:g}x is near 1"
+
+
+def near_words(v: dict[str, Any]) -> str:
+    """What a ratio above 1 that still covers the gap means: ``not clearly larger (a ratio
+    between 0.5x and 2x is near 1)``."""
+    lo, hi = v.get("marginal_range") or MARGINAL
+    return f"not clearly larger (a ratio between {lo:g}x and {hi:g}x is near 1)"
+
+
 def time_step_share(v: dict[str, Any]) -> str | None:
-    """Where the verdict is ``chaotic`` but the gap lies within an engine's own time-step error
-    at more instants than within the chaotic engines' spread: ``the gap lies within mujoco's own
-    time-step error at 980 of 981 instants (within pybullet's spread at 210)``; else None.
+    """Where the verdict is ``chaotic`` but an engine's own time-step error covers the gap (at
+    most 2x it) at more instants than the chaotic engines' spread does: ``the gap is at most
+    2x mujoco's own time-step error at 980 of 981 instants (at most 2x pybullet's spread at
+    210)``; else None.
 
     Chaos is named first (at the judged instant the chaotic engine's own runs are as far apart
     as the engines, so its single runs cannot show an engine difference at this time step);
@@ -49,28 +95,30 @@ def time_step_share(v: dict[str, Any]) -> str | None:
     if n <= chaos:
         return None
     spread = f"{v['engines'][0]}'s spread" if len(v["engines"]) == 1 else "a spread"
+    hi = f"{(v.get('marginal_range') or MARGINAL)[1]:g}x"
     return (
-        f"the gap lies within {own}'s own time-step error at {n} of {v['instants']['total']} "
-        f"instants (within {spread} at {chaos})"
+        f"the gap is at most {hi} {own}'s own time-step error at {n} of "
+        f"{v['instants']['total']} instants (at most {hi} {spread} at {chaos})"
     )
 
 
 def within_words(v: dict[str, Any]) -> str | None:
-    """``Counted alone (an instant may count for both, and for both engines): the gap lies
-    within pybullet's spread at 210 instants and its own time-step error at 259; within
-    mujoco's spread at 0 and its own time-step error at 980.``; None without the counts, or
-    where the gap stays below the tolerance all along."""
+    """``Counted alone (an instant may count for both, and for both engines): the gap is at
+    most 2x pybullet's spread at 210 instants and 2x its own time-step error at 259; at most
+    2x mujoco's spread at 0 and 2x its own time-step error at 980.``; None without the counts,
+    or where the gap stays below the tolerance all along."""
     within = (v.get("instants") or {}).get("within")
     if not within or v["instants"]["agree"] == v["instants"]["total"]:
         return None
+    hi = f"{(v.get('marginal_range') or MARGINAL)[1]:g}x"
     each = [
-        f"within {lab}'s spread at {w['spread']}"
+        f"at most {hi} {lab}'s spread at {w['spread']}"
         + (" instants" if k == 0 else "")
-        + f" and its own time-step error at {w['own_error']}"
+        + f" and {hi} its own time-step error at {w['own_error']}"
         for k, (lab, w) in enumerate(within.items())
     ]
     return (
-        "Counted alone (an instant may count for both, and for both engines): the gap lies "
+        "Counted alone (an instant may count for both, and for both engines): the gap is "
         + "; ".join(each)
         + "."
     )
@@ -116,6 +164,8 @@ def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
         )
     unit = v["unit"]
     word = verdict_word(v)
+    if v["marginal"]:  # what marginal means, where it is said
+        word = word[: word.rindex("marginal")] + marginal_note(v) + ")"
     if loud:
         word = v["verdict"].upper() + word[len(v["verdict"]) :]
     t = v["judged_at"]
@@ -131,8 +181,8 @@ def pair_words(pair: dict[str, Any], *, loud: bool = False) -> str:
             "single run": "one run per engine",
             "not separated": "the runs are not told apart",
         }.get(v["reason"], v["reason"])
-        if v["reason"] == "within own time-step error":
-            reason = f"within {' and '.join(v['engines'])}'s own time-step error"
+        if v["reason"] in OWN_ERROR_REASONS:
+            reason = own_error_words(v, sizes=False)
         line += f" ({reason})"
     share = time_step_share(v)
     if share:
@@ -241,9 +291,7 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
     started = _perturbation(ens)
     at_end = v["judged_at"]["why"] == "end"
     when = "end" if at_end else f"are, at t = {fmt_time(v['judged_at']['time'])},"
-    marg = ""
-    if v["marginal"]:
-        marg = " (marginal: " + "; ".join(v["marginal_reasons"]) + ")"
+    marg = f" ({marginal_note(v)})" if v["marginal"] else ""
     tol = fmt_threshold(v["tolerance"], unit)
     lines: list[str] = []
     if v["verdict"] == "agree":
@@ -287,13 +335,18 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
         also_words = ""
         if also:
             also_words = (
-                " It lies within "
+                " The gap is also "
                 + " and ".join(
-                    f"{lab}'s own time-step error ({fmt_value(figs[lab]['own_error'], unit)} "
-                    "between dt and dt/2)"
+                    against_words(figs[lab]["gap_over_own_error"], f"{lab}'s own time-step error")
+                    + f" ({fmt_value(figs[lab]['own_error'], unit)} between dt and dt/2)"
                     for lab in also
                 )
-                + " as well."
+                + (
+                    ""
+                    if all(figs[lab]["gap_over_own_error"] <= 1.0 for lab in also)
+                    else f", {near_words(v)}"
+                )
+                + "."
             )
         share = time_step_share(v)
         if share:
@@ -341,15 +394,11 @@ def verdict_lines(summary: dict[str, Any]) -> list[str]:
         )
     else:
         reason = v["reason"]
-        if reason == "within own time-step error":
-            who = " and ".join(v["engines"])
-            errs = ", ".join(
-                f"{lab} {fmt_value(figs[lab]['own_error'], unit)}" for lab in v["engines"]
-            )
+        if reason in OWN_ERROR_REASONS:
+            near = "" if reason == OWN_ERROR_REASONS[0] else f", {near_words(v)}"
             why = (
-                f"which lies within {who}'s own time-step error (dt against dt/2: {errs}): at "
-                "this time step the comparison cannot tell the engines apart; rerun with a "
-                "smaller --timestep"
+                f"which is {own_error_words(v)}{near}: at this time step the "
+                "comparison cannot tell the engines apart; rerun with a smaller --timestep"
             )
         elif reason == "single run":
             why = (

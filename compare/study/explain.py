@@ -151,8 +151,8 @@ class PairExplanation:
         if self.before.verdict == "chaotic" and not self.note:
             who = " and ".join(self.before.engines) or "an engine"
             text += (
-                f" (The gap lies within {who}'s own spread: part of it is chaos, which no "
-                "setting removes.)"
+                f" (The gap is {'within' if self.before.reason == 'within spread' else 'near'} "
+                f"{who}'s own spread: part of it is chaos, which no setting removes.)"
             )
         return text
 

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..analysis.diff import QUANTITIES
-from ..analysis.verdict import Interval
+from ..analysis.verdict import MARGINAL, Interval
 from ..report.fmt import fmt_value
 from ..report.verdict import verdict_word
 from ..scenario import format_timestep
@@ -85,8 +85,9 @@ def resolution_lines(r: Resolution) -> list[str]:
         "",
         "## Resolve: the verdict at each time step",
         "",
-        "Where the verdict is unresolved because the gap lies within an engine's own time-step "
-        f"error (dt against dt/2), the time step is halved, at most {r.limit} times. "
+        "Where the verdict is unresolved because an engine's own time-step error (dt against "
+        f"dt/2) covers the gap (it is at most {MARGINAL[1]:g}x that error), the time step is "
+        f"halved, at most {r.limit} times. "
         "The rest of this report is that of the last time step.",
         "",
         f"| dt (s) | verdict | gap ({a} - {b}) [95%] | own error {a} | own error {b} "
@@ -116,8 +117,8 @@ def resolution_lines(r: Resolution) -> list[str]:
     else:
         lines.append(
             f"Still unresolved after {r.halvings} halving(s) (dt = "
-            f"{format_timestep(last.timestep)} s): the gap still lies within an engine's own "
-            "time-step error; raise --resolve-limit or start from a smaller --timestep."
+            f"{format_timestep(last.timestep)} s): an engine's own time-step error still covers "
+            "the gap; raise --resolve-limit or start from a smaller --timestep."
         )
     return lines
 

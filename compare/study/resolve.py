@@ -18,7 +18,7 @@ from typing import Any
 
 from simbridge.exceptions import InvalidArgumentError
 
-from ..analysis.verdict import Verdict
+from ..analysis.verdict import OWN_ERROR_REASONS, Verdict
 from ..pipeline import Comparison, compare
 from ..scenario import load_scenario
 from .points import PairFigures, all_pairs
@@ -31,7 +31,7 @@ DEFAULT_LIMIT = 4
 
 def needs_halving(v: Verdict | PairFigures | None) -> bool:
     """The verdict is unresolved because the gap lies within an engine's own time-step error."""
-    return v is not None and v.verdict == "unresolved" and v.reason == "within own time-step error"
+    return v is not None and v.verdict == "unresolved" and v.reason in OWN_ERROR_REASONS
 
 
 @dataclass

@@ -124,8 +124,8 @@ def test_a_chaotic_verdict_carries_the_time_step_share_where_it_is_larger():
         },
     }
     assert time_step_share(v) == (
-        "the gap lies within b's own time-step error at 980 of 981 instants (within a's spread "
-        "at 210)"
+        "the gap is at most 2x b's own time-step error at 980 of 981 instants (at most 2x a's "
+        "spread at 210)"
     )
     v["instants"]["within"]["b"]["own_error"] = 100  # a's spread covers more: chaos alone
     v["instants"]["within"]["a"]["own_error"] = 200
@@ -144,8 +144,8 @@ def test_the_share_reaches_the_terminal_and_report_words(r2d2):
     v["instants"]["within"]["pybullet"]["spread"] = 10
     share = time_step_share(v)
     assert share == (
-        f"the gap lies within mujoco's own time-step error at {apart} of "
-        f"{v['instants']['total']} instants (within pybullet's spread at 10)"
+        f"the gap is at most 2x mujoco's own time-step error at {apart} of "
+        f"{v['instants']['total']} instants (at most 2x pybullet's spread at 10)"
     )
     line = brief(s)[0]
     assert line.startswith("r2d2, pybullet against mujoco: CHAOTIC (pybullet")

@@ -17,7 +17,7 @@ from simbridge.compare.analysis.verdict import (
     precision_floor,
 )
 from simbridge.compare.report.summary_json import verdict_dict
-from simbridge.compare.report.verdict import marginal_words, verdict_lines
+from simbridge.compare.report.verdict import marginal_words, pair_words, verdict_lines
 from simbridge.compare.run.ensemble import horizons, offsets, pairwise_spread, perturbed
 from simbridge.compare.run.quantities import rotation_angle
 from simbridge.compare.scenario import load_scenario
@@ -163,10 +163,29 @@ def test_a_gap_up_to_twice_a_spread_is_chaotic_and_marginal():
 def test_unresolved_when_the_gap_lies_within_an_own_time_step_error():
     a = cloud(np.arange(4) * 1e-6)
     b = cloud(1.0 + np.arange(4) * 1e-6)
-    v = verdict(a, b, own_a=1e-3, own_b=0.8)
+    v = verdict(a, b, own_a=1e-3, own_b=1.2)
     assert v.verdict == "unresolved" and v.reason == "within own time-step error"
-    assert v.engines == ["B"] and v.marginal  # 1.25x B's own error
-    assert "within B's own time-step error" in verdict_lines(summary_of(v, 4))[0]
+    assert v.engines == ["B"] and v.marginal  # 0.833x B's own error
+    line = verdict_lines(summary_of(v, 4))[0]
+    assert "which is within B's own time-step error (1.20 m between dt and dt/2)" in line
+    assert "near 1" in line  # marginal: what the range means is said where it is used
+
+
+def test_a_gap_above_the_own_error_is_near_it_never_within():
+    """The gap 1.25x B's own error still covers it (a ratio up to 2 is near 1), but the words
+    and the reason give the ratio, never "within"."""
+    a = cloud(np.arange(4) * 1e-6)
+    b = cloud(1.0 + np.arange(4) * 1e-6)
+    v = verdict(a, b, own_a=1e-3, own_b=0.8)
+    assert v.verdict == "unresolved" and v.reason == "near own time-step error"
+    assert v.engines == ["B"] and v.marginal
+    s = summary_of(v, 4)
+    line = verdict_lines(s)[0]
+    assert "within" not in line.split("apart", 1)[1]
+    assert "which is 1.25x B's own time-step error (80.0 cm between dt and dt/2)" in line
+    assert "not clearly larger (a ratio between 0.5x and 2x is near 1)" in line
+    pair = {"labels": ["A", "B"], "verdict": s["verdict"], "headline": {}}
+    assert "(1.25x B's own time-step error)" in pair_words(pair)
 
 
 def test_unresolved_when_the_ensembles_are_not_separated_or_absent():
