@@ -776,8 +776,10 @@ def _verdict_section(s: dict[str, Any], of: str = "") -> list[str]:
             runs
             + f"{q.title} is judged at every one of {v['instants']['total']} recorded instants "
             f"against each engine's own spread (the {v['spread_percentile']:g}th percentile of "
-            "the distances between its runs) and its own time-step error (dt against dt/2); "
-            f"figures below are {where}, with 95% bootstrap intervals in brackets.",
+            "the distances between its runs) and its own time-step error (dt against dt/2, the "
+            "position gains sent as the same controller at dt/2: PyBullet's position law has "
+            f"the step in it); figures below are {where}, with 95% bootstrap intervals in "
+            "brackets.",
             "",
         ]
         raised = perturbation_words(e)
