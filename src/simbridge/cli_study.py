@@ -28,8 +28,8 @@ def profile_name(text: str) -> str:
 
     try:
         get_profile(text)
-    except SimbridgeError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    except SimbridgeError as exc:  # argparse names the option: "argument --profile: ..."
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("argument 'profile': ")) from None
     return text
 
 
