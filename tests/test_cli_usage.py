@@ -34,6 +34,55 @@ def test_a_bad_set_is_bad_usage(capsys, assignment, says):
     assert says in line
 
 
+@pytest.mark.parametrize(
+    "assignment, says",
+    [
+        (  # a profile entry, not an engine setting: the form that sets it
+            "pybullet.solver_iterations=50",
+            "--set: pybullet.solver_iterations: solver_iterations is a profile entry "
+            "(one value for every engine), not an engine setting: set it with --profile "
+            "PROFILE+solver_iterations=50, the profile (the scenario's by default; one of "
+            "pybullet, urdf) with the entry changed, e.g. --profile pybullet+solver_iterations=50",
+        ),
+        (
+            "solver_iterations=50",
+            "argument --set: expected BACKEND.KEY=VALUE (mujoco.impratio=10), got "
+            "'solver_iterations=50': solver_iterations is a profile entry",
+        ),
+        (
+            "mujoco.timestep=1/480",
+            "--set: mujoco.timestep: timestep is the scenario's, not an engine "
+            "setting: set it with --timestep 1/480",
+        ),
+        (  # argparse's "argument --set:" once, and the engine that has the key
+            "impratio=10",
+            "argument --set: expected BACKEND.KEY=VALUE (mujoco.impratio=10), got "
+            "'impratio=10': impratio is a setting of mujoco alone: --set mujoco.impratio=10",
+        ),
+        (
+            "solver=newton",
+            "got 'solver=newton': solver is a setting of mujoco and physx: --set "
+            "mujoco.solver=newton or --set physx.solver=newton",
+        ),
+        (
+            "imprato=10",
+            "got 'imprato=10': no engine has a setting imprato; did you mean impratio, a "
+            "setting of mujoco alone: --set mujoco.impratio=10",
+        ),
+        ("zzz=1", "argument --set: expected BACKEND.KEY=VALUE (mujoco.impratio=10), got 'zzz=1'"),
+    ],
+)
+def test_a_set_of_no_engine_setting_names_the_form_that_sets_it(capsys, assignment, says):
+    line = _usage(capsys, ["compare", "pendulum", "--set", assignment], "compare")
+    assert line.startswith("simbridge compare: error: argument --set: ") and says in line, line
+    assert line.count("argument") == 1, line  # was "argument --set: argument '--set': ..."
+
+
+def test_a_bad_profile_change_says_argument_once(capsys):
+    line = _usage(capsys, ["compare", "pendulum", "--profile", "pybullet+foo=1"], "compare")
+    assert line.startswith("simbridge compare: error: argument --profile: unknown entry 'foo'")
+
+
 @pytest.mark.parametrize("command", ["compare", "sweep", "explain"])
 def test_one_backend_is_bad_usage_in_every_study(capsys, command):
     argv = [command, "pendulum", "--backends", "pybullet"]

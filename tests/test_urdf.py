@@ -59,6 +59,81 @@ def test_unknown_source_lists_where_it_looked():
         resolve_source("no_such_robot.urdf")
 
 
+def _deep_folder(root, length: int):
+    """A folder under ``root`` whose path is at least ``length`` characters long."""
+    folder = root
+    k = 0
+    while len(str(folder)) < length:
+        folder = folder / f"folder_{k:02d}_of_a_long_description"
+        k += 1
+    folder.mkdir(parents=True)
+    return folder
+
+
+def test_a_misspelt_path_is_shown_whole_with_the_file_beside_it(tmp_path):
+    """A long path is not cut in the part that is wrong, and the file near its name in the
+    same folder is offered (it was ``'/.../robots/panda_descri... (122 characters)'``, the
+    name cut off, and no word of the ``panda.urdf`` beside it)."""
+    folder = _deep_folder(tmp_path, 110) / "panda_description" / "urdf"
+    folder.mkdir(parents=True)
+    (folder / "panda.urdf").write_text(SHUFFLED)
+    typed = str(folder / "pandaa.urdf")
+    assert 120 < len(typed) <= 240
+    with pytest.raises(exc.UrdfNotFoundError) as err:
+        resolve_source(typed)
+    said = str(err.value)
+    assert said == (
+        f"URDF {typed!r} is neither a file, a name on the search path, nor URDF text "
+        f"(did you mean {str(folder / 'panda.urdf')!r}?); searched: [{typed!r}]"
+    )
+
+
+def test_a_wrong_folder_is_found_and_offered_too(tmp_path, monkeypatch):
+    (tmp_path / "panda_description" / "urdf").mkdir(parents=True)
+    (tmp_path / "panda_description" / "urdf" / "panda.urdf").write_text(SHUFFLED)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(
+        exc.UrdfNotFoundError,
+        match=r"^URDF 'panda_descriptoin/urdf/Panda\.urdf' is neither a file, a name on the "
+        r"search path, nor URDF text \(did you mean 'panda_description/urdf/panda\.urdf'\?\); ",
+    ):
+        resolve_source("panda_descriptoin/urdf/Panda.urdf")
+    # nothing near: no suggestion
+    with pytest.raises(exc.UrdfNotFoundError, match=r"URDF text; searched: "):
+        resolve_source("zzzz_qqqq.urdf")
+
+
+def test_a_very_long_path_is_cut_only_in_the_folders_that_exist(tmp_path):
+    """Over 240 characters, the middle of the folders that exist gives way to "...": the
+    last of them, the first one missing and the file's name stay whole."""
+    folder = _deep_folder(tmp_path, 260)
+    typed = str(folder / "no_such_folder" / "robot_with_a_long_name.urdf")
+    with pytest.raises(exc.UrdfNotFoundError) as err:
+        resolve_source(typed)
+    shown = err.value.source
+    assert "..." in shown and len(shown) <= 240
+    assert shown.startswith("/" + typed.split("/")[1] + "/.../")
+    assert shown.endswith(f"/{folder.name}/no_such_folder/robot_with_a_long_name.urdf")
+
+
+def test_searched_lists_each_place_once_in_order(monkeypatch):
+    """Run from a folder of the search path, a relative name was listed twice (the working
+    directory's try and the search folder's are one path)."""
+    monkeypatch.delenv("SIMBRIDGE_URDF_PATH", raising=False)
+    robots = simbridge.urdf._robots_dir()
+    monkeypatch.chdir(robots)
+    with pytest.raises(exc.UrdfNotFoundError) as err:
+        resolve_source("robots/pandaa.urdf")
+    searched = str(err.value).split("searched: ")[1]
+    places = [p.strip(" '") for p in searched.strip("[]").split(",")]
+    assert places[:3] == [
+        str(robots / "robots/pandaa.urdf"),
+        str(robots / "robots/pandaa.urdf.urdf"),
+        str(simbridge.urdf.search_path()[1] / "robots/pandaa.urdf"),
+    ]
+    assert len(places) == len(set(places)) == 4
+
+
 def test_package_uri_resolves_against_the_urdfs_own_tree(tmp_path):
     pkg = tmp_path / "my_robot_description"
     (pkg / "urdf").mkdir(parents=True)

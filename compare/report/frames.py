@@ -5,8 +5,9 @@ a PyBullet :class:`simbridge.Sim` (its ``render``, TinyRenderer on the CPU) hold
 scenario's robots, each posed at every drawn instant from an engine's trajectory (the root
 link's world pose and the movable joints' positions), so any difference between two engines'
 pictures is their motion, not their rendering. Each engine gets a panel under a header in its
-plots' colour; the camera follows that engine's robot (the mean of its links' centres of mass)
-from the same direction and distance in every panel and every frame.
+plots' colour; the camera follows that engine's robot (the middle of the box that holds it as
+drawn) from the same direction and distance in every panel and every frame, the distance the
+nearest at which the robot fits every panel and frame (:func:`_framing`).
 
 Drawn: the start, the end, and the instants of the events the report finds (the first event of
 each kind in each engine and the instant the gap is born, events within 2 % of the run merged
@@ -74,6 +75,13 @@ CAMERA_ELEVATION = 22.0
 """Degrees above the horizontal the camera looks down from."""
 FOV = 50.0
 """Degrees: the camera's vertical field of view."""
+FILL = 0.85
+"""The share of a panel's half-width and half-height the robot takes at most (the camera's
+distance: :func:`_framing`)."""
+MIN_DISTANCE = 0.2
+"""Metres: the camera's nearest (a robot of a few centimetres)."""
+MAX_GROWTH = 4.0
+"""The camera's distance is at most this many times the start's (a diverged run's poses)."""
 
 
 @dataclass
@@ -239,19 +247,50 @@ def _direction(up: np.ndarray) -> np.ndarray:
     return math.cos(el) * horizontal + math.sin(el) * up
 
 
-def _target(tr: Trajectory, row: int) -> np.ndarray:
-    links = tr.body.link_positions
-    return np.asarray(links[min(row, len(links) - 1)].mean(axis=0), dtype=np.float64)
+@dataclass
+class _View:
+    """Where each panel looks (by engine slot and row) and the camera's distance, the same in
+    every panel and frame."""
+
+    targets: dict[tuple[int, int], np.ndarray]
+    distance: float
 
 
-def _distance(c: Comparison) -> float:
-    """The camera's distance, the same in every panel: the subject's links' spread at the
-    start (the largest of the engines'), a robot filling about half the picture."""
-    spread = 0.0
+def _framing(c: Comparison, times: list[float], up: np.ndarray) -> _View:
+    """The camera on the subject robot at each drawn instant: it looks at the middle of the
+    box that holds the robot as drawn (:func:`~.replay.body_points`: its visuals' boxes), from
+    the distance at which the robot, in every panel and frame, fills at most :data:`FILL` of
+    the panel's width and height (the points nearer the camera counted larger). A distance
+    over :data:`MAX_GROWTH` times the start's (a run that diverged) is cut to that."""
+    from .replay import body_points
+
+    back = _direction(up)  # from the target to the camera
+    right = np.cross(-back, up)
+    right /= np.linalg.norm(right)
+    above = np.cross(right, -back)
+    tan_v = math.tan(math.radians(FOV) / 2) * FILL
+    tan_h = tan_v * PANEL[0] / PANEL[1]
+    targets: dict[tuple[int, int], np.ndarray] = {}
+    start, need = MIN_DISTANCE, MIN_DISTANCE
     for slot in range(len(c.labels)):
-        links = c.runs[(slot, c.timestep)].body.link_positions[0]
-        spread = max(spread, float(np.linalg.norm(links - links.mean(axis=0), axis=1).max()))
-    return max(0.6, 3.0 * spread + 0.3)
+        tr = c.runs[(slot, c.timestep)]
+        rows = sorted({_row(tr, t) for t in times})
+        points = body_points(tr, tr.subject, np.asarray(rows))
+        for row, p in zip(rows, points, strict=True):
+            p = p[np.isfinite(p).all(axis=1)]
+            links = tr.body.link_positions[min(row, len(tr.body.link_positions) - 1)]
+            if not len(p):  # a diverged pose: its links' mean, as drawn before
+                targets[(slot, row)] = np.asarray(links.mean(axis=0), dtype=np.float64)
+                continue
+            centre = (p.min(axis=0) + p.max(axis=0)) / 2
+            targets[(slot, row)] = centre
+            off = p - centre
+            d = off @ back + np.maximum(np.abs(off @ right) / tan_h, np.abs(off @ above) / tan_v)
+            far = float(d.max())
+            need = max(need, far)
+            if row == rows[0]:
+                start = max(start, far)
+    return _View(targets, min(need, MAX_GROWTH * start))
 
 
 def _colour(slot: int) -> tuple[int, int, int]:
@@ -263,7 +302,7 @@ def _colour(slot: int) -> tuple[int, int, int]:
     return round(r * 255), round(g * 255), round(b * 255)
 
 
-def _strip(c: Comparison, painter: _Painter, time: float, distance: float) -> Any:
+def _strip(c: Comparison, painter: _Painter, time: float, view: _View) -> Any:
     """Every engine at ``time``, side by side, each under its header: a PIL image."""
     from PIL import Image, ImageDraw, ImageFont
 
@@ -276,8 +315,8 @@ def _strip(c: Comparison, painter: _Painter, time: float, distance: float) -> An
         tr = c.runs[(slot, c.timestep)]
         row = _row(tr, time)
         painter.pose(tr, row)
-        target = _target(tr, row)
-        image.paste(Image.fromarray(painter.draw(target, distance)), (slot * w, HEADER))
+        target = view.targets[(slot, row)]
+        image.paste(Image.fromarray(painter.draw(target, view.distance)), (slot * w, HEADER))
         draw.rectangle((slot * w, 0, (slot + 1) * w - 1, HEADER - 1), fill=_colour(slot))
         height = float(
             dot(tr.body.base_position[min(row, len(tr.body.base_position) - 1)], painter.up)
@@ -349,15 +388,18 @@ def _draw(
 ) -> None:
     """:func:`write_frames`'s drawing, into ``result``."""
     (out / folder).mkdir(parents=True, exist_ok=True)
-    distance = _distance(c)
     events, result.left_out = key_instants(s, duration)
     stills = [KeyFrame(0.0, "", [], "the start"), *events]
     stills.append(KeyFrame(duration, "", [], "the end"))
+    n = max(2, min(GIF_FRAMES, int(duration * GIF_FPS) + 1))
+    times = np.linspace(0.0, duration, n)
+    times[-1] = duration  # exactly: the end's still
+    view = _framing(c, [k.time for k in stills] + [float(t) for t in times], painter.up)
     drawn: dict[float, Any] = {}  # the start and the end are the animation's first and last
 
     def strip(time: float) -> Any:
         if time not in drawn:
-            drawn[time] = _strip(c, painter, time, distance)
+            drawn[time] = _strip(c, painter, time, view)
         return drawn[time]
 
     for k in stills:
@@ -365,9 +407,6 @@ def _draw(
         k.file = f"{folder}/{name or f't{k.time:.3f}'.replace('.', '_')}.png"
         strip(k.time).save(out / k.file)
     result.key_frames = stills
-    n = max(2, min(GIF_FRAMES, int(duration * GIF_FPS) + 1))
-    times = np.linspace(0.0, duration, n)
-    times[-1] = duration  # exactly: the end's still
     pictures = [strip(float(t)) for t in times]
     step_ms = 1000.0 * duration / (n - 1)
     shown_ms = min(max(step_ms, 60.0), 200.0)

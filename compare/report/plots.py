@@ -69,7 +69,8 @@ def _style(slot: int, n: int) -> dict[str, Any]:
 def _legend_below(fig: Any, ax: Any, ncol: int = 3) -> None:
     """One legend for the figure, centred below its axes (out of the data's way)."""
     handles, labels = ax.get_legend_handles_labels()
-    if not handles:
+    if not handles:  # nothing to name: the axes alone, laid out
+        fig.tight_layout()
         return
     rows = math.ceil(len(handles) / ncol)
     fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=8, frameon=False)
@@ -523,6 +524,9 @@ _LANE_KINDS = (
     "motor_saturated",
 )
 
+_MARKED = {"contact_made": "v", "contact_lost": "^", "peak_height": "*"}
+"""The events drawn as instants, by their marker (the others are bars)."""
+
 
 def events(c: Comparison, path: Path) -> Path | None:
     """A timeline of both engines' events (:mod:`.events`), one lane per engine and kind:
@@ -565,7 +569,7 @@ def events(c: Comparison, path: Path) -> Path | None:
                 ax.plot(
                     x.time,
                     y,
-                    {"contact_made": "v", "contact_lost": "^", "peak_height": "*"}[kind],
+                    _MARKED[kind],
                     color=COLORS[slot % len(COLORS)],
                     ms=6,
                     mfc="none" if kind == "contact_lost" else COLORS[slot % len(COLORS)],
@@ -590,9 +594,11 @@ def events(c: Comparison, path: Path) -> Path | None:
                 f"(t = {t:.3f} s)"
             ),
         )
-    ax.plot([], [], "v", color="0.3", label="contact made")
-    ax.plot([], [], "^", color="0.3", mfc="none", label="contact lost")
-    ax.plot([], [], "*", color="0.3", label="peak height")
+    drawn = {kind for _, kind in lanes}
+    for kind, marker in _MARKED.items():  # the legend names only the markers drawn
+        if kind in drawn:
+            mfc = "none" if kind == "contact_lost" else "0.3"
+            ax.plot([], [], marker, color="0.3", mfc=mfc, label=kind.replace("_", " "))
     tr = c.runs[(0, c.timestep)]
     for _name, first, _ in tr.phases[1:]:
         ax.axvline(tr.time[first], color="0.6", lw=0.8, ls=":")

@@ -43,6 +43,8 @@ __all__ = [
     "EventMark",
     "ReplayEngine",
     "available",
+    "body_points",
+    "camera_view",
     "engines_from_report",
     "event_marks",
     "frame_rows",
@@ -361,6 +363,104 @@ def link_poses(
     return frames
 
 
+def _boxes(model: Any) -> list[tuple[int, np.ndarray]]:
+    """Each of ``model``'s visuals as its link and the 8 corners of its box (link frame)."""
+    out = []
+    for v in _visuals(model):
+        lo, hi = v.vertices.min(axis=0), v.vertices.max(axis=0)
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])], dtype=float)  # fmt: skip
+        out.append((v.link, corners))
+    return out
+
+
+_MODELS: dict[tuple[str, int, int], tuple[Any, list[tuple[int, np.ndarray]]]] = {}
+"""URDF models and their visuals' boxes by file (path, modification time, size): the key
+frames and the replay of one report read a robot's meshes once."""
+
+
+def _model_boxes(source: str | None) -> tuple[Any, list[tuple[int, np.ndarray]]]:
+    if source is None:
+        return None, []
+    try:
+        st = Path(source).stat()
+    except OSError:
+        return None, []
+    key = (source, st.st_mtime_ns, st.st_size)
+    if key not in _MODELS:
+        model = _read_model(source)
+        if len(_MODELS) >= 16:
+            _MODELS.clear()
+        _MODELS[key] = (model, _boxes(model) if model is not None else [])
+    return _MODELS[key]
+
+
+def body_points(tr: Trajectory, name: str, rows: np.ndarray) -> np.ndarray:
+    """(F, P, 3) m, world: points that bound body ``name`` of ``tr`` at ``rows`` as it is
+    drawn: the corners of its ``<visual>`` geometries' boxes, posed along the URDF's joints
+    from the recorded base and joint positions; where its file is no URDF (an MJCF body) or
+    has no visual, its links' centres of mass with a margin of a tenth of their spread and
+    2 cm each way."""
+    rows = np.asarray(rows, dtype=int)
+    names = list(tr.bodies)
+    b = tr.bodies[name]
+    model, boxes = _model_boxes(_urdf_sources(tr)[names.index(name)])
+    if model is not None and boxes:
+        frames = link_poses(model, b, rows)
+        parts = []
+        for link, corners in boxes:
+            pos, rot = frames[link]  # (F, 3), (F, 3, 3)
+            parts.append(np.einsum("fij,pj->fpi", rot, corners) + pos[:, None, :])
+        return np.concatenate(parts, axis=1)
+    links = np.asarray(b.link_positions[rows], dtype=float)  # (F, L, 3)
+    spread = np.ptp(links, axis=1).max(axis=1, initial=0.0)  # (F,)
+    pad = (0.1 * spread + 0.02)[:, None, None]
+    steps = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    return (links[:, :, None, :] + pad[..., None] * steps[None, None]).reshape(len(rows), -1, 3)
+
+
+CAMERA_FOV = 75.0
+"""Degrees: the replay viewer's vertical field of view (viser's)."""
+CAMERA_SIDE = (0.8, -1.4, 0.7)
+"""The direction the replay's camera looks from (towards the robots), before its length."""
+CAMERA_FILL = 0.8
+"""The share of the view's height the robots' bounding sphere takes."""
+
+
+def camera_view(
+    extent: list[np.ndarray],
+) -> tuple[tuple[float, float, float], tuple[float, float, float]] | None:
+    """Where the replay's camera looks and stands: at the middle of the box that holds the
+    moving bodies' drawn points ``extent`` (each (F, P, 3), :func:`body_points`) over the run,
+    and back along :data:`CAMERA_SIDE` so that the box's bounding sphere takes
+    :data:`CAMERA_FILL` of the view's height. The box spans the middle 90% of the points along
+    each axis (a robot thrown far leaves the view for a while rather than shrinking the others
+    to specks), the start's points always in it. None without a point."""
+    pts = [x.reshape(-1, 3) for x in extent if x.size]
+    if not pts:
+        return None
+    every = np.concatenate(pts)
+    every = every[np.isfinite(every).all(axis=1)]
+    if not len(every):
+        return None
+    start = np.concatenate([x[0] for x in extent if x.size])
+    start = start[np.isfinite(start).all(axis=1)]
+    lo, hi = np.percentile(every, 5, axis=0), np.percentile(every, 95, axis=0)
+    if len(start):
+        lo, hi = np.minimum(lo, start.min(axis=0)), np.maximum(hi, start.max(axis=0))
+    centre = (lo + hi) / 2
+    radius = max(float(np.linalg.norm(hi - lo)) / 2, 0.05)
+    half = math.radians(CAMERA_FOV) / 2
+    distance = radius / math.sin(CAMERA_FILL * half)
+    side = np.asarray(CAMERA_SIDE, dtype=float)
+    eye = centre + side / np.linalg.norm(side) * distance
+    return _point(centre), _point(eye)
+
+
+def _point(x: np.ndarray) -> tuple[float, float, float]:
+    return float(x[0]), float(x[1]), float(x[2])
+
+
 def _static(b: BodyTrajectory) -> bool:
     """A body that never moves (no joint, its base still): scenery."""
     return (
@@ -409,6 +509,7 @@ class _Scene:
         self.ghosts: list[tuple[Any, np.ndarray]] = []
         self.marks = event_marks(engines)
         self.roots: dict[str, tuple[Any, Any]] = {}
+        self.extent: list[np.ndarray] = []  # (F, P, 3) each: what bounds a moving body
         scene = server.scene
         scene.set_up_direction("+z")
         scene.add_grid(
@@ -439,6 +540,7 @@ class _Scene:
                         self._static_body(f"/ground/{_name(name)}", model, b)
                     continue
                 self._body(f"{root}/{_name(name)}", model, b, rows, eng.colour)
+                self.extent.append(body_points(tr, name, rows))
             if ghosts and eng.ghosts is not None:
                 g = eng.ghosts  # (M, F, P, 3)
                 pts = g[:, 0].reshape(-1, 3)
@@ -508,21 +610,13 @@ class _Scene:
                 )
 
     def _camera(self) -> None:
-        """Look at the robots' start from a distance that holds where they go on the ground
-        (the middle 80% of every link's horizontal positions over the run, and the robots'
-        own size): a robot thrown high leaves the view for a while rather than shrinking the
-        others to specks."""
-        if not self.nodes:
+        """Look at the moving robots from the side and above, from as near as holds them
+        (:func:`camera_view`)."""
+        view = camera_view(self.extent)
+        if view is None:
             return
-        start = np.array([n.positions[0] for n in self.nodes])
-        pts = np.concatenate([n.positions for n in self.nodes])
-        lo, hi = np.percentile(pts, 10, axis=0), np.percentile(pts, 90, axis=0)
-        centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, start[:, 2].mean()])
-        spread = max(float((hi - lo)[:2].max()), float(np.ptp(start, axis=0).max()), 0.6)
-        d = 1.1 * spread + 0.6
         cam = self.server.initial_camera
-        cam.look_at = tuple(float(x) for x in centre)
-        cam.position = tuple(float(x) for x in centre + np.array([0.8, -1.4, 0.7]) * d)
+        cam.look_at, cam.position = view
 
     def show(self, k: int) -> None:
         """Every engine at frame ``k``."""

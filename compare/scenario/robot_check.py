@@ -39,14 +39,21 @@ robot's file takes about half a second to read)."""
 
 def _joint_names(sc: Scenario, index: int) -> list[str]:
     """Joint names of robot ``index`` as its file makes them (PyBullet's order)."""
-    from simbridge.scene_files import parse_scene
+    from simbridge.mjcf import parse_mjcf
+    from simbridge.scene import resolve_scene_source
     from simbridge.urdf import parse_urdf
     from simbridge.urdf_source import resolve_source
 
     robot = sc.robots[index]
     source = sc.resolve_urdf(robot)
-    src = resolve_source(source) if robot.kind != "mjcf" else None
-    found = src.path if src is not None else Path(source)
+    # searched where the run searches: the scenario's folder first (a missing file's message
+    # lists it), then as Sim.load_urdf and load_mjcf search
+    near = Path(sc.source).parent if sc.source is not None else None
+    if robot.kind == "mjcf":
+        src = resolve_scene_source(source, "mjcf", near=near)
+    else:
+        src = resolve_source(source, near=near)
+    found = src.path
     try:
         stat = found.stat() if found is not None else None
     except OSError:
@@ -54,8 +61,8 @@ def _joint_names(sc: Scenario, index: int) -> list[str]:
     key = (robot.kind, robot.body, str(found), source, stat and (stat.st_mtime_ns, stat.st_size))
     if stat is not None and key in _READ:
         return _READ[key]
-    if src is None:
-        bodies = parse_scene(source, "mjcf")
+    if robot.kind == "mjcf":
+        bodies = parse_mjcf(src)
         names = (
             [] if not 0 <= robot.body < len(bodies) else [j.name for j in bodies[robot.body].joints]
         )

@@ -52,14 +52,24 @@ PROFILE_ENTRIES = tuple(
 
 @dataclass(frozen=True)
 class Setting:
-    """A setting (``KEY``) and the values a study gives it."""
+    """A setting (``KEY``) and the values a study gives it; ``typed``: each value as it was
+    written (``1/240``), what the terminal and the reports show (empty: none written)."""
 
     key: str
     values: tuple[Any, ...]
+    typed: tuple[str, ...] = ()
 
     @property
     def kind(self) -> str:
         return setting_kind(self.key)
+
+    def shown(self, value: Any) -> str:
+        """``value`` as it was written, else as :func:`format_value` (a time step as
+        ``1/240`` where it is one) writes it."""
+        for v, text in zip(self.values, self.typed, strict=False):
+            if type(v) is type(value) and v == value:
+                return text
+        return format_value(value, self.key)
 
 
 def _registered() -> list[str]:
@@ -158,7 +168,8 @@ def parse_vary(text: str) -> Setting:
         raise InvalidArgumentError("vary", f"expected KEY=V1,V2,..., got {text!r}")
     kind = setting_kind(key)
     name = split_slot(key)[0]
-    values = tuple(parse_value(name, v) for v in _split_values(rest))
+    typed = tuple(_split_values(rest))
+    values = tuple(parse_value(name, v) for v in typed)
     if not values:
         raise InvalidArgumentError("vary", f"{key}: no value given in {text!r}")
     if len(set(map(repr, values))) != len(values):
@@ -166,7 +177,7 @@ def parse_vary(text: str) -> Setting:
     for v in values:
         if kind == "profile" or kind == "engine":
             derived_profile("pybullet", {name: v})  # raises on a bad value
-    return Setting(key, values)
+    return Setting(key, values, typed)
 
 
 def check_vary(settings: Sequence[Setting | str], backends: Sequence[str]) -> None:
@@ -269,8 +280,13 @@ def _literal(text: str) -> Any:
         return text
 
 
-def format_value(value: Any) -> str:
-    """A setting's value as the tables show it."""
+def format_value(value: Any, key: str = "") -> str:
+    """A setting's value as the tables show it where it was not written
+    (:meth:`Setting.shown`): a time step (``key`` ``timestep``) as ``1/240`` where it is one."""
+    if key == "timestep" and isinstance(value, float):
+        from ..scenario import format_timestep
+
+        return format_timestep(value)
     if isinstance(value, float):
         return f"{value:.6g}"
     if isinstance(value, (list, tuple)):

@@ -52,7 +52,7 @@ def point_line(p: SweepPoint) -> str:
     """A sweep point in one terminal line, in report.md's words and units:
     ``solver_iterations=10: agree (marginal), gap 8.17 mm [7.90 mm, 8.40 mm]`` (more than one
     pair: each named)."""
-    values = ", ".join(f"{k}={format_value(v)}" for k, v in p.values.items())
+    values = ", ".join(f"{k}={p.shown(k)}" for k in p.values)
     words = []
     for (a, b), f in zip(_pairs(len(p.labels)), p.pairs, strict=False):
         who = f"{p.labels[a]} - {p.labels[b]} " if len(p.pairs) > 1 else ""
@@ -168,9 +168,9 @@ def sweep_lines(s: Sweep, key: str) -> list[dict[str, Any]]:
     others = [k for k in pts[0].values if k != key]
     groups: dict[str, list[Any]] = {}
     for p in pts:
-        tag = ", ".join(f"{k}={format_value(p.values[k])}" for k in others)
+        tag = ", ".join(f"{k}={p.shown(k)}" for k in others)
         groups.setdefault(tag, []).append(p)
-    ticks = [format_value(p.values[key]) for p in pts]
+    ticks = [p.shown(key) for p in pts]
     names = _engine_names(s)
     pairs = _pairs(len(names))
     holder = {}  # engine slot -> (the first pair holding it, its place in that pair)
@@ -185,10 +185,7 @@ def sweep_lines(s: Sweep, key: str) -> list[dict[str, Any]]:
                 "name": label,
                 "others": tag,
                 "label": label + (f" ({tag})" if tag else ""),
-                "x": [
-                    p.values[key] if numeric else ticks.index(format_value(p.values[key]))
-                    for p in group
-                ],
+                "x": [p.values[key] if numeric else ticks.index(p.shown(key)) for p in group],
                 "value": [x.value for x in xi],
                 "low": [interval_dict(x)["low"] for x in xi],  # None: none, or not finite
                 "high": [interval_dict(x)["high"] for x in xi],
@@ -226,7 +223,10 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
     names = _engine_names(s)
     many = len(names) > 2
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8) if many else (11, 4.2))
-    ticks = [format_value(p.values[key]) for p in pts]
+    ticks = [p.shown(key) for p in pts]
+    written = {p.values[key]: p.shown(key) for p in pts}
+    if all(text == format_value(v) for v, text in written.items()):
+        written = {}
     tags = list(dict.fromkeys(x["others"] for x in lines))
     pair_labels = [f"{names[a]} and {names[b]}" for a, b in _pairs(len(names))]
     spots = [v for x in lines for v in x["x"]]
@@ -272,6 +272,8 @@ def _plot_sweep(s: Sweep, key: str, path: Path) -> bool:
         ax.set_title(title, fontsize=10)
         if not numeric:
             ax.set_xticks(range(len(ticks)), ticks)
+        elif written:  # the values as written (1/240) where the numbers would read otherwise
+            ax.set_xticks(list(written), list(written.values()))
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
     if all(v > 0 for x in lines if x["panel"] == "gap" for v in x["value"]):
@@ -315,7 +317,7 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
         "",
         "Varied: "
         + "; ".join(
-            f"`{x.key}` = {', '.join(map(format_value, x.values))}{_on_whom(x.key, names)}"
+            f"`{x.key}` = {', '.join(map(x.shown, x.values))}{_on_whom(x.key, names)}"
             for x in s.settings
         )
         + ". Engines: "
@@ -343,7 +345,7 @@ def write_sweep(s: Sweep, out: str | Path, *, plots: bool = True) -> Path:
     lines.append("|" + "---|" * (len(keys) + 8))
     for p in s.points:
         for (a, b), f in zip(_pairs(len(names)), p.pairs, strict=False):
-            cells = [format_value(p.values[k]) if k in p.values else "·" for k in keys]
+            cells = [p.shown(k) if k in p.values else "·" for k in keys]
             lines.append(
                 "| "
                 + " | ".join(cells)

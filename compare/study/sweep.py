@@ -12,7 +12,7 @@ from __future__ import annotations
 import itertools
 import time as _time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from simbridge.engine_settings import require_engines
@@ -20,7 +20,15 @@ from simbridge.exceptions import InvalidArgumentError
 
 from ..pipeline import compare
 from ..scenario import load_scenario
-from .points import PairFigures, Setting, all_pairs, apply_setting, check_vary, parse_vary
+from .points import (
+    PairFigures,
+    Setting,
+    all_pairs,
+    apply_setting,
+    check_vary,
+    format_value,
+    parse_vary,
+)
 
 __all__ = ["SweepPoint", "Sweep", "sweep"]
 
@@ -36,10 +44,17 @@ class SweepPoint:
     pairs: list[PairFigures]
     labels: tuple[str, ...]
     wall_time: float
+    typed: dict[str, str] = field(default_factory=dict)
+    """The values as they were written (``1/240``; :meth:`Setting.shown`), by key."""
+
+    def shown(self, key: str) -> str:
+        """The value of ``key`` as it was written, else as :func:`format_value` writes it."""
+        return self.typed.get(key) or format_value(self.values[key], key)
 
     def as_dict(self) -> dict[str, Any]:
         return {
             "values": {k: _json_value(v) for k, v in self.values.items()},
+            "typed": {k: self.shown(k) for k in self.values},
             "profiles": list(self.profiles),
             "timestep": self.timestep,
             "labels": list(self.labels),
@@ -76,6 +91,7 @@ class Sweep:
             "backends": list(self.backends),
             "profiles": list(self.profiles),
             "vary": {s.key: [_json_value(v) for v in s.values] for s in self.settings},
+            "vary_typed": {s.key: [s.shown(v) for v in s.values] for s in self.settings},
             "grid": self.grid,
             "ensemble": self.ensemble,
             "duration": self.duration,
@@ -119,6 +135,7 @@ def sweep(
     if not settings:
         raise InvalidArgumentError("vary", "expected at least one KEY=V1,V2,... to vary")
     keys = [s.key for s in settings]
+    by_key = {s.key: s for s in settings}
     if len(set(keys)) != len(keys):
         raise InvalidArgumentError("vary", f"a setting is varied twice: {keys}")
     sc = load_scenario(scenario)
@@ -165,6 +182,7 @@ def sweep(
                 pairs=all_pairs(c),
                 labels=c.labels,
                 wall_time=_time.perf_counter() - t0,
+                typed={k: by_key[k].shown(v) for k, v in values.items()},
             )
         )
     ens = compare_args.get("ensemble")

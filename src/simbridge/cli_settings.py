@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 from collections.abc import Sequence
+from dataclasses import fields
 from typing import Any
 
 from .engine_settings import merge, parse_assignment, settings_for, validate
@@ -29,15 +30,81 @@ def add_set_option(parser: argparse.ArgumentParser) -> None:
 
 def _assignment(text: str) -> str:
     """``--set``'s argument, checked as it is parsed (bad usage, exit 2, on a bad key or
-    value); :func:`settings_from_args` reads it."""
-    from .exceptions import SimbridgeError
+    value); :func:`settings_from_args` reads it. argparse puts ``argument --set:`` before the
+    message: the message does not say it again. A profile entry or a key without its backend
+    is answered with the form that sets it."""
+    from .exceptions import InvalidArgumentError, InvalidEngineSettingError, SimbridgeError
 
+    name, _, raw = text.partition("=")
+    first, dot, rest = name.strip().partition(".")
+    key, value = (rest if dot else first).strip(), raw.strip()
     try:
-        backend, key, value = parse_assignment(text)
-        validate(backend, {key: value})
+        backend, key, parsed = parse_assignment(text)
+    except InvalidArgumentError as exc:
+        said = str(exc).removeprefix(f"argument {exc.argument!r}: ")
+        hint = _elsewhere(key, value) or (_owners_hint(key, value) if not dot else "")
+        raise argparse.ArgumentTypeError(said + (f": {hint}" if hint else "")) from None
+    try:
+        validate(backend, {key: parsed})
+    except InvalidEngineSettingError as exc:
+        hint = _elsewhere(key, value) if exc.key == key else ""
+        if hint:  # no setting of the engine's, but set another way
+            raise argparse.ArgumentTypeError(f"{backend}.{key}: {hint}") from None
+        raise argparse.ArgumentTypeError(str(exc)) from None
     except SimbridgeError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
     return text
+
+
+def _elsewhere(key: str, value: str) -> str:
+    """Where ``key`` is set when it is no engine setting: a profile entry for every engine
+    with ``--profile NAME+KEY=VALUE``, the time step with ``--timestep``, gravity in the
+    scenario. Empty for any other key."""
+    from .profiles import PROFILES, Profile
+
+    shown = value or "VALUE"
+    if key in ("timestep", "gravity"):
+        how = f"--timestep {shown}" if key == "timestep" else "the scenario's gravity = [x, y, z]"
+        return f"{key} is the scenario's, not an engine setting: set it with {how}"
+    entries = [f.name for f in fields(Profile) if f.name not in ("name", "engines")]
+    if key in entries:
+        return (
+            f"{key} is a profile entry (one value for every engine), not an engine setting: "
+            f"set it with --profile PROFILE+{key}={shown}, the profile (the scenario's by "
+            f"default; one of {', '.join(PROFILES)}) with the entry changed, e.g. --profile "
+            f"pybullet+{key}={shown}"
+        )
+    return ""
+
+
+def _owners_hint(key: str, value: str) -> str:
+    """For ``--set KEY=VALUE`` without a backend: the ``--set BACKEND.KEY=VALUE`` of each
+    engine that has ``KEY``, or else the key most like it; empty where none is near."""
+    import difflib
+
+    from .engine_settings import owners
+    from .registry import available_backends
+
+    found, typed = owners(key), key
+    if not found:
+        every = list(dict.fromkeys(k for b in available_backends() for k in _settings_of(b)))
+        near = difflib.get_close_matches(key, every, n=1)
+        if not near:
+            return ""
+        key = near[0]
+        found = owners(key)
+    forms = " or ".join(f"--set {b}.{key}={value or 'VALUE'}" for b in found)
+    whose = f"a setting of {' and '.join(found)}{' alone' if len(found) == 1 else ''}"
+    if key != typed:
+        return f"no engine has a setting {typed}; did you mean {key}, {whose}: {forms}"
+    return f"{key} is {whose}: {forms}"
+
+
+def _settings_of(backend: str) -> list[str]:
+    try:
+        return list(settings_for(backend))
+    except Exception:  # noqa: BLE001 - only a hint: a broken registration is reported elsewhere
+        return []
 
 
 def settings_from_args(assignments: Sequence[str] | None) -> dict[str, dict[str, Any]] | None:

@@ -28,8 +28,8 @@ def profile_name(text: str) -> str:
 
     try:
         get_profile(text)
-    except SimbridgeError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    except SimbridgeError as exc:  # argparse names the option: "argument --profile: ..."
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("argument 'profile': ")) from None
     return text
 
 
@@ -279,19 +279,17 @@ def _usage(text: str) -> Exception:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from simbridge.compare.scenario import format_timestep
     from simbridge.compare.study import sweep, write_sweep
-    from simbridge.compare.study.points import format_value
     from simbridge.compare.study.report import point_line
 
     sc, out = _start(args, "sweep")
     prefix = [""]
+    settings = {s.key: s for s in args.vary}
     with _bar_for(args) as bar:
 
         def on_point(i: int, n: int, values: dict[str, Any]) -> None:
             prefix[0] = f"{i + 1}/{n} " + ",".join(
-                f"{k}={format_value(v) if k != 'timestep' else format_timestep(v)}"
-                for k, v in values.items()
+                f"{k}={settings[k].shown(v)}" for k, v in values.items()
             )
 
         result = sweep(

@@ -41,6 +41,7 @@ __all__ = [
     "require_engines",
     "freeze",
     "thaw",
+    "owners",
     "KINDS",
 ]
 
@@ -219,12 +220,12 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
     for key in mapping:
         if key not in known:
             valid = ", ".join(known) if known else "none (this backend declares no settings)"
-            owners = _owners(str(key), backend)
-            if owners:
+            others = owners(str(key), backend)
+            if others:
                 raise InvalidEngineSettingError(
                     backend,
                     str(key),
-                    f"unknown setting: {key} is a {' and '.join(owners)} setting; {backend}'s "
+                    f"unknown setting: {key} is a {' and '.join(others)} setting; {backend}'s "
                     f"are: {valid}",
                 )
             raise InvalidEngineSettingError(
@@ -244,9 +245,10 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
     return checked
 
 
-def _owners(key: str, backend: str) -> list[str]:
-    """The other registered backends that have a setting ``key`` (for the message of a key
-    given to the wrong engine); a backend whose settings module cannot be read is skipped."""
+def owners(key: str, backend: str = "") -> list[str]:
+    """The registered backends but ``backend`` that have a setting ``key`` (for the message of
+    a key given to the wrong engine, or to none); a backend whose settings module cannot be
+    read is skipped."""
     from .registry import available_backends
 
     found = []

@@ -153,11 +153,14 @@ class UrdfError(SimbridgeError, ValueError):
 
 
 class UrdfNotFoundError(UrdfError, FileNotFoundError):
-    def __init__(self, source: str, searched: Iterable[str], kind: str = "URDF"):
+    """``searched``: every place looked, in order, each once; ``hint``: what follows the
+    sentence (`` (did you mean '...'?)``: :func:`simbridge.urdf_source.not_found`)."""
+
+    def __init__(self, source: str, searched: Iterable[str], kind: str = "URDF", hint: str = ""):
         self.source = source
         super().__init__(
-            f"{kind} {source!r} is neither a file, a name on the search path, nor {kind} text; "
-            f"searched: {_choices(searched)}"
+            f"{kind} {source!r} is neither a file, a name on the search path, nor {kind} text"
+            f"{hint}; searched: {_choices(searched)}"
         )
 
 

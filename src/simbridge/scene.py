@@ -29,7 +29,7 @@ import numpy as np
 from .exceptions import UrdfNotFoundError, UrdfParseError, UrdfStructureError
 from .types import Quat
 from .urdf_model import UrdfModel, Vec3
-from .urdf_source import UrdfSource, resolve_mesh, search_path
+from .urdf_source import UrdfSource, locate, resolve_mesh
 from .urdf_xml import XmlElement, c_atof, pybullet_numbers
 
 __all__ = [
@@ -90,35 +90,20 @@ def number(text: str | None) -> float:
     return c_atof(text or "")[0]
 
 
-def resolve_scene_source(source: str | os.PathLike[str], kind: str) -> UrdfSource:
+def resolve_scene_source(
+    source: str | os.PathLike[str], kind: str, *, near: Path | None = None
+) -> UrdfSource:
     """A path, a name on the search path (this package's robots, then pybullet_data, e.g.
-    ``"mjcf/ant.xml"``), or the file's XML text."""
+    ``"mjcf/ant.xml"``), or the file's XML text. ``near``: a folder searched for a relative
+    path first (a scenario's)."""
     label = _KIND[kind]
     if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
         return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), f"<{label} text>")
     if not isinstance(source, (str, os.PathLike)):
         raise UrdfNotFoundError(repr(source), ["a path, a name or XML text was expected"], label)
-    text_source = str(source)
-    shown = text_source if len(text_source) <= 120 else f"{text_source[:100]}..."
-    candidate = Path(source).expanduser() if "\0" not in text_source else None
-    tried: list[str] = []
-    found: Path | None = None
-    if candidate is not None:
-        if _is_file(candidate):
-            found = candidate
-        else:
-            tried.append(str(candidate.absolute()))
-            if not candidate.is_absolute() and len(text_source) <= 255:
-                for folder in search_path():
-                    path = folder / candidate
-                    if _is_file(path):
-                        found = path
-                        break
-                    tried.append(str(path))
-    if found is None:
-        raise UrdfNotFoundError(shown, tried, label)
+    found, itself = locate(source, near=near, kind=label)
     # the path as PyBullet would be given it: the caller's text, or the search folder's file
-    as_given = os.path.expanduser(text_source) if found is candidate else str(found)
+    as_given = os.path.expanduser(os.fspath(source)) if itself else str(found)
     found = found.resolve()
     try:
         data = found.read_bytes()
@@ -126,13 +111,6 @@ def resolve_scene_source(source: str | os.PathLike[str], kind: str) -> UrdfSourc
         raise UrdfParseError(str(found), f"cannot read the file: {exc}", label) from exc
     text = data.decode("utf-8", errors="surrogateescape")
     return UrdfSource(text, found, found.parent, str(found), as_given)
-
-
-def _is_file(path: Path) -> bool:
-    try:
-        return path.is_file()
-    except (OSError, ValueError):
-        return False
 
 
 # PyBullet's XML reader (TinyXML-2) refuses a file whose elements nest deeper than this, the

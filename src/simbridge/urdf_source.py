@@ -75,41 +75,190 @@ def _is_file(path: Path) -> bool:
         return False
 
 
-def resolve_source(source: str | os.PathLike[str]) -> UrdfSource:
-    """Turn a path, a name on the search path, or URDF XML text into a :class:`UrdfSource`."""
+NAME_MAX = 255
+"""Characters: the longest name of one file or folder that file systems take (Linux's
+``NAME_MAX``); a longer part is no name of a file."""
+SHOWN_LENGTH = 240
+"""Characters: a path up to this long is shown whole in a message."""
+_LISTED = 10000
+"""Entries: the most of one folder read for a "did you mean" (a larger folder gives none)."""
+
+
+def shown_path(text: str) -> str:
+    """A path (or what was given as one) as a message shows it: whole where it is at most
+    :data:`SHOWN_LENGTH` characters; longer, the middle of its folders that exist is cut
+    (``/a/b/.../y/z/wrong/name.urdf``), never the first part that does not exist nor any after
+    it; a text with a part no file system takes as a name (over :data:`NAME_MAX` characters) is
+    no path: its first 100 characters and its length."""
+    parts = text.split("/")
+    if any(len(p) > NAME_MAX for p in parts):
+        return f"{text[:100]}... ({len(text)} characters)"
+    if len(text) <= SHOWN_LENGTH:
+        return text
+    exists = 0  # the leading parts that name folders which exist
+    for k in range(1, len(parts)):
+        folder = "/".join(parts[:k]) or "/"
+        try:
+            if not os.path.isdir(folder):
+                break
+        except (OSError, ValueError):
+            break
+        exists = k
+    over = len(text) - SHOWN_LENGTH + len("/...")
+    head = 2 if parts[0] == "" else 1  # "/work" or "work" stays
+    # the folders cut: those after the head, never the last one that exists nor what follows
+    cut, dropped = 0, 0
+    while head + dropped < exists - 1 and cut < over:
+        cut += len(parts[head + dropped]) + 1
+        dropped += 1
+    if dropped < 2:  # "..." for one folder saves nothing worth the loss
+        return text
+    return "/".join([*parts[:head], "...", *parts[head + dropped :]])
+
+
+def _entries(folder: Path) -> list[str]:
+    """The names in ``folder`` (none where it cannot be read or holds more than
+    :data:`_LISTED`)."""
+    try:
+        with os.scandir(folder) as it:
+            names = []
+            for entry in it:
+                names.append(entry.name)
+                if len(names) > _LISTED:
+                    return []
+            return names
+    except (OSError, ValueError):
+        return []
+
+
+def _likeness(typed: str, name: str) -> float:
+    """How alike two names are, 0 to 1: case aside, the stems compared where both have the same
+    extension (``fooo.urdf`` is not like ``door.urdf``), letters swapped counting as alike."""
+    a, b = typed.lower(), name.lower()
+    ext_a, ext_b = os.path.splitext(a)[1], os.path.splitext(b)[1]
+    if ext_a and ext_a == ext_b:
+        a, b = a[: -len(ext_a)], b[: -len(ext_b)]
+    if sorted(a) == sorted(b):
+        return 1.0 if a == b else 0.9
+    import difflib
+
+    return difflib.SequenceMatcher(None, a, b).ratio()
+
+
+def _closest(name: str, names: list[str], suffixes: Sequence[str]) -> str | None:
+    """The name of ``names`` most like ``name`` (or ``name`` with one of ``suffixes``), None
+    where none is alike enough."""
+    best, score = None, 0.7  # "r2d3" and "r2d2" are 0.75 alike
+    for typed in (name, *(name + s for s in suffixes if s and not name.endswith(s))):
+        for other in names:
+            alike = _likeness(typed, other)
+            if alike > score:
+                best, score = other, alike
+    return best
+
+
+def near_file(text: str, folders: Sequence[Path], suffixes: Sequence[str] = ("",)) -> str | None:
+    """The path ``text`` with the parts that are not there replaced by the nearest names
+    beside them (``robots/pandaa.urdf`` -> ``robots/panda.urdf``), where that makes a file's
+    path: from ``/`` for an absolute path, else from each of ``folders`` in turn; None where no
+    such file is near. ``suffixes``: what the search also adds to the name (``.urdf``)."""
+    path = Path(text)
+    parts = list(path.parts)
+    if not parts:
+        return None
+    starts = [Path(parts.pop(0))] if path.is_absolute() else list(folders)
+    for base in starts:
+        here, new, changed = base, [], False
+        for k, part in enumerate(parts):
+            last = k == len(parts) - 1
+            try:
+                there = (here / part).is_file() if last else (here / part).is_dir()
+            except (OSError, ValueError):
+                there = False
+            if not there:
+                near = _closest(part, _entries(here), suffixes if last else ())
+                if near is None:
+                    break
+                part, changed = near, True
+            here = here / part
+            new.append(part)
+        else:
+            if changed and _is_file(here):
+                return str(Path(*path.parts[:1], *new)) if path.is_absolute() else str(Path(*new))
+    return None
+
+
+def not_found(
+    source: str,
+    tried: Sequence[str],
+    kind: str,
+    folders: Sequence[Path] = (),
+    suffixes: Sequence[str] = ("",),
+) -> UrdfNotFoundError:
+    """The error for ``source`` found nowhere: shown as :func:`shown_path` shows a path, every
+    place ``tried`` once (in order), and "did you mean" a file whose path is near
+    (:func:`near_file`, from ``folders`` for a relative path)."""
+    near = None
+    if "\0" not in source and all(len(p) <= NAME_MAX for p in source.split("/")):
+        near = near_file(source, folders, suffixes)
+    hint = f" (did you mean {shown_path(near)!r}?)" if near else ""
+    searched = [shown_path(t) for t in dict.fromkeys(tried)]
+    return UrdfNotFoundError(shown_path(source), searched, kind, hint)
+
+
+def locate(
+    source: str | os.PathLike[str],
+    *,
+    near: Path | None = None,
+    suffixes: Sequence[str] = ("",),
+    kind: str = "URDF",
+) -> tuple[Path, bool]:
+    """Where the file ``source`` names is: ``source`` itself (from the working directory, ``~``
+    expanded); else, for a relative path, the path under ``near`` (a scenario's folder: the
+    name alone), then under each folder of :func:`search_path` (the name, then with each of
+    ``suffixes``). Returns the file and whether it was ``source`` itself.
+
+    Raises:
+        UrdfNotFoundError: found nowhere (:func:`not_found`: every place searched, in order).
+    """
+    text = os.fspath(source)
+    try:
+        candidate = Path(text).expanduser()
+    except (RuntimeError, ValueError):  # "~nosuchuser/..."
+        candidate = Path(text)
+    relative = not candidate.is_absolute() and len(text) <= NAME_MAX and "\0" not in text
+    tried: list[str] = []
+    folders: list[Path] = []
+    if relative and near is not None:  # a scenario's folder first, as Scenario.resolve_urdf
+        folders.append(near)
+        if _is_file(near / candidate):
+            return near / candidate, False
+        tried.append(str((near / candidate).absolute()))
+    if _is_file(candidate):
+        return candidate, True
+    tried.append(str(candidate.absolute()))
+    folders.insert(0, Path.cwd())
+    if relative:
+        for folder in search_path():
+            folders.append(folder)
+            for ending in suffixes:
+                path = folder / f"{candidate}{ending}"
+                if _is_file(path):
+                    return path, False
+                tried.append(str(path.absolute()))
+    raise not_found(text, tried, kind, folders, suffixes)
+
+
+def resolve_source(source: str | os.PathLike[str], *, near: Path | None = None) -> UrdfSource:
+    """Turn a path, a name on the search path, or URDF XML text into a :class:`UrdfSource`.
+    ``near``: a folder searched for a relative path before the search path (a scenario's)."""
     if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
         return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), "<urdf text>")
     if not isinstance(source, (str, os.PathLike)):
         raise UrdfNotFoundError(repr(source), ["a path, a name or URDF text was expected"])
-    shown = (
-        str(source)
-        if len(str(source)) <= 120
-        else f"{str(source)[:100]}... ({len(str(source))} characters)"
-    )
-    try:
-        candidate = Path(source).expanduser()
-    except (RuntimeError, ValueError):  # "~nosuchuser/..."
-        candidate = Path(source)
-    tried: list[str] = []
-    if _is_file(candidate):
-        found: Path | None = candidate
-    else:
-        tried.append(shown if len(str(candidate)) > 120 else str(candidate.absolute()))
-        found = None
-        if not candidate.is_absolute() and len(str(candidate)) <= 255 and "\0" not in str(source):
-            for folder in search_path():
-                for name in (candidate, Path(f"{candidate}.urdf")):
-                    path = folder / name
-                    if _is_file(path):
-                        found = path
-                        break
-                    tried.append(str(path))
-                if found:
-                    break
-    if found is None:
-        raise UrdfNotFoundError(shown, tried)
+    found, itself = locate(source, near=near, suffixes=("", ".urdf"))
     # the path as PyBullet would be given it: the caller's text, or the search folder's file
-    as_given = os.path.expanduser(os.fspath(source)) if found is candidate else str(found)
+    as_given = os.path.expanduser(os.fspath(source)) if itself else str(found)
     found = found.resolve()
     try:
         data = found.read_bytes()

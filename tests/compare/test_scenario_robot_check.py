@@ -52,6 +52,35 @@ def test_a_robot_mistake_names_file_line_and_key_before_any_run(
     assert (err.value.line, err.value.key) == (line, key)
 
 
+def test_a_robot_not_found_lists_the_scenarios_folder_first(tmp_path, monkeypatch):
+    """The scenario's own folder is searched first (Scenario.resolve_urdf): the list says so,
+    each place once, in the order searched, and the file near the name there is offered."""
+    from simbridge.urdf_source import search_path
+
+    monkeypatch.delenv("SIMBRIDGE_URDF_PATH", raising=False)
+    sub = tmp_path / "my" / "sub"
+    sub.mkdir(parents=True)
+    (sub / "foo.urdf").write_text(
+        (Path(__file__).resolve().parents[2] / "robots/pendulum.urdf").read_text()
+    )
+    path = sub / "mine.toml"
+    path.write_text(PENDULUM.replace('urdf = "pendulum.urdf"', 'urdf = "fooo.urdf"', 1))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    from simbridge.compare.scenario.robot_check import check_robots
+
+    with pytest.raises(ScenarioError) as err:
+        check_robots(load_scenario(path))
+    said = str(err.value)
+    assert "URDF 'fooo.urdf' is neither a file, a name on the search path, nor URDF text " \
+        "(did you mean 'foo.urdf'?); searched: " in said  # fmt: skip
+    robots, data = search_path()
+    places = [sub / "fooo.urdf", elsewhere / "fooo.urdf"]
+    places += [f / n for f in (robots, data) for n in ("fooo.urdf", "fooo.urdf.urdf")]
+    assert said.endswith("searched: [" + ", ".join(repr(str(p)) for p in places) + "]")
+
+
 def test_a_right_scenario_passes_the_check():
     from simbridge.compare.scenario.robot_check import check_robots
 

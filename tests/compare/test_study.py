@@ -33,7 +33,7 @@ from simbridge.compare.study.explain import (
     candidates,
     share_removed,
 )
-from simbridge.compare.study.points import apply_setting
+from simbridge.compare.study.points import Setting, apply_setting
 from simbridge.exceptions import InvalidArgumentError, InvalidProfileError
 from simbridge.profiles import derived_profile, get_profile
 
@@ -70,6 +70,10 @@ def test_a_profile_with_changes_travels_as_its_name():
 def test_vary_parses_and_applies_per_engine():
     s = parse_vary("timestep=1/240,1/480")
     assert s.values == (1 / 240, 1 / 480)
+    # shown as written (it printed timestep=0.00416667), a value not written as a time step
+    assert (s.typed, s.shown(1 / 480)) == (("1/240", "1/480"), "1/480")
+    assert Setting("timestep", (1 / 960, 0.003)).shown(1 / 960) == "1/960"
+    assert parse_vary("lateral_friction=.50,1e-1").shown(0.1) == "1e-1"
     s = parse_vary("lateral_friction@2=0.3, 0.5")
     assert (s.key, s.values) == ("lateral_friction@2", (0.3, 0.5))
     profs, dt = apply_setting(("pybullet", "mujoco"), ("pybullet", "urdf"), None, s.key, 0.3)
@@ -394,6 +398,14 @@ def test_sweep_cli_grid_runs_every_combination(tmp_path, capsys):
         assert line.split(": ", 1)[1] == f"{row[3]}, gap {row[4]}"
     assert "`lateral_friction@2` = 0.5, 0.4 (on pybullet #2 alone)" in report
     assert "KEY@N" not in report
+    # the time steps as typed, in the terminal, report.md and summary.json (numbers kept)
+    assert "`timestep` = 1/240, 1/120" in report and {r[1] for r in rows} == {"1/240", "1/120"}
+    assert [x.split(": ")[0] for x in lines] == [
+        f"lateral_friction@2={f}, timestep={t}" for f in ("0.5", "0.4") for t in ("1/240", "1/120")
+    ]
+    assert data["vary"]["timestep"] == [1 / 240, 1 / 120]
+    assert data["vary_typed"]["timestep"] == ["1/240", "1/120"]
+    assert [p["typed"]["timestep"] for p in data["points"]] == ["1/240", "1/120"] * 2
 
 
 def test_sweep_cli_refuses_an_unknown_setting(capsys):
