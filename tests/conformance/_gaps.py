@@ -72,6 +72,15 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # fall); limit 2e-4. Exact rule:
     # each test's own (1e-7 rad, 5e-7 rad/s...: MuJoCo's double state).
     "trajectory_float32": {"physx": 2e-4},
+    # A position motor holding pendulum.urdf at 0.5 rad (test_cross_engine.py, max_force 100 N m,
+    # 2 s; the largest difference from PyBullet over the run). PhysX's float32 joint position
+    # comes to rest 4 float32 steps below the target (0.49999988 from step 335 on: 1.19e-7 rad),
+    # and the step that stops it there moves at 2.86e-6 rad/s (3 x 2^-20), both profiles; the
+    # test asks the size in rad and 25x it in rad/s (measured 24x). Limit 2.4e-7: 2x, as where a
+    # float32 drive stops is decided by the last bits of its solve (another build or SIMD path
+    # may stop it a few float32 steps further). Exact rule: 1e-11 rad, 1e-9 rad/s (MuJoCo's
+    # 1.6e-12 rad, 2.2e-10 rad/s: PyBullet's link damping summed in another order).
+    "held_position_float32": {"physx": 2.4e-7},
     # The torque a velocity motor applied, as read back (test_dynamics.py, kuka_iiwa joint 0
     # asking 100 rad/s in one step, so saturated): PyBullet and MuJoCo report the motor's own
     # clamped impulse over dt, exactly max_force or the effort limit. PhysX reports the joint

@@ -104,10 +104,14 @@ def test_pendulum_position_control_settles_the_same_way(backend, profile):
 
     a, b, dq, dv, dtau = _both(backend, profile, "pendulum.urdf", 480, setup, [0])
     assert a[-1, 0] == pytest.approx(0.5, abs=1e-6)
-    # measured: "urdf" 5.6e-17 rad, 2.3e-15 rad/s, 3.1e-9 N m; "pybullet" 1.6e-12 rad,
-    # 2.2e-10 rad/s, 2.3e-8 N m (link damping rounding). Tolerances: 100x and more.
-    assert dq < 1.2e-6
-    assert dv < 5e-6
+    # measured (MuJoCo): "urdf" 5.6e-17 rad, 2.3e-15 rad/s, 1.9e-13 N m; "pybullet" 1.6e-12 rad,
+    # 2.2e-10 rad/s, 2.5e-8 N m (link damping rounding), the same two digits on the machines
+    # this was first measured on and on an AVX-512 one. Tolerances: 6x and 4.5x for a compiler
+    # or summation order of another build; N m 400x (the rule every engine's torque shares).
+    # A float32 state comes to rest a few float32 steps off the target: its gap, in rad, and x25
+    # in rad/s (PhysX measured 1.19e-7 rad and 2.86e-6 rad/s, _gaps.py).
+    assert dq < tolerance(backend, 1e-11, "held_position_float32")
+    assert dv < tolerance(backend, 1e-9, "held_position_float32", scale=25.0)
     assert dtau < tolerance(backend, 1e-5, "applied_torque_from_joint_force", scale=100.0)
 
 
