@@ -23,6 +23,7 @@ __all__ = [
     "KNOWN_BUGS",
     "KNOWN_GAPS",
     "REFERENCE",
+    "against_reference",
     "as_stored",
     "declared",
     "gap",
@@ -288,6 +289,15 @@ def as_stored(backend: str, values: object) -> object:
 
 def gap_names() -> list[str]:
     return sorted(KNOWN_GAPS)
+
+
+def against_reference() -> list[str]:
+    """Every registered backend but the reference, for a test that runs a backend beside the
+    reference: the reference beside itself compares a run with its own repeat, which only a
+    loss of determinism could fail (test_determinism.py's subject). Used as
+    ``pytest.mark.parametrize("backend", against_reference(), indirect=True)``: the
+    ``backend`` fixture still fails or skips one that is not available."""
+    return [name for name in available_backends() if name != REFERENCE]
 
 
 def usable_backends() -> list[str]:

@@ -28,7 +28,7 @@ import _raw
 import _reference as ref
 import numpy as np
 import pytest
-from _gaps import REFERENCE, gap, tolerance, usable_backends
+from _gaps import REFERENCE, against_reference, gap, tolerance, usable_backends
 
 import simbridge
 from simbridge import exceptions as exc
@@ -531,6 +531,7 @@ def _swing(backend: str, profile: str, steps: int) -> np.ndarray:
 
 
 @pytest.mark.known_bug("spherical_emulation")
+@pytest.mark.parametrize("backend", against_reference(), indirect=True)  # not PyBullet twice
 @pytest.mark.parametrize(
     ("profile", "tol_q", "tol_v"),
     [
