@@ -4,14 +4,13 @@ Every test that takes the ``backend`` fixture runs once per name in
 :func:`simbridge.available_backends` (built-in and entry-point backends alike), so a new backend
 needs no new test code. A backend whose module or class is not there at all (not yet written,
 or its engine not installed) fails if it is one this project ships (pybullet, mujoco, physx) and is
-skipped with the reason if it is a third-party one, unless
-``SIMBRIDGE_REQUIRE_ALL_BACKENDS=1`` (CI) turns that into a failure; a backend that is there but
-breaks on import always fails.
+skipped with the reason if it is a third-party one, except in CI (``CI=true``) or with
+``SIMBRIDGE_REQUIRE_ALL_BACKENDS=1``, where it fails; a backend that is there but breaks on
+import always fails (tests/_engines.py: the suite's one rule).
 """
 
 from __future__ import annotations
 
-import os
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -20,7 +19,6 @@ from typing import Any
 import pytest
 
 import simbridge
-from simbridge.registry import unavailable_reason
 
 BACKENDS = simbridge.available_backends()
 PROFILES = ["pybullet", "urdf"]
@@ -131,13 +129,9 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):  
 
 @pytest.fixture(params=BACKENDS)
 def backend(request: pytest.FixtureRequest) -> str:
-    name: str = request.param
-    reason = unavailable_reason(name)
-    if reason is not None:
-        if name in SHIPPED_BACKENDS or os.environ.get("SIMBRIDGE_REQUIRE_ALL_BACKENDS") == "1":
-            pytest.fail(f"backend {name!r} is registered but unavailable: {reason}")
-        pytest.skip(f"backend {name!r} unavailable here: {reason}")
-    return name
+    from _engines import require_backend  # tests/_engines.py: the suite's one rule
+
+    return require_backend(request.param, always=request.param in SHIPPED_BACKENDS)
 
 
 @pytest.fixture(params=PROFILES)
