@@ -27,8 +27,9 @@ import simbridge
 PROFILES = ("pybullet", "urdf")
 
 # every test here takes the ``backend`` fixture (conftest.py: it fails or skips a backend that
-# is not available) for each registered backend but the reference
-pytestmark = pytest.mark.parametrize("backend", against_reference(), indirect=True)
+# is not available) for each registered backend but the reference; the decorator nearest each
+# test, so that the backend leads the case's id, as everywhere in the suite
+each_backend = pytest.mark.parametrize("backend", against_reference(), indirect=True)
 
 
 Setup = Callable[[simbridge.Sim, int], None]
@@ -68,6 +69,7 @@ def _release_and_tilt(q0: list[float]) -> Setup:
 
 
 @pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_pendulum_swings_freely_for_2_s(backend, profile):
     _, _, dq, dv, _ = _both(backend, profile, "pendulum.urdf", 480, _release_and_tilt([1.0]), [0])
     # measured: "urdf" 1.4e-15 rad, 8.9e-15 rad/s (same arithmetic up to rounding);
@@ -78,6 +80,7 @@ def test_pendulum_swings_freely_for_2_s(backend, profile):
 
 
 @pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_double_pendulum_for_half_a_second(backend, profile):
     setup = _release_and_tilt([1.0, -0.5])
     a, _, dq, dv, _ = _both(backend, profile, "double_pendulum.urdf", 120, setup, [0, 1])
@@ -89,6 +92,7 @@ def test_double_pendulum_for_half_a_second(backend, profile):
 
 
 @pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_wheel_in_the_air_reaches_and_holds_its_velocity(backend, profile):
     def setup(sim: simbridge.Sim, body: int) -> None:
         sim.set_joint_velocity(body, "axle", 20.0, max_force=1.0)
@@ -107,6 +111,7 @@ def test_wheel_in_the_air_reaches_and_holds_its_velocity(backend, profile):
 
 
 @pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_pendulum_position_control_settles_the_same_way(backend, profile):
     def setup(sim: simbridge.Sim, body: int) -> None:
         sim.set_joint_position(body, "hinge", 0.5, max_force=100.0)
@@ -125,6 +130,7 @@ def test_pendulum_position_control_settles_the_same_way(backend, profile):
 
 
 @pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_coupled_position_motors_settle_the_same_way(backend, profile):
     def setup(sim: simbridge.Sim, body: int) -> None:
         sim.set_joint_position(body, [0, 1], [0.5, -0.3], max_force=[50, 20], kp=0.05, kd=0.5)
@@ -142,6 +148,7 @@ def test_coupled_position_motors_settle_the_same_way(backend, profile):
 
 
 @pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_coupled_velocity_motors(backend, profile):
     def setup(sim: simbridge.Sim, body: int) -> None:
         sim.set_joint_velocity(body, [0, 1], [1.0, -2.0], max_force=[5.0, 1.0])
@@ -164,6 +171,8 @@ def test_coupled_velocity_motors(backend, profile):
     ("start", "speed"),
     [(0.4, 1.0), (0.41, 0.0), (0.439, 0.0), (0.441, 0.0), (0.7, 0.0), (0.7, -0.5), (-0.45, 2.0)],
 )
+@pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_joint_limit_rows_follow_pybullets_rule(backend, profile, start, speed):
     """slider.urdf's carriage (limits +-0.4 m) reset at or past a limit: PyBullet's limit row
     stops outward motion and, within 0.04 of the limit, pushes back at 0.2 x depth / dt;
@@ -195,6 +204,7 @@ def test_joint_limit_rows_follow_pybullets_rule(backend, profile, start, speed):
 @pytest.mark.parametrize(
     "offset", ["0 0 0", "0.2 0 0", '0.2 -0.1 0.05" rpy="0.3 0.5 -0.7'], ids=["none", "x", "rotated"]
 )
+@each_backend
 def test_a_free_body_spinning_about_an_offset_centre_of_mass(backend, offset):
     """One free body, no gravity, no damping ("urdf"), spinning with its centre of mass off its
     link origin (and its inertial frame rotated): both engines keep the centre of mass moving
@@ -229,6 +239,8 @@ def test_a_free_body_spinning_about_an_offset_centre_of_mass(backend, offset):
 
 
 @pytest.mark.parametrize("target", [0.6, 0.4, 0.3, -0.9])
+@pytest.mark.parametrize("profile", PROFILES)
+@each_backend
 def test_a_position_target_past_a_limit_is_the_limit(backend, profile, target):
     """PyBullet clamps a POSITION_CONTROL target to the joint's limits (measured on raw
     PyBullet: a target of 0.6 on the slider (limit 0.4) moves it exactly as a target of 0.4).

@@ -544,7 +544,6 @@ def _swing(backend: str, profile: str, steps: int) -> np.ndarray:
 
 
 @pytest.mark.known_bug("spherical_emulation")
-@pytest.mark.parametrize("backend", against_reference(), indirect=True)  # not PyBullet twice
 @pytest.mark.parametrize(
     ("profile", "tol_q", "tol_v"),
     [
@@ -555,6 +554,7 @@ def _swing(backend: str, profile: str, steps: int) -> np.ndarray:
         ("pybullet", 1e-7, 1e-6),
     ],
 )
+@pytest.mark.parametrize("backend", against_reference(), indirect=True)  # not PyBullet twice
 def test_cross_engine_free_swing(backend, profile, tol_q, tol_v, within):
     """The free-swinging spherical pendulum (released, 0.7 rad from hanging, spun at 2.6 rad/s)
     for 2 s on the backend under test against PyBullet, the reference (the tolerances are
