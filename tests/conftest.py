@@ -62,8 +62,22 @@ def pytest_configure(config: pytest.Config) -> None:
     Ctrl-C then waited for ever (a clean-clone run started as ``(bash .ci/run &)`` hung in
     test_world's and test_executors' Ctrl-C tests). The xdist workers and the commands the
     tests start inherit the handler set here (an exec resets a handled signal to its
-    default)."""
+    default). And the ``needs_backend`` mark (:func:`pytest_runtest_setup`)."""
     import signal
 
     if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+    config.addinivalue_line(
+        "markers",
+        "needs_backend(name): the test needs backend name's engine: where it is missing the "
+        "test is skipped with what to install, or fails in CI (tests/_engines.py)",
+    )
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """A test marked ``needs_backend(name)``: skipped or failed, by tests/_engines.py's one
+    rule, where that backend's engine is missing."""
+    from _engines import require_backend
+
+    for mark in item.iter_markers("needs_backend"):
+        require_backend(*mark.args)

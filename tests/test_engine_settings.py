@@ -9,7 +9,6 @@ bit as it is with none given (that holds the declared defaults to what the backe
 
 from __future__ import annotations
 
-import importlib.util
 import pickle
 import sys
 from pathlib import Path
@@ -27,8 +26,7 @@ from simbridge.exceptions import (
 )
 
 ROBOTS = Path(simbridge.__file__).resolve().parents[2] / "robots"
-HAVE_SAPIEN = importlib.util.find_spec("sapien") is not None
-needs_sapien = pytest.mark.skipif(not HAVE_SAPIEN, reason="SAPIEN (PhysX) is not installed")
+needs_sapien = pytest.mark.needs_backend("physx")  # tests/_engines.py: skipped, or fails in CI
 ENGINE_MODULES = ("pybullet", "mujoco", "sapien")
 
 

@@ -5,7 +5,6 @@ float32 spacings (1.2e-7 m at 1 m)."""
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
@@ -21,10 +20,7 @@ from simbridge.exceptions import (
 from simbridge.transforms import rpy_from_quat
 from simbridge.types import JointType
 
-HAVE_SAPIEN = importlib.util.find_spec("sapien") is not None
-needs_sapien = pytest.mark.skipif(
-    not HAVE_SAPIEN, reason="sapien is not installed (pip install 'simbridge[physx]')"
-)
+needs_sapien = pytest.mark.needs_backend("physx")  # tests/_engines.py: skipped, or fails in CI
 
 WHEELS = [
     "right_front_wheel_joint",

@@ -4,16 +4,12 @@ to PhysX's own limit once the joint is in range, never in force otherwise."""
 
 from __future__ import annotations
 
-import importlib.util
-
 import numpy as np
 import pytest
 
 import simbridge
 
-pytestmark = pytest.mark.skipif(
-    importlib.util.find_spec("sapien") is None, reason="the physx extra is not installed"
-)
+pytestmark = pytest.mark.needs_backend("physx")  # tests/_engines.py: skipped, or fails in CI
 
 # a hinge whose range leaves out 0 (where it loads), its arm along x: gravity turns it
 HINGE = """<robot name="h">

@@ -21,7 +21,11 @@ def sim():
 
 
 def _pybullet_functions() -> list[str]:
-    pybullet = pytest.importorskip("pybullet")
+    from _engines import require_backend
+
+    require_backend("pybullet")  # a core engine: fails where missing
+    import pybullet
+
     return [n for n in dir(pybullet) if not n.startswith("_") and callable(getattr(pybullet, n))]
 
 

@@ -52,9 +52,8 @@ def test_render_refuses_bad_arguments_by_name(kwargs, argument):
 
 @pytest.mark.parametrize("backend", [b for b in simbridge.available_backends() if b != "pybullet"])
 def test_other_backends_refuse_to_render_by_name(backend):
-    from simbridge.registry import unavailable_reason
+    from _engines import require_backend
 
-    if unavailable_reason(backend) is not None:
-        pytest.skip(f"{backend} unavailable here")
+    require_backend(backend)
     with simbridge.Sim(backend) as sim, pytest.raises(BackendUnsupportedError, match="pybullet"):
         sim.render(32, 24, eye=EYE, target=TARGET)

@@ -1,33 +1,23 @@
 """Fixtures of the comparison tests: every registered backend, and pairs of them.
 
-A shipped backend (pybullet, mujoco) that cannot load fails; a third-party backend whose engine
-or module is missing is skipped with the reason, unless ``SIMBRIDGE_REQUIRE_ALL_BACKENDS=1``
-turns that into a failure; a backend that is there but breaks on import fails.
+PyBullet and MuJoCo fail where they cannot load; another backend whose engine or module is missing
+(PhysX without the physx extra) is skipped with the reason, except in CI (``CI=true``) or with
+``SIMBRIDGE_REQUIRE_ALL_BACKENDS=1``, where it fails; a backend that is there but breaks on
+import fails (tests/_engines.py: the suite's one rule).
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from _engines import require_backend as require
 
 import simbridge
-from simbridge.registry import unavailable_reason
 
 BACKENDS = simbridge.available_backends()
 OTHERS = [b for b in BACKENDS if b != "pybullet"]
-SHIPPED_BACKENDS = ("pybullet", "mujoco")  # never skipped: only a third-party backend may be
-
-
-def require(name: str) -> str:
-    reason = unavailable_reason(name)
-    if reason is not None:
-        if name in SHIPPED_BACKENDS or os.environ.get("SIMBRIDGE_REQUIRE_ALL_BACKENDS") == "1":
-            pytest.fail(f"backend {name!r} is registered but unavailable: {reason}")
-        pytest.skip(f"backend {name!r} unavailable here: {reason}")
-    return name
 
 
 @pytest.fixture(params=BACKENDS)

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from _engines import installed_backends
 
 import simbridge.compare as compare_package
 from simbridge import registry
@@ -81,12 +82,13 @@ def test_run_and_report_stay_functions_after_their_subpackages_load():
 
 
 def test_declared_state_types_are_the_classes_own():
+    installed = installed_backends()  # in CI, one that does not load fails (tests/_engines.py)
     for name in ("pybullet", "mujoco", "physx"):
         declared = registry.backend_spec(name).state_dtype
         assert declared in registry.STATE_DTYPES
-        if registry.unavailable_reason(name) is None:
+        if name in installed:  # (state_dtype raises BackendNotInstalledError for one that is not)
             assert registry.load_backend(name).state_dtype == declared
-        assert registry.state_dtype(name) == declared
+            assert registry.state_dtype(name) == declared
 
 
 def test_a_declared_state_type_is_checked(monkeypatch):

@@ -4,7 +4,6 @@ and outcomes built by hand."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 
 import pytest
@@ -17,7 +16,6 @@ from simbridge.compare.report.outcomes import MAX_BRIEF_CHARS, outcome_brief, ou
 from simbridge.compare.report.summary_json import outcome_stats_dict
 from simbridge.compare.run.outcomes import OutcomeRecord
 
-SAPIEN = importlib.util.find_spec("sapien") is not None
 POINTER = " (figures: report.md, Outcomes)"
 
 
@@ -59,7 +57,7 @@ def test_every_run_reaching_is_said_in_a_word():
     assert outcome_brief({"outcomes": None}) is None
 
 
-@pytest.mark.skipif(not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'")
+@pytest.mark.needs_backend("physx")
 def test_a_closed_loop_headline_stays_short(tmp_path):
     # the first phase of kuka-reach (to A, 2 s), 2 runs per engine
     c = compare("kuka-reach", ["pybullet", "mujoco", "physx"], duration=2.0, ensemble=2, workers=0)

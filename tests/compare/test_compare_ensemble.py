@@ -60,21 +60,62 @@ def test_r2d2_gentle_differs(other):
         assert e.gap_over_spread > 2 and e.gap_over_own_error > 2
 
 
+class FallsLate(Exception):
+    """PhysX's balanced pendulum, released, judged "agree": the strict xfail's one outcome."""
+
+
+# PhysX (float32) released without a brake ("urdf"): its balanced pendulum falls later than on
+# the double-precision engines (its 6 runs' spread reaches 1 cm at 5.66 s, not 4.06 s), so in
+# the scenario's 6 s the gap to the held engine stays under the 1 cm tolerance (largest 6.15e-4
+# m, at 6.0 s; spread at the end 0.0448 m): verdict "agree" where "chaotic" is expected. An open
+# finding. Measured (PhysX, SAPIEN 3.0.3, AVX-512 machine), the same bits under OpenBLAS's
+# Haswell and Sandybridge kernels and numpy's run-time SIMD turned off; the bounds allow 10 %
+# (about 0.02 s of the fall's e-folding time, 1 / 4.42 s): worse than that fails.
+FALLS_LATE = {"largest gap": 6.15e-4, "spread at the end": 0.0448, "1 cm horizon": 5.6625}
+
+
+def _falls_late_no_worse(request, v, fell) -> None:
+    """The recorded figures, not worse (a regression fails), then the expected failure, its
+    reason naming what was measured."""
+    gap, spread, horizon = v.max_gap[0], fell.spread_end.value, fell.horizons[0][1]
+    measured = f"largest gap {gap:.3g} m, spread {spread:.3g} m, 1 cm horizon {horizon} s"
+    assert gap >= FALLS_LATE["largest gap"] / 1.1, measured
+    assert spread >= FALLS_LATE["spread at the end"] / 1.1, measured
+    assert horizon is not None and horizon <= FALLS_LATE["1 cm horizon"] * 1.1, measured
+    why = f"judged agree: {measured} (recorded {FALLS_LATE})"
+    request.node.add_marker(pytest.mark.xfail(strict=True, raises=FallsLate, reason=why), False)
+    raise FallsLate(why)
+
+
 @pytest.mark.parametrize("loose", [0, 1])
-def test_balanced_pendulum_is_chaotic_on_the_engine_without_a_brake(other, loose, tmp_path):
-    """Measured on double-precision engines. PhysX (float32) does not show it: released without a
-    brake ("urdf"), its balanced pendulum's 6 runs agreed (verdict "agree"), and held by the
-    brake its spread was 1.8e-6 (> 1e-6): an open finding, not a tolerance to widen."""
-    if float32(other):
-        pytest.skip(f"{other} keeps a float32 state: the balanced pendulum is not yet judged there")
+def test_balanced_pendulum_is_chaotic_on_the_engine_without_a_brake(
+    other, loose, tmp_path, request
+):
+    """Measured on double-precision engines. PhysX (float32) released without a brake
+    ("urdf") is a strict xfail with its size (FALLS_LATE): its 6 runs agree with the held
+    engine. Held by the brake, a float32 engine's spread is its perturbation's (below)."""
+    late = float32(other) and loose == 1
+    if late:  # strict: a pass fails
+        request.applymarker(
+            pytest.mark.xfail(
+                strict=True,
+                raises=FallsLate,
+                reason=f"{other}'s released balanced pendulum falls too late to be judged chaotic",
+            )
+        )
     profiles = ["pybullet", "pybullet"]
     profiles[loose] = "urdf"
     c = compare(BALANCED, ["pybullet", other], profile=profiles, ensemble=6)
     v = c.verdict
+    held, fell = v.per_engine[1 - loose], v.per_engine[loose]
+    if late and v.verdict == "agree":
+        _falls_late_no_worse(request, v, fell)
     assert v.verdict == "chaotic", v
     assert v.engines == [c.labels[loose]]
-    held, fell = v.per_engine[1 - loose], v.per_engine[loose]
-    assert held.spread_end.value < 1e-6
+    # nothing grows on the held engine: its spread is its members' starting offsets, 2x the
+    # perturbation (measured 1.93e-9 m on PyBullet and MuJoCo, perturbed at 1e-9 m; PhysX
+    # 1.82e-6 m, a float32 engine perturbed at 9.5e-7 m, as in test_pendulum_agrees)
+    assert held.spread_end.value < (5e-6 if float32(["pybullet", other][1 - loose]) else 1e-6)
     assert fell.spread_end.value > 0.1 and fell.gap_over_spread < 1
     assert fell.horizons[0][1] is not None  # its spread reached 1 cm
     first = report(c, tmp_path, plots=False, trajectories=False).read_text().splitlines()[2]

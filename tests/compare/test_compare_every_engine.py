@@ -172,7 +172,7 @@ def test_by_default_fewer_than_two_installed_is_refused(own_registry):
 # ---------------------------------------------------------------- PhysX beside the others
 
 
-@pytest.mark.skipif(not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'")
+@pytest.mark.needs_backend("physx")
 def test_three_engines_with_physx_every_pair_judged(tmp_path):
     c = compare(
         "r2d2",

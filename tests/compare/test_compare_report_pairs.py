@@ -24,10 +24,7 @@ from simbridge.compare.report.parts import parts_words
 from simbridge.compare.report.verdict import interval_cell, pair_words, verdict_word
 from simbridge.compare.study import sweep, write_sweep
 
-SAPIEN = importlib.util.find_spec("sapien") is not None
-pytestmark = pytest.mark.skipif(
-    not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'"
-)
+pytestmark = pytest.mark.needs_backend("physx")  # tests/_engines.py: skipped, or fails in CI
 LEFT = {"ghost": "No module named 'ghost'"}
 
 

@@ -5,7 +5,6 @@ resync), and a float32 engine's rounding of the state set into it."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from typing import Any
@@ -21,7 +20,6 @@ from simbridge.compare.run.jobs import Job, file_hashes
 from simbridge.compare.run.studyjobs import Plan
 from simbridge.compare.scenario import load_scenario
 
-SAPIEN = importlib.util.find_spec("sapien") is not None
 EVERY = 4
 
 
@@ -168,7 +166,7 @@ def test_a_study_recorded_with_the_first_pairs_resync_alone_rebuilds(study, tmp_
     assert sorted(p.name for p in old.glob("resync*.png")) == ["resync.png"]
 
 
-@pytest.mark.skipif(not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'")
+@pytest.mark.needs_backend("physx")
 def test_physx_holds_a_state_set_into_it_rounded_to_float32():
     """What Direction.rounding assumes: PhysX steps from the float32 rounding of the state set
     (read back before its step, the base and the joints are the state's float32 values), and

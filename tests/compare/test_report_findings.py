@@ -12,8 +12,8 @@ import json
 import re
 
 import pytest
+from _engines import installed_backends, require_backend
 
-from simbridge import registry
 from simbridge.compare import compare, report
 from simbridge.compare.report.departures import NOT_CHECKED, checked
 from simbridge.compare.report.verdict import interval_cell
@@ -27,8 +27,7 @@ def _section(text: str, title: str) -> str:
 
 @pytest.fixture(scope="module")
 def three(tmp_path_factory):
-    if registry.unavailable_reason("physx") is not None:
-        pytest.skip("PhysX (sapien) is not installed")
+    require_backend("physx")
     out = tmp_path_factory.mktemp("three")
     c = compare(
         "r2d2",
@@ -87,9 +86,7 @@ def test_a_departure_row_quotes_no_third_engines_figures(three):
 def single(tmp_path_factory):
     """pendulum with --ensemble 1 on PyBullet, MuJoCo and (where installed) PhysX, a float32
     engine whose perturbation would be raised."""
-    engines = ["pybullet", "mujoco"]
-    if registry.unavailable_reason("physx") is None:
-        engines.append("physx")
+    engines = ["pybullet", "mujoco"] + [b for b in installed_backends() if b == "physx"]
     out = tmp_path_factory.mktemp("single")
     c = compare("pendulum", engines, duration=0.5, ensemble=1, workers=0, resync_every=0)
     path = report(c, out, trajectories=False)

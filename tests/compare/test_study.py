@@ -14,7 +14,6 @@ Runs in this process (workers=0), small ensembles, short durations: about a minu
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -41,7 +40,6 @@ DATA = Path(__file__).parent / "data"
 SLIDE = DATA / "incline-slide.toml"
 G_COS30 = 9.8 * math.cos(math.radians(30))
 LINK_DAMPING = ("linear_damping", "angular_damping")
-SAPIEN = importlib.util.find_spec("sapien") is not None
 
 
 # ---------------------------------------------------------------- no engine
@@ -340,7 +338,7 @@ def test_explain_ranks_the_friction_made_different_first(tmp_path, capsys):
     assert "### Ranking" in report and "ensembles of 4 runs per engine" in report
 
 
-@pytest.mark.skipif(not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'")
+@pytest.mark.needs_backend("physx")
 def test_explain_ranks_a_friction_made_different_on_physx_first():
     """PhysX given friction 0.3 against PyBullet's 0.5 on the incline: PhysX given 0.5 must
     remove the gap, and the candidates PhysX's departures bring must not."""

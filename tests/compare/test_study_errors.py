@@ -17,10 +17,10 @@ racecar spawned at z 0.2), 0.5 s, ensembles of 2, in this process (workers=0).
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import pytest
+from _engines import require_backend
 
 from simbridge.cli import main
 from simbridge.compare import compare, load_scenario
@@ -42,7 +42,6 @@ DATA = Path(__file__).parent / "data"
 RACECAR = DATA / "racecar-drop.toml"
 TWO = ["pybullet", "mujoco"]
 WITH_PHYSX = ["pybullet", "physx"]  # PhysX lists departures no rule checks (spherical joints...)
-SAPIEN = importlib.util.find_spec("sapien") is not None
 SMALL = dict(duration=0.5, ensemble=2, workers=0, cache=False)
 
 
@@ -168,8 +167,7 @@ def test_did_you_mean_for_keys_profiles_and_settings(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def dropped():
-    if not SAPIEN:
-        pytest.skip("PhysX (sapien) is not installed")
+    require_backend("physx")
     return compare(RACECAR, WITH_PHYSX, **SMALL)
 
 
@@ -198,8 +196,7 @@ def test_explain_leaves_out_the_departures_not_checked_here(dropped):
 def test_explain_report_counts_them(tmp_path):
     from simbridge.compare.study import write_explanation
 
-    if not SAPIEN:
-        pytest.skip("PhysX (sapien) is not installed")
+    require_backend("physx")
     # PhysX's car given a heavy link damping: it falls slower, a gap of 5.3 cm at 0.2 s (measured)
     damped = ["pybullet", "pybullet+linear_damping=3.0"]
     e = explain(RACECAR, WITH_PHYSX, profile=damped, **{**SMALL, "duration": 0.3})

@@ -13,7 +13,7 @@ from simbridge import exceptions as exc
 
 
 @pytest.mark.known_bug("long_chain_velocity_motors")
-def test_a_robot_with_128_joints(make_sim, backend):
+def test_a_robot_with_128_joints(make_sim, backend, within):
     """128 revolute joints (8 arms of 16): MuJoCo loads, steps and reads all of them; PyBullet
     refuses it when loading, naming the count and its limits (raw PyBullet loads it, then
     getJointState, getLinkState and getBasePositionAndOrientation fail for every joint:
@@ -42,7 +42,7 @@ def test_a_robot_with_128_joints(make_sim, backend):
     sim.set_joint_velocity(body, every, 0.5, max_force=10.0)  # and its motor
     sim.step(2)
     states = sim.joint_states(body)
-    assert states.velocities == pytest.approx(np.full(n, 0.5), abs=1e-3)
+    within("motors after 2 steps (rad/s)", np.abs(states.velocities - 0.5).max(), 1e-3)
     assert np.isfinite(sim.link_state(body, n - 1).link_frame_position).all()
 
 
