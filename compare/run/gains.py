@@ -89,9 +89,11 @@ class HeldGains:
     ``position_command``) take gains written for the step ``written_for`` and send
     :func:`held_gains` at the Sim's step; every other call is the Sim's own."""
 
-    def __init__(self, sim: Any, ratio: float):
+    def __init__(self, sim: Any, ratio: float, where: str = "", written_for: str = ""):
         self._sim = sim
         self._ratio = float(ratio)
+        self._where = where
+        self._written_for = written_for
         self._cache: dict[tuple[float, float], tuple[float, float]] = {}
 
     def __getattr__(self, name: str) -> Any:
@@ -101,6 +103,19 @@ class HeldGains:
         return f"HeldGains({self._sim!r}, ratio={self._ratio:g})"
 
     def _convert(self, kp: Any, kd: Any) -> tuple[Any, Any]:
+        try:
+            return self._held(kp, kd)
+        except GainsChangeWithStep as exc:
+            at = f"{self._where}: " if self._where else ""
+            written = f" written for {self._written_for} s" if self._written_for else ""
+            raise GainsChangeWithStep(
+                f"{at}position gains{written}: {exc}. The controller changes with the time "
+                "step, so a run at another step (dt/2 for the own error, --timestep, --resolve) "
+                "would measure another controller, not the integration; gains with "
+                "0 <= kp <= 1 and PyBullet's kd = 1 have an equivalent at every step"
+            ) from None
+
+    def _held(self, kp: Any, kd: Any) -> tuple[Any, Any]:
         if isinstance(kp, (int, float)) and isinstance(kd, (int, float)):
             key = (float(kp), float(kd))
             out = self._cache.get(key)

@@ -26,7 +26,7 @@ import simbridge
 from simbridge.exceptions import ScenarioError, TrajectoryFileError
 from simbridge.types import JointType
 
-from ..scenario import Scenario, load_scenario, parse_timestep
+from ..scenario import Scenario, format_timestep, load_scenario, parse_timestep
 from ..scenario.controllers import PhaseControl
 from .gains import HeldGains
 from .outcomes import OutcomeRecord, evaluate_all
@@ -367,7 +367,12 @@ def run(
         # (compare/run/gains.py); the Sim itself where the steps are the same
         drive: Any = sim
         if sc.gains_timestep is not None and sc.gains_timestep != sc.timestep:
-            drive = HeldGains(sim, sc.timestep / sc.gains_timestep)
+            drive = HeldGains(
+                sim,
+                sc.timestep / sc.gains_timestep,
+                where=sc._where(),
+                written_for=format_timestep(sc.gains_timestep),
+            )
         ids: dict[str, int] = {}
         hashes: dict[str, dict[str, str]] = {}
         for r in sc.robots:

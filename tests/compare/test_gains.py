@@ -138,3 +138,26 @@ def test_resolve_converges_on_a_position_controlled_arm():
     assert len(own) == 3 and r.outcome == "resolved"
     assert all(0.4 < b / a < 0.75 for a, b in zip(own, own[1:], strict=False)), own
     assert r.steps[-1].headline.reason not in OWN_ERROR_REASONS
+
+
+def test_gains_with_no_equivalent_stop_the_run_and_say_why(tmp_path):
+    """kp = 1.5 with kd = 1 (the error flips sign each step): the run at half the step stops
+    with the scenario's file, the gains, and what would do, never a silent other
+    controller."""
+    from pathlib import Path
+
+    import simbridge.compare.scenario as scenarios
+
+    text = (Path(scenarios.__file__).parent.parent / "scenarios" / "pendulum.toml").read_text()
+    robot = str(Path(scenarios.__file__).parents[2] / "robots" / "pendulum.urdf")
+    text = text.replace('urdf = "pendulum.urdf"', f'urdf = "{robot}"')
+    text = text.replace('mode = "velocity"', 'mode = "position"\nkp = 1.5\nkd = 1.0')
+    text = text.replace("max_force = 0.0", "max_force = 50.0")
+    file = tmp_path / "stiff.toml"
+    file.write_text(text)
+    run(str(file), "pybullet", duration=0.1)  # at its own step: PyBullet's law, as written
+    with pytest.raises(GainsChangeWithStep) as err:
+        run(str(file), "pybullet", timestep="1/480", duration=0.1)
+    message = str(err.value)
+    assert message.startswith(f"{file}: position gains written for 1/240 s: kp = 1.5, kd = 1")
+    assert "0 <= kp <= 1 and PyBullet's kd = 1 have an equivalent" in message
