@@ -2,8 +2,9 @@
 
 Imports no engine (read when a profile or a scenario is checked). The defaults are what the
 backend builds a world with today (backend.py, model.py): PGS, one velocity iteration, a 1 cm
-contact offset, a 0.5 mm rest offset, bounce threshold 2 m/s, no depenetration speed cap, and
-SAPIEN's own scene flags. Left out: position iterations (the profile's ``solver_iterations``).
+contact offset, a 0.5 mm rest offset, bounce threshold 2 m/s, no depenetration speed cap,
+PhysX's hard joint limits (physx/limits.py), and SAPIEN's own scene flags. Left out: position
+iterations (the profile's ``solver_iterations``).
 """
 
 from __future__ import annotations
@@ -70,6 +71,18 @@ SETTINGS = (
         low=0.0,
         low_open=True,
         toward="pybullet.splitImpulsePenetrationThreshold",
+    ),
+    Setting(
+        "limit_rule",
+        "choice",
+        "hard",
+        "how a joint's position limit acts: 'hard' (PhysX's: a joint arriving at its limit is "
+        "stopped on it within the step; one found past it, after a write of the state, gets "
+        "PyBullet's push-back) or 'pybullet' (PyBullet's: no limit until a step starts at or "
+        "past it, so a joint passes by up to one step's travel, then is pushed back at 0.2 of "
+        "the depth per step; backends/physx/limits.py)",
+        choices=("hard", "pybullet"),
+        toward="mujoco.limit_rule",
     ),
     Setting(
         "enable_pcm",

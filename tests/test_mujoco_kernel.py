@@ -26,6 +26,7 @@ import simbridge
 from simbridge.backends.mujoco import kernel as mujoco_kernel
 from simbridge.backends.mujoco.inspect import compiled
 from simbridge.exceptions import SimBusyError, SimulationDivergedError
+from simbridge.profiles import get_profile
 
 WHEELS = [2, 3, 6, 7]
 requires_kernel = pytest.mark.skipif(
@@ -623,6 +624,31 @@ def _arms_driven_to_their_limits(sim, record) -> None:
 
 def test_arms_driven_to_their_limits(monkeypatch):
     _agree(monkeypatch, _arms_driven_to_their_limits)
+
+
+def _arms_falling_into_their_limits(sim, record) -> None:
+    # limit_rule "hard" (every limited joint's rows at every step, a gain inside the range): a
+    # KUKA whose joint 2 falls into its limit while the others are held, and one pressing on its
+    # limits as in _arms_pressing_on_their_limits, its motors released after 30 steps
+    falls = sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True)
+    sim.set_joint_position(falls, [0, 2, 3, 4, 5, 6], [0.0] * 6, max_force=300.0)
+    sim.set_joint_velocity(falls, 1, 0.0, max_force=0.0)
+    sim.reset_joint_state(falls, 1, 1.9, 0.0)
+    presses = sim.load_urdf("kuka_iiwa/model.urdf", fixed_base=True, base_position=(2, 0, 0))
+    joints = list(range(7))
+    table = [sim.joint_info(presses, j) for j in joints]
+    sim.reset_joint_state(presses, joints, [t.upper_limit - 0.01 for t in table])
+    sim.set_joint_velocity(presses, joints, [1.0] * 7, max_force=30.0)
+    for k in range(90):
+        if k == 30:
+            sim.set_joint_velocity(presses, joints, [0.0] * 7, max_force=0.0)
+        sim.step()
+        record()
+
+
+def test_the_hard_limit_rule(monkeypatch):
+    profile = get_profile("pybullet").with_engine("mujoco", limit_rule="hard")
+    _agree(monkeypatch, _arms_falling_into_their_limits, profile)
 
 
 def test_a_lost_compiled_loop_warns_once_naming_both_versions(monkeypatch):

@@ -113,7 +113,7 @@ typedef struct {
   solvefn solveM;
   mat2quatfn mat2quat;
   objvelfn objvel;
-  double dt, clamp_limit, r_scale, limit_k, limit_deep;
+  double dt, clamp_limit, r_scale, limit_k, limit_deep, limit_k_in;
   int has_clamp;
   /* world arrays (bound once per compile) */
   Arr lin_gain, ang_gain;   /* (n,), (n,3) */
@@ -319,21 +319,23 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   self->r_scale = 1.0;
   self->limit_k = 0.0;
   self->limit_deep = INFINITY;
+  self->limit_k_in = 0.0;
   self->damp_n = 0;
   return 0;
 }
 
 /* bind_world(first, lin_gain, ang_gain, jd_dof, jd_coef, tq_dof, tq, clamp_limit_or_None,
- *            r_scale, limit_k, limit_deep): link damping of the bodies first .. first +
- * len(lin_gain) - 1, joint damping, one-step torques, the speed clamp, the motor and limit rows'
- * hardening, the limit rows' position gain and the depth past which it is dropped */
+ *            r_scale, limit_k, limit_deep[, limit_k_in]): link damping of the bodies first ..
+ * first + len(lin_gain) - 1, joint damping, one-step torques, the speed clamp, the motor and
+ * limit rows' hardening, the limit rows' position gain and the depth past which it is dropped,
+ * and their gain inside the range (limit_rule "hard"; 0: none) */
 static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   if (refuse_if_busy(self) < 0) return NULL;
   int first;
   PyObject *lg, *ag, *jdd, *jdc, *tqd, *tq, *limit;
-  double r_scale, limit_k, limit_deep;
-  if (!PyArg_ParseTuple(args, "iOOOOOOOddd", &first, &lg, &ag, &jdd, &jdc, &tqd, &tq, &limit,
-                        &r_scale, &limit_k, &limit_deep))
+  double r_scale, limit_k, limit_deep, limit_k_in = 0.0;
+  if (!PyArg_ParseTuple(args, "iOOOOOOOddd|d", &first, &lg, &ag, &jdd, &jdc, &tqd, &tq, &limit,
+                        &r_scale, &limit_k, &limit_deep, &limit_k_in))
     return NULL;
   const mjModel* m = self->m;
   if (arr_take(&self->lin_gain, lg, 'd', -1, "lin_gain") < 0) return NULL;
@@ -367,6 +369,7 @@ static PyObject* Kernel_bind_world(Kernel* self, PyObject* args) {
   self->r_scale = r_scale;
   self->limit_k = limit_k;
   self->limit_deep = limit_deep;
+  self->limit_k_in = limit_k_in;
   Py_RETURN_NONE;
 bad_dof:
   PyErr_SetString(PyExc_ValueError, "a dof index out of the model's range");
@@ -904,6 +907,8 @@ static int run_steps(Kernel* self, long n, int pending) {
         double pos = d->efc_pos[r], margin = d->efc_margin[r];
         d->efc_aref[r] += self->limit_k * (pos - margin);
         if (pos <= 0.0 && pos > -self->limit_deep) d->efc_aref[r] -= self->limit_k * pos;
+        /* limit_rule "hard": inside the range, stop on the limit (motors.py) */
+        else if (pos > 0.0 && self->limit_k_in != 0.0) d->efc_aref[r] -= self->limit_k_in * pos;
       }
     }
     TOC(1);
@@ -1511,6 +1516,7 @@ PyMODINIT_FUNC PyInit__mjkernel(void) {
   Py_INCREF(&KernelType);
   if (PyModule_AddObject(mod, "Kernel", (PyObject*)&KernelType) < 0 ||
       PyModule_AddIntConstant(mod, "HEADER_VERSION", mjVERSION_HEADER) < 0 ||
+      PyModule_AddIntConstant(mod, "LIMIT_RULES", 1) < 0 ||
       PyModule_AddIntConstant(mod, "SIZEOF_MJDATA", (long)sizeof(mjData)) < 0 ||
       PyModule_AddIntConstant(mod, "SIZEOF_MJMODEL", (long)sizeof(mjModel)) < 0) {
     Py_DECREF(mod);

@@ -538,8 +538,17 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
         ),
     }
 
+    HARD_LIMITS = (
+        "limit_rule 'hard', PhysX's rule, not PyBullet's: a joint arriving at its limit is "
+        "stopped on it within the step (PyBullet lets it pass by up to one step's travel, then "
+        "pushes it back); past it, PyBullet's push-back (motors.py). The slider at 1 m/s toward "
+        "its 0.4 m limit: 0.4 m, PyBullet 0.40081 m, PhysX 0.4 m (bench/limit_rule.py)"
+    )
+
     def manifest(self) -> dict[str, Any]:
         departures: dict[str, str] = dict(self.DEPARTURES)
+        if self.profile.engine(self.name).get("limit_rule") == "hard":
+            departures["joint limits"] = self.HARD_LIMITS
         bounded = [r for r in self._robots.values() if r.spec.bounded_links]
         for r in bounded:
             departures[f"body {r.id} mass bound"] = build.mass_bound_note(r.spec)

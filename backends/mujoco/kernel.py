@@ -76,7 +76,8 @@ def _find() -> dict[str, Any]:
             f"this is MuJoCo {mujoco.__version__}: {_REBUILD}"
         )
         return found
-    if not hasattr(_mjkernel.Kernel, "check_since"):  # built from an older source
+    # built from an older source (LIMIT_RULES: bind_world takes the limit rows' inside gain)
+    if not hasattr(_mjkernel.Kernel, "check_since") or not hasattr(_mjkernel, "LIMIT_RULES"):
         found["reason"] = f"the compiled step loop is older than this simbridge: {_REBUILD}"
         return found
     folder = os.path.dirname(mujoco.__file__)

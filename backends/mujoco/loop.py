@@ -58,6 +58,8 @@ def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> 
             shallow = (pos <= 0.0) & (pos > -LIMIT_DEEP)
             d.efc_aref[lim] += c.limit_k * (pos - d.efc_margin[lim])
             d.efc_aref[lim] -= np.where(shallow, c.limit_k * pos, 0.0)
+            if c.limit_k_in:  # limit_rule "hard": inside the range, stop on the limit
+                d.efc_aref[lim] -= np.where(pos > 0.0, c.limit_k_in * pos, 0.0)
         if damping is not None:
             damping.apply(d)
         if len(c.damp_dof):

@@ -49,7 +49,7 @@ from simbridge.profiles import Profile
 from simbridge.transforms import transform_inverse, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
 
-from .motors import LIMIT_ERP, LIMIT_MARGIN, MOTOR_DMAX
+from .motors import LIMIT_ERP, LIMIT_HARD_MARGIN, LIMIT_MARGIN, MOTOR_DMAX
 
 __all__ = ["RobotSpec", "GeomContact", "add_robot", "add_pairs", "new_world_spec"]
 
@@ -382,7 +382,8 @@ def _add_joint(
         dt = profile.timestep
         jnt.solref_limit = [-LIMIT_ERP / dt / dt * MOTOR_DMAX, -MOTOR_DMAX / dt]
         jnt.solimp_limit = list(MOTOR_SOLIMP)
-        jnt.margin = LIMIT_MARGIN
+        hard = profile.engine("mujoco").get("limit_rule") == "hard"
+        jnt.margin = LIMIT_HARD_MARGIN if hard else LIMIT_MARGIN
     else:
         jnt.limited = mujoco.mjtLimited.mjLIMITED_FALSE
     joint_names.append(name)

@@ -55,6 +55,7 @@ __all__ = [
     "LIMIT_ERP",
     "LIMIT_DEEP",
     "LIMIT_MARGIN",
+    "LIMIT_HARD_MARGIN",
 ]
 
 MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2]), MuJoCo's largest
@@ -76,9 +77,15 @@ MOTOR_R_SCALE = 1e-2
 # rows hardened like the motor rows, and MuJoCo's position term K (pos - margin) replaced
 # between mj_step1 and mj_step2 by PyBullet's (K pos under LIMIT_DEEP, none deeper or inside
 # the margin).
+# The engine setting limit_rule "hard" (backends/settings_mujoco.py) gives the rows PhysX's rule
+# on arrival instead: a margin of LIMIT_HARD_MARGIN, so that every limited joint has its rows at
+# every step, and inside the range (pos > 0) a position term of pos / dt^2: the row asks for
+# J v' >= -pos / dt, so a joint arriving at its limit ends the step on it, not past it (PyBullet's
+# law once at or past it, as PhysX's backend stands in for it there; physx/limits.py).
 LIMIT_ERP = 0.2
 LIMIT_DEEP = 0.04
 LIMIT_MARGIN = 1e-12
+LIMIT_HARD_MARGIN = 10.0  # m or rad: no joint travels that far in a step
 
 # PyBullet's spherical joint motor (btMultiBodySphericalJointMotor): its position term is
 # erp kp e / dt with the solver's non-contact erp (btContactSolverInfo::m_erp, 0.2, which

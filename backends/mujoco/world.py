@@ -148,6 +148,9 @@ class Compiled:
     stale: bool = True  # poses and velocities not yet recomputed since the last step
     motor_force_valid: bool = False  # efc_force holds the last step's motor forces
     motor_rows_valid: bool = False  # ... and the current motor set's rows
+    # the joint-limit rows' position gain inside the range: 1 / dt^2 under limit_rule "hard"
+    # (the joint stops on its limit), 0 under "pybullet" (motors.py)
+    limit_k_in: float = 0.0
     # the command hot paths (commands.py), per joints array id: set_joint_velocity's
     # (commands.VelocityPath) and set_joint_position's (commands.PositionPath); an entry lives
     # while the row layout holds and no other command rewrites one of its motors
@@ -291,6 +294,7 @@ def _bind_kernel(c: Compiled) -> Any:
         MOTOR_R_SCALE,
         c.limit_k,
         LIMIT_DEEP,
+        c.limit_k_in,
     )
     return kernel
 
@@ -351,6 +355,7 @@ def compile_state(
         clamp=profile.max_joint_velocity,
         torque=torque,
         pending_torque=bool(torque.any()),
+        limit_k_in=1.0 / dt / dt if profile.engine("mujoco").get("limit_rule") == "hard" else 0.0,
     )
     if use_kernel:
         c.kernel = _bind_kernel(c)

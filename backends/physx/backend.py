@@ -183,7 +183,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
                 dtype=np.intp,
             )
             self._configure(robot)
-            limit_rows(robot)
+            limit_rows(robot, self.profile.engine(self.name).get("limit_rule", "hard"))
         except BaseException:
             for entity in built.entities:
                 self._scene.remove_entity(entity)
@@ -526,8 +526,20 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
         ),
     }
 
+    PYBULLET_LIMITS = (
+        "limit_rule 'pybullet', PyBullet's rule: no limit until a step starts at or past it "
+        "(PhysX's own limits moved 10 out of the range), so a joint passes by up to one step's "
+        "travel, then PyBullet's row stands in (stop outward motion, within 0.04 push back at "
+        "0.2 depth/dt: limits.py); a joint travelling more than 10 past its limit in one step "
+        "is stopped there. The slider at 1 m/s toward its 0.4 m limit within 5.9e-7 m of "
+        "PyBullet over 240 steps, a KUKA falling into its joint-2 limit within 5.8e-3 rad "
+        "(bench/limit_rule.py)"
+    )
+
     def manifest(self) -> dict[str, Any]:
         departures: dict[str, str] = dict(self.DEPARTURES)
+        if self.profile.engine(self.name).get("limit_rule") == "pybullet":
+            departures["joint limits"] = self.PYBULLET_LIMITS
         if not product_combine_available():
             departures["friction combine"] = (
                 "PhysX combines two materials' friction and restitution as their average: this "

@@ -34,6 +34,15 @@ Departure: a joint that arrives at its limit from inside is PhysX's (stopped on 
 PyBullet's row, made only once a step starts at or past the limit, lets it pass by up to a
 step's travel and pushes it back: the slider at 1 m/s reaches 0.4042 m and returns at -0.2
 m/s).
+
+The engine setting ``limit_rule`` (backends/settings_physx.py) chooses: ``"hard"`` (the default,
+all of the above) or ``"pybullet"``, PyBullet's rule on arrival too. Under ``"pybullet"`` PhysX's
+own limits are moved :data:`LIMIT_CLEAR` out of the joint's range at the load, beyond any step's
+travel, so that a joint inside its range at the start of a step moves freely through the step
+(as no PyBullet row exists then), and the row above stands in from every step that starts at or
+past a limit (``>=``: PyBullet makes the row at zero penetration too); the robot is looked at
+every step. A joint that would travel more than :data:`LIMIT_CLEAR` past its limit in one step
+is stopped there (PyBullet: nowhere).
 """
 
 from __future__ import annotations
@@ -44,15 +53,21 @@ import numpy as np
 
 from .world import Robot
 
-__all__ = ["LimitRows", "LIMIT_ERP", "LIMIT_DEEP"]
+__all__ = ["LimitRows", "LIMIT_ERP", "LIMIT_DEEP", "LIMIT_CLEAR", "LIMIT_RULES"]
 
 LIMIT_ERP = 0.2  # PyBullet's push-back per step, a fraction of the penetration
 LIMIT_DEEP = 0.04  # m or rad: deeper than this the row only stops outward motion
+# m or rad: under limit_rule "pybullet", PhysX's own limits this far out of the joint's range
+# (no joint travels that far in a step: 2400 rad/s at 1/240 s)
+LIMIT_CLEAR = 10.0
+LIMIT_RULES = ("hard", "pybullet")  # backends/settings_physx.py's limit_rule
 
 
-def limit_rows(robot: Robot) -> None:
+def limit_rows(robot: Robot, rule: str = "hard") -> None:
     """Record ``robot``'s limited 1-DoF joints: their dof, PhysX joint and limits as PhysX
-    holds them (float32, so that a joint reset exactly at a limit is at it, not past)."""
+    holds them (float32, so that a joint reset exactly at a limit is at it, not past).
+    ``rule`` ``"pybullet"``: PhysX's limits moved :data:`LIMIT_CLEAR` out, and the robot looked
+    at every step."""
     rows = []
     limit_of = [(-np.inf, np.inf)] * len(robot.table)
     for j in robot.movable:
@@ -65,6 +80,11 @@ def limit_rows(robot: Robot) -> None:
             limit_of[j] = (lo, hi)
     robot.limit_rows = rows
     robot.limit_of = limit_of
+    if rule == "pybullet" and rows:
+        robot.limit_clear = LIMIT_CLEAR
+        for _, joint, lo, hi in rows:
+            joint.limit = np.array([[lo - LIMIT_CLEAR, hi + LIMIT_CLEAR]], dtype=np.float32)
+        robot.past_limit = True  # never let go: every step is looked at
 
 
 class LimitRows:
@@ -93,33 +113,37 @@ class LimitRows:
 
     def _limit_rows(self, robot: Robot) -> None:
         """PyBullet's limit rows for this step on the joints past their limits (see above):
-        PhysX's limit on the violated side moved to ``q + vt dt``."""
+        PhysX's limit on the violated side moved to ``q + vt dt``. Under limit_rule "pybullet"
+        (``limit_clear`` > 0) on the joints at their limits too, PhysX's limits elsewhere
+        ``limit_clear`` out of the range."""
         q = robot.built.articulation.qpos
         dt = self._dt
         held = robot.held
         moved = robot.moved
+        clear = robot.limit_clear
+        at = clear > 0.0  # PyBullet's rule: a row at zero penetration too
         for i, (d, joint, lo, hi) in enumerate(robot.limit_rows):
             x = float(q[d])
-            if x > hi:
+            if x > hi or (at and x >= hi):
                 depth = x - hi
                 vt = -LIMIT_ERP * depth / dt if depth < LIMIT_DEEP else 0.0
                 bound = np.float32(x + vt * dt)
-                joint.limit = np.array([[lo, bound]], dtype=np.float32)
+                joint.limit = np.array([[lo - clear, bound]], dtype=np.float32)
                 side = 1.0
-            elif x < lo:
+            elif x < lo or (at and x <= lo):
                 depth = lo - x
                 vt = LIMIT_ERP * depth / dt if depth < LIMIT_DEEP else 0.0
                 bound = np.float32(x + vt * dt)
-                joint.limit = np.array([[bound, hi]], dtype=np.float32)
+                joint.limit = np.array([[bound, hi + clear]], dtype=np.float32)
                 side = -1.0
             else:
                 if i in moved:
-                    joint.limit = np.array([[lo, hi]], dtype=np.float32)
+                    joint.limit = np.array([[lo - clear, hi + clear]], dtype=np.float32)
                     moved.discard(i)
                 continue
             moved.add(i)
             held.append((d, float(bound), vt, side, 2.0 * float(np.spacing(bound))))
-        if not held:
+        if not held and not at:
             robot.past_limit = False
             self._refresh_active()
 

@@ -90,6 +90,8 @@ class Robot:
     limit_rows: list[tuple[int, Any, float, float]] = field(default_factory=list)
     limit_of: list[tuple[float, float]] = field(default_factory=list)  # per joint (-inf, inf)
     past_limit: bool = False
+    # limit_rule "pybullet": PhysX's own limits this far out of the range (0: "hard", PhysX's)
+    limit_clear: float = 0.0
     pinocchio: Any = None  # SAPIEN's Pinocchio model of the articulation, made when needed
     moved: set[int] = field(default_factory=set)
     # this step's rows (dof, the moved bound, the row's speed, 1 upper or -1 lower, 2 float32

@@ -16,8 +16,14 @@ value it is moved to, with the reason it could explain the gap in this scenario
   them exactly; both at 200 where both iterate), link damping PhysX applies by another law
   (both run without it), and the contact settings that move one engine's contact toward the
   other's (:func:`_engine_candidates`);
-- a departure no setting moves (collision cylinders, joint limits, joint axes, float32 state)
-  or that changes only what is reported is listed as not tested, and why.
+- the joint-limit rule (``physx.limit_rule``, ``mujoco.limit_rule``), where the engines part at
+  a limit event (a joint reached its limit in either engine's run within
+  :data:`~simbridge.compare.run.events.PARTING_WINDOW` before the gap first reached its
+  threshold, or the gap was born while one was at it: :func:`limit_parting`) and their rules
+  differ: each engine that has the setting given the other's rule (:func:`_limit_candidates`);
+- a departure no setting moves (collision cylinders, joint axes, float32 state, the joint
+  limits where the engines do not part at one) or that changes only what is reported is listed
+  as not tested, and why.
 
 Each candidate is one :func:`~simbridge.compare.compare` of the pair with the setting moved.
 The **share of the gap removed** is ``1 - gap_after / gap_before``, both the median distance
@@ -42,9 +48,12 @@ import numpy as np
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 from simbridge.profiles import get_profile
 
+from ..analysis.diff import QUANTITIES
+from ..analysis.events import EngineEvents, Event, Parting, engine_events, parting
 from ..analysis.verdict import BOOTSTRAP_RESAMPLES, CONFIDENCE, Interval
-from ..pipeline import Comparison, compare
-from ..report.departures import checked
+from ..pipeline import Comparison, Pair, compare
+from ..report.departures import applicable, checked
+from ..run.events import PARTING_WINDOW
 from ..run.quantities import distance
 from ..scenario import format_timestep, load_scenario
 from .points import PROFILE_ENTRIES, PairFigures, _with_change, format_value, pair_figures
@@ -59,6 +68,7 @@ __all__ = [
     "Explanation",
     "candidates",
     "explain",
+    "limit_parting",
     "not_checked",
     "share_removed",
 ]
@@ -293,7 +303,8 @@ def _profile_differences(profiles: tuple[str, str], labels: tuple[str, str]) -> 
 
 UNTESTABLE = {
     "cylinder": "a collision shape, not a setting: no setting moves it",
-    "joint limits": "the limit rule is each backend's own: no setting moves it",
+    "joint limits": "the limit rule is each backend's own here: neither engine has a limit_rule "
+    "setting",
     "joint axis": "the file's axis, not a setting",
     "precision": "the engine's float32 state: no setting moves it",
     "meshes": "collision shapes, not a setting: no setting moves it",
@@ -501,6 +512,128 @@ def _engine_candidates(
     return out
 
 
+FIXED_LIMIT_RULES = {"pybullet": "pybullet"}
+"""The joint-limit rule of an engine that has no ``limit_rule`` setting: PyBullet's is its own
+row (btMultiBodyJointLimitConstraint), which nothing turns into a hard limit."""
+LIMIT_RULE_WORDS = {
+    "pybullet": "lets a joint arriving at its limit pass by up to one step's travel, then pushes "
+    "it back (PyBullet's rule)",
+    "hard": "stops a joint arriving at its limit on it within the step (a hard limit)",
+}
+
+
+def _limit_rule(backend: str, settings: dict[str, Any]) -> str | None:
+    """The joint-limit rule ``backend`` runs with these effective settings (None: unknown)."""
+    if "limit_rule" in settings:
+        return str(settings["limit_rule"])
+    return FIXED_LIMIT_RULES.get(backend)
+
+
+def _has_limit_rule(backend: str) -> bool:
+    from simbridge.engine_settings import settings_for
+
+    try:
+        return "limit_rule" in settings_for(backend)
+    except SimbridgeError:
+        return False
+
+
+def limit_parting(where: Parting, engines: Sequence[EngineEvents]) -> tuple[str, Event] | None:
+    """The limit event at which the pair parts, with its engine's label (None: they do not part
+    at one): the event the gap was born after or during (``where``, :func:`~simbridge.compare.
+    analysis.events.parting`) when it is a ``joint_limit``, else the latest ``joint_limit`` of
+    either engine (``engines``: the pair's) that began within :data:`PARTING_WINDOW` before the
+    gap first reached its threshold (a limit hit that made a motor saturate a step later parts
+    the engines as much as the hit itself)."""
+    if where.time is None:
+        return None
+    if where.event is not None and where.event.kind == "joint_limit":
+        return (where.event_label or "", where.event)
+    found: tuple[str, Event] | None = None
+    for e in engines:
+        for ev in e.events:
+            if ev.kind != "joint_limit":
+                continue
+            if where.time - PARTING_WINDOW - 1e-12 <= ev.time <= where.time + where.step + 1e-12:
+                if found is None or ev.time > found[1].time:
+                    found = (e.label, ev)
+    return found
+
+
+def _limit_words(at: tuple[str, Event], engines: Sequence[EngineEvents] = ()) -> str:
+    """``in the step pybullet's kuka reached the upper limit of lbr_iiwa_joint_2 (2.094,
+    t = 0.700 s; past it by pybullet 2.7e-02, physx 5.8e-08)``."""
+    label, ev = at
+    past = []
+    for e in engines:
+        beyond = [
+            x.figures.get("beyond", math.nan)
+            for x in e.events
+            if x.kind == "joint_limit"
+            and x.part == ev.part
+            and x.side == ev.side
+            and abs(x.time - ev.time) <= PARTING_WINDOW + 1e-12
+        ]
+        if beyond:
+            past.append(f"{e.label} {max(beyond):.2g}")
+    limit = ev.figures.get("limit")
+    return (
+        f"where {label}'s {ev.body} reached the {ev.side} limit of {ev.part}"
+        + (f" ({limit:.4g}" if limit is not None else " (")
+        + f", t = {ev.time:.3f} s"
+        + (f"; largest past it: {', '.join(past)}" if past else "")
+        + ")"
+    )
+
+
+def _limit_candidates(
+    backends: tuple[str, str],
+    profiles: tuple[str, str],
+    labels: tuple[str, str],
+    at: tuple[str, Event] | None,
+    engines: Sequence[EngineEvents] = (),
+) -> tuple[list[Candidate], str]:
+    """The joint-limit rule moved toward the other engine's, where the pair parts at a limit
+    event ``at``: each engine with a ``limit_rule`` setting given the other's rule. With none,
+    why nothing is tested."""
+    from simbridge.engine_settings import settings_for
+
+    if not any(_has_limit_rule(b) for b in backends):
+        return [], UNTESTABLE["joint limits"]
+    if at is None:
+        return [], (
+            "joints reach their limits here, but the engines do not part at a limit event: the "
+            "limit rule (limit_rule) is not moved"
+        )
+    eff = [_effective(b, p) for b, p in zip(backends, profiles, strict=True)]
+    rules = [_limit_rule(b, e) for b, e in zip(backends, eff, strict=True)]
+    if rules[0] == rules[1]:
+        return [], f"both engines apply the same limit rule here ({rules[0]!r})"
+    where = _limit_words(at, engines)
+    out = []
+    for s in (0, 1):
+        o = 1 - s
+        key = f"{backends[s]}.limit_rule"
+        target = rules[o]
+        if target is None or "limit_rule" not in eff[s]:
+            continue
+        if target not in settings_for(backends[s])["limit_rule"].choices:
+            continue
+        words = [LIMIT_RULE_WORDS.get(str(r), f"applies its {r!r} rule") for r in rules]
+        out.append(
+            Candidate(
+                key,
+                ((s, key, target),),
+                "departure: joint limits",
+                f"the engines part {where}: {labels[o]} {words[o]}, {labels[s]} {words[s]}: "
+                f"{labels[s]} given {labels[o]}'s rule",
+            )
+        )
+    if not out:
+        return [], f"no engine of the pair has the other's limit rule ({rules[0]}, {rules[1]})"
+    return out, ""
+
+
 def not_checked(
     labels: tuple[str, str], departures: dict[str, dict[str, Any]] | None = None
 ) -> list[str]:
@@ -524,10 +657,14 @@ def candidates(
     labels: tuple[str, str],
     departures: dict[str, dict[str, Any]] | None = None,
     timestep: float = 1 / 240,
+    limit_event: tuple[str, Event] | None = None,
+    events: Sequence[EngineEvents] = (),
 ) -> tuple[list[Candidate], list[tuple[str, str]]]:
     """The candidates of one pair of engines and the departures that apply but are not
     tested (each with why). ``departures`` is :func:`~simbridge.compare.report.departures.
-    applicable`'s result for the comparison (by engine label); ``timestep`` the runs'."""
+    applicable`'s result for the comparison (by engine label); ``timestep`` the runs';
+    ``limit_event`` the limit event at which the pair parts (:func:`limit_parting`; None: they
+    do not part at one), ``events`` the pair's engines' events (for its figures)."""
     out = _profile_differences(profiles, labels)
     not_tested: list[tuple[str, str]] = []
     applying: dict[str, list[int]] = {}
@@ -568,6 +705,11 @@ def candidates(
             elif key == "link damping":
                 if not any(c.name == "link damping" for c in out):
                     out += _damping_candidate(profiles, labels)
+            elif key == "joint limits":
+                found, why = _limit_candidates(backends, profiles, labels, limit_event, events)
+                out += found
+                if not found:
+                    not_tested.append((key, why))
             elif key in UNTESTABLE:
                 not_tested.append((key, UNTESTABLE[key]))
             else:
@@ -679,7 +821,8 @@ def explain(
     base = compare(
         sc, backends, profile=profile, timesteps=[dt], ensemble=ensemble, seed=seed, **compare_args
     )
-    deps = _departures(base)
+    events = engine_events(base)
+    deps = applicable(base, events)
     pairs = []
     for p in base.pairs:
         assert p.verdict is not None
@@ -701,7 +844,9 @@ def explain(
                 f"{fmt_tol(before)}): there is no gap to explain."
             )
             continue
-        cands, pe.not_tested = candidates(names, profs, labels, deps, dt)
+        pair_events = (events[a], events[b])
+        at = limit_parting(pair_parting(base, p, events), pair_events)
+        cands, pe.not_tested = candidates(names, profs, labels, deps, dt, at, pair_events)
         pe.not_checked = not_checked(labels, deps)
         results = []
         for cand in cands:
@@ -760,11 +905,19 @@ def fmt_tol(p: PairFigures) -> str:
     return fmt_threshold(p.tolerance, p.unit)
 
 
-def _departures(c: Comparison) -> dict[str, dict[str, Any]]:
-    from ..analysis.events import engine_events
-    from ..report.departures import applicable
-
-    return applicable(c, engine_events(c))
+def pair_parting(c: Comparison, p: Pair, events: Sequence[EngineEvents]) -> Parting:
+    """Where the gap between the engines of ``p`` is born, as the compare report says it
+    (``summary.json``'s ``pairs[].parting``): the headline quantity first reaching its first
+    threshold at the headline time step, the phases and the pair's events (``events``: every
+    engine's, :func:`~simbridge.compare.analysis.events.engine_events`)."""
+    q = c.headline_quantity
+    dt = c.timestep
+    thr = QUANTITIES[q].thresholds[0]
+    tr = c.runs[(p.a, dt)]
+    phases = [(name, float(tr.time[i]), float(tr.time[j])) for name, i, j in tr.phases]
+    return parting(
+        p.cross[dt].first_crossing(q, thr), thr, q, phases, [events[p.a], events[p.b]], dt
+    )
 
 
 # ---------------------------------------------------------------- report

@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from simbridge.cli import main
+from simbridge.compare.analysis.events import EngineEvents, Event, Parting
 from simbridge.compare.analysis.verdict import OWN_ERROR_REASONS, Interval
 from simbridge.compare.study import explain, parse_vary, resolve, sweep, write_sweep
 from simbridge.compare.study.explain import (
@@ -30,6 +31,7 @@ from simbridge.compare.study.explain import (
     CandidateResult,
     PairExplanation,
     candidates,
+    limit_parting,
     share_removed,
 )
 from simbridge.compare.study.points import Setting, apply_setting
@@ -38,6 +40,7 @@ from simbridge.profiles import derived_profile, get_profile
 
 DATA = Path(__file__).parent / "data"
 SLIDE = DATA / "incline-slide.toml"
+FALLS = DATA / "kuka-falls.toml"
 G_COS30 = 9.8 * math.cos(math.radians(30))
 LINK_DAMPING = ("linear_damping", "angular_damping")
 
@@ -202,6 +205,75 @@ def test_candidates_follow_the_departures_that_apply():
     ]
 
 
+def _limit_hit(t: float, beyond: float, kind: str = "joint_limit") -> Event:
+    return Event(
+        kind,
+        t,
+        round(t * 240),
+        "fall",
+        "kuka",
+        part="lbr_iiwa_joint_2",
+        side="upper",
+        figures={"limit": 2.0944, "beyond": beyond},
+    )
+
+
+def _engine(label: str, *events: Event) -> EngineEvents:
+    return EngineEvents(label, "kuka", list(events), np.zeros(3), np.zeros(4), [], False)
+
+
+def test_limit_parting_finds_the_limit_hit_the_gap_parted_after():
+    """kuka-falls, as compare finds it: both engines' joint 2 hits its limit at 0.700 s, a motor
+    saturates at 0.708 s (the event the gap parts after, at 0.713 s): the limit hit is within
+    0.1 s before the parting, so the engines part at it; one 0.2 s before is not."""
+    hit = _limit_hit(0.700, 0.027)
+    saturated = _limit_hit(0.708, 0.0, kind="motor_saturated")
+    engines = [_engine("pybullet", hit, saturated), _engine("physx", _limit_hit(0.700, 6e-8))]
+    where = Parting("link_distance", 0.01, 0.713, 1 / 240, "kuka", event=saturated)
+    label, event = limit_parting(where, engines)
+    assert event.kind == "joint_limit" and event.time == 0.700
+    where.event = hit  # the gap parted after the hit itself
+    assert limit_parting(where, engines) == ("", hit)
+    late = Parting("link_distance", 0.01, 0.913, 1 / 240, "kuka", event=saturated)
+    assert limit_parting(late, engines) is None
+    assert limit_parting(Parting("link_distance", 0.01, None, 1 / 240, "kuka"), engines) is None
+
+
+def test_the_limit_rule_is_a_candidate_where_the_engines_part_at_a_limit():
+    deps = {
+        "pybullet": {"apply": []},
+        "physx": {"apply": [{"key": "joint limits"}]},
+        "mujoco": {"apply": [{"key": "joint limits"}]},
+    }
+    at = ("pybullet", _limit_hit(0.700, 0.027))
+    events = [_engine("pybullet", at[1]), _engine("physx", _limit_hit(0.700, 6e-8))]
+    pair = ("pybullet", "physx")
+    cands, not_tested = candidates(pair, ("pybullet",) * 2, pair, deps, 1 / 240, at, events)
+    (c,) = cands
+    assert c.name == "physx.limit_rule" and c.moves == ((1, "physx.limit_rule", "pybullet"),)
+    assert c.source == "departure: joint limits" and not not_tested
+    assert "reached the upper limit of lbr_iiwa_joint_2" in c.why
+    assert "pybullet 0.027, physx 6e-08" in c.why  # how far past it each engine went
+    # PhysX against MuJoCo: each given the other's rule (MuJoCo's is PyBullet's)
+    pair = ("physx", "mujoco")
+    cands, _ = candidates(pair, ("pybullet",) * 2, pair, deps, 1 / 240, at)
+    assert [c.moves for c in cands] == [
+        ((0, "physx.limit_rule", "pybullet"),),
+        ((1, "mujoco.limit_rule", "hard"),),
+    ]
+    # no limit event where they part: not tested, and why
+    cands, not_tested = candidates(pair, ("pybullet",) * 2, pair, deps, 1 / 240, None)
+    assert not cands
+    assert not_tested == [("joint limits", not_tested[0][1])]
+    assert "do not part at a limit event" in not_tested[0][1]
+    # the rules already the same (PhysX given PyBullet's): nothing to move
+    pair = ("pybullet", "physx")
+    profs = ("pybullet", "pybullet+physx.limit_rule=pybullet")
+    cands, not_tested = candidates(pair, profs, pair, deps, 1 / 240, at)
+    assert not [c for c in cands if c.source == "departure: joint limits"]
+    assert "the same limit rule" in not_tested[0][1]
+
+
 # ---------------------------------------------------------------- engines
 
 
@@ -364,6 +436,22 @@ def test_explain_ranks_a_friction_made_different_on_physx_first():
     # neither touches the friction (measured 0.0% and -1.2%)
     assert {r.candidate.name for r in rest} == {"solver_iterations", "link damping"}
     assert all(abs(r.share.value) < 0.1 for r in rest)
+
+
+@pytest.mark.skipif(not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'")
+def test_explain_moves_the_limit_rule_where_the_engines_part_at_a_limit():
+    """kuka-falls: the engines part where joint 2 falls into its limit (PyBullet's passes it by
+    2.7e-2 rad, PhysX's stops on it); PhysX given PyBullet's rule removes the gap (measured 99%,
+    3.7 cm to 0.38 mm), the other candidates do not (link damping 13%, iterations 0%)."""
+    e = explain(FALLS, ["pybullet", "physx"], duration=0.8, ensemble=2, workers=0, cache=False)
+    (pair,) = e.pairs
+    assert pair.before.verdict != "agree" and pair.gap.value > 0.03
+    first, *rest = pair.ranked
+    assert first.candidate.moves == ((1, "physx.limit_rule", "pybullet"),)
+    assert first.explains == "yes" and first.share.value > 0.95
+    assert first.after.verdict == "agree"
+    assert all(r.share.value < 0.5 for r in rest)
+    assert "joint limits" not in dict(pair.not_tested)
 
 
 def test_explain_has_nothing_to_explain_where_the_engines_agree():
