@@ -438,7 +438,7 @@ def test_explain_ranks_a_friction_made_different_on_physx_first():
     assert all(abs(r.share.value) < 0.1 for r in rest)
 
 
-@pytest.mark.skipif(not SAPIEN, reason="PhysX needs SAPIEN: pip install 'simbridge[physx]'")
+@pytest.mark.needs_backend("physx")
 def test_explain_moves_the_limit_rule_where_the_engines_part_at_a_limit():
     """kuka-falls: the engines part where joint 2 falls into its limit (PyBullet's passes it by
     2.7e-2 rad, PhysX's stops on it); PhysX given PyBullet's rule removes the gap (measured 99%,
