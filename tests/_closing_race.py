@@ -10,25 +10,15 @@ only after the close would get the closed Sim's ordinary error, which says nothi
 
 from __future__ import annotations
 
-import sys
 import threading
-import time
 import traceback
 from typing import Any
+
+from _threads import wait_until_waiting
 
 from simbridge.exceptions import SimClosedError
 
 WAIT = "wait_for_lock"  # backends/locking.py: where a call waits for another thread's
-
-
-def waiting_in(thread: threading.Thread, function: str) -> bool:
-    """Whether ``thread`` is now inside ``function`` (a frame of its stack runs it)."""
-    frame = sys._current_frames().get(thread.ident)  # type: ignore[arg-type]
-    while frame is not None:
-        if frame.f_code.co_name == function:
-            return True
-        frame = frame.f_back
-    return False
 
 
 def check_waiting_call_refused_after_close(sim: Any, lock: Any) -> None:
@@ -45,10 +35,7 @@ def check_waiting_call_refused_after_close(sim: Any, lock: Any) -> None:
     try:
         t = threading.Thread(target=reader)
         t.start()
-        deadline = time.monotonic() + 20  # bounds a hang only: it waits at once
-        while not waiting_in(t, WAIT):
-            assert t.is_alive() and time.monotonic() < deadline, outcome
-            time.sleep(0.001)
+        wait_until_waiting(t, WAIT)
         assert outcome == []
         sim.close()  # the same thread: its own lock, taken again
     finally:
