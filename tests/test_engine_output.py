@@ -13,6 +13,7 @@ import sys
 import threading
 
 import pytest
+from _threads import wait_until_waiting
 
 import simbridge
 from simbridge.engine_output import captured
@@ -169,17 +170,20 @@ def test_another_threads_output_is_held_back_not_dropped_and_windows_take_turns(
         with captured("pybullet"):
             opened.set()
             written.wait(10)
-            seen.append(second_in.wait(0.05))  # the second window waits for this one
+            # the second window waits for this one: once its thread is seen at the window's
+            # lock (a pause of 0.05 s let a late thread pass without having tried), it is not in
+            wait_until_waiting(b, "captured", "with _lock")
+            seen.append(second_in.is_set())
 
     def second() -> None:
         with captured("pybullet"):
             second_in.set()
 
     a = threading.Thread(target=first)
+    b = threading.Thread(target=second)
     a.start()
     assert opened.wait(10)
     os.write(1, b"printed by another thread meanwhile\n")  # lands in the open window
-    b = threading.Thread(target=second)
     b.start()
     written.set()
     a.join(10)

@@ -466,54 +466,82 @@ def test_sims_in_threads_step_as_they_do_alone():
             sim.close()
 
 
+class _HeldStep:
+    """A step(n) run in another thread and held inside its first step until the block ends: a
+    MuJoCo control callback (``mjcb_control``, called by MuJoCo in every step, on both loops)
+    waits there in the stepping thread. The Sim is then known to be stepping for as long as
+    the test needs, on a fast machine as on a slow or loaded one (20,000 steps had to outlast
+    the test's calls: about 0.25 s here, less on a faster machine)."""
+
+    def __init__(self, sim, n: int) -> None:
+        import threading
+
+        self.sim, self.n = sim, n
+        self.holding, self.go = threading.Event(), threading.Event()
+        self.stepper = 0
+        self.errors: list[BaseException] = []
+        self.thread = threading.Thread(target=self._step)
+
+    def _step(self) -> None:
+        import threading
+
+        self.stepper = threading.get_ident()
+        try:
+            self.sim.step(self.n)
+        except BaseException as error:  # noqa: BLE001 - raised by the block
+            self.errors.append(error)
+
+    def _control(self, m, d) -> None:  # type: ignore[no-untyped-def]
+        import threading
+
+        if threading.get_ident() == self.stepper and not self.go.is_set():
+            self.holding.set()
+            self.go.wait(60)  # bounds a hang only: the block lets it go
+
+    def __enter__(self) -> _HeldStep:
+        import mujoco
+
+        mujoco.set_mjcb_control(self._control)
+        self.thread.start()
+        assert self.holding.wait(60), "the step never began"
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        import mujoco
+
+        self.go.set()
+        self.thread.join(60)
+        mujoco.set_mjcb_control(None)
+        assert not self.thread.is_alive()
+        if self.errors:
+            raise self.errors[0]
+
+
 @requires_kernel
 def test_a_sim_stepping_in_another_thread_refuses_calls():
     """While one thread steps a Sim (without the GIL), a call that needs its compiled loop
-    from another thread raises SimBusyError instead of racing it."""
-    import threading
-
-    from simbridge.exceptions import SimBusyError
-
+    from another thread raises SimBusyError instead of racing it; the step runs to its end."""
     sim, robot = _r2d2()
     try:
         sim.step(1)
-        worker = threading.Thread(target=sim.step, args=(20000,))
-        refused = 0
-        worker.start()
-        while worker.is_alive() and not refused:
-            try:
+        kernel = compiled(sim).kernel
+        with _HeldStep(sim, 200):
+            with pytest.raises(SimBusyError, match="another thread"):
                 sim.link_state(robot, 2)
-            except SimBusyError as exc:
-                assert "another thread" in str(exc)
-                refused += 1
-        worker.join()
-        assert refused == 1
-        assert sim.time == pytest.approx(20001 / 240)
+            with pytest.raises(SimBusyError):
+                kernel.check_idle()  # the compiled loop itself says it is busy
+        assert sim.time == pytest.approx(201 / 240)
         sim.link_state(robot, 2)  # free again
         # changing the world (load, remove, reset, close) is refused while it steps too
-        kernel = compiled(sim).kernel
-
-        def stepping() -> bool:
-            try:
-                kernel.check_idle()
-            except SimBusyError:
-                return True
-            return False
-
         for change in (
             lambda: sim.load_urdf("cube_small.urdf"),
             lambda: sim.remove(robot),
             sim.reset,
             sim.close,
         ):
-            worker = threading.Thread(target=sim.step, args=(20000,))
-            worker.start()
-            while worker.is_alive() and not stepping():  # 20000 steps take about 0.25 s
-                pass
-            assert worker.is_alive()
-            with pytest.raises(SimBusyError):
+            with _HeldStep(sim, 200), pytest.raises(SimBusyError):
                 change()
-            worker.join()
+        assert sim.time == pytest.approx(1001 / 240)
         assert sim.num_joints(robot) == 15  # r2d2 is still there, the world unchanged
     finally:
         sim.close()

@@ -1,9 +1,8 @@
 """Reading other processes on Linux (``/proc``), for the tests that kill a command and check
-its workers: its children, whether one is alive, the CPU time one has used."""
+its workers: its children, whether one is alive."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 
@@ -29,11 +28,3 @@ def alive(pid: int) -> bool:
     """Whether ``pid`` runs (a zombie does not)."""
     fields = _stat(pid)
     return fields is not None and fields[0] != "Z"
-
-
-def cpu_s(pid: int) -> float:
-    """The CPU time ``pid`` has used (user + system), 0 once it is gone."""
-    fields = _stat(pid)
-    if fields is None:
-        return 0.0
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")

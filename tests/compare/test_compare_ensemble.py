@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _held import held_scenario, wait_for_holding
 from _precision import float32
-from _procs import alive, children, cpu_s
+from _procs import alive, children
 
 from simbridge.cli import main
 from simbridge.compare import compare, report
@@ -304,9 +305,10 @@ def test_workers_end_when_the_command_is_killed(tmp_path, when):
     import signal
     import time
 
+    scenario, ready = held_scenario(tmp_path)  # its runs hold: none can end before the kill
     proc = subprocess.Popen(
-        [sys.executable, "-m", "simbridge", "compare", "pendulum", "--ensemble", "400",
-         "--duration", "2", "--no-plots", "--out", str(tmp_path / "out")],
+        [sys.executable, "-m", "simbridge", "compare", str(scenario), "--ensemble", "4",
+         "--no-plots", "--out", str(tmp_path / "out")],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )  # fmt: skip
     try:
@@ -316,14 +318,8 @@ def test_workers_end_when_the_command_is_killed(tmp_path, when):
             time.sleep(0.2)
             workers = [c for c in children(proc.pid) if alive(c)]
         assert len(workers) >= 2, "the workers did not start"
-        while when == "running":
-            # read the children again each time: a spawn pool's first children can be its
-            # resource tracker and one worker, and the tracker never steps (CI caught that race)
-            workers = sorted(set(workers) | {c for c in children(proc.pid) if alive(c)})
-            if sum(cpu_s(w) > 2.0 for w in workers) >= 2:  # past their imports, stepping
-                break
-            assert time.monotonic() < deadline, "the workers never got to stepping"
-            time.sleep(0.2)
+        if when == "running":  # two workers past their imports, inside a run
+            workers = wait_for_holding(proc, ready, 2)
         workers = sorted(set(workers) | {c for c in children(proc.pid) if alive(c)})
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)

@@ -10,13 +10,17 @@ from __future__ import annotations
 import base64
 import html
 import io
+import itertools
 import json
+import math
 import os
 import re
 import signal
 import subprocess
 import sys
 import time
+import zlib
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -37,10 +41,8 @@ MB = 1_000_000
 def written(tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
     c = compare("r2d2", ["pybullet", "mujoco"], duration=0.6, ensemble=2, resync_every=0, workers=0)
-    started = time.process_time()
     report(c, out, plots=False)
-    with_replay = time.process_time() - started
-    return c, out, with_replay
+    return c, out
 
 
 def _recording(page: str) -> dict:
@@ -64,7 +66,7 @@ def _names(rec: dict, kind: str) -> list[str]:
 
 
 def test_page_is_one_offline_file(written):
-    c, out, _ = written
+    c, out = written
     page = (out / "report.html").read_text(encoding="utf-8")
     assert page.startswith("<!doctype html>")
     # nothing fetched from elsewhere: no script, style or image from a URL
@@ -89,7 +91,7 @@ def test_figures_are_inlined(tmp_path):
 
 
 def test_scene_has_every_engine_its_meshes_and_ghosts(written):
-    c, out, _ = written
+    c, out = written
     rec = _recording((out / "report.html").read_text(encoding="utf-8"))
     meshes = _names(rec, "MeshMessage")
     for label in c.labels:
@@ -106,7 +108,7 @@ def test_scene_has_every_engine_its_meshes_and_ghosts(written):
 
 
 def test_scene_marks_every_event_at_its_time(written):
-    c, out, _ = written
+    c, out = written
     rec = _recording((out / "report.html").read_text(encoding="utf-8"))
     spheres = {m["name"]: t for t, m in rec["messages"] if m.get("type") == "IcosphereMessage"}
     engines = rp.replay_engines(c)
@@ -130,7 +132,7 @@ def test_link_frames_carry_the_recorded_centres_of_mass(written):
     link's centre of mass where the engine recorded it."""
     from simbridge.urdf import parse_urdf, resolve_source
 
-    c, _, _ = written
+    c, _ = written
     model = parse_urdf(resolve_source("r2d2.urdf"))
     for slot in range(2):
         b = c.runs[(slot, c.timestep)].bodies["r2d2"]
@@ -156,14 +158,50 @@ def test_frames_are_capped():
     assert len(rows) == rp.MAX_FRAMES and rows[-1] == 240 * 60
 
 
-def test_replay_cost(written):
-    """What the replay adds to report(): well under the 5 s budget, here in CPU seconds (the
-    wall clock of a loaded test machine says little)."""
-    c, out, with_replay = written
-    started = time.process_time()
-    report(c, out / "again", plots=False, replay=False)
-    without = time.process_time() - started
-    assert with_replay - without < 3.0, (with_replay, without)
+def _cpu_s(work: Callable[[], object], tries: int) -> float:
+    """The CPU time of ``work()`` in this process, the least of ``tries`` (the least disturbed
+    by the rest of the machine)."""
+    least = math.inf
+    for _ in range(tries):
+        started = time.process_time()
+        work()
+        least = min(least, time.process_time() - started)
+    return least
+
+
+def _unit_of_work() -> None:
+    """A fixed piece of work of the replay's kind (numpy on small arrays in a Python loop, the
+    bytes compressed): about 0.1 CPU-s here. The replay's cost is counted in it, so that its
+    budget means the same on a slow machine as on a fast one."""
+    rng = np.random.default_rng(0)
+    parts = []
+    for _ in range(20_000):
+        m = rng.random((4, 3))
+        parts.append((m @ m.T).tobytes())
+    zlib.compress(b"".join(parts), 6)
+
+
+REPLAY_BUDGET = 6.0
+"""What the replay may add to report(), in units of :func:`_unit_of_work`: measured 0.8 to
+1.4 units (0.08 to 0.14 CPU-s here, alone and at load 8); a replay 6 times as costly fails."""
+
+
+def test_replay_cost(written, monkeypatch):
+    """What the replay adds to report(), counted in a fixed unit of work done here, not in
+    CPU seconds (it was under 3.0 CPU-s: a figure of one machine's speed). Measured warm, its
+    imports done by the module's report (viser's first import, 0.8 CPU-s here in a new
+    environment, compiles its files: a cost of the installation that depends on what ran
+    before, not of the replay), and made afresh each time, not read from the comparison's
+    cache of derived results."""
+    from simbridge.compare.report import derived
+
+    c, out = written
+    monkeypatch.setattr(derived, "memo", lambda c, kind, parts, make: make())
+    k = itertools.count()
+    with_replay = _cpu_s(lambda: report(c, out / f"with-{next(k)}", plots=False), 2)
+    without = _cpu_s(lambda: report(c, out / f"without-{next(k)}", plots=False, replay=False), 2)
+    unit = _cpu_s(_unit_of_work, 3)
+    assert with_replay - without < REPLAY_BUDGET * unit, (with_replay, without, unit)
 
 
 @pytest.fixture(scope="module")
@@ -188,13 +226,34 @@ def _view(b: Browser) -> np.ndarray:
         "const o = f.getBoundingClientRect();"
         "return [o.left + c.left, o.top + c.top, c.width, c.height]; })()"
     )
-    b.pump(1.5)
     x, y, w, h = (int(round(v)) for v in r)
     return _pixels(b.screenshot())[y : y + h, x : x + w]
 
 
+def _changed(a: np.ndarray, b: np.ndarray) -> float:
+    """The share of pixels that differ between two views of the replay."""
+    return float((np.abs(a - b).max(axis=2) > 0.1).mean())
+
+
+def _settled_view(b: Browser, ok: Callable[[np.ndarray], bool], timeout: float = 60) -> np.ndarray:
+    """The replay's picture once ``ok`` holds for it and it has stopped changing (two views in a
+    row alike): the browser draws when it draws, later on a slow machine (one screenshot after
+    a fixed pause of 1.5 to 3.5 s was a bet on its speed). The last view after ``timeout`` s,
+    which only bounds a hang."""
+    deadline = time.monotonic() + timeout
+    last = None
+    while True:
+        b.pump(0.25)  # the page's events: its console errors are collected
+        view = _view(b)
+        if ok(view) and last is not None and _changed(last, view) <= 1e-4:
+            return view
+        if time.monotonic() > deadline:
+            return view
+        last = view
+
+
 def test_chromium_draws_the_replay_from_disk(written, browser):
-    _, out, _ = written
+    _, out = written
     b = browser
     b.open(out / "report.html")
     b.wait_for(
@@ -202,19 +261,15 @@ def test_chromium_draws_the_replay_from_disk(written, browser):
         " && window.simbridgeSeek(0.05)",
         timeout=120,
     )
-    b.pump(2)
-    first = _view(b)
+    first = _settled_view(b, lambda v: v.std() > 0.02)
     assert first.std() > 0.02, "the 3D canvas is blank"
     assert b.js("window.simbridgeSeek(0.55)")
-    b.pump(1)
-    later = _view(b)
-    changed = np.abs(first - later).max(axis=2) > 0.1
-    assert changed.mean() > 1e-4, "two scrubber positions give the same picture"
+    later = _settled_view(b, lambda v: _changed(first, v) > 1e-4)
+    assert _changed(first, later) > 1e-4, "two scrubber positions give the same picture"
     # hiding both engines changes the picture again
     b.js("document.querySelectorAll('input[data-engine]').forEach(x => x.click())")
-    b.pump(1)
-    hidden = _view(b)
-    assert (np.abs(hidden - later).max(axis=2) > 0.1).mean() > 1e-4
+    hidden = _settled_view(b, lambda v: _changed(later, v) > 1e-4)
+    assert _changed(later, hidden) > 1e-4
     assert b.errors == [], b.errors
 
 
@@ -227,7 +282,7 @@ def test_cli_no_replay_and_replay_command(written, tmp_path):
 
 
 def test_replay_serves_until_ctrl_c(written):
-    _, out, _ = written
+    _, out = written
     proc = subprocess.Popen(
         [sys.executable, "-m", "simbridge", "replay", str(out), "--port", "8765"],
         stdout=subprocess.PIPE,
@@ -252,7 +307,7 @@ def test_replay_serves_until_ctrl_c(written):
 
 
 def test_engines_from_report_reads_what_report_wrote(written):
-    c, out, _ = written
+    c, out = written
     engines = rp.engines_from_report(out)
     assert [e.label for e in engines] == list(c.labels)
     assert all(e.ghosts is not None and e.ghosts.shape[0] == 1 for e in engines)

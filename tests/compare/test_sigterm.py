@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
-from _procs import children, cpu_s
+from _held import held_scenario, wait_for_holding
 
 from simbridge.terminate import Terminated, sigterm_raises
 
@@ -39,22 +39,18 @@ def test_a_handler_of_the_caller_is_kept():
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc (Linux)")
 def test_sigterm_stops_the_pool_and_leaks_nothing(tmp_path):
+    # signalled once two workers hold a run (tests/compare/_held.py): the runs cannot end
+    # first, on any machine (the shipped pendulum's 40-run ensemble often did on a fast one)
+    scenario, ready = held_scenario(tmp_path)
     out = tmp_path / "out"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "simbridge", "compare", "pendulum", "--backends", "pybullet",
-         "pybullet", "--ensemble", "40", "--duration", "2", "--workers", "2", "--no-plots",
-         "--no-replay", "--cache", str(tmp_path / "cache"), "--out", str(out)],
+        [sys.executable, "-m", "simbridge", "compare", str(scenario), "--backends", "pybullet",
+         "pybullet", "--ensemble", "40", "--workers", "2", "--no-plots", "--no-replay",
+         "--cache", str(tmp_path / "cache"), "--out", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:  # two workers past their imports, stepping
-            if sum(cpu_s(c) > 1.5 for c in children(proc.pid)) >= 2:
-                break
-            assert proc.poll() is None, proc.communicate()
-            time.sleep(0.2)
-        else:
-            pytest.fail("the workers never got to stepping")
+        wait_for_holding(proc, ready, 2)
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)
     finally:

@@ -25,6 +25,7 @@ import json
 import math
 import os
 import random
+import signal
 import struct
 import subprocess
 import sys
@@ -1120,58 +1121,78 @@ pend = _with("pendulum.urdf")
 r2d2 = _with("r2d2.urdf", fixed=False)
 
 
+BUSY_CALLS = 200
+"""How many times a thread-busy case makes its call while the Sim steps in another thread."""
+
+
 def _busy(call: Callable[[simbridge.Sim, int], object]) -> Callable[[Ctx], object]:
-    """``call`` from this thread, again and again, while another thread runs a long step(n):
-    every call that reaches the Sim then must raise SimBusyError. One call may go through
-    legitimately as the step ends (between its end and the stepping thread's exit): that one
-    is allowed, and a world change (reset, close) it made is not held against the step."""
+    """``call`` from a second thread, BUSY_CALLS times, while this one runs a step(n) of hours:
+    every call must raise SimBusyError and change nothing. The calls begin once a read from
+    that thread is refused (the step runs), and then a Ctrl-C stops the step (its steps
+    counted whole): the calls race the step on any machine. (A step(20000) in a thread, 0.3
+    to 4 s here by engine, had to outlast the calls made from this thread: a thread held up
+    that long, or a faster machine, found it over, and one call going through as it ended had
+    to be allowed.)"""
 
     def run(ctx: Ctx) -> object:
         sim = ctx.sim()
         body = sim.load_urdf("r2d2.urdf")
-        started = threading.Event()
-        failure: list[BaseException] = []
-
-        def stepper() -> None:
-            started.set()
-            try:
-                sim.step(20000)
-            except BaseException as e:  # noqa: BLE001 - reported below
-                failure.append(e)
-
-        t = threading.Thread(target=stepper)
         t0 = sim.time
-        t.start()
-        started.wait()
-        # until the stepping thread is seen inside step(): a read is refused then, and waited
-        # for by a step that begins meanwhile (a step(0) probe would refuse that step). A fixed
-        # pause (10 ms) was a race on loaded cores: calls could reach the Sim before the
-        # step began (a close there failed the step)
-        while t.is_alive():
+        counts = {"refused": 0, "through": 0}
+        errors: list[BaseException] = []
+        stepping = True
+
+        def caller() -> None:
             try:
-                sim.base_state(body)
-            except exc.SimBusyError:
-                break
-        went_through = busy = 0
-        while t.is_alive():
+                deadline = time.monotonic() + 30  # bounds a hang only: the step starts at once
+                while True:  # until the step is seen running: a read is refused then
+                    try:
+                        sim.base_state(body)
+                    except exc.SimBusyError:
+                        break
+                    if time.monotonic() > deadline:
+                        raise CaseFailure("the stepping thread was never seen stepping")
+                for _ in range(BUSY_CALLS):
+                    try:
+                        call(sim, body)
+                        counts["through"] += 1
+                    except exc.SimBusyError:
+                        counts["refused"] += 1
+                    time.sleep(0.0005)
+            except BaseException as e:  # noqa: BLE001 - raised below
+                errors.append(e)
+            finally:
+                os.kill(os.getpid(), signal.SIGINT)
+
+        def ctrl_c(signum: int, frame: object) -> None:
+            if stepping:  # else the step ended by an error, raised below: nothing to stop
+                raise KeyboardInterrupt
+
+        previous = signal.signal(signal.SIGINT, ctrl_c)
+        t = threading.Thread(target=caller)
+        try:
             try:
-                call(sim, body)
-                if t.is_alive():
-                    went_through += 1
-            except exc.SimBusyError:
-                busy += 1
-            time.sleep(0.0005)
-        t.join()
-        if failure:
-            raise failure[0]
-        if went_through > 1 or not busy:
+                t.start()
+                sim.step(10**9)  # hours
+                raise CaseFailure("a step of hours ended by itself")
+            except KeyboardInterrupt:
+                pass
+            finally:
+                stepping = False
+            t.join()
+        finally:
+            signal.signal(signal.SIGINT, previous)
+        if errors:
+            raise errors[0]
+        if counts["through"]:
             raise CaseFailure(
-                f"{went_through} calls went through while another thread stepped the Sim "
-                f"({busy} refused with SimBusyError)"
+                f"{counts['through']} of {BUSY_CALLS} calls went through while another thread "
+                "stepped the Sim"
             )
-        if not went_through and sim.time - t0 < 20000 * sim.timestep * 0.999:
-            raise CaseFailure("the stepping thread did not finish its steps")
-        return busy
+        steps = (sim.time - t0) / sim.timestep
+        if abs(steps - round(steps)) > 1e-6:
+            raise CaseFailure(f"the steps that ran are not counted whole: {steps}")
+        return counts["refused"]
 
     return run
 
