@@ -95,6 +95,7 @@ class HeldGains:
         self._where = where
         self._written_for = written_for
         self._cache: dict[tuple[float, float], tuple[float, float]] = {}
+        self._checked: set[tuple[int, str]] = set()
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._sim, name)
@@ -132,6 +133,29 @@ class HeldGains:
             np.array([d for _, d in pairs]).reshape(shape),
         )
 
+    def _refuse_spherical(self, body: int, joints: Any) -> None:
+        """PyBullet's spherical motor law (``-kd v + 0.2 kp e / dt`` as the velocity) is not
+        the revolute one, and its modes flip sign each step with its default gains: no gains
+        at another step make the same controller."""
+        key = (body, repr(joints))
+        if key in self._checked:
+            return
+        from simbridge.types import JointType
+
+        items = joints if isinstance(joints, (list, tuple, np.ndarray)) else [joints]
+        for j in items:
+            index = self._sim.joint_index(body, j) if isinstance(j, str) else int(j)
+            if self._sim.joint_info(body, index).type == JointType.SPHERICAL:
+                at = f"{self._where}: " if self._where else ""
+                raise GainsChangeWithStep(
+                    f"{at}a position command on spherical joint {index} "
+                    f"({self._sim.joint_info(body, index).name!r}): PyBullet's spherical motor "
+                    "law has no equivalent at another time step, so a run at another step "
+                    "(dt/2 for the own error, --timestep, --resolve) would measure another "
+                    "controller; command it at the scenario's own step, or by torque"
+                )
+        self._checked.add(key)
+
     def set_joint_position(
         self,
         body: int,
@@ -142,6 +166,7 @@ class HeldGains:
         kd: Any = DEFAULT_KD,
         **kw: Any,
     ) -> None:
+        self._refuse_spherical(body, joints)
         kp, kd = self._convert(kp, kd)
         if target is None:
             self._sim.set_joint_position(body, joints, kp=kp, kd=kd, **kw)
@@ -158,5 +183,6 @@ class HeldGains:
         kd: Any = DEFAULT_KD,
         **kw: Any,
     ) -> Any:
+        self._refuse_spherical(body, joints)
         kp, kd = self._convert(kp, kd)
         return self._sim.position_command(body, joints, target, kp=kp, kd=kd, **kw)

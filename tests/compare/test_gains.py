@@ -58,8 +58,18 @@ def test_a_law_that_flips_sign_each_step_has_no_equivalent(kp, kd):
 
 
 class _Recording:
+    """A Sim's commands as calls, its joint 5 spherical, every other revolute."""
+
     def __init__(self):
         self.calls = []
+
+    def joint_info(self, body, index):
+        from types import SimpleNamespace
+
+        from simbridge.types import JointType
+
+        kind = JointType.SPHERICAL if index == 5 else JointType.REVOLUTE
+        return SimpleNamespace(type=kind, name=f"j{index}")
 
     def set_joint_position(self, body, joints, target, **kw):
         self.calls.append((body, joints, target, kw))
@@ -85,6 +95,14 @@ def test_the_wrapper_converts_given_default_and_per_joint_gains():
     assert list(kws[2]["kp"]) == [held_gains(0.1, 1.0, 0.5)[0], held_gains(0.3, 1.0, 0.5)[0]]
     assert kws[3]["kp"] == held_gains(0.1, 1.0, 0.5)[0]
     assert held.joint_index(0, "x") == 7  # everything else is the Sim's
+
+
+def test_a_spherical_joints_position_command_has_no_equivalent():
+    held = HeldGains(_Recording(), 0.5, where="my.toml")
+    with pytest.raises(GainsChangeWithStep, match=r"my.toml: a position command on spherical "):
+        held.set_joint_position(0, [1, 5], [0.0, 0.0], max_force=5.0)
+    with pytest.raises(GainsChangeWithStep, match="spherical joint 5 \\('j5'\\)"):
+        held.position_command(0, [5], 0.0, max_force=5.0)
 
 
 def test_a_position_controlled_arm_s_own_error_is_the_integrations():
