@@ -204,9 +204,10 @@ def build_parser() -> argparse.ArgumentParser:
     _verbose(j)
     _verbose(add_settings_parser(sub, backends))
     cli_study.add_commands(sub, _verbose, add_job_options)
-    from simbridge import cli_cache
+    from simbridge import cli_cache, cli_info
 
     cli_cache.add_commands(sub, _verbose)
+    cli_info.add_command(sub, _verbose)
     return parser
 
 
