@@ -99,7 +99,10 @@ def _deb_version(package: str) -> str | None:
 def _numerics() -> list[str]:
     """What decides a result's last bits here (tests/_machine.py's keys)."""
     try:
-        from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+        from numpy._core._multiarray_umath import (  # type: ignore[import-not-found]
+            __cpu_dispatch__,
+            __cpu_features__,
+        )
     except ImportError:  # another numpy layout
         targets = "unknown"
     else:
