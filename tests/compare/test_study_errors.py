@@ -25,11 +25,11 @@ from _engines import require_backend
 from simbridge.cli import main
 from simbridge.compare import compare, load_scenario
 from simbridge.compare.analysis.events import engine_events
-from simbridge.compare.report.departures import NOT_CHECKED
+from simbridge.compare.report.departures import NOT_CHECKED, applicable
 from simbridge.compare.report.events import event_words
 from simbridge.compare.report.summary_json import event_dict
 from simbridge.compare.study import explain, parse_vary, sweep
-from simbridge.compare.study.explain import _departures, candidates, not_checked
+from simbridge.compare.study.explain import candidates, not_checked
 from simbridge.exceptions import (
     EngineNotInStudyError,
     InvalidArgumentError,
@@ -172,7 +172,7 @@ def dropped():
 
 
 def test_explain_leaves_out_the_departures_not_checked_here(dropped):
-    deps = _departures(dropped)
+    deps = applicable(dropped, engine_events(dropped))  # as explain() finds them
     marked = {
         d["key"] for lab in dropped.labels for d in deps[lab]["apply"] if d["why"] == NOT_CHECKED
     }
