@@ -117,8 +117,8 @@ def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):
         done, ended = _run(display, backend, "close")
         if run == 0:
             _skip_if_unsupported(done)
-        while backend == "pybullet" and _unopened(done) and unopened < OPEN_RETRIES:
-            unopened += 1  # the X connection failed before any window: not close's doing
+        while _unopened(backend, done) and unopened < OPEN_RETRIES:
+            unopened += 1  # no window was opened: not close's doing
             done, ended = _run(display, backend, "close")
         assert done.returncode == 0, (run, done.returncode, done.stdout[-500:], done.stderr[-2000:])
         closing = [line for line in done.stdout.splitlines() if line.startswith("closing ")]
@@ -129,18 +129,24 @@ def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):
         assert ended - float(closing[-1].split()[1]) < EXIT_S, run
     if unopened:
         warnings.warn(
-            f"{backend}: {unopened} of the runs ended with status 1 before any window opened "
-            "(PyBullet ends the process when its connection to the X server fails) and were run "
-            "again",
+            f"{backend}: {unopened} of the runs ended before any window opened and were run again",
             stacklevel=1,
         )
 
 
-def _unopened(done: subprocess.CompletedProcess[str]) -> bool:
-    """PyBullet's GUI ends the process with status 1 when its own connection to the X server
-    fails (its message is inside the Sim's capture of the engine's output, lost with the
-    process): measured here, 3-8 % of connections to a busy Xvfb fail at once."""
-    return done.returncode == 1 and not done.stdout and not done.stderr
+def _unopened(backend: str, done: subprocess.CompletedProcess[str]) -> bool:
+    """A run that ended before any window opened, not by close():
+
+    - PyBullet's GUI ends the process with status 1 when its own connection to the X server
+      fails (its message is inside the Sim's capture of the engine's output, lost with the
+      process): measured here, 3-8 % of connections to a busy Xvfb fail at once;
+    - PhysX's window process found no Vulkan device in three tries (1 s and 2 s apart) after
+      the first run's window opened: in two clean-clone suite runs beside other test runs (load
+      9) one run of the ten failed so (the 5th, the 4th); 12 of 12 opened when run alone.
+    """
+    if backend == "pybullet":
+        return done.returncode == 1 and not done.stdout and not done.stderr
+    return backend == "physx" and done.returncode == UNSUPPORTED
 
 
 def test_physx_without_a_vulkan_device_is_refused_with_what_is_missing(display, monkeypatch):

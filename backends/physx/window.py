@@ -47,6 +47,7 @@ CLOSE_WAIT_S = 3.0  # then the window's process is killed
 # at load 9 (the suite beside four other test runs) one window of test_gui's ten in a row
 # failed twice, the four before it opened: so twice more
 OPEN_RETRIES = 2
+RETRY_PAUSE_S = 1.0  # before the first retry; twice that before the second
 HEADER = 3  # the counter, the close flag, the world's generation (window_process.py)
 DEFAULT_RGBA = (1.0, 1.0, 1.0, 1.0)  # a visual without a colour (as the MuJoCo backend's)
 _SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "window_process.py")
@@ -161,7 +162,9 @@ class Window:
         self._poses: np.ndarray | None = None
         self._pose_map: mmap.mmap | None = None
         self.show([])
-        for _attempt in range(1 + OPEN_RETRIES):
+        for attempt in range(1 + OPEN_RETRIES):
+            if attempt:  # after a pause: the failures seen came in spells under load
+                time.sleep(RETRY_PAUSE_S * attempt)
             detail = self._start()
             if detail is None:
                 break
