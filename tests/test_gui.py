@@ -98,7 +98,7 @@ def test_the_window_shows_the_robot(display, backend, tmp_path):
     done, _ = _run(display, backend, "show", str(tmp_path))
     _skip_if_unsupported(done)
     for _ in range(OPEN_RETRIES):
-        if not (backend == "pybullet" and _unopened(done)):
+        if not _unopened(backend, done):
             break
         done, _ = _run(display, backend, "show", str(tmp_path))  # see _unopened
     assert done.returncode == 0, done.stderr[-2000:]
