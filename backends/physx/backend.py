@@ -127,6 +127,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
         self._diverged = None
         self._generation = getattr(self, "_generation", 0) + 1  # a new world: old snapshots void
         self._contacts_cache: list[Any] | None = None
+        # since a remove, the last step's points less the removed bodies' (contacts.py)
+        self._contacts_kept: list[Any] | None = None
         self._restored: list[Robot] = []  # robots whose link velocities a restore put back
         self._active: list[Robot] = []  # robots that need work before or after a step
         self._clamped: list[Any] = []  # articulations whose joint speeds the profile clamps
@@ -262,12 +264,12 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
     @exclusive
     def remove(self, body: int) -> None:
         self._check_idle()
+        self._keep_contacts_but(body)  # the scene's report would name removed components
         robot = self._robots.pop(body)
         for entity in robot.built.entities:
             self._scene.remove_entity(entity)
         self._free_ids.append(body)
         self._generation += 1
-        self._contacts_cache = None
         self._refresh_active()
         self._show()
 
@@ -330,7 +332,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
                 if window is not None:
                     window.sync()
             if n > 0:
-                self._contacts_cache = None
+                self._contacts_cache = self._contacts_kept = None
         finally:
             self._in_step = False
             lock.release()
