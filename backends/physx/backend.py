@@ -58,6 +58,11 @@ CHECK_EVERY = 8
 _SCENE_FLAGS = ("enable_pcm", "enable_friction_every_iteration", "enable_enhanced_determinism")
 
 
+def _pose_copy(pose: Any) -> Any:
+    """A ``sapien.Pose`` of its own (the entity's may change under a held reference)."""
+    return sapien.Pose(pose.p, pose.q)
+
+
 class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRows, Backend):
     """`Sim` on PhysX 5 (SAPIEN 3.0.3, CPU)."""
 
@@ -383,7 +388,13 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             for body, robot in self._robots.items()
             if not robot.static
         }
-        return (id(self), self._generation, self._system.pack(), velocities)
+        # a static body's pose (a plane.urdf teleported) is no part of pack(): kept beside it
+        statics = {
+            body: _pose_copy(robot.built.entities[0].pose)
+            for body, robot in self._robots.items()
+            if robot.static
+        }
+        return (id(self), self._generation, self._system.pack(), velocities, statics)
 
     @exclusive
     def restore(self, native: Any) -> bool:
@@ -395,11 +406,13 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
         self._contacts_cache = None
         if (
             isinstance(native, tuple)
-            and len(native) == 4
+            and len(native) == 5
             and native[0] == id(self)
             and native[1] == self._generation
         ):
             self._system.unpack(native[2])
+            for body, pose in native[4].items():
+                self._robots[body].built.entities[0].pose = _pose_copy(pose)
             for body, velocities in native[3].items():
                 self._robots[body].restored_velocities = velocities.copy()
             self._restored = [self._robots[body] for body in native[3]]

@@ -281,6 +281,19 @@ def test_pending_torques_and_a_moved_fixed_base_are_restored(make_sim):
         np.testing.assert_allclose(_observe(other, arm), truth, atol=1e-12, rtol=0)
 
 
+def test_a_moved_static_body_is_put_back(make_sim):
+    # plane.urdf (a base of mass 0: static) moved by reset_base_state after the state was taken.
+    # Found by test_state_machine.py: on PhysX the engine data (pack/unpack) held no static
+    # body's pose, and set_state left the plane where the teleport had put it.
+    sim = make_sim()
+    plane = sim.load_urdf("plane.urdf")
+    state = sim.get_state()
+    for restored in (state, state.portable()):
+        sim.reset_base_state(plane, position=(0.5, 0.0, 0.0), orientation=(0.0, 0.0, 1.0, 0.0))
+        sim.set_state(restored)
+        assert sim.base_state(plane)[:2] == ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+
+
 def test_set_state_errors(make_sim):
     sim, plane, robot = _r2d2(make_sim)
     state = sim.get_state()
