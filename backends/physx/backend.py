@@ -394,19 +394,28 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             for body, robot in self._robots.items()
             if robot.static
         }
-        return (id(self), self._generation, self._system.pack(), velocities, statics)
+        # the limit rows' bookkeeping (limits.py): whether a robot's joints are looked at before
+        # the next step and the PhysX limits moved meanwhile; not derived again at restore, where
+        # a joint the step left a hair past its limit (-2e-20 rad) would count as written there
+        limits = {
+            body: (robot.past_limit, set(robot.moved), [row[1].limit for row in robot.limit_rows])
+            for body, robot in self._robots.items()
+            if robot.limit_rows and not robot.static
+        }
+        return (id(self), self._generation, self._system.pack(), velocities, statics, limits)
 
     @exclusive
     def restore(self, native: Any) -> bool:
         """Unpack a snapshot of this very world (no load, remove or reset since), and put
-        back the link velocities it kept. PhysX keeps its contact caches out of the blob, and
+        back what it kept beside the blob: the link velocities, the static bodies' poses and
+        the limit rows' bookkeeping. PhysX keeps its contact caches out of the blob, and
         unpack derives a floating base's link poses afresh: with a fixed base and no contacts
         the next step is the same bits, else not (see DEPARTURES["snapshot"])."""
         self._check_idle()
         self._contacts_cache = None
         if (
             isinstance(native, tuple)
-            and len(native) == 5
+            and len(native) == 6
             and native[0] == id(self)
             and native[1] == self._generation
         ):
@@ -416,8 +425,13 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             for body, velocities in native[3].items():
                 self._robots[body].restored_velocities = velocities.copy()
             self._restored = [self._robots[body] for body in native[3]]
-            for robot in self._robots.values():
-                self._check_limits(robot)
+            for body, (past, moved, bounds) in native[5].items():
+                robot = self._robots[body]
+                for row, bound in zip(robot.limit_rows, bounds, strict=True):
+                    if (row[1].limit != bound).any():
+                        row[1].limit = bound
+                robot.past_limit, robot.moved = past, set(moved)
+            self._refresh_active()
             self._diverged = None
             if self._window is not None:
                 self._window.sync()

@@ -121,6 +121,29 @@ def test_set_state_of_a_floating_base_in_the_air(make_sim):
         assert 0.0 < worst < floating
 
 
+def test_set_state_with_a_joint_driven_against_its_limit(make_sim):
+    # r2d2 falling in the air (no contacts), a gripper driven at 1 rad/s against its lower
+    # limit 0 from the first step on. Found by test_state_machine.py: the PhysX backend's
+    # restore looked at every joint for one past its limit, as after a reset_joint_state, and
+    # took the gripper the step had left at -2e-20 rad for one: its limit row then held the joint
+    # the uninterrupted run let PhysX's own limit take (1.0 rad/s off after one step). The
+    # snapshot now carries the limit rows' bookkeeping. Measured after the fix: 0 (PyBullet,
+    # MuJoCo), PhysX within its floating-base departure.
+    sim = make_sim()
+    robot = sim.load_urdf("r2d2.urdf", base_position=(0.0, 0.0, 0.47))
+    sim.step()
+    sim.set_joint_velocity(robot, "left_gripper_joint", -1.0, max_force=1.0)
+    state = sim.get_state()
+    sim.step(3)
+    truth = _observe(sim, robot)
+    sim.set_state(state)
+    sim.step(3)
+    worst = float(np.abs(_observe(sim, robot) - truth).max())
+    print(f"{sim.backend}: gripper on its limit, 3 steps after set_state off by {worst:.3g}")
+    floating = gap(sim.backend, "state_continuation_floating_base")
+    assert worst <= (0.0 if floating is None else floating)
+
+
 def test_the_portable_state_in_the_same_sim_is_at_float_precision(make_sim):
     # Measured over these 6 points, largest one-step error (base pose, velocities, joint
     # states): MuJoCo 1.9e-15 (its solver starts cold), PyBullet 3.0e-12 (its contact caches
