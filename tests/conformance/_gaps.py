@@ -307,6 +307,26 @@ KNOWN_BUGS: dict[str, dict[str, KnownBug]] = {
             },
         ),
     },
+    # set_state with the engine's data, then steps, against the uninterrupted steps, where bodies
+    # came into contact after the state was taken (test_state.py: r2d2 lifted clear of the plane,
+    # stepped, teleported with its wheels 0.17 m into it, the state taken, 3 steps). The rule is
+    # the same bits; PyBullet's first step is 0.177 rad/s off (a wheel), then 4.3e-3 m/s. Cause:
+    # restoreState does not put back Bullet's broadphase pair cache, and the contact manifolds are
+    # made and solved in that cache's order: pairs that began since the state was taken are there
+    # at the restore, in another order than when they began (raw PyBullet the same figures; with
+    # setPhysicsEngineParameter(deterministicOverlappingPairs=1), which sorts the pairs, the same
+    # bits: a change of every PyBullet trajectory's last bits, so not made here). Found by
+    # test_state_machine.py, whose random sequences of loads and teleports into other bodies
+    # measured up to 200 (velocities of bodies started deep inside each other): it checks only
+    # finiteness where a contact began since the state was taken, on a backend listed here.
+    "restore_after_new_contact_pairs": {
+        "pybullet": KnownBug(
+            "set_state with PyBullet's saveState is not the same bits where contacts began "
+            "after the state was taken: restoreState leaves Bullet's broadphase pairs in their "
+            "new order (raw PyBullet the same)",
+            {"3 steps after set_state, contacts begun since the state": 0.2},  # measured 0.177
+        ),
+    },
 }
 
 

@@ -70,6 +70,36 @@ def test_set_state_then_step_equals_the_uninterrupted_step(make_sim):
         assert 0.0 < worst < continuation
 
 
+@pytest.mark.known_bug("restore_after_new_contact_pairs")
+def test_set_state_then_step_where_contacts_begin_after_the_state(make_sim, within):
+    # r2d2 at rest, lifted clear of the plane and stepped (no contact: the last step's points are
+    # none), then teleported with its wheels 0.17 m into the plane: the state is taken before any
+    # step has met that contact. Found by test_state_machine.py.
+    sim, _, robot = _r2d2(make_sim)
+    sim.step(50)
+    sim.reset_base_state(robot, position=(0.0, 0.0, 2.0))
+    sim.step()
+    assert sim.contact_points() == ()
+    sim.reset_base_state(robot, position=(0.0, 0.0, 0.3))
+    state = sim.get_state()
+    truth = []
+    for _ in range(3):
+        sim.step()
+        truth.append(_observe(sim, robot))
+    assert sim.contact_points()
+    sim.set_state(state)
+    worst = 0.0
+    for expected in truth:
+        sim.step()
+        worst = max(worst, float(np.abs(_observe(sim, robot) - expected).max()))
+    print(f"{sim.backend}: contacts begun after the state, 3 steps after set_state {worst:.3g}")
+    continuation = gap(sim.backend, "state_continuation")
+    if continuation is None:
+        within("3 steps after set_state, contacts begun since the state", worst, 0.0)
+    else:  # a backend that restarts its contacts at set_state: within that departure
+        assert worst < continuation
+
+
 def _swing_and_return(sim: simbridge.Sim, body: int) -> tuple[float, float]:
     """Step 20, take the state, step 10 (the truth), set the state back, step 10 again: the
     largest difference from the truth (base pose, velocities, joint states) and, right after
