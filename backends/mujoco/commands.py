@@ -207,8 +207,8 @@ class MotorCommands:
         the rows cannot be written in place (a force of 0, kp 0, an effort limit)."""
         t = c.motors
         rows = t.row_of[idx]
-        if self.profile.enforce_effort_limit or not (rows >= 0).all():
-            return None
+        if not len(idx) or self.profile.enforce_effort_limit or not (rows >= 0).all():
+            return None  # (no joints: nothing to write, and the path's min(max_force) fails)
         prows = np.searchsorted(t.position_rows, rows)
         if (prows >= len(t.position_rows)).any() or (t.position_rows[prows] != rows).any():
             return None  # kp 0 somewhere: a velocity row, not a position row
