@@ -330,7 +330,10 @@ class MotorCommands:
             backend, world, cmd = weak_self(), weak_c(), weak_command()
             if backend is None or world is None or cmd is None:
                 return
-            if not backend._in_force(world, cmd):
+            # a bad value is refused even where the table holds the command already: +inf
+            # clamped to an upper limit of 0 would compare equal to a target of 0 in force
+            bad = not (np.isfinite(cmd.targets).all() and np.isfinite(cmd.max_force).all())
+            if bad or not backend._in_force(world, cmd):
                 world.fast.pop(id(cmd.joints), None)  # the full path: the table is rewritten
                 world.fast_position.pop(id(cmd.joints), None)
                 cmd.send()  # checks the values (raises on a bad one), then set_joint_*
