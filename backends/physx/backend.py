@@ -421,7 +421,10 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
         ):
             self._system.unpack(native[2])
             for body, pose in native[4].items():
-                self._robots[body].built.entities[0].pose = _pose_copy(pose)
+                entity = self._robots[body].built.entities[0]
+                now = entity.pose  # written only if moved: PhysX normalises a written pose's
+                if (now.p != pose.p).any() or (now.q != pose.q).any():  # quaternion at the step
+                    entity.pose = _pose_copy(pose)
             for body, velocities in native[3].items():
                 self._robots[body].restored_velocities = velocities.copy()
             self._restored = [self._robots[body] for body in native[3]]
