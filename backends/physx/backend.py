@@ -402,7 +402,14 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             for body, robot in self._robots.items()
             if robot.limit_rows and not robot.static
         }
-        return (id(self), self._generation, self._system.pack(), velocities, statics, limits)
+        # each articulation's root pose as it reads: unpack writes the packed one through
+        # PhysX's float32 normalisation, which can move its last bit (a teleported orientation)
+        roots = {
+            body: _pose_copy(robot.built.articulation.root_pose)
+            for body, robot in self._robots.items()
+            if not robot.static
+        }
+        return (id(self), self._generation, self._system.pack(), velocities, statics, limits, roots)
 
     @exclusive
     def restore(self, native: Any) -> bool:
@@ -415,11 +422,18 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
         self._contacts_cache = None
         if (
             isinstance(native, tuple)
-            and len(native) == 6
+            and len(native) == 7
             and native[0] == id(self)
             and native[1] == self._generation
         ):
             self._system.unpack(native[2])
+            for body, pose in native[6].items():
+                art = self._robots[body].built.articulation
+                now = art.root_pose
+                if (now.p != pose.p).any() or (now.q != pose.q).any():
+                    # the pose as read, normalised in double: a Pose PhysX keeps as it is
+                    q = np.asarray(pose.q, dtype=np.float64)
+                    art.root_pose = sapien.Pose(pose.p, q / np.linalg.norm(q))
             for body, pose in native[4].items():
                 entity = self._robots[body].built.entities[0]
                 now = entity.pose  # written only if moved: PhysX normalises a written pose's
