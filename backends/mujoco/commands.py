@@ -207,8 +207,8 @@ class MotorCommands:
         the rows cannot be written in place (a force of 0, kp 0, an effort limit)."""
         t = c.motors
         rows = t.row_of[idx]
-        if self.profile.enforce_effort_limit or not (rows >= 0).all():
-            return None
+        if not len(idx) or self.profile.enforce_effort_limit or not (rows >= 0).all():
+            return None  # (no joints: nothing to write, and the path's min(max_force) fails)
         prows = np.searchsorted(t.position_rows, rows)
         if (prows >= len(t.position_rows)).any() or (t.position_rows[prows] != rows).any():
             return None  # kp 0 somewhere: a velocity row, not a position row
@@ -330,7 +330,10 @@ class MotorCommands:
             backend, world, cmd = weak_self(), weak_c(), weak_command()
             if backend is None or world is None or cmd is None:
                 return
-            if not backend._in_force(world, cmd):
+            # a bad value is refused even where the table holds the command already: +inf
+            # clamped to an upper limit of 0 would compare equal to a target of 0 in force
+            bad = not (np.isfinite(cmd.targets).all() and np.isfinite(cmd.max_force).all())
+            if bad or not backend._in_force(world, cmd):
                 world.fast.pop(id(cmd.joints), None)  # the full path: the table is rewritten
                 world.fast_position.pop(id(cmd.joints), None)
                 cmd.send()  # checks the values (raises on a bad one), then set_joint_*

@@ -58,6 +58,11 @@ CHECK_EVERY = 8
 _SCENE_FLAGS = ("enable_pcm", "enable_friction_every_iteration", "enable_enhanced_determinism")
 
 
+def _pose_copy(pose: Any) -> Any:
+    """A ``sapien.Pose`` of its own (the entity's may change under a held reference)."""
+    return sapien.Pose(pose.p, pose.q)
+
+
 class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRows, Backend):
     """`Sim` on PhysX 5 (SAPIEN 3.0.3, CPU)."""
 
@@ -127,6 +132,8 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
         self._diverged = None
         self._generation = getattr(self, "_generation", 0) + 1  # a new world: old snapshots void
         self._contacts_cache: list[Any] | None = None
+        # since a remove, the last step's points less the removed bodies' (contacts.py)
+        self._contacts_kept: list[Any] | None = None
         self._restored: list[Robot] = []  # robots whose link velocities a restore put back
         self._active: list[Robot] = []  # robots that need work before or after a step
         self._clamped: list[Any] = []  # articulations whose joint speeds the profile clamps
@@ -262,12 +269,12 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
     @exclusive
     def remove(self, body: int) -> None:
         self._check_idle()
+        self._keep_contacts_but(body)  # the scene's report would name removed components
         robot = self._robots.pop(body)
         for entity in robot.built.entities:
             self._scene.remove_entity(entity)
         self._free_ids.append(body)
         self._generation += 1
-        self._contacts_cache = None
         self._refresh_active()
         self._show()
 
@@ -330,7 +337,7 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
                 if window is not None:
                     window.sync()
             if n > 0:
-                self._contacts_cache = None
+                self._contacts_cache = self._contacts_kept = None
         finally:
             self._in_step = False
             lock.release()
@@ -381,28 +388,67 @@ class PhysxBackend(StateAccess, MotorCommands, BallJoints, ContactReads, LimitRo
             for body, robot in self._robots.items()
             if not robot.static
         }
-        return (id(self), self._generation, self._system.pack(), velocities)
+        # a static body's pose (a plane.urdf teleported) is no part of pack(): kept beside it
+        statics = {
+            body: _pose_copy(robot.built.entities[0].pose)
+            for body, robot in self._robots.items()
+            if robot.static
+        }
+        # the limit rows' bookkeeping (limits.py): whether a robot's joints are looked at before
+        # the next step and the PhysX limits moved meanwhile; not derived again at restore, where
+        # a joint the step left a hair past its limit (-2e-20 rad) would count as written there
+        limits = {
+            body: (robot.past_limit, set(robot.moved), [row[1].limit for row in robot.limit_rows])
+            for body, robot in self._robots.items()
+            if robot.limit_rows and not robot.static
+        }
+        # each articulation's root pose as it reads: unpack writes the packed one through
+        # PhysX's float32 normalisation, which can move its last bit (a teleported orientation)
+        roots = {
+            body: _pose_copy(robot.built.articulation.root_pose)
+            for body, robot in self._robots.items()
+            if not robot.static
+        }
+        return (id(self), self._generation, self._system.pack(), velocities, statics, limits, roots)
 
     @exclusive
     def restore(self, native: Any) -> bool:
         """Unpack a snapshot of this very world (no load, remove or reset since), and put
-        back the link velocities it kept. PhysX keeps its contact caches out of the blob, and
+        back what it kept beside the blob: the link velocities, the static bodies' poses and
+        the limit rows' bookkeeping. PhysX keeps its contact caches out of the blob, and
         unpack derives a floating base's link poses afresh: with a fixed base and no contacts
         the next step is the same bits, else not (see DEPARTURES["snapshot"])."""
         self._check_idle()
         self._contacts_cache = None
         if (
             isinstance(native, tuple)
-            and len(native) == 4
+            and len(native) == 7
             and native[0] == id(self)
             and native[1] == self._generation
         ):
             self._system.unpack(native[2])
+            for body, pose in native[6].items():
+                art = self._robots[body].built.articulation
+                now = art.root_pose
+                if (now.p != pose.p).any() or (now.q != pose.q).any():
+                    # the pose as read, normalised in double: a Pose PhysX keeps as it is
+                    q = np.asarray(pose.q, dtype=np.float64)
+                    art.root_pose = sapien.Pose(pose.p, q / np.linalg.norm(q))
+            for body, pose in native[4].items():
+                entity = self._robots[body].built.entities[0]
+                now = entity.pose  # written only if moved: PhysX normalises a written pose's
+                if (now.p != pose.p).any() or (now.q != pose.q).any():  # quaternion at the step
+                    entity.pose = _pose_copy(pose)
             for body, velocities in native[3].items():
                 self._robots[body].restored_velocities = velocities.copy()
             self._restored = [self._robots[body] for body in native[3]]
-            for robot in self._robots.values():
-                self._check_limits(robot)
+            for body, (past, moved, bounds) in native[5].items():
+                robot = self._robots[body]
+                for row, bound in zip(robot.limit_rows, bounds, strict=True):
+                    if (row[1].limit != bound).any():
+                        row[1].limit = bound
+                robot.past_limit, robot.moved = past, set(moved)
+            self._refresh_active()
             self._diverged = None
             if self._window is not None:
                 self._window.sync()

@@ -51,6 +51,7 @@ class ContactReads:
         _scene: Any
         _dt: float
         _contacts_cache: list[Any] | None
+        _contacts_kept: list[ContactPoint] | None
         profile: Any
 
     def _owners(self) -> dict[int, tuple[int, int]]:
@@ -68,8 +69,19 @@ class ContactReads:
     def contact_points(self) -> list[ContactPoint]:
         if self._diverged is not None:
             raise self._diverged
+        out = self._last_contacts()
+        self._contacts_cache = out
+        return out
+
+    def _last_contacts(self) -> list[ContactPoint]:
+        """The last step's points: those read already, or since a remove the points kept then
+        (the scene's report of that step still names the removed components: reading it
+        crashed the process, SAPIEN 3.0.3, a static plane removed under a resting robot), or
+        else the scene's report."""
         if self._contacts_cache is not None:
             return self._contacts_cache
+        if self._contacts_kept is not None:
+            return self._contacts_kept
         owners = self._owners()
         inv_dt = 1.0 / self._dt
         # the engine setting rest_offset, where the profile sets one (settings_physx.py)
@@ -110,5 +122,12 @@ class ContactReads:
                         _vec(d2),
                     )
                 )
-        self._contacts_cache = out
         return out
+
+    def _keep_contacts_but(self, body: int) -> None:
+        """Before ``body`` is removed: the last step's points less its own, read while every
+        component they name is alive, are what ``contact_points`` gives until the next step
+        (as PyBullet's, which drops the removed body's manifolds and keeps the others)."""
+        kept = [c for c in self._last_contacts() if body not in (c.body_a, c.body_b)]
+        self._contacts_kept = kept
+        self._contacts_cache = None

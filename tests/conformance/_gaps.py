@@ -307,6 +307,35 @@ KNOWN_BUGS: dict[str, dict[str, KnownBug]] = {
             },
         ),
     },
+    # set_state with the engine's data, then steps, against the uninterrupted steps, where the
+    # bodies in contact changed around the state (test_state.py, the rule the same bits):
+    # contacts that began after it was taken (r2d2 lifted clear of the plane and stepped,
+    # teleported with its wheels 0.17 m into it, the state taken, 3 steps): PyBullet's first step
+    # 0.177 rad/s off (a wheel), then 4.3e-3 m/s; and contacts that a teleport ended just before
+    # it (r2d2 loaded into kuka_iiwa, a step, teleported clear to z 2, the state taken, 3 steps):
+    # 0.0119. Cause, measured on raw PyBullet (the same figures): restoreState does not put back
+    # Bullet's broadphase pair cache, by which contact manifolds are made, dropped and ordered:
+    # pairs that began since the state are there at the restore in another order (a truth run
+    # of one step is the same bits, of three not; setPhysicsEngineParameter(
+    # deterministicOverlappingPairs=1), which sorts the pairs, gives the same bits there, at the
+    # cost of every PyBullet trajectory's last bits, so it is not made here), and a manifold
+    # the truth run dropped with its pair comes back with the saved state and no pair to drop it
+    # (that parameter does not mend this one). Found by test_state_machine.py, whose random
+    # sequences measured up to 200 (bodies started deep in each other): on a backend listed here
+    # it checks finiteness alone where the pairs in contact were not the same at the state and
+    # after every step, or where the world was written (teleport, load...) since the last step.
+    "restore_after_contacts_change": {
+        "pybullet": KnownBug(
+            "set_state with PyBullet's saveState is not the same bits where the bodies in "
+            "contact changed around the state (contacts begun after it, or ended by a teleport "
+            "just before it): restoreState leaves Bullet's broadphase pairs as they are now "
+            "(raw PyBullet the same)",
+            {
+                "3 steps after set_state, contacts begun since the state": 0.2,  # 0.177
+                "3 steps after set_state, contacts ended by a teleport before it": 0.014,  # 0.0119
+            },
+        ),
+    },
 }
 
 

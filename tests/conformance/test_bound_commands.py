@@ -170,6 +170,24 @@ def test_a_bad_value_is_refused_by_the_step_before_any_step(make_sim):
         t = sim.time
 
 
+def test_an_infinite_position_target_clamped_to_the_one_in_force_is_refused(make_sim):
+    # gripper_extension's upper limit is 0, the target in force 0: +inf clamps to 0. Found by
+    # test_state_machine.py: the MuJoCo backend compared the clamped value with the command in
+    # force before checking it, and stepped.
+    sim, robot = _r2d2(make_sim)
+    joint = sim.joint_index(robot, "gripper_extension")
+    assert sim.joint_info(robot, joint).upper_limit == 0.0
+    cmd = sim.position_command(robot, [joint], 0.0, max_force=1.0)
+    sim.step()
+    t, before = sim.time, _state(sim, robot)
+    cmd.targets[0] = np.inf
+    with pytest.raises(InvalidArgumentError, match="targets"):
+        sim.step()
+    with pytest.raises(InvalidArgumentError, match="targets"):
+        sim.get_state()  # as step would
+    assert sim.time == t and _state(sim, robot) == before  # nothing stepped
+
+
 def test_assigning_an_array_copies_it_in_with_its_shape_checked(make_sim):
     sim, robot = _r2d2(make_sim)
     cmd = sim.velocity_command(robot, WHEELS, 0.0, max_force=5.0)

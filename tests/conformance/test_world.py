@@ -121,6 +121,21 @@ def test_a_reused_id_is_a_new_robot(make_sim):
     assert sim.base_state(cube).position[2] < 1.0  # it falls: a live body
 
 
+def test_a_body_without_movable_joints_takes_commands_on_none_again_and_again(make_sim):
+    """Every command on all movable joints (None) of plane.urdf, which has none, is taken, the
+    second time too (found by test_state_machine.py: the MuJoCo backend kept a shortcut for the
+    empty joint list, whose min(max_force) raised ValueError on the second position command)."""
+    sim = make_sim()
+    plane = sim.load_urdf("plane.urdf")
+    for _ in range(3):
+        sim.set_joint_position(plane, None, 0.0, max_force=1.0)
+        sim.set_joint_position(plane, None, [], max_force=[], kp=[], kd=0.5)
+        sim.set_joint_velocity(plane, None, 0.0, max_force=1.0)
+        sim.set_joint_torque(plane, None, 0.0)
+        sim.step()
+    assert sim.time == 3 * sim.timestep
+
+
 def test_ctrl_c_stops_a_long_step_and_the_time_counts_the_steps_done(make_sim):
     """A KeyboardInterrupt (Ctrl-C) during step(n) stops it within a moment (MuJoCo's compiled
     loop runs in chunks of 1000 steps for this), sim.time counts exactly the steps that ran,
