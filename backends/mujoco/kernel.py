@@ -22,7 +22,7 @@ import mujoco
 
 from simbridge.exceptions import SimBusyError, SlowStepWarning
 
-__all__ = ["ENV", "kernel_class", "functions", "reason", "warn_if_lost"]
+__all__ = ["ENV", "kernel_class", "functions", "reason", "warn_if_lost", "describe"]
 
 ENV = "SIMBRIDGE_MUJOCO_STEP"  # "python" forces the Python step loop
 _FUNCTIONS = (
@@ -141,6 +141,13 @@ def reason() -> str:
         return f"{ENV}=python"
     _load()
     return _state["reason"]
+
+
+def describe() -> str:
+    """The step loop in use, for ``simbridge info``: ``step loop: compiled (C)``, or the Python
+    one and why."""
+    why = reason()
+    return "step loop: " + ("compiled (C)" if not why else f"Python, about 12x slower: {why}")
 
 
 def warn_if_lost() -> None:

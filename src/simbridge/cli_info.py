@@ -5,7 +5,7 @@ result on this processor, and the study cache's place and size.
 
 The engines are not imported here: their versions are their distributions' (the registry's
 ``engine_dists``), and what a backend says of its own build comes from the backend's module
-(:func:`mujoco_loop`), as a Sim would load it.
+(its registration's ``describe``: MuJoCo's step loop), as a Sim would load it.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-__all__ = ["add_command", "info_lines", "mujoco_loop", "display_lines"]
+__all__ = ["add_command", "info_lines", "described", "display_lines"]
 
 
 def add_command(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -> None:
@@ -40,17 +40,18 @@ def _version(dist: str) -> str | None:
         return None
 
 
-def mujoco_loop() -> str:
-    """``compiled (C)``, or ``Python, about 12x slower: <why>``; where MuJoCo is missing, why."""
-    from simbridge.registry import unavailable_reason
+def described(name: str) -> str | None:
+    """What backend ``name`` says of how it runs here (its registration's ``describe``), or
+    None where it says nothing."""
+    from importlib import import_module
 
-    missing = unavailable_reason("mujoco")
-    if missing is not None:
-        return f"none ({missing})"
-    from simbridge.backends.mujoco import kernel
+    from simbridge.registry import backend_spec
 
-    why = kernel.reason()
-    return "compiled (C)" if not why else f"Python, about 12x slower per step: {why}"
+    target = backend_spec(name).describe
+    if not target:
+        return None
+    module, _, function = target.partition(":")
+    return str(getattr(import_module(module), function)())
 
 
 def display_lines(env: dict[str, str] | None = None) -> list[str]:
@@ -146,8 +147,9 @@ def info_lines() -> list[str]:
         missing = unavailable_reason(name)
         state = "installed" if missing is None else f"not usable: {missing}"
         line = f"  {name}: {versions or 'no engine'}; {state}"
-        if name == "mujoco" and missing is None:
-            line += f"; step loop: {mujoco_loop()}"
+        more = described(name) if missing is None else None
+        if more:
+            line += f"; {more}"
         lines.append(line)
     lines += display_lines()
     lines += _numerics()

@@ -54,6 +54,7 @@ class BackendSpec:
     settings: str = ""  # "module:ATTR": its engine settings (engine_settings.Setting), no engine
     state_dtype: str = ""  # its class's state_dtype, declared; "": read from the class (imports it)
     engine_dists: tuple[str, ...] = ()  # distributions whose versions its runs depend on
+    describe: str = ""  # "module:function" -> str: how it runs here (``simbridge info``)
 
 
 _REGISTRY: dict[str, BackendSpec] = {}
@@ -70,6 +71,7 @@ def register(
     settings: str = "",
     state_dtype: str = "",
     engine_dists: tuple[str, ...] | None = None,
+    describe: str = "",
 ) -> None:
     """Register a backend under ``name``; ``entry_point`` is ``"module:Class"``; ``settings``
     is ``"module:ATTR"``, a sequence of :class:`simbridge.engine_settings.Setting` in a module
@@ -79,7 +81,9 @@ def register(
     every engine of the study); the class must agree (:func:`load_backend` checks).
     ``engine_dists``: the distributions (pip names) whose versions the backend's results depend
     on (its engine library; numpy counts for every backend): a cached run is reused only while
-    their versions are the same (:func:`engine_dists`); None: the ``requires`` modules' names."""
+    their versions are the same (:func:`engine_dists`); None: the ``requires`` modules' names.
+    ``describe``: ``"module:function"``, called with no argument, saying in a line how the
+    backend runs here (``simbridge info``: MuJoCo's compiled or Python step loop)."""
     if ":" not in entry_point:
         raise BackendError(f"backend {name!r}: entry point {entry_point!r} is not 'module:Class'")
     if state_dtype and state_dtype not in STATE_DTYPES:
@@ -103,6 +107,7 @@ def register(
         settings,
         state_dtype,
         tuple(requires if engine_dists is None else engine_dists),
+        describe,
     )
     _LOADED.pop(name, None)
 
@@ -275,6 +280,7 @@ register(
     settings="simbridge.backends.settings_mujoco:SETTINGS",
     state_dtype="float64",
     engine_dists=("mujoco",),
+    describe="simbridge.backends.mujoco.kernel:describe",
 )
 register(
     "physx",
