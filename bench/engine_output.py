@@ -14,8 +14,8 @@ import time
 from collections.abc import Callable
 
 from simbridge.engine_output import captured
+from simbridge.model.urdf import resolve_source
 from simbridge.registry import load_backend
-from simbridge.urdf import resolve_source
 
 
 def _median_us(fn: Callable[[], object], n: int) -> float:

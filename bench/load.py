@@ -87,7 +87,7 @@ def measure(path: str) -> dict[str, Any]:
     import pybullet_data
 
     import simbridge
-    from simbridge import meshes
+    from simbridge.model import meshes
 
     warm = os.path.join(pybullet_data.getDataPath(), "cube_small.urdf")
 
@@ -131,7 +131,7 @@ def measure(path: str) -> dict[str, Any]:
             if err is not None:
                 out[backend + "_error"] = err
     # the part of a first load no engine does: reading the robot's mesh files in Python
-    from simbridge.urdf import parse_urdf, resolve_source
+    from simbridge.model.urdf import parse_urdf, resolve_source
 
     try:
         model = parse_urdf(resolve_source(path))

@@ -203,8 +203,8 @@ def departures(name: str) -> str:
     """MuJoCo's own reading of an MJCF file against simbridge's (PyBullet's)."""
     import mujoco
 
-    from simbridge.inertia import model_inertials
-    from simbridge.scene_files import parse_scene
+    from simbridge.model.inertia import model_inertials
+    from simbridge.model.scene_reader import parse_scene
 
     path = os.path.join(DATA, name)
     try:

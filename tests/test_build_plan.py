@@ -1,4 +1,4 @@
-"""simbridge.build_plan: what every engine builder gets, checked against raw PyBullet on
+"""simbridge.model.build_plan: what every engine builder gets, checked against raw PyBullet on
 pybullet_data robots (these tests import pybullet on purpose): the link order and joints of
 PyBullet's joint table and its link frames, the inertials of each inertia source, the collision
 shapes (meshes with their vertices read, their frames), the ground shapes, and the contact
@@ -15,20 +15,20 @@ import pybullet as p
 import pybullet_data
 import pytest
 
-from simbridge.build_plan import (
+from simbridge.exceptions import InvalidArgumentError
+from simbridge.model.build_plan import (
     BuildPlan,
     ContactValues,
     build_plan,
     combine_contact,
     links_collide,
 )
-from simbridge.exceptions import InvalidArgumentError
-from simbridge.load_options import load_options
-from simbridge.meshes import read_mesh
+from simbridge.model.load_options import load_options
+from simbridge.model.meshes import read_mesh
+from simbridge.model.scene_reader import parse_scene
+from simbridge.model.urdf import UrdfModel, parse_urdf, resolve_source
 from simbridge.profiles import get_profile
-from simbridge.scene_files import parse_scene
 from simbridge.transforms import transform_multiply
-from simbridge.urdf import UrdfModel, parse_urdf, resolve_source
 
 DATA = pybullet_data.getDataPath()
 PYBULLET = get_profile("pybullet")
@@ -430,8 +430,8 @@ def test_contact_values_and_their_combination():
 
 
 # Moments PyBullet's float32 reading leaves 1e-7 relative apart, except (file, link) here,
-# measured: the finger tips' .stl hulls, 4.7e-5 relative on Ix and Iz (simbridge.inertia's rule
-# for a hull's bounding box; tests/conformance/test_mjcf_sdf.py MOMENTS_OFF)
+# measured: the finger tips' .stl hulls, 4.7e-5 relative on Ix and Iz (simbridge.model.inertia's
+# rule for a hull's bounding box; tests/conformance/test_mjcf_sdf.py MOMENTS_OFF)
 MOMENTS_OFF = {
     ("kuka_iiwa/kuka_with_gripper2.sdf", 10): 5e-5,
     ("kuka_iiwa/kuka_with_gripper2.sdf", 13): 5e-5,

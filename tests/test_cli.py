@@ -195,7 +195,7 @@ def test_a_log_record_clears_the_progress_bar_line_first(capsys):
     import io
     import logging
 
-    from simbridge.cli import _StderrLog
+    from simbridge.cli.main import _StderrLog
     from simbridge.compare.report.progress import ProgressBar
 
     stream = io.StringIO()

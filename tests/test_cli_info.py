@@ -5,7 +5,7 @@ from __future__ import annotations
 from importlib import metadata
 
 from simbridge.cli import main
-from simbridge.cli_info import described, display_lines
+from simbridge.cli.info import described, display_lines
 
 
 def _info(capsys) -> list[str]:

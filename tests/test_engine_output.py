@@ -44,7 +44,7 @@ def test_a_warning_emitting_load_logs_and_prints_nothing(capfd, caplog):
         "inertial frame: FR_upper_shoulder"
     )
     warnings = [r for r in caplog.records if r.levelno >= logging.WARNING]
-    assert [r.name for r in warnings] == ["simbridge.urdf"] * 4
+    assert [r.name for r in warnings] == ["simbridge.model.urdf"] * 4
     assert "spirit40newer.urdf:85: link 'FR_upper_shoulder' has no <inertial>" in (
         warnings[0].getMessage()
     )

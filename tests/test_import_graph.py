@@ -199,7 +199,7 @@ def test_every_package_module_is_found():
     for name in (
         "simbridge",
         "simbridge.sim",
-        "simbridge.urdf",
+        "simbridge.model.urdf",
         "simbridge.backends.pybullet.backend",
         "simbridge.compare.scenario",
     ):
@@ -475,3 +475,97 @@ def test_the_backend_rule_sees_a_foreign_import(tmp_path):
         "simbridge.backends.beta.world (line 2) imports simbridge.compare",
         "simbridge.compare (line 1) imports the engine sapien",
     ]
+
+
+# ---------------------------------------------------------------- the core's floors
+
+FLOORS = {"interface": 0, "model": 0, "sim": 1, "cli": 2}
+"""The core's rooms and their floors: the interface (simbridge's own plain modules: the Backend
+contract, types, exceptions, profiles, registry, settings, transforms...) and ``model/`` (files
+read into build plans, whose types the Backend contract names) at the bottom, then ``sim/`` (the
+`Sim` and its parts), then ``cli/``. A module imports its own floor and the floors below it.
+The package's doors (``simbridge/__init__``, re-exporting the `Sim`, and ``__main__``) stand
+above sim/: only cli/ may import them."""
+
+
+def _floor(module: str) -> int | None:
+    """A core module's floor (:data:`FLOORS`); None for the doors, the backends and compare."""
+    parts = module.split(".")
+    if len(parts) == 1 or parts[0] != "simbridge" or parts[1] in ("backends", "compare"):
+        return None
+    if parts[1] == "__main__":
+        return None
+    return FLOORS.get(parts[1], 0)
+
+
+def _floor_breaches(graph: dict[str, dict[str, int]]) -> list[str]:
+    """Every edge of the core that goes up a floor or to the package's door, every backend edge
+    to sim/ or cli/, and every compare edge to cli/ or into a backend."""
+    out = []
+    for module, targets in sorted(graph.items()):
+        own = _floor(module)
+        parts = module.split(".")
+        for target, line in targets.items():
+            theirs = _floor(target)
+            where = f"{module} (line {line}) imports {target}"
+            if own is not None:
+                door = target == "simbridge" and own < FLOORS["cli"]
+                if door or (theirs is not None and theirs > own):
+                    out.append(where)
+            elif parts[1:2] == ["backends"] and theirs is not None and theirs >= FLOORS["sim"]:
+                out.append(f"{where}: a backend takes the interface and the model alone")
+            elif parts[1:2] == ["compare"] and (
+                theirs == FLOORS["cli"] or target.startswith("simbridge.backends")
+            ):
+                out.append(f"{where}: compare speaks the interface")
+    return out
+
+
+def test_the_core_s_floors_import_only_downwards():
+    """interface and model < sim < cli: model/ imports nothing of sim/ or cli/, sim/ nothing of
+    cli/, neither the package's door; no backend imports sim/ or cli/ (the Sim drives backends, not the other way round);
+    compare/ imports no backend and no cli module."""
+    breaches = _floor_breaches(_edges(_modules()))
+    assert not breaches, "\n".join(breaches)
+
+
+def test_the_floor_checker_sees_an_upward_import():
+    """The checker on made-up edges: model -> sim, interface -> sim, a backend -> sim and
+    compare -> cli are flagged; sim -> model, cli -> sim and a backend -> model are not."""
+    graph = {
+        "simbridge.model.urdf": {"simbridge.sim.core": 3, "simbridge.types": 4},
+        "simbridge.registry": {"simbridge.sim.core": 5, "simbridge.model.urdf": 5},
+        "simbridge.sim.core": {"simbridge.model.urdf": 6, "simbridge.backend": 7},
+        "simbridge.cli.main": {"simbridge.sim.core": 8, "simbridge.compare": 9},
+        "simbridge.backends.alpha.model": {"simbridge.sim.lookups": 10, "simbridge.model.x": 11},
+        "simbridge.compare.pipeline": {"simbridge.cli.main": 12, "simbridge.types": 13},
+    }
+    breaches = _floor_breaches(graph)
+    assert [b.split(" ")[0] for b in breaches] == [
+        "simbridge.backends.alpha.model",
+        "simbridge.compare.pipeline",
+        "simbridge.model.urdf",
+        "simbridge.registry",
+    ], breaches
+
+
+def test_a_moved_module_s_old_name_still_imports_with_a_warning():
+    """Each module that moved into a room imports by its old name for one release: the same
+    module object, with a DeprecationWarning naming the new path."""
+    import importlib
+    import sys
+    import warnings
+
+    from simbridge._moved import MOVED
+
+    for old, new in MOVED.items():
+        sys.modules.pop(f"simbridge.{old}", None)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            module = importlib.import_module(f"simbridge.{old}")
+        assert module is importlib.import_module(f"simbridge.{new}")
+        messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
+        assert messages == [
+            f"simbridge.{old} moved to simbridge.{new}; the old name goes in the next release"
+        ], (old, messages)
+        sys.modules.pop(f"simbridge.{old}", None)

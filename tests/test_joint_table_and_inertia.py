@@ -1,5 +1,6 @@
-"""simbridge.joint_table and simbridge.inertia: PyBullet's joint table and link inertia computed
-from a UrdfModel, checked against PyBullet itself (these tests import pybullet on purpose)."""
+"""simbridge.model.joint_table and simbridge.model.inertia: PyBullet's joint table and link
+inertia computed from a UrdfModel, checked against PyBullet itself (these tests import pybullet on
+purpose)."""
 
 from __future__ import annotations
 
@@ -12,9 +13,9 @@ import pybullet as p
 import pybullet_data
 import pytest
 
-from simbridge.inertia import is_fixed_base, model_inertials
-from simbridge.joint_table import joint_table
-from simbridge.urdf import parse_urdf, resolve_source
+from simbridge.model.inertia import is_fixed_base, model_inertials
+from simbridge.model.joint_table import joint_table
+from simbridge.model.urdf import parse_urdf, resolve_source
 
 DATA = pybullet_data.getDataPath()
 
@@ -255,7 +256,7 @@ def test_bad_file_inertia_is_zero_with_one_warning_on_both_backends(
     with simbridge.Sim(backend, profile="urdf") as sim:
         body = sim.load_urdf(path)
         assert sim.dynamics_info(body, 0).local_inertia_diagonal == (0.0, 0.0, 0.0)
-    ours = [r.getMessage() for r in caplog.records if r.name == "simbridge.urdf"]
+    ours = [r.getMessage() for r in caplog.records if r.name == "simbridge.model.urdf"]
     # link a has no <inertial>: that is said too (PyBullet: "No inertial data for link")
     assert "link 'a' has no <inertial>" in ours.pop(0)
     assert len(ours) == 1, ours

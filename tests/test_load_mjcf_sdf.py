@@ -14,7 +14,7 @@ import simbridge
 from simbridge import exceptions as exc
 from simbridge.compare.scenario import dumps_scenario, loads_scenario
 from simbridge.exceptions import ScenarioError
-from simbridge.scene_files import parse_scene
+from simbridge.model.scene_reader import parse_scene
 
 BACKENDS = ("pybullet", "mujoco")
 
@@ -400,7 +400,7 @@ def test_an_mjcf_include_is_not_read_and_says_so(caplog):
     )
     caplog.set_level(logging.WARNING, logger="simbridge")
     (model,) = parse_scene(text, "mjcf")
-    records = [r.getMessage() for r in caplog.records if r.name == "simbridge.mjcf"]
+    records = [r.getMessage() for r in caplog.records if r.name == "simbridge.model.mjcf"]
     assert records == [
         "<MJCF text>: <include> not read (PyBullet's MJCF importer does not read it; the "
         "included file's elements are not loaded): line 2 file='parts.xml'; line 4 "
@@ -419,7 +419,7 @@ def test_an_sdf_include_is_not_read_and_says_so(caplog):
     )
     caplog.set_level(logging.WARNING, logger="simbridge")
     (body,) = parse_scene(text, "sdf")
-    records = [r.getMessage() for r in caplog.records if r.name == "simbridge.sdf"]
+    records = [r.getMessage() for r in caplog.records if r.name == "simbridge.model.sdf"]
     assert records == [
         "<SDF text>: <include> not read (PyBullet's SDF importer does not read it; the "
         "included model is not loaded): line 2 uri='model://table'"

@@ -73,7 +73,7 @@ def write(root: Path, where: str, filename: str) -> Path:
 
 def layer_load(backend: str, urdf: str) -> str:
     """The mesh file the backend's model holds for the collision (its real path)."""
-    from simbridge.urdf import parse_urdf, resolve_source
+    from simbridge.model.urdf import parse_urdf, resolve_source
 
     model = parse_urdf(resolve_source(urdf))
     with simbridge.Sim(backend) as sim:

@@ -1,4 +1,5 @@
-"""simbridge.meshes: the one reader per mesh format (vertices and triangles), cached per path."""
+"""simbridge.model.meshes: the one reader per mesh format (vertices and triangles), cached per
+path."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import numpy as np
 import pybullet_data
 import pytest
 
-from simbridge.meshes import MeshData, MeshReadError, mesh_vertices, read_mesh
+from simbridge.model.meshes import MeshData, MeshReadError, mesh_vertices, read_mesh
 
 DATA = Path(pybullet_data.getDataPath())
 
@@ -43,7 +44,7 @@ def test_obj_faces_are_fans_of_every_polygon(tmp_path):
 def test_an_obj_face_past_its_vertices_is_an_error(tmp_path):
     """A face corner that names no vertex (was: the triangle left out) raises MeshReadError
     with the file and line (issue 15: garbage meshes)."""
-    from simbridge.meshes import MeshReadError
+    from simbridge.model.meshes import MeshReadError
 
     path = tmp_path / "past.obj"
     path.write_text(OBJ + "f 1 2 9\n", encoding="utf-8")

@@ -1,4 +1,4 @@
-"""simbridge.meshes caches a mesh per file version: a file rewritten while the process runs is
+"""simbridge.model.meshes caches a mesh per file version: a file rewritten while the process runs is
 read again (the cache is keyed on path, modification time and size), an unchanged one is not;
 the MuJoCo world's mesh assets likewise."""
 
@@ -8,7 +8,7 @@ import os
 
 import simbridge
 from simbridge.backends.mujoco.inspect import model_and_data
-from simbridge.meshes import read_mesh
+from simbridge.model.meshes import read_mesh
 
 TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
 

@@ -9,8 +9,8 @@ import pytest
 
 import simbridge
 from simbridge import exceptions as exc
-from simbridge.inertia import model_inertials
-from simbridge.urdf import parse_urdf, resolve_source
+from simbridge.model.inertia import model_inertials
+from simbridge.model.urdf import parse_urdf, resolve_source
 
 PLANE_LINK = (
     '<robot name="p">\n<link name="a"><inertial><mass value="1"/><inertia ixx="1" iyy="1" '

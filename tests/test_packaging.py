@@ -29,7 +29,7 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     for required in (
         "simbridge/__init__.py",
-        "simbridge/sim.py",
+        "simbridge/sim/core.py",
         "simbridge/py.typed",
         "simbridge/backends/pybullet/backend.py",
         "simbridge/backends/mujoco/backend.py",
@@ -84,7 +84,7 @@ def test_installed_wheel_imports_and_finds_the_robots(wheel, tmp_path):
         check=True,
     )
     code = (
-        "import simbridge, simbridge.urdf as u; "
+        "import simbridge, simbridge.model.urdf as u; "
         "s = u.resolve_source('r2d2'); print(s.path); "
         "m = u.parse_urdf(s); print(len(m.joints))"
     )

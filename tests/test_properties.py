@@ -1,7 +1,7 @@
 """Property-based tests (hypothesis) of the two readers of user text: any text either loads or
 raises a SimbridgeError, never another exception.
 
-- The URDF reader (``simbridge.urdf.parse_urdf``, no engine): arbitrary text; text that starts
+- The URDF reader (``simbridge.model.urdf.parse_urdf``, no engine): arbitrary text; text that starts
   like XML; and URDF-like XML built from robots, links, joints, geometry and attributes drawn
   by hypothesis, with hostile values (NaN, infinities, huge and negative numbers, unknown
   names, missing elements, cycles, entities).
@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 
 from simbridge.compare.scenario import loads_scenario
 from simbridge.exceptions import SimbridgeError
-from simbridge.urdf import UrdfModel, UrdfSource, parse_urdf
+from simbridge.model.urdf import UrdfModel, UrdfSource, parse_urdf
 
 SETTINGS = settings(
     max_examples=150,

@@ -11,7 +11,7 @@ import pytest
 import simbridge
 from simbridge import transforms
 from simbridge.exceptions import NotOfferedError
-from simbridge.pybullet_names import EQUIVALENTS, NOT_OFFERED
+from simbridge.sim.pybullet_names import EQUIVALENTS, NOT_OFFERED
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ import pytest
 
 import simbridge
 from simbridge import exceptions as exc
-from simbridge.urdf import parse_urdf, resolve_source
+from simbridge.model.urdf import parse_urdf, resolve_source
 
 LINK = '<link name="{n}"><inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>'  # noqa: E501
 
@@ -120,7 +120,7 @@ def test_searched_lists_each_place_once_in_order(monkeypatch):
     """Run from a folder of the search path, a relative name was listed twice (the working
     directory's try and the search folder's are one path)."""
     monkeypatch.delenv("SIMBRIDGE_URDF_PATH", raising=False)
-    robots = simbridge.urdf._robots_dir()
+    robots = simbridge.model.urdf._robots_dir()
     monkeypatch.chdir(robots)
     with pytest.raises(exc.UrdfNotFoundError) as err:
         resolve_source("robots/pandaa.urdf")
@@ -129,7 +129,7 @@ def test_searched_lists_each_place_once_in_order(monkeypatch):
     assert places[:3] == [
         str(robots / "robots/pandaa.urdf"),
         str(robots / "robots/pandaa.urdf.urdf"),
-        str(simbridge.urdf.search_path()[1] / "robots/pandaa.urdf"),
+        str(simbridge.model.urdf.search_path()[1] / "robots/pandaa.urdf"),
     ]
     assert len(places) == len(set(places)) == 4
 
@@ -139,7 +139,7 @@ def test_package_uri_resolves_against_the_urdfs_own_tree(tmp_path):
     (pkg / "urdf").mkdir(parents=True)
     (pkg / "meshes").mkdir()
     (pkg / "meshes" / "body.stl").write_bytes(
-        (simbridge.urdf._robots_dir() / "l_finger_tip.stl").read_bytes()
+        (simbridge.model.urdf._robots_dir() / "l_finger_tip.stl").read_bytes()
     )
     urdf = pkg / "urdf" / "robot.urdf"
     urdf.write_text(
@@ -229,10 +229,10 @@ def test_a_mesh_scale_of_fewer_than_three_numbers_warns_as_pybullet_reads_it(
     )
     path = tmp_path / "scale.urdf"
     path.write_text(text)
-    caplog.set_level(logging.WARNING, logger="simbridge.urdf")
+    caplog.set_level(logging.WARNING, logger="simbridge.model.urdf")
     model = parse_urdf(resolve_source(path))
     assert model.base.collisions[0].size == (2.0, 2.0, 2.0)
-    records = [r for r in caplog.records if r.name == "simbridge.urdf"]
+    records = [r for r in caplog.records if r.name == "simbridge.model.urdf"]
     assert len(records) == 1
     assert records[0].getMessage() == (
         f"{path}: read as PyBullet reads it: line 2: link 'a' <collision> #0 <mesh scale> "

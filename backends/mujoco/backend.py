@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import mujoco
 
 from simbridge.backend import Backend
-from simbridge.build_plan import build_plan
 from simbridge.exceptions import (
     BackendUnsupportedError,
     EngineError,
@@ -28,15 +27,16 @@ from simbridge.exceptions import (
     SimulationDivergedError,
     UrdfStructureError,
 )
-from simbridge.joint_table import joint_table
-from simbridge.load_options import LoadOptions
+from simbridge.model.build_plan import build_plan
+from simbridge.model.joint_table import joint_table
+from simbridge.model.load_options import LoadOptions
+from simbridge.model.urdf import UrdfModel
 from simbridge.profiles import Profile
 from simbridge.types import (
     JointType,
     Quat,
     Vec3,
 )
-from simbridge.urdf import UrdfModel
 
 from .. import locking
 from ..locking import exclusive, wait_for_lock
@@ -51,7 +51,7 @@ from .viewer import Viewer, check_display
 from .world import Compiled, Robot, compile_state, default_motors
 
 if TYPE_CHECKING:
-    from simbridge.scene import SceneBody
+    from simbridge.model.scene import SceneBody
 
 __all__ = ["MujocoBackend"]
 

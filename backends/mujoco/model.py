@@ -1,4 +1,4 @@
-"""A robot's :class:`~simbridge.build_plan.BuildPlan` translated into MjSpec: one MuJoCo body
+"""A robot's :class:`~simbridge.model.build_plan.BuildPlan` translated into MjSpec: one MuJoCo body
 per link, its joint, inertia, geoms and contact pairs.
 
 MuJoCo's own URDF importer welds the root to the world, merges fixed-joint links, drops
@@ -35,7 +35,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from simbridge.build_plan import (
+from simbridge.exceptions import UrdfStructureError
+from simbridge.model.build_plan import (
     BuildPlan,
     ContactValues,
     JointPlan,
@@ -43,8 +44,7 @@ from simbridge.build_plan import (
     combine_contact,
     links_collide,
 )
-from simbridge.exceptions import UrdfStructureError
-from simbridge.inertia import LinkInertial
+from simbridge.model.inertia import LinkInertial
 from simbridge.profiles import Profile
 from simbridge.transforms import transform_inverse, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
@@ -412,7 +412,7 @@ def _set_shape(geom: mujoco.MjsGeom, s: ShapePlan, meshes: MeshLibrary, file: st
 
 def pair_friction(a: GeomContact, b: GeomContact) -> tuple[list[float], int]:
     """The pair's contact values combined by PyBullet's rules
-    (:func:`simbridge.build_plan.combine_contact`), as MuJoCo's 5 friction values and
+    (:func:`simbridge.model.build_plan.combine_contact`), as MuJoCo's 5 friction values and
     condim."""
     c = combine_contact(a.contact, b.contact)
     mu, roll, spin = c.lateral_friction, c.rolling_friction, c.spinning_friction

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simbridge.multi_dof import motor_error
+from simbridge.spherical import motor_error
 
 __all__ = [
     "MotorTable",
@@ -99,7 +99,7 @@ SPHERICAL_BRAKE_IMPULSE = 1000.0
 def spherical_error(
     qw: float, qx: float, qy: float, qz: float, tx: float, ty: float, tz: float, tw: float
 ) -> tuple[float, float, float]:
-    """Bullet's error of a spherical motor (:func:`simbridge.multi_dof.motor_error`) from the
+    """Bullet's error of a spherical motor (:func:`simbridge.spherical.motor_error`) from the
     joint quaternion q in MuJoCo's order (w, x, y, z) to the target t (x, y, z, w)."""
     return motor_error(qx, qy, qz, qw, tx, ty, tz, tw)
 

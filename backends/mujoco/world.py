@@ -17,9 +17,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from simbridge.model.urdf import UrdfModel
 from simbridge.profiles import Profile
 from simbridge.types import JointInfo
-from simbridge.urdf import UrdfModel
 
 from . import kernel as kernel_loader
 from .damping import LinkDamping

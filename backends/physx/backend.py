@@ -19,16 +19,16 @@ import sapien
 from sapien import physx
 
 from simbridge.backend import Backend
-from simbridge.build_plan import build_plan
 from simbridge.exceptions import (
     SimBusyError,
     SimulationDivergedError,
 )
-from simbridge.joint_table import joint_table
-from simbridge.load_options import LoadOptions
+from simbridge.model.build_plan import build_plan
+from simbridge.model.joint_table import joint_table
+from simbridge.model.load_options import LoadOptions
+from simbridge.model.urdf import UrdfModel
 from simbridge.profiles import Profile
 from simbridge.types import Quat, Vec3
-from simbridge.urdf import UrdfModel
 
 from .. import locking
 from ..locking import exclusive, wait_for_lock
@@ -43,7 +43,7 @@ from .window import Window
 from .world import Robot, default_motors, movable_joints
 
 if TYPE_CHECKING:
-    from simbridge.scene import SceneBody
+    from simbridge.model.scene import SceneBody
 
 __all__ = ["PhysxBackend"]
 

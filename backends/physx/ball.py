@@ -24,8 +24,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from simbridge.exceptions import SimulationDivergedError
-from simbridge.multi_dof import motor_error
 from simbridge.profiles import Profile
+from simbridge.spherical import motor_error
 from simbridge.transforms import quat_multiply
 from simbridge.types import (
     JointStateMultiDof,
@@ -68,7 +68,7 @@ def rate_matrix(b: float, c: float) -> np.ndarray:
 
 
 def spherical_error(q: tuple[float, ...], t: tuple[float, ...]) -> tuple[float, float, float]:
-    """Bullet's error of a spherical motor (:func:`simbridge.multi_dof.motor_error`) from q to
+    """Bullet's error of a spherical motor (:func:`simbridge.spherical.motor_error`) from q to
     t (both x, y, z, w)."""
     return motor_error(*q, *t)
 

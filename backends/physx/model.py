@@ -1,4 +1,4 @@
-"""A robot's :class:`~simbridge.build_plan.BuildPlan` built into PhysX through SAPIEN's
+"""A robot's :class:`~simbridge.model.build_plan.BuildPlan` built into PhysX through SAPIEN's
 components. The plan holds every PyBullet rule (link order, inertials, shapes and meshes,
 contact values, contact filter); what is decided here is PhysX's alone.
 
@@ -36,9 +36,9 @@ import numpy as np
 import sapien
 from sapien import physx
 
-from simbridge.build_plan import BuildPlan, JointPlan, LinkPlan, ShapePlan
 from simbridge.exceptions import BackendUnsupportedError, InvalidEngineSettingError
-from simbridge.inertia import LinkInertial
+from simbridge.model.build_plan import BuildPlan, JointPlan, LinkPlan, ShapePlan
+from simbridge.model.inertia import LinkInertial
 from simbridge.transforms import quat_multiply, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
 

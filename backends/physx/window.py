@@ -32,8 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from simbridge.build_plan import BuildPlan, ShapePlan
 from simbridge.exceptions import BackendUnsupportedError, DisplayError
+from simbridge.model.build_plan import BuildPlan, ShapePlan
 from simbridge.transforms import transform_multiply
 
 from .model import _link_frame_in_base

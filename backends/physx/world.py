@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
+from simbridge.model.urdf import UrdfModel
 from simbridge.profiles import Profile
 from simbridge.types import JointInfo, JointType
-from simbridge.urdf import UrdfModel
 
 from .model import BuiltRobot
 

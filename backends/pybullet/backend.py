@@ -32,15 +32,15 @@ from simbridge.exceptions import (
     SimulationDivergedError,
     UrdfStructureError,
 )
-from simbridge.load_options import LoadOptions
+from simbridge.model.load_options import LoadOptions
+from simbridge.model.scene import SceneBody
+from simbridge.model.urdf import UrdfModel, resolve_mesh
 from simbridge.profiles import Profile
-from simbridge.scene import SceneBody
 from simbridge.types import (
     JointType,
     Quat,
     Vec3,
 )
-from simbridge.urdf import UrdfModel, resolve_mesh
 
 from .. import locking
 from .commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands

@@ -12,8 +12,8 @@ import xml.etree.ElementTree as ET
 from typing import Any
 
 from simbridge.exceptions import UrdfStructureError
+from simbridge.model.urdf import UrdfModel
 from simbridge.types import JointInfo, JointType, Quat, Vec3
-from simbridge.urdf import UrdfModel
 
 from ..locking import WAIT_LIMIT_S, WAIT_SLICE_S, exclusive, wait_for_lock
 

@@ -2,7 +2,7 @@
 
 PyBullet stays the reference: the file is handed to its importer as a user would, and the
 bodies it creates are checked against simbridge's reading of the same file
-(:mod:`simbridge.scene`): the body count, and per body the joint count, every joint's type and
+(:mod:`simbridge.model.scene`): the body count, and per body the joint count, every joint's type and
 every link's name. Joint names PyBullet makes up itself (``jointfix_<n>_<k>``, ``joint<n>_...``)
 carry a counter that lives as long as the process; the table reports the model's names, which
 are the ones a first load in a fresh process gets.
@@ -18,7 +18,7 @@ from typing import ClassVar, Protocol
 
 from simbridge.engine_output import captured
 from simbridge.exceptions import UrdfStructureError
-from simbridge.scene import SceneBody, find_mesh
+from simbridge.model.scene import SceneBody, find_mesh
 from simbridge.types import JointInfo
 
 from .output import p  # pybullet, imported with its banner captured

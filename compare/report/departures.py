@@ -72,9 +72,9 @@ def _urdf_facts(c: ComparisonView) -> dict[str, Any]:
     """Per robot: links with collision cylinders, restitution, rolling/spinning friction,
     and joints with a non-unit axis, from the scenario's URDFs (read as ``Sim.load_urdf``
     reads them; the root link is named ``base`` as in the record)."""
-    from simbridge.urdf import parse_urdf, resolve_source
+    from simbridge.model.urdf import parse_urdf, resolve_source
 
-    log = logging.getLogger("simbridge.urdf")
+    log = logging.getLogger("simbridge.model.urdf")
     facts: dict[str, Any] = {}
     for r in c.scenario.robots:
         was = log.disabled

@@ -13,8 +13,9 @@ drawn by viser (a three.js viewer) from the recorded poses, no engine needed.
   (``simbridge replay REPORT_DIR``).
 
 Each engine's robots get the robot's own meshes and colours (the URDF's ``<visual>`` elements
-read through simbridge's URDF model; meshes through :func:`simbridge.meshes.read_mesh`), tinted
-towards the engine's colour; static bodies (a plane) are drawn once, grey, under a grid on
+read through simbridge's URDF model; meshes through
+:func:`simbridge.model.meshes.read_mesh`), tinted towards the engine's colour; static bodies (a
+plane) are drawn once, grey, under a grid on
 z = 0. Every link's pose is computed from the recorded base pose and joint positions along the
 URDF's joints (the URDF link frames the visuals are given in). Events
 (:func:`~simbridge.compare.run.events.find_events`) become markers in the scene from the
@@ -219,7 +220,7 @@ def _urdf_sources(tr: Trajectory) -> list[str | None]:
 def _read_model(source: str | None) -> Any:
     if source is None or not Path(source).is_file():
         return None
-    from simbridge.urdf import parse_urdf, resolve_source
+    from simbridge.model.urdf import parse_urdf, resolve_source
 
     try:
         return parse_urdf(resolve_source(source))
@@ -239,7 +240,7 @@ def _geometry_mesh(g: Any) -> tuple[np.ndarray, np.ndarray] | None:
     if g.kind == "sphere":
         return _sphere(g.size[0])
     if g.kind == "mesh" and g.mesh_path is not None:
-        from simbridge.meshes import read_mesh
+        from simbridge.model.meshes import read_mesh
 
         try:
             data = read_mesh(g.mesh_path)

@@ -167,7 +167,7 @@ def file_hashes(sc: Scenario) -> tuple[tuple[str, str], ...]:
     """``(reference, sha256)`` of every file ``sc`` names: each robot's file as
     ``Sim.load_urdf`` / ``load_mjcf`` would read it, each controller's and outcome function's
     Python file; a reference that names no file here gets ``""`` (its run fails and says so)."""
-    from simbridge.urdf_source import resolve_source
+    from simbridge.model.urdf_source import resolve_source
 
     out: dict[str, str] = {}
     for r in sc.robots:

@@ -295,7 +295,7 @@ def _json_default(obj: Any) -> Any:
 
 def urdf_sha256(source: str) -> tuple[str, str]:
     """``(resolved file, sha256 of its text)`` of a URDF as ``Sim.load_urdf`` would read it."""
-    from simbridge.urdf import resolve_source
+    from simbridge.model.urdf import resolve_source
 
     src = resolve_source(source)
     return src.display_name, hashlib.sha256(src.text.encode("utf-8")).hexdigest()

@@ -39,10 +39,10 @@ robot's file takes about half a second to read)."""
 
 def _joint_names(sc: Scenario, index: int) -> list[str]:
     """Joint names of robot ``index`` as its file makes them (PyBullet's order)."""
-    from simbridge.mjcf import parse_mjcf
-    from simbridge.scene import resolve_scene_source
-    from simbridge.urdf import parse_urdf
-    from simbridge.urdf_source import resolve_source
+    from simbridge.model.mjcf import parse_mjcf
+    from simbridge.model.scene import resolve_scene_source
+    from simbridge.model.urdf import parse_urdf
+    from simbridge.model.urdf_source import resolve_source
 
     robot = sc.robots[index]
     source = sc.resolve_urdf(robot)

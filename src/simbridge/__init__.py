@@ -6,13 +6,13 @@ engines disagree.
 
 from __future__ import annotations
 
-from . import engine_settings, exceptions
-from ._version import __version__
-from .exceptions import SimbridgeError
-from .profiles import PROFILES, Profile, get_profile
-from .registry import available_backends, register
-from .sim import Sim
-from .types import (
+from simbridge import _moved, engine_settings, exceptions
+from simbridge._version import __version__
+from simbridge.exceptions import SimbridgeError
+from simbridge.profiles import PROFILES, Profile, get_profile
+from simbridge.registry import available_backends, register
+from simbridge.sim import Sim
+from simbridge.types import (
     BaseState,
     BodyState,
     ContactPoint,
@@ -49,3 +49,5 @@ __all__ = [
     "engine_settings",
     "SimbridgeError",
 ]
+
+_moved.install()  # old module paths (simbridge.urdf...) still import, with a warning

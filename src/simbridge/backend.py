@@ -9,7 +9,7 @@ commands as lists of finite Python floats of the same length (the cheapest form 
 to hand to an engine; copy them into your own buffers). A backend must:
 
 * keep PyBullet's indices: joint i moves link i, the base is -1, links in the order of
-  :func:`simbridge.urdf.parse_urdf`;
+  :func:`simbridge.model.urdf.parse_urdf`;
 * report in PyBullet's frames and units (see :mod:`simbridge.types`), quaternions x, y, z, w;
 * honour every entry of the :class:`~simbridge.profiles.Profile` it is given, and list what it
   cannot reproduce exactly in ``manifest()["departures"]``;
@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from .profiles import Profile
-from .types import (
+from simbridge.profiles import Profile
+from simbridge.types import (
     BaseState,
     ContactPoint,
     DynamicsInfo,
@@ -46,10 +46,10 @@ from .types import (
 )
 
 if TYPE_CHECKING:
-    from .bound import BoundCommand
-    from .load_options import LoadOptions
-    from .scene import SceneBody
-    from .urdf import UrdfModel
+    from simbridge.bound import BoundCommand
+    from simbridge.model.load_options import LoadOptions
+    from simbridge.model.scene import SceneBody
+    from simbridge.model.urdf import UrdfModel
 
 __all__ = ["Backend"]
 
@@ -73,7 +73,7 @@ class Backend(ABC):
     ) -> None:
         """A fixed base takes a pose but no velocity: PyBullet would carry the welded base
         along at it, MuJoCo has nothing to carry; both refuse it alike."""
-        from .exceptions import InvalidArgumentError
+        from simbridge.exceptions import InvalidArgumentError
 
         if any(v != 0.0 for v in (*(linear or ()), *(angular or ()))):
             raise InvalidArgumentError(
@@ -91,7 +91,7 @@ class Backend(ABC):
     ) -> None:
         """Raise BackendUnsupportedError for a profile entry this engine has no switch for (the
         defaults: what both shipped backends reproduce), before any engine resource exists."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         p = self.profile
         if p.integrator not in integrators:
@@ -134,7 +134,7 @@ class Backend(ABC):
         ``base_position``/``base_orientation`` place the root's URDF link frame (not its centre
         of mass), as ``p.loadURDF`` does; ``base_orientation`` is a unit quaternion.
 
-        ``options`` are ``loadURDF``'s (:mod:`simbridge.load_options`). ``model`` is already
+        ``options`` are ``loadURDF``'s (:mod:`simbridge.model.load_options`). ``model`` is already
         scaled by ``options.global_scaling`` and has its fixed links merged when
         ``options.merge_fixed_links``: a backend that builds its engine model from ``model``
         uses it as it is; one whose engine reads the file itself passes both on to it (and its
@@ -145,7 +145,7 @@ class Backend(ABC):
     def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
         """Add every body of one MJCF or SDF file; return their ids, in ``bodies``' order.
 
-        ``bodies`` are :func:`simbridge.scene_files.parse_scene`'s, in PyBullet's order, each
+        ``bodies`` are :func:`simbridge.model.scene_reader.parse_scene`'s, in PyBullet's order, each
         with its links, joints and numbering, and with ``base_position``/``base_orientation``
         placing its root link frame (its base is fixed when the root's mass is 0). ``options``
         hold the self-collision mode; the inertia source is ``"collision_aabb"``. The default
@@ -256,14 +256,14 @@ class Backend(ABC):
 
     # ---------------------------------------------------------------- multi-DoF joints
     # Not abstract: a backend without spherical joints refuses them at load and these calls
-    # (BackendUnsupportedError). The Sim checks and normalises every value (simbridge.multi_dof).
+    # (BackendUnsupportedError). The Sim checks and normalises every value (simbridge.spherical).
 
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
         """Every coordinate of each of ``joints`` (any types): a spherical joint's quaternion
         (x, y, z, w: the child's inertial frame turned from its zero pose), angular velocity
         in the child's inertial frame and its motor's torque per axis of that frame; a
         revolute or prismatic joint's 1-tuples; a fixed joint's empty tuples."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "multi-DoF joint states")
 
@@ -277,7 +277,7 @@ class Backend(ABC):
         """Teleport movable ``joints`` (``p.resetJointStateMultiDof``): per joint its
         coordinates, a spherical joint's a unit quaternion and 3 angular velocities; commands
         are kept."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "multi-DoF joint resets")
 
@@ -292,11 +292,11 @@ class Backend(ABC):
         kd: list[list[float]],
     ) -> None:
         """PyBullet's spherical joint motor on spherical ``joints``, per axis of the child's
-        inertial frame (see :mod:`simbridge.multi_dof`): POSITION towards the unit quaternion
+        inertial frame (see :mod:`simbridge.spherical`): POSITION towards the unit quaternion
         ``targets[i]`` (x, y, z, w) with gains ``kp``, ``kd`` (PyBullet's ``damping``);
         VELOCITY brakes (target velocity 0, kp 0, kd 1; ``targets`` the identity, unused).
         ``max_force[i]`` (N·m, >= 0; 0 releases an axis). Persists until replaced."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "spherical joint motors")
 
@@ -305,7 +305,7 @@ class Backend(ABC):
     ) -> None:
         """TORQUE_CONTROL on spherical ``joints``: 3 torques each about the child's inertial
         frame axes (N·m), added during the next step only (they add up, as 1-DoF torques)."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "spherical joint torques")
 
@@ -315,7 +315,7 @@ class Backend(ABC):
         next step. ``joint_commands`` reports these joints' first axis only, and
         ``set_joint_commands`` leaves them as they are: this and :meth:`set_spherical_states`
         carry them (``Sim.get_state``/``set_state``)."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "the state of spherical joints (get_state)")
 
@@ -326,7 +326,7 @@ class Backend(ABC):
         >= 0) the motor in force and the pending torques of its joint, replacing both; with
         ``positions`` also teleport the joint to its position and velocity (False after a
         bit-exact :meth:`restore`)."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the state of spherical joints")
 
@@ -372,7 +372,7 @@ class Backend(ABC):
         late). Called once, before anything is loaded. A backend that cannot check every step
         refuses True."""
         if every_step:
-            from .exceptions import BackendUnsupportedError
+            from simbridge.exceptions import BackendUnsupportedError
 
             raise BackendUnsupportedError(
                 self.name, 'divergence_check="every_step"', "valid here: ['periodic']"
@@ -392,7 +392,7 @@ class Backend(ABC):
         order (the Sim filters and orients them): links as PyBullet's indices (-1 = base),
         forces in N, and the friction fields the friction force on A (see
         :class:`~simbridge.types.ContactPoint`). Empty before the first step."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "contact points")
 
@@ -402,7 +402,7 @@ class Backend(ABC):
         velocity command reads back as VELOCITY with kp 0 and kd 1, one set by a position
         command as POSITION (the default brake: VELOCITY, target 0, the profile's brake force);
         ``max_force`` is the force asked for, before any effort limit of the profile."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "reading the commands in force (get_state)")
 
@@ -412,7 +412,7 @@ class Backend(ABC):
         replacing both (a pending torque is not added to: it is set). Afterwards
         ``joint_commands(body)`` reads them back. Spherical joints' entries are left alone
         (:meth:`set_spherical_states` sets them)."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the commands in force (set_state)")
 
@@ -433,7 +433,7 @@ class Backend(ABC):
 
     def set_time(self, time: float) -> None:
         """Set the simulated time (s), to the nearest whole step of this world's time step."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the time (set_state)")
 
@@ -452,7 +452,7 @@ class Backend(ABC):
         ``eye`` looking at ``target`` with ``up`` pointing up, ``fov`` degrees of vertical field
         of view (checked by :meth:`simbridge.Sim.render`: finite, eye away from target, up not
         along the line of sight)."""
-        from .exceptions import BackendUnsupportedError
+        from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(
             self.name,

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import InvalidArgumentError, StaleCommandError
+from simbridge.exceptions import InvalidArgumentError, StaleCommandError
 
 __all__ = ["BoundCommand"]
 

@@ -24,12 +24,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import profiles
-from .exceptions import InvalidArgumentError, InvalidEngineSettingError, did_you_mean
-from .registry import backend_spec
+from simbridge import profiles
+from simbridge.exceptions import InvalidArgumentError, InvalidEngineSettingError, did_you_mean
+from simbridge.registry import backend_spec
 
 if TYPE_CHECKING:
-    from .profiles import Profile
+    from simbridge.profiles import Profile
 
 __all__ = [
     "Setting",
@@ -249,7 +249,7 @@ def owners(key: str, backend: str = "") -> list[str]:
     """The registered backends but ``backend`` that have a setting ``key`` (for the message of
     a key given to the wrong engine, or to none); a backend whose settings module cannot be
     read is skipped."""
-    from .registry import available_backends
+    from simbridge.registry import available_backends
 
     found = []
     for other in available_backends():
@@ -341,7 +341,7 @@ def require_engines(
     Raises:
         EngineNotInStudyError: a setting for another engine, naming it and ``engines``.
     """
-    from .exceptions import EngineNotInStudyError
+    from simbridge.exceptions import EngineNotInStudyError
 
     for backend, values in (settings or {}).items():
         if backend not in engines and values:

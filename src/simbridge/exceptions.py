@@ -154,7 +154,7 @@ class UrdfError(SimbridgeError, ValueError):
 
 class UrdfNotFoundError(UrdfError, FileNotFoundError):
     """``searched``: every place looked, in order, each once; ``hint``: what follows the
-    sentence (`` (did you mean '...'?)``: :func:`simbridge.urdf_source.not_found`)."""
+    sentence (`` (did you mean '...'?)``: :func:`simbridge.model.urdf_source.not_found`)."""
 
     def __init__(self, source: str, searched: Iterable[str], kind: str = "URDF", hint: str = ""):
         self.source = source
@@ -188,7 +188,7 @@ class UrdfStructureError(UrdfError):
 
 class MeshNotFoundError(UrdfError, FileNotFoundError):
     """A mesh file found nowhere PyBullet looks; ``tried``: every path tried, in PyBullet's
-    order (see :func:`simbridge.urdf_source.resolve_mesh`), made absolute from the working
+    order (see :func:`simbridge.model.urdf_source.resolve_mesh`), made absolute from the working
     directory."""
 
     def __init__(
@@ -383,7 +383,7 @@ class SimNotCopyableError(SimbridgeError, TypeError):
 class NotOfferedError(SimbridgeError, AttributeError):
     """A PyBullet function the Sim does not offer (yet), asked for by its PyBullet name
     (``sim.applyExternalForce``) or in snake case: says so, and what to use instead where
-    something exists (:data:`simbridge.pybullet_names.NOT_OFFERED`)."""
+    something exists (:data:`simbridge.sim.pybullet_names.NOT_OFFERED`)."""
 
     def __init__(self, attribute: str, pybullet_name: str, instead: str):
         self.attribute = attribute

@@ -23,7 +23,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .exceptions import InvalidArgumentError, InvalidProfileError, did_you_mean
+from simbridge.exceptions import InvalidArgumentError, InvalidProfileError, did_you_mean
 
 __all__ = ["Profile", "PROFILES", "get_profile", "derived_profile"]
 

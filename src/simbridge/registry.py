@@ -18,8 +18,8 @@ import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .engine_output import captured
-from .exceptions import (
+from simbridge.engine_output import captured
+from simbridge.exceptions import (
     BackendError,
     BackendNotInstalledError,
     InvalidArgumentError,
@@ -27,7 +27,7 @@ from .exceptions import (
 )
 
 if TYPE_CHECKING:
-    from .backend import Backend
+    from simbridge.backend import Backend
 
 __all__ = [
     "BackendSpec",

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .types import Quat, Vec3
+from simbridge.types import Quat, Vec3
 
 __all__ = [
     "IDENTITY_QUAT",

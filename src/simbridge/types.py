@@ -245,7 +245,7 @@ class JointCommands(NamedTuple):
 class SphericalJointState(NamedTuple):
     """A spherical joint's part of a :class:`BodyState` (whose arrays hold its first
     coordinate only, as ``joint_states`` does): every coordinate, and its motor per axis of the
-    child's inertial frame (see :mod:`simbridge.multi_dof`)."""
+    child's inertial frame (see :mod:`simbridge.spherical`)."""
 
     joint: int
     """The joint's index."""

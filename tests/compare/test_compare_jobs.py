@@ -80,7 +80,7 @@ def test_job_key_is_its_content(tmp_path):
     ]
     assert len({j.key for j in others} | {job.key}) == len(others) + 1
     # the robot file's content is in the key, not its place
-    from simbridge.urdf_source import resolve_source
+    from simbridge.model.urdf_source import resolve_source
 
     urdf = resolve_source(sc.resolve_urdf(sc.robots[0])).path
     assert urdf is not None

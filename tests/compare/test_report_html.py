@@ -130,7 +130,7 @@ def test_scene_marks_every_event_at_its_time(written):
 def test_link_frames_carry_the_recorded_centres_of_mass(written):
     """The replay's link poses (recorded base frame and joints along the URDF) put every
     link's centre of mass where the engine recorded it."""
-    from simbridge.urdf import parse_urdf, resolve_source
+    from simbridge.model.urdf import parse_urdf, resolve_source
 
     c, _ = written
     model = parse_urdf(resolve_source("r2d2.urdf"))

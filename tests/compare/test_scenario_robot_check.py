@@ -55,7 +55,7 @@ def test_a_robot_mistake_names_file_line_and_key_before_any_run(
 def test_a_robot_not_found_lists_the_scenarios_folder_first(tmp_path, monkeypatch):
     """The scenario's own folder is searched first (Scenario.resolve_urdf): the list says so,
     each place once, in the order searched, and the file near the name there is offered."""
-    from simbridge.urdf_source import search_path
+    from simbridge.model.urdf_source import search_path
 
     monkeypatch.delenv("SIMBRIDGE_URDF_PATH", raising=False)
     sub = tmp_path / "my" / "sub"

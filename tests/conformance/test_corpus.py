@@ -150,7 +150,7 @@ def test_every_robot_loads_as_raw_pybullet_loads_it(make_sim, name, caplog):
         is None
     ), name
     said = [r for r in caplog.records if r.levelno >= logging.WARNING]
-    assert all(r.name == "simbridge.urdf" for r in said), [r.getMessage() for r in said]
+    assert all(r.name == "simbridge.model.urdf" for r in said), [r.getMessage() for r in said]
     assert len(said) == len(wanted), ([r.getMessage() for r in said], raw_lines)
     left = [r.getMessage() for r in said]
     for pattern in wanted:  # each raw line said once, in any order

@@ -2,8 +2,8 @@
 the same bodies, joint tables (the 17 fields), masses, inertial frames, moments, lateral
 friction and base frames; what PyBullet refuses, simbridge refuses with a one-line error.
 
-* every file, cheaply: simbridge's reading (:func:`simbridge.scene_files.parse_scene`, the joint
-  table and inertials computed without an engine) against raw PyBullet in this process;
+* every file, cheaply: simbridge's reading (:func:`simbridge.model.scene_reader.parse_scene`,
+  the joint table and inertials computed without an engine) against raw PyBullet in this process;
 * a full load of every file through ``Sim.load_mjcf``/``load_sdf`` on every backend: joint
   tables and every link's world frame (all of it about 5 s on the shared 2-core machine);
 * PyBullet names the joints it makes up (``jointfix_<n>_<k>``, ``joint<n>_<k>_<m>``) with a
@@ -27,10 +27,10 @@ import _raw
 import pytest
 
 from simbridge import exceptions as exc
-from simbridge.inertia import is_fixed_base, model_inertials
-from simbridge.joint_table import joint_table
-from simbridge.scene import SceneBody
-from simbridge.scene_files import parse_scene
+from simbridge.model.inertia import is_fixed_base, model_inertials
+from simbridge.model.joint_table import joint_table
+from simbridge.model.scene import SceneBody
+from simbridge.model.scene_reader import parse_scene
 
 DATA = _raw.DATA
 MJCF = sorted(os.path.relpath(f, DATA) for f in glob.glob(os.path.join(DATA, "mjcf", "*.xml")))
@@ -66,7 +66,8 @@ LOADABLE = [f for f in MJCF + SDF if f not in PYBULLET_REFUSES and f not in REFU
 
 # Moments of inertia that differ from raw PyBullet's by more than 1e-7 relative: (file, body,
 # link) -> measured relative difference. The finger tips' .stl hulls: simbridge's URDF rule for
-# a hull's bounding box (simbridge.inertia) gives the same difference for a URDF with this mesh
+# a hull's bounding box (simbridge.model.inertia) gives the same difference for a URDF with this
+# mesh
 # (4.7e-5 relative on Ix and Iz; y extent off by about 2 grid steps of Bullet's hull snapping).
 MOMENTS_OFF = {
     ("kuka_iiwa/kuka_with_gripper.sdf", 0, 10): 5e-5,

@@ -24,9 +24,9 @@ import _raw
 import pytest
 
 from simbridge import exceptions as exc
-from simbridge.inertia import is_fixed_base, model_inertials
-from simbridge.joint_table import joint_table
-from simbridge.urdf import parse_urdf, resolve_source
+from simbridge.model.inertia import is_fixed_base, model_inertials
+from simbridge.model.joint_table import joint_table
+from simbridge.model.urdf import parse_urdf, resolve_source
 
 DATA = _raw.DATA
 ALL = sorted(
@@ -186,7 +186,7 @@ def test_husky_is_read_with_one_warning_naming_file_line_and_values(make_sim, ca
     path = os.path.join(DATA, "husky/husky.urdf")
     sim = make_sim()
     body = sim.load_urdf(path)
-    records = [r for r in caplog.records if r.name == "simbridge.urdf"]
+    records = [r for r in caplog.records if r.name == "simbridge.model.urdf"]
     # the others: its 6 links without <inertial> (PyBullet's "No inertial data for link")
     others = [r for r in records if "has no <inertial>" in r.getMessage()]
     assert len(others) == 6 and len(records) == 7
@@ -199,9 +199,9 @@ def test_husky_is_read_with_one_warning_naming_file_line_and_values(make_sim, ca
 
 
 def test_a_clean_file_logs_nothing(make_sim, caplog):
-    caplog.set_level(logging.DEBUG, logger="simbridge.urdf")
+    caplog.set_level(logging.DEBUG, logger="simbridge.model.urdf")
     make_sim().load_urdf("r2d2.urdf")
-    assert [r for r in caplog.records if r.name == "simbridge.urdf"] == []
+    assert [r for r in caplog.records if r.name == "simbridge.model.urdf"] == []
 
 
 def test_a_non_unit_spawn_quaternion_is_normalised_with_a_warning(make_sim, caplog):

@@ -1,6 +1,6 @@
 """Spherical joints on every backend, against raw PyBullet 3.2.7 (issue 14, item 2).
 
-What PyBullet does, measured and read in its source (simbridge/multi_dof.py has the whole
+What PyBullet does, measured and read in its source (simbridge/spherical.py has the whole
 story): a URDF ``type="spherical"`` joint is ``getJointInfo`` type 2 with 4 position and 3
 velocity coordinates, axis (0, 0, 0) and flags 0; ``getJointState`` reports its first
 coordinate; ``resetJointState`` leaves it as it is; its motor (``btMultiBodySphericalJointMotor``,
@@ -98,7 +98,7 @@ def test_a_floating_joint_is_welded_as_pybullet_welds_it(make_sim, caplog):
     )
     raw = _raw.raw_load(text)
     assert raw.table[0][2] == simbridge.JointType.FIXED  # "creating a fixed joint instead"
-    caplog.set_level(logging.WARNING, logger="simbridge.urdf")
+    caplog.set_level(logging.WARNING, logger="simbridge.model.urdf")
     sim = make_sim()
     body = sim.load_urdf(text)
     assert _raw.table_difference(sim.joints(body), raw.table) is None

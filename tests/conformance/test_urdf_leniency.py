@@ -145,7 +145,7 @@ def test_lenient_input_reads_as_pybullet_reads_it(make_sim, case, caplog, tmp_pa
         _raw.frames_difference(_raw.sim_frames(sim, body), raw.frames, _raw.frame_rel(sim.backend))
         is None
     )
-    records = [r for r in caplog.records if r.name == "simbridge.urdf"]
+    records = [r for r in caplog.records if r.name == "simbridge.model.urdf"]
     assert len(records) == 1, [r.getMessage() for r in records]
     assert records[0].getMessage().startswith(f"{path}: read as PyBullet reads it: ")
     assert re.search(warning, records[0].getMessage()), records[0].getMessage()
@@ -357,7 +357,7 @@ def test_what_pybullet_warns_of_every_backend_says_once(make_sim, case, caplog, 
     """A link without <inertial> (PyBullet: mass 1 at the link frame) and an ASCII STL (PyBullet
     reads binary STL only and leaves the shape out): raw PyBullet warns; every backend loads
     the same body (joint table, masses, inertias, frames) and gives one warning on the
-    ``simbridge.urdf`` logger naming the file, the line and the link (the PyBullet backend's
+    ``simbridge.model.urdf`` logger naming the file, the line and the link (the PyBullet backend's
     own copy of PyBullet's lines is kept at DEBUG). MuJoCo refused the whole robot over the
     ASCII STL (its compiler's error) and gave the missing <inertial> its mass without a word."""
     link_b, pybullet_says, we_say = PYBULLET_WARNS[case]
@@ -378,5 +378,7 @@ def test_what_pybullet_warns_of_every_backend_says_once(make_sim, case, caplog, 
         is None
     )
     warnings = [r for r in caplog.records if r.levelno >= logging.WARNING]
-    assert [r.name for r in warnings] == ["simbridge.urdf"], [r.getMessage() for r in warnings]
+    assert [r.name for r in warnings] == ["simbridge.model.urdf"], [
+        r.getMessage() for r in warnings
+    ]
     assert re.search(we_say, warnings[0].getMessage()), warnings[0].getMessage()

@@ -842,13 +842,13 @@ def urdf_structure() -> None:
     }
     for name, (text, pattern) in structural.items():
         case(f"structure-{name}", cat, raises(exc.UrdfStructureError, pattern), _load_text(text))
-    from simbridge.urdf import SUPPORTED_JOINT_TYPES
+    from simbridge.model.urdf import SUPPORTED_JOINT_TYPES
 
     for jtype in ("floating", "planar", "spherical"):
         case(
             f"structure-{jtype}-joint",
             cat,
-            accepts(f"'{jtype}' is one of simbridge.urdf.SUPPORTED_JOINT_TYPES")
+            accepts(f"'{jtype}' is one of simbridge.model.urdf.SUPPORTED_JOINT_TYPES")
             if jtype in SUPPORTED_JOINT_TYPES
             else raises(exc.UnsupportedJointError, rf"joint type '{jtype}' is not supported"),
             _load_text(robot_xml(a + b, joint_xml("j", "a", "b", jtype))),

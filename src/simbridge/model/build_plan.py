@@ -1,0 +1,555 @@
+"""What an engine's builder needs to make one robot, resolved once: :func:`build_plan`.
+
+A backend that builds its own model (MuJoCo, PhysX) does not read the :class:`UrdfModel`, the
+:class:`Profile` or the :class:`LoadOptions` itself: it asks :func:`build_plan` for a
+:class:`BuildPlan` and only translates it into its engine. Every PyBullet rule an engine
+builder needs is applied here, once, by the engine-neutral core:
+
+* the links in PyBullet's order (``links[0]`` the base, link -1; ``links[i + 1]`` link i),
+  each with its parent and the joint that moves it (:class:`JointPlan`);
+* the profile's inertial of each link (:class:`~simbridge.model.inertia.LinkInertial`: PyBullet's
+  mass, principal moments and inertial frame for the inertia source of ``options``);
+* the collision and visual shapes (:class:`ShapePlan`), meshes read once
+  (:class:`MeshPlan`: vertices with the scale applied, triangles), primitives of size 0 marked
+  ``degenerate`` (PyBullet keeps them as point-like shapes), meshes PyBullet gets nothing from
+  left out and listed (``BuildPlan.dropped_shapes``), ground-like shapes marked
+  (:class:`GroundPlan`: a ``<plane>``, or a huge box welded to the world);
+* each link's contact values (:class:`ContactValues`: the profile's or the file's friction and
+  restitution, as PyBullet applies them) and :func:`combine_contact` for a pair (PyBullet's
+  combination rules);
+* the contact filter (:class:`CollisionFilter` per link; :meth:`BuildPlan.self_collides` for
+  two links of the body under its self-collision mode; :func:`links_collide` for links of two
+  bodies).
+
+Engine-specific choices (geom groups, collision bits, the engine's own minimum sizes or masses,
+its body frames) stay with each backend. Units: metres, kilograms, seconds, radians;
+quaternions (x, y, z, w). Every pose is a frame in the link frame of the link it belongs to,
+unless its field says otherwise. Nothing here imports an engine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from simbridge.model.inertia import LinkInertial, is_fixed_base, model_inertials
+from simbridge.model.load_options import LoadOptions, self_collision_exclusions
+from simbridge.model.meshes import read_mesh
+from simbridge.model.urdf_model import Geometry, Joint, Link, UrdfModel
+from simbridge.profiles import Profile
+from simbridge.transforms import IDENTITY_QUAT, quat_rotate, transform_multiply
+from simbridge.types import DynamicsInfo, Quat, Vec3
+
+__all__ = [
+    "GROUND_MIN_SIDE",
+    "BuildPlan",
+    "LinkPlan",
+    "JointPlan",
+    "ShapePlan",
+    "MeshPlan",
+    "GroundPlan",
+    "ContactValues",
+    "CollisionFilter",
+    "PairContact",
+    "build_plan",
+    "combine_contact",
+    "contact_values",
+    "collision_filter",
+    "links_collide",
+    "mesh_unusable",
+    "spherical_limited",
+]
+
+GROUND_MIN_SIDE = 100.0
+"""m: a box welded to the world at least this wide in x and y is ground-like (pybullet_data's
+``plane.urdf`` is a 200 x 200 x 10 m box)."""
+
+COMBINED_FRICTION_MAX = 10.0
+"""Bullet clamps a pair's combined rolling and spinning friction to this."""
+
+
+# ---------------------------------------------------------------- dataclasses
+
+
+@dataclass(frozen=True)
+class ContactValues:
+    """One link's contact values as PyBullet applies them: the file's ``<contact>`` values where
+    the profile reads them (``read_urdf_contact``) and the file gives them, else the profile's.
+
+    ``stiffness`` and ``damping`` (N/m, N·s/m): the file's ``<contact><stiffness>`` and
+    ``<damping>`` when it gives both (Bullet uses them only as a pair), else None: the
+    profile's ``contact_model`` (each engine's rigid contact)."""
+
+    lateral_friction: float  # dimensionless (Coulomb coefficient)
+    rolling_friction: float  # m (Bullet's rolling resistance, scaled by the normal force)
+    spinning_friction: float  # m (torsional, about the contact normal)
+    restitution: float  # dimensionless, 0..1
+    stiffness: float | None = None
+    damping: float | None = None
+
+
+@dataclass(frozen=True)
+class PairContact:
+    """The contact values of a pair of links, combined as PyBullet does
+    (:func:`combine_contact`)."""
+
+    lateral_friction: float
+    rolling_friction: float
+    spinning_friction: float
+    restitution: float
+
+
+@dataclass(frozen=True)
+class CollisionFilter:
+    """A link's broadphase filter, Bullet's rule: links a and b may touch when
+    ``a.group & b.mask or b.group & a.mask`` (PyBullet's OR rule). A URDF link is group 1, mask
+    -1 (all); a fixed base is group 2, mask ``-1 ^ 2``; an MJCF or SDF link may say otherwise
+    (``SceneBody.collision_filters``)."""
+
+    group: int = 1
+    mask: int = -1
+
+    def passes(self, other: CollisionFilter) -> bool:
+        """Whether the broadphase lets this link and ``other`` touch."""
+        return bool(self.group & other.mask or other.group & self.mask)
+
+
+@dataclass(frozen=True, eq=False)
+class MeshPlan:
+    """A mesh file, read once (:func:`simbridge.model.meshes.read_mesh`).
+
+    ``file_vertices`` (n, 3) float64: the positions as the file holds them (its units and
+    frame, unscaled); ``vertices`` (n, 3) float64: the same times ``scale``, in the shape's
+    frame (m); ``faces`` (m, 3) int64: triangles, indices into either. All three read-only (the
+    file arrays are shared with the mesh cache)."""
+
+    path: Path  # resolved absolute path
+    uri: str  # the file name as written in the robot file
+    scale: Vec3  # per axis, as written (times global_scaling)
+    file_vertices: np.ndarray
+    vertices: np.ndarray
+    faces: np.ndarray
+
+
+@dataclass(frozen=True)
+class GroundPlan:
+    """A ground-like shape: an infinite plane (a ``<plane>``), or the top face of a huge box
+    welded to the world (both horizontal sides at least :data:`GROUND_MIN_SIDE`, unrotated, on
+    a body whose z axis is the world's), which an engine may build as a plane.
+
+    ``position`` (m) is a point on the plane and ``orientation`` the plane's frame, whose +z
+    is the outward normal, both in the link frame; ``half_extents`` (m): the box's top face
+    half sizes in x and y, None for a ``<plane>`` (unbounded)."""
+
+    position: Vec3
+    orientation: Quat
+    half_extents: tuple[float, float] | None
+
+
+@dataclass(frozen=True, eq=False)
+class ShapePlan:
+    """One collision or visual shape of a link.
+
+    ``position`` (m) and ``orientation`` place the shape's frame in the link frame. ``size`` as
+    :class:`~simbridge.model.urdf_model.Geometry` holds it: box ``(x, y, z)`` full sizes; sphere
+    ``(radius,)``; cylinder and capsule ``(radius, length)`` along the shape's z axis (a
+    capsule's length without its caps); plane its normal ``(x, y, z)`` in the shape's frame, as
+    written; mesh its scale. ``element``: the shape's place among its link's ``<collision>``
+    (or ``<visual>``) elements as written, counting the ones left out. (PyBullet itself makes
+    a URDF cylinder a 32-gon convex hull, reported as a mesh by its collision shape data; the
+    plan keeps the cylinder.)"""
+
+    element: int
+    kind: str  # "box" | "sphere" | "cylinder" | "capsule" | "plane" | "mesh"
+    position: Vec3
+    orientation: Quat
+    size: tuple[float, ...]
+    mesh: MeshPlan | None = None  # for kind "mesh"
+    degenerate: bool = False  # a primitive with a size <= 0 (PyBullet keeps it, point-like)
+    ground: GroundPlan | None = None  # collision shapes only
+    rgba: tuple[float, float, float, float] | None = None  # visual shapes; None: not given
+    name: str = ""  # the element's name attribute
+    line: int = 0  # its source line (0: unknown)
+
+
+@dataclass(frozen=True)
+class JointPlan:
+    """The joint that moves link ``index`` (PyBullet's joint ``index``).
+
+    ``position`` (m) and ``orientation``: the child link frame in the parent link frame (the
+    joint frame is the child link frame). ``axis``: for revolute, continuous and prismatic
+    joints the unit axis in the joint frame (the written axis normalised); for fixed and
+    spherical joints as written. Limits in rad (revolute) or m (prismatic); ``limited`` is
+    PyBullet's rule (a revolute or prismatic joint whose ``<limit>`` has lower <= upper; lower
+    == upper locks it). ``effort`` (N·m or N), ``velocity`` (rad/s or m/s), ``damping``
+    (N·m·s/rad or N·s/m) and ``friction`` (N·m or N) as written; which of them an engine
+    applies is the profile's (``apply_joint_damping``, ``joint_brake``,
+    ``enforce_effort_limit``...). ``spherical_limit``: (swing about x, swing about y, twist about
+    z) in rad where PyBullet limits a spherical joint (:func:`spherical_limited`), else None."""
+
+    index: int
+    name: str
+    type: str  # "revolute" | "continuous" | "prismatic" | "spherical" | "fixed"
+    parent: int  # the parent link's index (-1 = base)
+    position: Vec3
+    orientation: Quat
+    axis: Vec3
+    limited: bool
+    lower: float
+    upper: float
+    effort: float
+    velocity: float
+    damping: float
+    friction: float
+    spherical_limit: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class LinkPlan:
+    """One link, PyBullet's link ``index`` (-1 = base).
+
+    ``inertial``: mass (kg), principal moments (kg·m²) and the principal (inertial) frame in
+    the link frame, as PyBullet simulates them for the plan's inertia source (a base loaded
+    with ``fixed_base`` has mass 0). ``static``: welded to the world (a fixed base, or a link
+    hanging from a static link by a fixed joint). ``collisions`` and ``visuals`` in the file's
+    order, without the shapes left out (``BuildPlan.dropped_shapes``); a visual ``<plane>`` is
+    not drawn (as in PyBullet) and not listed."""
+
+    index: int
+    name: str
+    parent: int | None  # None for the base
+    joint: JointPlan | None  # None for the base
+    inertial: LinkInertial
+    static: bool
+    collisions: tuple[ShapePlan, ...]
+    visuals: tuple[ShapePlan, ...]
+    contact: ContactValues
+    filter: CollisionFilter
+
+
+@dataclass(frozen=True, eq=False)
+class BuildPlan:
+    """Everything an engine builder needs to make one robot (see the module docstring).
+
+    ``fixed_base``: PyBullet welds the root to the world (asked, or a root of mass 0).
+    ``base_position`` (m) and ``base_orientation``: the base link frame in the world.
+    ``upright``: the base's z axis is the world's (a ground box stays horizontal).
+    ``self_collision``: the body's mode
+    (:data:`~simbridge.model.load_options.SELF_COLLISION_MODES`);
+    ``excluded_pairs``: the link pairs (i < j, -1 = base) that mode leaves out (parent and
+    child, or every ancestor; empty for ``"off"``, where no pair collides, and for
+    ``"include_parent"``). ``dropped_shapes``: the shapes left out, one line each
+    (``"link 'name' <collision> #k"``), visuals before collisions, link by link."""
+
+    name: str
+    file: str  # the model's display name, for messages
+    fixed_base: bool
+    base_position: Vec3
+    base_orientation: Quat
+    upright: bool
+    inertia_source: str
+    links: tuple[LinkPlan, ...]
+    self_collision: str
+    excluded_pairs: frozenset[tuple[int, int]] = field(default_factory=frozenset)
+    dropped_shapes: tuple[str, ...] = ()
+
+    def link(self, index: int) -> LinkPlan:
+        """The link by PyBullet index (-1 = base)."""
+        return self.links[index + 1]
+
+    def dynamics_info(self, index: int) -> DynamicsInfo:
+        """``Backend.dynamics_info`` of the link by PyBullet index (-1 = base): its inertial
+        and contact values, as every engine built from this plan simulates them."""
+        link = self.links[index + 1]
+        ine, ct = link.inertial, link.contact
+        return DynamicsInfo(
+            ine.mass,
+            ct.lateral_friction,
+            ine.diagonal,
+            ine.position,
+            ine.orientation,
+            ct.restitution,
+            ct.rolling_friction,
+            ct.spinning_friction,
+        )
+
+    @property
+    def joints(self) -> tuple[JointPlan, ...]:
+        """Joint i moves link i, in PyBullet's order."""
+        return tuple(link.joint for link in self.links[1:] if link.joint is not None)
+
+    def self_collides(self, a: int, b: int) -> bool:
+        """Whether links ``a`` and ``b`` (PyBullet indices) of this body may touch each other:
+        the mode is not ``"off"``, they are two links, not a pair the mode excludes, not both
+        static, and the broadphase filter lets them (PyBullet's rules). PyBullet's collision
+        detection still pairs two static links the filter lets through (``getContactPoints``
+        lists them) but they carry no force (measured: r2d2 on a fixed base), so they are left
+        out here."""
+        if self.self_collision == "off" or a == b:
+            return False
+        if (min(a, b), max(a, b)) in self.excluded_pairs:
+            return False
+        return links_collide(self.link(a), self.link(b))
+
+    def self_pairs(self) -> tuple[tuple[int, int], ...]:
+        """Every pair of links (i < j) of this body, both with collision shapes, that may touch
+        (:meth:`self_collides`), in order."""
+        ids = [link.index for link in self.links if link.collisions]
+        return tuple(
+            (a, b) for k, a in enumerate(ids) for b in ids[k + 1 :] if self.self_collides(a, b)
+        )
+
+
+# ---------------------------------------------------------------- rules
+
+
+def contact_values(link: Link, profile: Profile) -> ContactValues:
+    """``link``'s contact values under ``profile`` (see :class:`ContactValues`)."""
+    ct = link.contact
+    read = profile.read_urdf_contact
+
+    def pick(value: float | None, default: float) -> float:
+        return float(value) if read and value is not None else default
+
+    both = ct.stiffness is not None and ct.damping is not None
+    return ContactValues(
+        pick(ct.lateral_friction, profile.lateral_friction),
+        pick(ct.rolling_friction, profile.rolling_friction),
+        pick(ct.spinning_friction, profile.spinning_friction),
+        pick(ct.restitution, profile.restitution),
+        float(ct.stiffness) if both else None,  # type: ignore[arg-type]
+        float(ct.damping) if both else None,  # type: ignore[arg-type]
+    )
+
+
+def combine_contact(a: ContactValues, b: ContactValues) -> PairContact:
+    """Bullet's combination of two links' values: sliding friction and restitution are the
+    products; rolling and spinning friction ``x_a mu_b + x_b mu_a`` (mu the sliding friction),
+    clamped to :data:`COMBINED_FRICTION_MAX`."""
+    mu = a.lateral_friction * b.lateral_friction
+    roll = min(
+        COMBINED_FRICTION_MAX,
+        a.rolling_friction * b.lateral_friction + b.rolling_friction * a.lateral_friction,
+    )
+    spin = min(
+        COMBINED_FRICTION_MAX,
+        a.spinning_friction * b.lateral_friction + b.spinning_friction * a.lateral_friction,
+    )
+    return PairContact(mu, roll, spin, a.restitution * b.restitution)
+
+
+def collision_filter(model: UrdfModel, link: Link, fixed: bool) -> CollisionFilter:
+    """``link``'s broadphase group and mask as PyBullet gives them (``fixed``: the body's base
+    is welded to the world); see :class:`CollisionFilter`."""
+    static_base = link.index == -1 and fixed
+    group, mask = (2, -1 ^ 2) if static_base else (1, -1)
+    own = getattr(model, "collision_filters", {}).get(link.name)
+    if own is not None:
+        group = own[0] if own[0] is not None else group
+        mask = own[1] if own[1] is not None else mask
+    return CollisionFilter(group, mask)
+
+
+def links_collide(a: LinkPlan, b: LinkPlan) -> bool:
+    """Whether two links may touch, by PyBullet's rules: not both welded to the world, and
+    the broadphase filter lets them. (Two links of one body: also
+    :meth:`BuildPlan.self_collides`.)"""
+    if a.static and b.static:
+        return False
+    return a.filter.passes(b.filter)
+
+
+def spherical_limited(joint: Joint) -> bool:
+    """Whether PyBullet limits this spherical joint: its importer adds a
+    btMultiBodySphericalJointLimit (swing about x within ``lower``, about y within ``upper``,
+    twist about z within ``twist``) when all four of lower, upper, twist and effort are > 0."""
+    return joint.lower > 0 and joint.upper > 0 and joint.twist > 0 and joint.effort > 0
+
+
+def mesh_unusable(g: Geometry) -> bool:
+    """True for a mesh PyBullet gets nothing from: a file that cannot be read, no finite
+    vertex (pybullet_data's random_urdfs/168 is all NaN) or an .obj without a readable triangle
+    (PyBullet warns "cannot extract anything useful from mesh" and loads the link without
+    it)."""
+    assert g.mesh_path is not None
+    try:
+        verts, faces = read_mesh(g.mesh_path)
+    except (OSError, ValueError, IndexError):
+        return True
+    if g.mesh_path.suffix.lower() == ".obj" and len(faces) == 0:
+        return True
+    return not (len(verts) > 0 and bool(np.isfinite(verts).all()))
+
+
+def _degenerate(g: Geometry) -> bool:
+    """A primitive with a size <= 0 (a plane's size is its normal, a mesh's its scale)."""
+    return g.kind not in ("mesh", "plane") and min(g.size) <= 0.0
+
+
+def _is_ground_box(g: Geometry) -> bool:
+    return (
+        g.kind == "box"
+        and g.size[0] >= GROUND_MIN_SIDE
+        and g.size[1] >= GROUND_MIN_SIDE
+        and not any(g.origin_rpy)
+    )
+
+
+def _z_to(normal: tuple[float, ...]) -> Quat:
+    """The shortest turn (x, y, z, w) of the z axis onto ``normal`` (not zero)."""
+    n = np.asarray(normal, dtype=float) / np.linalg.norm(normal)
+    w = 1.0 + n[2]
+    if w < 1e-12:  # normal = -z: half a turn about x
+        return (1.0, 0.0, 0.0, 0.0)
+    q = np.array([-n[1], n[0], 0.0, w])
+    q /= np.linalg.norm(q)
+    return (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
+
+
+def _mesh_plan(g: Geometry) -> MeshPlan:
+    assert g.mesh_path is not None
+    verts, faces = read_mesh(g.mesh_path)
+    scale = (float(g.size[0]), float(g.size[1]), float(g.size[2]))
+    scaled = verts * np.asarray(scale, dtype=float)
+    scaled.setflags(write=False)
+    return MeshPlan(g.mesh_path, g.mesh_uri, scale, verts, scaled, faces)
+
+
+def _shape(g: Geometry, k: int, ground: GroundPlan | None = None) -> ShapePlan:
+    return ShapePlan(
+        k,
+        g.kind,
+        g.origin_xyz,
+        g.origin_quat,
+        tuple(g.size),
+        _mesh_plan(g) if g.kind == "mesh" else None,
+        _degenerate(g),
+        ground,
+        g.rgba,
+        g.name,
+        g.line,
+    )
+
+
+def _ground(g: Geometry, static: bool, upright: bool) -> GroundPlan | None:
+    if g.kind == "plane":  # Bullet's infinite plane through the shape's origin
+        pos, orn = transform_multiply(
+            (g.origin_xyz, g.origin_quat), ((0.0, 0.0, 0.0), _z_to(g.size))
+        )
+        return GroundPlan(pos, orn, None)
+    if static and upright and _is_ground_box(g):
+        top = (g.origin_xyz[0], g.origin_xyz[1], g.origin_xyz[2] + 0.5 * g.size[2])
+        return GroundPlan(top, IDENTITY_QUAT, (0.5 * g.size[0], 0.5 * g.size[1]))
+    return None
+
+
+def _joint(model: UrdfModel, joint: Joint) -> JointPlan:
+    axis: Vec3 = joint.axis
+    if joint.type in ("revolute", "continuous", "prismatic"):
+        a = np.asarray(joint.axis, dtype=float)
+        axis = tuple((a / np.linalg.norm(a)).tolist())
+    limit = None
+    if joint.type == "spherical" and spherical_limited(joint):
+        limit = (joint.lower, joint.upper, joint.twist)
+    return JointPlan(
+        joint.index,
+        joint.name,
+        joint.type,
+        model.parent_index(joint),
+        joint.origin_xyz,
+        joint.origin_quat,
+        axis,
+        joint.has_limit,
+        joint.lower,
+        joint.upper,
+        joint.effort,
+        joint.velocity,
+        joint.damping,
+        joint.friction,
+        limit,
+    )
+
+
+# ---------------------------------------------------------------- the plan
+
+
+def build_plan(
+    model: UrdfModel,
+    profile: Profile,
+    options: LoadOptions,
+    *,
+    fixed_base: bool,
+    base_position: Vec3 = (0.0, 0.0, 0.0),
+    base_orientation: Quat = IDENTITY_QUAT,
+) -> BuildPlan:
+    """The :class:`BuildPlan` of ``model`` (a :class:`UrdfModel`, or a
+    :class:`~simbridge.model.scene.SceneBody` from an MJCF or SDF file, already scaled and merged by
+    :func:`~simbridge.model.load_options.apply_load_options`) loaded at ``base_position`` /
+    ``base_orientation`` (x, y, z, w), with ``fixed_base`` as asked of ``load``.
+
+    The inertia source and self-collision mode are ``options``'; contact values the
+    ``profile``'s. Meshes are read here (:func:`simbridge.model.meshes.read_mesh`, cached): a file
+    that is not one of its format may raise its reader's error, as it would at load."""
+    fixed = is_fixed_base(model, fixed_base)
+    inertials = model_inertials(model, fixed_base, options.inertia_source)
+    base_z = quat_rotate(base_orientation, (0.0, 0.0, 1.0))
+    upright = base_z[2] > 1.0 - 1e-9
+    skip = self_collision_exclusions(model, options.self_collision)
+    static: dict[int, bool] = {}
+    links: list[LinkPlan] = []
+    dropped: list[str] = []
+    for link in model.links:
+        i = link.index
+        joint = None
+        parent = None
+        if i == -1:
+            static[i] = fixed
+        else:
+            j = model.joints[i]
+            joint = _joint(model, j)
+            parent = joint.parent
+            static[i] = static[parent] and j.type == "fixed"
+        where = f"link {link.name!r}"
+        visuals: list[ShapePlan] = []
+        for k, g in enumerate(link.visuals):
+            if g.kind == "plane":
+                continue  # PyBullet draws no <plane> either ("No default visual")
+            if _degenerate(g) or (g.kind == "mesh" and mesh_unusable(g)):
+                dropped.append(f"{where} <visual> #{k}")
+                continue  # nothing to draw (e.g. laikago_toes' radius-0 spheres)
+            visuals.append(_shape(g, k))
+        collisions: list[ShapePlan] = []
+        for k, g in enumerate(link.collisions):
+            if g.kind == "mesh" and mesh_unusable(g):
+                dropped.append(f"{where} <collision> #{k}")
+                continue
+            collisions.append(_shape(g, k, _ground(g, static[i], upright)))
+        links.append(
+            LinkPlan(
+                i,
+                link.name,
+                parent,
+                joint,
+                inertials[i + 1],
+                static[i],
+                tuple(collisions),
+                tuple(visuals),
+                contact_values(link, profile),
+                collision_filter(model, link, fixed),
+            )
+        )
+    return BuildPlan(
+        model.name,
+        model.source.display_name,
+        fixed,
+        base_position,
+        base_orientation,
+        upright,
+        options.inertia_source,
+        tuple(links),
+        options.self_collision,
+        frozenset(skip or ()),
+        tuple(dropped),
+    )

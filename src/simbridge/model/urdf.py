@@ -1,0 +1,692 @@
+"""URDF parsing and validation, shared by every backend.
+
+The core reads a URDF once into a :class:`UrdfModel`: links, joints, geometry, inertia and
+contact values, and PyBullet's link order (joint i moves link i, the root is -1). Every backend
+builds its engine model from, or checks its engine's model against, this one object, so a bad
+file gets the same error on every backend before any engine sees it.
+
+The values are the ones PyBullet 3.2.7 reads from the same file (bullet3
+``Importers/ImportURDFDemo/UrdfParser.cpp``), leniency included (:mod:`simbridge.model.urdf_xml`:
+numbers read with C's ``atof``, vectors split at spaces, their first three numbers used, a NUL
+byte a line break...); whatever a strict reading would not have read so is logged as one
+warning naming the file and the lines. What PyBullet refuses is refused here too, with an error
+naming the file, the line and the element; a few things PyBullet loads are refused on purpose
+(no engine simulates them faithfully): a non-finite number, a negative mass, size, joint
+damping or friction, a zero joint axis, several root links (PyBullet crashes), and the joint
+types outside :data:`SUPPORTED_JOINT_TYPES`.
+
+Sources (files, names on the search path, URDF text) are :mod:`simbridge.model.urdf_source`'s part.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+
+from simbridge.exceptions import (
+    MeshNotFoundError,
+    UnsupportedJointError,
+    UrdfStructureError,
+)
+from simbridge.model.inertia import file_principal
+from simbridge.model.meshes import MeshReadError, mesh_vertices, pybullet_reads_stl
+from simbridge.model.urdf_model import (
+    CONTACT_TAGS,
+    Contact,
+    Geometry,
+    Inertial,
+    Joint,
+    Link,
+    UrdfModel,
+    Vec3,
+)
+from simbridge.model.urdf_source import (  # noqa: F401 - re-exported: simbridge.model.urdf is the public module
+    UrdfSource,
+    _robots_dir,
+    not_a_regular_file,
+    resolve_mesh,
+    resolve_source,
+    search_path,
+)
+from simbridge.model.urdf_xml import (
+    LOGGER,
+    Leniency,
+    XmlElement,
+    c_atof,
+    pybullet_numbers,
+    read_urdf_xml,
+)
+
+__all__ = [
+    "UrdfSource",
+    "UrdfModel",
+    "Link",
+    "Joint",
+    "Geometry",
+    "Inertial",
+    "Contact",
+    "resolve_source",
+    "resolve_mesh",
+    "parse_urdf",
+    "search_path",
+    "check_file_inertia",
+    "warn_missing_inertials",
+    "SUPPORTED_JOINT_TYPES",
+    "MESH_FORMATS",
+]
+
+SUPPORTED_JOINT_TYPES = ("revolute", "continuous", "prismatic", "spherical", "fixed", "floating")
+_KNOWN_UNSUPPORTED = ("planar",)
+# PyBullet 3.2.7 builds a planar joint (btMultibody setupPlanar) but broken, measured: the
+# child's centre of mass is put at the joint origin, its state reads back 2 of its 3
+# coordinates, and resetJointStateMultiDof leaves it where it is. No engine can be held to that.
+_PLANAR_REFUSED = (
+    "PyBullet's planar joint is broken (measured on 3.2.7: the child's centre of mass is put at "
+    "the joint origin, getJointStateMultiDof reads 2 of its 3 coordinates, resetJointStateMultiDof "
+    "is ignored)"
+)
+MESH_FORMATS = (".obj", ".stl", ".dae")  # what PyBullet's URDF importer reads
+
+# ---------------------------------------------------------------- reading values
+
+
+def _fmt(values: Sequence[float]) -> str:
+    return "(" + ", ".join(f"{v:g}" for v in values) + ")"
+
+
+class _Reader:
+    """Attribute values read as PyBullet reads them (``atof``; vectors split at spaces), with
+    a note on the leniency record where a strict reading would differ, and errors that name
+    the file, the line and the element."""
+
+    def __init__(self, file: str, lenient: Leniency) -> None:
+        self.file = file
+        self.lenient = lenient
+
+    def error(self, elem: XmlElement | None, where: str, detail: str) -> UrdfStructureError:
+        return UrdfStructureError(self.file, where, detail, getattr(elem, "line", None))
+
+    def require(self, elem: XmlElement, attr: str, where: str) -> str:
+        text = elem.get(attr)
+        if text is None:
+            raise self.error(elem, where, f"has no {attr} attribute (PyBullet refuses it too)")
+        return text
+
+    def _finite(self, elem: XmlElement, where: str, values: Sequence[float], text: str) -> None:
+        if not all(math.isfinite(v) for v in values):
+            raise self.error(elem, where, f"numbers must be finite, got {text!r}")
+
+    def number(
+        self, elem: XmlElement | None, attr: str, default: float, where: str, required=False
+    ) -> float:
+        """One number (``atof`` of the whole attribute); ``default`` when it is absent."""
+        if elem is None:
+            return default
+        text = self.require(elem, attr, where) if required else elem.get(attr)
+        if text is None:
+            return default
+        value, whole = c_atof(text)
+        if not whole:
+            self.lenient.add(
+                elem.line, f"{where} {attr}={text!r} read as {value:g} (C atof: its leading number)"
+            )
+        self._finite(elem, f"{where} {attr}", (value,), text)
+        return value
+
+    def vector(self, elem: XmlElement, attr: str, n: int, where: str) -> tuple[float, ...] | None:
+        """PyBullet's ``parseVector3`` (n 3: the first 3 numbers, None for fewer) or
+        ``parseVector4`` (n 4: exactly 4, else None); None also when the attribute is absent.
+        The caller says what None stands for (and notes it)."""
+        text = elem.get(attr)
+        if text is None:
+            return None
+        values, clean = pybullet_numbers(text)
+        if len(values) < n or (n == 4 and len(values) != n):
+            return None
+        reasons = []
+        if not clean:
+            reasons.append(
+                "each space-separated piece read with C atof (its leading number, 0 if none)"
+            )
+        if len(values) > n:
+            reasons.append(f"the first {n} of {len(values)} numbers used")
+        if reasons:
+            self.lenient.add(
+                elem.line, f"{where} {text!r} read as {_fmt(values[:n])}: {'; '.join(reasons)}"
+            )
+        self._finite(elem, where, values[:n], text)
+        return tuple(values[:n])
+
+    def short(self, elem: XmlElement, attr: str, where: str, assumed: str) -> None:
+        self.lenient.add(
+            elem.line,
+            f"{where} {elem.get(attr)!r}: fewer than 3 numbers (split at spaces), read as "
+            f"{assumed}",
+        )
+
+    def origin(self, elem: XmlElement, where: str) -> tuple[Vec3, Vec3]:
+        """PyBullet's ``parseTransform``: xyz (0 0 0 if unreadable), rpy (none if unreadable)."""
+        origin = elem.find("origin")
+        if origin is None:
+            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+        xyz = self.vector(origin, "xyz", 3, f"{where} <origin xyz>")  # type: ignore[arg-type]
+        if xyz is None and origin.get("xyz") is not None:
+            self.short(origin, "xyz", f"{where} <origin xyz>", "(0, 0, 0)")  # type: ignore[arg-type]
+        rpy = self.vector(origin, "rpy", 3, f"{where} <origin rpy>")  # type: ignore[arg-type]
+        if rpy is None and origin.get("rpy") is not None:
+            self.short(origin, "rpy", f"{where} <origin rpy>", "no rotation")  # type: ignore[arg-type]
+        return xyz or (0.0, 0.0, 0.0), rpy or (0.0, 0.0, 0.0)  # type: ignore[return-value]
+
+
+# ---------------------------------------------------------------- elements
+
+
+def _geometry(
+    r: _Reader,
+    elem: XmlElement,
+    where: str,
+    src: UrdfSource,
+    rgba: tuple[float, float, float, float] | None,
+) -> Geometry:
+    file = src.display_name
+    xyz, rpy = r.origin(elem, where)
+    geom = elem.find("geometry")
+    if geom is None or len(geom) == 0:
+        raise r.error(elem, where, "has no <geometry> (PyBullet refuses it too)")
+    shape: XmlElement = geom[0]  # type: ignore[assignment]
+    tag, line = shape.tag, shape.line
+    name = elem.get("name", "")
+    common = {"rgba": rgba, "name": name, "line": elem.line}
+    if tag == "box":
+        r.require(shape, "size", f"{where} <box>")
+        size = r.vector(shape, "size", 3, f"{where} <box size>")
+        if size is None:
+            r.short(shape, "size", f"{where} <box size>", "(0, 0, 0)")
+            size = (0.0, 0.0, 0.0)
+        _sizes(r, shape, size, f"{where} <box size>")
+        return Geometry("box", xyz, rpy, size, **common)  # type: ignore[arg-type]
+    if tag in ("cylinder", "capsule"):
+        radius = r.number(shape, "radius", 0.0, f"{where} <{tag}>", required=True)
+        length = r.number(shape, "length", 0.0, f"{where} <{tag}>", required=True)
+        _sizes(r, shape, (radius, length), f"{where} <{tag} radius, length>")
+        return Geometry(tag, xyz, rpy, (radius, length), **common)  # type: ignore[arg-type]
+    if tag == "sphere":
+        radius = r.number(shape, "radius", 0.0, f"{where} <sphere>", required=True)
+        _sizes(r, shape, (radius,), f"{where} <sphere radius>")
+        return Geometry("sphere", xyz, rpy, (radius,), **common)  # type: ignore[arg-type]
+    if tag == "plane":
+        r.require(shape, "normal", f"{where} <plane>")
+        normal = r.vector(shape, "normal", 3, f"{where} <plane normal>")
+        if normal is None or not any(normal):
+            raise r.error(
+                shape,
+                f"{where} <plane normal>",
+                f"must be 3 numbers, not all 0, got {shape.get('normal')!r}",
+            )
+        return Geometry("plane", xyz, rpy, normal, **common)  # type: ignore[arg-type]
+    if tag == "mesh":
+        uri = shape.get("filename")
+        if not uri:
+            raise r.error(shape, f"{where} <mesh>", "has no filename (PyBullet refuses it too)")
+        scale: tuple[float, ...] = (1.0, 1.0, 1.0)
+        if shape.get("scale") is not None:
+            read = r.vector(shape, "scale", 3, f"{where} <mesh scale>")
+            if read is None:  # PyBullet: one number s is (s, s, s); no number leaves zeros
+                s = c_atof(shape.get("scale", ""))[0]
+                read = (s, s, s)
+                r.lenient.add(
+                    line,
+                    f"{where} <mesh scale> {shape.get('scale')!r} read as {_fmt(read)}: fewer "
+                    "than 3 numbers, PyBullet's workaround uses the first for all three",
+                )
+                r._finite(shape, f"{where} <mesh scale>", read, shape.get("scale", ""))
+            scale = read
+        path, tried = resolve_mesh(uri, src.mesh_from)
+        if not path.is_file():
+            odd = not_a_regular_file(tried)
+            if odd is not None:
+                raise r.error(shape, f"{where} <mesh>", f"mesh file {uri!r}: {odd}")
+            raise MeshNotFoundError(file, where, uri, tried, line)
+        if path.suffix.lower() not in MESH_FORMATS:
+            raise r.error(
+                shape,
+                f"{where} <mesh>",
+                f"{uri!r}: unsupported mesh format; valid: {', '.join(MESH_FORMATS)}",
+            )
+        if path.suffix.lower() == ".dae":
+            _check_collada(r, shape, path, uri, f"{where} <mesh>")
+        else:
+            _check_mesh(r, shape, path, uri, f"{where} <mesh>")
+        return Geometry("mesh", xyz, rpy, scale, mesh_path=path, mesh_uri=uri, **common)  # type: ignore[arg-type]
+    raise r.error(
+        shape,
+        where,
+        f"unknown geometry <{tag}>; valid: box, cylinder, sphere, capsule, mesh, plane",
+    )
+
+
+def _sizes(r: _Reader, elem: XmlElement, values: Sequence[float], where: str) -> None:
+    if any(v < 0 for v in values):
+        raise r.error(elem, where, f"sizes must be >= 0, got {tuple(values)}")
+
+
+def _check_mesh(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:
+    """Read an .obj/.stl before any engine does (the read is cached for the inertia and the
+    MuJoCo model): a file that is not one of its format is refused here (PyBullet loads random
+    bytes as a link without a shape, and an .obj's unreadable numbers as garbage inertia)."""
+    try:
+        mesh_vertices(path)
+    except MeshReadError as exc:
+        at = "" if exc.line is None else f" (line {exc.line})"
+        raise r.error(elem, where, f"{uri!r} cannot be read as a mesh{at}: {exc.detail}") from None
+    except OSError as exc:
+        raise r.error(elem, where, f"{uri!r} cannot be read: {exc.strerror}") from None
+
+
+def _without_unread_stl(file: str, shapes: list[Geometry], where: str) -> list[Geometry]:
+    """``shapes`` less the .stl meshes PyBullet does not read (an ASCII STL: PyBullet reads
+    binary ones only, :func:`~simbridge.model.meshes.pybullet_reads_stl`): PyBullet loads the link
+    without that shape and warns ("cannot extract mesh from"); every backend leaves it out
+    (its inertia, its collisions and its looks), with one warning per shape on the
+    ``simbridge.model.urdf`` logger naming the file, the line and the element."""
+    kept = []
+    for k, g in enumerate(shapes):
+        drop = (
+            g.kind == "mesh"
+            and g.mesh_path is not None
+            and g.mesh_path.suffix.lower() == ".stl"
+            and not pybullet_reads_stl(g.mesh_path)
+        )
+        if not drop:
+            kept.append(g)
+            continue
+        at = f"{file}:{g.line}" if g.line else file
+        LOGGER.warning(
+            "%s: %s #%d <mesh>: %r is not a binary STL, which PyBullet alone reads: the shape "
+            "is left out, as PyBullet leaves it out ('cannot extract mesh from')",
+            at,
+            where,
+            k,
+            g.mesh_uri,
+        )
+    return kept
+
+
+def _check_collada(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:
+    """Read a .dae before any engine does: PyBullet's COLLADA reader ends the process on some
+    malformed files (an empty <scene>), and MuJoCo's backend converts .dae through trimesh."""
+    try:
+        vertices = mesh_vertices(path)
+    except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
+        raise r.error(
+            elem, where, f"{uri!r} cannot be read as COLLADA ({type(exc).__name__}: {exc})"
+        ) from None
+    if len(vertices) < 3:
+        raise r.error(elem, where, f"{uri!r} holds no geometry (no vertices)")
+
+
+def _inertial(r: _Reader, elem: XmlElement | None, where: str) -> Inertial:
+    if elem is None:
+        return Inertial()
+    xyz, rpy = r.origin(elem, f"{where} <inertial>")
+    mass_elem = elem.find("mass")
+    if mass_elem is None:
+        raise r.error(elem, f"{where} <inertial>", "has no <mass> (PyBullet refuses it too)")
+    mass = r.number(mass_elem, "value", 0.0, f"{where} <mass>", required=True)  # type: ignore[arg-type]
+    if mass < 0:
+        raise r.error(mass_elem, f"{where} <mass>", f"mass must be >= 0, got {mass}")  # type: ignore[arg-type]
+    ie: XmlElement | None = elem.find("inertia")  # type: ignore[assignment]
+    if ie is None:
+        raise r.error(elem, f"{where} <inertial>", "has no <inertia> (PyBullet refuses it too)")
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    present = [ie.get(k) is not None for k in keys]
+    if not all(present[k] for k in (0, 3, 5)):
+        raise r.error(
+            ie, f"{where} <inertia>", "needs at least ixx, iyy and izz (PyBullet refuses it too)"
+        )
+    # PyBullet reads the products of inertia only when all six are there
+    used = keys if all(present) else ("ixx", "iyy", "izz")
+    inertia = tuple(r.number(ie, k, 0.0, f"{where} <inertia>") if k in used else 0.0 for k in keys)
+    if not all(present) and any(present):
+        given = [k for k, p in zip(keys, present, strict=True) if p and k not in used]
+        if given:
+            r.lenient.add(
+                ie.line,
+                f"{where} <inertia>: {', '.join(given)} ignored "
+                "(PyBullet reads products of inertia only when all six are given)",
+            )
+    return Inertial(xyz, rpy, mass, inertia, True, line=ie.line)  # type: ignore[arg-type]
+
+
+def _contact(r: _Reader, elem: XmlElement | None, where: str) -> Contact:
+    if elem is None:
+        return Contact()
+    values: dict[str, float] = {}
+    for tag in CONTACT_TAGS:
+        child: XmlElement | None = elem.find(tag)  # type: ignore[assignment]
+        if child is not None:
+            values[tag] = r.number(child, "value", 0.0, f"{where} <contact><{tag}>", required=True)
+    return Contact(**values)
+
+
+def _material_color(
+    r: _Reader, elem: XmlElement, where: str
+) -> tuple[float, float, float, float] | None:
+    """A ``<material>``'s ``<color rgba>``: exactly 4 numbers, else (0, 0, 0, 0) as in PyBullet;
+    None without a color."""
+    color: XmlElement | None = elem.find("color")  # type: ignore[assignment]
+    if color is None or color.get("rgba") is None:
+        return None
+    rgba = r.vector(color, "rgba", 4, f"{where} <color rgba>")
+    if rgba is None:
+        r.lenient.add(
+            color.line,
+            f"{where} <color rgba> {color.get('rgba')!r}: not 4 numbers, read as (0, 0, 0, 0)",
+        )
+        return (0.0, 0.0, 0.0, 0.0)
+    return rgba  # type: ignore[return-value]
+
+
+def _visual_color(
+    r: _Reader,
+    visual: XmlElement,
+    where: str,
+    materials: dict[str, tuple[float, float, float, float] | None],
+) -> tuple[float, float, float, float] | None:
+    material: XmlElement | None = visual.find("material")  # type: ignore[assignment]
+    if material is None:
+        return None
+    name = material.get("name")
+    if name is None:
+        raise r.error(
+            material, f"{where} <material>", "has no name attribute (PyBullet refuses it too)"
+        )
+    if any(material.find(t) is not None for t in ("texture", "color", "specular")):
+        rgba = _material_color(r, material, f"{where} <material>")
+        materials[name] = rgba  # a local material replaces one of the same name
+        return rgba
+    return materials.get(name)
+
+
+# ---------------------------------------------------------------- parse
+
+
+def warn_missing_inertials(model: UrdfModel) -> None:
+    """PyBullet's parser gives a link without ``<inertial>`` (but one named ``world``) mass 1 at
+    the link's own frame, and says so ("No inertial data for link, using mass=1, ..."): every
+    backend simulates that link so, and this says it once per link, on every backend, on the
+    ``simbridge.model.urdf`` logger, naming the file, the line and the link."""
+    file = model.source.display_name
+    for link in model.links:
+        if link.inertial.from_file or link.name == "world":
+            continue
+        at = f"{file}:{link.line}" if link.line else file
+        LOGGER.warning(
+            "%s: link %r has no <inertial>: simulated with mass 1 kg, its centre of mass at the "
+            "link frame, as PyBullet does ('No inertial data for link, using mass=1')",
+            at,
+            link.name,
+        )
+
+
+def check_file_inertia(model: UrdfModel) -> None:
+    """Under a profile that simulates the file's <inertia> (inertia_source "file"), a negative
+    moment of inertia is an error (PyBullet zeroes it, MuJoCo cannot take it); under the
+    "pybullet" profile the file's inertia is not used and such a file loads, as in PyBullet.
+    A tensor whose principal moments PyBullet zeroes (negative, or breaking the triangle
+    inequality) is simulated so on every backend, with one warning per link on the
+    ``simbridge.model.urdf`` logger naming the file, the line, the link and why."""
+    file = model.source.display_name
+    for link in model.links:
+        i = link.inertial.inertia
+        if min(i[0], i[3], i[5]) < 0:
+            raise UrdfStructureError(
+                file,
+                f"link {link.name!r} <inertia>",
+                f"ixx, iyy and izz must be >= 0 to be simulated, got {i[0]}, {i[3]}, {i[5]}",
+                link.inertial.line or None,
+            )
+    for link in model.links:
+        if not link.inertial.from_file:
+            continue
+        reason = file_principal(link.inertial)[2]
+        if reason is not None:
+            at = f"{file}:{link.inertial.line}" if link.inertial.line else file
+            LOGGER.warning(
+                "%s: link %r <inertia>: %s; simulated with zero inertia, as PyBullet does "
+                "('Bad inertia tensor properties, setting inertia to zero')",
+                at,
+                link.name,
+                reason,
+            )
+
+
+def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> Joint:
+    where = f"joint {name!r}"
+    jtype = elem.get("type")
+    if jtype is None:
+        raise r.error(elem, where, "has no type attribute (PyBullet refuses it too)")
+    if jtype not in SUPPORTED_JOINT_TYPES:
+        if jtype in _KNOWN_UNSUPPORTED:
+            raise UnsupportedJointError(
+                r.file, name, jtype, SUPPORTED_JOINT_TYPES, elem.line, _PLANAR_REFUSED
+            )
+        raise r.error(
+            elem, where, f"unknown joint type {jtype!r}; valid: {list(SUPPORTED_JOINT_TYPES)}"
+        )
+    parent_elem, child_elem = elem.find("parent"), elem.find("child")
+    if parent_elem is None or child_elem is None:
+        raise r.error(elem, where, "needs both <parent link> and <child link>")
+    parent, child = parent_elem.get("link", ""), child_elem.get("link", "")
+    for role, link_name in (("parent", parent), ("child", child)):
+        if link_name not in links:
+            raise r.error(elem, where, f"{role} link {link_name!r} is not a <link> of this robot")
+    if parent == child:
+        raise r.error(elem, where, f"link {child!r} is its own parent (a cycle)")
+    xyz, rpy = r.origin(elem, where)
+    if jtype == "floating":  # PyBullet: "joint unsupported, creating a fixed joint instead"
+        r.lenient.add(
+            elem.line, f"{where} type 'floating' read as 'fixed' (PyBullet welds it the same)"
+        )
+        jtype = "fixed"
+    axis: tuple[float, ...] = (1.0, 0.0, 0.0)  # PyBullet's axis without an <axis> element
+    axis_elem: XmlElement | None = elem.find("axis")  # type: ignore[assignment]
+    if jtype in ("fixed", "spherical"):
+        if axis_elem is not None:  # not read by PyBullet; kept when it reads as 3 numbers
+            values, clean = pybullet_numbers(axis_elem.get("xyz", ""))
+            if clean and len(values) == 3 and all(math.isfinite(v) for v in values):
+                axis = tuple(values)
+    elif axis_elem is not None:
+        if axis_elem.get("xyz") is None:
+            axis = (0.0, 0.0, 0.0)  # PyBullet: an <axis> without xyz is the zero axis
+        else:
+            read = r.vector(axis_elem, "xyz", 3, f"{where} <axis>")
+            if read is None:
+                raise r.error(
+                    axis_elem,
+                    f"{where} <axis>",
+                    f"expected 3 numbers, got {axis_elem.get('xyz')!r} (PyBullet refuses it too)",
+                )
+            axis = read
+    # The axis is kept as written (PyBullet reports it unnormalised); engines normalise it.
+    if jtype not in ("fixed", "spherical") and max(abs(a) for a in axis) < 1e-12:
+        raise r.error(
+            axis_elem if axis_elem is not None else elem,
+            f"{where} <axis>",
+            f"axis must not be zero, got {_fmt(axis)}",
+        )
+    if jtype not in ("fixed", "spherical") and not math.isfinite(sum(a * a for a in axis)):
+        raise r.error(
+            axis_elem if axis_elem is not None else elem,
+            f"{where} <axis>",
+            f"axis {_fmt(axis)} is too long to normalise: its squared length overflows a "
+            "double, and PyBullet then turns the joint about a zero axis, so that it never "
+            "moves (measured); write it shorter, a unit axis",
+        )
+    limit: XmlElement | None = elem.find("limit")  # type: ignore[assignment]
+    dynamics: XmlElement | None = elem.find("dynamics")  # type: ignore[assignment]
+    if jtype in ("revolute", "prismatic") and limit is None:
+        raise r.error(elem, where, f"a {jtype} joint needs a <limit> element (effort, velocity)")
+    if (
+        dynamics is not None
+        and dynamics.get("damping") is None
+        and dynamics.get("friction") is None
+    ):
+        raise r.error(
+            dynamics,
+            f"{where} <dynamics>",
+            "has neither damping nor friction (PyBullet refuses it too)",
+        )
+    has_range = limit is not None and (
+        limit.get("lower") is not None or limit.get("upper") is not None
+    )
+    # PyBullet's defaults: lower 0, upper -1 ("no range"); attributes override. Fixed joints
+    # report their <limit> too (PyBullet 3.2.7, e.g. microtaur.urdf's plate joints).
+    lower = r.number(limit, "lower", 0.0, f"{where} <limit>")
+    upper = r.number(limit, "upper", -1.0, f"{where} <limit>")
+    damping = r.number(dynamics, "damping", 0.0, f"{where} <dynamics>")
+    friction = r.number(dynamics, "friction", 0.0, f"{where} <dynamics>")
+    for what, value in (("damping", damping), ("friction", friction)):
+        if value < 0:
+            raise r.error(dynamics, f"{where} <dynamics>", f"{what} must be >= 0, got {value}")
+    return Joint(
+        name=name,
+        type=jtype,
+        parent=parent,
+        child=child,
+        origin_xyz=xyz,
+        origin_rpy=rpy,
+        axis=axis,  # type: ignore[arg-type]
+        lower=lower,
+        upper=upper,
+        effort=r.number(limit, "effort", 0.0, f"{where} <limit>"),
+        velocity=r.number(limit, "velocity", 0.0, f"{where} <limit>"),
+        damping=damping,
+        friction=friction,
+        has_limit=jtype in ("revolute", "prismatic") and has_range and lower <= upper,
+        line=elem.line,
+        twist=r.number(limit, "twist", -1.0, f"{where} <limit>"),
+    )
+
+
+def parse_urdf(src: UrdfSource) -> UrdfModel:
+    """Parse and validate a URDF as PyBullet reads it (see the module docstring); raise a
+    :class:`~simbridge.exceptions.UrdfError` subclass naming the file, the line and the
+    element on anything a backend could not load faithfully. What was read leniently is
+    logged as one warning on the ``simbridge.model.urdf`` logger and kept in ``model.assumed``."""
+    file = src.display_name
+    lenient = Leniency(file)
+    xml = read_urdf_xml(src.text, file, lenient)
+    root = xml.root
+    r = _Reader(file, lenient)
+    if root.tag != "robot":
+        raise r.error(root, f"<{root.tag}>", "the root element must be <robot>")
+    robot_name = root.get("name")
+    if robot_name is None:  # PyBullet: "Expected a name for robot"
+        raise r.error(root, "<robot>", "has no name attribute")
+
+    materials: dict[str, tuple[float, float, float, float] | None] = {}
+    for elem in root.findall("material"):
+        name = elem.get("name")
+        if name is not None and name not in materials:  # the first of a name counts
+            materials[name] = _material_color(r, elem, f"<material {name!r}>")  # type: ignore[arg-type]
+
+    links: dict[str, Link] = {}
+    for elem in root.findall("link"):
+        name = elem.get("name")
+        if name is None:
+            raise r.error(elem, "<link>", "a link has no name attribute")  # type: ignore[arg-type]
+        where = f"link {name!r}"
+        if name in links:
+            raise r.error(elem, where, "link name is used twice")  # type: ignore[arg-type]
+        contact = _contact(r, elem.find("contact"), where)  # type: ignore[arg-type]
+        inertial = _inertial(r, elem.find("inertial"), where)  # type: ignore[arg-type]
+        visuals = []
+        for i, v in enumerate(elem.findall("visual")):
+            vwhere = f"{where} <visual> #{i}"
+            rgba = _visual_color(r, v, vwhere, materials)  # type: ignore[arg-type]
+            visuals.append(_geometry(r, v, vwhere, src, rgba))  # type: ignore[arg-type]
+        collisions = [
+            _geometry(r, c, f"{where} <collision> #{i}", src, None)  # type: ignore[arg-type]
+            for i, c in enumerate(elem.findall("collision"))
+        ]
+        visuals = _without_unread_stl(r.file, visuals, f"{where} <visual>")
+        collisions = _without_unread_stl(r.file, collisions, f"{where} <collision>")
+        links[name] = Link(
+            name,
+            inertial,
+            visuals,
+            collisions,
+            contact,
+            line=elem.line,  # type: ignore[attr-defined]
+        )
+    if not links:
+        raise r.error(root, f"robot {robot_name!r}", "has no <link>")
+
+    joints: list[Joint] = []
+    child_of: dict[str, Joint] = {}
+    names: set[str] = set()
+    for elem in root.findall("joint"):
+        name = elem.get("name")
+        if not name:
+            raise r.error(elem, "<joint>", "a joint has no name attribute")  # type: ignore[arg-type]
+        if name in names:
+            raise r.error(elem, f"joint {name!r}", "joint name is used twice")  # type: ignore[arg-type]
+        names.add(name)
+        joint = _joint(r, elem, name, links)  # type: ignore[arg-type]
+        if joint.child in child_of:
+            raise r.error(
+                elem,  # type: ignore[arg-type]
+                f"joint {name!r}",
+                f"link {joint.child!r} already has parent joint {child_of[joint.child].name!r}; "
+                "a URDF is a tree (each link has at most one parent)",
+            )
+        joints.append(joint)
+        child_of[joint.child] = joint
+
+    roots = [name for name in links if name not in child_of]
+    if len(roots) != 1:
+        if not roots:
+            detail = "every link has a parent: the joints form a cycle"
+        else:
+            detail = (
+                f"{len(roots)} root links {roots}; a URDF needs exactly one root "
+                "(PyBullet crashes on several)"
+            )
+        raise r.error(root, f"robot {robot_name!r}", detail)
+
+    ordered_links, ordered_joints = pybullet_order(links, joints, roots[0])
+    if len(ordered_links) != len(links):
+        unreached = sorted(set(links) - {link.name for link in ordered_links})
+        raise r.error(
+            root, f"robot {robot_name!r}", f"links {unreached} form a cycle detached from the root"
+        )
+    lenient.log()
+    return UrdfModel(
+        robot_name, replace(src, text=xml.text), ordered_links, ordered_joints, lenient.notes
+    )
+
+
+def pybullet_order(
+    links: dict[str, Link], joints: Sequence[Joint], root: str
+) -> tuple[list[Link], list[Joint]]:
+    """PyBullet's order: depth-first, pre-order, children in the order their joints appear
+    (``joints``' order). Sets each link's and joint's index (the root's -1)."""
+    children: dict[str, list[Joint]] = {name: [] for name in links}
+    for joint in joints:
+        children[joint.parent].append(joint)
+    ordered_links = [links[root]]
+    ordered_joints: list[Joint] = []
+    stack = list(reversed(children[root]))
+    while stack:
+        joint = stack.pop()
+        joint.index = len(ordered_joints)
+        ordered_joints.append(joint)
+        link = links[joint.child]
+        link.index = joint.index
+        ordered_links.append(link)
+        stack.extend(reversed(children[link.name]))
+    ordered_links[0].index = -1
+    return ordered_links, ordered_joints
