@@ -523,8 +523,8 @@ def _floor_breaches(graph: dict[str, dict[str, int]]) -> list[str]:
 
 def test_the_core_s_floors_import_only_downwards():
     """interface and model < sim < cli: model/ imports nothing of sim/ or cli/, sim/ nothing of
-    cli/, neither the package's door; no backend imports sim/ or cli/ (the Sim drives backends, not the other way round);
-    compare/ imports no backend and no cli module."""
+    cli/, neither the package's door; no backend imports sim/ or cli/ (the Sim drives backends,
+    not the other way round); compare/ imports no backend and no cli module."""
     breaches = _floor_breaches(_edges(_modules()))
     assert not breaches, "\n".join(breaches)
 
