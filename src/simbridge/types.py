@@ -201,8 +201,12 @@ class ContactPoint(NamedTuple):
     """The second friction direction: ``normal_on_b``, dir 1 and dir 2 are orthonormal."""
 
     def swapped(self) -> ContactPoint:
-        """The same contact with A and B exchanged (the normal and the friction directions
-        reversed, so the forces stay the forces on the new A)."""
+        """The same contact with A and B exchanged.
+
+        Returns:
+            The contact seen from B: positions and links swapped, the normal and the friction
+            directions reversed, so the forces stay the forces on the new A.
+        """
         n, d1, d2 = self.normal_on_b, self.lateral_friction_dir_1, self.lateral_friction_dir_2
         return ContactPoint(
             self.contact_flag,
@@ -318,5 +322,9 @@ class WorldState:
     native: Any = field(default=None, repr=False)
 
     def portable(self) -> WorldState:
-        """This state without the engine's own data."""
+        """This state without the engine's own data.
+
+        Returns:
+            A copy with ``native`` None: what another engine or world can take.
+        """
         return replace(self, native=None)
