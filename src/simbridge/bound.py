@@ -115,8 +115,8 @@ class BoundCommand:
     # ---------------------------------------------------------------- use
 
     def send(self) -> None:
-        """Check the arrays and send them now, as a step does (the backend skips a command already in
-        force).
+        """Check the arrays and send them now, as a step does (the backend skips a command
+        already in force).
 
         Raises:
             InvalidArgumentError: a non-finite target, or a negative or non-finite force.
