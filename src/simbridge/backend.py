@@ -55,14 +55,24 @@ __all__ = ["Backend"]
 
 
 class Backend(ABC):
-    """One engine behind the :class:`simbridge.Sim` interface."""
+    """One engine behind the :class:`simbridge.Sim` interface.
+
+    A subclass sets :attr:`name`, implements every abstract method and overrides the optional
+    ones it supports (the defaults raise
+    :class:`~simbridge.exceptions.BackendUnsupportedError`). Each method's Args, Returns and
+    Raises below are what a new backend must honour.
+
+    Args:
+        profile: The physics settings to reproduce (time step, gravity, solver, defaults).
+        gui: Whether to open the engine's window.
+    """
 
     name: ClassVar[str]
     state_dtype: ClassVar[str] = "float64"
     """The floating-point type the engine keeps its state in (positions, orientations,
     velocities): ``"float64"`` (PyBullet, MuJoCo: the default) or ``"float32"`` (PhysX). A
-    declared fact, read without making an engine (:func:`simbridge.registry.state_dtype`):
-    ``simbridge compare`` perturbs a float32 engine's ensemble at a size that type represents."""
+    declared fact, read without making an engine (:func:`simbridge.registry.state_dtype`).
+    What compare does with it: docs/compare.md, "A float32 engine's perturbation"."""
 
     def __init__(self, profile: Profile, gui: bool = False) -> None:
         self.profile = profile
@@ -71,8 +81,19 @@ class Backend(ABC):
     def refuse_fixed_base_velocity(
         self, body: int, linear: Vec3 | None, angular: Vec3 | None
     ) -> None:
-        """A fixed base takes a pose but no velocity: PyBullet would carry the welded base
-        along at it, MuJoCo has nothing to carry; both refuse it alike."""
+        """Refuse a non-zero velocity for a fixed base, which takes a pose but no velocity.
+
+        PyBullet would carry the welded base along at it, MuJoCo has nothing to carry; both
+        refuse it alike.
+
+        Args:
+            body: The body's id (for the message).
+            linear: The base's linear velocity asked for (m/s, world), or None.
+            angular: The base's angular velocity asked for (rad/s, world), or None.
+
+        Raises:
+            InvalidArgumentError: When a component of either velocity is not 0.
+        """
         from simbridge.exceptions import InvalidArgumentError
 
         if any(v != 0.0 for v in (*(linear or ()), *(angular or ()))):
@@ -89,8 +110,20 @@ class Backend(ABC):
         contact_models: tuple[str, ...] = ("stiff",),
         velocity_limit: bool = False,
     ) -> None:
-        """Raise BackendUnsupportedError for a profile entry this engine has no switch for (the
-        defaults: what both shipped backends reproduce), before any engine resource exists."""
+        """Refuse a profile entry this engine has no switch for, before any engine resource
+        exists.
+
+        Args:
+            integrators: The ``Profile.integrator`` values this engine reproduces (the
+                default: what both shipped backends reproduce).
+            contact_models: The ``Profile.contact_model`` values it reproduces.
+            velocity_limit: Whether it can honour ``enforce_velocity_limit=True``.
+
+        Raises:
+            BackendUnsupportedError: For an integrator or contact model not listed, a
+                friction or restitution combine rule other than ``"product"``, or
+                ``enforce_velocity_limit`` without ``velocity_limit``.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         p = self.profile
@@ -129,30 +162,48 @@ class Backend(ABC):
         fixed_base: bool,
         options: LoadOptions,
     ) -> int:
-        """Add the robot to the world; return its body id.
+        """Add the robot to the world.
 
-        ``base_position``/``base_orientation`` place the root's URDF link frame (not its centre
-        of mass), as ``p.loadURDF`` does; ``base_orientation`` is a unit quaternion.
+        ``model`` is already scaled by ``options.global_scaling`` and has its fixed links
+        merged when ``options.merge_fixed_links``: a backend that builds its engine model from
+        ``model`` uses it as it is; one whose engine reads the file itself passes both on to it
+        (and its link order must then be ``model``'s). Every backend honours
+        ``options.inertia_source`` and ``options.self_collision`` for this body in place of the
+        profile's entries.
 
-        ``options`` are ``loadURDF``'s (:mod:`simbridge.model.load_options`). ``model`` is already
-        scaled by ``options.global_scaling`` and has its fixed links merged when
-        ``options.merge_fixed_links``: a backend that builds its engine model from ``model``
-        uses it as it is; one whose engine reads the file itself passes both on to it (and its
-        link order must then be ``model``'s). Every backend honours ``options.inertia_source``
-        and ``options.self_collision`` for this body in place of the profile's entries.
+        Args:
+            model: The parsed robot (links in PyBullet's order).
+            base_position: Where the root's URDF link frame goes (m, world; not its centre of
+                mass), as ``p.loadURDF`` does.
+            base_orientation: The root link frame's orientation, a unit quaternion (x, y, z,
+                w).
+            fixed_base: Whether the base is welded to the world.
+            options: ``loadURDF``'s options (:mod:`simbridge.model.load_options`).
+
+        Returns:
+            The new body's id (never one used before in this world).
+
+        Raises:
+            BackendUnsupportedError: For a joint type or option this engine cannot build.
         """
 
     def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
-        """Add every body of one MJCF or SDF file; return their ids, in ``bodies``' order.
+        """Add every body of one MJCF or SDF file.
 
-        ``bodies`` are :func:`simbridge.model.scene_reader.parse_scene`'s, in PyBullet's order, each
-        with its links, joints and numbering, and with ``base_position``/``base_orientation``
-        placing its root link frame (its base is fixed when the root's mass is 0). ``options``
-        hold the self-collision mode; the inertia source is ``"collision_aabb"``. The default
-        loads each body through :meth:`load` (removing the ones loaded when one fails); a
-        backend whose engine reads the file itself (PyBullet's ``loadMJCF``/``loadSDF``)
-        overrides it, and its bodies' joint tables must then equal the models' (names
-        included).
+        The default loads each body through :meth:`load` (removing the ones loaded when one
+        fails); a backend whose engine reads the file itself (PyBullet's
+        ``loadMJCF``/``loadSDF``) overrides it, and its bodies' joint tables must then equal
+        the models' (names included).
+
+        Args:
+            bodies: :func:`simbridge.model.scene_reader.parse_scene`'s bodies, in PyBullet's
+                order, each with its links, joints and numbering, and with
+                ``base_position``/``base_orientation`` placing its root link frame (its base
+                is fixed when the root's mass is 0).
+            options: The self-collision mode; the inertia source is ``"collision_aabb"``.
+
+        Returns:
+            The new bodies' ids, in ``bodies``' order.
         """
         ids: list[int] = []
         try:
@@ -168,7 +219,11 @@ class Backend(ABC):
 
     @abstractmethod
     def remove(self, body: int) -> None:
-        """Remove a body; its id is not reused."""
+        """Remove a body; its id is not reused.
+
+        Args:
+            body: An id :meth:`load` returned, not yet removed.
+        """
 
     @abstractmethod
     def reset(self) -> None:
@@ -176,7 +231,15 @@ class Backend(ABC):
 
     @abstractmethod
     def step(self, n: int) -> None:
-        """Advance ``n`` fixed steps."""
+        """Advance ``n`` fixed steps of the profile's time step.
+
+        Args:
+            n: How many steps (>= 1).
+
+        Raises:
+            SimulationDivergedError: When the state turned non-finite (after the step that
+                did it with ``set_divergence_check(True)``, else up to 7 steps late).
+        """
 
     @abstractmethod
     def close(self) -> None:
@@ -186,33 +249,94 @@ class Backend(ABC):
 
     @abstractmethod
     def joint_info(self, body: int, joint: int) -> JointInfo:
-        """Row ``joint`` of the joint table (all 17 fields of ``getJointInfo``)."""
+        """Row ``joint`` of the joint table.
+
+        Args:
+            body: A loaded body's id.
+            joint: The joint's index (0 <= joint < :meth:`num_joints`).
+
+        Returns:
+            All 17 fields of ``getJointInfo``, equal to the model's joint table.
+        """
 
     @abstractmethod
-    def num_joints(self, body: int) -> int: ...
+    def num_joints(self, body: int) -> int:
+        """How many joints ``body`` has (fixed ones included; as many as it has links).
+
+        Args:
+            body: A loaded body's id.
+
+        Returns:
+            The number of joints.
+        """
 
     @abstractmethod
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
-        """Mass, friction and inertia as the engine actually simulates them (after the
-        profile's inertia source and friction defaults were applied)."""
+        """Mass, friction and inertia of one link as the engine actually simulates them.
+
+        Args:
+            body: A loaded body's id.
+            link: The link's index (-1 = base).
+
+        Returns:
+            The values after the profile's inertia source and friction defaults were applied
+            (kg, kg·m² in the link's inertial frame).
+        """
 
     # ---------------------------------------------------------------- state
 
     @abstractmethod
-    def link_state(self, body: int, link: int) -> LinkState: ...
+    def link_state(self, body: int, link: int) -> LinkState:
+        """One link's pose and velocity as they stand now.
+
+        Args:
+            body: A loaded body's id.
+            link: The link's index (0 <= link < :meth:`num_joints`; the base is read with
+                :meth:`base_state`).
+
+        Returns:
+            ``p.getLinkState``'s fields with link velocity and forward kinematics (world
+            frame, m, m/s, rad/s, quaternions x, y, z, w).
+        """
 
     @abstractmethod
-    def base_state(self, body: int) -> BaseState: ...
+    def base_state(self, body: int) -> BaseState:
+        """The base's centre-of-mass pose and velocity.
+
+        Args:
+            body: A loaded body's id.
+
+        Returns:
+            Position (m), orientation (x, y, z, w), linear (m/s) and angular (rad/s) velocity,
+            world frame.
+        """
 
     @abstractmethod
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
-        """``joints`` is an ``np.intp`` array (any joint types; fixed joints report zeros)."""
+        """Positions, velocities and last-step motor torques of ``joints``.
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` joint indices, any joint types (read-only, cached by the
+                caller).
+
+        Returns:
+            Three (n,) float arrays in ``joints``' order (rad or m, rad/s or m/s, N·m or N);
+            fixed joints report zeros, a spherical joint its first coordinate.
+        """
 
     @abstractmethod
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
-        """Teleport movable joints (``p.resetJointState``); commands are kept."""
+        """Teleport movable joints (``p.resetJointState``); commands are kept.
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` indices of movable 1-DoF joints.
+            positions: n positions (rad or m).
+            velocities: n velocities (rad/s or m/s).
+        """
 
     @abstractmethod
     def reset_base_state(
@@ -223,8 +347,20 @@ class Backend(ABC):
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
-        """Teleport the base; position/orientation are the base's centre-of-mass frame, as in
-        ``p.resetBasePositionAndOrientation``; None keeps the current value."""
+        """Teleport the base, as ``p.resetBasePositionAndOrientation`` and
+        ``p.resetBaseVelocity``; None keeps the current value.
+
+        Args:
+            body: A loaded body's id.
+            position: The base's centre of mass (m, world), or None.
+            orientation: The base's inertial frame, a unit quaternion (x, y, z, w), or None.
+            linear_velocity: m/s, world, or None.
+            angular_velocity: rad/s, world, or None.
+
+        Raises:
+            InvalidArgumentError: A non-zero velocity for a fixed base
+                (:meth:`refuse_fixed_base_velocity`).
+        """
 
     # ---------------------------------------------------------------- control
 
@@ -233,7 +369,14 @@ class Backend(ABC):
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
         """VELOCITY_CONTROL: a motor that reaches ``target`` within one step if a force of at
-        most ``max_force`` can; persists until replaced."""
+        most ``max_force`` can; persists until replaced.
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` indices of movable 1-DoF joints.
+            target: n target velocities (rad/s or m/s).
+            max_force: n force limits (N·m or N, >= 0; 0 releases the joint).
+        """
 
     @abstractmethod
     def set_joint_position(
@@ -246,23 +389,49 @@ class Backend(ABC):
         kd: list[float],
     ) -> None:
         """POSITION_CONTROL: PyBullet's law, target velocity ``kp (q* - q) / dt`` with velocity
-        gain ``kd``, force clamped to ``max_force``; persists until replaced."""
+        gain ``kd``, force clamped to ``max_force``; persists until replaced.
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` indices of movable 1-DoF joints.
+            target: n target positions (rad or m).
+            max_force: n force limits (N·m or N, >= 0).
+            kp: n position gains (PyBullet's ``positionGain``, >= 0).
+            kd: n velocity gains (PyBullet's ``velocityGain``, >= 0).
+        """
 
     @abstractmethod
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         """TORQUE_CONTROL: added during the next step only. As in PyBullet it does not remove
         the joint's motor: under the "pybullet" profile the default brake cancels small torques
-        until ``set_joint_velocity(..., max_force=0)`` releases it."""
+        until ``set_joint_velocity(..., max_force=0)`` releases it.
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` indices of movable 1-DoF joints.
+            torque: n torques or forces (N·m or N); several in one step add up.
+        """
 
     # ---------------------------------------------------------------- multi-DoF joints
     # Not abstract: a backend without spherical joints refuses them at load and these calls
     # (BackendUnsupportedError). The Sim checks and normalises every value (simbridge.spherical).
 
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
-        """Every coordinate of each of ``joints`` (any types): a spherical joint's quaternion
-        (x, y, z, w: the child's inertial frame turned from its zero pose), angular velocity
-        in the child's inertial frame and its motor's torque per axis of that frame; a
-        revolute or prismatic joint's 1-tuples; a fixed joint's empty tuples."""
+        """Every coordinate of each of ``joints`` (``p.getJointStatesMultiDof``).
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` joint indices, any types.
+
+        Returns:
+            n states in ``joints``' order: a spherical joint's quaternion (x, y, z, w: the
+            child's inertial frame turned from its zero pose), angular velocity in the child's
+            inertial frame (rad/s) and its motor's torque per axis of that frame (N·m); a
+            revolute or prismatic joint's 1-tuples; a fixed joint's empty tuples.
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend without spherical joints.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "multi-DoF joint states")
@@ -274,9 +443,19 @@ class Backend(ABC):
         positions: list[list[float]],
         velocities: list[list[float]],
     ) -> None:
-        """Teleport movable ``joints`` (``p.resetJointStateMultiDof``): per joint its
-        coordinates, a spherical joint's a unit quaternion and 3 angular velocities; commands
-        are kept."""
+        """Teleport movable ``joints`` (``p.resetJointStateMultiDof``); commands are kept.
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` indices of movable joints.
+            positions: Per joint its coordinates: a spherical joint's unit quaternion (x, y,
+                z, w), a 1-DoF joint's 1 value (rad or m).
+            velocities: Per joint its velocities: a spherical joint's 3 (rad/s, child's
+                inertial frame), a 1-DoF joint's 1.
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend without spherical joints.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "multi-DoF joint resets")
@@ -292,10 +471,21 @@ class Backend(ABC):
         kd: list[list[float]],
     ) -> None:
         """PyBullet's spherical joint motor on spherical ``joints``, per axis of the child's
-        inertial frame (see :mod:`simbridge.spherical`): POSITION towards the unit quaternion
-        ``targets[i]`` (x, y, z, w) with gains ``kp``, ``kd`` (PyBullet's ``damping``);
-        VELOCITY brakes (target velocity 0, kp 0, kd 1; ``targets`` the identity, unused).
-        ``max_force[i]`` (N·m, >= 0; 0 releases an axis). Persists until replaced."""
+        inertial frame (see :mod:`simbridge.spherical`). Persists until replaced.
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` indices of spherical joints.
+            mode: POSITION (towards ``targets``) or VELOCITY (a brake: target velocity 0, kp
+                0, kd 1).
+            targets: n unit quaternions (x, y, z, w); the identity, unused, for VELOCITY.
+            max_force: n triples, per axis (N·m, >= 0; 0 releases an axis).
+            kp: n triples of position gains.
+            kd: n triples of velocity gains (PyBullet's ``damping``).
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend without spherical joints.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "spherical joint motors")
@@ -303,18 +493,39 @@ class Backend(ABC):
     def set_joint_torque_multi_dof(
         self, body: int, joints: np.ndarray, torques: list[list[float]]
     ) -> None:
-        """TORQUE_CONTROL on spherical ``joints``: 3 torques each about the child's inertial
-        frame axes (N·m), added during the next step only (they add up, as 1-DoF torques)."""
+        """TORQUE_CONTROL on spherical ``joints``, added during the next step only (they add
+        up, as 1-DoF torques).
+
+        Args:
+            body: A loaded body's id.
+            joints: (n,) ``np.intp`` indices of spherical joints.
+            torques: n triples, about the child's inertial frame axes (N·m).
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend without spherical joints.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "spherical joint torques")
 
     def spherical_states(self, body: int) -> list[SphericalJointState]:
-        """Every spherical joint of ``body`` (joint order): its coordinates, the motor in force
-        (a position motor, or a brake read back as VELOCITY) and the torques pending for the
-        next step. ``joint_commands`` reports these joints' first axis only, and
-        ``set_joint_commands`` leaves them as they are: this and :meth:`set_spherical_states`
-        carry them (``Sim.get_state``/``set_state``)."""
+        """The full state and motor of every spherical joint of ``body``.
+
+        ``joint_commands`` reports these joints' first axis only, and ``set_joint_commands``
+        leaves them as they are: this and :meth:`set_spherical_states` carry them
+        (``Sim.get_state``/``set_state``).
+
+        Args:
+            body: A loaded body's id.
+
+        Returns:
+            One state per spherical joint, in joint order: its coordinates, the motor in force
+            (a position motor, or a brake read back as VELOCITY) and the torques pending for
+            the next step.
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend without spherical joints.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "the state of spherical joints (get_state)")
@@ -322,10 +533,18 @@ class Backend(ABC):
     def set_spherical_states(
         self, body: int, states: list[SphericalJointState], positions: bool
     ) -> None:
-        """Make each of ``states`` (checked: unit quaternions, finite values, forces and gains
-        >= 0) the motor in force and the pending torques of its joint, replacing both; with
-        ``positions`` also teleport the joint to its position and velocity (False after a
-        bit-exact :meth:`restore`)."""
+        """Make each of ``states`` the motor in force and the pending torques of its joint,
+        replacing both.
+
+        Args:
+            body: A loaded body's id.
+            states: Checked states (unit quaternions, finite values, forces and gains >= 0).
+            positions: Whether to also teleport each joint to its position and velocity (False
+                after a bit-exact :meth:`restore`).
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend without spherical joints.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the state of spherical joints")
@@ -336,41 +555,64 @@ class Backend(ABC):
     # step can read the arrays itself overrides both.
 
     def bind_command(self, command: BoundCommand) -> bool:
-        """Take a bound command (``Sim.velocity_command``/``position_command``): its
-        ``targets`` and ``max_force`` (float64 arrays of ``len(command.joints)``, owned by the
-        command, written in place by the user) are the command of ``command.joints`` at every
-        step, as if ``set_joint_velocity`` (or ``set_joint_position`` with ``command.kp``,
+        """Take a bound command (``Sim.velocity_command``/``position_command``).
+
+        Its ``targets`` and ``max_force`` are the command of ``command.joints`` at every step,
+        as if ``set_joint_velocity`` (or ``set_joint_position`` with ``command.kp``,
         ``command.kd``) were called with them just before it. The Sim has checked the joints
         and sent the first values; while bound, no other velocity or position command reaches
-        these joints.
+        these joints. The Sim calls :meth:`unbind_command` before any world change (load,
+        remove, reset) and after ``close``.
 
-        Return False (the default) to have the Sim call ``command.send()`` (which checks the
-        values and calls ``set_joint_*``) before every ``step``; True when this backend's
-        ``step`` reads the arrays itself, before it steps: a change must then give the same
-        results as that call, bit for bit, and a value ``send()`` would refuse (non-finite, a
-        negative force) must go through ``send()`` so that it raises before any step. The Sim
-        calls :meth:`unbind_command` before any world change (load, remove, reset) and after
-        ``close``."""
+        Args:
+            command: The bound command; ``targets`` and ``max_force`` are (n,) float64 arrays,
+                n = ``len(command.joints)``, owned by the command and written in place by the
+                user.
+
+        Returns:
+            False (the default) to have the Sim call ``command.send()`` (which checks the
+            values and calls ``set_joint_*``) before every ``step``; True when this backend's
+            ``step`` reads the arrays itself, before it steps: a change must then give the same
+            results as that call, bit for bit, and a value ``send()`` would refuse
+            (non-finite, a negative force) must go through ``send()`` so that it raises before
+            any step.
+        """
         return False
 
     def unbind_command(self, command: BoundCommand) -> None:
-        """Stop reading ``command``'s arrays; its joints keep the command last sent."""
+        """Stop reading ``command``'s arrays; its joints keep the command last sent.
+
+        Args:
+            command: A command :meth:`bind_command` took.
+        """
         return None  # the default binding keeps nothing: the Sim stops sending it
 
     def reading(self) -> AbstractContextManager[None]:
-        """A read or a write made of several calls (``Sim.get_state``, ``Sim.set_state``)
-        runs inside this: a step that another thread begins meanwhile must make it raise
-        SimBusyError, or wait for its end, never let the parts come from two steps (the
-        built-in backends hold the Sim's lock). The default holds nothing: a backend whose
-        step cannot run while a read does (no step releases the GIL) needs nothing more."""
+        """The context a read or a write made of several calls runs inside.
+
+        ``Sim.get_state`` and ``Sim.set_state`` run inside it: a step that another thread
+        begins meanwhile must make it raise SimBusyError, or wait for its end, never let the
+        parts come from two steps (the built-in backends hold the Sim's lock). The default
+        holds nothing: a backend whose step cannot run while a read does (no step releases
+        the GIL) needs nothing more.
+
+        Returns:
+            A context manager guarding the read or write.
+        """
         return nullcontext()
 
     def set_divergence_check(self, every_step: bool) -> None:
-        """Sim(divergence_check=...): True for "every_step" (``step`` raises
-        SimulationDivergedError after the step that left a non-finite state), False for
-        "periodic" (every read checks what it returns; ``step`` may notice up to 7 steps
-        late). Called once, before anything is loaded. A backend that cannot check every step
-        refuses True."""
+        """Set ``Sim(divergence_check=...)``; called once, before anything is loaded.
+
+        Args:
+            every_step: True for "every_step" (``step`` raises SimulationDivergedError after
+                the step that left a non-finite state), False for "periodic" (every read
+                checks what it returns; ``step`` may notice up to 7 steps late).
+
+        Raises:
+            BackendUnsupportedError: For True on a backend that cannot check every step (the
+                default).
+        """
         if every_step:
             from simbridge.exceptions import BackendUnsupportedError
 
@@ -381,58 +623,107 @@ class Backend(ABC):
     # ---------------------------------------------------------------- description
 
     def manifest(self) -> dict[str, Any]:
-        """Engine name and version, native defaults, and departures from the profile."""
+        """What this engine is and where it departs from the profile.
+
+        Returns:
+            A JSON-serialisable dict: at least ``"backend"`` (its name), ``"engine_version"``
+            and ``"departures"`` (profile entry -> what the engine does instead), plus its
+            native defaults.
+        """
         return {"backend": self.name, "engine_version": "unknown", "departures": {}}
 
     # ---------------------------------------------------------------- contacts and state
     # Not abstract: a backend without them refuses these calls (BackendUnsupportedError).
 
     def contact_points(self) -> list[ContactPoint]:
-        """Every contact point the last step solved, each once, A and B in the engine's own
-        order (the Sim filters and orients them): links as PyBullet's indices (-1 = base),
-        forces in N, and the friction fields the friction force on A (see
-        :class:`~simbridge.types.ContactPoint`). Empty before the first step."""
+        """Every contact point the last step solved, each once.
+
+        Returns:
+            The points, A and B in the engine's own order (the Sim filters and orients them):
+            links as PyBullet's indices (-1 = base), forces in N, and the friction fields the
+            friction force on A (see :class:`~simbridge.types.ContactPoint`). Empty before
+            the first step.
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend without contacts.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "contact points")
 
     def joint_commands(self, body: int) -> JointCommands:
-        """The motor in force and the torque pending for the next step of every joint of
-        ``body`` (arrays over all joints; fixed joints: mode NONE, zeros). A motor set by a
-        velocity command reads back as VELOCITY with kp 0 and kd 1, one set by a position
-        command as POSITION (the default brake: VELOCITY, target 0, the profile's brake force);
-        ``max_force`` is the force asked for, before any effort limit of the profile."""
+        """The motor in force and the torque pending for the next step of every joint.
+
+        Args:
+            body: A loaded body's id.
+
+        Returns:
+            (n,) arrays over all n joints of ``body`` (fixed joints: mode NONE, zeros). A
+            motor set by a velocity command reads back as VELOCITY with kp 0 and kd 1, one set
+            by a position command as POSITION (the default brake: VELOCITY, target 0, the
+            profile's brake force); ``max_force`` is the force asked for, before any effort
+            limit of the profile.
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend that cannot read them.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "reading the commands in force (get_state)")
 
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
-        """Make ``commands`` (checked: modes NONE exactly on the fixed joints, finite values,
-        forces and gains >= 0) the motors in force and the pending torques of ``body``,
+        """Make ``commands`` the motors in force and the pending torques of ``body``,
         replacing both (a pending torque is not added to: it is set). Afterwards
         ``joint_commands(body)`` reads them back. Spherical joints' entries are left alone
-        (:meth:`set_spherical_states` sets them)."""
+        (:meth:`set_spherical_states` sets them).
+
+        Args:
+            body: A loaded body's id.
+            commands: (n,) arrays over all joints, checked: modes NONE exactly on the fixed
+                joints, finite values, forces and gains >= 0.
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend that cannot set them.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the commands in force (set_state)")
 
     def snapshot(self) -> Any:
-        """The engine's own data that ``restore`` needs to put this world back bit-exactly
-        (solver warm starts, contact caches), or None when the portable state is all there
-        is. Opaque to the Sim; never used by another backend."""
+        """The engine's own data that ``restore`` needs to put this world back bit-exactly.
+
+        Returns:
+            Solver warm starts, contact caches and the like, opaque to the Sim and never used
+            by another backend; or None (the default) when the portable state is all there is.
+        """
         return None
 
     def restore(self, native: Any) -> bool:
-        """Called first by every ``set_state``. Put back the positions, velocities, time and
-        engine data saved by ``snapshot`` and return True; or, when ``native`` is None or does
-        not fit this world as it is now (another world, a load, remove or reset since), drop
-        what the engine keeps of its past where it can (MuJoCo: the solver's warm start), so
-        that the portable state the Sim sets next means the same in any world, and return
-        False. Motors and pending torques are set after it by ``set_joint_commands``."""
+        """Put back what :meth:`snapshot` saved; called first by every ``set_state``.
+
+        Motors and pending torques are set after it by ``set_joint_commands``.
+
+        Args:
+            native: What :meth:`snapshot` returned, or None.
+
+        Returns:
+            True when the positions, velocities, time and engine data were put back. False
+            when ``native`` is None or does not fit this world as it is now (another world, a
+            load, remove or reset since): the backend then drops what the engine keeps of its
+            past where it can (MuJoCo: the solver's warm start), so that the portable state
+            the Sim sets next means the same in any world.
+        """
         return False
 
     def set_time(self, time: float) -> None:
-        """Set the simulated time (s), to the nearest whole step of this world's time step."""
+        """Set the simulated time, to the nearest whole step of this world's time step.
+
+        Args:
+            time: Seconds (finite, >= 0).
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend that cannot set it.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the time (set_state)")
@@ -448,10 +739,25 @@ class Backend(ABC):
         up: Vec3,
         fov: float,
     ) -> np.ndarray:
-        """A picture of the world as it stands: a (height, width, 3) uint8 RGB array seen from
-        ``eye`` looking at ``target`` with ``up`` pointing up, ``fov`` degrees of vertical field
-        of view (checked by :meth:`simbridge.Sim.render`: finite, eye away from target, up not
-        along the line of sight)."""
+        """A picture of the world as it stands.
+
+        The Sim has checked the view (:meth:`simbridge.Sim.render`): finite, eye away from
+        target, up not along the line of sight.
+
+        Args:
+            width: Pixels across (>= 1).
+            height: Pixels down (>= 1).
+            eye: The camera's position (m, world).
+            target: The point it looks at (m, world).
+            up: The direction that points up in the picture (world).
+            fov: Vertical field of view (degrees).
+
+        Returns:
+            A (height, width, 3) uint8 RGB array.
+
+        Raises:
+            BackendUnsupportedError: The default, for a backend that cannot render.
+        """
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(

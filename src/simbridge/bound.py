@@ -88,7 +88,18 @@ class BoundCommand:
         kp: list[float],
         kd: list[float],
     ) -> None:
-        """Made by ``Sim.velocity_command`` / ``Sim.position_command`` from checked values."""
+        """Made by ``Sim.velocity_command`` / ``Sim.position_command`` from checked values.
+
+        Args:
+            sim: The Sim the command is bound in.
+            mode: ``"velocity"`` or ``"position"``.
+            body: The body's id.
+            joints: (n,) ``np.intp`` indices of movable joints.
+            targets: n targets (rad/s or m/s for velocity, rad or m for position).
+            max_force: n force limits (N·m or N, >= 0).
+            kp: n position gains (a velocity command: 0).
+            kd: n velocity gains (a velocity command: 1).
+        """
         init = object.__setattr__
         init(self, "mode", mode)
         init(self, "body", body)
@@ -105,8 +116,12 @@ class BoundCommand:
 
     def send(self) -> None:
         """Check the arrays and send them now, as a step does (the backend skips a command
-        already in force). Raises InvalidArgumentError for a non-finite target or a negative
-        or non-finite force, StaleCommandError after a world change."""
+        already in force).
+
+        Raises:
+            InvalidArgumentError: a non-finite target, or a negative or non-finite force.
+            StaleCommandError: after a world change or :meth:`release`.
+        """
         targets = self.targets.tolist()
         force = self.max_force.tolist()
         # a sum of floats is finite only if every one is (an overflow is told apart below)

@@ -82,7 +82,12 @@ _libc: ctypes.CDLL | None = None
 
 
 def register_classifier(engine: str, classify: Classifier) -> None:
-    """Read what ``engine`` (a backend name) writes with ``classify`` from now on."""
+    """Read what ``engine`` writes with ``classify`` from now on.
+
+    Args:
+        engine: A backend's name.
+        classify: Takes the captured text, returns the records to log and the text to pass on.
+    """
     _classifiers[engine] = classify
 
 
@@ -115,11 +120,17 @@ def _flush_python_streams() -> None:
 def captured(engine: str, during: str = "", classify: Classifier | None = None) -> Iterator[None]:
     """Capture fds 1 and 2 while the body runs an engine call; see the module's rules.
 
-    ``engine`` names the classifier (a backend name) and the logger (``simbridge.<engine>``);
-    ``during`` says what the call was ("loading r2d2.urdf"), put in each record's message;
-    ``classify`` replaces the registered classifier for this window. Records are logged when
-    the window closes, also when the body raised (an engine's error lines come before its
-    exception).
+    Records are logged when the window closes, also when the body raised (an engine's error
+    lines come before its exception). A window opened inside this thread's open window does
+    nothing: the outer one captures.
+
+    Args:
+        engine: Names the classifier (a backend name) and the logger (``simbridge.<engine>``).
+        during: What the call was ("loading r2d2.urdf"), put in each record's message.
+        classify: Replaces the registered classifier for this window; None: the registered one.
+
+    Yields:
+        None, once: the body runs with the descriptors captured.
     """
     global _owner
     me = threading.get_ident()

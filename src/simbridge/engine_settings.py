@@ -71,13 +71,24 @@ class Setting:
     default_note: str = ""
 
     def default_for(self, profile: Profile) -> Any:
-        """The value the backend uses under ``profile`` when the setting is not given."""
+        """The value the backend uses under ``profile`` when the setting is not given.
+
+        Args:
+            profile: The profile in force.
+
+        Returns:
+            ``default``, or ``default(profile)`` where it is a function of the profile.
+        """
         if callable(self.default):
             return self.default(profile)
         return self.default
 
     def range_text(self) -> str:
-        """The accepted values, in words."""
+        """The accepted values, in words.
+
+        Returns:
+            A phrase such as ``"a finite number >= 0"`` or ``"one of ['pyramidal', 'elliptic']"``.
+        """
         if self.kind == "bool":
             return "true or false"
         if self.kind == "choice":
@@ -92,13 +103,25 @@ class Setting:
         return what + (f" {bounds}" if bounds else "")
 
     def default_text(self) -> str:
+        """The default, in words.
+
+        Returns:
+            ``default_note`` where there is one, else the default as text (a tuple as a list).
+        """
         if self.default_note:
             return self.default_note
         d = self.default
         return str(list(d)) if isinstance(d, tuple) else str(d)
 
     def check(self, backend: str, value: Any) -> Any:
-        """``value`` in its normal form (float, int, bool, str or a tuple of floats).
+        """``value`` checked against the setting's kind and range.
+
+        Args:
+            backend: The backend's name (for the message).
+            value: The value given.
+
+        Returns:
+            ``value`` in its normal form (float, int, bool, str or a tuple of floats).
 
         Raises:
             InvalidEngineSettingError: naming the setting and its accepted values.
@@ -143,7 +166,12 @@ class Setting:
         return self.high is None or x <= self.high
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-able description (the default in words where it depends on the profile)."""
+        """The setting described for JSON.
+
+        Returns:
+            Its key, kind, default (in words where it depends on the profile), accepted values,
+            unit, meaning and counterpart in another engine.
+        """
         return {
             "key": self.key,
             "kind": self.kind,
@@ -177,11 +205,17 @@ _TOGETHER: dict[tuple[str, str], Any] = {}
 
 
 def settings_for(backend: str) -> Mapping[str, Setting]:
-    """Every engine setting backend ``backend`` accepts, by key (empty for a backend that
-    declares none). Imports no engine.
+    """Every engine setting a backend accepts. Imports no engine.
+
+    Args:
+        backend: A registered backend's name.
+
+    Returns:
+        The settings by key, in the backend's order (empty for a backend that declares none).
 
     Raises:
         UnknownBackendError: ``backend`` is not registered (the message lists those that are).
+        TypeError: The backend's settings module declares something that is not a Setting.
     """
     spec = backend_spec(backend)
     cached = _CACHE.get((spec.name, spec.settings))
@@ -204,13 +238,21 @@ def settings_for(backend: str) -> Mapping[str, Setting]:
 
 
 def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
-    """``mapping``'s settings checked and in their normal form, keys in the backend's order.
+    """Check settings for one backend.
+
+    Args:
+        backend: A registered backend's name.
+        mapping: The settings given, ``{key: value}``.
+
+    Returns:
+        ``mapping``'s settings checked and in their normal form, keys in the backend's order.
 
     Raises:
         UnknownBackendError: ``backend`` is not registered.
+        InvalidArgumentError: ``mapping`` is not a mapping.
         InvalidEngineSettingError (an InvalidProfileError): a key the backend does not have
-            (the message lists the valid ones) or a value outside its range (the message
-            names the key and its accepted values).
+            (the message lists the valid ones), a value outside its range (the message names
+            the key and its accepted values), or settings that disagree with each other.
     """
     known = settings_for(backend)
     if not isinstance(mapping, Mapping):
@@ -246,9 +288,18 @@ def validate(backend: str, mapping: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def owners(key: str, backend: str = "") -> list[str]:
-    """The registered backends but ``backend`` that have a setting ``key`` (for the message of
-    a key given to the wrong engine, or to none); a backend whose settings module cannot be
-    read is skipped."""
+    """The registered backends other than ``backend`` that have a setting ``key``.
+
+    For the message of a key given to the wrong engine, or to none; a backend whose settings
+    module cannot be read is skipped.
+
+    Args:
+        key: A setting's key.
+        backend: The backend to leave out; none by default.
+
+    Returns:
+        Their names, in the registry's order.
+    """
     from simbridge.registry import available_backends
 
     found = []
@@ -264,8 +315,16 @@ def owners(key: str, backend: str = "") -> list[str]:
 
 
 def effective(backend: str, profile: Profile) -> dict[str, Any]:
-    """Every setting of ``backend`` with the value it takes under ``profile`` (the profile's
-    own where it sets one, the backend's default otherwise), JSON-able."""
+    """Every setting of ``backend`` with the value it takes under ``profile``.
+
+    Args:
+        backend: A registered backend's name.
+        profile: The profile in force.
+
+    Returns:
+        ``{key: value}``, JSON-able: the profile's own value where it sets one, the backend's
+        default otherwise.
+    """
     given = profile.engine(backend)
     return {
         key: _jsonable(given[key] if key in given else s.default_for(profile))
@@ -274,9 +333,14 @@ def effective(backend: str, profile: Profile) -> dict[str, Any]:
 
 
 def parse_assignment(text: str) -> tuple[str, str, Any]:
-    """``"mujoco.impratio=10"`` -> ``("mujoco", "impratio", 10)``: the value read as TOML
-    (``0.02``, ``true``, ``[0.01, 1]``), a bare word as a string (``cone=elliptic``).
-    The setting itself is not checked here (see :func:`validate`).
+    """Read one ``--set`` assignment. The setting itself is not checked here (see :func:`validate`).
+
+    Args:
+        text: ``"BACKEND.KEY=VALUE"``, the value read as TOML (``0.02``, ``true``,
+            ``[0.01, 1]``), a bare word as a string (``cone=elliptic``).
+
+    Returns:
+        ``(backend, key, value)``: ``"mujoco.impratio=10"`` -> ``("mujoco", "impratio", 10)``.
 
     Raises:
         InvalidArgumentError: not ``BACKEND.KEY=VALUE``.
@@ -299,9 +363,14 @@ Frozen = tuple[tuple[str, tuple[tuple[str, Any], ...]], ...]
 
 
 def freeze(engines: Any, argument: str = "engine_settings") -> Frozen:
-    """Settings per backend (``{backend: {key: value}}``, or already frozen) checked with
-    :func:`validate` and made hashable: sorted ``(backend, ((key, value), ...))`` pairs,
-    backends with no setting left out.
+    """Settings per backend checked with :func:`validate` and made hashable.
+
+    Args:
+        engines: ``{backend: {key: value}}``, or already frozen pairs.
+        argument: The argument's name in messages.
+
+    Returns:
+        Sorted ``(backend, ((key, value), ...))`` pairs, backends with no setting left out.
 
     Raises:
         InvalidArgumentError: not a table of tables.
@@ -329,14 +398,26 @@ def freeze(engines: Any, argument: str = "engine_settings") -> Frozen:
 
 
 def thaw(frozen: Frozen) -> dict[str, dict[str, Any]]:
-    """:func:`freeze`'s pairs back as ``{backend: {key: value}}``, JSON-able (lists)."""
+    """:func:`freeze`'s pairs back as a table.
+
+    Args:
+        frozen: What :func:`freeze` returned.
+
+    Returns:
+        ``{backend: {key: value}}``, JSON-able (tuples as lists).
+    """
     return {b: {k: _jsonable(v) for k, v in values} for b, values in frozen}
 
 
 def require_engines(
     argument: str, settings: Mapping[str, Mapping[str, Any]] | None, engines: Sequence[str]
 ) -> None:
-    """Every backend ``settings`` sets something for is one of ``engines`` (the study's).
+    """Check that every backend ``settings`` sets something for is one of ``engines``.
+
+    Args:
+        argument: Where the settings were given (for the message).
+        settings: ``{backend: {key: value}}``, or None.
+        engines: The study's engines.
 
     Raises:
         EngineNotInStudyError: a setting for another engine, naming it and ``engines``.
@@ -350,7 +431,14 @@ def require_engines(
 
 
 def merge(*layers: Mapping[str, Mapping[str, Any]] | None) -> dict[str, dict[str, Any]]:
-    """Settings per backend, later layers on top of earlier ones (key by key)."""
+    """Settings per backend, later layers on top of earlier ones (key by key).
+
+    Args:
+        *layers: ``{backend: {key: value}}`` tables, or None (skipped), lowest first.
+
+    Returns:
+        The merged ``{backend: {key: value}}``.
+    """
     out: dict[str, dict[str, Any]] = {}
     for layer in layers:
         for backend, values in (layer or {}).items():

@@ -49,7 +49,15 @@ __all__ = [
 
 
 def did_you_mean(name: str, valid: Iterable[str]) -> str:
-    """``" (did you mean 'r2d2'?)"`` for the valid name closest to ``name``, or ``""``."""
+    """The hint that ends a lookup error's sentence.
+
+    Args:
+        name: The name asked for.
+        valid: The names that exist.
+
+    Returns:
+        ``" (did you mean 'r2d2'?)"`` for the valid name closest to ``name``, or ``""``.
+    """
     import difflib
 
     close = difflib.get_close_matches(name, list(valid), n=1)
@@ -99,6 +107,13 @@ class BackendError(SimbridgeError):
 
 
 class UnknownBackendError(BackendError, LookupError):
+    """A backend name that is not registered.
+
+    Args:
+        name: The name asked for.
+        available: The registered names (listed in the message, the closest suggested).
+    """
+
     def __init__(self, name: str, available: Iterable[str]):
         self.name = name
         self.available = sorted(available)
@@ -109,6 +124,15 @@ class UnknownBackendError(BackendError, LookupError):
 
 
 class BackendNotInstalledError(BackendError, ImportError):
+    """A registered backend whose engine package does not import.
+
+    Args:
+        backend: The backend's name.
+        module: The Python module that failed to import.
+        pip_name: What to ``pip install`` to get it.
+        cause: The import's own error.
+    """
+
     def __init__(self, backend: str, module: str, pip_name: str, cause: BaseException):
         self.backend = backend
         super().__init__(
@@ -118,7 +142,14 @@ class BackendNotInstalledError(BackendError, ImportError):
 
 
 class ExtraNotInstalledError(SimbridgeError, ImportError):
-    """A feature needs a package of one of simbridge's extras that is not installed."""
+    """A feature needs a package of one of simbridge's extras that is not installed.
+
+    Args:
+        feature: What needs it (the message's subject).
+        module: The Python module that failed to import.
+        pip_name: What to ``pip install`` to get it (an extra: ``simbridge[compare]``).
+        cause: The import's own error.
+    """
 
     def __init__(self, feature: str, module: str, pip_name: str, cause: BaseException):
         self.feature = feature
@@ -130,7 +161,13 @@ class ExtraNotInstalledError(SimbridgeError, ImportError):
 
 
 class BackendUnsupportedError(BackendError, NotImplementedError):
-    """The backend cannot do what was asked (never silently ignored)."""
+    """The backend cannot do what was asked (never silently ignored).
+
+    Args:
+        backend: The backend's name.
+        what: What it does not support (``"contact points"``).
+        hint: What to do instead, appended after a colon; none by default.
+    """
 
     def __init__(self, backend: str, what: str, hint: str = ""):
         msg = f"backend {backend!r} does not support {what}"
@@ -138,6 +175,13 @@ class BackendUnsupportedError(BackendError, NotImplementedError):
 
 
 class DisplayError(BackendError, RuntimeError):
+    """A window (``gui=True``) that cannot open.
+
+    Args:
+        backend: The backend's name.
+        detail: Why it cannot.
+    """
+
     def __init__(self, backend: str, detail: str):
         super().__init__(
             f"backend {backend!r} cannot open a window: {detail}. "
@@ -153,8 +197,15 @@ class UrdfError(SimbridgeError, ValueError):
 
 
 class UrdfNotFoundError(UrdfError, FileNotFoundError):
-    """``searched``: every place looked, in order, each once; ``hint``: what follows the
-    sentence (`` (did you mean '...'?)``: :func:`simbridge.model.urdf_source.not_found`)."""
+    """A robot or scene file found nowhere it was looked for.
+
+    Args:
+        source: What was asked for (a path, a name on the search path).
+        searched: Every place looked, in order, each once.
+        kind: The file's kind in the message (``"URDF"``, ``"MJCF"``, ``"SDF"``).
+        hint: What follows the sentence (`` (did you mean '...'?)``:
+            :func:`simbridge.model.urdf_source.not_found`).
+    """
 
     def __init__(self, source: str, searched: Iterable[str], kind: str = "URDF", hint: str = ""):
         self.source = source
@@ -165,6 +216,14 @@ class UrdfNotFoundError(UrdfError, FileNotFoundError):
 
 
 class UrdfParseError(UrdfError):
+    """A file that is not well-formed XML.
+
+    Args:
+        file: The file's path.
+        detail: The XML parser's complaint.
+        kind: The file's kind in the message (``"URDF"``, ``"MJCF"``, ``"SDF"``).
+    """
+
     def __init__(self, file: str, detail: str, kind: str = "URDF"):
         self.file = file
         super().__init__(f"{file}: malformed {kind} XML: {detail}")
@@ -177,7 +236,13 @@ def _at(file: str, line: int | None) -> str:
 
 class UrdfStructureError(UrdfError):
     """Well-formed XML that is not a valid robot (no links, a cycle, a missing parent...).
-    ``line``: the element's line in the file (1-based), None where no one line is to blame."""
+
+    Args:
+        file: The file's path.
+        element: The element to blame (``"joint 'hip'"``).
+        detail: What is wrong with it.
+        line: The element's line in the file (1-based), None where no one line is to blame.
+    """
 
     def __init__(self, file: str, element: str, detail: str, line: int | None = None):
         self.file = file
@@ -187,9 +252,17 @@ class UrdfStructureError(UrdfError):
 
 
 class MeshNotFoundError(UrdfError, FileNotFoundError):
-    """A mesh file found nowhere PyBullet looks; ``tried``: every path tried, in PyBullet's
-    order (see :func:`simbridge.model.urdf_source.resolve_mesh`), made absolute from the working
-    directory."""
+    """A mesh file found nowhere PyBullet looks.
+
+    Args:
+        file: The robot file's path.
+        element: The element that names the mesh.
+        filename: The mesh's name as written in the file.
+        tried: Every path tried, in PyBullet's order (see
+            :func:`simbridge.model.urdf_source.resolve_mesh`), made absolute from the working
+            directory.
+        line: The element's line in the file (1-based), or None.
+    """
 
     def __init__(
         self,
@@ -212,6 +285,17 @@ class MeshNotFoundError(UrdfError, FileNotFoundError):
 
 
 class UnsupportedJointError(UrdfError):
+    """A joint type simbridge (or PyBullet) cannot build.
+
+    Args:
+        file: The robot file's path.
+        joint: The joint's name.
+        joint_type: Its type as written.
+        supported: The types that are.
+        line: The joint's line in the file (1-based), or None.
+        reason: Why it is not supported, in parentheses after the type; none by default.
+    """
+
     def __init__(
         self,
         file: str,
@@ -233,6 +317,13 @@ class UnsupportedJointError(UrdfError):
 
 
 class UnknownBodyError(SimbridgeError, LookupError):
+    """A body id that is not in the Sim.
+
+    Args:
+        body: What was given.
+        valid: The ids of the bodies in the Sim.
+    """
+
     def __init__(self, body: object, valid: Iterable[int]):
         super().__init__(f"unknown body {body!r}; bodies in this Sim: {_choices(valid)}")
 
@@ -247,6 +338,16 @@ def _body_label(body_name: str, body: int | None, source: str | None) -> str:
 
 
 class UnknownJointError(SimbridgeError, LookupError):
+    """A joint index or name that the body does not have.
+
+    Args:
+        body_name: The robot's name inside its file.
+        joint: The index or name given.
+        valid_names: The body's joint names, in index order.
+        body: The body's id, when known.
+        source: The body's file, when known (its base name goes in the message).
+    """
+
     def __init__(
         self,
         body_name: str,
@@ -269,6 +370,16 @@ class UnknownJointError(SimbridgeError, LookupError):
 
 
 class UnknownLinkError(SimbridgeError, LookupError):
+    """A link index or name that the body does not have.
+
+    Args:
+        body_name: The robot's name inside its file.
+        link: The index or name given.
+        valid_names: The body's link names, in index order.
+        body: The body's id, when known.
+        source: The body's file, when known (its base name goes in the message).
+    """
+
     def __init__(
         self,
         body_name: str,
@@ -287,6 +398,13 @@ class UnknownLinkError(SimbridgeError, LookupError):
 
 
 class InvalidArgumentError(SimbridgeError, ValueError):
+    """An argument outside what the call accepts.
+
+    Args:
+        argument: The argument's name.
+        detail: What is wrong and what would be right.
+    """
+
     def __init__(self, argument: str, detail: str):
         self.argument = argument
         super().__init__(f"argument {argument!r}: {detail}")
@@ -295,7 +413,14 @@ class InvalidArgumentError(SimbridgeError, ValueError):
 class EngineNotInStudyError(InvalidArgumentError):
     """An engine setting (``--set``, ``engine_settings=``, a ``--vary BACKEND.KEY``) for an
     engine the study does not run: it would change nothing. A scenario's own ``[engines.*]``
-    tables are not this: a scenario is written for every engine."""
+    tables are not this: a scenario is written for every engine.
+
+    Args:
+        argument: Where the setting was given (``"--set"``).
+        setting: The setting as written.
+        backend: The engine it is for.
+        engines: The engines the study runs.
+    """
 
     def __init__(self, argument: str, setting: str, backend: str, engines: Sequence[str]):
         self.setting = setting
@@ -311,6 +436,13 @@ class EngineNotInStudyError(InvalidArgumentError):
 
 
 class InvalidProfileError(SimbridgeError, ValueError):
+    """A profile name that does not exist.
+
+    Args:
+        profile: What was given.
+        valid: The profile names.
+    """
+
     def __init__(self, profile: object, valid: Iterable[str]):
         valid = list(valid)
         hint = did_you_mean(profile, valid) if isinstance(profile, str) else ""
@@ -318,7 +450,13 @@ class InvalidProfileError(SimbridgeError, ValueError):
 
 
 class InvalidEngineSettingError(InvalidProfileError):
-    """An engine setting that is not one of the backend's, or a value outside its range."""
+    """An engine setting that is not one of the backend's, or a value outside its range.
+
+    Args:
+        backend: The backend's name.
+        key: The setting's key.
+        detail: What is wrong and what would be right.
+    """
 
     def __init__(self, backend: str, key: str, detail: str):
         self.backend = backend
@@ -330,6 +468,14 @@ class InvalidEngineSettingError(InvalidProfileError):
 
 
 class SimulationDivergedError(SimbridgeError, FloatingPointError):
+    """The world's state turned non-finite.
+
+    Args:
+        backend: The backend's name.
+        time: The simulated time when it was noticed (s).
+        where: What is not finite (``"body 0 joint velocities"``).
+    """
+
     def __init__(self, backend: str, time: float, where: str):
         super().__init__(
             f"simulation on backend {backend!r} diverged at t={time:.6f} s: {where} is not finite"
@@ -339,7 +485,13 @@ class SimulationDivergedError(SimbridgeError, FloatingPointError):
 class EngineError(BackendError, RuntimeError):
     """The engine itself stopped with an error (MuJoCo's ``mju_error``: a world too large for
     its memory, say). The world's state is then undefined: the Sim refuses to step further
-    until ``reset()``."""
+    until ``reset()``.
+
+    Args:
+        backend: The backend's name.
+        time: The simulated time when it stopped (s).
+        detail: The engine's message.
+    """
 
     def __init__(self, backend: str, time: float, detail: str):
         self.detail = detail
@@ -352,7 +504,11 @@ class EngineError(BackendError, RuntimeError):
 class SimBusyError(SimbridgeError, RuntimeError):
     """A call reached a Sim while it was stepping in another thread (another thread's call
     that is not a step is waited for). A Sim takes one call at a time; Sims in different
-    threads step in parallel (MuJoCo's compiled loop releases the GIL)."""
+    threads step in parallel (MuJoCo's compiled loop releases the GIL).
+
+    Args:
+        detail: The whole message; by default one that says the Sim is stepping.
+    """
 
     def __init__(self, detail: str | None = None) -> None:
         super().__init__(
@@ -363,6 +519,8 @@ class SimBusyError(SimbridgeError, RuntimeError):
 
 
 class SimClosedError(SimbridgeError, RuntimeError):
+    """A call to a Sim after ``close()``."""
+
     def __init__(self) -> None:
         super().__init__("this Sim is closed; create a new one")
 
@@ -383,7 +541,13 @@ class SimNotCopyableError(SimbridgeError, TypeError):
 class NotOfferedError(SimbridgeError, AttributeError):
     """A PyBullet function the Sim does not offer (yet), asked for by its PyBullet name
     (``sim.applyExternalForce``) or in snake case: says so, and what to use instead where
-    something exists (:data:`simbridge.sim.pybullet_names.NOT_OFFERED`)."""
+    something exists (:data:`simbridge.sim.pybullet_names.NOT_OFFERED`).
+
+    Args:
+        attribute: The attribute asked for.
+        pybullet_name: PyBullet's name of the function.
+        instead: What to use instead, or ``""`` when nothing does it yet.
+    """
 
     def __init__(self, attribute: str, pybullet_name: str, instead: str):
         self.attribute = attribute
@@ -399,7 +563,12 @@ class NotOfferedError(SimbridgeError, AttributeError):
 class PyBulletKeywordError(SimbridgeError, TypeError):
     """A Sim call given a keyword it does not take (often PyBullet's name of one of its
     arguments, ``basePosition``), or missing a required argument: ``detail`` names the keyword
-    and simbridge's name for it, or the valid keywords."""
+    and simbridge's name for it, or the valid keywords.
+
+    Args:
+        call: The call (``"Sim.load_urdf()"``), the message's subject.
+        detail: The rest of the message.
+    """
 
     def __init__(self, call: str, detail: str):
         self.call = call
@@ -408,7 +577,12 @@ class PyBulletKeywordError(SimbridgeError, TypeError):
 
 class StaleCommandError(SimbridgeError, RuntimeError):
     """A bound command (``Sim.velocity_command``, ``Sim.position_command``) used after it was
-    released or after a world change (load_urdf, remove, reset, close) ended it."""
+    released or after a world change (load_urdf, remove, reset, close) ended it.
+
+    Args:
+        command: What the command is (``"velocity command"``).
+        why: What ended it.
+    """
 
     def __init__(self, command: str, why: str) -> None:
         super().__init__(
@@ -423,9 +597,13 @@ class StaleCommandError(SimbridgeError, RuntimeError):
 class ScenarioError(SimbridgeError, ValueError):
     """A comparison scenario file is missing, malformed, or says something invalid.
 
-    ``file`` names the file (or ``<scenario>``), ``key`` the dotted key path
-    (``phases[1].commands[0].mode``), ``line`` the 1-based line in the file where it was found
-    (``None`` when it cannot be located)."""
+    Args:
+        file: The file (or ``<scenario>``).
+        key: The dotted key path (``phases[1].commands[0].mode``), or None.
+        detail: What is wrong and what would be right.
+        line: The 1-based line in the file where it was found (None when it cannot be
+            located).
+    """
 
     def __init__(self, file: str, key: str | None, detail: str, line: int | None = None):
         self.file = file
@@ -439,8 +617,11 @@ class ScenarioError(SimbridgeError, ValueError):
 class TrajectoryFileError(SimbridgeError, ValueError):
     """A saved comparison trajectory (``Trajectory.load``) holds something malformed.
 
-    ``file`` names the file, ``key`` the dotted key path inside its header
-    (``outcomes.goal.closest``)."""
+    Args:
+        file: The file.
+        key: The dotted key path inside its header (``outcomes.goal.closest``).
+        detail: What is wrong.
+    """
 
     def __init__(self, file: str, key: str, detail: str):
         self.file = file
@@ -450,8 +631,15 @@ class TrajectoryFileError(SimbridgeError, ValueError):
 
 class CacheEntryMissingError(SimbridgeError, LookupError):
     """A study rebuilt from the cache alone (``simbridge report DIR``) needs a job's result that
-    the cache does not hold: ``cache`` the folder, ``job`` and ``key`` the first such job,
-    ``missing`` of ``total`` jobs absent."""
+    the cache does not hold.
+
+    Args:
+        cache: The cache folder.
+        job: The first missing job's name.
+        key: Its cache key (the first 16 characters go in the message).
+        missing: How many of the study's jobs are absent.
+        total: How many jobs the study has.
+    """
 
     def __init__(self, cache: str, job: str, key: str, missing: int, total: int):
         self.cache = cache
@@ -469,7 +657,13 @@ class CacheEntryMissingError(SimbridgeError, LookupError):
 
 class JobError(SimbridgeError, RuntimeError):
     """A job run in another process raised an error that cannot be sent back as it is (its
-    class does not pickle): its class, message and the worker's traceback, as text."""
+    class does not pickle): its class, message and the worker's traceback, as text.
+
+    Args:
+        job: The job's name.
+        error: The error the job raised.
+        traceback: The worker's traceback, as text.
+    """
 
     def __init__(self, job: str, error: BaseException, traceback: str):
         self.job = job

@@ -81,13 +81,28 @@ class Profile:
             )
 
     def with_(self, **changes: Any) -> Profile:
-        """A copy with some entries changed (``gravity``, ``timestep`` ...)."""
+        """A copy with some entries changed.
+
+        Args:
+            **changes: Entries by name (``gravity``, ``timestep`` ...).
+
+        Returns:
+            The new profile (checked as any profile is made).
+        """
         return replace(self, **changes)
 
     def with_engine(self, backend: str, **settings: Any) -> Profile:
-        """A copy with engine settings of ``backend`` set (on top of those already set):
-        ``profile.with_engine("mujoco", solref=(0.01, 1.0), impratio=10)``.
+        """A copy with engine settings of ``backend`` set (on top of those already set).
+
+        ``profile.with_engine("mujoco", solref=(0.01, 1.0), impratio=10)``;
         :func:`simbridge.engine_settings.settings_for` lists each backend's.
+
+        Args:
+            backend: A registered backend's name.
+            **settings: The settings by key.
+
+        Returns:
+            The new profile.
 
         Raises:
             UnknownBackendError: ``backend`` is not registered.
@@ -98,22 +113,36 @@ class Profile:
         return replace(self, engines=merged)
 
     def engine(self, backend: str) -> dict[str, Any]:
-        """The engine settings this profile sets for ``backend`` (only those set; empty by
-        default)."""
+        """The engine settings this profile sets for ``backend``.
+
+        Args:
+            backend: A backend's name.
+
+        Returns:
+            ``{key: value}``, only those set (empty by default).
+        """
         for name, values in self.engines:
             if name == backend:
                 return dict(values)
         return {}
 
     def engine_settings(self) -> dict[str, dict[str, Any]]:
-        """Every engine setting this profile sets, by backend (JSON-able)."""
+        """Every engine setting this profile sets, by backend.
+
+        Returns:
+            ``{backend: {key: value}}``, JSON-able (tuples as lists).
+        """
         return {
             b: {k: list(v) if isinstance(v, tuple) else v for k, v in values}
             for b, values in self.engines
         }
 
     def as_dict(self) -> dict[str, Any]:
-        """The entries, JSON-able; ``engines`` only where some engine setting is set."""
+        """The entries, JSON-able.
+
+        Returns:
+            Every entry by name; ``engines`` only where some engine setting is set.
+        """
         out = asdict(replace(self, engines=()))
         del out["engines"]
         if self.engines:
@@ -251,13 +280,24 @@ PROFILES: dict[str, Profile] = {
 
 
 def get_profile(profile: str | Profile) -> Profile:
-    """Return the named profile, or ``profile`` itself when it already is one.
+    """The named profile, or ``profile`` itself when it already is one.
 
     A name may carry changes after the profile's: ``"pybullet+lateral_friction=0.9"`` is the
     ``pybullet`` profile with that entry changed, and once engine settings exist
     ``"pybullet+mujoco.impratio=10"`` sets one (:func:`derived_profile`). Such a name travels
     wherever a profile name does (worker processes, saved trajectories) and is the profile's
-    name."""
+    name.
+
+    Args:
+        profile: A name in :data:`PROFILES`, a derived name, or a :class:`Profile`.
+
+    Returns:
+        The profile.
+
+    Raises:
+        InvalidProfileError: an unknown name (the valid ones listed).
+        InvalidArgumentError: a derived name with a malformed or unknown change.
+    """
     if isinstance(profile, Profile):
         return profile
     if isinstance(profile, str) and SPEC_SEPARATOR in profile:
@@ -294,9 +334,17 @@ def _value_text(value: Any) -> str:
 
 
 def derived_profile(base: str, changes: dict[str, Any]) -> str:
-    """The name of profile ``base`` with ``changes`` made (``{"lateral_friction": 0.9}``, or an
-    engine setting ``{"mujoco.impratio": 10}``): ``"pybullet+lateral_friction=0.9"``. Checked
-    here: a bad entry or value raises as :func:`get_profile` would."""
+    """The name of profile ``base`` with ``changes`` made, checked here: a bad entry or value
+    raises as :func:`get_profile` would.
+
+    Args:
+        base: A profile's name.
+        changes: Entries (``{"lateral_friction": 0.9}``) or engine settings
+            (``{"mujoco.impratio": 10}``) to change.
+
+    Returns:
+        The derived name: ``"pybullet+lateral_friction=0.9"``.
+    """
     name = base
     for key, value in changes.items():
         name += f"{SPEC_SEPARATOR}{key}={_value_text(value)}"

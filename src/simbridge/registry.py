@@ -73,17 +73,31 @@ def register(
     engine_dists: tuple[str, ...] | None = None,
     describe: str = "",
 ) -> None:
-    """Register a backend under ``name``; ``entry_point`` is ``"module:Class"``; ``settings``
-    is ``"module:ATTR"``, a sequence of :class:`simbridge.engine_settings.Setting` in a module
-    that imports no engine (read when a profile or scenario sets one); ``state_dtype``, one of
-    :data:`STATE_DTYPES`, declares the class's :attr:`~simbridge.backend.Backend.state_dtype`
-    so that :func:`state_dtype` imports no engine (a report rebuilt from the cache asks it of
-    every engine of the study); the class must agree (:func:`load_backend` checks).
-    ``engine_dists``: the distributions (pip names) whose versions the backend's results depend
-    on (its engine library; numpy counts for every backend): a cached run is reused only while
-    their versions are the same (:func:`engine_dists`); None: the ``requires`` modules' names.
-    ``describe``: ``"module:function"``, called with no argument, saying in a line how the
-    backend runs here (``simbridge info``: MuJoCo's compiled or Python step loop)."""
+    """Register a backend under ``name``, importing nothing of it.
+
+    Args:
+        name: The backend's name (``Sim(backend=name)``); registering it again replaces it.
+        entry_point: ``"module:Class"``, the :class:`~simbridge.backend.Backend` subclass.
+        requires: Importable module names the backend needs (its engine).
+        pip_name: What to ``pip install`` when one is missing; by default the ``requires``.
+        settings: ``"module:ATTR"``, a sequence of :class:`simbridge.engine_settings.Setting`
+            in a module that imports no engine (read when a profile or scenario sets one).
+        state_dtype: One of :data:`STATE_DTYPES`, declaring the class's
+            :attr:`~simbridge.backend.Backend.state_dtype` so that :func:`state_dtype` imports
+            no engine (a report rebuilt from the cache asks it of every engine of the study);
+            the class must agree (:func:`load_backend` checks). ``""``: read from the class.
+        engine_dists: The distributions (pip names) whose versions the backend's results depend
+            on (its engine library; numpy counts for every backend): a cached run is reused only
+            while their versions are the same (:func:`engine_dists`); None: the ``requires``
+            modules' names.
+        describe: ``"module:function"``, called with no argument, saying in a line how the
+            backend runs here (``simbridge info``: MuJoCo's compiled or Python step loop).
+
+    Raises:
+        BackendError: ``entry_point`` is not ``"module:Class"``.
+        InvalidArgumentError: ``state_dtype`` not in :data:`STATE_DTYPES`, or ``engine_dists``
+            not a tuple of names.
+    """
     if ":" not in entry_point:
         raise BackendError(f"backend {name!r}: entry point {entry_point!r} is not 'module:Class'")
     if state_dtype and state_dtype not in STATE_DTYPES:
@@ -146,9 +160,15 @@ def _normal(name: str) -> str:
 
 
 def engine_dists(name: str) -> tuple[str, ...]:
-    """The distributions whose versions backend ``name``'s results depend on: as registered
-    (``register(..., engine_dists=)``; an entry-point backend: its package and what that
-    requires), numpy first. Imports nothing of the backend.
+    """The distributions whose versions backend ``name``'s results depend on. Imports nothing of
+    the backend.
+
+    Args:
+        name: A registered backend's name.
+
+    Returns:
+        Their pip names, numpy first, then as registered (``register(..., engine_dists=)``; an
+        entry-point backend: its package and what that requires).
 
     Raises:
         UnknownBackendError: as :func:`backend_spec`.
@@ -157,14 +177,28 @@ def engine_dists(name: str) -> tuple[str, ...]:
 
 
 def available_backends() -> list[str]:
-    """Names of every registered backend (installed or not), in registration order."""
+    """Every registered backend, installed or not (entry points included).
+
+    Returns:
+        Their names, in registration order.
+    """
     _read_entry_points()
     return list(_REGISTRY)
 
 
 def backend_spec(name: str) -> BackendSpec:
-    """How backend ``name`` is registered: its ``"module:Class"`` and the engine modules it
-    requires. Imports nothing of the backend."""
+    """How backend ``name`` is registered. Imports nothing of the backend.
+
+    Args:
+        name: A backend's name.
+
+    Returns:
+        Its spec: ``"module:Class"``, the engine modules it requires and the rest of
+        :func:`register`'s arguments.
+
+    Raises:
+        UnknownBackendError: ``name`` is not registered (the message lists those that are).
+    """
     if isinstance(name, str) and name not in _REGISTRY:
         _read_entry_points()
     if not isinstance(name, str) or name not in _REGISTRY:
@@ -173,7 +207,21 @@ def backend_spec(name: str) -> BackendSpec:
 
 
 def load_backend(name: str) -> type[Backend]:
-    """Import and return the backend class registered as ``name``."""
+    """Import the backend class registered as ``name`` (once; later calls return the same class).
+
+    Args:
+        name: A registered backend's name.
+
+    Returns:
+        The :class:`~simbridge.backend.Backend` subclass.
+
+    Raises:
+        UnknownBackendError: ``name`` is not registered.
+        BackendNotInstalledError: one of its required modules does not import (the message
+            says what to install).
+        BackendError: its module or class cannot be loaded, or the class's ``state_dtype``
+            differs from the one registered.
+    """
     if not isinstance(name, str):
         _read_entry_points()
         raise UnknownBackendError(repr(name), _REGISTRY)
@@ -220,11 +268,17 @@ STATE_DTYPES = ("float64", "float32")
 
 
 def state_dtype(name: str) -> str:
-    """The floating-point type backend ``name`` keeps its state in (its class's
-    :attr:`~simbridge.backend.Backend.state_dtype`, ``"float64"`` unless it declares another):
-    as registered (``register(..., state_dtype=)``, the shipped backends: its engine modules are
-    looked for, not imported), else read from its class, which imports the backend; makes no
-    engine.
+    """The floating-point type backend ``name`` keeps its state in; makes no engine.
+
+    As registered (``register(..., state_dtype=)``, the shipped backends: its engine modules
+    are looked for, not imported), else read from its class, which imports the backend.
+
+    Args:
+        name: A registered backend's name.
+
+    Returns:
+        Its class's :attr:`~simbridge.backend.Backend.state_dtype`: ``"float64"`` unless it
+        declares another (``"float32"``).
 
     Raises:
         UnknownBackendError, BackendNotInstalledError: as :func:`load_backend`.
@@ -246,8 +300,19 @@ def state_dtype(name: str) -> str:
 
 
 def unavailable_reason(name: str) -> str | None:
-    """Why backend ``name`` cannot be used here (its engine or its module is missing), or None
-    when it loads. A backend whose module is present but broken still raises."""
+    """Why backend ``name`` cannot be used here.
+
+    Args:
+        name: A registered backend's name.
+
+    Returns:
+        The reason (its engine or its module is missing), or None when it loads.
+
+    Raises:
+        UnknownBackendError: ``name`` is not registered.
+        BackendError: its module is present but broken (re-raised as :func:`load_backend`
+            raised it).
+    """
     try:
         load_backend(name)
     except BackendNotInstalledError as exc:

@@ -48,11 +48,27 @@ U_SIZE = {0: 1, 1: 1, 2: 3, 3: 3, 4: 0}
 def motor_error(
     qx: float, qy: float, qz: float, qw: float, tx: float, ty: float, tz: float, tw: float
 ) -> tuple[float, float, float]:
-    """The spherical motor's error e: Bullet's ``matrixToEulerXYZ`` of the rotation
-    ``conj(q) * t`` from the joint quaternion q to the target t (both x, y, z, w), with Bullet's
-    quaternion product and matrix (the matrix divides by the squared norm), in Bullet's order of
-    operations (the MuJoCo backend's compiled loop, _mjkernel.c ``spherical_error``, does the
-    same arithmetic in the same order; math's atan2 and asin are the C library's)."""
+    """The spherical motor's error e: Bullet's ``matrixToEulerXYZ`` of the rotation ``conj(q) * t``
+    from the joint quaternion q to the target t.
+
+    With Bullet's quaternion product and matrix (the matrix divides by the squared norm), in
+    Bullet's order of operations (the MuJoCo backend's compiled loop, _mjkernel.c
+    ``spherical_error``, does the same arithmetic in the same order; math's atan2 and asin are
+    the C library's).
+
+    Args:
+        qx: The joint quaternion's x.
+        qy: Its y.
+        qz: Its z.
+        qw: Its w.
+        tx: The target quaternion's x.
+        ty: Its y.
+        tz: Its z.
+        tw: Its w.
+
+    Returns:
+        e, Euler angles XYZ (rad) about the axes of the child's inertial frame.
+    """
     cx, cy, cz, cw = -qx, -qy, -qz, qw
     rx = cw * tx + cx * tw + cy * tz - cz * ty
     ry = cw * ty + cy * tw + cz * tx - cx * tz

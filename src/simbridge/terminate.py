@@ -27,15 +27,27 @@ def _raise(signum: int, frame: FrameType | None) -> None:
 
 
 def raises_terminated(handler: object) -> bool:
-    """Whether ``handler`` is the one :func:`sigterm_raises` installs."""
+    """Whether ``handler`` is the one :func:`sigterm_raises` installs.
+
+    Args:
+        handler: A signal handler, as ``signal.getsignal`` returns it.
+
+    Returns:
+        True for :func:`sigterm_raises`'s handler.
+    """
     return handler is _raise
 
 
 @contextmanager
 def sigterm_raises() -> Iterator[None]:
-    """Within the block, SIGTERM raises :class:`Terminated` in the main thread; outside the main
-    thread, or where SIGTERM already has a handler other than the default (the caller's own, or
-    an enclosing block's), it changes nothing."""
+    """Within the block, SIGTERM raises :class:`Terminated` in the main thread.
+
+    Outside the main thread, or where SIGTERM already has a handler other than the default (the
+    caller's own, or an enclosing block's), it changes nothing.
+
+    Yields:
+        None, once; the previous handler is put back when the block ends.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return

@@ -36,9 +36,15 @@ IDENTITY_QUAT: Quat = (0.0, 0.0, 0.0, 1.0)
 
 
 def quat_from_rpy(rpy: Sequence[float]) -> Quat:
-    """URDF roll-pitch-yaw in radians (fixed axes X, then Y, then Z:
-    R = Rz(yaw) Ry(pitch) Rx(roll)) to a unit quaternion (x, y, z, w), as
-    ``p.getQuaternionFromEuler``."""
+    """URDF roll-pitch-yaw to a unit quaternion, as ``p.getQuaternionFromEuler``.
+
+    Args:
+        rpy: (3,) roll, pitch, yaw in radians, about fixed axes X, then Y, then Z:
+            R = Rz(yaw) Ry(pitch) Rx(roll).
+
+    Returns:
+        The unit quaternion (x, y, z, w).
+    """
     r, p, y = (0.5 * float(a) for a in rpy)
     cr, sr, cp, sp, cy, sy = (
         math.cos(r),
@@ -57,8 +63,14 @@ def quat_from_rpy(rpy: Sequence[float]) -> Quat:
 
 
 def rpy_from_quat(q: Sequence[float]) -> Vec3:
-    """Inverse of :func:`quat_from_rpy` (``p.getEulerFromQuaternion``): roll, pitch, yaw in
-    radians, pitch in [-pi/2, pi/2]."""
+    """Inverse of :func:`quat_from_rpy` (``p.getEulerFromQuaternion``).
+
+    Args:
+        q: (4,) unit quaternion (x, y, z, w).
+
+    Returns:
+        Roll, pitch, yaw in radians, pitch in [-pi/2, pi/2].
+    """
     x, y, z, w = (float(c) for c in q)
     sinp = max(-1.0, min(1.0, 2.0 * (w * y - z * x)))
     return (
@@ -69,7 +81,15 @@ def rpy_from_quat(q: Sequence[float]) -> Vec3:
 
 
 def quat_multiply(a: Sequence[float], b: Sequence[float]) -> Quat:
-    """Hamilton product ``a * b`` (rotation b, then a), both (x, y, z, w)."""
+    """Hamilton product ``a * b``: rotation b, then a.
+
+    Args:
+        a: (4,) quaternion (x, y, z, w).
+        b: (4,) quaternion (x, y, z, w).
+
+    Returns:
+        The product (x, y, z, w).
+    """
     ax, ay, az, aw = a
     bx, by, bz, bw = b
     return (
@@ -81,12 +101,27 @@ def quat_multiply(a: Sequence[float], b: Sequence[float]) -> Quat:
 
 
 def quat_conjugate(q: Sequence[float]) -> Quat:
-    """The inverse rotation of a unit quaternion (x, y, z, w)."""
+    """The inverse rotation of a unit quaternion.
+
+    Args:
+        q: (4,) unit quaternion (x, y, z, w).
+
+    Returns:
+        Its conjugate (x, y, z, w).
+    """
     return (-q[0], -q[1], -q[2], q[3])
 
 
 def quat_rotate(q: Sequence[float], v: Sequence[float]) -> Vec3:
-    """Rotate vector ``v`` (3,) by unit quaternion ``q`` (x, y, z, w)."""
+    """Rotate a vector by a unit quaternion.
+
+    Args:
+        q: (4,) unit quaternion (x, y, z, w).
+        v: (3,) vector in the frame ``q`` describes.
+
+    Returns:
+        ``v`` in ``q``'s parent frame.
+    """
     x, y, z, w = q
     vx, vy, vz = v
     # t = 2 q_vec x v ; v' = v + w t + q_vec x t
@@ -101,7 +136,14 @@ def quat_rotate(q: Sequence[float], v: Sequence[float]) -> Vec3:
 
 
 def quat_to_matrix(q: Sequence[float]) -> np.ndarray:
-    """3x3 rotation matrix of a unit quaternion (x, y, z, w)."""
+    """The rotation matrix of a unit quaternion.
+
+    Args:
+        q: (4,) unit quaternion (x, y, z, w).
+
+    Returns:
+        A (3, 3) float64 rotation matrix.
+    """
     x, y, z, w = (float(c) for c in q)
     return np.array(
         [
@@ -113,7 +155,14 @@ def quat_to_matrix(q: Sequence[float]) -> np.ndarray:
 
 
 def quat_from_matrix(m: np.ndarray) -> Quat:
-    """Unit quaternion (x, y, z, w, with w >= 0) of a 3x3 rotation matrix."""
+    """The unit quaternion of a rotation matrix.
+
+    Args:
+        m: (3, 3) rotation matrix.
+
+    Returns:
+        The quaternion (x, y, z, w), normalised, with w >= 0.
+    """
     m = np.asarray(m, dtype=float)
     tr = m[0, 0] + m[1, 1] + m[2, 2]
     if tr > 0:
@@ -134,10 +183,18 @@ def quat_from_matrix(m: np.ndarray) -> Quat:
 
 
 def matrix_from_quat_bullet(q: Sequence[float]) -> list[list[float]]:
-    """The rotation matrix Bullet's ``btMatrix3x3::setRotation`` makes of a quaternion (x, y, z,
-    w), operation for operation (double precision, no SIMD: PyBullet's build), as nested lists;
-    with :func:`quat_from_matrix_bullet` it repeats Bullet's own round-off where that decides
-    a sign (a turn of 120 degrees has trace 0)."""
+    """The rotation matrix Bullet's ``btMatrix3x3::setRotation`` makes of a quaternion.
+
+    Operation for operation (double precision, no SIMD: PyBullet's build); with
+    :func:`quat_from_matrix_bullet` it repeats Bullet's own round-off where that decides a sign
+    (a turn of 120 degrees has trace 0).
+
+    Args:
+        q: (4,) quaternion (x, y, z, w).
+
+    Returns:
+        The (3, 3) matrix as nested lists of floats, row by row.
+    """
     x, y, z, w = (float(c) for c in q)
     s = 2.0 / (x * x + y * y + z * z + w * w)
     xs, ys, zs = x * s, y * s, z * s
@@ -152,11 +209,20 @@ def matrix_from_quat_bullet(q: Sequence[float]) -> list[list[float]]:
 
 
 def quat_from_matrix_bullet(m: Sequence[Sequence[float]] | np.ndarray) -> Quat:
-    """The quaternion (x, y, z, w) Bullet's ``btMatrix3x3::getRotation`` gives for a rotation
-    matrix, its sign included: w > 0 where the trace is positive, else the component of the
-    largest diagonal entry positive (the first of equal ones, in Bullet's order of tests).
+    """The quaternion Bullet's ``btMatrix3x3::getRotation`` gives for a rotation matrix, its sign
+    included.
+
     Bullet turns every rotation it composes into a quaternion this way, so this sign, not
-    :func:`quat_from_matrix`'s w >= 0, is the one PyBullet reports (``getJointInfo``)."""
+    :func:`quat_from_matrix`'s w >= 0, is the one PyBullet reports (``getJointInfo``).
+
+    Args:
+        m: (3, 3) rotation matrix (nested sequences or an array).
+
+    Returns:
+        The quaternion (x, y, z, w) as plain floats: w > 0 where the trace is positive, else the
+        component of the largest diagonal entry positive (the first of equal ones, in Bullet's
+        order of tests).
+    """
     # Python floats, not numpy scalars: the same double arithmetic, and the quaternion it
     # returns holds plain floats (the joint table reports it as PyBullet does)
     m = np.asarray(m, dtype=float).tolist()
@@ -185,8 +251,15 @@ def quat_from_matrix_bullet(m: Sequence[Sequence[float]] | np.ndarray) -> Quat:
 def transform_multiply(
     a: tuple[Sequence[float], Sequence[float]], b: tuple[Sequence[float], Sequence[float]]
 ) -> tuple[Vec3, Quat]:
-    """Compose poses ``a * b`` given as (position, quaternion x, y, z, w): ``b`` expressed in
-    the frame ``a`` describes, returned in ``a``'s parent frame."""
+    """Compose poses ``a * b``.
+
+    Args:
+        a: (position (3,), quaternion (x, y, z, w)) of a frame in its parent frame.
+        b: (position, quaternion) expressed in the frame ``a`` describes.
+
+    Returns:
+        ``b`` in ``a``'s parent frame, as (position, quaternion).
+    """
     pa, qa = a
     pb, qb = b
     r = quat_rotate(qa, pb)
@@ -194,7 +267,14 @@ def transform_multiply(
 
 
 def transform_inverse(t: tuple[Sequence[float], Sequence[float]]) -> tuple[Vec3, Quat]:
-    """Inverse of a pose (position, quaternion x, y, z, w)."""
+    """Inverse of a pose.
+
+    Args:
+        t: (position (3,), quaternion (x, y, z, w)) of a frame in its parent frame.
+
+    Returns:
+        The parent frame in that frame, as (position, quaternion).
+    """
     p, q = t
     qi = quat_conjugate(q)
     r = quat_rotate(qi, p)
@@ -202,10 +282,24 @@ def transform_inverse(t: tuple[Sequence[float], Sequence[float]]) -> tuple[Vec3,
 
 
 def xyzw_to_wxyz(q: Sequence[float]) -> tuple[float, float, float, float]:
-    """(x, y, z, w) to MuJoCo's (w, x, y, z) order."""
+    """(x, y, z, w) to MuJoCo's (w, x, y, z) order.
+
+    Args:
+        q: (4,) quaternion (x, y, z, w).
+
+    Returns:
+        The same quaternion as (w, x, y, z).
+    """
     return (q[3], q[0], q[1], q[2])
 
 
 def wxyz_to_xyzw(q: Sequence[float]) -> Quat:
-    """MuJoCo's (w, x, y, z) order to (x, y, z, w)."""
+    """MuJoCo's (w, x, y, z) order to (x, y, z, w).
+
+    Args:
+        q: (4,) quaternion (w, x, y, z).
+
+    Returns:
+        The same quaternion as (x, y, z, w).
+    """
     return (q[1], q[2], q[3], q[0])

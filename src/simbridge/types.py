@@ -49,18 +49,22 @@ class JointInfo(NamedTuple):
     index: int  # type: ignore[assignment]  # PyBullet's field name; shadows tuple.index
     """Joint index; joint i moves link i."""
     name: str
+    """The joint's name in the file (bytes in PyBullet, a str here)."""
     type: JointType
+    """Its type, PyBullet's number (a URDF continuous joint is REVOLUTE)."""
     q_index: int
     """Index of this joint's first position in the body's state vector (-1 for fixed joints).
     PyBullet's layout: the 7 base coordinates come first, with a fixed base too."""
     u_index: int
     """Index of this joint's first velocity (after the 6 base velocities, -1 for fixed)."""
     flags: int
+    """1 for revolute and prismatic joints (they carry the default motor), else 0."""
     damping: float
     """URDF ``<dynamics damping>`` (N·m·s/rad or N·s/m)."""
     friction: float
     """URDF ``<dynamics friction>`` (N·m or N)."""
     lower_limit: float
+    """Lower position limit (rad or m); see ``upper_limit``."""
     upper_limit: float
     """Position limits. PyBullet reports lower 0, upper -1 when the URDF gives none
     (continuous joints); limits are reported, and enforced only for revolute/prismatic joints
@@ -86,15 +90,21 @@ class DynamicsInfo(NamedTuple):
     """The first eight fields of ``p.getDynamicsInfo``, in its order."""
 
     mass: float
+    """The link's mass (kg)."""
     lateral_friction: float
+    """Coefficient of sliding friction."""
     local_inertia_diagonal: Vec3
     """Principal moments of inertia in the link's inertial frame (kg·m²)."""
     local_inertial_position: Vec3
     """Centre of mass in the link frame."""
     local_inertial_orientation: Quat
+    """Orientation of the inertial frame in the link frame (x, y, z, w)."""
     restitution: float
+    """Coefficient of restitution."""
     rolling_friction: float
+    """Coefficient of rolling friction."""
     spinning_friction: float
+    """Coefficient of spinning friction."""
 
 
 class LinkState(NamedTuple):
@@ -110,9 +120,11 @@ class LinkState(NamedTuple):
     local_inertial_position: Vec3
     """Centre of mass in the link frame (as in ``DynamicsInfo``)."""
     local_inertial_orientation: Quat
+    """Orientation of the inertial frame in the link frame (x, y, z, w)."""
     link_frame_position: Vec3
     """World position of the URDF link frame (``worldLinkFramePosition``)."""
     link_frame_orientation: Quat
+    """World orientation of the URDF link frame (x, y, z, w)."""
     linear_velocity: Vec3
     """World linear velocity of the centre of mass (m/s)."""
     angular_velocity: Vec3
@@ -124,9 +136,13 @@ class BaseState(NamedTuple):
     ``getBaseVelocity`` report them (world frame)."""
 
     position: Vec3
+    """World position of the base's centre of mass (m)."""
     orientation: Quat
+    """World orientation of the base's inertial frame (x, y, z, w)."""
     linear_velocity: Vec3
+    """World linear velocity of the centre of mass (m/s)."""
     angular_velocity: Vec3
+    """World angular velocity (rad/s)."""
 
 
 class JointStates(NamedTuple):
@@ -143,8 +159,11 @@ class JointStates(NamedTuple):
     """
 
     positions: np.ndarray  # (n,)
+    """(n,) rad or m."""
     velocities: np.ndarray  # (n,)
+    """(n,) rad/s or m/s."""
     applied_torques: np.ndarray  # (n,)
+    """(n,) N·m or N, the motor force of the last step."""
 
 
 class JointStateMultiDof(NamedTuple):
@@ -160,8 +179,11 @@ class JointStateMultiDof(NamedTuple):
     """
 
     position: tuple[float, ...]
+    """Coordinates: rad or m; a spherical joint's quaternion (x, y, z, w)."""
     velocity: tuple[float, ...]
+    """Velocities: rad/s or m/s; a spherical joint's angular velocity."""
     applied_torque: tuple[float, ...]
+    """Motor force of the last step: N·m or N, per axis for a spherical joint."""
 
 
 class ContactPoint(NamedTuple):
@@ -177,13 +199,17 @@ class ContactPoint(NamedTuple):
     contact_flag: int
     """0 (PyBullet's reserved field)."""
     body_a: int
+    """Body id of A."""
     body_b: int
+    """Body id of B."""
     link_a: int
     """Link index of A (-1 = base)."""
     link_b: int
+    """Link index of B (-1 = base)."""
     position_on_a: Vec3
     """Contact point on A's surface (m, world)."""
     position_on_b: Vec3
+    """Contact point on B's surface (m, world)."""
     normal_on_b: Vec3
     """Unit contact normal on B, pointing from B towards A (world):
     ``position_on_a = position_on_b + distance * normal_on_b``."""
@@ -196,13 +222,19 @@ class ContactPoint(NamedTuple):
     lateral_friction_1: float
     """Friction force along ``lateral_friction_dir_1`` on A (N)."""
     lateral_friction_dir_1: Vec3
+    """First friction direction (unit, world)."""
     lateral_friction_2: float
+    """Friction force along ``lateral_friction_dir_2`` on A (N)."""
     lateral_friction_dir_2: Vec3
     """The second friction direction: ``normal_on_b``, dir 1 and dir 2 are orthonormal."""
 
     def swapped(self) -> ContactPoint:
-        """The same contact with A and B exchanged (the normal and the friction directions
-        reversed, so the forces stay the forces on the new A)."""
+        """The same contact with A and B exchanged.
+
+        Returns:
+            The contact seen from B: positions and links swapped, the normal and the friction
+            directions reversed, so the forces stay the forces on the new A.
+        """
         n, d1, d2 = self.normal_on_b, self.lateral_friction_dir_1, self.lateral_friction_dir_2
         return ContactPoint(
             self.contact_flag,
@@ -235,11 +267,17 @@ class JointCommands(NamedTuple):
     index order (see :class:`BodyState`, whose motor fields these are)."""
 
     mode: np.ndarray  # (n,) int, MotorMode values
+    """(n,) int, MotorMode values."""
     target: np.ndarray  # (n,) rad/s, m/s (VELOCITY) or rad, m (POSITION)
+    """(n,) rad/s or m/s (VELOCITY), rad or m (POSITION)."""
     max_force: np.ndarray  # (n,) N·m or N
+    """(n,) N·m or N, the force asked for."""
     kp: np.ndarray  # (n,)
+    """(n,) position gains (VELOCITY: 0)."""
     kd: np.ndarray  # (n,)
+    """(n,) velocity gains (VELOCITY: 1)."""
     pending_torque: np.ndarray  # (n,) N·m or N
+    """(n,) N·m or N, torque commands given since the last step."""
 
 
 class SphericalJointState(NamedTuple):
@@ -256,9 +294,11 @@ class SphericalJointState(NamedTuple):
     motor_mode: int
     """MotorMode.POSITION (towards ``motor_target``) or VELOCITY (a brake: kp 0, kd 1)."""
     motor_target: Quat
+    """The position motor's target (x, y, z, w); the identity for a brake."""
     motor_max_force: Vec3
     """N·m per axis (0: that axis released)."""
     motor_kp: Vec3
+    """Position gain per axis."""
     motor_kd: Vec3
     """PyBullet's ``damping`` per axis."""
     pending_torque: Vec3
@@ -281,18 +321,29 @@ class BodyState(NamedTuple):
     name: str
     """``<robot name>``."""
     joint_names: tuple[str, ...]
+    """Every joint's name, in index order."""
     base_position: Vec3
     """The base's centre of mass (m, world), as :class:`BaseState`."""
     base_orientation: Quat
+    """The base's inertial frame (x, y, z, w, world)."""
     base_linear_velocity: Vec3
+    """m/s, world."""
     base_angular_velocity: Vec3
+    """rad/s, world."""
     joint_positions: np.ndarray  # (n,)
+    """(n,) rad or m."""
     joint_velocities: np.ndarray  # (n,)
+    """(n,) rad/s or m/s."""
     motor_mode: np.ndarray  # (n,) int, MotorMode values
+    """(n,) int, MotorMode values."""
     motor_target: np.ndarray  # (n,)
+    """(n,) rad/s or m/s (VELOCITY), rad or m (POSITION)."""
     motor_max_force: np.ndarray  # (n,)
+    """(n,) N·m or N (0 = released)."""
     motor_kp: np.ndarray  # (n,)
+    """(n,) position gains."""
     motor_kd: np.ndarray  # (n,)
+    """(n,) velocity gains."""
     pending_torque: np.ndarray
     """(n,) torque commands given since the last step (they act during the next one)."""
     spherical: tuple[SphericalJointState, ...] = ()
@@ -318,5 +369,9 @@ class WorldState:
     native: Any = field(default=None, repr=False)
 
     def portable(self) -> WorldState:
-        """This state without the engine's own data."""
+        """This state without the engine's own data.
+
+        Returns:
+            A copy with ``native`` None: what another engine or world can take.
+        """
         return replace(self, native=None)

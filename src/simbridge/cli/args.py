@@ -22,6 +22,17 @@ __all__ = [
 
 
 def timestep(text: str) -> float:
+    """``--timestep``'s argument type.
+
+    Args:
+        text: The argument as given (seconds: ``0.004``, or ``1/240``).
+
+    Returns:
+        The time step (s).
+
+    Raises:
+        argparse.ArgumentTypeError: not a time step (the scenario reader's message).
+    """
     from simbridge.compare.scenario import parse_timestep
 
     try:
@@ -71,7 +82,12 @@ nonnegative_int = _integer(0)
 
 
 def add_job_options(p: argparse.ArgumentParser) -> None:
-    """Where and how a study's runs (jobs) run, and their cache."""
+    """Add where and how a study's runs (jobs) run, and their cache: ``--workers``,
+    ``--scheduler``, ``--cache``, ``--no-cache``, ``--fresh``.
+
+    Args:
+        p: The command's parser.
+    """
     p.add_argument(
         "--workers",
         type=nonnegative_int,
@@ -98,7 +114,14 @@ def add_job_options(p: argparse.ArgumentParser) -> None:
 
 
 def job_options(args: argparse.Namespace) -> dict[str, Any]:
-    """compare()'s job options from the options above, those not given left out."""
+    """compare()'s job options from the options :func:`add_job_options` adds.
+
+    Args:
+        args: The parsed command line.
+
+    Returns:
+        ``workers``, ``scheduler``, ``cache`` and ``fresh`` by name, those not given left out.
+    """
     out: dict[str, Any] = {}
     if getattr(args, "workers", None) is not None:
         out["workers"] = args.workers

@@ -34,7 +34,13 @@ def _size(text: str) -> int:
 
 
 def add_commands(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -> None:
-    """``simbridge cache`` and its commands ``info`` and ``prune`` (each parser's ``handler``)."""
+    """Add ``simbridge cache`` and its commands ``info`` and ``prune`` (each parser's ``handler``
+    set).
+
+    Args:
+        sub: The top-level parser's subparsers.
+        verbose: Adds ``--verbose`` to a parser.
+    """
     c = sub.add_parser(
         "cache",
         help="the study cache: its size, and its least recently used entries removed",
@@ -85,7 +91,14 @@ def add_commands(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -
 
 
 def fmt_size(n: float) -> str:
-    """``n`` bytes in words: 512 B, 3.4 KiB, 61.8 MiB, 1.2 GiB."""
+    """A size in words: 512 B, 3.4 KiB, 61.8 MiB, 1.2 GiB.
+
+    Args:
+        n: Bytes.
+
+    Returns:
+        The size in the largest unit (up to GiB) under 1024 of it.
+    """
     for unit in ("B", "KiB", "MiB", "GiB"):
         if n < 1024 or unit == "GiB":
             return f"{n:.0f} B" if unit == "B" else f"{n:.1f} {unit}"

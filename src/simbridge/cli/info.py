@@ -22,6 +22,12 @@ __all__ = ["add_command", "info_lines", "described", "display_lines"]
 
 
 def add_command(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -> None:
+    """Add ``simbridge info`` (its parser's ``handler`` set).
+
+    Args:
+        sub: The top-level parser's subparsers.
+        verbose: Adds ``--verbose`` to a parser.
+    """
     p = sub.add_parser(
         "info",
         help="what is installed and how it runs here: the lines a bug report needs",
@@ -41,8 +47,14 @@ def _version(dist: str) -> str | None:
 
 
 def described(name: str) -> str | None:
-    """What backend ``name`` says of how it runs here (its registration's ``describe``), or
-    None where it says nothing."""
+    """What a backend says of how it runs here (its registration's ``describe``).
+
+    Args:
+        name: A registered backend's name.
+
+    Returns:
+        Its line, or None where it says nothing.
+    """
     from importlib import import_module
 
     from simbridge.registry import backend_spec
@@ -55,9 +67,16 @@ def described(name: str) -> str | None:
 
 
 def display_lines(env: dict[str, str] | None = None) -> list[str]:
-    """Whether ``gui=True`` can open a window here: the X display and its socket, and for
-    PhysX's window the Vulkan drivers installed (it needs VK_KHR_external_semaphore_fd,
-    which Debian 12's lavapipe 22.3.6 lacks and Mesa 25's has; checked when a window opens)."""
+    """Whether ``gui=True`` can open a window here: the X display and its socket, and for PhysX's
+    window the Vulkan drivers installed (it needs VK_KHR_external_semaphore_fd, which Debian 12's
+    lavapipe 22.3.6 lacks and Mesa 25's has; checked when a window opens).
+
+    Args:
+        env: The environment to read (default: ``os.environ``).
+
+    Returns:
+        The lines ``simbridge info`` prints about windows.
+    """
     env = dict(os.environ) if env is None else env
     display = env.get("DISPLAY", "")
     if not display:
@@ -127,7 +146,11 @@ def _numerics() -> list[str]:
 
 
 def info_lines() -> list[str]:
-    """Every line ``simbridge info`` prints."""
+    """Every line ``simbridge info`` prints.
+
+    Returns:
+        The lines: simbridge's and Python's versions, each engine, windows, numerics, the cache.
+    """
     from simbridge import __version__
     from simbridge.cli.cache import fmt_size
     from simbridge.compare.run.cache import Cache

@@ -50,6 +50,11 @@ PROG = "simbridge"
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``simbridge`` command line: every command and its options.
+
+    Returns:
+        The parser (commands that set a ``handler`` run it; the others are run by name).
+    """
     from simbridge import PROFILES, available_backends
     from simbridge.cli.settings import add_set_option, add_settings_parser
 
@@ -504,7 +509,15 @@ class _StderrLog(logging.StreamHandler):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Parse ``argv`` (default ``sys.argv[1:]``), run the command, return the exit status."""
+    """Parse the command line, run the command.
+
+    Args:
+        argv: The arguments (default ``sys.argv[1:]``).
+
+    Returns:
+        The exit status: 0 on success, 1 on an error, 2 on bad usage, 130 on Ctrl-C, 143 on
+        SIGTERM.
+    """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -14,7 +14,11 @@ __all__ = ["add_settings_parser", "add_set_option", "settings_from_args", "setti
 
 
 def add_set_option(parser: argparse.ArgumentParser) -> None:
-    """``--set BACKEND.KEY=VALUE``, repeatable."""
+    """Add ``--set BACKEND.KEY=VALUE``, repeatable, each checked as it is parsed.
+
+    Args:
+        parser: The command's parser.
+    """
     parser.add_argument(
         "--set",
         action="append",
@@ -108,7 +112,13 @@ def _settings_of(backend: str) -> list[str]:
 
 
 def settings_from_args(assignments: Sequence[str] | None) -> dict[str, dict[str, Any]] | None:
-    """``--set``'s assignments as ``{backend: {key: value}}``, each checked (None: none).
+    """``--set``'s assignments as settings per backend, each checked.
+
+    Args:
+        assignments: The assignments as given, or None.
+
+    Returns:
+        ``{backend: {key: value}}``, later assignments on top; None when there are none.
 
     Raises:
         InvalidArgumentError, UnknownBackendError, InvalidProfileError: a bad assignment.
@@ -123,6 +133,15 @@ def settings_from_args(assignments: Sequence[str] | None) -> dict[str, dict[str,
 
 
 def add_settings_parser(sub: Any, backends: Sequence[str]) -> argparse.ArgumentParser:
+    """Add ``simbridge settings [BACKEND] [--json]``.
+
+    Args:
+        sub: The top-level parser's subparsers.
+        backends: The registered backends (the choices of BACKEND).
+
+    Returns:
+        The command's parser.
+    """
     s: argparse.ArgumentParser = sub.add_parser(
         "settings",
         help="list each engine's own settings (set them with --set or [engines.NAME])",
@@ -137,6 +156,16 @@ def add_settings_parser(sub: Any, backends: Sequence[str]) -> argparse.ArgumentP
 
 
 def settings_command(args: argparse.Namespace, backends: Sequence[str]) -> int:
+    """Print each backend's engine settings: key, default, accepted values, unit, meaning and
+    counterpart (or JSON with ``--json``).
+
+    Args:
+        args: The parsed command line (``backend``, ``json``).
+        backends: Every registered backend, listed when ``args.backend`` is not given.
+
+    Returns:
+        The exit status, 0.
+    """
     names = [args.backend] if args.backend else list(backends)
     if args.json:
         data = {b: [s.as_dict() for s in settings_for(b).values()] for b in names}

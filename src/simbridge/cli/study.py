@@ -23,6 +23,17 @@ __all__ = [
 
 
 def profile_name(text: str) -> str:
+    """``--profile``'s argument type: a profile's name, checked.
+
+    Args:
+        text: The argument as given (``pybullet`` or ``pybullet+lateral_friction=0.9``).
+
+    Returns:
+        ``text``.
+
+    Raises:
+        argparse.ArgumentTypeError: not a profile (the message of :func:`get_profile`).
+    """
     from simbridge.exceptions import SimbridgeError
     from simbridge.profiles import get_profile
 
@@ -44,7 +55,11 @@ def _vary(text: str) -> Any:
 
 
 def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
-    """``--resolve`` and ``--resolve-limit`` on ``simbridge compare``."""
+    """Add ``--resolve`` and ``--resolve-limit`` to ``simbridge compare``.
+
+    Args:
+        p: ``simbridge compare``'s parser.
+    """
     from simbridge.compare.study import DEFAULT_LIMIT
 
     p.add_argument(
@@ -63,7 +78,14 @@ def add_resolve_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def resolver_of(args: argparse.Namespace) -> Any:
-    """The :class:`~simbridge.compare.study.Resolver` ``--resolve`` asks for, else None."""
+    """The :class:`~simbridge.compare.study.Resolver` ``--resolve`` asks for.
+
+    Args:
+        args: The parsed command line.
+
+    Returns:
+        The resolver, or None without ``--resolve`` or ``--resolve-limit``.
+    """
     if not (getattr(args, "resolve", False) or getattr(args, "resolve_limit", None) is not None):
         return None
     from simbridge.compare.study import DEFAULT_LIMIT, Resolver
@@ -73,7 +95,12 @@ def resolver_of(args: argparse.Namespace) -> Any:
 
 
 def finish_resolve(resolver: Any, out: Path) -> None:
-    """Add the resolve table to the report in ``out`` and say on stdout how it went."""
+    """Add the resolve table to the report and say on stdout how it went.
+
+    Args:
+        resolver: What :func:`resolver_of` returned (None: nothing to do).
+        out: The report folder.
+    """
     if resolver is None or resolver.resolution is None:
         return
     from simbridge.compare.study import write_resolution
@@ -84,8 +111,14 @@ def finish_resolve(resolver: Any, out: Path) -> None:
 
 
 def add_study_options(p: argparse.ArgumentParser, backends: list[str], ensemble: int) -> None:
-    """The options of every study command: the scenario, its engines, the runs and the report
-    folder (``ensemble``: the default of ``--ensemble``)."""
+    """Add the options of every study command: the scenario, its engines, the runs and the report
+    folder.
+
+    Args:
+        p: The command's parser.
+        backends: The registered backends (the choices of ``--backends``).
+        ensemble: The default of ``--ensemble``.
+    """
     from simbridge.compare.run.ensemble import DEFAULT_PERTURB, DEFAULT_SEED
 
     p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
@@ -148,8 +181,14 @@ def add_commands(
     verbose: Callable[[argparse.ArgumentParser], None],
     jobs_arguments: Callable[[argparse.ArgumentParser], None] | None = None,
 ) -> None:
-    """``simbridge sweep`` and ``simbridge explain`` (each parser's ``handler`` set), with
-    ``jobs_arguments`` (``--workers``, ``--cache`` ...) added to each when given."""
+    """Add ``simbridge sweep`` and ``simbridge explain`` (each parser's ``handler`` set).
+
+    Args:
+        sub: The top-level parser's subparsers.
+        verbose: Adds ``--verbose`` to a parser.
+        jobs_arguments: Adds the job options (``--workers``, ``--cache`` ...) to each command,
+            when given.
+    """
     from simbridge.compare.run.ensemble import DEFAULT_ENSEMBLE
     from simbridge.compare.study.explain import DEFAULT_ENSEMBLE as EXPLAIN_ENSEMBLE
     from simbridge.registry import available_backends
@@ -223,9 +262,15 @@ def _check_profiles(args: argparse.Namespace) -> None:
 
 
 def check_engines(args: argparse.Namespace) -> None:
-    """``--set`` and ``--vary`` against the engines the command runs (``--backends``, else
-    every installed one): a setting of an engine not run, or a ``KEY@N`` past them, is bad
-    usage (exit 2), said before any engine runs."""
+    """Check ``--set`` and ``--vary`` against the engines the command runs (``--backends``, else
+    every installed one), before any engine runs.
+
+    Args:
+        args: The parsed command line.
+
+    Raises:
+        Usage: a setting of an engine not run, or a ``KEY@N`` past them (bad usage, exit 2).
+    """
     from simbridge.cli.settings import settings_from_args
     from simbridge.compare.study.points import check_vary
     from simbridge.engine_settings import require_engines

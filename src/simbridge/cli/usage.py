@@ -33,8 +33,16 @@ class ChoiceParser(argparse.ArgumentParser):
 
 
 def command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
-    """The parser of the command ``args`` ran (``simbridge compare``'s, ``simbridge cache
-    prune``'s), else ``parser``."""
+    """The parser of the command ``args`` ran.
+
+    Args:
+        parser: The top-level parser.
+        args: What it parsed.
+
+    Returns:
+        The innermost command's parser (``simbridge compare``'s, ``simbridge cache prune``'s),
+        else ``parser``.
+    """
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction) and action.dest:
             found = action.choices.get(str(getattr(args, action.dest, "")))
@@ -44,8 +52,18 @@ def command_parser(parser: argparse.ArgumentParser, args: argparse.Namespace) ->
 
 
 def scenario_argument(text: str) -> Any:
-    """The scenario a command line names: bad usage (exit 2) when it is neither a file nor a
-    shipped scenario's name; an invalid file's error as it is."""
+    """The scenario a command line names.
+
+    Args:
+        text: A scenario file's path or a shipped scenario's name.
+
+    Returns:
+        The loaded scenario.
+
+    Raises:
+        Usage: neither a file nor a shipped scenario's name (bad usage, exit 2).
+        ScenarioError: an invalid file, as it is.
+    """
     from simbridge.compare import load_scenario
     from simbridge.exceptions import ScenarioError
 

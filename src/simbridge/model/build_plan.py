@@ -112,7 +112,14 @@ class CollisionFilter:
     mask: int = -1
 
     def passes(self, other: CollisionFilter) -> bool:
-        """Whether the broadphase lets this link and ``other`` touch."""
+        """Whether the broadphase lets this link and ``other`` touch (PyBullet's OR rule).
+
+        Args:
+            other: The other link's filter.
+
+        Returns:
+            True when ``self.group & other.mask or other.group & self.mask``.
+        """
         return bool(self.group & other.mask or other.group & self.mask)
 
 
@@ -256,12 +263,25 @@ class BuildPlan:
     dropped_shapes: tuple[str, ...] = ()
 
     def link(self, index: int) -> LinkPlan:
-        """The link by PyBullet index (-1 = base)."""
+        """The link by PyBullet index.
+
+        Args:
+            index: The link's index (-1 = base).
+
+        Returns:
+            Its plan.
+        """
         return self.links[index + 1]
 
     def dynamics_info(self, index: int) -> DynamicsInfo:
-        """``Backend.dynamics_info`` of the link by PyBullet index (-1 = base): its inertial
-        and contact values, as every engine built from this plan simulates them."""
+        """``Backend.dynamics_info`` of a link, as every engine built from this plan simulates it.
+
+        Args:
+            index: The link's PyBullet index (-1 = base).
+
+        Returns:
+            Its inertial (kg, kg·m², inertial frame in the link frame) and contact values.
+        """
         link = self.links[index + 1]
         ine, ct = link.inertial, link.contact
         return DynamicsInfo(
@@ -281,12 +301,20 @@ class BuildPlan:
         return tuple(link.joint for link in self.links[1:] if link.joint is not None)
 
     def self_collides(self, a: int, b: int) -> bool:
-        """Whether links ``a`` and ``b`` (PyBullet indices) of this body may touch each other:
-        the mode is not ``"off"``, they are two links, not a pair the mode excludes, not both
-        static, and the broadphase filter lets them (PyBullet's rules). PyBullet's collision
-        detection still pairs two static links the filter lets through (``getContactPoints``
-        lists them) but they carry no force (measured: r2d2 on a fixed base), so they are left
-        out here."""
+        """Whether two links of this body may touch each other, by PyBullet's rules.
+
+        The mode is not ``"off"``, they are two links, not a pair the mode excludes, not both
+        static, and the broadphase filter lets them. PyBullet's collision detection still pairs two
+        static links the filter lets through (``getContactPoints`` lists them) but they carry no
+        force (measured: r2d2 on a fixed base), so they are left out here.
+
+        Args:
+            a: One link's PyBullet index (-1 = base).
+            b: The other's.
+
+        Returns:
+            True when they may touch.
+        """
         if self.self_collision == "off" or a == b:
             return False
         if (min(a, b), max(a, b)) in self.excluded_pairs:
@@ -294,8 +322,12 @@ class BuildPlan:
         return links_collide(self.link(a), self.link(b))
 
     def self_pairs(self) -> tuple[tuple[int, int], ...]:
-        """Every pair of links (i < j) of this body, both with collision shapes, that may touch
-        (:meth:`self_collides`), in order."""
+        """Every pair of links of this body, both with collision shapes, that may touch
+        (:meth:`self_collides`).
+
+        Returns:
+            ``(i, j)`` pairs of PyBullet indices, i < j, in order.
+        """
         ids = [link.index for link in self.links if link.collisions]
         return tuple(
             (a, b) for k, a in enumerate(ids) for b in ids[k + 1 :] if self.self_collides(a, b)
@@ -306,7 +338,15 @@ class BuildPlan:
 
 
 def contact_values(link: Link, profile: Profile) -> ContactValues:
-    """``link``'s contact values under ``profile`` (see :class:`ContactValues`)."""
+    """A link's contact values under a profile (see :class:`ContactValues`).
+
+    Args:
+        link: The link, with the ``<contact>`` values its file gives.
+        profile: The profile (its defaults, and whether it reads the file's values).
+
+    Returns:
+        Its friction, restitution and (when the file gives both) contact stiffness and damping.
+    """
     ct = link.contact
     read = profile.read_urdf_contact
 
@@ -325,9 +365,17 @@ def contact_values(link: Link, profile: Profile) -> ContactValues:
 
 
 def combine_contact(a: ContactValues, b: ContactValues) -> PairContact:
-    """Bullet's combination of two links' values: sliding friction and restitution are the
-    products; rolling and spinning friction ``x_a mu_b + x_b mu_a`` (mu the sliding friction),
-    clamped to :data:`COMBINED_FRICTION_MAX`."""
+    """Bullet's combination of two links' contact values.
+
+    Args:
+        a: One link's values.
+        b: The other's.
+
+    Returns:
+        Sliding friction and restitution as the products; rolling and spinning friction
+        ``x_a mu_b + x_b mu_a`` (mu the sliding friction), clamped to
+        :data:`COMBINED_FRICTION_MAX`.
+    """
     mu = a.lateral_friction * b.lateral_friction
     roll = min(
         COMBINED_FRICTION_MAX,
@@ -341,8 +389,16 @@ def combine_contact(a: ContactValues, b: ContactValues) -> PairContact:
 
 
 def collision_filter(model: UrdfModel, link: Link, fixed: bool) -> CollisionFilter:
-    """``link``'s broadphase group and mask as PyBullet gives them (``fixed``: the body's base
-    is welded to the world); see :class:`CollisionFilter`."""
+    """A link's broadphase group and mask as PyBullet gives them; see :class:`CollisionFilter`.
+
+    Args:
+        model: The robot (an MJCF or SDF body may set its own filters).
+        link: One of its links.
+        fixed: Whether the body's base is welded to the world.
+
+    Returns:
+        The link's filter.
+    """
     static_base = link.index == -1 and fixed
     group, mask = (2, -1 ^ 2) if static_base else (1, -1)
     own = getattr(model, "collision_filters", {}).get(link.name)
@@ -353,26 +409,48 @@ def collision_filter(model: UrdfModel, link: Link, fixed: bool) -> CollisionFilt
 
 
 def links_collide(a: LinkPlan, b: LinkPlan) -> bool:
-    """Whether two links may touch, by PyBullet's rules: not both welded to the world, and
-    the broadphase filter lets them. (Two links of one body: also
-    :meth:`BuildPlan.self_collides`.)"""
+    """Whether two links may touch, by PyBullet's rules: not both welded to the world, and the
+    broadphase filter lets them. (Two links of one body: also :meth:`BuildPlan.self_collides`.)
+
+    Args:
+        a: One link's plan.
+        b: The other's.
+
+    Returns:
+        True when they may touch.
+    """
     if a.static and b.static:
         return False
     return a.filter.passes(b.filter)
 
 
 def spherical_limited(joint: Joint) -> bool:
-    """Whether PyBullet limits this spherical joint: its importer adds a
-    btMultiBodySphericalJointLimit (swing about x within ``lower``, about y within ``upper``,
-    twist about z within ``twist``) when all four of lower, upper, twist and effort are > 0."""
+    """Whether PyBullet limits this spherical joint.
+
+    Its importer adds a btMultiBodySphericalJointLimit (swing about x within ``lower``, about y
+    within ``upper``, twist about z within ``twist``) when all four of lower, upper, twist and
+    effort are > 0.
+
+    Args:
+        joint: A spherical joint.
+
+    Returns:
+        True when it is limited.
+    """
     return joint.lower > 0 and joint.upper > 0 and joint.twist > 0 and joint.effort > 0
 
 
 def mesh_unusable(g: Geometry) -> bool:
-    """True for a mesh PyBullet gets nothing from: a file that cannot be read, no finite
-    vertex (pybullet_data's random_urdfs/168 is all NaN) or an .obj without a readable triangle
-    (PyBullet warns "cannot extract anything useful from mesh" and loads the link without
-    it)."""
+    """Whether PyBullet gets nothing from a mesh.
+
+    Args:
+        g: A mesh geometry with its resolved path.
+
+    Returns:
+        True for a file that cannot be read, no finite vertex (pybullet_data's random_urdfs/168
+        is all NaN) or an .obj without a readable triangle (PyBullet warns "cannot extract
+        anything useful from mesh" and loads the link without it).
+    """
     assert g.mesh_path is not None
     try:
         verts, faces = read_mesh(g.mesh_path)
@@ -484,14 +562,29 @@ def build_plan(
     base_position: Vec3 = (0.0, 0.0, 0.0),
     base_orientation: Quat = IDENTITY_QUAT,
 ) -> BuildPlan:
-    """The :class:`BuildPlan` of ``model`` (a :class:`UrdfModel`, or a
-    :class:`~simbridge.model.scene.SceneBody` from an MJCF or SDF file, already scaled and merged by
-    :func:`~simbridge.model.load_options.apply_load_options`) loaded at ``base_position`` /
-    ``base_orientation`` (x, y, z, w), with ``fixed_base`` as asked of ``load``.
+    """The :class:`BuildPlan` of ``model`` as ``load`` was asked to place it.
 
     The inertia source and self-collision mode are ``options``'; contact values the
-    ``profile``'s. Meshes are read here (:func:`simbridge.model.meshes.read_mesh`, cached): a file
-    that is not one of its format may raise its reader's error, as it would at load."""
+    ``profile``'s. Meshes are read here (:func:`simbridge.model.meshes.read_mesh`, cached).
+
+    Args:
+        model: A :class:`UrdfModel`, or a :class:`~simbridge.model.scene.SceneBody` from an
+            MJCF or SDF file, already scaled and merged by
+            :func:`~simbridge.model.load_options.apply_load_options`.
+        profile: The profile in force.
+        options: The load options.
+        fixed_base: As asked of ``load`` (a root of mass 0 is fixed too).
+        base_position: The base link frame's position in the world (m).
+        base_orientation: Its orientation (x, y, z, w).
+
+    Returns:
+        The plan: links in PyBullet's order, their inertials, shapes, contact values and
+        filters.
+
+    Raises:
+        OSError, ValueError: A mesh file that is not one of its format may raise its reader's
+            error, as it would at load.
+    """
     fixed = is_fixed_base(model, fixed_base)
     inertials = model_inertials(model, fixed_base, options.inertia_source)
     base_z = quat_rotate(base_orientation, (0.0, 0.0, 1.0))

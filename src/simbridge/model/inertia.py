@@ -68,6 +68,7 @@ class LinkInertial(NamedTuple):
     """A link's mass properties as PyBullet simulates them."""
 
     mass: float
+    """kg (0 for a link welded to the world as a fixed base)."""
     diagonal: Vec3
     """Principal moments in the inertial frame (kg·m²)."""
     position: Vec3
@@ -137,8 +138,19 @@ def collision_aabb_inertia(
     frame: tuple[Sequence[float], Sequence[float]],
     vertices: Callable[[Path], np.ndarray] = mesh_vertices,
 ) -> Vec3:
-    """PyBullet's default inertia of ``link`` with ``mass``, in the inertial ``frame``
-    (position, quaternion x, y, z, w, in the link frame). See the module docstring."""
+    """PyBullet's default inertia of a link: that of the box around its collision shapes. See the
+    module docstring.
+
+    Args:
+        link: The link.
+        mass: Its mass (kg); <= 0 gives zero moments.
+        frame: The inertial frame (position (3,) in m, quaternion (x, y, z, w)) in the link
+            frame.
+        vertices: Reads a mesh file's vertices ((n, 3) array) by path.
+
+    Returns:
+        The principal moments in the inertial frame (kg·m²).
+    """
     if mass <= 0:
         return (0.0, 0.0, 0.0)
     inv = transform_inverse(frame)
@@ -183,11 +195,18 @@ def collision_aabb_inertia(
 def jacobi_principal(
     tensor: np.ndarray, threshold: float = 1e-6, max_steps: int = 30
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Principal moments and axes (columns) of a symmetric 3x3 matrix by cyclic Jacobi
-    rotations, in the order Bullet's ``btMatrix3x3::diagonalize`` visits them (largest
-    off-diagonal first; ``threshold`` relative to the trace, at most ``max_steps`` rotations:
-    1e-6 and 30 for a link's file inertia), so the principal frame's orientation (axis order
-    and signs) is the one PyBullet reports."""
+    """Principal moments and axes of a symmetric 3x3 matrix by cyclic Jacobi rotations, in the
+    order Bullet's ``btMatrix3x3::diagonalize`` visits them (largest off-diagonal first), so
+    the principal frame's orientation (axis order and signs) is the one PyBullet reports.
+
+    Args:
+        tensor: (3, 3) symmetric matrix (an inertia tensor, kg·m²).
+        threshold: When to stop, relative to the trace (1e-6 for a link's file inertia).
+        max_steps: The most rotations (30 for a link's file inertia).
+
+    Returns:
+        The (3,) moments and the (3, 3) matrix whose columns are the principal axes.
+    """
     a = np.array(tensor, dtype=float)
     rot = np.eye(3)
     eps = np.finfo(float).eps
@@ -232,11 +251,20 @@ def jacobi_principal(
 
 
 def file_principal(ine: Inertial) -> tuple[np.ndarray, Quat, str | None]:
-    """The principal moments (kg m²) and the principal frame's orientation in the link frame
-    (x, y, z, w) PyBullet makes of an ``<inertia>`` tensor under ``URDF_USE_INERTIA_FROM_FILE``
-    (diagonalised as Bullet does), and why it zeroes them, or None: moments that are negative
-    or break the triangle inequality become zero (and the frame the ``<inertial>``'s), as in
-    PyBullet ("Bad inertia tensor properties, setting inertia to zero")."""
+    """What PyBullet makes of an ``<inertia>`` tensor under ``URDF_USE_INERTIA_FROM_FILE``
+    (diagonalised as Bullet does).
+
+    Moments that are negative or break the triangle inequality become zero (and the frame the
+    ``<inertial>``'s), as in PyBullet ("Bad inertia tensor properties, setting inertia to
+    zero").
+
+    Args:
+        ine: The link's ``<inertial>``.
+
+    Returns:
+        The (3,) principal moments (kg·m²), the principal frame's orientation in the link frame
+        (x, y, z, w), and why the moments were zeroed, or None.
+    """
     ixx, ixy, ixz, iyy, iyz, izz = ine.inertia
     orn = ine.origin_quat
     if ixy == 0.0 and ixz == 0.0 and iyz == 0.0:
@@ -257,8 +285,16 @@ def file_principal(ine: Inertial) -> tuple[np.ndarray, Quat, str | None]:
 
 
 def is_fixed_base(model: UrdfModel, fixed_base: bool) -> bool:
-    """PyBullet welds the root to the world when asked, or when the root's mass is 0 (a root
-    named ``world`` without ``<inertial>`` has mass 0)."""
+    """Whether PyBullet welds the root to the world: when asked, or when the root's mass is 0 (a
+    root named ``world`` without ``<inertial>`` has mass 0).
+
+    Args:
+        model: The robot.
+        fixed_base: Whether ``load`` was asked for a fixed base.
+
+    Returns:
+        True when the base is welded.
+    """
     if fixed_base:
         return True
     base = model.base
@@ -277,15 +313,22 @@ def link_inertial(
 ) -> LinkInertial:
     """Mass, principal inertia and inertial frame of ``link`` as PyBullet simulates them.
 
-    ``inertia_source`` is the profile entry: ``"collision_aabb"`` (PyBullet's default) or
-    ``"file"`` (``URDF_USE_INERTIA_FROM_FILE``: the tensor, diagonalised as Bullet does, its
-    principal axes turning the inertial frame; a tensor that breaks the triangle inequality
-    or is negative becomes zero, as in PyBullet). ``is_fixed_root``: the base of a body loaded
-    with ``fixed_base`` (mass and inertia 0). ``inertia_scaling``: Bullet's
-    ``<contact><inertia_scaling>`` factor on the moments (see :func:`inertia_scalings`).
-
     A link without ``<inertial>`` has mass 1 (inertia 1, 1, 1 from the file), except one named
     ``world``, which has mass 0 (Bullet's URDF parser).
+
+    Args:
+        link: The link.
+        inertia_source: The profile entry: ``"collision_aabb"`` (PyBullet's default) or
+            ``"file"`` (``URDF_USE_INERTIA_FROM_FILE``: the tensor, diagonalised as Bullet does,
+            its principal axes turning the inertial frame; a tensor that breaks the triangle
+            inequality or is negative becomes zero, as in PyBullet).
+        is_fixed_root: The base of a body loaded with ``fixed_base`` (mass and inertia 0).
+        inertia_scaling: Bullet's ``<contact><inertia_scaling>`` factor on the moments (see
+            :func:`inertia_scalings`).
+        vertices: Reads a mesh file's vertices ((n, 3) array) by path.
+
+    Returns:
+        Mass (kg), principal moments (kg·m²), and the inertial frame in the link frame.
     """
     ine = link.inertial
     pos: Vec3 = tuple(float(v) for v in ine.origin_xyz)  # type: ignore[assignment]
@@ -313,8 +356,14 @@ def link_inertial(
 
 
 def inertia_scalings(model: UrdfModel) -> dict[str, float]:
-    """Bullet's ``<contact><inertia_scaling value=..>`` per link name (links without one are
-    left out)."""
+    """Bullet's ``<contact><inertia_scaling value=..>`` per link.
+
+    Args:
+        model: The robot.
+
+    Returns:
+        The factor by link name (links without one are left out).
+    """
     return {
         link.name: link.contact.inertia_scaling
         for link in model.links
@@ -328,7 +377,17 @@ def model_inertials(
     inertia_source: str,
     vertices: Callable[[Path], np.ndarray] = mesh_vertices,
 ) -> list[LinkInertial]:
-    """:func:`link_inertial` of every link, in PyBullet order (base first)."""
+    """:func:`link_inertial` of every link.
+
+    Args:
+        model: The robot.
+        fixed_base: Whether ``load`` was asked for a fixed base (the base's mass is then 0).
+        inertia_source: The profile entry (``"collision_aabb"`` or ``"file"``).
+        vertices: Reads a mesh file's vertices ((n, 3) array) by path.
+
+    Returns:
+        One per link, in PyBullet order (base first).
+    """
     scales = inertia_scalings(model)
     return [
         link_inertial(

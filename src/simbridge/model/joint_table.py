@@ -46,8 +46,6 @@ def joint_table(
 ) -> list[JointInfo]:
     """The rows of ``p.getJointInfo`` for every joint of ``model``.
 
-    ``inertials[i + 1]`` is link i's inertial frame (``inertials[0]`` the base), as
-    :func:`~simbridge.model.inertia.link_inertial` gives them for the profile's inertia source.
     Fields:
 
     * ``q_index``/``u_index``: PyBullet's state layout, after 7 position and 6 velocity
@@ -62,6 +60,17 @@ def joint_table(
       inertial frame orientation seen from the parent's inertial frame at zero joint angle
       (measured: this, not the joint frame's orientation, is what ``getJointInfo`` reports),
       with Bullet's sign (:func:`_rot_parent_to_this`).
+
+    Args:
+        model: The robot, links and joints in PyBullet's order.
+        fixed_base: Whether the base is fixed; unused (PyBullet counts 7 and 6 base coordinates
+            even for a fixed base).
+        inertials: ``inertials[i + 1]`` is link i's inertial frame (``inertials[0]`` the base),
+            as :func:`~simbridge.model.inertia.link_inertial` gives them for the profile's
+            inertia source.
+
+    Returns:
+        One row per joint, in index order.
     """
     del fixed_base  # PyBullet counts 7 and 6 base coordinates even for a fixed base
     q, u = 7, 6

@@ -64,6 +64,11 @@ class LoadOptions:
     merge_fixed_links: bool = False
 
     def as_dict(self) -> dict[str, Any]:
+        """The options, JSON-able.
+
+        Returns:
+            Each field by name.
+        """
         return asdict(self)
 
 
@@ -75,10 +80,23 @@ def load_options(
     inertia_source: Any = None,
     merge_fixed_links: Any = False,
 ) -> LoadOptions:
-    """Check :meth:`Sim.load_urdf`'s options and fill the profile's entries in for the ones
-    left None. ``self_collision`` may also be True (``"exclude_parent"``) or False (``"off"``).
-    Raises :class:`~simbridge.exceptions.InvalidArgumentError` naming the argument and the
-    valid values."""
+    """Check :meth:`Sim.load_urdf`'s options and fill the profile's entries in for the ones left
+    None.
+
+    Args:
+        profile: The profile whose ``self_collision`` and ``inertia_source`` fill in.
+        global_scaling: A finite number > 0.
+        self_collision: One of :data:`SELF_COLLISION_MODES`, True (``"exclude_parent"``),
+            False (``"off"``), or None (the profile's).
+        inertia_source: One of :data:`INERTIA_SOURCES`, or None (the profile's).
+        merge_fixed_links: True or False.
+
+    Returns:
+        The checked options.
+
+    Raises:
+        InvalidArgumentError: naming the argument and the valid values.
+    """
     if isinstance(global_scaling, bool) or not isinstance(global_scaling, (int, float, np.number)):
         raise InvalidArgumentError(
             "global_scaling", f"must be a finite number > 0, got {global_scaling!r}"
@@ -114,8 +132,20 @@ def load_options(
 
 
 def apply_load_options(model: UrdfModel, options: LoadOptions, fixed_base: bool) -> UrdfModel:
-    """The model PyBullet builds with these options: scaled, then merged. ``model`` itself is
-    left as it was."""
+    """The model PyBullet builds with these options: scaled, then merged.
+
+    Args:
+        model: The parsed robot, left as it was.
+        options: The checked options.
+        fixed_base: Whether ``load`` was asked for a fixed base (merging keeps a welded root's
+            mass).
+
+    Returns:
+        The model to build (``model`` itself when neither option changes it).
+
+    Raises:
+        UrdfStructureError: as :func:`merge_fixed_links`.
+    """
     if options.global_scaling != 1.0:
         model = scaled(model, options.global_scaling)
     if options.merge_fixed_links:
@@ -140,7 +170,15 @@ def _scaled_shape(g: Geometry, s: float) -> Geometry:
 
 
 def scaled(model: UrdfModel, s: float) -> UrdfModel:
-    """``model`` with PyBullet's ``globalScaling`` ``s`` (see the module docstring)."""
+    """``model`` with PyBullet's ``globalScaling`` (see the module docstring).
+
+    Args:
+        model: The parsed robot, left as it was.
+        s: The factor on every length (> 0).
+
+    Returns:
+        The scaled copy.
+    """
     links = []
     for link in model.links:
         ine = link.inertial
@@ -212,8 +250,17 @@ def merge_fixed_links(model: UrdfModel, fixed_base: bool) -> UrdfModel:
     * a root welded to the world (``fixed_base`` or mass 0) takes the shapes but keeps its mass;
       its inertial frame still becomes the link frame.
 
-    Raises :class:`~simbridge.exceptions.UrdfStructureError` where Bullet would divide by a total
-    mass of 0 (a centre of mass of NaN)."""
+    Args:
+        model: The parsed robot, left as it was.
+        fixed_base: Whether ``load`` was asked for a fixed base.
+
+    Returns:
+        The merged copy, links in PyBullet's order.
+
+    Raises:
+        UrdfStructureError: where Bullet would divide by a total mass of 0 (a centre of mass of
+            NaN).
+    """
     file = model.source.display_name
     nodes: dict[str, _Node] = {}
     for link in model.links:
@@ -329,9 +376,16 @@ def _add_mass(node: _Node, child: _Node, at: tuple[Vec3, Quat], file: str, joint
 
 
 def self_collision_exclusions(model: UrdfModel, mode: str) -> set[tuple[int, int]] | None:
-    """The link pairs (i < j, -1 = base) of one body that do not collide under ``mode``; None
-    for ``"off"`` (no pair collides). The static rule (links welded to a fixed base) is the
-    backend's."""
+    """The link pairs of one body that do not collide under ``mode``. The static rule (links
+    welded to a fixed base) is the backend's.
+
+    Args:
+        model: The robot.
+        mode: One of :data:`SELF_COLLISION_MODES`.
+
+    Returns:
+        ``(i, j)`` pairs, i < j, -1 = base; None for ``"off"`` (no pair collides).
+    """
     if mode == "off":
         return None
     parent = {j.index: model.parent_index(j) for j in model.joints}

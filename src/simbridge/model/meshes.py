@@ -50,7 +50,13 @@ __all__ = [
 
 
 class MeshReadError(ValueError):
-    """A mesh file that is not one of its format (see the module docstring)."""
+    """A mesh file that is not one of its format (see the module docstring).
+
+    Args:
+        path: The file.
+        detail: What is wrong.
+        line: The line of an .obj that is to blame (1-based), or None.
+    """
 
     def __init__(self, path: str, detail: str, line: int | None = None) -> None:
         self.path = path
@@ -70,16 +76,36 @@ class MeshData(NamedTuple):
 
 def read_mesh(path: str | Path) -> MeshData:
     """The vertices and triangles of a mesh file (see the module docstring). Cached per path,
-    modification time and size; raises OSError when the file cannot be read, MeshReadError
-    (a ValueError) on an .obj/.stl that is not one, and trimesh's own errors on a file
-    trimesh cannot read."""
+    modification time and size.
+
+    Args:
+        path: The mesh file (.obj, .stl, or what trimesh reads).
+
+    Returns:
+        (n, 3) float64 vertices, unscaled, and (m, 3) int64 triangles, both read-only.
+
+    Raises:
+        OSError: the file cannot be read.
+        MeshReadError: an .obj/.stl that is not one (a ValueError); trimesh's own errors on a
+            file trimesh cannot read.
+    """
     name = str(path)
     stat = os.stat(name)
     return _read_cached(name, stat.st_mtime_ns, stat.st_size)
 
 
 def mesh_vertices(path: str | Path) -> np.ndarray:
-    """The (n, 3) vertex positions of :func:`read_mesh`, unscaled, read-only."""
+    """The vertex positions of :func:`read_mesh`.
+
+    Args:
+        path: The mesh file.
+
+    Returns:
+        (n, 3) float64 positions, unscaled, read-only.
+
+    Raises:
+        OSError, MeshReadError: as :func:`read_mesh`.
+    """
     return read_mesh(path).vertices
 
 
@@ -205,10 +231,21 @@ def _read_obj_quickly(text: str) -> MeshData | None:
 
 
 def pybullet_reads_stl(path: str | Path) -> bool:
-    """Whether PyBullet's STL reader (bullet3 ``LoadMeshFromSTL``) takes the file: binary
-    only, its header's triangle count (a signed 32-bit integer at byte 80) not 0 and the size
-    84 bytes + 50 per triangle. PyBullet leaves any other .stl out of the link (an ASCII STL,
-    which :func:`read_mesh` reads, among them) and warns "cannot extract mesh from"."""
+    """Whether PyBullet's STL reader (bullet3 ``LoadMeshFromSTL``) takes the file.
+
+    Binary only, its header's triangle count (a signed 32-bit integer at byte 80) not 0 and the
+    size 84 bytes + 50 per triangle. PyBullet leaves any other .stl out of the link (an ASCII
+    STL, which :func:`read_mesh` reads, among them) and warns "cannot extract mesh from".
+
+    Args:
+        path: An .stl file.
+
+    Returns:
+        True when PyBullet reads it.
+
+    Raises:
+        OSError: the file cannot be opened.
+    """
     with open(path, "rb") as f:
         head = f.read(84)
         size = os.fstat(f.fileno()).st_size

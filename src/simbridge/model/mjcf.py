@@ -149,12 +149,22 @@ def _alone_moments(s: _Shape, mass: float) -> Vec3:
 
 
 def bullet_moments(shapes: list[_Shape], mass: float, inertial: Pose) -> Vec3:
-    """PyBullet's principal moments of an MJCF link of ``mass`` with ``shapes``, in its
-    inertial frame ``inertial`` (``calculateLocalInertia`` of the link's compound shape, whose
-    margin is 0): one shape in that very frame gives its own rule (a solid sphere or cylinder, a
-    box for the rest); otherwise the box inertia of the box around every shape's box turned into
-    the inertial frame (a ``fromto`` capsule's box grown by 4 cm a side, Bullet's default
-    margin of its multi-sphere shape)."""
+    """PyBullet's principal moments of an MJCF link (``calculateLocalInertia`` of the link's
+    compound shape, whose margin is 0).
+
+    One shape in that very frame gives its own rule (a solid sphere or cylinder, a box for the
+    rest); otherwise the box inertia of the box around every shape's box turned into the
+    inertial frame (a ``fromto`` capsule's box grown by 4 cm a side, Bullet's default margin of
+    its multi-sphere shape).
+
+    Args:
+        shapes: The link's collision shapes, each with its frame in the link frame.
+        mass: The link's mass (kg); 0 gives zero moments.
+        inertial: The inertial frame (position in m, quaternion x, y, z, w) in the link frame.
+
+    Returns:
+        The moments in the inertial frame (kg·m²).
+    """
     if mass == 0 or not shapes:
         return (0.0, 0.0, 0.0)
     inv = transform_inverse(inertial)
@@ -314,9 +324,18 @@ def _scene_body(
 
 
 def parse_mjcf(src: UrdfSource) -> list[SceneBody]:
-    """The bodies ``p.loadMJCF`` creates from the file (see the module docstring), in its
-    order. Raises UrdfParseError, UrdfStructureError, MeshNotFoundError or
-    UnsupportedJointError naming the file, the line and the element."""
+    """The bodies ``p.loadMJCF`` creates from the file (see the module docstring), in its order.
+
+    Args:
+        src: The file, as :func:`~simbridge.model.scene.resolve_scene_source` gives it.
+
+    Returns:
+        One body per top-level ``<body>`` or ``<geom>`` of ``<worldbody>``.
+
+    Raises:
+        UrdfParseError, UrdfStructureError, MeshNotFoundError, UnsupportedJointError: naming
+            the file, the line and the element.
+    """
     reader = _Reader(src)
     models = reader.read()
     root = reader.root

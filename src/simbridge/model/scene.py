@@ -70,32 +70,72 @@ class SceneBody(UrdfModel):
 
 
 def line_of(elem: ET.Element) -> int:
-    """The source line of an element read by :func:`read_scene_xml` (1-based)."""
+    """The source line of an element read by :func:`read_scene_xml`.
+
+    Args:
+        elem: An element of that tree.
+
+    Returns:
+        Its line (1-based; 0 when it has none).
+    """
     return int(getattr(elem, "line", 0))
 
 
 def f32(value: float) -> float:
-    """``value`` rounded to float32 (PyBullet's MJCF importer reads vectors into float arrays)."""
+    """A number rounded to float32 (PyBullet's MJCF importer reads vectors into float arrays).
+
+    Args:
+        value: The number.
+
+    Returns:
+        It rounded to float32, as a Python float.
+    """
     return float(np.float32(value))
 
 
 def numbers(text: str | None) -> list[float]:
     """PyBullet's reading of a list of numbers: split at spaces only, each piece through C's
-    ``atof``."""
+    ``atof``.
+
+    Args:
+        text: An attribute's text, or None (no numbers).
+
+    Returns:
+        The numbers.
+    """
     return pybullet_numbers(text or "")[0]
 
 
 def number(text: str | None) -> float:
-    """C's ``atof`` of the whole text (PyBullet's ``urdfLexicalCast``)."""
+    """C's ``atof`` of the whole text (PyBullet's ``urdfLexicalCast``).
+
+    Args:
+        text: An attribute's text, or None (0).
+
+    Returns:
+        The number (0.0 where the text starts with none).
+    """
     return c_atof(text or "")[0]
 
 
 def resolve_scene_source(
     source: str | os.PathLike[str], kind: str, *, near: Path | None = None
 ) -> UrdfSource:
-    """A path, a name on the search path (this package's robots, then pybullet_data, e.g.
-    ``"mjcf/ant.xml"``), or the file's XML text. ``near``: a folder searched for a relative
-    path first (a scenario's)."""
+    """Find and read an MJCF or SDF file.
+
+    Args:
+        source: A path, a name on the search path (this package's robots, then pybullet_data,
+            e.g. ``"mjcf/ant.xml"``), or the file's XML text.
+        kind: ``"mjcf"`` or ``"sdf"``.
+        near: A folder searched for a relative path first (a scenario's).
+
+    Returns:
+        The source: its text, its file and folder.
+
+    Raises:
+        UrdfNotFoundError: neither a path, a name nor text, or found nowhere.
+        UrdfParseError: the file cannot be read.
+    """
     label = _KIND[kind]
     if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
         return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), f"<{label} text>")
@@ -121,10 +161,22 @@ MAX_XML_DEPTH = 98
 
 
 def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
-    """The file's root element (``<mujoco>`` or ``<sdf>``), every element with its source line.
-    Raises UrdfParseError (line and column) for XML PyBullet's parser refuses too, and
-    UrdfStructureError when the root element is another one (PyBullet: "Cannot find <mujoco>
-    root element", "expected an sdf element")."""
+    """Parse an MJCF or SDF file as PyBullet's XML reader does.
+
+    Args:
+        src: The source, as :func:`resolve_scene_source` gives it.
+        kind: ``"mjcf"`` or ``"sdf"``.
+
+    Returns:
+        The file's root element (``<mujoco>`` or ``<sdf>``), every element with its source
+        line.
+
+    Raises:
+        UrdfParseError: XML PyBullet's parser refuses too (with line and column).
+        UrdfStructureError: elements nested deeper than :data:`MAX_XML_DEPTH`, or a root
+            element other than the format's (PyBullet: "Cannot find <mujoco> root element",
+            "expected an sdf element").
+    """
     data = src.text.encode("utf-8", errors="surrogateescape")
     parser = expat.ParserCreate()
     builder = ET.TreeBuilder(element_factory=XmlElement)
@@ -190,16 +242,38 @@ def read_scene_xml(src: UrdfSource, kind: str) -> XmlElement:
 
 
 def find_mesh(uri: str, folder: str | Path) -> tuple[Path, list[str]]:
-    """:func:`~simbridge.model.urdf_source.resolve_mesh`: PyBullet's MJCF and SDF importers look
-    where its URDF importer does (bullet3 ``UrdfFindMeshFile.h``). Every folder tried is
-    joined to the name as written, so ``/meshes/a.stl`` is also found as ``meshes/a.stl``
-    beside the file (pybullet_data's ``kuka_with_gripper.sdf`` writes its meshes so)."""
+    """Where a mesh of an MJCF or SDF file is: PyBullet's MJCF and SDF importers look where its
+    URDF importer does (:func:`~simbridge.model.urdf_source.resolve_mesh`, bullet3
+    ``UrdfFindMeshFile.h``).
+
+    Every folder tried is joined to the name as written, so ``/meshes/a.stl`` is also found as
+    ``meshes/a.stl`` beside the file (pybullet_data's ``kuka_with_gripper.sdf`` writes its
+    meshes so).
+
+    Args:
+        uri: The mesh's file name as written.
+        folder: The file's folder, as :func:`~simbridge.model.urdf_source.resolve_mesh` takes
+            it.
+
+    Returns:
+        As :func:`~simbridge.model.urdf_source.resolve_mesh`: the file found (or the first
+        attempt) and every attempt.
+    """
     return resolve_mesh(uri, folder)
 
 
 def check_names(file: str, what: str, names: Sequence[tuple[str, int]]) -> None:
-    """Refuse a name used twice in one body: PyBullet keys links and joints by name and keeps
-    only the last of a name (silently dropping the other from its tree)."""
+    """Refuse a name used twice in one body: PyBullet keys links and joints by name and keeps only
+    the last of a name (silently dropping the other from its tree).
+
+    Args:
+        file: The file (for the message).
+        what: ``"link"`` or ``"joint"``.
+        names: Every name of that kind in the body, with its line (0: unknown).
+
+    Raises:
+        UrdfStructureError: at the second use of a name.
+    """
     seen: dict[str, int] = {}
     for name, line in names:
         if name in seen:

@@ -14,9 +14,21 @@ __all__ = ["parse_scene"]
 
 
 def parse_scene(source: str | os.PathLike[str], kind: str) -> list[SceneBody]:
-    """The bodies PyBullet creates from an MJCF (``kind="mjcf"``) or SDF (``"sdf"``) file, in
-    its order: a path, a name on the search path, or the file's text. See
-    :func:`simbridge.model.mjcf.parse_mjcf` and :func:`simbridge.model.sdf.parse_sdf`."""
+    """The bodies PyBullet creates from an MJCF or SDF file, in its order. See
+    :func:`simbridge.model.mjcf.parse_mjcf` and :func:`simbridge.model.sdf.parse_sdf`.
+
+    Args:
+        source: A path, a name on the search path, or the file's text.
+        kind: ``"mjcf"`` or ``"sdf"``.
+
+    Returns:
+        One :class:`~simbridge.model.scene.SceneBody` per body.
+
+    Raises:
+        ValueError: ``kind`` is neither.
+        UrdfError: as the format's reader, or the file is found nowhere
+            (UrdfNotFoundError).
+    """
     if kind not in SCENE_FORMATS:
         raise ValueError(f"kind must be one of {SCENE_FORMATS}, got {kind!r}")
     src = resolve_scene_source(source, kind)

@@ -433,10 +433,21 @@ class _Reader:
 
 
 def parse_sdf(src: UrdfSource) -> list[SceneBody]:
-    """The bodies ``p.loadSDF`` creates from the file (see the module docstring), in its
-    order. Raises UrdfParseError, UrdfStructureError, MeshNotFoundError or
-    UnsupportedJointError naming the file, the line and the element. An ``<include>``, which
-    PyBullet does not read, is one warning on the ``simbridge.model.sdf`` logger."""
+    """The bodies ``p.loadSDF`` creates from the file (see the module docstring), in its order.
+
+    An ``<include>``, which PyBullet does not read, is one warning on the
+    ``simbridge.model.sdf`` logger.
+
+    Args:
+        src: The file, as :func:`~simbridge.model.scene.resolve_scene_source` gives it.
+
+    Returns:
+        One body per ``<model>``.
+
+    Raises:
+        UrdfParseError, UrdfStructureError, MeshNotFoundError, UnsupportedJointError: naming
+            the file, the line and the element.
+    """
     root = read_scene_xml(src, "sdf")
     reader = _Reader(src)
     included = [f"line {line_of(e)} uri={e.findtext('uri')!r}" for e in root.iter("include")]

@@ -414,10 +414,16 @@ def _visual_color(
 
 
 def warn_missing_inertials(model: UrdfModel) -> None:
-    """PyBullet's parser gives a link without ``<inertial>`` (but one named ``world``) mass 1 at
+    """Say once per link, on every backend, that a link without ``<inertial>`` gets mass 1.
+
+    PyBullet's parser gives a link without ``<inertial>`` (but one named ``world``) mass 1 at
     the link's own frame, and says so ("No inertial data for link, using mass=1, ..."): every
-    backend simulates that link so, and this says it once per link, on every backend, on the
-    ``simbridge.model.urdf`` logger, naming the file, the line and the link."""
+    backend simulates that link so, and this logs it on the ``simbridge.model.urdf`` logger,
+    naming the file, the line and the link.
+
+    Args:
+        model: The parsed robot.
+    """
     file = model.source.display_name
     for link in model.links:
         if link.inertial.from_file or link.name == "world":
@@ -432,12 +438,20 @@ def warn_missing_inertials(model: UrdfModel) -> None:
 
 
 def check_file_inertia(model: UrdfModel) -> None:
-    """Under a profile that simulates the file's <inertia> (inertia_source "file"), a negative
-    moment of inertia is an error (PyBullet zeroes it, MuJoCo cannot take it); under the
-    "pybullet" profile the file's inertia is not used and such a file loads, as in PyBullet.
+    """Check the file's ``<inertia>`` under a profile that simulates it (inertia_source "file").
+
+    A negative moment of inertia is an error (PyBullet zeroes it, MuJoCo cannot take it); under
+    the "pybullet" profile the file's inertia is not used and such a file loads, as in PyBullet.
     A tensor whose principal moments PyBullet zeroes (negative, or breaking the triangle
     inequality) is simulated so on every backend, with one warning per link on the
-    ``simbridge.model.urdf`` logger naming the file, the line, the link and why."""
+    ``simbridge.model.urdf`` logger naming the file, the line, the link and why.
+
+    Args:
+        model: The parsed robot.
+
+    Raises:
+        UrdfStructureError: a negative ixx, iyy or izz.
+    """
     file = model.source.display_name
     for link in model.links:
         i = link.inertial.inertia
@@ -572,10 +586,22 @@ def _joint(r: _Reader, elem: XmlElement, name: str, links: dict[str, Link]) -> J
 
 
 def parse_urdf(src: UrdfSource) -> UrdfModel:
-    """Parse and validate a URDF as PyBullet reads it (see the module docstring); raise a
-    :class:`~simbridge.exceptions.UrdfError` subclass naming the file, the line and the
-    element on anything a backend could not load faithfully. What was read leniently is
-    logged as one warning on the ``simbridge.model.urdf`` logger and kept in ``model.assumed``."""
+    """Parse and validate a URDF as PyBullet reads it (see the module docstring).
+
+    What was read leniently is logged as one warning on the ``simbridge.model.urdf`` logger and
+    kept in ``model.assumed``.
+
+    Args:
+        src: The source, as :func:`~simbridge.model.urdf_source.resolve_source` gives it.
+
+    Returns:
+        The model: links and joints in PyBullet's order, each with its index.
+
+    Raises:
+        UrdfError: a subclass naming the file, the line and the element on anything a backend
+            could not load faithfully (UrdfParseError, UrdfStructureError, MeshNotFoundError,
+            UnsupportedJointError).
+    """
     file = src.display_name
     lenient = Leniency(file)
     xml = read_urdf_xml(src.text, file, lenient)
@@ -672,8 +698,18 @@ def parse_urdf(src: UrdfSource) -> UrdfModel:
 def pybullet_order(
     links: dict[str, Link], joints: Sequence[Joint], root: str
 ) -> tuple[list[Link], list[Joint]]:
-    """PyBullet's order: depth-first, pre-order, children in the order their joints appear
-    (``joints``' order). Sets each link's and joint's index (the root's -1)."""
+    """PyBullet's order: depth-first, pre-order, children in the order their joints appear.
+
+    Sets each link's and joint's index (the root's -1).
+
+    Args:
+        links: Every link by name.
+        joints: Every joint, in the file's order.
+        root: The root link's name.
+
+    Returns:
+        The links reached from the root (root first) and their joints, in that order.
+    """
     children: dict[str, list[Joint]] = {name: [] for name in links}
     for joint in joints:
         children[joint.parent].append(joint)

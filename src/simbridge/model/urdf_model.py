@@ -150,10 +150,25 @@ class UrdfModel:
         return self.links[0]
 
     def link(self, index: int) -> Link:
-        """Link by PyBullet index (-1 = base)."""
+        """A link by PyBullet index.
+
+        Args:
+            index: The link's index (-1 = base).
+
+        Returns:
+            The link.
+        """
         return self.links[index + 1]
 
     def parent_index(self, joint: Joint) -> int:
+        """The PyBullet index of a joint's parent link.
+
+        Args:
+            joint: One of the model's joints.
+
+        Returns:
+            The parent's index (-1 = base).
+        """
         return self._link_index[joint.parent]
 
     def __post_init__(self) -> None:

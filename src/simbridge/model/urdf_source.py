@@ -58,6 +58,12 @@ def search_path() -> list[Path]:
     """Folders searched for a URDF given by name: the package's robots, then pybullet_data.
 
     ``SIMBRIDGE_URDF_PATH`` (os.pathsep-separated) is searched first when set.
+
+    Returns:
+        The folders, in the order searched.
+
+    Raises:
+        RuntimeError: The package's robots folder is missing (a broken installation).
     """
     paths = [Path(p) for p in os.environ.get("SIMBRIDGE_URDF_PATH", "").split(os.pathsep) if p]
     paths.append(_robots_dir())
@@ -85,11 +91,17 @@ _LISTED = 10000
 
 
 def shown_path(text: str) -> str:
-    """A path (or what was given as one) as a message shows it: whole where it is at most
-    :data:`SHOWN_LENGTH` characters; longer, the middle of its folders that exist is cut
-    (``/a/b/.../y/z/wrong/name.urdf``), never the first part that does not exist nor any after
-    it; a text with a part no file system takes as a name (over :data:`NAME_MAX` characters) is
-    no path: its first 100 characters and its length."""
+    """A path (or what was given as one) as a message shows it.
+
+    Args:
+        text: The path as given.
+
+    Returns:
+        ``text`` whole where it is at most :data:`SHOWN_LENGTH` characters; longer, the middle
+        of its folders that exist cut (``/a/b/.../y/z/wrong/name.urdf``), never the first part
+        that does not exist nor any after it; for a text with a part no file system takes as a
+        name (over :data:`NAME_MAX` characters), its first 100 characters and its length.
+    """
     parts = text.split("/")
     if any(len(p) > NAME_MAX for p in parts):
         return f"{text[:100]}... ({len(text)} characters)"
@@ -158,10 +170,17 @@ def _closest(name: str, names: list[str], suffixes: Sequence[str]) -> str | None
 
 
 def near_file(text: str, folders: Sequence[Path], suffixes: Sequence[str] = ("",)) -> str | None:
-    """The path ``text`` with the parts that are not there replaced by the nearest names
-    beside them (``robots/pandaa.urdf`` -> ``robots/panda.urdf``), where that makes a file's
-    path: from ``/`` for an absolute path, else from each of ``folders`` in turn; None where no
-    such file is near. ``suffixes``: what the search also adds to the name (``.urdf``)."""
+    """The path ``text`` with the parts that are not there replaced by the nearest names beside
+    them (``robots/pandaa.urdf`` -> ``robots/panda.urdf``), where that makes a file's path.
+
+    Args:
+        text: The path given.
+        folders: Where a relative path starts, tried in turn (an absolute one starts at ``/``).
+        suffixes: What the search also adds to the name (``.urdf``).
+
+    Returns:
+        The near path, or None where no such file is near.
+    """
     path = Path(text)
     parts = list(path.parts)
     if not parts:
@@ -195,9 +214,18 @@ def not_found(
     folders: Sequence[Path] = (),
     suffixes: Sequence[str] = ("",),
 ) -> UrdfNotFoundError:
-    """The error for ``source`` found nowhere: shown as :func:`shown_path` shows a path, every
-    place ``tried`` once (in order), and "did you mean" a file whose path is near
-    (:func:`near_file`, from ``folders`` for a relative path)."""
+    """The error for ``source`` found nowhere.
+
+    Args:
+        source: What was asked for (shown as :func:`shown_path` shows a path).
+        tried: Every place tried, in order (each listed once).
+        kind: The file's kind in the message (``"URDF"``).
+        folders: Where a relative path's "did you mean" starts (:func:`near_file`).
+        suffixes: What the search also added to the name.
+
+    Returns:
+        The error, with "did you mean" a file whose path is near, to raise.
+    """
     near = None
     if "\0" not in source and all(len(p) <= NAME_MAX for p in source.split("/")):
         near = near_file(source, folders, suffixes)
@@ -213,10 +241,21 @@ def locate(
     suffixes: Sequence[str] = ("",),
     kind: str = "URDF",
 ) -> tuple[Path, bool]:
-    """Where the file ``source`` names is: ``source`` itself (from the working directory, ``~``
-    expanded); else, for a relative path, the path under ``near`` (a scenario's folder: the
-    name alone), then under each folder of :func:`search_path` (the name, then with each of
-    ``suffixes``). Returns the file and whether it was ``source`` itself.
+    """Where the file ``source`` names is.
+
+    ``source`` itself (from the working directory, ``~`` expanded); else, for a relative path,
+    the path under ``near``, then under each folder of :func:`search_path` (the name, then with
+    each of ``suffixes``).
+
+    Args:
+        source: A path or a name.
+        near: A folder searched first for a relative path (a scenario's folder: the name
+            alone).
+        suffixes: What the search path's lookups add to the name, in order.
+        kind: The file's kind in the message.
+
+    Returns:
+        The file, and whether it was ``source`` itself.
 
     Raises:
         UrdfNotFoundError: found nowhere (:func:`not_found`: every place searched, in order).
@@ -251,7 +290,19 @@ def locate(
 
 def resolve_source(source: str | os.PathLike[str], *, near: Path | None = None) -> UrdfSource:
     """Turn a path, a name on the search path, or URDF XML text into a :class:`UrdfSource`.
-    ``near``: a folder searched for a relative path before the search path (a scenario's)."""
+
+    Args:
+        source: A path, a name (``"r2d2"`` or ``"r2d2.urdf"``), or text starting with ``<``.
+        near: A folder searched for a relative path before the search path (a scenario's).
+
+    Returns:
+        The source: its text read as UTF-8 (other bytes kept as surrogate escapes), its file
+        and folder.
+
+    Raises:
+        UrdfNotFoundError: neither a path, a name nor text, or found nowhere.
+        UrdfParseError: the file cannot be read.
+    """
     if isinstance(source, str) and source.lstrip("\ufeff \t\r\n").startswith("<"):
         return UrdfSource(source.lstrip("\ufeff"), None, Path.cwd(), "<urdf text>")
     if not isinstance(source, (str, os.PathLike)):
@@ -286,31 +337,43 @@ def _mesh_candidates(uri: str, folder: str) -> list[str]:
 
 
 def mesh_folder(path: str | os.PathLike[str]) -> str:
-    """The folder part of a file's path as written (up to and with its last separator; ""
-    for a bare name): what :func:`resolve_mesh` takes for a file read from ``path``."""
+    """What :func:`resolve_mesh` takes for a file read from ``path``.
+
+    Args:
+        path: The file's path as written.
+
+    Returns:
+        Its folder part, up to and with its last separator (``""`` for a bare name).
+    """
     text = os.fspath(path)
     cut = max(text.rfind("/"), text.rfind("\\"))
     return text[: cut + 1]
 
 
 def resolve_mesh(uri: str, folder: str | Path) -> tuple[Path, list[str]]:
-    """Resolve a mesh filename where PyBullet does (bullet3 ``UrdfFindMeshFile.h``, measured
-    on PyBullet 3.2.7 with strace).
+    """Resolve a mesh filename where PyBullet does (bullet3 ``UrdfFindMeshFile.h``, measured on
+    PyBullet 3.2.7 with strace).
 
     ``file://`` is dropped, then ``package://`` or ``model://`` (the package's name stays:
-    ``package://pkg/m.stl`` is looked for as ``pkg/m.stl``). The name is tried as written
-    (from the working directory), then after every leading part of the URDF's path up to a
-    separator, longest first (its own folder, then each folder above it that the path names:
-    all of them for an absolute path, only those written for a relative one), then after
-    ``./``, ``../`` and ``../../`` (from the working directory). Each attempt is a prefix and
-    the name joined as strings, so ``/meshes/m.stl`` is also found as ``meshes/m.stl`` beside
-    the file. PyBullet's additional search path is not searched (it finds the URDF, whose path
-    then gives the folders).
+    ``package://pkg/m.stl`` is looked for as ``pkg/m.stl``). The name is tried as written (from
+    the working directory), then after every leading part of the URDF's path up to a separator,
+    longest first (its own folder, then each folder above it that the path names: all of them
+    for an absolute path, only those written for a relative one), then after ``./``, ``../``
+    and ``../../`` (from the working directory). Each attempt is a prefix and the name joined
+    as strings, so ``/meshes/m.stl`` is also found as ``meshes/m.stl`` beside the file.
+    PyBullet's additional search path is not searched (it finds the URDF, whose path then gives
+    the folders).
 
-    ``folder``: the URDF's folder as PyBullet is given it (:func:`mesh_folder` of its path, a
-    relative one included), or a folder as a Path (treated as absolute). Returns the first
-    regular file found (its real path) and the attempts made so far, each made absolute from
-    the working directory; where none is found, the first attempt and every attempt."""
+    Args:
+        uri: The mesh's filename as written in the file.
+        folder: The URDF's folder as PyBullet is given it (:func:`mesh_folder` of its path, a
+            relative one included), or a folder as a Path (treated as absolute).
+
+    Returns:
+        The first regular file found (its real path) and the attempts made so far, each made
+        absolute from the working directory; where none is found, the first attempt and every
+        attempt.
+    """
     base = folder if isinstance(folder, str) else os.path.join(os.path.abspath(folder), "")
     cwd = os.getcwd()
     tried: list[str] = []
@@ -331,11 +394,20 @@ _KINDS = (
 
 
 def not_a_regular_file(tried: Sequence[str | Path]) -> str | None:
-    """Why a mesh path that exists is not read: "PATH is a directory (not a regular file)"
-    for the first of ``tried`` (as :func:`resolve_mesh` lists them) that exists but is not a
-    regular file (symbolic links followed); None when none exists. Raw PyBullet 3.2.7 waits
-    forever on a FIFO, ends the process on a directory (std::bad_alloc) and reads a device
-    such as /dev/zero as a link without a shape (measured): such a path is refused."""
+    """Why a mesh path that exists is not read.
+
+    Raw PyBullet 3.2.7 waits forever on a FIFO, ends the process on a directory
+    (std::bad_alloc) and reads a device such as /dev/zero as a link without a shape (measured):
+    such a path is refused.
+
+    Args:
+        tried: The paths, as :func:`resolve_mesh` lists them.
+
+    Returns:
+        "PATH is a directory, not a regular file" (or a FIFO, a device...) for the first of
+        ``tried`` that exists, when it is not a regular file (symbolic links followed); None
+        when it is one or none exists.
+    """
     for path in tried:
         try:
             mode = os.stat(path).st_mode

@@ -48,15 +48,28 @@ class Leniency:
     notes: list[tuple[int, str]] = field(default_factory=list)
 
     def add(self, line: int | None, text: str) -> None:
+        """Note one assumption.
+
+        Args:
+            line: The source line (1-based), or None where no one line is to blame.
+            text: What was assumed.
+        """
         self.notes.append((line or 0, text))
 
     def message(self) -> str:
+        """The warning's text.
+
+        Returns:
+            The file, then every note (line: text), the first ten in full and a count of the rest.
+        """
         parts = [f"line {line}: {text}" if line else text for line, text in self.notes]
         more = len(parts) - _SHOWN
         shown = parts[:_SHOWN] + ([f"... and {more} more"] if more > 0 else [])
         return f"{self.file}: read as PyBullet reads it: " + "; ".join(shown)
 
     def log(self) -> None:
+        """Log :meth:`message` as one warning on the ``simbridge.model.urdf`` logger (if any
+        note)."""
         if self.notes:
             LOGGER.warning("%s", self.message())
 
@@ -92,9 +105,15 @@ _C_SPACE = " \t\n\v\f\r"
 
 
 def c_atof(text: str) -> tuple[float, bool]:
-    """C's ``atof`` (``strtod`` in the C locale): the value of the longest prefix that is a
-    number, 0.0 when there is none; and whether the whole text (blanks around it aside) was
-    that number."""
+    """C's ``atof`` (``strtod`` in the C locale).
+
+    Args:
+        text: The text to read.
+
+    Returns:
+        The value of the longest prefix that is a number (0.0 when there is none), and whether
+        the whole text (blanks around it aside) was that number.
+    """
     if text.isascii() and text.isprintable() and "_" not in text:  # float reads as strtod
         try:
             return float(text), True
@@ -115,9 +134,15 @@ def c_atof(text: str) -> tuple[float, bool]:
 
 
 def pybullet_numbers(text: str) -> tuple[list[float], bool]:
-    """A vector as PyBullet's ``parseVector3``/``parseVector4`` read it: the text split at
-    spaces (only), each non-empty piece through :func:`c_atof`. Also whether every piece was
-    a number as written."""
+    """A vector as PyBullet's ``parseVector3``/``parseVector4`` read it: the text split at spaces
+    (only), each non-empty piece through :func:`c_atof`.
+
+    Args:
+        text: An attribute's text.
+
+    Returns:
+        The numbers, and whether every piece was a number as written.
+    """
     values, clean = [], True
     for piece in text.split(" "):
         if piece:
@@ -451,10 +476,20 @@ def _utf16(raw: bytes) -> str:
 
 
 def read_urdf_xml(text: str, file: str, lenient: Leniency) -> UrdfXml:
-    """The ``<robot>`` element of ``text`` as PyBullet reads it (see the module docstring),
-    every element with its source line; notes on ``lenient`` for what a strict reading would
-    not have read so. Raises :class:`~simbridge.exceptions.UrdfParseError` (naming the line,
-    the column and the element it is in) for what PyBullet's parser also refuses."""
+    """The ``<robot>`` element of ``text`` as PyBullet reads it (see the module docstring).
+
+    Args:
+        text: The file's text (bytes that are not UTF-8 as surrogate escapes).
+        file: The file's name, for messages.
+        lenient: Takes a note of what a strict reading would not have read so.
+
+    Returns:
+        The root element, every element with its source line, and the text as read.
+
+    Raises:
+        UrdfParseError: what PyBullet's parser also refuses (naming the line, the column and
+            the element it is in), or a UTF-16 file.
+    """
     try:
         raw = text.encode("utf-8", errors="surrogateescape")  # a file's bytes as they were
     except UnicodeEncodeError:  # text with a lone surrogate of its own
