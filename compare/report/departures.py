@@ -30,7 +30,8 @@ it; any other is listed as the backend wrote it, marked as not checked against t
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -153,6 +154,26 @@ def checked(entry: dict[str, Any]) -> bool:
     return entry.get("why") != NOT_CHECKED
 
 
+class _Case(NamedTuple):
+    """What a rule of :func:`_judge` reads: one departure of one engine against this run."""
+
+    key: str
+    """The departure's key (``contact``, ``joint limits``...)."""
+    c: ComparisonView
+    """The comparison."""
+    facts: dict[str, Any]
+    """Each robot's model facts (collision cylinders, restitution, joint axes...)."""
+    touched: list[dict[str, list[str]]]
+    """Per shown engine, what each robot's links touched."""
+    events: list[EngineEvents]
+    """Per shown engine, its events."""
+    slot: int
+    """The slot of the engine whose departure it is."""
+    shown: list[int]
+    """The slots whose figures are shown: both of two engines, else the reference and
+    ``slot``."""
+
+
 def _judge(
     key: str,
     c: ComparisonView,
@@ -161,127 +182,185 @@ def _judge(
     events: list[EngineEvents],
     slot: int = 0,
 ) -> tuple[str | None, str | None]:
-    """(why it applies, measured) or (None, None) when it does not apply, for the engine in
-    ``slot``: with two engines, both engines' figures; with more, its own beside the first
-    engine's (the reference), never a third engine's."""
+    """Whether the departure ``key`` applies, for the engine in ``slot``: with two engines,
+    both engines' figures; with more, its own beside the first engine's (the reference), never
+    a third engine's.
+
+    Args:
+        key: the departure's key.
+        c: the comparison.
+        facts: each robot's model facts.
+        touched: per engine (every slot), what each robot's links touched.
+        events: per engine (every slot), its events.
+        slot: the engine whose departure it is.
+
+    Returns:
+        (why it applies, measured), measured None where the rule measures nothing; (None,
+        None) when it does not apply; (:data:`NOT_CHECKED`, None) where no rule checks it.
+    """
     shown = list(range(len(c.labels))) if len(c.labels) <= 2 else sorted({0, slot})
-    labels = c.labels
-    subject = c.scenario.subject
-    touched = [touched[k] for k in shown]
-    events = [events[k] for k in shown]
-    any_touch = any(touched)
-
-    def touching_with(kind: str) -> list[str]:
-        hits = []
-        for robot, f in facts.items():
-            links = f[kind] if isinstance(f[kind], list) else list(f[kind])
-            for link in links:
-                if any(link in t.get(robot, []) for t in touched):
-                    hits.append(f"{robot}'s {link}")
-        return hits
-
-    if key == "contact":
-        if not any_touch:
-            return None, None
-        bodies = sorted({b for t in touched for b in t})
-        why = "contacts in this run (" + ", ".join(bodies) + ")"
-        return why, _contact_figures(c, events, shown)
-    if key in ("cylinder", "restitution", "rolling/spinning friction"):
-        hits = touching_with(key)
-        if not hits:
-            return None, None
-        what = {
-            "cylinder": "collision cylinders",
-            "restitution": "nonzero restitution",
-            "rolling/spinning friction": "rolling or spinning friction",
-        }[key]
-        return f"links with {what} touched something: " + ", ".join(hits), None
-    if key == "joint limits":
-        per = []
-        for e in events:
-            reached = [x for x in e.events if x.kind == "joint_limit"]
-            words: list[str] = []
-            if e.initial_limits:
-                words.append(
-                    "from the start " + ", ".join(f"{x.joint} ({x.side})" for x in e.initial_limits)
-                )
-            if reached:
-                first = reached[0]
-                words.append(
-                    f"reached {len(reached)} time(s), first {first.part} ({first.side}) at "
-                    f"t = {first.time:.3f} s"
-                )
-            if words:
-                per.append(f"{e.label}: " + "; ".join(words))
-        if not per:
-            return None, None
-        return "joints at their limits in this run", "; ".join(per)
-    if key == "motors":
-        tr = c.runs[(0, c.timestep)]
-        mf = tr.body.joint_max_forces
-        driven = (
-            np.any(tr.body.joint_modes[1:] != 0, axis=0)
-            if mf is None
-            else np.any(np.isfinite(mf), axis=0)
-        )
-        names = [tr.body.joint_names[j] for j in np.flatnonzero(driven)]
-        if not names:
-            return None, None
-        sat = [f"{e.label} {sum(x.kind == 'motor_saturated' for x in e.events)}" for e in events]
-        return (
-            f"velocity or position motors drive {subject}'s " + ", ".join(names),
-            "motor saturations (force at max_force): " + ", ".join(sat),
-        )
-    if key == "speed clamp":
-        rows = []
-        hit = False
-        for k in shown:
-            label = labels[k]
-            tr = c.runs[(k, c.timestep)]
-            clamp = (tr.manifest.get("profile") or {}).get("max_joint_velocity")
-            if not clamp:
-                continue
-            b = tr.body
-            joint = float(np.abs(b.joint_velocities).max()) if b.joint_velocities.size else 0.0
-            base = float(norm(b.base_linear_velocity).max())
-            spin = float(norm(b.base_angular_velocity).max())
-            top = max(joint, base, spin)
-            hit |= top >= SPEED_CLAMP_FRACTION * clamp
-            rows.append(
-                f"{label}: largest joint speed {joint:.3g}, base {base:.3g} m/s and "
-                f"{spin:.3g} rad/s against the clamp {clamp:g}"
-            )
-        if not hit:
-            return None, None
-        return "a speed reached the profile's max_joint_velocity", "; ".join(rows)
-    if key == "joint axis":
-        hits = [
-            f"{robot}'s {j} (|axis| {n:.6g})"
-            for robot, f in facts.items()
-            for j, n in f["joint axis"].items()
-        ]
-        if not hits:
-            return None, None
-        return "joints with an axis not of length 1: " + ", ".join(hits), None
-    if key == "precision":
-        dtype = _state_dtype(c.runs[(slot, c.timestep)].manifest)
-        if dtype in (None, "float64"):
-            return NOT_CHECKED, None
-        return f"every scenario: {labels[slot]} keeps its state in {dtype}", None
-    if key == "link damping":
-        damped = []
-        for k in shown:  # its own figures and the reference's, never a third engine's
-            label = labels[k]
-            prof = c.runs[(k, c.timestep)].manifest.get("profile") or {}
-            found = [f"{k} {prof[k]:g}" for k in LINK_DAMPING if prof.get(k)]
-            if found:
-                damped.append(f"{label}: " + ", ".join(found))
-        if not damped:
-            return None, None
-        return "the profiles damp link velocities: " + "; ".join(damped), None
+    case = _Case(
+        key, c, facts, [touched[k] for k in shown], [events[k] for k in shown], slot, shown
+    )
+    rule = _RULES.get(key)
+    if rule is not None:
+        return rule(case)
     if key.startswith("body "):
         return "it names a body of this world", None
     return NOT_CHECKED, None
+
+
+def _contact(case: _Case) -> tuple[str | None, str | None]:
+    """``contact``: some body touched something in a shown engine's run."""
+    if not any(case.touched):
+        return None, None
+    bodies = sorted({b for t in case.touched for b in t})
+    why = "contacts in this run (" + ", ".join(bodies) + ")"
+    return why, _contact_figures(case.c, case.events, case.shown)
+
+
+_TOUCHING_WHAT = {
+    "cylinder": "collision cylinders",
+    "restitution": "nonzero restitution",
+    "rolling/spinning friction": "rolling or spinning friction",
+}
+"""The links each touching rule looks for, by departure key (a key of each robot's facts)."""
+
+
+def _touching(case: _Case) -> tuple[str | None, str | None]:
+    """``cylinder``, ``restitution``, ``rolling/spinning friction``: a link with it touched
+    something in a shown engine's run."""
+    hits = []
+    for robot, f in case.facts.items():
+        links = f[case.key] if isinstance(f[case.key], list) else list(f[case.key])
+        for link in links:
+            if any(link in t.get(robot, []) for t in case.touched):
+                hits.append(f"{robot}'s {link}")
+    if not hits:
+        return None, None
+    return f"links with {_TOUCHING_WHAT[case.key]} touched something: " + ", ".join(hits), None
+
+
+def _joint_limits(case: _Case) -> tuple[str | None, str | None]:
+    """``joint limits``: a joint sat at its limit from the start or reached it."""
+    per = []
+    for e in case.events:
+        reached = [x for x in e.events if x.kind == "joint_limit"]
+        words: list[str] = []
+        if e.initial_limits:
+            words.append(
+                "from the start " + ", ".join(f"{x.joint} ({x.side})" for x in e.initial_limits)
+            )
+        if reached:
+            first = reached[0]
+            words.append(
+                f"reached {len(reached)} time(s), first {first.part} ({first.side}) at "
+                f"t = {first.time:.3f} s"
+            )
+        if words:
+            per.append(f"{e.label}: " + "; ".join(words))
+    if not per:
+        return None, None
+    return "joints at their limits in this run", "; ".join(per)
+
+
+def _motors(case: _Case) -> tuple[str | None, str | None]:
+    """``motors``: a velocity or position motor drove a joint of the followed robot; each
+    engine's count of saturations."""
+    c = case.c
+    tr = c.runs[(0, c.timestep)]
+    mf = tr.body.joint_max_forces
+    driven = (
+        np.any(tr.body.joint_modes[1:] != 0, axis=0)
+        if mf is None
+        else np.any(np.isfinite(mf), axis=0)
+    )
+    names = [tr.body.joint_names[j] for j in np.flatnonzero(driven)]
+    if not names:
+        return None, None
+    sat = [f"{e.label} {sum(x.kind == 'motor_saturated' for x in e.events)}" for e in case.events]
+    return (
+        f"velocity or position motors drive {c.scenario.subject}'s " + ", ".join(names),
+        "motor saturations (force at max_force): " + ", ".join(sat),
+    )
+
+
+def _speed_clamp(case: _Case) -> tuple[str | None, str | None]:
+    """``speed clamp``: a joint speed or the base's speed reached
+    :data:`SPEED_CLAMP_FRACTION` of the profile's ``max_joint_velocity``."""
+    c = case.c
+    rows = []
+    hit = False
+    for k in case.shown:
+        label = c.labels[k]
+        tr = c.runs[(k, c.timestep)]
+        clamp = (tr.manifest.get("profile") or {}).get("max_joint_velocity")
+        if not clamp:
+            continue
+        b = tr.body
+        joint = float(np.abs(b.joint_velocities).max()) if b.joint_velocities.size else 0.0
+        base = float(norm(b.base_linear_velocity).max())
+        spin = float(norm(b.base_angular_velocity).max())
+        top = max(joint, base, spin)
+        hit |= top >= SPEED_CLAMP_FRACTION * clamp
+        rows.append(
+            f"{label}: largest joint speed {joint:.3g}, base {base:.3g} m/s and "
+            f"{spin:.3g} rad/s against the clamp {clamp:g}"
+        )
+    if not hit:
+        return None, None
+    return "a speed reached the profile's max_joint_velocity", "; ".join(rows)
+
+
+def _joint_axis(case: _Case) -> tuple[str | None, str | None]:
+    """``joint axis``: a movable joint's axis is not of length 1."""
+    hits = [
+        f"{robot}'s {j} (|axis| {n:.6g})"
+        for robot, f in case.facts.items()
+        for j, n in f["joint axis"].items()
+    ]
+    if not hits:
+        return None, None
+    return "joints with an axis not of length 1: " + ", ".join(hits), None
+
+
+def _precision(case: _Case) -> tuple[str | None, str | None]:
+    """``precision``: the engine keeps its state in a type other than float64."""
+    c = case.c
+    dtype = _state_dtype(c.runs[(case.slot, c.timestep)].manifest)
+    if dtype in (None, "float64"):
+        return NOT_CHECKED, None
+    return f"every scenario: {c.labels[case.slot]} keeps its state in {dtype}", None
+
+
+def _link_damping(case: _Case) -> tuple[str | None, str | None]:
+    """``link damping``: a shown engine's profile damps link velocities."""
+    c = case.c
+    damped = []
+    for k in case.shown:  # its own figures and the reference's, never a third engine's
+        label = c.labels[k]
+        prof = c.runs[(k, c.timestep)].manifest.get("profile") or {}
+        found = [f"{k} {prof[k]:g}" for k in LINK_DAMPING if prof.get(k)]
+        if found:
+            damped.append(f"{label}: " + ", ".join(found))
+    if not damped:
+        return None, None
+    return "the profiles damp link velocities: " + "; ".join(damped), None
+
+
+_RULES: dict[str, Callable[[_Case], tuple[str | None, str | None]]] = {
+    "contact": _contact,
+    "cylinder": _touching,
+    "restitution": _touching,
+    "rolling/spinning friction": _touching,
+    "joint limits": _joint_limits,
+    "motors": _motors,
+    "speed clamp": _speed_clamp,
+    "joint axis": _joint_axis,
+    "precision": _precision,
+    "link damping": _link_damping,
+}
+"""The rule that checks each departure key against this run."""
 
 
 def _state_dtype(manifest: dict[str, Any]) -> str | None:

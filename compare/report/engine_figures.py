@@ -10,16 +10,10 @@ from __future__ import annotations
 from typing import Any
 
 from ..analysis.diff import QUANTITIES
-from .fmt import fmt_threshold, fmt_time, fmt_value
+from .fmt import fmt_threshold, fmt_time, fmt_value, table
 from .verdict import interval_cell, perturbation_words, spread_ratio, verdict_word
 
 __all__ = ["engines_section", "pair_reasons", "p_words"]
-
-
-def _table(header: list[str], rows: list[list[str]]) -> list[str]:
-    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    out += ["| " + " | ".join(r) + " |" for r in rows]
-    return out
 
 
 def _ratio(r: float) -> str:
@@ -89,7 +83,7 @@ def engines_section(s: dict[str, Any]) -> list[str]:
         "against dt/2). Every figure is in `summary.json` under `ensemble.engines` and `own`.",
         "",
     ]
-    lines += _table(
+    lines += table(
         [
             "engine",
             "runs",

@@ -7,7 +7,15 @@ import re
 
 from ..run.quantities import DEG
 
-__all__ = ["file_stem", "fmt_apart", "fmt_distance", "fmt_time", "fmt_value", "fmt_threshold"]
+__all__ = [
+    "file_stem",
+    "fmt_apart",
+    "fmt_distance",
+    "fmt_time",
+    "fmt_value",
+    "fmt_threshold",
+    "table",
+]
 
 
 def fmt_distance(x: float | None, more: int = 0) -> str:
@@ -78,3 +86,18 @@ def file_stem(label: str) -> str:
     and ``_`` one ``-``, none at either end (``pybullet (2)``: ``pybullet-2``; ``mujoco
     (urdf)``: ``mujoco-urdf``)."""
     return re.sub(r"[^A-Za-z0-9_-]+", "-", label).strip("-") or "engine"
+
+
+def table(header: list[str], rows: list[list[str]]) -> list[str]:
+    """A Markdown table's lines: the header, its rule, a line per row.
+
+    Args:
+        header: the column titles.
+        rows: the cells of each row, as many as ``header``.
+
+    Returns:
+        The lines, with no blank line before or after.
+    """
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(r) + " |" for r in rows]
+    return out

@@ -1,8 +1,9 @@
-"""``report.md``'s sections over time, per phase and per part with more than two engines: a row
-for every pair of engines (:func:`crossings_section`, :func:`phases_section`,
-:func:`parts_section`, :func:`parting_lines`), from ``summary.json``'s ``pairs`` alone
+"""``report.md``'s sections with more than two engines: the pair table (:func:`pairs_section`),
+and over time, per phase and per part a row for every pair of engines
+(:func:`crossings_section`, :func:`phases_section`, :func:`parts_section`,
+:func:`parting_lines`), from ``summary.json``'s ``pairs`` alone
 (``pairs[].cross``, ``pairs[].parts``, ``pairs[].parting``). Two engines keep their sections in
-:mod:`.markdown`, one pair and no pair column."""
+:mod:`.gap_sections`, one pair and no pair column."""
 
 from __future__ import annotations
 
@@ -10,8 +11,9 @@ from typing import Any
 
 from ..analysis.diff import QUANTITIES
 from .events import parting_words
-from .fmt import fmt_threshold, fmt_time, fmt_value
+from .fmt import fmt_threshold, fmt_time, fmt_value, table
 from .parts import parts_words
+from .verdict import interval_cell, verdict_word
 
 # the notes under the crossings and the parts tables, one pair or many (markdown.py too)
 CROSSINGS_NOTE = (
@@ -28,6 +30,7 @@ PARTS_NOTE = (
 __all__ = [
     "MAX_PART_ROWS",
     "pair_name",
+    "pairs_section",
     "crossings_section",
     "phases_section",
     "parts_section",
@@ -45,10 +48,70 @@ def pair_name(p: dict[str, Any]) -> str:
     return f"{a} and {b}"
 
 
-def _table(header: list[str], rows: list[list[str]]) -> list[str]:
-    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    out += ["| " + " | ".join(r) + " |" for r in rows]
-    return out
+def pairs_section(s: dict[str, Any]) -> list[str]:
+    """With more than two engines, the pair table: one row per pair with its verdict, its judged
+    gap and interval, its nominal runs' gap at the end, where that gap is born and the test's
+    p-value.
+
+    Args:
+        s: ``summary.json``'s dict.
+
+    Returns:
+        The section's lines; empty with two engines.
+    """
+    pairs = s.get("pairs") or []
+    labels = s["labels"]
+    if len(labels) <= 2 or not pairs:
+        return []
+    unit = s["headline"]["unit"]
+    rows = [_pair_row(p, unit) for p in pairs]
+    lines = ["## Every pair of engines", ""]
+    lines += [
+        f"Each pair is judged as the first pair below is, on the {s['headline']['title']}: the "
+        "judged gap is the median over every pair of runs (one of each engine) at the judged "
+        "instant, with its 95% bootstrap interval; the nominal gap is that of the runs with no "
+        "offset at the end; the p-value is the two-sample test's, where it ran. Every figure is "
+        "in `summary.json` under `pairs`.",
+        "",
+    ]
+    lines += table(
+        [
+            "pair",
+            "verdict",
+            "judged gap [95%] (when)",
+            "nominal gap (end)",
+            "where the nominal gap is born",
+            "p",
+        ],
+        rows,
+    )
+    lines += [""]
+    return lines
+
+
+def _pair_row(p: dict[str, Any], unit: str) -> list[str]:
+    """One pair's row of the pair table (``p``: an entry of ``summary.json``'s ``pairs``)."""
+    a, b = p["labels"]
+    v = p["verdict"]
+    if v:
+        t = v["judged_at"]
+        when = "end" if t["why"] == "end" else f"t = {fmt_time(t['time'])}"
+        judged = f"{interval_cell(v['gap'], unit)} ({when})"
+    thr = p["headline"]["crossings"][0]
+    if thr["time"] is None:
+        born = f"never {fmt_threshold(thr['threshold'], unit)} apart"
+    else:
+        born = f"t = {fmt_time(thr['time'])} ({fmt_threshold(thr['threshold'], unit)})"
+        words = parting_words(p.get("parting") or {})
+        born += f", {words}" if words else ""
+    return [
+        f"{a} and {b}",
+        verdict_word(v) if v else "not judged",
+        judged if v else "n/a",
+        fmt_value(p["headline"]["final"], unit),
+        born,
+        "n/a" if not v or v["test"] is None else f"{v['test']['p_value']:.2g}",
+    ]
 
 
 def _quantities(pairs: list[dict[str, Any]]) -> list[str]:
@@ -81,7 +144,7 @@ def crossings_section(s: dict[str, Any]) -> list[str]:
         "`pairs[].cross`.",
         "",
     ]
-    lines += _table(["quantity", "pair", "first crossing", "", "", "at the end", "largest"], rows)
+    lines += table(["quantity", "pair", "first crossing", "", "", "at the end", "largest"], rows)
     lines += [
         "",
         CROSSINGS_NOTE,
@@ -116,7 +179,7 @@ def phases_section(s: dict[str, Any]) -> list[str]:
         "in `summary.json` under `pairs[].cross.phases`.",
         "",
     ]
-    lines += _table(
+    lines += table(
         ["phase", "pair", "time"] + [QUANTITIES[k].title + " at end" for k in keys], rows
     )
     lines += [""]
@@ -151,7 +214,7 @@ def parts_section(s: dict[str, Any]) -> list[str]:
                     fmt_value(part["at_end"], part["unit"]),
                 ]
             )
-    lines += _table(["pair", "rank", "part", "apart by", "largest gap", "at the end"], rows)
+    lines += table(["pair", "rank", "part", "apart by", "largest gap", "at the end"], rows)
     lines += [
         "",
         PARTS_NOTE,

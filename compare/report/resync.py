@@ -340,6 +340,64 @@ _COLORS = ("tab:blue", "tab:orange")
 _ENGINE_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 
 
+def _direction_lines(
+    ax: Any, d: Direction, picked: tuple[Any, Any, Any], color: str, lo: float
+) -> None:
+    """One direction's lines in a panel, each held above the precision floor ``lo``: its error
+    (solid), its floor (dashed) and, where given, the rounding of its states (dotted).
+    ``picked``: the panel's (error, floor, rounding or None) of ``d``."""
+    err, flo, loss = picked
+    ax.plot(
+        d.time,
+        np.maximum(err, lo),
+        color=color,
+        lw=1.4,
+        marker="o",
+        ms=2.5,
+        label=f"{d.source}'s states, stepped by {d.target}",
+    )
+    ax.plot(
+        d.time,
+        np.maximum(flo, lo),
+        color=color,
+        lw=1.1,
+        ls=(0, (4, 2)),
+        marker="x",
+        ms=2.5,
+        alpha=0.8,
+        label=f"{d.source}'s states, stepped by {d.source} (floor)",
+    )
+    if loss is not None and len(loss) == len(d.time):
+        ax.plot(
+            d.time,
+            np.maximum(loss, lo),
+            color=color,
+            lw=0.9,
+            ls=":",
+            alpha=0.9,
+            label=f"{d.source}'s states rounded to {d.target}'s {d.target_dtype}",
+        )
+
+
+def _phase_marks(ax: Any, r: Resync) -> None:
+    """Dotted lines at the phase starts, the phases' names at the top of the panel."""
+    d0 = r.directions[0]
+    tr_time = r.trajectories[0].time if r.trajectories else d0.time
+    for _name, first, _ in d0.phases[1:]:
+        ax.axvline(tr_time[first], color="0.6", lw=0.8, ls=":")
+    for name, first, _ in d0.phases:
+        ax.annotate(
+            name,
+            (tr_time[first], 0.98),
+            xycoords=ax.get_xaxis_transform(),
+            xytext=(3, 0),
+            textcoords="offset points",
+            fontsize=8,
+            color="0.4",
+            va="top",
+        )
+
+
 def _panels(
     r: Resync,
 ) -> list[tuple[str, str, Callable[[Direction], tuple[np.ndarray, np.ndarray, Any]]]]:
@@ -431,7 +489,17 @@ def plot_resync(
     the study has more; ``ylims``: each panel's y limits (several pairs on one scale);
     ``colors``: per engine label, the colour of its states' lines (one engine one colour over
     several pairs' figures; default blue for the first direction, orange for the second).
-    None when there is no point."""
+
+    Args:
+        r: the one-step resync of a pair.
+        path: the PNG to write.
+        pair: the pair's name for the title, or None.
+        ylims: each panel's y limits, or None for matplotlib's.
+        colors: each engine label's colour, or None for the defaults.
+
+    Returns:
+        ``path``, or None when there is no point to draw.
+    """
     if not any(len(d.rows) for d in r.directions):
         return None
     import matplotlib
@@ -445,60 +513,15 @@ def plot_resync(
         len(panels), 1, figsize=(7.6, 2.2 + 2.3 * len(panels)), sharex=True, squeeze=False
     )
     for p, (ax, (title, unit, pick)) in enumerate(zip(axes[:, 0], panels, strict=True)):
-        lo = r.precision_floor
         for slot, d in enumerate(r.directions):
-            err, flo, loss = pick(d)
             c = (colors or {}).get(d.source, _COLORS[slot % 2])
-            ax.plot(
-                d.time,
-                np.maximum(err, lo),
-                color=c,
-                lw=1.4,
-                marker="o",
-                ms=2.5,
-                label=f"{d.source}'s states, stepped by {d.target}",
-            )
-            ax.plot(
-                d.time,
-                np.maximum(flo, lo),
-                color=c,
-                lw=1.1,
-                ls=(0, (4, 2)),
-                marker="x",
-                ms=2.5,
-                alpha=0.8,
-                label=f"{d.source}'s states, stepped by {d.source} (floor)",
-            )
-            if loss is not None and len(loss) == len(d.time):
-                ax.plot(
-                    d.time,
-                    np.maximum(loss, lo),
-                    color=c,
-                    lw=0.9,
-                    ls=":",
-                    alpha=0.9,
-                    label=f"{d.source}'s states rounded to {d.target}'s {d.target_dtype}",
-                )
+            _direction_lines(ax, d, pick(d), c, r.precision_floor)
         ax.set_yscale("log")
         if ylims is not None:
             ax.set_ylim(*ylims[p])
         ax.set_ylabel(f"{title} ({unit})", fontsize=9)
         ax.grid(True, which="major", alpha=0.3)
-        d0 = r.directions[0]
-        tr_time = r.trajectories[0].time if r.trajectories else d0.time
-        for _name, first, _ in d0.phases[1:]:
-            ax.axvline(tr_time[first], color="0.6", lw=0.8, ls=":")
-        for name, first, _ in d0.phases:
-            ax.annotate(
-                name,
-                (tr_time[first], 0.98),
-                xycoords=ax.get_xaxis_transform(),
-                xytext=(3, 0),
-                textcoords="offset points",
-                fontsize=8,
-                color="0.4",
-                va="top",
-            )
+        _phase_marks(ax, r)
     between = f" ({pair})" if pair else ""
     axes[0, 0].set_title(
         f"One step from the same state{between}, every {r.every} steps (log scale)", fontsize=10

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 from ..analysis.verdict import ALPHA, MARGINAL, OWN_ERROR_REASONS, Marginal
 from ..run.ensemble import FLOAT_SPACINGS
@@ -281,145 +281,218 @@ def perturbation_words(ensemble: dict[str, Any] | None) -> str | None:
 
 
 def verdict_lines(summary: dict[str, Any]) -> list[str]:
-    """The verdict in words, from ``summary.json``'s ``verdict`` and ``ensemble`` alone."""
+    """The verdict in words, from ``summary.json``'s ``verdict`` and ``ensemble`` alone.
+
+    Args:
+        summary: ``summary.json``'s dict, with a ``verdict``.
+
+    Returns:
+        The verdict's paragraphs (its word in bold first), then, unless the engines agree, the
+        predictability horizons.
+    """
     v = summary["verdict"]
-    ens = summary.get("ensemble")
-    unit = v["unit"]
-    a, b = v["labels"]
-    figs = v["engine_figures"]
-    n = figs[a]["size"]
-    started = _perturbation(ens)
-    at_end = v["judged_at"]["why"] == "end"
-    when = "end" if at_end else f"are, at t = {fmt_time(v['judged_at']['time'])},"
-    marg = f" ({marginal_note(v)})" if v["marginal"] else ""
-    tol = fmt_threshold(v["tolerance"], unit)
-    lines: list[str] = []
-    if v["verdict"] == "agree":
-        mg = v["max_gap"]
-        spreads = " and ".join(
-            f"{fmt_value(f['spread_max'], unit)} ({lab})" for lab, f in figs.items()
-        )
-        lines.append(
-            f"**{a} and {b} agree on this scenario**{marg}: the gap between them stays below "
-            f"{tol} all along (largest {fmt_value(mg['value'], unit)}, at t = "
-            f"{fmt_time(mg['time'])})."
-            + (f" Each engine's {n} {started} spread by at most {spreads}." if n > 1 else "")
-        )
-    elif v["verdict"] == "chaotic":
-        names = v["engines"]
-        who = " and ".join(names)
-        verb = "is" if len(names) == 1 else "are"
-        first = figs[names[0]]
-        others = [lab for lab in (a, b) if lab not in names]
-        spread_words = (
-            f"**{who} {verb} chaotic on this scenario**{marg}: {first['size']} "
-            f"{_perturbation(ens, names[0])} "
-            f"{when} up to {fmt_value(first['largest_pair'], unit)} apart (spread "
-            f"{_iv(first['spread'], unit, inner=True)})"
-        )
-        if others:
-            o = figs[others[0]]
-            spread_words += (
-                f"; {others[0]}'s {o['size']} runs {when} within "
-                f"{fmt_value(o['largest_pair'], unit)} of each other"
-            )
-        lines.append(spread_words + ".")
-        ratio = " and ".join(f"{_x(figs[lab]['gap_over_spread'])} {lab}'s" for lab in names)
-        near = ""
-        if others:
-            near = (
-                f"; {others[0]}'s runs {when} a median "
-                f"{fmt_value(first['other_to_nearest'], unit)} from the nearest {names[0]} run"
-            )
-        also = [lab for lab in (a, b) if figs[lab]["gap_over_own_error"] <= v["marginal_range"][1]]
-        also_words = ""
-        if also:
-            also_words = (
-                " The gap is also "
-                + " and ".join(
-                    against_words(figs[lab]["gap_over_own_error"], f"{lab}'s own time-step error")
-                    + f" ({fmt_value(figs[lab]['own_error'], unit)} between dt and dt/2)"
-                    for lab in also
-                )
-                + (
-                    ""
-                    if all(figs[lab]["gap_over_own_error"] <= 1.0 for lab in also)
-                    else f", {near_words(v)}"
-                )
-                + "."
-            )
-        share = time_step_share(v)
-        if share:
-            also_words += (
-                f" Chaos is named first: at this time step {who}'s own runs {when} as far apart "
-                "as the two engines, so no single run here can show an engine difference. But "
-                f"over the run {share}: for most of the run the gap is of the size of what "
-                "halving the time step changes, not of chaos; a smaller --timestep tells whether "
-                "it closes."
-            )
-        lines.append(
-            f"The two engines' runs {when} {_median(v)}{_iv(v['gap'], unit)} apart, {ratio} own "
-            f"spread{near}: at this scale {who}'s outcome is not predictable, and the gap says "
-            "nothing about the engines' physics." + also_words
-        )
-        t = v["test"]
-        if t is not None:
-            told = "tells" if t["p_value"] < ALPHA else "does not tell"
-            lines[-1] += (
-                f" (A permutation test on the energy distance {told} the two sets of runs apart, "
-                f"{_p(t)}: "
-                + (
-                    "they are distributed differently, but within the spread of "
-                    f"{names[0]}'s own runs.)"
-                    if t["p_value"] < ALPHA
-                    else "one engine's runs could be the other's.)"
-                )
-            )
-    elif v["verdict"] == "differ":
-        t = v["test"]
-        parts = "; ".join(
-            f"{_x(f['gap_over_spread'])} {lab}'s own spread "
-            f"({fmt_value(f['spread']['value'], unit)}) and {_x(f['gap_over_own_error'])} its "
-            "time-step error"
-            for lab, f in figs.items()
-        )
-        lines.append(
-            f"**{a} and {b} differ on this scenario**{marg}: their runs {when} {_median(v)}"
-            f"{_iv(v['gap'], unit)} apart; that is {parts}."
-        )
-        lines.append(
-            f"A permutation test on the energy distance separates the two sets of {n} "
-            f"{started} ({_p(t)}): the gap is the engines', not chaos or the "
-            "time step."
-        )
-    else:
-        reason = v["reason"]
-        if reason in OWN_ERROR_REASONS:
-            near = "" if reason == OWN_ERROR_REASONS[0] else f", {near_words(v)}"
-            why = (
-                f"which is {own_error_words(v)}{near}: at this time step the "
-                "comparison cannot tell the engines apart; rerun with a smaller --timestep"
-            )
-        elif reason == "single run":
-            why = (
-                "and with one run per engine chaos cannot be told from an engine difference; "
-                "rerun with --ensemble 8 or more"
-            )
-        else:
-            t = v["test"]
-            why = (
-                f"but the permutation test does not separate the two sets of {n} {started} "
-                f"({_p(t)}); a larger --ensemble may"
-            )
-        lines.append(
-            f"**Unresolved**{marg}: the engines' runs {when} {_median(v)}{_iv(v['gap'], unit)} "
-            f"apart, {why}."
-        )
-    lines += _horizon_lines(v, unit) if v["verdict"] != "agree" else []
+    w = _VerdictWords.of(v, summary.get("ensemble"))
+    write = {"agree": _agree_lines, "chaotic": _chaotic_lines, "differ": _differ_lines}
+    lines = write.get(v["verdict"], _unresolved_lines)(v, w)
+    lines += _horizon_lines(v, w.unit) if v["verdict"] != "agree" else []
     return lines
 
 
+class _VerdictWords(NamedTuple):
+    """What every verdict's words share, from ``summary.json``'s ``verdict`` and ``ensemble``."""
+
+    ens: dict[str, Any] | None
+    """``summary.json``'s ``ensemble``."""
+    unit: str
+    """The judged quantity's unit."""
+    a: str
+    """The first engine's label."""
+    b: str
+    """The second engine's label."""
+    n: int
+    """The first engine's number of runs."""
+    started: str
+    """How the runs were started (:func:`_perturbation`)."""
+    when: str
+    """``end``, or ``are, at t = 1.200 s,`` where the judged instant is not the end."""
+    marg: str
+    """`` (marginal: ...)`` where the verdict is marginal, else empty."""
+
+    @classmethod
+    def of(cls, v: dict[str, Any], ens: dict[str, Any] | None) -> _VerdictWords:
+        """The words of the verdict ``v`` with the ensemble ``ens``."""
+        a, b = v["labels"]
+        at_end = v["judged_at"]["why"] == "end"
+        return cls(
+            ens=ens,
+            unit=v["unit"],
+            a=a,
+            b=b,
+            n=v["engine_figures"][a]["size"],
+            started=_perturbation(ens),
+            when="end" if at_end else f"are, at t = {fmt_time(v['judged_at']['time'])},",
+            marg=f" ({marginal_note(v)})" if v["marginal"] else "",
+        )
+
+
+def _agree_lines(v: dict[str, Any], w: _VerdictWords) -> list[str]:
+    """``agree``: the gap stays below the tolerance; each engine's spread."""
+    figs = v["engine_figures"]
+    unit = w.unit
+    mg = v["max_gap"]
+    spreads = " and ".join(f"{fmt_value(f['spread_max'], unit)} ({lab})" for lab, f in figs.items())
+    return [
+        f"**{w.a} and {w.b} agree on this scenario**{w.marg}: the gap between them stays below "
+        f"{fmt_threshold(v['tolerance'], unit)} all along (largest {fmt_value(mg['value'], unit)}, "
+        f"at t = {fmt_time(mg['time'])})."
+        + (f" Each engine's {w.n} {w.started} spread by at most {spreads}." if w.n > 1 else "")
+    ]
+
+
+def _chaotic_lines(v: dict[str, Any], w: _VerdictWords) -> list[str]:
+    """``chaotic``: how far the chaotic engine's own runs spread, then the gap against that
+    spread (and against the own time-step error where it is near), then the test."""
+    figs = v["engine_figures"]
+    names = v["engines"]
+    who = " and ".join(names)
+    first = figs[names[0]]
+    others = [lab for lab in (w.a, w.b) if lab not in names]
+    ratio = " and ".join(f"{_x(figs[lab]['gap_over_spread'])} {lab}'s" for lab in names)
+    near = ""
+    if others:
+        near = (
+            f"; {others[0]}'s runs {w.when} a median "
+            f"{fmt_value(first['other_to_nearest'], w.unit)} from the nearest {names[0]} run"
+        )
+    gap = (
+        f"The two engines' runs {w.when} {_median(v)}{_iv(v['gap'], w.unit)} apart, {ratio} own "
+        f"spread{near}: at this scale {who}'s outcome is not predictable, and the gap says "
+        "nothing about the engines' physics." + _chaotic_own_error_words(v, w)
+    )
+    return [_chaotic_spread_words(v, w), gap + _chaotic_test_words(v)]
+
+
+def _chaotic_spread_words(v: dict[str, Any], w: _VerdictWords) -> str:
+    """The chaotic engine's runs, how far apart they end; the other engine's, how close."""
+    figs = v["engine_figures"]
+    names = v["engines"]
+    first = figs[names[0]]
+    verb = "is" if len(names) == 1 else "are"
+    others = [lab for lab in (w.a, w.b) if lab not in names]
+    words = (
+        f"**{' and '.join(names)} {verb} chaotic on this scenario**{w.marg}: {first['size']} "
+        f"{_perturbation(w.ens, names[0])} "
+        f"{w.when} up to {fmt_value(first['largest_pair'], w.unit)} apart (spread "
+        f"{_iv(first['spread'], w.unit, inner=True)})"
+    )
+    if others:
+        o = figs[others[0]]
+        words += (
+            f"; {others[0]}'s {o['size']} runs {w.when} within "
+            f"{fmt_value(o['largest_pair'], w.unit)} of each other"
+        )
+    return words + "."
+
+
+def _chaotic_own_error_words(v: dict[str, Any], w: _VerdictWords) -> str:
+    """Where the gap is also near an engine's own time-step error: that, and how much of the
+    run the time step explains; else empty."""
+    figs = v["engine_figures"]
+    also = [lab for lab in (w.a, w.b) if figs[lab]["gap_over_own_error"] <= v["marginal_range"][1]]
+    words = ""
+    if also:
+        words = (
+            " The gap is also "
+            + " and ".join(
+                against_words(figs[lab]["gap_over_own_error"], f"{lab}'s own time-step error")
+                + f" ({fmt_value(figs[lab]['own_error'], w.unit)} between dt and dt/2)"
+                for lab in also
+            )
+            + (
+                ""
+                if all(figs[lab]["gap_over_own_error"] <= 1.0 for lab in also)
+                else f", {near_words(v)}"
+            )
+            + "."
+        )
+    share = time_step_share(v)
+    if share:
+        words += (
+            f" Chaos is named first: at this time step {' and '.join(v['engines'])}'s own runs "
+            f"{w.when} as far apart as the two engines, so no single run here can show an engine "
+            f"difference. But over the run {share}: for most of the run the gap is of the size of "
+            "what halving the time step changes, not of chaos; a smaller --timestep tells whether "
+            "it closes."
+        )
+    return words
+
+
+def _chaotic_test_words(v: dict[str, Any]) -> str:
+    """The permutation test's result in parentheses, where it ran; else empty."""
+    t = v["test"]
+    if t is None:
+        return ""
+    told = "tells" if t["p_value"] < ALPHA else "does not tell"
+    return (
+        f" (A permutation test on the energy distance {told} the two sets of runs apart, "
+        f"{_p(t)}: "
+        + (
+            f"they are distributed differently, but within the spread of {v['engines'][0]}'s own "
+            "runs.)"
+            if t["p_value"] < ALPHA
+            else "one engine's runs could be the other's.)"
+        )
+    )
+
+
+def _differ_lines(v: dict[str, Any], w: _VerdictWords) -> list[str]:
+    """``differ``: the gap against each engine's spread and time-step error, and the test that
+    separates the runs."""
+    unit = w.unit
+    parts = "; ".join(
+        f"{_x(f['gap_over_spread'])} {lab}'s own spread "
+        f"({fmt_value(f['spread']['value'], unit)}) and {_x(f['gap_over_own_error'])} its "
+        "time-step error"
+        for lab, f in v["engine_figures"].items()
+    )
+    return [
+        f"**{w.a} and {w.b} differ on this scenario**{w.marg}: their runs {w.when} {_median(v)}"
+        f"{_iv(v['gap'], unit)} apart; that is {parts}.",
+        f"A permutation test on the energy distance separates the two sets of {w.n} "
+        f"{w.started} ({_p(v['test'])}): the gap is the engines', not chaos or the "
+        "time step.",
+    ]
+
+
+def _unresolved_lines(v: dict[str, Any], w: _VerdictWords) -> list[str]:
+    """``unresolved``: the gap, and why it cannot be judged (the time step, one run, or a test
+    that does not separate the runs) with what to rerun."""
+    reason = v["reason"]
+    if reason in OWN_ERROR_REASONS:
+        near = "" if reason == OWN_ERROR_REASONS[0] else f", {near_words(v)}"
+        why = (
+            f"which is {own_error_words(v)}{near}: at this time step the "
+            "comparison cannot tell the engines apart; rerun with a smaller --timestep"
+        )
+    elif reason == "single run":
+        why = (
+            "and with one run per engine chaos cannot be told from an engine difference; "
+            "rerun with --ensemble 8 or more"
+        )
+    else:
+        why = (
+            f"but the permutation test does not separate the two sets of {w.n} {w.started} "
+            f"({_p(v['test'])}); a larger --ensemble may"
+        )
+    return [
+        f"**Unresolved**{w.marg}: the engines' runs {w.when} {_median(v)}"
+        f"{_iv(v['gap'], w.unit)} apart, {why}."
+    ]
+
+
 def _horizon_lines(v: dict[str, Any], unit: str) -> list[str]:
+    """When each engine's runs first spread past each threshold, in one sentence (empty when no
+    engine ran more than once)."""
     parts = []
     for lab, f in v["engine_figures"].items():
         if f["size"] < 2:

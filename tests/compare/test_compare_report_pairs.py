@@ -324,7 +324,7 @@ def test_distance_draws_every_pair(three, tmp_path, monkeypatch):
         fig.clf()
         return path
 
-    monkeypatch.setattr(plots, "_save", keep)
+    monkeypatch.setattr(plots, "save", keep)
     plots.distance(three, tmp_path / "distance.png")
     for a, b in (("pybullet", "mujoco"), ("pybullet", "physx"), ("mujoco", "physx")):
         assert f"{a} vs {b}: nominal runs" in seen

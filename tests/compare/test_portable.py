@@ -24,7 +24,12 @@ DISPATCHED = re.compile(
 
 # modules that draw pictures (pixels and the 3D replay's meshes), whose numbers no test holds
 # bit for bit and no report states
-PICTURES = {"report/plots.py", "report/replay.py", "report/frames.py"}
+PICTURES = {
+    "report/plots.py",
+    "report/replay.py",
+    "report/replay_models.py",
+    "report/frames.py",
+}
 
 
 def test_every_module_making_figures_avoids_the_dispatched_calls():

@@ -14,7 +14,7 @@ import pytest
 from PIL import Image
 
 from simbridge.compare import compare
-from simbridge.compare.report import plots, replay
+from simbridge.compare.report import plot_events, plots, replay
 from simbridge.compare.report.frames import HEADER, PANEL, write_frames
 
 
@@ -99,7 +99,7 @@ def _legend(monkeypatch, c, path) -> list[str]:
         seen["texts"] = [t.get_text() for lg in fig.legends for t in lg.get_texts()]
         return where
 
-    monkeypatch.setattr(plots, "_save_fixed", keep)
+    monkeypatch.setattr(plot_events, "save_fixed", keep)
     assert plots.events(c, path) is not None
     return seen["texts"]
 
