@@ -49,7 +49,7 @@ from simbridge.profiles import Profile
 from simbridge.transforms import transform_inverse, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
 
-from .motors import LIMIT_ERP, LIMIT_HARD_MARGIN, LIMIT_MARGIN, MOTOR_DMAX
+from .motor_rows import LIMIT_ERP, LIMIT_HARD_MARGIN, LIMIT_MARGIN, MOTOR_DMAX
 
 __all__ = ["RobotSpec", "GeomContact", "add_robot", "add_pairs", "new_world_spec"]
 
@@ -59,7 +59,7 @@ MIN_MASS = 1e-6  # kg, for a moving body whose URDF mass is 0 (MuJoCo refuses ze
 MIN_INERTIA = 1e-10  # kg m^2, likewise
 MIN_SIZE = 1e-6  # m, for a collision shape of size 0
 # Friction rows of the joint motors: as close to a hard constraint as MuJoCo allows, so the
-# motor reaches the velocity it asks for within a step (see motors.py).
+# motor reaches the velocity it asks for within a step (see motor_rows.py).
 MOTOR_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 DEFAULT_RGBA = (1.0, 1.0, 1.0, 1.0)
 
@@ -134,7 +134,7 @@ def new_world_spec(profile: Profile) -> mujoco.MjSpec:
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
     opt.iterations = profile.solver_iterations
     opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
-    # islands copy efc_R/efc_D before the backend hardens the motor rows (motors.py)
+    # islands copy efc_R/efc_D before the backend hardens the motor rows (motor_rows.py)
     opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     # the engine settings the profile sets (backends/settings_mujoco.py); contacts: add_pairs
     settings = profile.engine("mujoco")
@@ -378,7 +378,7 @@ def _add_joint(
         if upper == joint.lower:
             upper = float(np.nextafter(upper, np.inf))
         jnt.range = [joint.lower, upper]
-        # PyBullet's limit row (motors.py): aref = -v/dt - erp pos/dt^2
+        # PyBullet's limit row (motor_rows.py): aref = -v/dt - erp pos/dt^2
         dt = profile.timestep
         jnt.solref_limit = [-LIMIT_ERP / dt / dt * MOTOR_DMAX, -MOTOR_DMAX / dt]
         jnt.solimp_limit = list(MOTOR_SOLIMP)
