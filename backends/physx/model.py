@@ -219,6 +219,7 @@ class _LinkShapes:
         self.shape_links: dict[int, int] = {}
 
     def material_of(self, link: LinkPlan) -> Any:
+        """The ``PhysxMaterial`` of the link's friction and restitution, made once per pair."""
         key = (link.contact.lateral_friction, link.contact.restitution)
         if key not in self.materials:
             mat = physx.PhysxMaterial(key[0], key[0], key[1])
@@ -227,6 +228,7 @@ class _LinkShapes:
         return self.materials[key]
 
     def of(self, link: LinkPlan) -> list[Any]:
+        """The link's collision shapes, filtered for the contact filter (none attached yet)."""
         mat = self.material_of(link)
         out = []
         for g in link.collisions:
