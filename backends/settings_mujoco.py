@@ -2,7 +2,7 @@
 
 Imports no engine (read when a profile or a scenario is checked). The defaults are what the
 backend builds a world with today (model.py, backend.py): contact pairs with solref
-(2 dt, 1), MuJoCo's own solimp, a 1 mm margin; PyBullet's joint-limit rule (motors.py);
+(2 dt, 1), MuJoCo's own solimp, a 1 mm margin; PyBullet's joint-limit rule (motor_rows.py);
 MuJoCo's own option values otherwise. The
 contact parameters apply to every contact pair the backend makes (robot-robot and self
 collision); the options to the world.
@@ -99,7 +99,7 @@ SETTINGS = (
         "starts at or past it, so a joint passes by up to one step's travel, then is pushed "
         "back at 0.2 of the depth per step) or 'hard' (PhysX's: a joint arriving at its limit "
         "is stopped on it within the step; past it, pushed back as PyBullet's; "
-        "backends/mujoco/motors.py)",
+        "backends/mujoco/motor_rows.py)",
         choices=("pybullet", "hard"),
         toward="physx.limit_rule",
     ),

@@ -272,7 +272,7 @@ def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
     import sapien
 
     from simbridge.backends.physx import inspect
-    from simbridge.backends.physx.motors import DRIVE_DAMPING
+    from simbridge.backends.physx.commands import DRIVE_DAMPING
 
     scene, r = inspect.scene(w.sim), inspect.robot(w.sim, w.body)
     for moving in r.moving_links:  # PhysX's own link damping, the profile's k

@@ -292,7 +292,7 @@ def _physx_raw_world(sim: simbridge.Sim, robot: int, native_damping: bool = True
     the idiomatic way (stiffness 0, the layer's damping, the force limit set where the schedule
     changes it, targets every step) and the other joints' brakes left as the layer set them."""
     from simbridge.backends.physx import inspect
-    from simbridge.backends.physx.motors import DRIVE_DAMPING
+    from simbridge.backends.physx.commands import DRIVE_DAMPING
 
     r = inspect.robot(sim, robot)
     if native_damping:

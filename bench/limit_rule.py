@@ -8,7 +8,7 @@ inside passes by up to one step's travel, then is pushed back at 0.2 of the dept
 PhysX's own limit (``physx.limit_rule = "hard"``, its default) stops it on the limit within the
 step; ``"pybullet"`` gives PhysX PyBullet's rule (backends/physx/limits.py). MuJoCo's backend
 has PyBullet's rule (``mujoco.limit_rule = "pybullet"``, its default); ``"hard"`` gives it PhysX's
-(backends/mujoco/motors.py).
+(backends/mujoco/motor_rows.py).
 
 Cases, 1/240 s, "pybullet" profile, each 240 steps:
 

@@ -349,7 +349,7 @@ def test_manifest_lists_what_physx_cannot_match():
 
 @needs_sapien
 def test_the_speed_clamp_and_motor_departures_say_what_the_backend_does():
-    from simbridge.backends.physx.motors import DRIVE_DAMPING
+    from simbridge.backends.physx.commands import DRIVE_DAMPING
 
     with simbridge.Sim("physx") as sim:
         dep = sim.manifest()["departures"]

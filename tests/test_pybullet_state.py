@@ -1,6 +1,6 @@
-"""The PyBullet backend's bookkeeping for get_state/set_state (backends/pybullet/state.py): its
-saveState snapshots are freed when their states are collected, never across a reset, and a
-snapshot of another world is not restored."""
+"""The PyBullet backend's bookkeeping for get_state/set_state (backends/pybullet/records.py and
+world.py): its saveState snapshots are freed when their states are collected, never across a
+reset, and a snapshot of another world is not restored."""
 
 from __future__ import annotations
 

@@ -19,7 +19,7 @@
  * unit so that the per-step helpers (motor offsets, limit rows, damping, the exact solve, the
  * polish, the clamp) inline into the step loop, with no header shared between .c files to keep
  * in step. Its sections follow the Python rooms it mirrors: loop.py (the step), solve.py (the
- * exact solve and the polish), damping.py (link damping and the clamp), state.py (body_state),
+ * exact solve and the polish), damping.py (link damping and the clamp), reads.py (body_state),
  * commands.py (set_velocity), and the module's Python type at the end.
  */
 #define PY_SSIZE_T_CLEAN
@@ -425,7 +425,7 @@ fail:
   return NULL;
 }
 
-/* motors.spherical_error: Bullet's matrixToEulerXYZ of conj(q) * t, q = (w, x, y, z) as MuJoCo
+/* motor_rows.spherical_error: Bullet's matrixToEulerXYZ of conj(q) * t, q = (w, x, y, z) as MuJoCo
  * keeps it, t = (x, y, z, w); the same arithmetic in the same order as the Python. */
 static void spherical_error(const double* q, const double* t, double* e) {
   double cx = -q[1], cy = -q[2], cz = -q[3], cw = q[0];
@@ -897,7 +897,7 @@ static int run_steps(Kernel* self, long n, int pending) {
         d->efc_D[r] *= inv;
       }
     }
-    if (d->nl) { /* PyBullet's limit rows (motors.py), after the friction rows */
+    if (d->nl) { /* PyBullet's limit rows (motor_rows.py), after the friction rows */
       const double inv = 1.0 / self->r_scale;
       for (int r = d->nf; r < d->nf + d->nl; r++) {
         d->efc_R[r] *= self->r_scale;
@@ -907,7 +907,7 @@ static int run_steps(Kernel* self, long n, int pending) {
         double pos = d->efc_pos[r], margin = d->efc_margin[r];
         d->efc_aref[r] += self->limit_k * (pos - margin);
         if (pos <= 0.0 && pos > -self->limit_deep) d->efc_aref[r] -= self->limit_k * pos;
-        /* limit_rule "hard": inside the range, stop on the limit (motors.py) */
+        /* limit_rule "hard": inside the range, stop on the limit (motor_rows.py) */
         else if (pos > 0.0 && self->limit_k_in != 0.0) d->efc_aref[r] -= self->limit_k_in * pos;
       }
     }

@@ -2,7 +2,7 @@
 
 The ``Backend`` methods. One ``MjSpec`` holds the world (model.py builds each robot into it);
 every ``load``/``remove`` edits it and recompiles with ``MjSpec.recompile``, which carries
-``qpos``/``qvel``/time of the bodies already there across; world.py then derives everything a
+``qpos``/``qvel``/time of the bodies already there across; robots.py then derives everything a
 step needs (:class:`~.world.Compiled`) and keeps each robot's motor settings across compiles.
 A step runs the compiled loop (kernel.py, _mjkernel.c) or its Python reference (loop.py); both
 report trouble as a status or an exception that this module turns into the Sim's errors.
@@ -45,10 +45,10 @@ from . import model as build
 from .commands import MotorCommands
 from .contacts import ContactReads
 from .loop import step_python
-from .snapshot import Snapshots
-from .state import _PY_BUSY, StateAccess
-from .viewer import Viewer, check_display
-from .world import Compiled, Robot, compile_state, default_motors
+from .reads import _PY_BUSY, StateReads
+from .robots import Compiled, Robot, compile_state, default_motors
+from .window import Viewer, check_display
+from .world import Snapshots
 
 if TYPE_CHECKING:
     from simbridge.model.scene import SceneBody
@@ -94,7 +94,7 @@ def tree_depth(model: UrdfModel) -> int:
 _STEP_CHUNK = 1000
 
 
-class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend):
+class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend):
     """`Sim` on MuJoCo 4 (see the module docstring and docs/mujoco_backend.md)."""
 
     name = "mujoco"
@@ -541,8 +541,8 @@ class MujocoBackend(StateAccess, MotorCommands, ContactReads, Snapshots, Backend
     HARD_LIMITS = (
         "limit_rule 'hard', PhysX's rule, not PyBullet's: a joint arriving at its limit is "
         "stopped on it within the step (PyBullet lets it pass by up to one step's travel, then "
-        "pushes it back); past it, PyBullet's push-back (motors.py). The slider at 1 m/s toward "
-        "its 0.4 m limit: 0.4 m, PyBullet 0.40081 m, PhysX 0.4 m (bench/limit_rule.py)"
+        "pushes it back); past it, PyBullet's push-back (motor_rows.py). The slider at 1 m/s "
+        "toward its 0.4 m limit: 0.4 m, PyBullet 0.40081 m, PhysX 0.4 m (bench/limit_rule.py)"
     )
 
     def manifest(self) -> dict[str, Any]:

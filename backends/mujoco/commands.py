@@ -13,6 +13,17 @@ Bound commands (``Sim.velocity_command``, ``Sim.position_command``) are handed t
 loop, which reads their arrays at every step and writes a change with the same command writes;
 a change the writes cannot take (a force of 0, a bad value, rows rebound by another command) is
 sent through :meth:`set_joint_velocity` / :meth:`set_joint_position`, which check it.
+
+The commands in force, read and set for ``get_state``/``set_state``:
+
+* ``joint_commands``: the motor table's columns of a body (motor_rows.py) in PyBullet's terms: a
+  motor with kp 0 and kd 1 is a VELOCITY motor towards ``target_velocity``, any other a
+  POSITION motor towards ``target_position`` (a position command sets ``target_velocity`` to
+  0); the torques pending for the next step.
+* ``set_joint_commands``: writes those columns back (a position target clamped to the
+  joint's limits, as ``set_joint_position`` does) and the pending torques; spherical joints
+  apart: ``spherical_states``/``set_spherical_states`` read and write their three slots, target
+  quaternion, coordinates and torques.
 """
 
 from __future__ import annotations
@@ -24,10 +35,10 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from simbridge.profiles import Profile
-from simbridge.types import MotorMode
+from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointState
 
 from ..locking import exclusive, wait_for_lock
-from .world import Compiled, Robot
+from .robots import Compiled, Robot
 
 if TYPE_CHECKING:
     from simbridge.bound import BoundCommand
@@ -81,6 +92,8 @@ class MotorCommands:
         def _joint_cache(self, robot: Robot, joints: np.ndarray) -> tuple[Any, ...]: ...
 
         def _py_mark(self) -> None: ...
+
+        def _check_idle(self) -> None: ...
 
         _stepping: threading.RLock
 
@@ -407,3 +420,112 @@ class MotorCommands:
         kernel = c.kernel
         if c is self._c and kernel is not None:
             kernel.remove_command(handle)
+
+    # ---------------------------------------------------------------- commands in force
+
+    @exclusive
+    def joint_commands(self, body: int) -> JointCommands:
+        robot = self._robots[body]
+        c = self._w
+        t = c.motors
+        n = len(robot.table)
+        mv = np.asarray(robot.movable, dtype=np.intp)
+        slots = robot.motor_index
+        kp = t.kp[slots]
+        kd = t.kd[slots]
+        position = (kp != 0.0) | (kd != 1.0)
+        mode = np.full(n, MotorMode.NONE, dtype=np.int8)
+        mode[mv] = np.where(position, MotorMode.POSITION, MotorMode.VELOCITY)
+        out = [np.zeros(n) for _ in range(5)]
+        out[0][mv] = np.where(position, t.target_position[slots], t.target_velocity[slots])
+        out[1][mv] = t.max_force[slots]
+        out[2][mv] = kp
+        out[3][mv] = kd
+        out[4][mv] = c.torque[slots]
+        return JointCommands(mode, *out)
+
+    @exclusive
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        self._check_idle()
+        robot = self._robots[body]
+        c = self._w
+        t = c.motors
+        keep = [k for k, j in enumerate(robot.movable) if j not in robot.balls]  # not spherical
+        mv = np.asarray(robot.movable, dtype=np.intp)[keep]
+        slots = robot.motor_index[keep]
+        position = commands.mode[mv] == MotorMode.POSITION
+        target = commands.target[mv]
+        joints = robot.model.joints
+        for k in np.flatnonzero(position).tolist():  # as set_joint_position: within the limits
+            j = joints[int(mv[k])]
+            if j.has_limit:
+                target[k] = min(max(target[k], j.lower), j.upper)
+        t.target_velocity[slots] = np.where(position, 0.0, target)
+        t.target_position[slots] = np.where(position, target, t.target_position[slots])
+        t.kp[slots] = np.where(position, commands.kp[mv], 0.0)
+        t.kd[slots] = np.where(position, commands.kd[mv], 1.0)
+        t.max_force[slots] = commands.max_force[mv]
+        c.refresh_motors()
+        c.torque[slots] = commands.pending_torque[mv]  # in place: the step loops hold it
+        c.pending_torque = bool(c.torque.any())
+
+    @exclusive
+    def spherical_states(self, body: int) -> list[SphericalJointState]:
+        robot = self._robots[body]
+        c = self._w
+        t = c.motors
+        d = c.d
+        first = dict(zip(robot.movable, robot.motor_index.tolist(), strict=True))
+        out = []
+        for j in robot.balls:
+            s = first[j]
+            axes = slice(s, s + 3)
+            kp, kd = tuple(t.kp[axes].tolist()), tuple(t.kd[axes].tolist())
+            position = any(kp) or kd != (1.0, 1.0, 1.0)
+            a, v = int(robot.qadr[j]), int(robot.dofadr[j])  # a: x's address, after w
+            q = d.qpos[a - 1 : a + 3].tolist()
+            out.append(
+                SphericalJointState(
+                    j,
+                    (q[1], q[2], q[3], q[0]),
+                    tuple(d.qvel[v : v + 3].tolist()),
+                    int(MotorMode.POSITION if position else MotorMode.VELOCITY),
+                    tuple(t.ball_target[t.ball_of[s]].tolist()),
+                    tuple(t.max_force[axes].tolist()),
+                    kp,
+                    kd,
+                    tuple(c.torque[axes].tolist()),
+                )
+            )
+        return out
+
+    @exclusive
+    def set_spherical_states(
+        self, body: int, states: list[SphericalJointState], positions: bool
+    ) -> None:
+        self._check_idle()
+        robot = self._robots[body]
+        c = self._w
+        t = c.motors
+        first = dict(zip(robot.movable, robot.motor_index.tolist(), strict=True))
+        for e in states:
+            assert robot.table[e.joint].type == JointType.SPHERICAL
+            s = first[e.joint]
+            axes = slice(s, s + 3)
+            t.target_velocity[axes] = 0.0
+            t.target_position[axes] = 0.0
+            t.kp[axes] = e.motor_kp
+            t.kd[axes] = e.motor_kd
+            t.max_force[axes] = e.motor_max_force
+            t.ball_target[t.ball_of[s]] = e.motor_target
+            c.torque[axes] = e.pending_torque  # in place: the step loops hold it
+            if positions:
+                a, v = int(robot.qadr[e.joint]), int(robot.dofadr[e.joint])
+                x, y, z, w = e.position
+                c.d.qpos[a - 1 : a + 3] = (w, x, y, z)
+                c.d.qvel[v : v + 3] = e.velocity
+        c.refresh_motors()
+        c.pending_torque = bool(c.torque.any())
+        if positions:
+            c.stale = True
+            c.motor_force_valid = False

@@ -27,7 +27,7 @@ from simbridge.exceptions import SimulationDivergedError
 from simbridge.types import ContactPoint
 
 from ..locking import exclusive
-from .world import Compiled, Robot
+from .robots import Compiled, Robot
 
 __all__ = ["ContactReads"]
 

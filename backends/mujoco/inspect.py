@@ -13,7 +13,7 @@ from typing import Any
 from simbridge.exceptions import InvalidArgumentError
 
 from .backend import MujocoBackend
-from .world import Compiled, Robot
+from .robots import Compiled, Robot
 
 __all__ = ["backend_of", "compiled", "model_and_data", "robot", "world_spec"]
 

@@ -2,7 +2,7 @@
 and in the same order of arithmetic (tests/test_mujoco_kernel.py holds them together).
 
 Each step is ``mj_step1`` (positions, velocities, constraint rows), the layer's additions to the
-rows and forces (PyBullet's motor offsets and hard rows: motors.py; PyBullet's joint-limit rule;
+rows and forces (PyBullet's motor offsets and hard rows: motor_rows.py; PyBullet's joint-limit rule;
 link and joint damping: damping.py; torque commands), then ``mj_step2``, split when there are
 motor rows or a speed clamp (``mj_fwdActuation``, ``mj_fwdAcceleration``, the kd term, the
 exact solve or MuJoCo's solver and the polish: solve.py, the clamp, ``mj_Euler``).
@@ -21,8 +21,8 @@ import numpy as np
 
 from . import solve
 from .damping import clamp_acceleration
-from .motors import LIMIT_DEEP, MOTOR_R_SCALE
-from .world import BAD_WARNINGS, Compiled
+from .motor_rows import LIMIT_DEEP, MOTOR_R_SCALE
+from .robots import BAD_WARNINGS, Compiled
 
 __all__ = ["step_python"]
 
@@ -45,9 +45,9 @@ def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> 
         if k:  # friction rows come first (no equality constraints)
             if t.has_offset:
                 d.efc_aref[:k] += t.aref_offset(d.qpos)
-            d.efc_R[:k] *= MOTOR_R_SCALE  # harden the motor rows (motors.py)
+            d.efc_R[:k] *= MOTOR_R_SCALE  # harden the motor rows (motor_rows.py)
             d.efc_D[:k] *= 1.0 / MOTOR_R_SCALE
-        if d.nl:  # PyBullet's limit rows (motors.py), after the friction rows
+        if d.nl:  # PyBullet's limit rows (motor_rows.py), after the friction rows
             lim = slice(d.nf, d.nf + d.nl)
             d.efc_R[lim] *= MOTOR_R_SCALE
             d.efc_D[lim] *= 1.0 / MOTOR_R_SCALE

@@ -30,6 +30,7 @@ ground shapes); what is decided here is MuJoCo's alone:
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import mujoco
@@ -40,6 +41,7 @@ from simbridge.model.build_plan import (
     BuildPlan,
     ContactValues,
     JointPlan,
+    LinkPlan,
     ShapePlan,
     combine_contact,
     links_collide,
@@ -49,7 +51,7 @@ from simbridge.profiles import Profile
 from simbridge.transforms import transform_inverse, transform_multiply, xyzw_to_wxyz
 from simbridge.types import Quat, Vec3
 
-from .motors import LIMIT_ERP, LIMIT_HARD_MARGIN, LIMIT_MARGIN, MOTOR_DMAX
+from .motor_rows import LIMIT_ERP, LIMIT_HARD_MARGIN, LIMIT_MARGIN, MOTOR_DMAX
 
 __all__ = ["RobotSpec", "GeomContact", "add_robot", "add_pairs", "new_world_spec"]
 
@@ -59,7 +61,7 @@ MIN_MASS = 1e-6  # kg, for a moving body whose URDF mass is 0 (MuJoCo refuses ze
 MIN_INERTIA = 1e-10  # kg m^2, likewise
 MIN_SIZE = 1e-6  # m, for a collision shape of size 0
 # Friction rows of the joint motors: as close to a hard constraint as MuJoCo allows, so the
-# motor reaches the velocity it asks for within a step (see motors.py).
+# motor reaches the velocity it asks for within a step (see motor_rows.py).
 MOTOR_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 DEFAULT_RGBA = (1.0, 1.0, 1.0, 1.0)
 
@@ -134,7 +136,7 @@ def new_world_spec(profile: Profile) -> mujoco.MjSpec:
     opt.solver = mujoco.mjtSolver.mjSOL_NEWTON
     opt.iterations = profile.solver_iterations
     opt.cone = mujoco.mjtCone.mjCONE_PYRAMIDAL
-    # islands copy efc_R/efc_D before the backend hardens the motor rows (motors.py)
+    # islands copy efc_R/efc_D before the backend hardens the motor rows (motor_rows.py)
     opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     # the engine settings the profile sets (backends/settings_mujoco.py); contacts: add_pairs
     settings = profile.engine("mujoco")
@@ -203,6 +205,134 @@ class MeshLibrary:
         return name
 
 
+_Placer = Callable[[int, Vec3, Quat], tuple[list[float], list[float]]]
+
+
+def _body_offsets(
+    plan: BuildPlan,
+) -> tuple[tuple[Vec3, Quat] | None, dict[int, tuple[Vec3, Quat]]]:
+    """Where a link frame lies in its MuJoCo body's frame, where they differ: a free base's
+    (its body frame is its centre-of-mass frame), and each spherical joint's child's (keyed by
+    joint index: its body frame is the link frame turned by the child's inertial rotation)."""
+    offset: tuple[Vec3, Quat] | None = None
+    if not plan.fixed_base:
+        ine0 = plan.links[0].inertial
+        if any(ine0.position) or tuple(ine0.orientation) != (0.0, 0.0, 0.0, 1.0):
+            offset = transform_inverse((ine0.position, ine0.orientation))
+    link_offsets: dict[int, tuple[Vec3, Quat]] = {}
+    for joint in plan.joints:
+        orn = plan.links[joint.index + 1].inertial.orientation
+        if joint.type == "spherical" and tuple(orn) != (0.0, 0.0, 0.0, 1.0):
+            link_offsets[joint.index] = transform_inverse(((0.0, 0.0, 0.0), orn))
+    return offset, link_offsets
+
+
+def _placer(
+    offset: tuple[Vec3, Quat] | None, link_offsets: dict[int, tuple[Vec3, Quat]]
+) -> _Placer:
+    """``placed_in(link, xyz, quat)``: a pose given in link ``link``'s frame, in its body's
+    frame, as MjSpec's ``pos`` and ``quat`` (w first)."""
+
+    def placed_in(link: int, xyz: Vec3, quat: Quat) -> tuple[list[float], list[float]]:
+        own = offset if link == -1 else link_offsets.get(link)
+        if own is not None:
+            xyz, quat = transform_multiply(own, (xyz, quat))
+        return list(xyz), _wxyz(quat)
+
+    return placed_in
+
+
+def _set_inertial(
+    body: mujoco.MjsBody, link: LinkPlan, free_offset: bool, placed_in: _Placer, bounded: list[str]
+) -> None:
+    """The link's explicit inertia, bounded below for a moving link (its name then added to
+    ``bounded``); ``free_offset``: the body frame is the base's inertial frame itself."""
+    ine = link.inertial
+    mass, diag = ine.mass, list(ine.diagonal)
+    if not link.static and not (mass >= MIN_MASS and min(diag) >= MIN_INERTIA):  # NaN too
+        bounded.append(link.name)
+        mass = max(mass, MIN_MASS)
+        diag = [v if v >= MIN_INERTIA else MIN_INERTIA for v in diag]
+    body.explicitinertial = True
+    body.mass = mass
+    body.inertia = diag
+    if free_offset:
+        body.ipos = [0.0, 0.0, 0.0]
+        body.iquat = [1.0, 0.0, 0.0, 0.0]
+    else:
+        body.ipos, body.iquat = placed_in(link.index, ine.position, ine.orientation)
+
+
+def _add_visuals(
+    body: mujoco.MjsBody,
+    link: LinkPlan,
+    name: str,
+    meshes: MeshLibrary,
+    file: str,
+    placed_in: _Placer,
+) -> None:
+    """The link's visual geoms (drawn, never colliding), named ``name$v<element>``."""
+    i = link.index
+    for s in link.visuals:
+        vg = body.add_geom(name=f"{name}$v{s.element}")
+        _set_shape(vg, s, meshes, file, f"link {link.name!r} <visual> #{s.element}")
+        vg.pos, vg.quat = placed_in(i, s.position, s.orientation)
+        vg.contype = vg.conaffinity = 0
+        vg.group = VISUAL_GROUP
+        vg.rgba = list(s.rgba or DEFAULT_RGBA)
+        vg.mass = 0.0
+
+
+def _add_collisions(
+    body: mujoco.MjsBody,
+    link: LinkPlan,
+    name: str,
+    meshes: MeshLibrary,
+    file: str,
+    placed_in: _Placer,
+    geoms: list[GeomContact],
+    planes: list[str],
+) -> None:
+    """The link's collision geoms, named ``name$c<element>``, each recorded in ``geoms`` (and
+    in ``planes`` where it is a ground plane).
+
+    Raises:
+        UrdfStructureError: a ``<plane>`` on a link that moves.
+    """
+    i = link.index
+    where = f"link {link.name!r}"
+    for s in link.collisions:
+        k = s.element
+        geom_name = f"{name}$c{k}"
+        cg = body.add_geom(name=geom_name)
+        ground = s.ground
+        if ground is not None:
+            half = ground.half_extents
+            if half is None:  # a <plane>: Bullet's infinite plane
+                if not link.static:
+                    raise UrdfStructureError(
+                        file,
+                        f"{where} <collision> #{k} <plane>",
+                        "MuJoCo takes a plane only on a body welded to the world; this link "
+                        "moves (PyBullet moves the plane with it)",
+                        s.line or None,
+                    )
+                cg.size = [0.0, 0.0, 1.0]
+            else:  # a huge box welded to the world: its top face
+                cg.size = [half[0], half[1], 1.0]
+            cg.type = mujoco.mjtGeom.mjGEOM_PLANE
+            cg.pos, cg.quat = placed_in(i, ground.position, ground.orientation)
+            planes.append(geom_name)
+        else:
+            _set_shape(cg, s, meshes, file, f"{where} <collision> #{k}")
+            cg.pos, cg.quat = placed_in(i, s.position, s.orientation)
+        cg.contype = cg.conaffinity = 0
+        cg.group = COLLISION_GROUP
+        cg.rgba = [0.5, 0.5, 0.5, 0.5]
+        cg.mass = 0.0
+        geoms.append(GeomContact(geom_name, i, link.contact, ground is not None))
+
+
 def add_robot(
     spec: mujoco.MjSpec,
     meshes: MeshLibrary,
@@ -210,41 +340,33 @@ def add_robot(
     prefix: str,
     profile: Profile,
 ) -> RobotSpec:
-    """Add the robot of ``plan`` to ``spec`` as bodies named ``prefix + link name``: the plan
-    translated into MjSpec (``profile`` gives the timestep of the joint-limit rows)."""
+    """Add the robot of ``plan`` to ``spec``: the plan translated into MjSpec.
+
+    Args:
+        spec: the world's ``MjSpec``.
+        meshes: the world's mesh library (each mesh file added once).
+        plan: the engine-neutral build plan of the robot.
+        prefix: the prefix of every name the robot adds (bodies are ``prefix + link name``).
+        profile: the profile, which gives the timestep of the joint-limit rows.
+
+    Returns:
+        The :class:`RobotSpec`: what was added, and the frames and bounds decided here.
+
+    Raises:
+        UrdfStructureError: a ``<plane>`` on a moving link, or a mesh MuJoCo cannot read.
+    """
     file = plan.file
     fixed = plan.fixed_base
-    inertials = [link.inertial for link in plan.links]
     body_names = [prefix + link.name for link in plan.links]
     bodies: list[mujoco.MjsBody] = []
     joint_names: list[str | None] = []
     bounded: list[str] = []
     geoms: list[GeomContact] = []
     planes: list[str] = []
-    free_joint = None
-
-    # the link frame of a free base in its body (centre-of-mass) frame
-    offset: tuple[Vec3, Quat] | None = None
-    if not fixed:
-        ine0 = inertials[0]
-        if any(ine0.position) or tuple(ine0.orientation) != (0.0, 0.0, 0.0, 1.0):
-            offset = transform_inverse((ine0.position, ine0.orientation))
-
-    # the link frame of a spherical joint's child in its body frame, where they differ
-    link_offsets: dict[int, tuple[Vec3, Quat]] = {}
-    for joint in plan.joints:
-        orn = inertials[joint.index + 1].orientation
-        if joint.type == "spherical" and tuple(orn) != (0.0, 0.0, 0.0, 1.0):
-            link_offsets[joint.index] = transform_inverse(((0.0, 0.0, 0.0), orn))
     unlimited: list[str] = []
-
-    def placed_in(link: int, xyz: Vec3, quat: Quat) -> tuple[list[float], list[float]]:
-        """A pose given in link ``link``'s frame, in its body's frame"""
-        own = offset if link == -1 else link_offsets.get(link)
-        if own is not None:
-            xyz, quat = transform_multiply(own, (xyz, quat))
-        return list(xyz), _wxyz(quat)
-
+    free_joint = None
+    offset, link_offsets = _body_offsets(plan)
+    placed_in = _placer(offset, link_offsets)
     for link in plan.links:
         i = link.index
         if link.joint is None:
@@ -267,61 +389,9 @@ def add_robot(
             body.pos, body.quat = placed_in(parent, frame[0], frame[1])
             _add_joint(body, prefix, joint, profile, joint_names, unlimited)
         bodies.append(body)
-
-        ine = link.inertial
-        mass, diag = ine.mass, list(ine.diagonal)
-        if not link.static and not (mass >= MIN_MASS and min(diag) >= MIN_INERTIA):  # NaN too
-            bounded.append(link.name)
-            mass = max(mass, MIN_MASS)
-            diag = [v if v >= MIN_INERTIA else MIN_INERTIA for v in diag]
-        body.explicitinertial = True
-        body.mass = mass
-        body.inertia = diag
-        if i == -1 and offset is not None:  # the body frame is the inertial frame itself
-            body.ipos = [0.0, 0.0, 0.0]
-            body.iquat = [1.0, 0.0, 0.0, 0.0]
-        else:
-            body.ipos, body.iquat = placed_in(i, ine.position, ine.orientation)
-
-        where = f"link {link.name!r}"
-        for s in link.visuals:
-            vg = body.add_geom(name=f"{body_names[i + 1]}$v{s.element}")
-            _set_shape(vg, s, meshes, file, f"{where} <visual> #{s.element}")
-            vg.pos, vg.quat = placed_in(i, s.position, s.orientation)
-            vg.contype = vg.conaffinity = 0
-            vg.group = VISUAL_GROUP
-            vg.rgba = list(s.rgba or DEFAULT_RGBA)
-            vg.mass = 0.0
-        for s in link.collisions:
-            k = s.element
-            name = f"{body_names[i + 1]}$c{k}"
-            cg = body.add_geom(name=name)
-            ground = s.ground
-            if ground is not None:
-                half = ground.half_extents
-                if half is None:  # a <plane>: Bullet's infinite plane
-                    if not link.static:
-                        raise UrdfStructureError(
-                            file,
-                            f"{where} <collision> #{k} <plane>",
-                            "MuJoCo takes a plane only on a body welded to the world; this link "
-                            "moves (PyBullet moves the plane with it)",
-                            s.line or None,
-                        )
-                    cg.size = [0.0, 0.0, 1.0]
-                else:  # a huge box welded to the world: its top face
-                    cg.size = [half[0], half[1], 1.0]
-                cg.type = mujoco.mjtGeom.mjGEOM_PLANE
-                cg.pos, cg.quat = placed_in(i, ground.position, ground.orientation)
-                planes.append(name)
-            else:
-                _set_shape(cg, s, meshes, file, f"{where} <collision> #{k}")
-                cg.pos, cg.quat = placed_in(i, s.position, s.orientation)
-            cg.contype = cg.conaffinity = 0
-            cg.group = COLLISION_GROUP
-            cg.rgba = [0.5, 0.5, 0.5, 0.5]
-            cg.mass = 0.0
-            geoms.append(GeomContact(name, i, link.contact, ground is not None))
+        _set_inertial(body, link, i == -1 and offset is not None, placed_in, bounded)
+        _add_visuals(body, link, body_names[i + 1], meshes, file, placed_in)
+        _add_collisions(body, link, body_names[i + 1], meshes, file, placed_in, geoms, planes)
     return RobotSpec(
         prefix,
         bodies[0],
@@ -329,7 +399,7 @@ def add_robot(
         joint_names,
         free_joint,
         geoms,
-        inertials,
+        [link.inertial for link in plan.links],
         plan,
         bounded,
         planes,
@@ -378,7 +448,7 @@ def _add_joint(
         if upper == joint.lower:
             upper = float(np.nextafter(upper, np.inf))
         jnt.range = [joint.lower, upper]
-        # PyBullet's limit row (motors.py): aref = -v/dt - erp pos/dt^2
+        # PyBullet's limit row (motor_rows.py): aref = -v/dt - erp pos/dt^2
         dt = profile.timestep
         jnt.solref_limit = [-LIMIT_ERP / dt / dt * MOTOR_DMAX, -MOTOR_DMAX / dt]
         jnt.solimp_limit = list(MOTOR_SOLIMP)

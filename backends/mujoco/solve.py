@@ -20,7 +20,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from .motors import MotorTable
+from .motor_rows import MotorTable
 
 __all__ = ["exact_motors", "polish"]
 

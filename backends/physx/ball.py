@@ -34,7 +34,7 @@ from simbridge.types import (
 )
 
 from ..locking import exclusive
-from .world import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, Robot
+from .robots import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, Robot
 
 __all__ = ["BallJoints", "angles_to_quat", "quat_to_angles", "rate_matrix", "spherical_error"]
 
@@ -194,7 +194,7 @@ class BallJoints:
 
     def _ball_forces(self, robot: Robot, joint: int) -> None:
         motor = robot.balls[joint]
-        from .motors import DRIVE_DAMPING
+        from .commands import DRIVE_DAMPING
 
         for d, f in zip(robot.ball_dofs[joint], motor["max_force"], strict=True):
             k = robot.dof_joint[d]

@@ -24,7 +24,7 @@ from simbridge.types import ContactPoint
 
 from ..locking import exclusive
 from .model import REST_OFFSET
-from .world import Robot
+from .robots import Robot
 
 __all__ = ["ContactReads"]
 

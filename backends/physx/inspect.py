@@ -9,7 +9,7 @@ from typing import Any
 from simbridge.exceptions import InvalidArgumentError
 
 from .backend import PhysxBackend
-from .world import Robot
+from .robots import Robot
 
 __all__ = ["backend_of", "scene", "robot", "articulation"]
 

@@ -51,7 +51,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .world import Robot
+from .robots import Robot
 
 __all__ = ["LimitRows", "LIMIT_ERP", "LIMIT_DEEP", "LIMIT_CLEAR", "LIMIT_RULES"]
 

@@ -172,17 +172,12 @@ def _shapes(
     return [shape]
 
 
-def build_robot(
-    scene: Any,
-    plan: BuildPlan,
-    solver_iterations: int,
-    body: int,
-    settings: Mapping[str, Any] | None = None,
-) -> BuiltRobot:
-    """Add the robot of ``plan`` to ``scene``; ``body`` (its id) tags its shapes for the
-    contact filter (:func:`_filter`); ``settings``: the engine settings a profile sets
-    (backends/settings_physx.py), each one not given at the backend's default."""
-    settings = settings or {}
+def _offsets(settings: Mapping[str, Any]) -> tuple[float, float]:
+    """The shapes' (rest offset, contact offset) the settings ask for.
+
+    Raises:
+        InvalidEngineSettingError: the rest offset is not below the contact offset.
+    """
     offsets = (
         float(settings.get("rest_offset", REST_OFFSET)),
         float(settings.get("contact_offset", CONTACT_OFFSET)),
@@ -193,14 +188,15 @@ def build_robot(
             "rest_offset",
             f"must be below contact_offset ({offsets[1]:g} m), got {offsets[0]:g}",
         )
-    depenetration = float(settings.get("max_depenetration_velocity", MAX_DEPENETRATION))
-    velocity_iterations = int(settings.get("solver_velocity_iterations", 1))
-    moving = any(link.joint is not None and link.joint.type != "fixed" for link in plan.links)
-    static_body = plan.fixed_base and not moving
+    return offsets
+
+
+def _check_size(plan: BuildPlan) -> None:
+    """BackendUnsupportedError when the plan needs more links than one articulation takes."""
     n_links = len(plan.links) + 2 * sum(  # a spherical joint's two extra links (ball.py)
         1 for link in plan.links if link.joint is not None and link.joint.type == "spherical"
     )
-    if not static_body and n_links > MAX_ARTICULATION_LINKS:
+    if n_links > MAX_ARTICULATION_LINKS:
         raise BackendUnsupportedError(
             "physx",
             f"a body with {len(plan.links) - 1} joints ({n_links} PhysX links, its base and a "
@@ -208,78 +204,104 @@ def build_robot(
             f"one PhysX articulation takes no more than {MAX_ARTICULATION_LINKS} links "
             f"(measured: {MAX_ARTICULATION_LINKS + 1} crash the process at the first step)",
         )
-    inertials = [link.inertial for link in plan.links]
-    skipped: list[str] = []
-    bounded: list[str] = []
-    ignore = _ignore_bits(plan)
-    materials: dict[tuple[float, float], Any] = {}
 
-    def material_of(link: LinkPlan) -> Any:
+
+class _LinkShapes:
+    """Makes each link's collision shapes, one material per (friction, restitution), and
+    records which link each shape belongs to and which shapes were left out."""
+
+    def __init__(self, plan: BuildPlan, body: int, offsets: tuple[float, float]) -> None:
+        self.body = body
+        self.offsets = offsets
+        self.ignore = _ignore_bits(plan)
+        self.materials: dict[tuple[float, float], Any] = {}
+        self.skipped: list[str] = []
+        self.shape_links: dict[int, int] = {}
+
+    def material_of(self, link: LinkPlan) -> Any:
+        """The ``PhysxMaterial`` of the link's friction and restitution, made once per pair."""
         key = (link.contact.lateral_friction, link.contact.restitution)
-        if key not in materials:
+        if key not in self.materials:
             mat = physx.PhysxMaterial(key[0], key[0], key[1])
             set_product_combine(mat)  # PyBullet's product rule (combine.py), where reachable
-            materials[key] = mat
-        return materials[key]
+            self.materials[key] = mat
+        return self.materials[key]
 
-    def link_shapes(link: LinkPlan) -> list[Any]:
-        mat = material_of(link)
+    def of(self, link: LinkPlan) -> list[Any]:
+        """The link's collision shapes, filtered for the contact filter (none attached yet)."""
+        mat = self.material_of(link)
         out = []
         for g in link.collisions:
             where = f"link {link.name!r} <collision> #{g.element}"
-            for shape in _shapes(g, mat, where, skipped, offsets):
-                _filter(shape, link, ignore, body)
+            for shape in _shapes(g, mat, where, self.skipped, self.offsets):
+                _filter(shape, link, self.ignore, self.body)
                 out.append(shape)
         return out
 
-    root_pose = pose(plan.base_position, plan.base_orientation)
-    shape_links: dict[int, int] = {}
-    if static_body:
-        entity = sapien.Entity()
-        actor = physx.PhysxRigidStaticComponent()
-        for link in plan.links:
-            frame = _link_frame_in_base(plan, link.index)
-            for shape in link_shapes(link):
-                shape.local_pose = pose(*frame) * shape.local_pose
-                actor.attach(shape)
-                shape_links[id(shape)] = link.index
-        entity.add_component(actor)
-        entity.name = plan.name
-        entity.pose = root_pose
-        scene.add_entity(entity)
-        return BuiltRobot(
-            inertials,
-            True,
-            [entity],
-            [],
-            actor=actor,
-            shape_links=shape_links,
-            skipped_shapes=skipped,
-        )
 
+def _static_robot(scene: Any, plan: BuildPlan, shapes: _LinkShapes) -> BuiltRobot:
+    """The robot as one static actor (welded to the world, nothing of it moves)."""
+    entity = sapien.Entity()
+    actor = physx.PhysxRigidStaticComponent()
+    for link in plan.links:
+        frame = _link_frame_in_base(plan, link.index)
+        for shape in shapes.of(link):
+            shape.local_pose = pose(*frame) * shape.local_pose
+            actor.attach(shape)
+            shapes.shape_links[id(shape)] = link.index
+    entity.add_component(actor)
+    entity.name = plan.name
+    entity.pose = pose(plan.base_position, plan.base_orientation)
+    scene.add_entity(entity)
+    return BuiltRobot(
+        [link.inertial for link in plan.links],
+        True,
+        [entity],
+        [],
+        actor=actor,
+        shape_links=shapes.shape_links,
+        skipped_shapes=shapes.skipped,
+    )
+
+
+def _set_inertia(comp: Any, link: LinkPlan, bounded: list[str]) -> None:
+    """The link's mass, centre of mass and principal inertia, bounded below for a moving link
+    (its name then added to ``bounded``)."""
+    ine = link.inertial
+    mass, diag = ine.mass, list(ine.diagonal)
+    if not (mass >= MIN_MASS and min(diag) >= MIN_INERTIA):  # NaN too
+        if not link.static:
+            bounded.append(link.name)
+        mass = max(mass, MIN_MASS) if math.isfinite(mass) else MIN_MASS
+        diag = [v if v >= MIN_INERTIA else MIN_INERTIA for v in diag]
+    comp.mass = mass
+    comp.cmass_local_pose = pose(ine.position, ine.orientation)
+    comp.inertia = np.asarray(diag, dtype=np.float32)
+
+
+def _articulation(
+    scene: Any,
+    plan: BuildPlan,
+    shapes: _LinkShapes,
+    depenetration: float,
+    solver_iterations: tuple[int, int],
+) -> BuiltRobot:
+    """The robot as one articulation, a link per URDF link in PyBullet's order (a spherical
+    joint's two extra links before its child); ``solver_iterations``: (position, velocity)."""
     entities: list[Any] = []
     links: list[Any] = []
     extra: list[Any] = []
+    bounded: list[str] = []
     for link in plan.links:
-        i = link.index
         parent = None if link.parent is None else links[link.parent + 1]
         jp = link.joint
         if jp is not None and jp.type == "spherical":  # two massless links, then this one
             parent = _ball_links(parent, jp, link.inertial.orientation, entities, extra)
         comp = physx.PhysxArticulationLinkComponent(parent)
-        for shape in link_shapes(link):
+        for shape in shapes.of(link):
             comp.attach(shape)
-            shape_links[id(shape)] = i
-        ine = link.inertial
-        mass, diag = ine.mass, list(ine.diagonal)
-        if not (mass >= MIN_MASS and min(diag) >= MIN_INERTIA):  # NaN too
-            if not link.static:
-                bounded.append(link.name)
-            mass = max(mass, MIN_MASS) if math.isfinite(mass) else MIN_MASS
-            diag = [v if v >= MIN_INERTIA else MIN_INERTIA for v in diag]
-        comp.mass = mass
-        comp.cmass_local_pose = pose(ine.position, ine.orientation)
-        comp.inertia = np.asarray(diag, dtype=np.float32)
+            shapes.shape_links[id(shape)] = link.index
+        _set_inertia(comp, link, bounded)
         comp.name = link.name
         comp.max_linear_velocity = LINK_SPEED_CAP
         comp.max_angular_velocity = LINK_SPEED_CAP
@@ -295,27 +317,69 @@ def build_robot(
         entity.name = link.name
         links.append(comp)
         entities.append(entity)
-    entities[0].pose = root_pose
+    entities[0].pose = pose(plan.base_position, plan.base_orientation)
     for entity in entities:
         scene.add_entity(entity)
     art = links[0].articulation
-    art.solver_position_iterations = solver_iterations
-    art.solver_velocity_iterations = velocity_iterations
+    art.solver_position_iterations, art.solver_velocity_iterations = solver_iterations
     # PyBullet lets a body sleep only when loaded with URDF_ENABLE_SLEEPING: never here
     art.sleep_threshold = 0.0
     # the links' poses are PhysX's only after a step or a write of the joint positions: one
     # write now, so that a read right after the load sees every link where it is
     art.qpos = art.qpos
     return BuiltRobot(
-        inertials,
+        [link.inertial for link in plan.links],
         False,
         entities,
         links,
         articulation=art,
-        shape_links=shape_links,
+        shape_links=shapes.shape_links,
         bounded_links=bounded,
-        skipped_shapes=skipped,
+        skipped_shapes=shapes.skipped,
         ball_links=extra,
+    )
+
+
+def build_robot(
+    scene: Any,
+    plan: BuildPlan,
+    solver_iterations: int,
+    body: int,
+    settings: Mapping[str, Any] | None = None,
+) -> BuiltRobot:
+    """Add the robot of ``plan`` to ``scene``: one static actor when it is welded to the world
+    and nothing of it moves, else one articulation.
+
+    Args:
+        scene: the ``sapien.Scene`` to add it to.
+        plan: the engine-neutral build plan of the robot.
+        solver_iterations: the articulation's solver position iterations (the profile's).
+        body: the robot's body id, which tags its shapes for the contact filter
+            (:func:`_filter`).
+        settings: the engine settings a profile sets (backends/settings_physx.py); each one
+            not given is at the backend's default.
+
+    Returns:
+        The :class:`BuiltRobot`: its SAPIEN entities and components, and what was bounded or
+        left out.
+
+    Raises:
+        InvalidEngineSettingError: ``rest_offset`` is not below ``contact_offset``.
+        BackendUnsupportedError: the body needs more links than one articulation takes.
+    """
+    settings = settings or {}
+    offsets = _offsets(settings)
+    depenetration = float(settings.get("max_depenetration_velocity", MAX_DEPENETRATION))
+    velocity_iterations = int(settings.get("solver_velocity_iterations", 1))
+    moving = any(link.joint is not None and link.joint.type != "fixed" for link in plan.links)
+    static_body = plan.fixed_base and not moving
+    if not static_body:
+        _check_size(plan)
+    shapes = _LinkShapes(plan, body, offsets)
+    if static_body:
+        return _static_robot(scene, plan, shapes)
+    return _articulation(
+        scene, plan, shapes, depenetration, (solver_iterations, velocity_iterations)
     )
 
 

@@ -1,167 +1,127 @@
-"""The robots of one PhysX world: what the backend keeps of each body between calls."""
+"""The whole world's state, PhysX's half of ``get_state``/``set_state`` (a part of
+:class:`PhysxBackend`): ``snapshot``/``restore`` through PhysX's own record of the world
+(``PhysxCpuSystem.pack``/``unpack``) with what it leaves out kept beside it: every moving link's
+velocities as PhysX reported them, the static bodies' poses, the limit rows' bookkeeping and the
+articulations' root poses (DEPARTURES["snapshot"])."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import sapien
 
-from simbridge.model.urdf import UrdfModel
-from simbridge.profiles import Profile
-from simbridge.types import JointInfo, JointType
+from simbridge.exceptions import SimulationDivergedError
 
-from .model import BuiltRobot
+from ..locking import exclusive
+from .robots import Robot
 
-__all__ = ["Robot", "default_motors", "SPHERICAL_BRAKE_KP", "SPHERICAL_BRAKE_IMPULSE"]
+if TYPE_CHECKING:
+    from .window import Window
 
-SPHERICAL_BRAKE_KP = 0.2  # PyBullet's spherical joint motor at load
-SPHERICAL_BRAKE_IMPULSE = 1000.0  # N·m·s per step per axis
-
-
-@dataclass(eq=False)
-class Robot:
-    """One body: its model, joint table, PhysX objects and motor table.
-
-    ``dof[j]`` is the first entry of joint ``j`` in the articulation's ``qpos``/``qvel`` (-1 for
-    a fixed joint); ``movable`` the movable 1-DoF and spherical joints in index order. The motor
-    arrays run over ``movable``."""
-
-    id: int
-    model: UrdfModel
-    built: BuiltRobot
-    table: list[JointInfo]
-    fixed: bool
-    movable: list[int]
-    dof: np.ndarray
-    ndof: int
-    joints: list[Any]  # PhysxArticulationJoint per URDF joint (None for a static body)
-    motors: dict[str, np.ndarray] = field(default_factory=dict)
-    pending: bool = False  # a torque waits for the next step
-    slot: dict[int, int] = field(default_factory=dict)  # joint -> index in the motor arrays
-    damping: np.ndarray | None = None  # <dynamics damping> per dof where the profile applies it
-    qf_set: bool = False  # joint forces were handed to PhysX for the coming step
-    drive_force: list[float] = field(default_factory=list)  # per slot, as set (NaN: not yet)
-    has_position: bool = False  # a position motor needs its velocity target every step
-    # the slots array of the last velocity command while nothing else has changed a motor's
-    # mode or gains since: those slots are velocity motors with kp 0 and kd 1 already
-    velocity_slots: np.ndarray | None = None
-    # the commands' shortcuts (motors.py), per joints array (keyed by its id; a few at most):
-    # velocity: (joints array, max_force as given, slots as a list, their PhysX joints);
-    # position: (joints array, max_force, kp, kd as given, slots as a list). Each stands while
-    # no other command has changed a motor of its slots: a velocity or position command drops
-    # every plan that shares a slot with it, set_joint_commands all of them. Made only where
-    # every slot is a distinct 1-DoF joint driven (force > 0)
-    velocity_plans: dict[int, tuple[np.ndarray, list[float], list[int], list[Any]]] = field(
-        default_factory=dict
-    )
-    position_plans: dict[
-        int, tuple[np.ndarray, list[float], list[float], list[float], list[int]]
-    ] = field(default_factory=dict)
-    moving_links: list[Any] = field(default_factory=list)  # the links not welded to the world
-    moving_rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))  # theirs
-    ball_dofs: dict[int, tuple[int, int, int]] = field(default_factory=dict)  # spherical joints
-    dof_joint: dict[int, Any] = field(default_factory=dict)  # dof -> its PhysX joint
-    balls: dict[int, dict[str, Any]] = field(default_factory=dict)  # spherical joints' motors
-    read_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
-    base_inverse: Any = None  # the base's link frame in its centre-of-mass frame, once asked
-    joint_cache: dict[int, tuple[np.ndarray, list[Any]]] = field(default_factory=dict)
-    slot_cache: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    call_cache: dict[int, tuple[np.ndarray, Any]] = field(default_factory=dict)
-    # per motor slot, the range a position target is clamped into (-inf, inf: no limit)
-    target_lo: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    target_hi: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    # spherical joints with PyBullet's swing/twist <limit>, which the stand-in does not enforce
-    unlimited_spherical: list[str] = field(default_factory=list)
-    # PyBullet's link damping for the coming step, one call made once (motors.py _damper;
-    # None where the profile has none), and whether the step has nothing else to do before it
-    damper: Callable[[], None] | None = None
-    damping_only: bool = False
-    # after an exact restore, until the next step or write: every link's (linear, angular)
-    # velocity as PhysX reported it when the snapshot was taken, shape (links, 2, 3) float32.
-    # PhysX recomputes link velocities from the joint velocities at unpack, and those differ
-    # from the ones its step left (backend.DEPARTURES["snapshot"]); the link damping law and
-    # link_state read these instead, so that the next step is the uninterrupted one
-    restored_velocities: np.ndarray | None = None
-    # the limited 1-DoF joints (limits.py): (dof, PhysX joint, lower, upper) as PhysX holds
-    # them, and per joint its limits; whether a joint is past its limit (the step stands in
-    # for PyBullet's limit row) and which rows' PhysX limits are moved meanwhile
-    limit_rows: list[tuple[int, Any, float, float]] = field(default_factory=list)
-    limit_of: list[tuple[float, float]] = field(default_factory=list)  # per joint (-inf, inf)
-    past_limit: bool = False
-    # limit_rule "pybullet": PhysX's own limits this far out of the range (0: "hard", PhysX's)
-    limit_clear: float = 0.0
-    pinocchio: Any = None  # SAPIEN's Pinocchio model of the articulation, made when needed
-    moved: set[int] = field(default_factory=set)
-    # this step's rows (dof, the moved bound, the row's speed, 1 upper or -1 lower, 2 float32
-    # steps at the bound), for the fix after the step
-    held: list[tuple[int, float, float, float, float]] = field(default_factory=list)
-
-    @property
-    def static(self) -> bool:
-        return self.built.static
-
-    def slot_calls(
-        self, slots: np.ndarray, effort: np.ndarray, ball: np.ndarray
-    ) -> tuple[list[int], list[Any], list[float], list[bool]]:
-        """Motor ``slots`` as a list, their PhysX joints, their effort limits and which are
-        spherical, as Python values (cached per slots array; all of it fixed at load)."""
-        key = id(slots)
-        hit = self.call_cache.get(key)
-        if hit is not None and hit[0] is slots:
-            return hit[1]
-        out = (
-            slots.tolist(),
-            self.slot_joints(slots),
-            effort[slots].tolist(),
-            ball[slots].tolist(),
-        )
-        self.call_cache[key] = (slots, out)
-        return out
-
-    def slot_joints(self, slots: np.ndarray) -> list[Any]:
-        """The PhysX joints of motor ``slots`` (cached per slots array)."""
-        key = id(slots)
-        hit = self.joint_cache.get(key)
-        if hit is not None and hit[0] is slots:
-            return hit[1]
-        out = [self.joints[self.movable[s]] for s in slots.tolist()]
-        self.joint_cache[key] = (slots, out)
-        return out
+__all__ = ["Snapshots"]
 
 
-def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> dict[str, np.ndarray]:
-    """PyBullet's motor at load per movable joint: the brake (velocity 0, impulse 1 N·s per
-    step), PyBullet's spherical motor on a spherical joint, or under joint_brake
-    "urdf_friction" the file's friction."""
-    joints = [model.joints[j] for j in movable]
-    n = len(joints)
-    ball = np.array([j.type == "spherical" for j in joints], dtype=bool)
-    kp = np.zeros(n)
-    mode = np.zeros(n, dtype=int)
-    if profile.joint_brake == "pybullet":
-        brake = np.full(n, 1.0 / profile.timestep)
-        brake[ball] = SPHERICAL_BRAKE_IMPULSE / profile.timestep
-        kp[ball] = SPHERICAL_BRAKE_KP
-        mode[ball] = 2
-    else:
-        brake = np.array([j.friction for j in joints], dtype=float)
-    effort = np.full(n, np.inf)
-    if profile.enforce_effort_limit:
-        effort = np.array([j.effort if j.effort > 0 else np.inf for j in joints], float)
-    return {
-        "mode": mode,  # MotorMode: 0 VELOCITY, 2 POSITION
-        "target": np.zeros(n),
-        "max_force": brake,
-        "kp": kp,
-        "kd": np.ones(n),
-        "effort": effort,
-        "torque": np.zeros(n),
-        "applied": np.zeros(n),
-        "ball": ball,
-    }
+def _pose_copy(pose: Any) -> Any:
+    """A ``sapien.Pose`` of its own (the entity's may change under a held reference)."""
+    return sapien.Pose(pose.p, pose.q)
 
 
-def movable_joints(table: list[JointInfo]) -> list[int]:
-    return [j.index for j in table if j.type != JointType.FIXED]
+class Snapshots:
+    """``snapshot`` and ``restore`` (a part of :class:`PhysxBackend`)."""
+
+    if TYPE_CHECKING:
+        _robots: dict[int, Robot]
+        _generation: int
+        _system: Any
+        _contacts_cache: list[Any] | None
+        _restored: list[Robot]
+        _diverged: SimulationDivergedError | None
+        _window: Window | None
+
+        def _check_idle(self) -> None: ...
+
+        def _refresh_active(self) -> None: ...
+
+    @exclusive
+    def snapshot(self) -> Any:
+        """PhysX's own record of the world (``PhysxCpuSystem.pack``: every body's pose and
+        velocities, the articulations' joint state), for this world as it is now, with every
+        moving link's velocities as PhysX reports them: unpack recomputes those from the joint
+        velocities, and they are the link damping law's input (DEPARTURES["snapshot"])."""
+        velocities = {
+            body: np.array(
+                [(link.linear_velocity, link.angular_velocity) for link in robot.built.links],
+                dtype=np.float32,
+            )
+            if robot.restored_velocities is None
+            else robot.restored_velocities.copy()
+            for body, robot in self._robots.items()
+            if not robot.static
+        }
+        # a static body's pose (a plane.urdf teleported) is no part of pack(): kept beside it
+        statics = {
+            body: _pose_copy(robot.built.entities[0].pose)
+            for body, robot in self._robots.items()
+            if robot.static
+        }
+        # the limit rows' bookkeeping (limits.py): whether a robot's joints are looked at before
+        # the next step and the PhysX limits moved meanwhile; not derived again at restore, where
+        # a joint the step left a hair past its limit (-2e-20 rad) would count as written there
+        limits = {
+            body: (robot.past_limit, set(robot.moved), [row[1].limit for row in robot.limit_rows])
+            for body, robot in self._robots.items()
+            if robot.limit_rows and not robot.static
+        }
+        # each articulation's root pose as it reads: unpack writes the packed one through
+        # PhysX's float32 normalisation, which can move its last bit (a teleported orientation)
+        roots = {
+            body: _pose_copy(robot.built.articulation.root_pose)
+            for body, robot in self._robots.items()
+            if not robot.static
+        }
+        return (id(self), self._generation, self._system.pack(), velocities, statics, limits, roots)
+
+    @exclusive
+    def restore(self, native: Any) -> bool:
+        """Unpack a snapshot of this very world (no load, remove or reset since), and put
+        back what it kept beside the blob: the link velocities, the static bodies' poses and
+        the limit rows' bookkeeping. PhysX keeps its contact caches out of the blob, and
+        unpack derives a floating base's link poses afresh: with a fixed base and no contacts
+        the next step is the same bits, else not (see DEPARTURES["snapshot"])."""
+        self._check_idle()
+        self._contacts_cache = None
+        if (
+            isinstance(native, tuple)
+            and len(native) == 7
+            and native[0] == id(self)
+            and native[1] == self._generation
+        ):
+            self._system.unpack(native[2])
+            for body, pose in native[6].items():
+                art = self._robots[body].built.articulation
+                now = art.root_pose
+                if (now.p != pose.p).any() or (now.q != pose.q).any():
+                    # the pose as read, normalised in double: a Pose PhysX keeps as it is
+                    q = np.asarray(pose.q, dtype=np.float64)
+                    art.root_pose = sapien.Pose(pose.p, q / np.linalg.norm(q))
+            for body, pose in native[4].items():
+                entity = self._robots[body].built.entities[0]
+                now = entity.pose  # written only if moved: PhysX normalises a written pose's
+                if (now.p != pose.p).any() or (now.q != pose.q).any():  # quaternion at the step
+                    entity.pose = _pose_copy(pose)
+            for body, velocities in native[3].items():
+                self._robots[body].restored_velocities = velocities.copy()
+            self._restored = [self._robots[body] for body in native[3]]
+            for body, (past, moved, bounds) in native[5].items():
+                robot = self._robots[body]
+                for row, bound in zip(robot.limit_rows, bounds, strict=True):
+                    if (row[1].limit != bound).any():
+                        row[1].limit = bound
+                robot.past_limit, robot.moved = past, set(moved)
+            self._refresh_active()
+            self._diverged = None
+            if self._window is not None:
+                self._window.sync()
+            return True
+        return False

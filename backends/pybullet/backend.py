@@ -16,9 +16,7 @@ from __future__ import annotations
 import math
 import os
 import sys
-import tempfile
 import threading
-import xml.etree.ElementTree as ET
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
@@ -30,45 +28,40 @@ from simbridge.exceptions import (
     BackendUnsupportedError,
     DisplayError,
     SimulationDivergedError,
-    UrdfStructureError,
 )
 from simbridge.model.load_options import LoadOptions
 from simbridge.model.scene import SceneBody
-from simbridge.model.urdf import UrdfModel, resolve_mesh
+from simbridge.model.urdf import UrdfModel
 from simbridge.profiles import Profile
 from simbridge.types import (
-    JointType,
     Quat,
     Vec3,
 )
 
 from .. import locking
-from .commands import SPHERICAL_BRAKE_IMPULSE, SPHERICAL_BRAKE_KP, MotorCommands
+from .commands import MotorCommands
 from .common import (
     _all_finite,
     _Body,
-    _nesting,
     _refuse_long_names,
     _x_display_problem,
     wait_for_lock,
 )
+from .contacts import ContactReads
+from .model import ModelLoading
 from .output import (
     _pybullet_gui_output,
-    _pybullet_merge_output,
     p,  # pybullet, imported with its banner captured
 )
 from .reads import StateReads
+from .records import Records
 from .render import Rendering
 from .scene import Pending, named_table
-from .state import Records
 from .window import Window
+from .world import Snapshots
 
 __all__ = ["PyBulletBackend"]
 
-_PYBULLET_DEFAULT_LINK_DAMPING = 0.04
-_PYBULLET_DEFAULT_MAX_JOINT_VELOCITY = 100.0
-_NO_CLAMP = 1e30  # "no speed clamp": PyBullet takes a number; this one is never reached
-_PYBULLET_DEFAULT_FRICTION = 0.5
 # Divergence: every state read checks the values it returns (a few float additions), so no
 # read ever hands out a NaN or an infinity. Besides, every body is probed (one engine call each:
 # its base pose, or its leaf joints for a fixed base) after the first step following a load or
@@ -96,10 +89,6 @@ MAX_BODY_MOVABLE_JOINTS = 121
 # removed 1000 times: 20 MB over the first cycles, then flat).
 RECYCLE_AFTER_REMOVALS = 32
 
-# PyBullet's XML reader (tinyxml2) refuses a file whose elements nest deeper than this, <robot>
-# counting 1 (measured: 98 loads, 99 is XML_ELEMENT_DEPTH_EXCEEDED)
-_MAX_XML_DEPTH = 98
-
 
 # the probe's engine calls (bound once: a module attribute lookup less per call)
 _base_pose = p.getBasePositionAndOrientation
@@ -118,7 +107,9 @@ _SELF_COLLISION_FLAGS = {
 }
 
 
-class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
+class PyBulletBackend(
+    ModelLoading, StateReads, MotorCommands, ContactReads, Snapshots, Rendering, Backend
+):
     """`Sim` on PyBullet (DIRECT, or GUI when asked)."""
 
     name = "pybullet"
@@ -313,158 +304,6 @@ class PyBulletBackend(StateReads, MotorCommands, Rendering, Backend):
         finally:
             self._scene.discard_unclaimed(self)
             self._scene = None
-
-    def _clamp_brake(self, body: int, info: _Body, model: UrdfModel) -> None:
-        """Under enforce_effort_limit, the default brake too stays within <limit effort>."""
-        assert info.effort is not None
-        if self.profile.joint_brake == "pybullet":
-            brake = {i: 1.0 / self._dt for i in info.movable}
-        else:
-            brake = {j.index: j.friction for j in model.joints if j.type != "fixed"}
-        balls = {i for i in info.movable if info.table[i].type == JointType.SPHERICAL}
-        if self.profile.joint_brake == "pybullet":  # PyBullet's spherical motor at load
-            brake.update({i: SPHERICAL_BRAKE_IMPULSE / self._dt for i in balls})
-        weak = [i for i in info.movable if info.effort[i] < brake[i] and i not in balls]
-        weak_balls = [i for i in info.movable if info.effort[i] < brake[i] and i in balls]
-        if weak_balls:  # the same motor (kp 0.2 or the friction brake), within the effort
-            kp = SPHERICAL_BRAKE_KP if self.profile.joint_brake == "pybullet" else 0.0
-            self._spherical_motor(
-                body,
-                weak_balls,
-                [[0.0, 0.0, 0.0, 1.0]] * len(weak_balls),
-                [[info.effort[i]] * 3 for i in weak_balls],
-                [[kp] * 3] * len(weak_balls),
-                [[1.0] * 3] * len(weak_balls),
-            )
-        if weak:
-            p.setJointMotorControlArray(
-                body,
-                weak,
-                p.VELOCITY_CONTROL,
-                targetVelocities=[0.0] * len(weak),
-                forces=[info.effort[i] for i in weak],
-                physicsClientId=self._c,
-            )
-
-    def _load_file(
-        self,
-        path: str,
-        display: str,
-        pos: Vec3,
-        orn: Quat,
-        fixed: bool,
-        flags: int,
-        scale: float = 1.0,
-    ) -> int:
-        # globalScaling only when asked: PyBullet's default call stays the tutorial's call
-        scaling = {} if scale == 1.0 else {"globalScaling": scale}
-        merging = _pybullet_merge_output if flags & p.URDF_MERGE_FIXED_LINKS else None
-        try:
-            with captured(self.name, f"loading {display}", merging):
-                return int(
-                    p.loadURDF(
-                        path,
-                        basePosition=pos,
-                        baseOrientation=orn,
-                        useFixedBase=fixed,
-                        flags=flags,
-                        physicsClientId=self._c,
-                        **scaling,
-                    )
-                )
-        except p.error as exc:
-            raise UrdfStructureError(
-                display, "<robot>", f"PyBullet cannot load it: {exc}"
-            ) from None
-
-    def _load_text(
-        self, model: UrdfModel, pos: Vec3, orn: Quat, fixed: bool, flags: int, scale: float = 1.0
-    ) -> int:
-        """Load through a uniquely named temporary file that is always removed (PyBullet reads
-        files only, and caches their contents by name). Mesh paths are made absolute."""
-        root = ET.fromstring(model.source.text)
-        depth = _nesting(root)
-        if depth > _MAX_XML_DEPTH:  # ET.tostring would recurse past Python's limit first
-            raise UrdfStructureError(
-                model.source.display_name,
-                "<robot>",
-                f"elements nested {depth} deep: PyBullet's XML reader refuses more than "
-                f"{_MAX_XML_DEPTH} (XML_ELEMENT_DEPTH_EXCEEDED)",
-            )
-        # the files the reader found (in this same call: the working directory is the same)
-        found = {
-            g.mesh_uri: g.mesh_path
-            for link in model.links
-            for g in (*link.visuals, *link.collisions)
-            if g.mesh_path is not None
-        }
-        for mesh in root.iter("mesh"):
-            uri = mesh.get("filename")
-            if uri:
-                mesh_path = found.get(uri) or resolve_mesh(uri, model.source.mesh_from)[0]
-                mesh.set("filename", str(mesh_path))
-        fd, path = tempfile.mkstemp(prefix="simbridge_", suffix=".urdf")
-        try:
-            with os.fdopen(fd, "wb") as f:
-                f.write(ET.tostring(root, encoding="utf-8"))
-            return self._load_file(path, model.source.display_name, pos, orn, fixed, flags, scale)
-        finally:
-            os.unlink(path)
-
-    def _apply_profile(self, body: int, model: UrdfModel) -> None:
-        prof, c = self.profile, self._c
-        changes: dict[str, float] = {}
-        if prof.linear_damping != _PYBULLET_DEFAULT_LINK_DAMPING:
-            changes["linearDamping"] = prof.linear_damping
-        if prof.angular_damping != _PYBULLET_DEFAULT_LINK_DAMPING:
-            changes["angularDamping"] = prof.angular_damping
-        max_vel = prof.max_joint_velocity
-        if max_vel != _PYBULLET_DEFAULT_MAX_JOINT_VELOCITY:
-            changes["maxJointVelocity"] = _NO_CLAMP if max_vel is None else max_vel
-        if changes:
-            p.changeDynamics(body, -1, physicsClientId=c, **changes)
-        for link in model.links:
-            ct = link.contact
-            dyn: dict[str, float] = {}
-            if ct.lateral_friction is None or not prof.read_urdf_contact:
-                if prof.lateral_friction != _PYBULLET_DEFAULT_FRICTION:
-                    dyn["lateralFriction"] = prof.lateral_friction
-            if ct.rolling_friction is None or not prof.read_urdf_contact:
-                if prof.rolling_friction != 0.0:
-                    dyn["rollingFriction"] = prof.rolling_friction
-            if ct.spinning_friction is None or not prof.read_urdf_contact:
-                if prof.spinning_friction != 0.0:
-                    dyn["spinningFriction"] = prof.spinning_friction
-            if ct.restitution is None or not prof.read_urdf_contact:
-                if prof.restitution != 0.0:
-                    dyn["restitution"] = prof.restitution
-            if dyn:
-                p.changeDynamics(body, link.index, physicsClientId=c, **dyn)
-        if not prof.apply_joint_damping:  # PyBullet applies <dynamics damping> unless told
-            for j in model.joints:
-                if j.damping != 0.0:
-                    p.changeDynamics(body, j.index, jointDamping=0.0, physicsClientId=c)
-        if prof.joint_brake == "urdf_friction":
-            balls = [j for j in model.joints if j.type == "spherical"]
-            if balls:  # PyBullet's spherical motor, made a brake with the file's friction
-                self._spherical_motor(
-                    body,
-                    [j.index for j in balls],
-                    [[0.0, 0.0, 0.0, 1.0]] * len(balls),
-                    [[j.friction] * 3 for j in balls],
-                    [[0.0] * 3] * len(balls),
-                    [[1.0] * 3] * len(balls),
-                )
-            movable = [j for j in model.joints if j.type not in ("fixed", "spherical")]
-            if movable:
-                p.setJointMotorControlArray(
-                    body,
-                    [j.index for j in movable],
-                    p.VELOCITY_CONTROL,
-                    targetVelocities=[0.0] * len(movable),
-                    forces=[j.friction for j in movable],
-                    physicsClientId=c,
-                )
 
     @contextmanager
     def _idle(self) -> Iterator[None]:

@@ -16,7 +16,7 @@ from simbridge.types import JointCommands, JointType, MotorMode, SphericalJointS
 
 from .common import _Body, _exclusive, wait_for_lock
 from .output import p  # pybullet, imported with its banner captured
-from .state import Records
+from .records import Records
 
 __all__ = ["MotorCommands", "SPHERICAL_BRAKE_IMPULSE", "SPHERICAL_BRAKE_KP"]
 

@@ -8,15 +8,13 @@ from __future__ import annotations
 import math
 import threading
 from contextlib import AbstractContextManager
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
-from simbridge.engine_output import captured
 from simbridge.exceptions import SimulationDivergedError
 from simbridge.types import (
     BaseState,
-    ContactPoint,
     DynamicsInfo,
     JointInfo,
     JointStateMultiDof,
@@ -29,7 +27,7 @@ from simbridge.types import (
 
 from .common import _all_finite, _Body, _exclusive, _finite_base, wait_for_lock
 from .output import p  # pybullet, imported with its banner captured
-from .state import Records, Saved, contact_point
+from .records import Records
 
 __all__ = ["StateReads"]
 
@@ -234,60 +232,3 @@ class StateReads:
         for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
             p.resetJointStateMultiDof(body, j, q, v, physicsClientId=c)
         self._next_check = self._steps + 1  # a teleport: probed after the next step
-
-    # ---------------------------------------------------------------- contacts and state
-
-    @_exclusive
-    def contact_points(self) -> list[ContactPoint]:
-        if self._diverged is not None:
-            raise self._diverged
-        # unfiltered: PyBullet keeps the friction fields in its own order of A and B when it
-        # swaps them to answer a filtered query (Sim.contact_points orients them itself)
-        rows = p.getContactPoints(physicsClientId=self._c)
-        for r in rows:  # positions, normal, distance, forces and friction directions
-            values = (*r[5], *r[6], *r[7], r[8], r[9], r[10], *r[11], r[12], *r[13])
-            if not math.isfinite(sum(values)) and not _all_finite(values):
-                self._diverge(f"a contact point of bodies {r[1]} and {r[2]}")
-        return [contact_point(r) for r in rows]
-
-    # ---------------------------------------------------------------- snapshots
-
-    def _world_key(self) -> tuple[Any, ...]:
-        return tuple(self._bodies.items())
-
-    def _free_dead_states(self) -> None:
-        records = self._records
-        while records.dead:
-            generation, state_id = records.dead.pop()
-            if generation == records.generation:
-                p.removeState(state_id, physicsClientId=self._c)
-
-    def snapshot(self) -> Any:
-        if self._diverged is not None:
-            raise self._diverged
-        with self._idle():
-            self._free_dead_states()
-            state_id = p.saveState(physicsClientId=self._c)
-            return Saved(self._c, self._records, self._world_key(), state_id, self._steps)
-
-    def restore(self, native: Any) -> bool:
-        if self._diverged is not None:
-            raise self._diverged
-        with self._idle():
-            self._free_dead_states()
-            if not (
-                isinstance(native, Saved) and native.fits(self._c, self._records, self._world_key())
-            ):
-                return False  # PyBullet's contact caches cannot be dropped: they stay
-            with captured(self.name, "restoring a state"):
-                p.restoreState(native.state_id, physicsClientId=self._c)
-            self.set_time(native.steps * self._dt)
-            return True
-
-    @_exclusive
-    def set_time(self, time: float) -> None:
-        steps = round(time / self._dt)
-        if steps != self._steps:
-            self._records.restamp(self._steps, steps)
-            self._steps = steps
-            self._next_check = steps + 1  # a restored state: probed after the next step

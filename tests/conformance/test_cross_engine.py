@@ -177,7 +177,7 @@ def test_joint_limit_rows_follow_pybullets_rule(backend, profile, start, speed):
     """slider.urdf's carriage (limits +-0.4 m) reset at or past a limit: PyBullet's limit row
     stops outward motion and, within 0.04 of the limit, pushes back at 0.2 x depth / dt;
     deeper it only stops (0.7: the carriage stays). MuJoCo's limit rows are given that law
-    (backends/mujoco/motors.py). Measured over 60 steps, both profiles: 4.7e-7 m, 1.9e-6 m/s:
+    (backends/mujoco/motor_rows.py). Measured over 60 steps, both profiles: 4.7e-7 m, 1.9e-6 m/s:
     MuJoCo's hardened limit row keeps a regulariser of 1e-6 of the speed change it asks for (the
     motor rows are polished to exact, the limit rows are not). Tolerances ~2.5x. PhysX's limit
     threw the carriage back (1.10 m, 57.6 m/s off); the backend stands in for the row while the

@@ -26,7 +26,7 @@ from simbridge.profiles import Profile
 from simbridge.types import JointCommands, JointType, MotorMode
 
 from ..locking import exclusive, wait_for_lock
-from .world import Robot
+from .robots import Robot
 
 __all__ = ["MotorCommands", "DRIVE_DAMPING"]
 

@@ -36,9 +36,9 @@ from simbridge.types import (
 )
 
 from ..locking import exclusive, wait_for_lock
-from .world import Compiled, Robot
+from .robots import Compiled, Robot
 
-__all__ = ["StateAccess"]
+__all__ = ["StateReads"]
 
 # as the compiled loop's busy error says it (_mjkernel.c refuse_if_busy)
 _PY_BUSY = (
@@ -47,7 +47,7 @@ _PY_BUSY = (
 )
 
 
-class StateAccess:
+class StateReads:
     """The ``Backend`` methods that read or set state (a part of :class:`MujocoBackend`)."""
 
     if TYPE_CHECKING:  # provided by MujocoBackend and simbridge.backend.Backend

@@ -1,6 +1,6 @@
 """MuJoCo's passive viewer for ``Sim(gui=True)``: opened on a world, kept in step, closed.
 
-The window lives in a process of its own (viewer_window.py) with a copy of the model: the
+The window lives in a process of its own (window_process.py) with a copy of the model: the
 simulation writes each new state into a shared file and the window draws it. Measured under
 Xvfb (Mesa), MuJoCo's passive viewer in the simulation's own process hung it at ``close()`` in
 2 of 4 runs and crashed it in 1, and its scene was black (its camera frames the whole world,
@@ -32,8 +32,8 @@ __all__ = ["Viewer", "check_display"]
 
 OPEN_WAIT_S = 60.0  # the window's first frame: seconds on a loaded 2-core machine under Mesa
 CLOSE_WAIT_S = 3.0  # then the window's process is killed
-_WINDOW = os.path.join(os.path.dirname(os.path.abspath(__file__)), "viewer_window.py")
-_HEADER = 2  # the counter and the close flag (viewer_window.py)
+_WINDOW = os.path.join(os.path.dirname(os.path.abspath(__file__)), "window_process.py")
+_HEADER = 2  # the counter and the close flag (window_process.py)
 
 
 def check_display(backend: str) -> None:

@@ -1,7 +1,7 @@
 """The window process of ``Sim(gui=True)`` on MuJoCo: MuJoCo's passive viewer on a copy of the
-model, drawing the poses the simulation writes into a shared file (see viewer.py).
+model, drawing the poses the simulation writes into a shared file (see window.py).
 
-Run as a script (``python -P viewer_window.py SHARED PARENT_PID``), never imported by the
+Run as a script (``python -P window_process.py SHARED PARENT_PID``), never imported by the
 simulation: it imports MuJoCo and NumPy alone. The pickled ``MjModel`` comes on standard input;
 one line on standard output says ``ready`` or why the window could not open. The shared file
 holds float64 values: ``[0]`` a counter the simulation raises at every new state, ``[1]`` 1.0

@@ -1,30 +1,22 @@
-"""What the PyBullet backend keeps to answer ``joint_commands``, ``contact_points`` and
-``snapshot``/``restore`` (PyBullet has no getter for the commands in force).
-
-* :class:`Records`: the velocity and position commands given per body since it was loaded
-  (or since the last ``set_joint_commands``), in order, and the torque commands of the current
-  step. The default motor is derived from the joint table and the profile: PyBullet's brake
-  (VELOCITY, target 0, 1 N·s per step = 1/dt N·m) or, under ``joint_brake="urdf_friction"``,
-  the joint's ``<dynamics friction>``.
-* :class:`Saved`: one ``p.saveState`` snapshot (positions, velocities and the contact caches
-  with their warm-started impulses, kept in the physics client's memory; about 2.6 ms on
-  r2d2). It fits only the world it was taken in: the same client, no load, remove or reset
-  since. When it is garbage-collected its id is queued and removed by the backend on its next
-  snapshot or restore, in the backend's own thread; a reset drops the queue (resetSimulation
-  frees every saved state, and PyBullet numbers new ones from 0 again).
+"""What the PyBullet backend keeps to answer ``joint_commands`` (PyBullet has no getter for the
+commands in force) and to tell a snapshot's world: :class:`Records`, the velocity and position
+commands given per body since it was loaded (or since the last ``set_joint_commands``), in
+order, and the torque commands of the current step, with the generation of saved states. The
+default motor is derived from the joint table and the profile: PyBullet's brake (VELOCITY,
+target 0, 1 N·s per step = 1/dt N·m) or, under ``joint_brake="urdf_friction"``, the joint's
+``<dynamics friction>``.
 """
 
 from __future__ import annotations
 
 import itertools
-import weakref
 from typing import Any
 
 import numpy as np
 
-from simbridge.types import ContactPoint, JointCommands, JointInfo, JointType, MotorMode
+from simbridge.types import JointCommands, JointInfo, JointType, MotorMode
 
-__all__ = ["Records", "Saved", "contact_point"]
+__all__ = ["Records"]
 
 
 class Records:
@@ -160,36 +152,3 @@ class Records:
 
 def _first(entry: tuple[Any, ...]) -> Any:
     return entry[0]
-
-
-class Saved:
-    """One ``p.saveState`` snapshot and what it fits (see the module docstring)."""
-
-    __slots__ = ("client", "generation", "world", "state_id", "steps", "__weakref__")
-
-    def __init__(
-        self, client: int, records: Records, world: tuple[Any, ...], state_id: int, steps: int
-    ) -> None:
-        self.client = client
-        self.generation = records.generation
-        self.world = world  # ((body id, its _Body object), ...): the very objects, not copies
-        self.state_id = state_id
-        self.steps = steps
-        done = weakref.finalize(self, records.dead.append, (records.generation, state_id))
-        done.atexit = False
-
-    def fits(self, client: int, records: Records, world: tuple[Any, ...]) -> bool:
-        return (
-            self.client == client
-            and self.generation == records.generation
-            and len(self.world) == len(world)
-            and all(a[0] == b[0] and a[1] is b[1] for a, b in zip(self.world, world, strict=True))
-        )
-
-
-def contact_point(r: tuple[Any, ...]) -> ContactPoint:
-    """One row of ``p.getContactPoints()`` (unfiltered: PyBullet's own order of A and B, in
-    which the friction fields are the friction force on A)."""
-    return ContactPoint(
-        int(r[0]), r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], r[10], r[11], r[12], r[13]
-    )

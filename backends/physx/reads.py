@@ -29,9 +29,9 @@ from simbridge.types import (
 
 from ..locking import exclusive, wait_for_lock
 from .model import _link_frame_in_base
-from .world import Robot
+from .robots import Robot
 
-__all__ = ["StateAccess"]
+__all__ = ["StateReads"]
 
 
 def _vec(v: Any) -> Vec3:
@@ -77,7 +77,7 @@ def _com_frame(
     )
 
 
-class StateAccess:
+class StateReads:
     """The ``Backend`` methods that read or set state."""
 
     if TYPE_CHECKING:
