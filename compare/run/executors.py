@@ -44,13 +44,10 @@ from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
 from dataclasses import dataclass
 from typing import Any
 
-from simbridge.exceptions import (
-    ExtraNotInstalledError,
-    InvalidArgumentError,
-    JobError,
-    SimbridgeError,
-)
+from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 from simbridge.terminate import sigterm_raises
+
+from ..errors import ExtraNotInstalledError, JobError
 
 __all__ = [
     "JobFailed",

@@ -21,8 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from simbridge.exceptions import ScenarioError, TrajectoryFileError
-
+from ..errors import ScenarioError, TrajectoryFileError
 from ..scenario.outcomes import KINDS, JointRef, Outcome
 from .portable import acos, dot, length, norm
 from .quantities import rotate

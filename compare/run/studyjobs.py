@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from simbridge._version import __version__
-from simbridge.exceptions import CacheEntryMissingError
 
+from ..errors import CacheEntryMissingError
 from ..scenario import Scenario, dumps_scenario
 from .cache import Cache, resolve
 from .ensemble import (

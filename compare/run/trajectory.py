@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 
 import simbridge
-from simbridge.exceptions import ScenarioError, TrajectoryFileError
 from simbridge.types import JointType
 
+from ..errors import ScenarioError, TrajectoryFileError
 from ..scenario import Scenario, format_timestep, load_scenario, parse_timestep
 from ..scenario.controllers import PhaseControl
 from .gains import HeldGains

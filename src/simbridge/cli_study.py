@@ -227,8 +227,8 @@ def check_engines(args: argparse.Namespace) -> None:
     every installed one): a setting of an engine not run, or a ``KEY@N`` past them, is bad
     usage (exit 2), said before any engine runs."""
     from simbridge.cli_settings import settings_from_args
+    from simbridge.compare.run.asked import require_engines
     from simbridge.compare.study.points import check_vary
-    from simbridge.engine_settings import require_engines
     from simbridge.exceptions import InvalidArgumentError
 
     names = args.backends

@@ -47,7 +47,7 @@ def scenario_argument(text: str) -> Any:
     """The scenario a command line names: bad usage (exit 2) when it is neither a file nor a
     shipped scenario's name; an invalid file's error as it is."""
     from simbridge.compare import load_scenario
-    from simbridge.exceptions import ScenarioError
+    from simbridge.compare.errors import ScenarioError
 
     try:
         return load_scenario(text)

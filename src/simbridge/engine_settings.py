@@ -18,7 +18,7 @@ import importlib
 import math
 import numbers
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -38,7 +38,6 @@ __all__ = [
     "effective",
     "parse_assignment",
     "merge",
-    "require_engines",
     "freeze",
     "thaw",
     "owners",
@@ -331,22 +330,6 @@ def freeze(engines: Any, argument: str = "engine_settings") -> Frozen:
 def thaw(frozen: Frozen) -> dict[str, dict[str, Any]]:
     """:func:`freeze`'s pairs back as ``{backend: {key: value}}``, JSON-able (lists)."""
     return {b: {k: _jsonable(v) for k, v in values} for b, values in frozen}
-
-
-def require_engines(
-    argument: str, settings: Mapping[str, Mapping[str, Any]] | None, engines: Sequence[str]
-) -> None:
-    """Every backend ``settings`` sets something for is one of ``engines`` (the study's).
-
-    Raises:
-        EngineNotInStudyError: a setting for another engine, naming it and ``engines``.
-    """
-    from .exceptions import EngineNotInStudyError
-
-    for backend, values in (settings or {}).items():
-        if backend not in engines and values:
-            key = next(iter(values))
-            raise EngineNotInStudyError(argument, f"{backend}.{key}", backend, engines)
 
 
 def merge(*layers: Mapping[str, Mapping[str, Any]] | None) -> dict[str, dict[str, Any]]:

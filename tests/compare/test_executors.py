@@ -21,13 +21,9 @@ from pathlib import Path
 
 import pytest
 
+from simbridge.compare.errors import ExtraNotInstalledError, JobError
 from simbridge.compare.run.executors import JobFailed, describe_exit, run_all, shutdown_pool
-from simbridge.exceptions import (
-    ExtraNotInstalledError,
-    InvalidArgumentError,
-    JobError,
-    UrdfNotFoundError,
-)
+from simbridge.exceptions import InvalidArgumentError, UrdfNotFoundError
 
 # ---------------------------------------------------------------- job functions
 
