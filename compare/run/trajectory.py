@@ -1,8 +1,9 @@
 """Running a scenario on one backend and recording every step: :func:`run` and
 :class:`Trajectory`.
 
-One file of about 620 lines: :func:`run` and the :class:`Trajectory` it records share the
-recording layout (``_Recorder``).
+About 740 lines: :func:`run` (in named steps) and the :class:`Trajectory` it records share the
+recording layout (``_Recorder``), and :class:`Trajectory` stays here because the study cache
+pickles it under this module's name.
 
 Only the :class:`simbridge.Sim` interface is used: the same code runs on every backend.
 """
@@ -26,7 +27,7 @@ import simbridge
 from simbridge.types import JointType
 
 from ..errors import ScenarioError, TrajectoryFileError
-from ..scenario import Scenario, format_timestep, load_scenario, parse_timestep
+from ..scenario import Command, Phase, Scenario, format_timestep, load_scenario, parse_timestep
 from ..scenario.controllers import PhaseControl
 from .gains import HeldGains
 from .outcomes import OutcomeRecord, evaluate_all
@@ -346,127 +347,21 @@ def run(
             phase and the time; its ``trajectory`` holds the run recorded up to there).
     """
     t_start = _time.perf_counter()
-    sc = load_scenario(scenario)
-    if controller is not None:
-        sc = sc.with_controller(controller)
-    if timestep is not None:
-        try:
-            dt = parse_timestep(timestep)
-        except ValueError as exc:
-            raise ScenarioError(sc._where(), "timestep", str(exc)) from None
-        sc = sc.with_timestep(dt)
-    if duration is not None:
-        sc = sc.truncated(duration)
+    sc = _scenario_to_run(scenario, controller, timestep, duration)
     prof = profile or sc.profile
     grav = gravity if gravity is not None else sc.gravity
 
     sim_prof = sc.sim_profile(backend, prof)  # with the scenario's engine settings, if any
     with simbridge.Sim(backend, gravity=grav, timestep=sc.timestep, profile=sim_prof) as sim:
-        # what the phases and controllers command through: the scenario's position gains,
-        # written for its own step, sent as the same controller at this one
-        # (compare/run/gains.py); the Sim itself where the steps are the same
-        drive: Any = sim
-        if sc.gains_timestep is not None and sc.gains_timestep != sc.timestep:
-            drive = HeldGains(
-                sim,
-                sc.timestep / sc.gains_timestep,
-                where=sc._where(),
-                written_for=format_timestep(sc.gains_timestep),
-            )
-        ids: dict[str, int] = {}
-        hashes: dict[str, dict[str, str]] = {}
-        for r in sc.robots:
-            source = sc.resolve_urdf(r)
-            file, digest = urdf_sha256(source)
-            hashes[r.name] = {"urdf": r.urdf, "file": file, "sha256": digest}
-            body = sc.load_robot(sim, r)
-            ids[r.name] = body
-            for joint, q in r.joint_positions:
-                sim.reset_joint_state(body, joint, q)
-
+        ids, hashes = _load_robots(sim, sc)
         recorders = {
             r.name: _Recorder(sim, ids[r.name], r.fixed_base, sc.steps + 1) for r in sc.robots
         }
-        # Resolve every command once: (body, joint indices, command, recorder, its columns)
-        plan = []
-        for pi, p in enumerate(sc.phases):
-            cmds = []
-            for ci, c in enumerate(p.commands):
-                body, rec = ids[c.robot], recorders[c.robot]
-                idx = [sim.joint_index(body, j) for j in c.joints]
-                for i in idx:
-                    if sim.joint_info(body, i).type == JointType.FIXED:
-                        raise ScenarioError(
-                            str(sc.source or "<scenario>"),
-                            f"phases[{pi}].commands[{ci}].joints",
-                            f"joint {i} ({sim.joint_info(body, i).name!r}) of robot "
-                            f"{c.robot!r} is fixed and takes no command",
-                        )
-                cmds.append((body, idx, c, rec, rec.columns(idx)))
-            plan.append((p, cmds))
-
-        total = sc.steps
-        row = 0
-        for rec in recorders.values():
-            rec.record(row)
-        phases: list[tuple[str, int, int]] = []
-        wall = 0.0
-        every = max(1, total // 200)
-        for pi, (p, cmds) in enumerate(plan):
-            first = row
-            for body, idx, c, _, _ in cmds:
-                if c.mode == "torque":  # release the velocity motor (the profile's brake)
-                    sim.set_joint_velocity(body, idx, 0.0, max_force=0.0)
-            ctl = _start_control(
-                sc,
-                pi,
-                drive,
-                ids,
-                recorders,
-                row,
-                partial(_partial, sc, backend, prof, recorders, phases),
-            )
-            for i in range(p.steps):
-                t0 = _time.perf_counter()
-                for body, idx, c, _, _ in cmds:
-                    if c.mode == "velocity":
-                        sim.set_joint_velocity(body, idx, c.target, max_force=c.max_force)
-                    elif c.mode == "position":
-                        kw = {k: v for k, v in (("kp", c.kp), ("kd", c.kd)) if v is not None}
-                        drive.set_joint_position(body, idx, c.target, max_force=c.max_force, **kw)
-                    else:
-                        sim.set_joint_torque(body, idx, c.target)
-                if ctl is not None:
-                    ctl.before_step(i, row * sc.timestep)
-                if before_step is not None:
-                    before_step(sim, row)
-                sim.step()
-                wall += _time.perf_counter() - t0
-                row += 1
-                for rec in recorders.values():
-                    rec.record(row)
-                for _, _, c, rec, cols in cmds:
-                    rec.targets[row, cols] = c.target
-                    rec.modes[row, cols] = _MODE_CODE[c.mode]
-                    rec.held_force[cols] = np.nan if c.max_force is None else c.max_force
-                for rec in recorders.values():
-                    rec.max_forces[row] = rec.held_force
-                if ctl is not None:
-                    ctl.record(row)
-                if progress is not None and (row % every == 0 or row == total):
-                    progress(row, total)
-            phases.append((p.name, first, row))
-        manifest = sim.manifest()
-        manifest["urdf"] = hashes
-        manifest["scenario"] = {
-            "name": sc.name,
-            "file": str(sc.source) if sc.source else None,
-            "timestep": sc.timestep,
-            "steps": sc.steps,
-        }
-        if sys.argv:
-            manifest["command_line"] = list(sys.argv)
-        time = np.arange(total + 1, dtype=np.float64) * sc.timestep
+        plan = _resolve_commands(sim, sc, ids, recorders)
+        stopped = partial(_partial, sc, backend, prof)
+        phases, wall = _step_phases(sim, sc, ids, recorders, plan, stopped, progress, before_step)
+        manifest = _manifest(sim, sc, hashes)
+        time = np.arange(sc.steps + 1, dtype=np.float64) * sc.timestep
         bodies = {name: rec.finish(name) for name, rec in recorders.items()}
     tr = Trajectory(
         scenario=sc.name,
@@ -484,6 +379,190 @@ def run(
     if sc.outcomes:
         tr.outcomes = evaluate_all(sc, tr)
     return tr
+
+
+_Commands = list[tuple[int, list[int], Command, "_Recorder", list[int]]]
+"""A phase's commands resolved: (body, joint indices, command, its body's recorder, the
+joints' columns in the recorder)."""
+
+
+def _scenario_to_run(
+    scenario: str | Path | Scenario,
+    controller: Any,
+    timestep: float | str | None,
+    duration: float | None,
+) -> Scenario:
+    """The scenario :func:`run` runs: with ``controller``, at ``timestep``, cut to
+    ``duration`` (each where given).
+
+    Raises:
+        ScenarioError: a bad scenario or time step.
+    """
+    sc = load_scenario(scenario)
+    if controller is not None:
+        sc = sc.with_controller(controller)
+    if timestep is not None:
+        try:
+            dt = parse_timestep(timestep)
+        except ValueError as exc:
+            raise ScenarioError(sc._where(), "timestep", str(exc)) from None
+        sc = sc.with_timestep(dt)
+    if duration is not None:
+        sc = sc.truncated(duration)
+    return sc
+
+
+def _drive(sim: simbridge.Sim, sc: Scenario) -> Any:
+    """What the phases and controllers command through: the scenario's position gains, written
+    for its own step, sent as the same controller at this one (compare/run/gains.py); the Sim
+    itself where the steps are the same."""
+    if sc.gains_timestep is not None and sc.gains_timestep != sc.timestep:
+        return HeldGains(
+            sim,
+            sc.timestep / sc.gains_timestep,
+            where=sc._where(),
+            written_for=format_timestep(sc.gains_timestep),
+        )
+    return sim
+
+
+def _load_robots(
+    sim: simbridge.Sim, sc: Scenario
+) -> tuple[dict[str, int], dict[str, dict[str, str]]]:
+    """Load every robot of ``sc`` at its initial joint positions.
+
+    Returns:
+        Each robot's body id, and its file's name and SHA-256 (the manifest's ``urdf``).
+    """
+    ids: dict[str, int] = {}
+    hashes: dict[str, dict[str, str]] = {}
+    for r in sc.robots:
+        source = sc.resolve_urdf(r)
+        file, digest = urdf_sha256(source)
+        hashes[r.name] = {"urdf": r.urdf, "file": file, "sha256": digest}
+        body = sc.load_robot(sim, r)
+        ids[r.name] = body
+        for joint, q in r.joint_positions:
+            sim.reset_joint_state(body, joint, q)
+    return ids, hashes
+
+
+def _resolve_commands(
+    sim: simbridge.Sim, sc: Scenario, ids: dict[str, int], recorders: dict[str, _Recorder]
+) -> list[tuple[Phase, _Commands]]:
+    """Every phase with its commands resolved once (:data:`_Commands`).
+
+    Raises:
+        ScenarioError: a command to a fixed joint.
+    """
+    plan = []
+    for pi, p in enumerate(sc.phases):
+        cmds: _Commands = []
+        for ci, c in enumerate(p.commands):
+            body, rec = ids[c.robot], recorders[c.robot]
+            idx = [sim.joint_index(body, j) for j in c.joints]
+            for i in idx:
+                if sim.joint_info(body, i).type == JointType.FIXED:
+                    raise ScenarioError(
+                        str(sc.source or "<scenario>"),
+                        f"phases[{pi}].commands[{ci}].joints",
+                        f"joint {i} ({sim.joint_info(body, i).name!r}) of robot "
+                        f"{c.robot!r} is fixed and takes no command",
+                    )
+            cmds.append((body, idx, c, rec, rec.columns(idx)))
+        plan.append((p, cmds))
+    return plan
+
+
+def _step_phases(
+    sim: simbridge.Sim,
+    sc: Scenario,
+    ids: dict[str, int],
+    recorders: dict[str, _Recorder],
+    plan: list[tuple[Phase, _Commands]],
+    stopped: Callable[..., Trajectory],
+    progress: Progress | None,
+    before_step: Callable[[simbridge.Sim, int], None] | None,
+) -> tuple[list[tuple[str, int, int]], float]:
+    """Step every phase of ``plan``, recording each row.
+
+    Args:
+        stopped: the run recorded so far, as ``stopped(done, phase, first, row)`` (a
+            controller that fails hands it on).
+
+    Returns:
+        Each phase's (name, first row, last row), and the seconds spent commanding and
+        stepping.
+    """
+    drive = _drive(sim, sc)
+    total = sc.steps
+    row = 0
+    for rec in recorders.values():
+        rec.record(row)
+    phases: list[tuple[str, int, int]] = []
+    wall = 0.0
+    every = max(1, total // 200)
+    for pi, (p, cmds) in enumerate(plan):
+        first = row
+        for body, idx, c, _, _ in cmds:
+            if c.mode == "torque":  # release the velocity motor (the profile's brake)
+                sim.set_joint_velocity(body, idx, 0.0, max_force=0.0)
+        ctl = _start_control(
+            sc, pi, drive, ids, recorders, row, partial(stopped, recorders, phases)
+        )
+        for i in range(p.steps):
+            t0 = _time.perf_counter()
+            for body, idx, c, _, _ in cmds:
+                if c.mode == "velocity":
+                    sim.set_joint_velocity(body, idx, c.target, max_force=c.max_force)
+                elif c.mode == "position":
+                    kw = {k: v for k, v in (("kp", c.kp), ("kd", c.kd)) if v is not None}
+                    drive.set_joint_position(body, idx, c.target, max_force=c.max_force, **kw)
+                else:
+                    sim.set_joint_torque(body, idx, c.target)
+            if ctl is not None:
+                ctl.before_step(i, row * sc.timestep)
+            if before_step is not None:
+                before_step(sim, row)
+            sim.step()
+            wall += _time.perf_counter() - t0
+            row += 1
+            _record_row(recorders, cmds, row)
+            if ctl is not None:
+                ctl.record(row)
+            if progress is not None and (row % every == 0 or row == total):
+                progress(row, total)
+        phases.append((p.name, first, row))
+    return phases, wall
+
+
+def _record_row(recorders: dict[str, _Recorder], cmds: _Commands, row: int) -> None:
+    """Record row ``row`` of every body, and the commands in force there."""
+    for rec in recorders.values():
+        rec.record(row)
+    for _, _, c, rec, cols in cmds:
+        rec.targets[row, cols] = c.target
+        rec.modes[row, cols] = _MODE_CODE[c.mode]
+        rec.held_force[cols] = np.nan if c.max_force is None else c.max_force
+    for rec in recorders.values():
+        rec.max_forces[row] = rec.held_force
+
+
+def _manifest(
+    sim: simbridge.Sim, sc: Scenario, hashes: dict[str, dict[str, str]]
+) -> dict[str, Any]:
+    """The run's manifest: the Sim's, with the robot files, the scenario and the command line."""
+    manifest = sim.manifest()
+    manifest["urdf"] = hashes
+    manifest["scenario"] = {
+        "name": sc.name,
+        "file": str(sc.source) if sc.source else None,
+        "timestep": sc.timestep,
+        "steps": sc.steps,
+    }
+    if sys.argv:
+        manifest["command_line"] = list(sys.argv)
+    return manifest
 
 
 def _start_control(
