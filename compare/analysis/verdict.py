@@ -382,28 +382,9 @@ def judge(
     # bootstrap intervals: the gap, each engine's spread (at the judged instant and the end)
     gap_j = _gap_interval(quantity, fa, fb, gap, j, seed)
     gap_end = gap_j if j == end else _gap_interval(quantity, fa, fb, gap, end, seed)
-    dab = _matrix(quantity, fa[:, j], fb[:, j])  # (na, nb)
-    nearest = (float(np.median(dab.min(axis=0))), float(np.median(dab.min(axis=1))))
-    per_engine = []
-    for slot, f in enumerate((fa, fb)):
-        sj = _spread_interval(quantity, f, spreads[slot], j, seed)
-        send = sj if j == end else _spread_interval(quantity, f, spreads[slot], end, seed)
-        largest = float(np.max(_matrix(quantity, f[:, j], f[:, j]))) if len(f) > 1 else 0.0
-        per_engine.append(
-            EngineJudgement(
-                label=labels[slot],
-                size=len(f),
-                spread=sj,
-                spread_end=send,
-                spread_max=float(np.max(spreads[slot])),
-                largest_pair=largest,
-                other_to_nearest=nearest[slot],
-                own_error=float(own[slot, j]),
-                gap_over_spread=g / float(spread_f[slot, j]),
-                gap_over_own_error=g / float(own_f[slot, j]),
-                horizons=horizons(time, spreads[slot], q.thresholds),
-            )
-        )
+    per_engine = _engine_judgements(
+        quantity, labels, (fa, fb), j, end, g, spreads, (spread_f, own_f), own, time, seed
+    )
     test = None
     if not np.all(gap < tol) and na >= 2 and nb >= 2:
         both = np.concatenate([fa[:, j], fb[:, j]])
@@ -506,3 +487,53 @@ def _decide(
     if test.p_value >= ALPHA:
         return "unresolved", [], "not separated", marginal
     return "differ", [], "separated", marginal
+
+
+def _engine_judgements(
+    quantity: str,
+    labels: Sequence[str],
+    members: tuple[np.ndarray, np.ndarray],
+    j: int,
+    end: int,
+    g: float,
+    spreads: np.ndarray,
+    floored: tuple[np.ndarray, np.ndarray],
+    own: np.ndarray,
+    time: np.ndarray,
+    seed: int,
+) -> list[EngineJudgement]:
+    """Each engine's judgement at the judged instant ``j`` (and the last, ``end``), where the
+    gap is ``g``.
+
+    Args:
+        members: per engine, (N, T, ...) features of its runs.
+        spreads, own: (2, T) each engine's spread and own time-step error; ``floored`` the
+            two floored at the precision floor.
+        time: (T,) s.
+    """
+    q = QUANTITIES[quantity]
+    fa, fb = members
+    spread_f, own_f = floored
+    dab = _matrix(quantity, fa[:, j], fb[:, j])  # (na, nb)
+    nearest = (float(np.median(dab.min(axis=0))), float(np.median(dab.min(axis=1))))
+    per_engine = []
+    for slot, f in enumerate((fa, fb)):
+        sj = _spread_interval(quantity, f, spreads[slot], j, seed)
+        send = sj if j == end else _spread_interval(quantity, f, spreads[slot], end, seed)
+        largest = float(np.max(_matrix(quantity, f[:, j], f[:, j]))) if len(f) > 1 else 0.0
+        per_engine.append(
+            EngineJudgement(
+                label=labels[slot],
+                size=len(f),
+                spread=sj,
+                spread_end=send,
+                spread_max=float(np.max(spreads[slot])),
+                largest_pair=largest,
+                other_to_nearest=nearest[slot],
+                own_error=float(own[slot, j]),
+                gap_over_spread=g / float(spread_f[slot, j]),
+                gap_over_own_error=g / float(own_f[slot, j]),
+                horizons=horizons(time, spreads[slot], q.thresholds),
+            )
+        )
+    return per_engine
