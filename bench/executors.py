@@ -37,7 +37,7 @@ import time
 from simbridge.compare import load_scenario
 from simbridge.compare.run.ensemble import end_point, offsets, perturbed
 from simbridge.compare.run.executors import JobFailed, run_all, shutdown_pool
-from simbridge.compare.run.trajectory import run
+from simbridge.compare.run.recording import run
 from simbridge.compare.scenario import Scenario
 
 

@@ -6,7 +6,7 @@ along x, then along the diagonal x = y, and slides 0.1 s: the deceleration over 
 each (the profile's link damping adds about 0.02 to every figure). A cone decelerates alike both
 ways; PyBullet's enableConeFriction = False (two friction rows, each bounded by mu N) gives the
 diagonal sqrt(2) times more; MuJoCo's pyramidal cone (its edges along the two axes) about
-1 / sqrt(2) of it. ``simbridge explain`` reasons from these figures (compare/study/explain.py).
+1 / sqrt(2) of it. ``simbridge explain`` reasons from these figures (compare/study/candidates.py).
 
 Measured (SAPIEN 3.0.3, MuJoCo and PyBullet as pinned, this machine)::
 

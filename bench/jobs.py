@@ -178,7 +178,7 @@ def _import_cpu(runs: int = 3) -> float:
 
     code = (
         "import time; c = time.process_time(); import simbridge.compare.run.jobs, "
-        "simbridge.compare.run.trajectory, simbridge.compare.run.ensemble; "
+        "simbridge.compare.run.recording, simbridge.compare.run.ensemble; "
         "print(time.process_time() - c)"
     )
     return min(

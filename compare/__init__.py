@@ -40,7 +40,8 @@ if TYPE_CHECKING:
     from .report import headline, report, summary
     from .run.ensemble import Ensemble, run_ensembles
     from .run.quantities import QUANTITIES, Quantity
-    from .run.trajectory import BodyTrajectory, Trajectory, run
+    from .run.recording import run
+    from .run.trajectory import BodyTrajectory, Trajectory
     from .scenario import (
         Command,
         Phase,
@@ -109,7 +110,7 @@ _LAZY = {
     "Quantity": ".run.quantities",
     "BodyTrajectory": ".run.trajectory",
     "Trajectory": ".run.trajectory",
-    "run": ".run.trajectory",
+    "run": ".run.recording",
     "Command": ".scenario",
     "Phase": ".scenario",
     "RobotSpec": ".scenario",

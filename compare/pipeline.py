@@ -3,7 +3,6 @@ of time steps, every pair of them judged: :func:`compare` and :class:`Comparison
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 import time as _time
@@ -13,22 +12,27 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from simbridge.engine_settings import require_engines
-from simbridge.exceptions import InvalidArgumentError, ScenarioError, SimbridgeError
+from simbridge.exceptions import SimbridgeError
 
 from .analysis.diff import Divergence, diff
 from .analysis.judged import judged
 from .analysis.verdict import Verdict
+from .run.asked import (
+    Study,
+    engine_labels,
+    headline_quantity,
+    installed_backends,
+    plan_study,
+)
 from .run.cache import Cache
 from .run.ensemble import (
     DEFAULT_ENSEMBLE,
     DEFAULT_PERTURB,
     DEFAULT_SEED,
     Ensemble,
-    EnsembleRunner,
-    _main_importable,
 )
-from .run.resync import Resync, default_every
+from .run.jobs import JobResult
+from .run.resync import Resync
 from .run.studyjobs import (
     JobCounts,
     JobFailed,
@@ -39,7 +43,7 @@ from .run.studyjobs import (
     study_record,
 )
 from .run.trajectory import Trajectory
-from .scenario import Scenario, load_scenario, parse_timestep
+from .scenario import Scenario
 
 __all__ = [
     "Comparison",
@@ -146,37 +150,7 @@ class Comparison:
     def headline_quantity(self) -> str:
         """The scenario's ``headline``, else ``base_distance`` for a free-moving subject and
         ``link_distance`` for a fixed base."""
-        return _headline_quantity(self.scenario)
-
-
-def engine_labels(backends: Sequence[str], profiles: Sequence[str]) -> tuple[str, ...]:
-    """:attr:`Comparison.labels` of ``backends`` run under ``profiles``."""
-    if len(set(profiles)) > 1:
-        names = [f"{b} ({p})" for b, p in zip(backends, profiles, strict=True)]
-    else:
-        names = list(backends)
-    out: list[str] = []
-    for name in names:
-        seen = names[: len(out)].count(name)
-        out.append(name if seen == 0 else f"{name} ({seen + 1})")
-    return tuple(out)
-
-
-def installed_backends() -> tuple[list[str], dict[str, str]]:
-    """Every registered backend that loads here, in registration order, and each other
-    registered one with why it does not (:func:`simbridge.registry.unavailable_reason`: its
-    engine or module is not installed): what :func:`compare` runs when no backend is named."""
-    from simbridge.registry import available_backends, unavailable_reason
-
-    names: list[str] = []
-    left_out: dict[str, str] = {}
-    for name in available_backends():
-        reason = unavailable_reason(name)
-        if reason is None:
-            names.append(name)
-        else:
-            left_out[name] = reason
-    return names, left_out
+        return headline_quantity(self.scenario)
 
 
 def _pairs(n: int) -> list[tuple[int, int]]:
@@ -265,138 +239,116 @@ def compare(
         CacheEntryMissingError: ``offline`` and a job is not in the cache.
     """
     start = _time.perf_counter()
-    sc = load_scenario(scenario)
-    if controller is not None:
-        sc = sc.with_controller(controller)
-    sc = sc.with_engine_settings(engine_settings)
-    left_out: dict[str, str] = {}
-    backends_named = backends is not None
-    if backends is None:
-        backends, left_out = installed_backends()
-        if len(backends) < 2:
-            why = "; ".join(f"{b}: {r}" for b, r in left_out.items()) or "none registered"
-            raise InvalidArgumentError(
-                "backends",
-                f"two or more installed backends are needed, installed here: {backends} "
-                f"(left out: {why})",
-            )
-    if isinstance(backends, str) or len(backends) < 2:
-        raise InvalidArgumentError(
-            "backends", f"expected two or more backend names, got {backends!r}"
-        )
-    names = tuple(backends)
-    require_engines("engine_settings", engine_settings, names)  # one not run changes nothing
-    n = len(names)
-    if profile is None:
-        profiles = (sc.profile,) * n
-    elif isinstance(profile, str):
-        profiles = (profile,) * n
-    else:
-        if len(profile) not in (1, n):
-            many = "two" if n == 2 else f"one per backend ({n})"
-            raise InvalidArgumentError("profile", f"expected one or {many} names, got {profile!r}")
-        profiles = tuple(profile) if len(profile) == n else (profile[0],) * n
-    dts: list[float] = []
-    for t in timesteps or [sc.timestep]:
-        try:
-            dt = parse_timestep(t)
-        except ValueError as exc:
-            raise ScenarioError(sc._where(), "timestep", str(exc)) from None
-        if dt not in dts:
-            dts.append(dt)
-    scaled = {}
-    for dt in sorted(dts, reverse=True):  # coarsest first: a half step covers the same time
-        if dt not in scaled:  # (one that is a coarser step's half is that step's run)
-            s = sc.with_timestep(dt)  # raises on a step that does not divide a phase
-            scaled[dt] = s.truncated(duration) if duration is not None else s
-        scaled[dt / 2] = scaled[dt].with_timestep(dt / 2)  # cut at dt, then halved
-    todo = [(slot, d) for slot in range(n) for dt in dts for d in (dt, dt / 2)]
-    todo = list(dict.fromkeys(todo))
-    quantity = _headline_quantity(sc)
-    if tolerance is not None and (
-        isinstance(tolerance, bool)
-        or not isinstance(tolerance, (int, float))
-        or not (math.isfinite(tolerance) and tolerance > 0)
-    ):
-        raise InvalidArgumentError("tolerance", f"expected a finite number > 0, got {tolerance!r}")
-    if resync_every is None:
-        resync_every = default_every(scaled[dts[0]].steps)
-    if isinstance(resync_every, bool) or not isinstance(resync_every, int) or resync_every < 0:
-        raise InvalidArgumentError(
-            "resync_every", f"expected a whole number of steps >= 0 (0: none), got {resync_every!r}"
-        )
-    runner = EnsembleRunner(  # checks the ensemble's arguments, draws its offsets
-        scaled[dts[0]],
-        list(zip(names, profiles, strict=True)),
-        quantity,
-        size=ensemble,
+    study = plan_study(
+        scenario,
+        backends,
+        profile=profile,
+        timesteps=timesteps,
+        duration=duration,
+        ensemble=ensemble,
         perturb=perturb,
         seed=seed,
+        tolerance=tolerance,
         workers=workers,
-    )
-    if executor is None and scheduler is None and workers != 0 and not _main_importable():
-        workers = runner.workers = 0  # a script read from stdin: a spawned one cannot import it
-    if not offline:  # a robot file or joint named wrong: FILE:LINE now, not after a run
-        from .scenario.robot_check import check_robots
-
-        check_robots(sc)
-    labels = engine_labels(names, profiles)
-    if resync_pairs is not None and (
-        isinstance(resync_pairs, bool) or not isinstance(resync_pairs, int) or resync_pairs < 1
-    ):
-        raise InvalidArgumentError(
-            "resync_pairs", f"expected a whole number of pairs >= 1, got {resync_pairs!r}"
-        )
-    plan = Plan(
-        scaled, dts, todo, names, profiles, labels, quantity, runner, resync_every, resync_pairs
+        controller=controller,
+        resync_every=resync_every,
+        resync_pairs=resync_pairs,
+        engine_settings=engine_settings,
+        parallel=executor is not None or scheduler is not None,
+        offline=offline,
     )
     results, failed, counts = run_jobs(
-        plan.jobs,
+        study.plan.jobs,
         cache=cache,
         fresh=fresh,
         offline=offline,
-        workers=workers,
+        workers=study.workers,
         scheduler=scheduler,
         executor=executor,
         progress=progress,
     )
+    runs = _nominal_runs(study.plan, results, failed)
+    ensembles = ensembles_of(study.plan, results, runs)
+    own = {(k, dt): diff(runs[(k, dt)], runs[(k, dt / 2)]) for k in study.slots for dt in study.dts}
+    pairs = _judge_pairs(study, results, failed, runs, own, ensembles, counts)
+    line = list(sys.argv if command_line is None else command_line)
+    return _comparison(study, runs, own, ensembles, pairs, failed, counts, line, start)
+
+
+def _nominal_runs(
+    plan: Plan, results: dict[str, JobResult], failed: dict[str, JobFailed]
+) -> dict[tuple[int, float], Trajectory]:
+    """Every engine's run at every time step, by ``(slot, dt)``.
+
+    Raises:
+        SimbridgeError: one of them failed (the study cannot be judged without it).
+    """
     runs: dict[tuple[int, float], Trajectory] = {}
     for (slot, d), key in plan.nominal.items():
         result = results.get(key)
         if result is None:
             raise SimbridgeError(f"the run of {plan.by_key[key].label} failed: {failed[key].cause}")
         runs[(slot, d)] = result.value
-    ensembles = ensembles_of(plan, results, runs)
-    own = {(k, dt): diff(runs[(k, dt)], runs[(k, dt / 2)]) for k in range(n) for dt in dts}
+    return runs
+
+
+def _judge_pairs(
+    study: Study,
+    results: dict[str, JobResult],
+    failed: dict[str, JobFailed],
+    runs: dict[tuple[int, float], Trajectory],
+    own: Mapping[tuple[int, float], Divergence],
+    ensembles: Sequence[Ensemble],
+    counts: JobCounts,
+) -> list[Pair]:
+    """Every pair of engines diffed at every time step, judged on their ensembles at the
+    headline one, and resynced where the plan has it."""
+    plan, dts = study.plan, study.dts
     rows = ensembles[0].rows
     pairs = []
-    for a, b in _pairs(n):
+    for a, b in _pairs(len(study.names)):
         verdict = judged(  # judge(), kept in the cache
             counts,
             ensembles[0].time,
-            quantity,
-            (labels[a], labels[b]),
+            plan.quantity,
+            (plan.labels[a], plan.labels[b]),
             [ensembles[a].features, ensembles[b].features],
-            [own[(k, dts[0])].series[quantity][rows] for k in (a, b)],
-            tolerance=tolerance,
-            seed=runner.seed,
+            [own[(k, dts[0])].series[plan.quantity][rows] for k in (a, b)],
+            tolerance=study.tolerance,
+            seed=study.runner.seed,
         )
         cross = {dt: diff(runs[(a, dt)], runs[(b, dt)]) for dt in dts}
         resynced = None
         if (a, b) in plan.resync_pairs:
-            steps = scaled[dts[0]].steps
-            resynced = resync_of(plan, results, failed, runs, steps, tolerance, (a, b))
+            steps = study.scaled[dts[0]].steps
+            resynced = resync_of(plan, results, failed, runs, steps, study.tolerance, (a, b))
         pairs.append(Pair(a, b, cross, verdict, resynced))
+    return pairs
+
+
+def _comparison(
+    study: Study,
+    runs: dict[tuple[int, float], Trajectory],
+    own: dict[tuple[int, float], Divergence],
+    ensembles: list[Ensemble],
+    pairs: list[Pair],
+    failed: dict[str, JobFailed],
+    counts: JobCounts,
+    command_line: list[str],
+    start: float,
+) -> Comparison:
+    """The :class:`Comparison` of a study run and judged, begun at ``start``
+    (``time.perf_counter()``), with its record for ``study.json``."""
+    runner = study.runner
     return Comparison(
-        scenario=sc,
-        backends=names,
-        profiles=profiles,
-        timesteps=dts,
+        scenario=study.scenario,
+        backends=study.names,
+        profiles=study.profiles,
+        timesteps=study.dts,
         runs=runs,
         cross=pairs[0].cross,
         own=own,
-        command_line=list(sys.argv if command_line is None else command_line),
-        wall_time=_time.perf_counter() - start,
+        command_line=command_line,
         ensembles=ensembles,
         verdict=pairs[0].verdict,
         resync=pairs[0].resync,
@@ -408,23 +360,18 @@ def compare(
             wall_time=counts.wall_time,
         ),
         pairs=pairs,
-        left_out=left_out,
-        failed=[failed[k] for k in plan.keys if k in failed],
-        failed_members=plan.failed_members(failed),
+        left_out=study.left_out,
+        failed=[failed[k] for k in study.plan.keys if k in failed],
+        failed_members=study.plan.failed_members(failed),
         jobs=counts,
+        wall_time=_time.perf_counter() - start,
         study=study_record(
-            sc,
-            plan,
-            backends_named=not left_out and backends_named,
-            duration=duration,
-            tolerance=tolerance,
-            command_line=list(sys.argv if command_line is None else command_line),
-            left_out=left_out,
+            study.scenario,
+            study.plan,
+            backends_named=not study.left_out and study.named,
+            duration=study.duration,
+            tolerance=study.tolerance,
+            command_line=list(command_line),
+            left_out=study.left_out,
         ),
     )
-
-
-def _headline_quantity(sc: Scenario) -> str:
-    if sc.headline:
-        return sc.headline
-    return "link_distance" if sc.robot(sc.subject).fixed_base else "base_distance"

@@ -18,7 +18,8 @@ import sys
 
 import numpy as np
 
-from simbridge.compare.run.trajectory import _BODY_ARRAYS, Trajectory, run
+from simbridge.compare.run.recording import run
+from simbridge.compare.run.trajectory import _BODY_ARRAYS, Trajectory
 from simbridge.compare.scenario import list_scenarios
 
 

@@ -11,11 +11,14 @@ import pickle
 import pytest
 
 from simbridge import exceptions as exc
+from simbridge.compare import errors as compare_errors
 
 ERRORS = [
-    getattr(exc, name)
-    for name in exc.__all__
-    if isinstance(getattr(exc, name), type) and issubclass(getattr(exc, name), exc.SimbridgeError)
+    getattr(module, name)
+    for module in (exc, compare_errors)
+    for name in module.__all__
+    if isinstance(getattr(module, name), type)
+    and issubclass(getattr(module, name), exc.SimbridgeError)
 ]
 
 
@@ -52,3 +55,38 @@ def test_every_error_comes_back_from_pickle_as_itself(cls: type[exc.SimbridgeErr
     assert back.args == err.args
     assert back.__dict__ == err.__dict__
     assert isinstance(back, exc.SimbridgeError)
+
+
+MOVED = [
+    "ScenarioError",
+    "TrajectoryFileError",
+    "CacheEntryMissingError",
+    "JobError",
+    "EngineNotInStudyError",
+    "ExtraNotInstalledError",
+]
+
+
+def test_compare_errors_are_simbridge_errors_of_the_same_builtins() -> None:
+    assert sorted(compare_errors.__all__) == sorted(MOVED)
+    assert issubclass(compare_errors.ScenarioError, ValueError)
+    assert issubclass(compare_errors.TrajectoryFileError, ValueError)
+    assert issubclass(compare_errors.CacheEntryMissingError, LookupError)
+    assert issubclass(compare_errors.JobError, RuntimeError)
+    assert issubclass(compare_errors.EngineNotInStudyError, exc.InvalidArgumentError)
+    assert issubclass(compare_errors.ExtraNotInstalledError, ImportError)
+    assert not set(MOVED) & set(exc.__all__)
+
+
+@pytest.mark.parametrize("name", MOVED)
+def test_a_compare_error_by_its_old_path_warns_and_is_the_same_class(name: str) -> None:
+    with pytest.warns(DeprecationWarning, match=rf"simbridge\.compare\.errors\.{name}"):
+        old = getattr(exc, name)
+    assert old is getattr(compare_errors, name)
+    with pytest.warns(DeprecationWarning):
+        exec(f"from simbridge.exceptions import {name} as imported", {})
+
+
+def test_an_unknown_name_of_the_exceptions_module_is_an_attribute_error() -> None:
+    with pytest.raises(AttributeError, match="has no attribute 'NoSuchError'"):
+        exc.NoSuchError  # noqa: B018

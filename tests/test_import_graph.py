@@ -256,11 +256,11 @@ def test_the_checker_sees_lazy_and_type_checking_circles(tmp_path, sources, circ
 
 # ---------------------------------------------------------------- compare/'s stages
 
-STAGES = ("scenario", "run", "analysis", "pipeline", "report", "study")
+STAGES = ("errors", "scenario", "run", "analysis", "pipeline", "report", "study")
 """simbridge.compare's stages, in pipeline order: a module imports only modules of its own stage
-and of the stages before it (the package itself, above them all, imports any). ``study`` (sets
-of comparisons: resolve, sweep, explain) comes last: it runs the pipeline and words its own
-reports."""
+and of the stages before it (the package itself, above them all, imports any). ``errors``
+(compare's error classes) is below every stage. ``study`` (sets of comparisons: resolve, sweep,
+explain) comes last: it runs the pipeline and words its own reports."""
 
 
 def _stage(module: str) -> int | None:
@@ -295,9 +295,9 @@ def _stage_breaches(graph: dict[str, dict[str, int]]) -> list[str]:
 
 
 def test_compare_stages_import_only_the_stages_before_them():
-    """scenario < run < analysis < pipeline < report < study: each stage of simbridge.compare
-    imports only its own stage and those before it, never the package's __init__ (which imports
-    every stage), and every module of compare/ is in a stage."""
+    """errors < scenario < run < analysis < pipeline < report < study: each stage of
+    simbridge.compare imports only its own stage and those before it, never the package's
+    __init__ (which imports every stage), and every module of compare/ is in a stage."""
     modules = _modules()
     assert {f"simbridge.compare.{s}" for s in STAGES} <= set(modules)
     breaches = _stage_breaches(_edges(modules))
@@ -313,7 +313,7 @@ def test_the_stage_checker_sees_a_backward_import():
     }
     assert _stage_breaches(graph) == [
         "simbridge.compare.extra is in no stage of "
-        "('scenario', 'run', 'analysis', 'pipeline', 'report', 'study')",
+        "('errors', 'scenario', 'run', 'analysis', 'pipeline', 'report', 'study')",
         "simbridge.compare.report.fmt (stage report, line 7) imports simbridge.compare "
         "(the package)",
         "simbridge.compare.run.ensemble (stage run, line 3) imports "

@@ -12,8 +12,8 @@ import pytest
 
 import simbridge
 from simbridge import exceptions as exc
+from simbridge.compare.errors import ScenarioError
 from simbridge.compare.scenario import dumps_scenario, loads_scenario
-from simbridge.exceptions import ScenarioError
 from simbridge.model.scene_reader import parse_scene
 
 BACKENDS = ("pybullet", "mujoco")

@@ -116,7 +116,7 @@ def test_the_same_bits_whatever_the_kernels() -> None:
       moved anything outside its C step would move the Python loop's hash in the same child;
       the C step itself calls no numpy and no BLAS;
     - PyBullet steps in its own C (it does not load numpy's OpenBLAS); its backend
-      (``backends/pybullet_*.py``), the recorder (``compare/run/trajectory.py``) and the
+      (``backends/pybullet_*.py``), the recorder (``compare/run/recording.py``) and the
       scenarios' controllers call no BLAS or LAPACK (no ``@``, ``dot``, ``linalg``, ``einsum``)
       and no numpy transcendental (``math`` does the trigonometry); the only numpy linear
       algebra it reaches is the core's at load (``urdf.py``'s principal inertias,

@@ -371,13 +371,7 @@ def judge(
     gap = np.median(cross, axis=0)
     spread_f = np.maximum(spreads, flo)
     own_f = np.maximum(own, flo)
-
-    classes = np.full(len(time), _CODES["differ"], dtype=np.int8)
-    within = MARGINAL[1]
-    classes[np.any(gap <= within * own_f, axis=0)] = _CODES["unresolved"]
-    classes[np.any(gap <= within * spread_f, axis=0)] = _CODES["chaotic"]
-    classes[gap < tol] = _CODES["agree"]
-
+    classes = _classes(gap, tol, own_f, spread_f)
     end = len(time) - 1
     if gap[end] >= tol:
         j, why = end, "end"
@@ -386,77 +380,16 @@ def judge(
     g = float(gap[j])
 
     # bootstrap intervals: the gap, each engine's spread (at the judged instant and the end)
-    def gap_interval(k: int) -> Interval:
-        d = _matrix(quantity, fa[:, k], fb[:, k])
-        return _bootstrap(
-            (np.arange(na), np.arange(nb)), _median_cross_statistic(d), float(gap[k]), seed
-        )
-
-    def spread_interval(f: np.ndarray, slot: int, k: int) -> Interval:
-        d = _matrix(quantity, f[:, k], f[:, k])
-        return _bootstrap((np.arange(len(f)),), _spread_statistic(d), float(spreads[slot, k]), seed)
-
-    gap_j = gap_interval(j)
-    gap_end = gap_j if j == end else gap_interval(end)
-    dab = _matrix(quantity, fa[:, j], fb[:, j])  # (na, nb)
-    nearest = (float(np.median(dab.min(axis=0))), float(np.median(dab.min(axis=1))))
-    per_engine = []
-    for slot, f in enumerate((fa, fb)):
-        sj = spread_interval(f, slot, j)
-        send = sj if j == end else spread_interval(f, slot, end)
-        largest = float(np.max(_matrix(quantity, f[:, j], f[:, j]))) if len(f) > 1 else 0.0
-        per_engine.append(
-            EngineJudgement(
-                label=labels[slot],
-                size=len(f),
-                spread=sj,
-                spread_end=send,
-                spread_max=float(np.max(spreads[slot])),
-                largest_pair=largest,
-                other_to_nearest=nearest[slot],
-                own_error=float(own[slot, j]),
-                gap_over_spread=g / float(spread_f[slot, j]),
-                gap_over_own_error=g / float(own_f[slot, j]),
-                horizons=horizons(time, spreads[slot], q.thresholds),
-            )
-        )
-
+    gap_j = _gap_interval(quantity, fa, fb, gap, j, seed)
+    gap_end = gap_j if j == end else _gap_interval(quantity, fa, fb, gap, end, seed)
+    per_engine = _engine_judgements(
+        quantity, labels, (fa, fb), j, end, g, spreads, (spread_f, own_f), own, time, seed
+    )
     test = None
-    marginal: list[Marginal] = []
-    lo_m = MARGINAL[0]
-    if np.all(gap < tol):
-        verdict, engines, reason = "agree", [], "below tolerance"
-        ratio = float(np.max(gap)) / tol
-        if ratio >= lo_m:
-            marginal.append(Marginal("tolerance", ratio))
-    else:
-        if na >= 2 and nb >= 2:
-            both = np.concatenate([fa[:, j], fb[:, j]])
-            test = energy_test(_matrix(quantity, both, both), na, seed)
-        covering = [e for e in per_engine if e.gap_over_spread <= within]
-        if covering:
-            covering.sort(key=lambda e: -e.spread.value)
-            inside = min(e.gap_over_spread for e in covering) <= 1.0
-            reason = "within spread" if inside else "near spread"
-            verdict, engines = "chaotic", [e.label for e in covering]
-            for e in covering:
-                if e.gap_over_spread >= lo_m:
-                    marginal.append(Marginal("spread", e.gap_over_spread, e.label))
-        else:
-            own_cover = [e for e in per_engine if e.gap_over_own_error <= within]
-            if own_cover:
-                inside = min(e.gap_over_own_error for e in own_cover) <= 1.0
-                reason = OWN_ERROR_REASONS[0 if inside else 1]
-                verdict, engines = "unresolved", [e.label for e in own_cover]
-                for e in own_cover:
-                    if e.gap_over_own_error >= lo_m:
-                        marginal.append(Marginal("own_error", e.gap_over_own_error, e.label))
-            elif test is None:
-                verdict, engines, reason = "unresolved", [], "single run"
-            elif test.p_value >= ALPHA:
-                verdict, engines, reason = "unresolved", [], "not separated"
-            else:
-                verdict, engines, reason = "differ", [], "separated"
+    if not np.all(gap < tol) and na >= 2 and nb >= 2:
+        both = np.concatenate([fa[:, j], fb[:, j]])
+        test = energy_test(_matrix(quantity, both, both), na, seed)
+    verdict, engines, reason, marginal = _decide(gap, tol, per_engine, test)
     imax = int(np.argmax(gap))
     return Verdict(
         verdict=verdict,
@@ -483,3 +416,124 @@ def judge(
         own_errors=own,
         classes=classes,
     )
+
+
+def _classes(gap: np.ndarray, tol: float, own_f: np.ndarray, spread_f: np.ndarray) -> np.ndarray:
+    """(T,) int8 code of each instant (:data:`_CODES`): the gap below ``tol``, within the
+    spreads, within the own errors (each floored, (2, T)), else apart."""
+    classes = np.full(len(gap), _CODES["differ"], dtype=np.int8)
+    within = MARGINAL[1]
+    classes[np.any(gap <= within * own_f, axis=0)] = _CODES["unresolved"]
+    classes[np.any(gap <= within * spread_f, axis=0)] = _CODES["chaotic"]
+    classes[gap < tol] = _CODES["agree"]
+    return classes
+
+
+def _gap_interval(
+    quantity: str, fa: np.ndarray, fb: np.ndarray, gap: np.ndarray, k: int, seed: int
+) -> Interval:
+    """The bootstrap interval of the gap (the median cross distance) at instant ``k``."""
+    d = _matrix(quantity, fa[:, k], fb[:, k])
+    return _bootstrap(
+        (np.arange(len(fa)), np.arange(len(fb))), _median_cross_statistic(d), float(gap[k]), seed
+    )
+
+
+def _spread_interval(
+    quantity: str, f: np.ndarray, spread: np.ndarray, k: int, seed: int
+) -> Interval:
+    """The bootstrap interval of one engine's spread (``spread``, (T,)) at instant ``k``."""
+    d = _matrix(quantity, f[:, k], f[:, k])
+    return _bootstrap((np.arange(len(f)),), _spread_statistic(d), float(spread[k]), seed)
+
+
+def _decide(
+    gap: np.ndarray,
+    tol: float,
+    per_engine: list[EngineJudgement],
+    test: TwoSampleTest | None,
+) -> tuple[str, list[str], str, list[Marginal]]:
+    """The verdict from the gap series, each engine's judgement and the energy test.
+
+    Returns:
+        The verdict, the engines it names, its reason, and what put it near a line.
+    """
+    marginal: list[Marginal] = []
+    lo_m, within = MARGINAL
+    if np.all(gap < tol):
+        ratio = float(np.max(gap)) / tol
+        if ratio >= lo_m:
+            marginal.append(Marginal("tolerance", ratio))
+        return "agree", [], "below tolerance", marginal
+    covering = [e for e in per_engine if e.gap_over_spread <= within]
+    if covering:
+        covering.sort(key=lambda e: -e.spread.value)
+        inside = min(e.gap_over_spread for e in covering) <= 1.0
+        for e in covering:
+            if e.gap_over_spread >= lo_m:
+                marginal.append(Marginal("spread", e.gap_over_spread, e.label))
+        reason = "within spread" if inside else "near spread"
+        return "chaotic", [e.label for e in covering], reason, marginal
+    own_cover = [e for e in per_engine if e.gap_over_own_error <= within]
+    if own_cover:
+        inside = min(e.gap_over_own_error for e in own_cover) <= 1.0
+        for e in own_cover:
+            if e.gap_over_own_error >= lo_m:
+                marginal.append(Marginal("own_error", e.gap_over_own_error, e.label))
+        reason = OWN_ERROR_REASONS[0 if inside else 1]
+        return "unresolved", [e.label for e in own_cover], reason, marginal
+    if test is None:
+        return "unresolved", [], "single run", marginal
+    if test.p_value >= ALPHA:
+        return "unresolved", [], "not separated", marginal
+    return "differ", [], "separated", marginal
+
+
+def _engine_judgements(
+    quantity: str,
+    labels: Sequence[str],
+    members: tuple[np.ndarray, np.ndarray],
+    j: int,
+    end: int,
+    g: float,
+    spreads: np.ndarray,
+    floored: tuple[np.ndarray, np.ndarray],
+    own: np.ndarray,
+    time: np.ndarray,
+    seed: int,
+) -> list[EngineJudgement]:
+    """Each engine's judgement at the judged instant ``j`` (and the last, ``end``), where the
+    gap is ``g``.
+
+    Args:
+        members: per engine, (N, T, ...) features of its runs.
+        spreads, own: (2, T) each engine's spread and own time-step error; ``floored`` the
+            two floored at the precision floor.
+        time: (T,) s.
+    """
+    q = QUANTITIES[quantity]
+    fa, fb = members
+    spread_f, own_f = floored
+    dab = _matrix(quantity, fa[:, j], fb[:, j])  # (na, nb)
+    nearest = (float(np.median(dab.min(axis=0))), float(np.median(dab.min(axis=1))))
+    per_engine = []
+    for slot, f in enumerate((fa, fb)):
+        sj = _spread_interval(quantity, f, spreads[slot], j, seed)
+        send = sj if j == end else _spread_interval(quantity, f, spreads[slot], end, seed)
+        largest = float(np.max(_matrix(quantity, f[:, j], f[:, j]))) if len(f) > 1 else 0.0
+        per_engine.append(
+            EngineJudgement(
+                label=labels[slot],
+                size=len(f),
+                spread=sj,
+                spread_end=send,
+                spread_max=float(np.max(spreads[slot])),
+                largest_pair=largest,
+                other_to_nearest=nearest[slot],
+                own_error=float(own[slot, j]),
+                gap_over_spread=g / float(spread_f[slot, j]),
+                gap_over_own_error=g / float(own_f[slot, j]),
+                horizons=horizons(time, spreads[slot], q.thresholds),
+            )
+        )
+    return per_engine

@@ -7,8 +7,9 @@ import os
 from pathlib import Path
 from typing import Any
 
-from simbridge.exceptions import CacheEntryMissingError, SimbridgeError
+from simbridge.exceptions import SimbridgeError
 
+from ..errors import CacheEntryMissingError
 from ..pipeline import compare
 from ..run.cache import Cache
 from ..run.studyjobs import scenario_of

@@ -40,17 +40,15 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
+from concurrent.futures import Executor, Future
 from dataclasses import dataclass
 from typing import Any
 
-from simbridge.exceptions import (
-    ExtraNotInstalledError,
-    InvalidArgumentError,
-    JobError,
-    SimbridgeError,
-)
+from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 from simbridge.terminate import sigterm_raises
+
+from ..errors import ExtraNotInstalledError, JobError
+from .held_signals import HeldSignals, wait_first
 
 __all__ = [
     "JobFailed",
@@ -242,7 +240,7 @@ def _killed_worker(exc: BaseException) -> bool:
 def _run_executor(
     fn: Callable[[Any], Any], items: list[Any], executor: Executor, tracker: _Tracker
 ) -> None:
-    with _HeldSignals() as held:
+    with HeldSignals() as held:
         _run_executor_held(fn, items, executor, tracker, held)
 
 
@@ -251,13 +249,13 @@ def _run_executor_held(
     items: list[Any],
     executor: Executor,
     tracker: _Tracker,
-    held: _HeldSignals,
+    held: HeldSignals,
 ) -> None:
     futures: dict[Future[Any], int] = {executor.submit(fn, item): i for i, item in enumerate(items)}
     pending = set(futures)
     try:
         while pending:
-            done, pending = _wait_first(pending, held)
+            done, pending = wait_first(pending, held)
             for f in done:
                 i = futures[f]
                 if f.cancelled():
@@ -329,96 +327,6 @@ def _run_client(client: Any, fn: Callable[[Any], Any], items: list[Any], tracker
             if f.status == "finished":
                 tracker.finish(i, f.result())
         raise
-
-
-# ---------------------------------------------------------------- signals held around wait()
-
-WAIT_POLL_S = 0.25
-"""How long a wait for the first finished job lasts before it looks for a Ctrl-C or SIGTERM."""
-
-
-class _HeldSignals:
-    """Ctrl-C and SIGTERM recorded, not raised, while the jobs run: they are raised by
-    :meth:`check` between two waits. Raised from the handler, a ``KeyboardInterrupt`` can land
-    inside :func:`concurrent.futures.wait` while it holds the futures' locks one by one (with
-    hundreds of jobs pending most of the main thread's time is spent there): the locks it took
-    stay taken, the pool's result thread then blocks on them, and the pool's shutdown never
-    returns (a killed ``simbridge compare`` hung for 30 s and more under load). Only the main
-    thread handles signals, and only a handler that is Python's default (or
-    :mod:`simbridge.terminate`'s) is replaced; a caller's own handler is left alone."""
-
-    def __init__(self) -> None:
-        self.caught: BaseException | None = None
-        self.previous: dict[int, Any] = {}
-        self.active = False
-
-    def __enter__(self) -> _HeldSignals:
-        if threading.current_thread() is not threading.main_thread():
-            return self
-        from simbridge.terminate import Terminated, raises_terminated
-
-        # A handler of a block no longer active (one left installed by a signal that landed
-        # inside __enter__ itself) raises as the handler it replaced would: never a Ctrl-C lost.
-        def hold_int(signum: int, frame: Any) -> None:
-            if not self.active:
-                raise KeyboardInterrupt
-            self.caught = self.caught or KeyboardInterrupt()
-
-        def hold_term(signum: int, frame: Any) -> None:
-            if not self.active:
-                raise Terminated()
-            self.caught = self.caught or Terminated()
-
-        self.active = True
-        try:
-            for sig, ours, default in (
-                (signal.SIGINT, hold_int, signal.default_int_handler),
-                (getattr(signal, "SIGTERM", None), hold_term, None),
-            ):
-                if sig is None:
-                    continue
-                try:
-                    now = signal.getsignal(sig)
-                except (AttributeError, ValueError):
-                    continue
-                if now is default or (default is None and raises_terminated(now)):
-                    self.previous[sig] = (now, ours)
-                    signal.signal(sig, ours)
-        except BaseException:
-            self._restore()
-            raise
-        return self
-
-    def _restore(self) -> None:
-        self.active = False
-        for sig, (handler, ours) in self.previous.items():
-            if signal.getsignal(sig) is ours:  # else another handler was set since: keep it
-                signal.signal(sig, handler)
-        self.previous.clear()
-
-    def __exit__(self, kind: type[BaseException] | None, *exc: object) -> None:
-        self._restore()
-        if kind is None:  # a Ctrl-C or SIGTERM after the last check: raised, not lost
-            self.check()
-
-    def check(self) -> None:
-        """Raise the Ctrl-C or SIGTERM recorded since the jobs started, if any."""
-        if self.caught is not None:
-            caught, self.caught = self.caught, None
-            raise caught
-
-
-def _wait_first(
-    pending: set[Future[Any]], held: _HeldSignals
-) -> tuple[set[Future[Any]], set[Future[Any]]]:
-    """The futures done and those still pending, once at least one is done; a Ctrl-C or
-    SIGTERM recorded meanwhile is raised here, outside ``wait``'s locks."""
-    while True:
-        held.check()
-        done, rest = wait(pending, timeout=WAIT_POLL_S, return_when=FIRST_COMPLETED)
-        held.check()
-        if done:
-            return done, rest
 
 
 # ---------------------------------------------------------------- the local pool
@@ -608,7 +516,7 @@ def _run_pool(
     max_attempts: int,
     tracker: _Tracker,
 ) -> None:
-    with _HeldSignals() as held:
+    with HeldSignals() as held:
         _run_pool_held(fn, items, workers, max_attempts, tracker, held)
 
 
@@ -618,7 +526,7 @@ def _run_pool_held(
     workers: int,
     max_attempts: int,
     tracker: _Tracker,
-    held: _HeldSignals,
+    held: HeldSignals,
 ) -> None:
     import multiprocessing
     from concurrent.futures.process import BrokenProcessPool
@@ -636,7 +544,7 @@ def _run_pool_held(
                 futures[pool.submit(_call, fn, items[i], i, tracker.labels[i])] = i
             pending = set(futures)
             while pending and not broken:
-                done, pending = _wait_first(pending, held)
+                done, pending = wait_first(pending, held)
                 for f in done:
                     exc = f.exception()
                     if exc is None:

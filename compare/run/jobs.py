@@ -354,7 +354,7 @@ def run_job(job: Job) -> JobResult:
     import multiprocessing
 
     from .ensemble import member_of
-    from .trajectory import run
+    from .recording import run
 
     start, cpu = _time.perf_counter(), _time.process_time()
     log = logging.getLogger("simbridge")

@@ -14,15 +14,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from simbridge.exceptions import ScenarioError, TrajectoryFileError
-
+from ..errors import ScenarioError, TrajectoryFileError
 from ..scenario.outcomes import KINDS, JointRef, Outcome
 from .portable import acos, dot, length, norm
 from .quantities import rotate
@@ -320,73 +319,100 @@ def evaluate(
         return _record(outcome, None, None, note=note)
     a, b = window
     t = tr.time[a : b + 1] - tr.time[a]
+    measure = _MEASURES.get(outcome.kind)
+    if measure is None:
+        raise _fail(outcome, index, "kind", f"unknown kind {outcome.kind!r}; kinds: {KINDS}", file)
     try:
-        if outcome.kind == "reach":
-            return _reach(outcome, body, a, b, t)
-        if outcome.kind == "upright":
-            angles = tilt(body.base_orientation[a : b + 1])
-            assert outcome.max_tilt is not None
-            over = np.flatnonzero(angles >= outcome.max_tilt)
-            worst = float(angles.max())
-            return _record(
-                outcome,
-                worst,
-                bool(over.size == 0),
-                UprightFigures(
-                    exceeded_at=float(t[over[0]]) if over.size else None,
-                    final_tilt=float(angles[-1]),
-                ),
-            )
-        if outcome.kind == "track":
-            return _track(outcome, body, a, b, t)
-        if outcome.kind == "final_pose":
-            if outcome.point is not None:
-                n = len(outcome.point)
-                pos = _positions(body, outcome.link)[b, :n]
-                err = length(pos - np.asarray(outcome.point))
-            elif outcome.orientation is not None:
-                q = body.base_orientation[b]
-                target = np.asarray(outcome.orientation)
-                cos = abs(float(dot(q, target))) / (length(q) * length(target))
-                err = 2.0 * math.acos(min(1.0, cos))
-            else:
-                cols = _joint_columns(body, outcome.joints)
-                q = body.joint_positions[b, cols]
-                err = float(np.sqrt(np.mean((q - np.asarray(outcome.targets)) ** 2)))
-            ok = None if outcome.within is None else bool(err <= outcome.within)
-            return _record(outcome, err, ok)
-        if outcome.kind == "effort":
-            cols = (
-                _joint_columns(body, outcome.joints)
-                if outcome.joints
-                else list(range(len(body.joint_names)))
-            )
-            power = np.abs(
-                body.joint_forces[a + 1 : b + 1, cols] * body.joint_velocities[a + 1 : b + 1, cols]
-            )
-            work = float(power.sum() * tr.timestep)
-            ok = None if outcome.max is None else bool(work <= outcome.max)
-            return _record(outcome, work, ok)
+        return measure(outcome, body, a, b, t, tr.timestep)
     except KeyError as exc:
         (missing,) = exc.args
-        if outcome.kind in ("track", "final_pose", "effort") and outcome.joints:
-            valid = ", ".join(body.joint_names)
-            if missing in outcome.joints:
-                raise _fail(
-                    outcome,
-                    index,
-                    "joints",
-                    f"robot {robot!r} has no movable joint {missing!r}; movable joints: {valid}",
-                    file,
-                ) from None
-        valid = ", ".join(["base", *body.link_names[1:]])
-        raise _fail(
-            outcome, index, "link", f"robot {robot!r} has no link {missing!r}; links: {valid}", file
-        ) from None
-    raise _fail(outcome, index, "kind", f"unknown kind {outcome.kind!r}; kinds: {KINDS}", file)
+        raise _unknown_name(outcome, index, file, robot, body, missing) from None
 
 
-def _reach(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray) -> OutcomeRecord:
+def _unknown_name(
+    outcome: Outcome, index: int | None, file: str, robot: str, body: BodyTrajectory, missing: Any
+) -> ScenarioError:
+    """The error for a joint or link ``missing`` from ``robot`` (``body``), naming the valid
+    ones."""
+    if outcome.kind in ("track", "final_pose", "effort") and outcome.joints:
+        valid = ", ".join(body.joint_names)
+        if missing in outcome.joints:
+            return _fail(
+                outcome,
+                index,
+                "joints",
+                f"robot {robot!r} has no movable joint {missing!r}; movable joints: {valid}",
+                file,
+            )
+    valid = ", ".join(["base", *body.link_names[1:]])
+    return _fail(
+        outcome, index, "link", f"robot {robot!r} has no link {missing!r}; links: {valid}", file
+    )
+
+
+def _upright(
+    outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray, dt: float
+) -> OutcomeRecord:
+    """``upright``: the largest tilt of the base (rad) over rows ``a`` to ``b``, and when it
+    first reached the bound (``t``: s from row ``a``)."""
+    angles = tilt(body.base_orientation[a : b + 1])
+    assert outcome.max_tilt is not None
+    over = np.flatnonzero(angles >= outcome.max_tilt)
+    worst = float(angles.max())
+    return _record(
+        outcome,
+        worst,
+        bool(over.size == 0),
+        UprightFigures(
+            exceeded_at=float(t[over[0]]) if over.size else None,
+            final_tilt=float(angles[-1]),
+        ),
+    )
+
+
+def _final_pose(
+    outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray, dt: float
+) -> OutcomeRecord:
+    """``final_pose``: at row ``b``, the distance to the point (m), the angle to the
+    orientation (rad) or the joints' RMS error to their targets."""
+    if outcome.point is not None:
+        n = len(outcome.point)
+        pos = _positions(body, outcome.link)[b, :n]
+        err = length(pos - np.asarray(outcome.point))
+    elif outcome.orientation is not None:
+        q = body.base_orientation[b]
+        target = np.asarray(outcome.orientation)
+        cos = abs(float(dot(q, target))) / (length(q) * length(target))
+        err = 2.0 * math.acos(min(1.0, cos))
+    else:
+        cols = _joint_columns(body, outcome.joints)
+        q = body.joint_positions[b, cols]
+        err = float(np.sqrt(np.mean((q - np.asarray(outcome.targets)) ** 2)))
+    ok = None if outcome.within is None else bool(err <= outcome.within)
+    return _record(outcome, err, ok)
+
+
+def _effort(
+    outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray, dt: float
+) -> OutcomeRecord:
+    """``effort``: the work of the joints (every movable one by default) over the steps after
+    row ``a`` to row ``b``, |force x velocity| summed times ``dt`` (s)."""
+    cols = (
+        _joint_columns(body, outcome.joints)
+        if outcome.joints
+        else list(range(len(body.joint_names)))
+    )
+    power = np.abs(
+        body.joint_forces[a + 1 : b + 1, cols] * body.joint_velocities[a + 1 : b + 1, cols]
+    )
+    work = float(power.sum() * dt)
+    ok = None if outcome.max is None else bool(work <= outcome.max)
+    return _record(outcome, work, ok)
+
+
+def _reach(
+    outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray, dt: float
+) -> OutcomeRecord:
     assert outcome.point is not None and outcome.within is not None
     n = len(outcome.point)
     pos = _positions(body, outcome.link)[a : b + 1, :n]
@@ -406,7 +432,9 @@ def _reach(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray
     )
 
 
-def _track(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray) -> OutcomeRecord:
+def _track(
+    outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray, dt: float
+) -> OutcomeRecord:
     if outcome.points:
         pos = _positions(body, outcome.link)[a : b + 1]
         pts = np.asarray(outcome.points, dtype=np.float64)
@@ -442,6 +470,19 @@ def _track(outcome: Outcome, body: BodyTrajectory, a: int, b: int, t: np.ndarray
     return _record(
         outcome, rms, ok, TrackFigures(samples=int(err.size), max_error=float(err.max()))
     )
+
+
+_MEASURES: dict[
+    str, Callable[[Outcome, BodyTrajectory, int, int, np.ndarray, float], OutcomeRecord]
+] = {
+    "reach": _reach,
+    "upright": _upright,
+    "track": _track,
+    "final_pose": _final_pose,
+    "effort": _effort,
+}
+"""Each kind measured on a body's rows ``a`` to ``b`` (the outcome's window), ``t`` their times
+from row ``a`` (s), ``dt`` the time step (s); ``function`` is :func:`_evaluate_function`."""
 
 
 def _evaluate_function(

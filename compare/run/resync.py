@@ -48,7 +48,8 @@ from ..scenario import Scenario, load_scenario
 from .events import Event, find_events, phase_at
 from .portable import length
 from .quantities import FEATURE_SOURCES, QUANTITIES, distance, features, rotation_angle
-from .trajectory import Trajectory, run
+from .recording import run
+from .trajectory import Trajectory
 
 __all__ = [
     "DEFAULT_POINTS",

@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from simbridge._version import __version__
-from simbridge.exceptions import CacheEntryMissingError
 
+from ..errors import CacheEntryMissingError
 from ..scenario import Scenario, dumps_scenario
 from .cache import Cache, resolve
 from .ensemble import (
@@ -189,12 +189,7 @@ def run_jobs(
         CacheEntryMissingError: ``offline`` and a job is not in the cache.
     """
     store = resolve(cache)
-    results: dict[str, JobResult] = {}
-    if store is not None and not fresh:
-        for job in jobs:
-            got = store.get(job.key)
-            if isinstance(got, JobResult) and got.kind == job.kind:
-                results[job.key] = got
+    results = _from_cache(store, jobs) if store is not None and not fresh else {}
     missing = [j for j in jobs if j.key not in results]
     counts = JobCounts(
         total=len(jobs),
@@ -212,57 +207,27 @@ def run_jobs(
             len(missing),
             len(jobs),
         )
-    steps = {j.key: j.steps for j in jobs}
-    total = sum(steps.values())
-    done = sum(steps[k] for k in results)
+    done = _Done(jobs, results, progress)
     failed: dict[str, JobFailed] = {}
     if missing:
-        missing.sort(key=lambda j: -_COST.get(j.kind, 1.0) * steps[j.key])
         if executor is None and scheduler is None:
             if workers is None and len(missing) == 1:
                 workers = 0  # one job: no process to start
             elif workers != 0 and not _main_importable():
                 workers = 0  # a script read from stdin: a spawned process cannot import it
-        start = _time.perf_counter()
-
-        def finished(job: Job) -> None:
-            nonlocal done
-            done += steps[job.key]
-            if progress is not None:
-                progress(job.label, done, total)
-
-        def on_result(index: int, result: Any) -> None:
-            job = missing[index]
-            results[job.key] = result
-            counts.ran += 1
-            if store is not None:
-                try:
-                    store.put(job.key, result)
-                except OSError as exc:
-                    log.warning("cannot write the cache entry of %s: %s", job.label, exc)
-            finished(job)
-
-        from simbridge.registry import available_backends, backend_spec
-
-        specs = tuple(backend_spec(name) for name in available_backends())
-        out = run_all(
-            functools.partial(run_job_registered, specs),
+        _run_missing(
             missing,
-            labels=[j.label for j in missing],
+            results,
+            failed,
+            counts,
+            store,
+            done,
             workers=workers,
             scheduler=scheduler,
             executor=executor,
-            progress=None if progress is None else _silent,
-            on_result=on_result,
         )
-        for job, result in zip(missing, out, strict=True):
-            if isinstance(result, JobFailed):  # not cached: the next study runs it again
-                failed[job.key] = result
-                counts.failed += 1
-                finished(job)
-        counts.wall_time = _time.perf_counter() - start
     elif progress is not None:
-        progress("every run from the cache", done, total)
+        progress("every run from the cache", done.steps, done.total)
     if store is not None:
         counts.digests = {j.key: store.digests[j.key] for j in jobs if j.key in store.digests}
     log.info(
@@ -273,13 +238,99 @@ def run_jobs(
         counts.ran,
         counts.failed,
     )
+    _replay_logs(jobs, results)
+    return results, failed, counts
+
+
+def _from_cache(store: Cache, jobs: Sequence[Job]) -> dict[str, JobResult]:
+    """The results of ``jobs`` that ``store`` holds (of the same kind), by key."""
+    results: dict[str, JobResult] = {}
+    for job in jobs:
+        got = store.get(job.key)
+        if isinstance(got, JobResult) and got.kind == job.kind:
+            results[job.key] = got
+    return results
+
+
+class _Done:
+    """The steps of a study's jobs done so far (the cached ones from the start), told to
+    ``progress(what, steps_done, steps_total)`` as each job finishes."""
+
+    def __init__(
+        self,
+        jobs: Sequence[Job],
+        results: dict[str, JobResult],
+        progress: Callable[[str, int, int], None] | None,
+    ):
+        self.job_steps = {j.key: j.steps for j in jobs}
+        self.total = sum(self.job_steps.values())
+        self.steps = sum(self.job_steps[k] for k in results)
+        self.progress = progress
+
+    def finished(self, job: Job) -> None:
+        self.steps += self.job_steps[job.key]
+        if self.progress is not None:
+            self.progress(job.label, self.steps, self.total)
+
+
+def _run_missing(
+    missing: list[Job],
+    results: dict[str, JobResult],
+    failed: dict[str, JobFailed],
+    counts: JobCounts,
+    store: Cache | None,
+    done: _Done,
+    *,
+    workers: int | None,
+    scheduler: str | None,
+    executor: Executor | None,
+) -> None:
+    """Run the jobs not in the cache, costliest first, into ``results`` (and ``store``) or
+    ``failed``; ``counts`` counts them and the wall time."""
+    missing.sort(key=lambda j: -_COST.get(j.kind, 1.0) * done.job_steps[j.key])
+    start = _time.perf_counter()
+
+    def on_result(index: int, result: Any) -> None:
+        job = missing[index]
+        results[job.key] = result
+        counts.ran += 1
+        if store is not None:
+            try:
+                store.put(job.key, result)
+            except OSError as exc:
+                log.warning("cannot write the cache entry of %s: %s", job.label, exc)
+        done.finished(job)
+
+    from simbridge.registry import available_backends, backend_spec
+
+    specs = tuple(backend_spec(name) for name in available_backends())
+    out = run_all(
+        functools.partial(run_job_registered, specs),
+        missing,
+        labels=[j.label for j in missing],
+        workers=workers,
+        scheduler=scheduler,
+        executor=executor,
+        progress=None if done.progress is None else _silent,
+        on_result=on_result,
+    )
+    for job, result in zip(missing, out, strict=True):
+        if isinstance(result, JobFailed):  # not cached: the next study runs it again
+            failed[job.key] = result
+            counts.failed += 1
+            done.finished(job)
+    counts.wall_time = _time.perf_counter() - start
+
+
+def _replay_logs(jobs: Sequence[Job], results: dict[str, JobResult]) -> None:
+    """Log what the runs in other processes logged, each message once, under its job's label
+    (a member's logs are its nominal run's)."""
     here = os.getpid()
     for job in jobs:  # what the runs logged, each once, where no handler has seen it yet
         r = results.get(job.key)
         if r is not None and job.kind != "member" and r.pid != here:
             for name, level, message in dict.fromkeys(r.log):
                 logging.getLogger(name).log(level, "%s [%s]", message, job.label)
-    return results, failed, counts
 
 
 def _silent(done: int, total: int, label: str) -> None:

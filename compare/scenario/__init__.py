@@ -68,8 +68,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from simbridge.exceptions import ScenarioError, did_you_mean
+from simbridge.exceptions import did_you_mean
 
+from ..errors import ScenarioError
+from .checks import find_key_line
 from .controllers import ControllerSpec
 
 # re-exported: callers import these from here
@@ -86,7 +88,7 @@ from .model import (  # noqa: F401
     parse_timestep,
 )
 from .outcomes import Outcome
-from .reader import find_key_line, loads_scenario
+from .reader import loads_scenario
 from .writer import dumps_scenario, save_scenario
 
 __all__ = [

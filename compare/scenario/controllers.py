@@ -38,7 +38,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
-from simbridge.exceptions import ScenarioError
+from ..errors import ScenarioError
 
 if TYPE_CHECKING:
     import simbridge

@@ -15,9 +15,10 @@ from typing import Any
 
 import simbridge
 from simbridge.engine_settings import freeze, merge, thaw
-from simbridge.exceptions import InvalidArgumentError, ScenarioError
+from simbridge.exceptions import InvalidArgumentError
 from simbridge.transforms import quat_multiply
 
+from ..errors import ScenarioError
 from .controllers import ControllerSpec
 from .outcomes import Outcome
 

@@ -11,10 +11,11 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from simbridge.exceptions import ScenarioError, SimbridgeError, UnknownJointError
+from simbridge.exceptions import SimbridgeError, UnknownJointError
 
+from ..errors import ScenarioError
+from .checks import _keystr, find_key_line
 from .model import JointRef, Scenario
-from .reader import _keystr, find_key_line
 
 __all__ = ["check_robots"]
 

@@ -189,7 +189,7 @@ def check_vary(settings: Sequence[Setting | str], backends: Sequence[str]) -> No
         EngineNotInStudyError: ``BACKEND.KEY`` for a backend not among ``backends``.
         InvalidArgumentError: ``KEY@N`` past the last engine, or naming another backend's.
     """
-    from simbridge.exceptions import EngineNotInStudyError
+    from ..errors import EngineNotInStudyError
 
     for s in settings:
         key = s.key if isinstance(s, Setting) else s.partition("=")[0].strip()

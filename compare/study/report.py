@@ -386,7 +386,7 @@ def _pairs(n: int) -> list[tuple[int, int]]:
 
 def write_explanation(e: Explanation, out: str | Path, *, plots: bool = True) -> Path:
     """report.md, summary.json and the figures of an explain study into ``out``."""
-    from .explain import explanation_lines, plot_explanation
+    from .explain_report import explanation_lines, plot_explanation
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -15,10 +15,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from simbridge.engine_settings import require_engines
 from simbridge.exceptions import InvalidArgumentError
 
 from ..pipeline import compare
+from ..run.asked import require_engines
 from ..scenario import load_scenario
 from .points import (
     PairFigures,

@@ -18,7 +18,7 @@ import importlib
 import math
 import numbers
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -38,7 +38,6 @@ __all__ = [
     "effective",
     "parse_assignment",
     "merge",
-    "require_engines",
     "freeze",
     "thaw",
     "owners",
@@ -407,27 +406,6 @@ def thaw(frozen: Frozen) -> dict[str, dict[str, Any]]:
         ``{backend: {key: value}}``, JSON-able (tuples as lists).
     """
     return {b: {k: _jsonable(v) for k, v in values} for b, values in frozen}
-
-
-def require_engines(
-    argument: str, settings: Mapping[str, Mapping[str, Any]] | None, engines: Sequence[str]
-) -> None:
-    """Check that every backend ``settings`` sets something for is one of ``engines``.
-
-    Args:
-        argument: Where the settings were given (for the message).
-        settings: ``{backend: {key: value}}``, or None.
-        engines: The study's engines.
-
-    Raises:
-        EngineNotInStudyError: a setting for another engine, naming it and ``engines``.
-    """
-    from simbridge.exceptions import EngineNotInStudyError
-
-    for backend, values in (settings or {}).items():
-        if backend not in engines and values:
-            key = next(iter(values))
-            raise EngineNotInStudyError(argument, f"{backend}.{key}", backend, engines)
 
 
 def merge(*layers: Mapping[str, Mapping[str, Any]] | None) -> dict[str, dict[str, Any]]:

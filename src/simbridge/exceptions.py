@@ -16,7 +16,6 @@ __all__ = [
     "BackendError",
     "UnknownBackendError",
     "BackendNotInstalledError",
-    "ExtraNotInstalledError",
     "BackendUnsupportedError",
     "DisplayError",
     "UrdfError",
@@ -31,7 +30,6 @@ __all__ = [
     "InvalidArgumentError",
     "InvalidProfileError",
     "InvalidEngineSettingError",
-    "EngineNotInStudyError",
     "SimulationDivergedError",
     "EngineError",
     "SimBusyError",
@@ -40,10 +38,6 @@ __all__ = [
     "NotOfferedError",
     "PyBulletKeywordError",
     "StaleCommandError",
-    "ScenarioError",
-    "TrajectoryFileError",
-    "CacheEntryMissingError",
-    "JobError",
     "SlowStepWarning",
 ]
 
@@ -138,25 +132,6 @@ class BackendNotInstalledError(BackendError, ImportError):
         super().__init__(
             f"backend {backend!r} needs the Python package {module!r}, which is not importable "
             f"({cause}); install it with: pip install {pip_name}"
-        )
-
-
-class ExtraNotInstalledError(SimbridgeError, ImportError):
-    """A feature needs a package of one of simbridge's extras that is not installed.
-
-    Args:
-        feature: What needs it (the message's subject).
-        module: The Python module that failed to import.
-        pip_name: What to ``pip install`` to get it (an extra: ``simbridge[compare]``).
-        cause: The import's own error.
-    """
-
-    def __init__(self, feature: str, module: str, pip_name: str, cause: BaseException):
-        self.feature = feature
-        self.module = module
-        super().__init__(
-            f"{feature} needs the Python package {module!r}, which is not importable "
-            f"({cause}); install it with: pip install '{pip_name}'"
         )
 
 
@@ -410,31 +385,6 @@ class InvalidArgumentError(SimbridgeError, ValueError):
         super().__init__(f"argument {argument!r}: {detail}")
 
 
-class EngineNotInStudyError(InvalidArgumentError):
-    """An engine setting (``--set``, ``engine_settings=``, a ``--vary BACKEND.KEY``) for an
-    engine the study does not run: it would change nothing. A scenario's own ``[engines.*]``
-    tables are not this: a scenario is written for every engine.
-
-    Args:
-        argument: Where the setting was given (``"--set"``).
-        setting: The setting as written.
-        backend: The engine it is for.
-        engines: The engines the study runs.
-    """
-
-    def __init__(self, argument: str, setting: str, backend: str, engines: Sequence[str]):
-        self.setting = setting
-        self.backend = backend
-        self.engines = list(engines)
-        InvalidArgumentError.__init__(
-            self,
-            argument,
-            f"{setting} is a setting of {backend!r}, which this study does not run (its "
-            f"engines: {', '.join(map(repr, dict.fromkeys(engines)))}): it would change "
-            f"nothing; add {backend} to the backends or leave the setting out",
-        )
-
-
 class InvalidProfileError(SimbridgeError, ValueError):
     """A profile name that does not exist.
 
@@ -591,90 +541,44 @@ class StaleCommandError(SimbridgeError, RuntimeError):
         )
 
 
-# ---------------------------------------------------------------- comparison scenarios
-
-
-class ScenarioError(SimbridgeError, ValueError):
-    """A comparison scenario file is missing, malformed, or says something invalid.
-
-    Args:
-        file: The file (or ``<scenario>``).
-        key: The dotted key path (``phases[1].commands[0].mode``), or None.
-        detail: What is wrong and what would be right.
-        line: The 1-based line in the file where it was found (None when it cannot be
-            located).
-    """
-
-    def __init__(self, file: str, key: str | None, detail: str, line: int | None = None):
-        self.file = file
-        self.key = key
-        self.line = line
-        where = file if line is None else f"{file}:{line}"
-        what = f"key {key!r}: " if key else ""
-        super().__init__(f"{where}: {what}{detail}")
-
-
-class TrajectoryFileError(SimbridgeError, ValueError):
-    """A saved comparison trajectory (``Trajectory.load``) holds something malformed.
-
-    Args:
-        file: The file.
-        key: The dotted key path inside its header (``outcomes.goal.closest``).
-        detail: What is wrong.
-    """
-
-    def __init__(self, file: str, key: str, detail: str):
-        self.file = file
-        self.key = key
-        super().__init__(f"{file}: key {key!r}: {detail}")
-
-
-class CacheEntryMissingError(SimbridgeError, LookupError):
-    """A study rebuilt from the cache alone (``simbridge report DIR``) needs a job's result that
-    the cache does not hold.
-
-    Args:
-        cache: The cache folder.
-        job: The first missing job's name.
-        key: Its cache key (the first 16 characters go in the message).
-        missing: How many of the study's jobs are absent.
-        total: How many jobs the study has.
-    """
-
-    def __init__(self, cache: str, job: str, key: str, missing: int, total: int):
-        self.cache = cache
-        self.job = job
-        self.key = key
-        self.missing = missing
-        self.total = total
-        super().__init__(
-            f"{missing} of {total} jobs of the study are not in the cache {cache}: the first is "
-            f"{job} (key {key[:16]}); name the cache the study used (--cache DIR), or run the "
-            "study again (simbridge compare): a changed robot, controller or scenario file, or "
-            "another simbridge version, makes new jobs"
-        )
-
-
-class JobError(SimbridgeError, RuntimeError):
-    """A job run in another process raised an error that cannot be sent back as it is (its
-    class does not pickle): its class, message and the worker's traceback, as text.
-
-    Args:
-        job: The job's name.
-        error: The error the job raised.
-        traceback: The worker's traceback, as text.
-    """
-
-    def __init__(self, job: str, error: BaseException, traceback: str):
-        self.job = job
-        self.error_type = f"{type(error).__module__}.{type(error).__qualname__}"
-        self.traceback = traceback
-        super().__init__(
-            f"job {job!r} raised {self.error_type}: {error} (the error could not be sent back "
-            f"from the worker process as it is; the worker's traceback:\n{traceback})"
-        )
-
-
 class SlowStepWarning(UserWarning):
     """A backend runs a slower path than it was installed for (the MuJoCo backend's compiled
     step loop is missing or was built against another MuJoCo): same results, more time."""
+
+
+_MOVED_TO_COMPARE = frozenset(
+    {
+        "ScenarioError",
+        "TrajectoryFileError",
+        "CacheEntryMissingError",
+        "JobError",
+        "EngineNotInStudyError",
+        "ExtraNotInstalledError",
+    }
+)
+"""compare's errors, which now live in :mod:`simbridge.compare.errors`; importable from here
+for one release, with a ``DeprecationWarning``."""
+
+
+def __getattr__(name: str) -> type[SimbridgeError]:
+    """A compare error by its old path: imported from :mod:`simbridge.compare.errors` on first
+    use, with a ``DeprecationWarning`` (the core imports nothing of compare otherwise).
+
+    Raises:
+        AttributeError: ``name`` is not one of the moved errors.
+    """
+    if name not in _MOVED_TO_COMPARE:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+    import warnings
+
+    warnings.warn(
+        f"simbridge.exceptions.{name} moved to simbridge.compare.errors.{name}; the old path "
+        "goes in the next release",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    # by name, not an import statement: the core does not depend on compare
+    errors = importlib.import_module("simbridge.compare.errors")
+    cls: type[SimbridgeError] = getattr(errors, name)
+    return cls

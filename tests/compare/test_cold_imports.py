@@ -71,7 +71,7 @@ def test_run_and_report_stay_functions_after_their_subpackages_load():
     code = (
         "import simbridge.compare.run.jobs, simbridge.compare.report.rebuild\n"
         "from simbridge import compare\n"
-        "assert compare.run is sys.modules['simbridge.compare.run.trajectory'].run\n"
+        "assert compare.run is sys.modules['simbridge.compare.run.recording'].run\n"
         "assert compare.report is sys.modules['simbridge.compare.report'].report\n"
         "from simbridge.compare import run, report\n"
         "assert callable(run) and callable(report) and run.__name__ == 'run'\n"

@@ -21,9 +21,10 @@ from simbridge.compare import (
     loads_scenario,
     run,
 )
+from simbridge.compare.errors import ScenarioError
 from simbridge.compare.run.ensemble import run_ensembles
 from simbridge.compare.scenario import dumps_scenario
-from simbridge.exceptions import InvalidArgumentError, ScenarioError
+from simbridge.exceptions import InvalidArgumentError
 
 DT = 1 / 240
 

@@ -15,7 +15,7 @@ import pytest
 
 from simbridge.cli import main
 from simbridge.compare import compare, dumps_scenario, loads_scenario, report
-from simbridge.exceptions import ScenarioError
+from simbridge.compare.errors import ScenarioError
 
 BOX = """
 name = "box-drop"

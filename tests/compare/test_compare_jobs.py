@@ -18,11 +18,11 @@ import pytest
 import simbridge
 from simbridge.cli import main
 from simbridge.compare import compare, load_scenario, report
+from simbridge.compare.errors import CacheEntryMissingError
 from simbridge.compare.run import jobs as jobs_module
 from simbridge.compare.run import studyjobs
 from simbridge.compare.run.cache import Cache, default_dir
 from simbridge.compare.run.jobs import Job, run_job
-from simbridge.exceptions import CacheEntryMissingError
 
 pytestmark = pytest.mark.usefixtures("_no_home_cache_writes")
 
@@ -338,8 +338,8 @@ def test_ctrl_c_keeps_what_finished_in_the_cache(tmp_path, monkeypatch):
 
 
 def test_an_exception_of_a_run_pickles_back_to_its_type():
+    from simbridge.compare.errors import ScenarioError
     from simbridge.compare.run.jobs import _portable
-    from simbridge.exceptions import ScenarioError
 
     exc = ScenarioError("s.toml", "phases[0].steps", "must be > 0", 3)
     _portable(exc)

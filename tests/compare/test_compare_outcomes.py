@@ -12,6 +12,7 @@ from _synthetic import quat_x, quat_z, trajectory
 
 from simbridge.compare import Outcome, loads_scenario
 from simbridge.compare.analysis.outcomes import success_interval, summarize
+from simbridge.compare.errors import ScenarioError, TrajectoryFileError
 from simbridge.compare.report.outcomes import outcome_lines, outcomes_section
 from simbridge.compare.report.summary_json import outcome_stats_dict
 from simbridge.compare.run.outcomes import (
@@ -24,7 +25,6 @@ from simbridge.compare.run.outcomes import (
 )
 from simbridge.compare.run.trajectory import Trajectory
 from simbridge.compare.scenario import dumps_scenario
-from simbridge.exceptions import ScenarioError, TrajectoryFileError
 
 DT = 0.125  # the synthetic trajectories: 16 steps of 1/8 s, 17 instants from t = 0 to 2 s
 

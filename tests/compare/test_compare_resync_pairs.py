@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from simbridge.cli import main
-from simbridge.compare.pipeline import _headline_quantity, engine_labels
 from simbridge.compare.report.resync import resync_file
+from simbridge.compare.run.asked import engine_labels, headline_quantity
 from simbridge.compare.run.ensemble import EnsembleRunner
 from simbridge.compare.run.jobs import Job, file_hashes
 from simbridge.compare.run.studyjobs import Plan
@@ -30,7 +30,7 @@ def _plan(names: tuple[str, ...], **kw: Any) -> tuple[Plan, Any]:
     scaled = {dt: sc, dt / 2: sc.with_timestep(dt / 2)}
     todo = [(slot, d) for slot in range(len(names)) for d in (dt, dt / 2)]
     profiles = (sc.profile,) * len(names)
-    q = _headline_quantity(sc)
+    q = headline_quantity(sc)
     runner = EnsembleRunner(sc, list(zip(names, profiles, strict=True)), q, size=2, workers=0)
     labels = engine_labels(names, profiles)
     return Plan(scaled, [dt], todo, names, profiles, labels, q, runner, EVERY, **kw), sc

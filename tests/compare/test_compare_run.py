@@ -10,7 +10,8 @@ from _precision import float32
 
 import simbridge
 from simbridge.compare import Trajectory, loads_scenario, run
-from simbridge.exceptions import ScenarioError, UnknownJointError
+from simbridge.compare.errors import ScenarioError
+from simbridge.exceptions import UnknownJointError
 
 
 def test_every_step_is_recorded(backend):

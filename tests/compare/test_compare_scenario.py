@@ -13,8 +13,8 @@ from simbridge.compare import (
     loads_scenario,
     save_scenario,
 )
+from simbridge.compare.errors import ScenarioError
 from simbridge.compare.scenario import find_key_line
-from simbridge.exceptions import ScenarioError
 
 SHIPPED = [
     "ant-gait",

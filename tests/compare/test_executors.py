@@ -21,13 +21,9 @@ from pathlib import Path
 
 import pytest
 
+from simbridge.compare.errors import ExtraNotInstalledError, JobError
 from simbridge.compare.run.executors import JobFailed, describe_exit, run_all, shutdown_pool
-from simbridge.exceptions import (
-    ExtraNotInstalledError,
-    InvalidArgumentError,
-    JobError,
-    UrdfNotFoundError,
-)
+from simbridge.exceptions import InvalidArgumentError, UrdfNotFoundError
 
 # ---------------------------------------------------------------- job functions
 
@@ -90,7 +86,7 @@ def _end_point(args: tuple[str, str, float]) -> tuple[float, ...]:
     """A real simbridge run: the scenario on the backend for ``duration`` s; where the robot
     ends (its base, or a fixed base's last link)."""
     from simbridge.compare.run.ensemble import end_point
-    from simbridge.compare.run.trajectory import run
+    from simbridge.compare.run.recording import run
 
     scenario, backend, duration = args
     return tuple(float(v) for v in end_point(run(scenario, backend, duration=duration).body))
@@ -394,9 +390,9 @@ def test_ctrl_c_while_waiting_on_many_jobs_leaves_no_future_locked(monkeypatch) 
     import threading as th
     from concurrent.futures import Future
 
-    from simbridge.compare.run import executors
+    from simbridge.compare.run import held_signals
 
-    monkeypatch.setattr(executors, "WAIT_POLL_S", 0)
+    monkeypatch.setattr(held_signals, "WAIT_POLL_S", 0)
     rng = random.Random(0)
 
     def taken(fs: set[Future[None]], out: list[bool]) -> None:
@@ -417,9 +413,9 @@ def test_ctrl_c_while_waiting_on_many_jobs_leaves_no_future_locked(monkeypatch) 
             # landing before pytest.raises would stop the whole test run
             with pytest.raises(KeyboardInterrupt):
                 th.Timer(rng.uniform(0.01, 0.05), os.kill, (os.getpid(), signal.SIGINT)).start()
-                with executors._HeldSignals() as held:
+                with held_signals.HeldSignals() as held:
                     while time.monotonic() < deadline:
-                        executors._wait_first(futures, held)
+                        held_signals.wait_first(futures, held)
             out: list[bool] = []
             # from another thread: the main thread would re-enter its own RLocks
             probe = th.Thread(target=taken, args=(futures, out))
@@ -440,16 +436,16 @@ def test_a_held_ctrl_c_is_never_lost() -> None:
     """A Ctrl-C after the last wait is raised when the block ends; a holding handler left
     installed past its block (a signal landing inside the block's start) raises as Python's
     own would."""
-    from simbridge.compare.run import executors
+    from simbridge.compare.run import held_signals
 
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        with pytest.raises(KeyboardInterrupt), executors._HeldSignals():
+        with pytest.raises(KeyboardInterrupt), held_signals.HeldSignals():
             os.kill(os.getpid(), signal.SIGINT)
             time.sleep(0.05)  # the handler runs here: held, not raised
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
-        held = executors._HeldSignals()
+        held = held_signals.HeldSignals()
         held.__enter__()
         leaked = signal.getsignal(signal.SIGINT)
         held.active = False  # as if __exit__ never ran

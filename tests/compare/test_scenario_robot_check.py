@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from simbridge.compare import compare, load_scenario
+from simbridge.compare.errors import ScenarioError
 from simbridge.compare.run import studyjobs
-from simbridge.exceptions import ScenarioError
 
 PENDULUM = (Path(__file__).resolve().parents[2] / "compare/scenarios/pendulum.toml").read_text()
 

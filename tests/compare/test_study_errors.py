@@ -25,17 +25,13 @@ from _engines import require_backend
 from simbridge.cli import main
 from simbridge.compare import compare, load_scenario
 from simbridge.compare.analysis.events import engine_events
+from simbridge.compare.errors import EngineNotInStudyError, ScenarioError
 from simbridge.compare.report.departures import NOT_CHECKED, applicable
 from simbridge.compare.report.events import event_words
 from simbridge.compare.report.summary_json import event_dict
 from simbridge.compare.study import explain, parse_vary, sweep
 from simbridge.compare.study.explain import candidates, not_checked
-from simbridge.exceptions import (
-    EngineNotInStudyError,
-    InvalidArgumentError,
-    InvalidProfileError,
-    ScenarioError,
-)
+from simbridge.exceptions import InvalidArgumentError, InvalidProfileError
 from simbridge.profiles import get_profile
 
 DATA = Path(__file__).parent / "data"

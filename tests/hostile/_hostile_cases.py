@@ -40,6 +40,7 @@ import numpy as np
 
 import simbridge
 from simbridge import exceptions as exc
+from simbridge.compare.errors import ScenarioError
 
 
 def _installed_backends() -> tuple[str, ...]:
@@ -2105,7 +2106,7 @@ def _scenario(text: str) -> Callable[[Ctx], object]:
 
 def scenarios() -> None:
     cat = "scenarios"
-    se = exc.ScenarioError
+    se = ScenarioError
     s = SCENARIO
 
     def sub(old: str, new: str) -> str:

@@ -272,8 +272,8 @@ def check_engines(args: argparse.Namespace) -> None:
         Usage: a setting of an engine not run, or a ``KEY@N`` past them (bad usage, exit 2).
     """
     from simbridge.cli.settings import settings_from_args
+    from simbridge.compare.run.asked import require_engines
     from simbridge.compare.study.points import check_vary
-    from simbridge.engine_settings import require_engines
     from simbridge.exceptions import InvalidArgumentError
 
     names = args.backends

@@ -65,7 +65,7 @@ def scenario_argument(text: str) -> Any:
         ScenarioError: an invalid file, as it is.
     """
     from simbridge.compare import load_scenario
-    from simbridge.exceptions import ScenarioError
+    from simbridge.compare.errors import ScenarioError
 
     try:
         return load_scenario(text)
