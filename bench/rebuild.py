@@ -75,6 +75,7 @@ def phases(folder: Path, cache: Path) -> dict[str, tuple[float, float]]:
 
     t0, c0 = time.perf_counter(), time.process_time()
     from simbridge.compare import pipeline
+    from simbridge.compare.run import asked
     from simbridge.compare.report import html
     from simbridge.compare.report.rebuild import rebuild
 
@@ -88,7 +89,7 @@ def phases(folder: Path, cache: Path) -> dict[str, tuple[float, float]]:
     wrap(pipeline, "run_jobs", "read the jobs' entries")
     wrap(pipeline, "judged", "verdicts")
     # each engine's state type (registry.state_dtype): declared in the registry, nothing imported
-    wrap(pipeline, "EnsembleRunner", "ensemble offsets")
+    wrap(asked, "EnsembleRunner", "ensemble offsets")  # the study's plan draws them
     wrap(pipeline, "diff", "diffs")
     wrap(report_module, "summary", "summary.json")
     wrap(report_module, "markdown", "report.md")
