@@ -55,18 +55,36 @@ def build_parser() -> argparse.ArgumentParser:
     Returns:
         The parser (commands that set a ``handler`` run it; the others are run by name).
     """
-    from simbridge import PROFILES, available_backends
-    from simbridge.cli.settings import add_set_option, add_settings_parser
+    from simbridge import __version__, available_backends
+    from simbridge.cli import cache as cli_cache
+    from simbridge.cli import info as cli_info
+    from simbridge.cli import study as cli_study
+    from simbridge.cli.settings import add_settings_parser
 
     backends = available_backends()
     parser = ChoiceParser(
         prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    from simbridge import __version__
-
     parser.add_argument("--version", action="version", version=f"simbridge {__version__}")
     _verbose(parser, default=False)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _add_compare(sub, backends)
+    _add_report(sub)
+    _add_scenarios(sub)
+    _add_replay(sub)
+    _add_joints(sub, backends)
+    _verbose(add_settings_parser(sub, backends))
+    cli_study.add_commands(sub, _verbose, add_job_options)
+    cli_cache.add_commands(sub, _verbose)
+    cli_info.add_command(sub, _verbose)
+    return parser
+
+
+def _add_compare(sub: Any, backends: list[str]) -> None:
+    """``simbridge compare``: a scenario on two or more engines, every pair judged."""
+    from simbridge import PROFILES
+    from simbridge.cli import study as cli_study
+    from simbridge.cli.settings import add_set_option
 
     p = sub.add_parser(
         "compare",
@@ -75,8 +93,6 @@ def build_parser() -> argparse.ArgumentParser:
         "the trajectories of every pair and write report.md, summary.json, figures and "
         "trajectories.",
     )
-    from simbridge.cli import study as cli_study
-
     p.add_argument("scenario", metavar="SCENARIO", help="a shipped scenario name or a TOML file")
     p.add_argument(
         "--backends",
@@ -150,6 +166,9 @@ def build_parser() -> argparse.ArgumentParser:
     cli_study.add_resolve_arguments(p)
     _verbose(p)
 
+
+def _add_report(sub: Any) -> None:
+    """``simbridge report``: a report folder's report again, from the cache."""
     r = sub.add_parser(
         "report",
         help="write a report folder's report again from the cache, running nothing",
@@ -169,6 +188,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--no-replay", action="store_true", help="skip the key frames and the animation")
     _verbose(r)
 
+
+def _add_scenarios(sub: Any) -> None:
+    """``simbridge scenarios``: the shipped scenarios."""
     s = sub.add_parser(
         "scenarios",
         help="list the shipped scenarios",
@@ -176,6 +198,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _verbose(s)
 
+
+def _add_replay(sub: Any) -> None:
+    """``simbridge replay``: a written report's 3D replay, served live."""
     r = sub.add_parser(
         "replay",
         help="serve a written report's 3D replay live in the browser",
@@ -192,6 +217,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _verbose(r)
 
+
+def _add_joints(sub: Any, backends: list[str]) -> None:
+    """``simbridge joints``: a URDF's joint table as a backend loads it."""
     j = sub.add_parser(
         "joints",
         help="print a URDF's joint table as a backend loads it",
@@ -207,14 +235,6 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--movable", action="store_true", help="movable joints only (not fixed)")
     j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
     _verbose(j)
-    _verbose(add_settings_parser(sub, backends))
-    cli_study.add_commands(sub, _verbose, add_job_options)
-    from simbridge.cli import cache as cli_cache
-    from simbridge.cli import info as cli_info
-
-    cli_cache.add_commands(sub, _verbose)
-    cli_info.add_command(sub, _verbose)
-    return parser
 
 
 def _report(args: argparse.Namespace) -> int:
