@@ -34,10 +34,16 @@ WAIT_LIMIT_S = 10.0
 
 
 def wait_for_lock(backend: Any) -> None:
-    """Take ``backend._stepping`` (its non-blocking acquire just failed: another thread holds
-    it), or raise SimBusyError once the holder is seen stepping (``backend._in_step``) or
-    after WAIT_LIMIT_S, and SimClosedError when the holder closed the Sim meanwhile
-    (``backend._closed``)."""
+    """Take ``backend._stepping`` after its non-blocking acquire failed (another thread holds it).
+
+    Args:
+        backend: A built-in backend (its ``_stepping`` lock, ``_in_step`` and ``_closed`` flags).
+
+    Raises:
+        SimBusyError: Once the holder is seen stepping (``backend._in_step``), or after
+            ``WAIT_LIMIT_S`` seconds.
+        SimClosedError: The holder closed the Sim meanwhile (``backend._closed``).
+    """
     lock = backend._stepping
     for _ in range(int(WAIT_LIMIT_S / WAIT_SLICE_S)):
         if backend._in_step:
@@ -54,8 +60,16 @@ def wait_for_lock(backend: Any) -> None:
 
 
 def exclusive(method: _F) -> _F:
-    """A call that touches the world: it holds the Sim's lock (waiting for another thread's
-    call, refused with SimBusyError while another thread steps)."""
+    """A call that touches the world: it holds the Sim's lock while it runs.
+
+    Args:
+        method: A backend method.
+
+    Returns:
+        The method wrapped: it waits for another thread's call, and is refused with
+        ``SimBusyError`` while another thread steps (``SimClosedError`` once that thread closed the
+        Sim), as :func:`wait_for_lock` says.
+    """
 
     @functools.wraps(method)
     def call(self: Any, *args: Any, **kwargs: Any) -> Any:
@@ -72,9 +86,17 @@ def exclusive(method: _F) -> _F:
 
 @contextmanager
 def reading(backend: Any) -> Iterator[None]:
-    """``Backend.reading`` of every built-in backend (``reading = locking.reading`` in its
-    class): the Sim's lock held for a read (or a write) of several calls, re-entrant (its
-    calls pass), so that no step in another thread lands between its parts."""
+    """``Backend.reading`` of every built-in backend (``reading = locking.reading`` in its class).
+
+    The Sim's lock is held for a read (or a write) of several calls, re-entrant (its calls pass),
+    so that no step in another thread lands between its parts.
+
+    Args:
+        backend: The backend whose lock is held.
+
+    Yields:
+        Nothing; the lock is held until the ``with`` block ends.
+    """
     lock = backend._stepping
     if not lock.acquire(False):
         wait_for_lock(backend)

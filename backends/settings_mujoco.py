@@ -18,7 +18,14 @@ from simbridge.engine_settings import Setting
 
 
 def contact_solref(profile: Any) -> tuple[float, float]:
-    """The contacts' solref under ``profile``: (2 dt, 1), as stiff as stays stable."""
+    """The contacts' solref under ``profile``: (2 dt, 1), as stiff as stays stable.
+
+    Args:
+        profile: The engine profile (its ``timestep``, in seconds).
+
+    Returns:
+        MuJoCo's ``(timeconst, dampratio)``: the time constant in seconds, the damping ratio.
+    """
     return (2.0 * float(profile.timestep), 1.0)
 
 

@@ -108,9 +108,19 @@ SETTINGS = (
 def check_together(
     values: dict[str, Any], given: frozenset[str] = frozenset()
 ) -> tuple[str, str] | None:
-    """PhysX makes a shape's contacts within its contact offset and rests it at its rest
-    offset: the rest offset must be below the contact offset. ``given``: the keys the user set
-    (the others are at their defaults); the message blames a setting the user set."""
+    """Checks that the rest offset is below the contact offset.
+
+    PhysX makes a shape's contacts within its contact offset and rests it at its rest offset, so
+    the rest offset must be below the contact offset.
+
+    Args:
+        values: The PhysX settings in force, by key (offsets in metres).
+        given: The keys the user set (the others are at their defaults); the message blames a
+            setting the user set.
+
+    Returns:
+        None when they fit, else ``(key, message)``: the setting to blame and why.
+    """
     rest, contact = values["rest_offset"], values["contact_offset"]
     if rest < contact:
         return None

@@ -1,4 +1,5 @@
-"""Every public function of the core says its arguments, what it returns and what it raises.
+"""Every public function of the core and the backends says its arguments, what it returns and
+what it raises.
 
 The docstrings follow the Google style (``Args:``, ``Returns:`` or ``Yields:``, ``Raises:``),
 which the documentation can render. Files are parsed with :mod:`ast`; nothing is imported or
@@ -23,6 +24,16 @@ A public class says its constructor's arguments: when it defines ``__init__`` wi
 the class docstring or ``__init__``'s names each of them under ``Args:``. A ``NamedTuple``
 record documents each field: a docstring right after it, or its name under the class's
 ``Args:`` or ``Attributes:``.
+
+The backends (``backends/``) are covered by the same rule. A backend class is composed of parts
+(``StateReads``, ``MotorCommands``, ``ContactReads``, ``Snapshots``... in each engine's package):
+each is a public class at module level, so its public methods are covered like the backend
+class's own. A method that implements a method of the ``Backend`` contract
+(src/simbridge/backend.py, where its Args/Returns/Raises are written) and behaves as the contract
+says starts its docstring ``"See Backend.x."`` and adds a line on what its engine does
+differently. A class or module whose name starts with ``_`` (PyBullet's per-body record
+``_Body``, MuJoCo's snapshot record ``_Native``, the compiled ``_mjkernel``) is private, as in
+the core.
 
 ``python tests/test_docstrings.py`` prints how many public functions and methods comply.
 
@@ -62,6 +73,7 @@ SCOPE: tuple[Path, ...] = (
     CORE / "spherical.py",
     CORE / "model",
     CORE / "cli",
+    ROOT / "backends",
 )
 
 _SECTION = re.compile(r"^\s*(Args|Arguments|Attributes|Returns|Yields|Raises):\s*$", re.MULTILINE)

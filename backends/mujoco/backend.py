@@ -81,7 +81,14 @@ MAX_TREE_DEPTH = 1022
 
 
 def tree_depth(model: UrdfModel) -> int:
-    """The most joints on a path from the root to a link (0: the root alone)."""
+    """The most joints on a path from the root to a link.
+
+    Args:
+        model: The parsed robot (joints in PyBullet's order: a parent before its children).
+
+    Returns:
+        The depth in joints (0: the root alone).
+    """
     depth = {model.base.name: 0}
     for joint in model.joints:  # in PyBullet's order: a parent before its children
         depth[joint.child] = depth[joint.parent] + 1
@@ -95,7 +102,17 @@ _STEP_CHUNK = 1000
 
 
 class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend):
-    """`Sim` on MuJoCo 4 (see the module docstring and docs/mujoco_backend.md)."""
+    """`Sim` on MuJoCo 4 (see the module docstring and docs/mujoco_backend.md).
+
+    Args:
+        profile: The physics settings to reproduce (time step, gravity, solver, defaults).
+        gui: Whether to open MuJoCo's passive viewer in a process of its own.
+
+    Raises:
+        BackendUnsupportedError: For a profile setting MuJoCo cannot reproduce
+            (``Backend.refuse_unsupported``).
+        DisplayError: With ``gui`` where no window can open.
+    """
 
     name = "mujoco"
 
@@ -197,6 +214,11 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
         fixed_base: bool,
         options: LoadOptions,
     ) -> int:
+        """See Backend.load.
+
+        MuJoCo: the robot is built into the world's ``MjSpec`` and the world recompiled; a body tree
+        deeper than ``MAX_TREE_DEPTH`` joints is refused (``BackendUnsupportedError``).
+        """
         self._check_idle()
         depth = tree_depth(model)
         if depth > MAX_TREE_DEPTH:
@@ -254,7 +276,10 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
 
     @exclusive
     def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
-        """Every body of the file under one hold of the Sim's lock."""
+        """See Backend.load_scene.
+
+        MuJoCo: every body of the file under one hold of the Sim's lock.
+        """
         return super().load_scene(bodies, options)
 
     def _drop_from_spec(self, prefix: str) -> None:
@@ -278,6 +303,10 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
 
     @exclusive
     def remove(self, body: int) -> None:
+        """See Backend.remove.
+
+        MuJoCo: the body leaves the ``MjSpec`` and the world is recompiled.
+        """
         self._check_idle()
         robot = self._robots.pop(body)
         self._w.save_motor_state(self._robots)
@@ -288,12 +317,16 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
     reading = locking.reading
 
     def set_divergence_check(self, every_step: bool) -> None:
-        """Nothing to set: MuJoCo checks positions, speeds and accelerations at every step
-        itself (mj_checkPos, mj_checkVel, mj_checkAcc), and both step loops stop after the
-        step that raised such a warning."""
+        """See Backend.set_divergence_check.
+
+        MuJoCo: nothing to set: MuJoCo checks positions, speeds and accelerations at every step
+        itself (mj_checkPos, mj_checkVel, mj_checkAcc), and both step loops stop after the step that
+        raised such a warning.
+        """
 
     @exclusive
     def reset(self) -> None:
+        """See Backend.reset. MuJoCo: a new, empty ``MjSpec`` and world; the viewer closes."""
         self._check_idle()
         self._close_viewer()
         self._robots.clear()
@@ -318,6 +351,11 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
     # ---------------------------------------------------------------- stepping
 
     def step(self, n: int) -> None:
+        """See Backend.step.
+
+        MuJoCo: the compiled loop (_mjkernel.c) or its Python reference (loop.py); MuJoCo's warnings
+        and a failed motor solve become ``SimulationDivergedError`` or ``EngineError``.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)  # another thread's call: waited for; its step: SimBusyError
@@ -476,6 +514,7 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
 
     @exclusive
     def close(self) -> None:
+        """See Backend.close. MuJoCo: the viewer closes; the model and data are released."""
         if self._closed:
             return
         self._check_idle()
@@ -546,6 +585,7 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
     )
 
     def manifest(self) -> dict[str, Any]:
+        """See Backend.manifest. MuJoCo: the step loop in use, and each body's departures."""
         departures: dict[str, str] = dict(self.DEPARTURES)
         if self.profile.engine(self.name).get("limit_rule") == "hard":
             departures["joint limits"] = self.HARD_LIMITS

@@ -47,9 +47,24 @@ __all__ = ["MotorCommands", "PositionPath", "VelocityPath"]
 
 
 class VelocityPath(NamedTuple):
-    """set_joint_velocity's hot path for one joints array (Compiled.fast): the motors are
-    velocity motors with kd 1 and all their rows are present; the entry is dropped when the
-    rows move or another command rewrites one of these motors (Compiled.refresh_motors)."""
+    """``set_joint_velocity``'s hot path for one joints array (``Compiled.fast``).
+
+    The motors are velocity motors with kd 1 and all their rows are present; the entry is dropped
+    when the rows move or another command rewrites one of these motors
+    (``Compiled.refresh_motors``).
+
+    Attributes:
+        joints: The (n,) ``np.intp`` joints array the entry is for (compared by identity).
+        body: The body's id.
+        slots: (n,) the joints' motor slots in the motor table.
+        rows: (n,) their rows in the motor table's row arrays (``offset_rows``,
+            ``force_rows_slack``).
+        dofs: (n,) their dofs in ``qvel``.
+        slot_set: ``slots`` as a set, to see whether another command touches them.
+        target: The target velocities in force (rad/s or m/s).
+        max_force: The force limits in force (N·m or N).
+        packed: (3, n) ``intp``: slots, rows, dofs (the compiled loop's index).
+    """
 
     joints: np.ndarray
     body: int
@@ -63,9 +78,22 @@ class VelocityPath(NamedTuple):
 
 
 class PositionPath(NamedTuple):
-    """set_joint_position's hot path for one joints array (Compiled.fast_position): position
-    motors with all their rows present, taken while the command keeps ``kp`` and ``kd``;
-    dropped as a VelocityPath is."""
+    """``set_joint_position``'s hot path for one joints array (``Compiled.fast_position``).
+
+    Position motors with all their rows present, taken while the command keeps ``kp`` and ``kd``;
+    dropped as a :class:`VelocityPath` is.
+
+    Attributes:
+        joints: The (n,) ``np.intp`` joints array the entry is for (compared by identity).
+        body: The body's id.
+        slot_set: The joints' motor slots, as a set.
+        kp: The position gains in force.
+        kd: The velocity gains in force.
+        packed: (4, n) ``intp``: motor slots, friction rows, dofs, rows in the position arrays.
+        limits: (2, n) float64: lower, upper limit (rad or m; -inf, inf: no limit).
+        lower: The lower limits, as a list.
+        upper: The upper limits, as a list.
+    """
 
     joints: np.ndarray
     body: int
@@ -105,6 +133,11 @@ class MotorCommands:
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
+        """See Backend.set_joint_velocity.
+
+        MuJoCo: a velocity motor as a friction row (its ``frictionloss`` the force limit) with a
+        reference acceleration; a repeated command on the same joints array takes a hot path.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -164,6 +197,11 @@ class MotorCommands:
         kp: list[float],
         kd: list[float],
     ) -> None:
+        """See Backend.set_joint_position.
+
+        MuJoCo: PyBullet's law written into the motor's friction row; a target is clamped into the
+        joint's limits; a repeated command with the same gains takes a hot path.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -257,6 +295,10 @@ class MotorCommands:
         t.has_offset = True
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
+        """See Backend.set_joint_torque.
+
+        MuJoCo: clipped to the effort limit where the profile says so.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -287,6 +329,10 @@ class MotorCommands:
         kp: list[list[float]],
         kd: list[list[float]],
     ) -> None:
+        """See Backend.set_joint_motor_multi_dof.
+
+        MuJoCo: a ball joint's three motor rows, its target error taken as a rotation vector.
+        """
         c = self._w
         if c.kernel is None:
             self._py_mark()  # as set_joint_velocity
@@ -304,6 +350,10 @@ class MotorCommands:
     def set_joint_torque_multi_dof(
         self, body: int, joints: np.ndarray, torques: list[list[float]]
     ) -> None:
+        """See Backend.set_joint_torque_multi_dof.
+
+        MuJoCo: on the ball's three motor slots, as set_joint_torque.
+        """
         slots, _ = self._ball_slots(body, joints)
         self._add_torque(slots, [x for row in torques for x in row])
 
@@ -327,8 +377,11 @@ class MotorCommands:
 
     @exclusive
     def bind_command(self, command: BoundCommand) -> bool:
-        """Hand ``command`` to the compiled loop, which reads its arrays at every step (True);
-        False without the compiled loop: the Sim sends it before every step."""
+        """See Backend.bind_command.
+
+        MuJoCo: True with the compiled loop, which reads the arrays at every step; False with the
+        Python loop (the Sim sends the command before every step).
+        """
         c = self._w
         kernel = c.kernel
         if kernel is None:
@@ -411,7 +464,7 @@ class MotorCommands:
 
     @exclusive
     def unbind_command(self, command: BoundCommand) -> None:
-        """Stop reading ``command``'s arrays (the motors keep the command last sent)."""
+        """See Backend.unbind_command. MuJoCo: removes the command from the compiled loop."""
         bound = command.backend_handle
         command.backend_handle = None
         if bound is None:
@@ -425,6 +478,7 @@ class MotorCommands:
 
     @exclusive
     def joint_commands(self, body: int) -> JointCommands:
+        """See Backend.joint_commands. MuJoCo: read back from the motor table."""
         robot = self._robots[body]
         c = self._w
         t = c.motors
@@ -446,6 +500,10 @@ class MotorCommands:
 
     @exclusive
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """See Backend.set_joint_commands.
+
+        MuJoCo: written into the motor table (spherical joints left to ``set_spherical_states``).
+        """
         self._check_idle()
         robot = self._robots[body]
         c = self._w
@@ -471,6 +529,10 @@ class MotorCommands:
 
     @exclusive
     def spherical_states(self, body: int) -> list[SphericalJointState]:
+        """See Backend.spherical_states.
+
+        MuJoCo: the ball's ``qpos`` (w, x, y, z) given as (x, y, z, w).
+        """
         robot = self._robots[body]
         c = self._w
         t = c.motors
@@ -503,6 +565,7 @@ class MotorCommands:
     def set_spherical_states(
         self, body: int, states: list[SphericalJointState], positions: bool
     ) -> None:
+        """See Backend.set_spherical_states. MuJoCo: written into the ball's three motor slots."""
         self._check_idle()
         robot = self._robots[body]
         c = self._w

@@ -70,6 +70,10 @@ class ContactReads:
 
     @exclusive
     def contact_points(self) -> list[ContactPoint]:
+        """See Backend.contact_points.
+
+        MuJoCo: ``d.contact`` of the last step, as the module says.
+        """
         c = self._w
         if c.kernel is not None:  # refused from a MuJoCo callback inside the step
             c.kernel.check_idle()

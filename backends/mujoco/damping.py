@@ -36,7 +36,14 @@ __all__ = ["LinkDamping", "clamp_acceleration"]
 
 
 class LinkDamping:
-    """Link damping of the bodies ``first .. first + n - 1`` (a contiguous range of body ids)."""
+    """Link damping of the bodies ``first .. first + n - 1`` (a contiguous range of body ids).
+
+    Args:
+        m: The ``mujoco.MjModel`` (masses, inertias, the tree).
+        first: The first damped body's id; every body from it to the last is damped.
+        k_lin: The linear damping coefficient (PyBullet's ``linearDamping``).
+        k_ang: The angular damping coefficient (PyBullet's ``angularDamping``).
+    """
 
     def __init__(
         self,
@@ -56,10 +63,15 @@ class LinkDamping:
         self.dof_body = m.dof_bodyid.copy()
 
     def apply(self, d: Any) -> None:
-        """Add the damping forces to ``d.qfrc_passive`` as generalised forces (after
-        ``mj_step1``, which computes both). Element-wise arithmetic only, each sum term by term
-        in the compiled loop's order (no einsum or BLAS product, whose sums depend on the
-        processor's kernels): the same bits as ``link_damping`` in _mjkernel.c."""
+        """Add the damping forces to ``d.qfrc_passive`` as generalised forces.
+
+        Called after ``mj_step1``, which computes both. Element-wise arithmetic only, each sum term
+        by term in the compiled loop's order (no einsum or BLAS product, whose sums depend on the
+        processor's kernels): the same bits as ``link_damping`` in _mjkernel.c.
+
+        Args:
+            d: The ``mujoco.MjData``, after ``mj_step1``.
+        """
         rows = self.rows
         cvel = d.cvel[rows]  # [w, v at the tree's centre of mass], world axes
         w = cvel[:, :3]
@@ -98,7 +110,15 @@ _Z = [2, 0, 1]
 
 
 def clamp_acceleration(d: Any, dt: float, limit: float) -> None:
-    """Limit ``qacc`` so that the velocity after the step, ``qvel + dt qacc``, is within
-    +-limit in every coordinate (and the positions integrate with the clamped velocity)."""
+    """Limit ``qacc`` so that the velocity after the step is within +-limit.
+
+    The velocity after the step, ``qvel + dt qacc``, is limited in every coordinate (and the
+    positions integrate with the clamped velocity).
+
+    Args:
+        d: The ``mujoco.MjData``; its ``qacc`` is written in place.
+        dt: The time step (s).
+        limit: The velocity limit (rad/s or m/s per coordinate).
+    """
     qvel = d.qvel
     np.clip(d.qacc, (-limit - qvel) / dt, (limit - qvel) / dt, out=d.qacc)

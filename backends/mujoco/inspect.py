@@ -19,7 +19,17 @@ __all__ = ["backend_of", "compiled", "model_and_data", "robot", "world_spec"]
 
 
 def backend_of(sim: Any) -> MujocoBackend:
-    """The :class:`MujocoBackend` behind ``sim`` (InvalidArgumentError for another backend)."""
+    """The :class:`MujocoBackend` behind ``sim``.
+
+    Args:
+        sim: A `Sim`.
+
+    Returns:
+        Its backend.
+
+    Raises:
+        InvalidArgumentError: ``sim`` runs on another backend.
+    """
     backend = getattr(sim, "_b", None)
     if not isinstance(backend, MujocoBackend):
         raise InvalidArgumentError(
@@ -29,23 +39,52 @@ def backend_of(sim: Any) -> MujocoBackend:
 
 
 def compiled(sim: Any) -> Compiled:
-    """The world's current :class:`~.world.Compiled` state (model, data, motor table, the
-    compiled loop or None, hot-path caches)."""
+    """The world's current compiled state.
+
+    Args:
+        sim: A `Sim` on the MuJoCo backend.
+
+    Returns:
+        The :class:`~.robots.Compiled` state: model, data, motor table, the compiled loop or
+        None, hot-path caches.
+    """
     return backend_of(sim)._w
 
 
 def model_and_data(sim: Any) -> tuple[Any, Any]:
-    """``(MjModel, MjData)`` of the world as it is now."""
+    """The MuJoCo model and data of the world as it is now.
+
+    Args:
+        sim: A `Sim` on the MuJoCo backend.
+
+    Returns:
+        ``(MjModel, MjData)``.
+    """
     c = compiled(sim)
     return c.m, c.d
 
 
 def world_spec(sim: Any) -> Any:
-    """The ``MjSpec`` the world is compiled from (a change shows at the next load or remove)."""
+    """The ``MjSpec`` the world is compiled from (a change shows at the next load or remove).
+
+    Args:
+        sim: A `Sim` on the MuJoCo backend.
+
+    Returns:
+        The world's ``mujoco.MjSpec``.
+    """
     return backend_of(sim)._spec
 
 
 def robot(sim: Any, body: int) -> Robot:
-    """What the backend keeps of body ``body``: its MuJoCo body ids (base first), joint
-    addresses (``qadr``, ``dofadr``, -1 for fixed joints), names in the spec."""
+    """What the backend keeps of one body.
+
+    Args:
+        sim: A `Sim` on the MuJoCo backend.
+        body: The body's id.
+
+    Returns:
+        Its :class:`Robot`: its MuJoCo body ids (base first), joint addresses (``qadr``,
+        ``dofadr``, -1 for fixed joints), names in the spec.
+    """
     return backend_of(sim)._robots[body]

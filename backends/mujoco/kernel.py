@@ -123,7 +123,11 @@ def _load() -> None:
 
 
 def kernel_class() -> Any:
-    """The ``Kernel`` type, or None when the Python step loop must be used."""
+    """The compiled step loop's type.
+
+    Returns:
+        The ``Kernel`` type, or None when the Python step loop must be used.
+    """
     if os.environ.get(ENV, "").strip().lower() == "python":
         return None
     _load()
@@ -131,12 +135,22 @@ def kernel_class() -> Any:
 
 
 def functions() -> tuple[int, ...]:
+    """The addresses of the MuJoCo functions the compiled loop calls, read from MuJoCo's library.
+
+    Returns:
+        One address per function the loop calls, in its order; empty when the loop cannot be
+        used.
+    """
     _load()
     return _state["functions"]
 
 
 def reason() -> str:
-    """Why the kernel is not used ("" when it is)."""
+    """Why the kernel is not used.
+
+    Returns:
+        The reason, or "" when it is used.
+    """
     if os.environ.get(ENV, "").strip().lower() == "python":
         return f"{ENV}=python"
     _load()
@@ -144,8 +158,11 @@ def reason() -> str:
 
 
 def describe() -> str:
-    """The step loop in use, for ``simbridge info``: ``step loop: compiled (C)``, or the Python
-    one and why."""
+    """The step loop in use, for ``simbridge info``.
+
+    Returns:
+        ``step loop: compiled (C)``, or the Python one and why.
+    """
     why = reason()
     return "step loop: " + ("compiled (C)" if not why else f"Python, about 12x slower: {why}")
 

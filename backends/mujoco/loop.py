@@ -28,11 +28,20 @@ __all__ = ["step_python"]
 
 
 def step_python(c: Compiled, n: int, sync: Callable[[], None] | None = None) -> tuple[int, bool]:
-    """``n`` steps of the world ``c``; ``sync`` (the viewer's) is called after each. Returns
-    the steps completed and whether the motor rows' solve was singular: it stops after a step
-    in which MuJoCo raised a divergence warning (a bad position, speed or acceleration: MuJoCo
-    has put the state back to the reference pose) or the polish found the free motor rows
-    singular, as the compiled loop does (its status 1 and 3)."""
+    """``n`` steps of the world ``c`` by the Python step loop, the compiled loop's reference.
+
+    It stops after a step in which MuJoCo raised a divergence warning (a bad position, speed or
+    acceleration: MuJoCo has put the state back to the reference pose) or the polish found the free
+    motor rows singular, as the compiled loop does (its status 1 and 3).
+
+    Args:
+        c: The compiled world.
+        n: How many steps.
+        sync: Called after each step (the viewer's), or None.
+
+    Returns:
+        The steps completed, and whether the motor rows' solve was singular.
+    """
     m, d = c.m, c.d
     t = c.motors
     damping = c.damping

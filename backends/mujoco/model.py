@@ -121,7 +121,15 @@ _OPTIONS = (
 
 
 def new_world_spec(profile: Profile) -> mujoco.MjSpec:
-    """An empty world with the profile's options."""
+    """An empty world with the profile's options.
+
+    Args:
+        profile: The physics settings (time step in seconds, gravity in m/s², solver iterations) and
+            the MuJoCo engine settings it sets.
+
+    Returns:
+        A new ``MjSpec`` holding no body.
+    """
     spec = mujoco.MjSpec()
     spec.modelname = "simbridge"
     spec.compiler.fusestatic = False
@@ -156,20 +164,35 @@ def _wxyz(q: Quat) -> list[float]:
 
 
 class MeshLibrary:
-    """Mesh assets of one world spec, one per (file version, scale); .dae converted with
-    trimesh. A file rewritten since (another modification time or size) is a new asset."""
+    """Mesh assets of one world spec, one per (file version, scale); .dae converted with trimesh.
+
+    A file rewritten since (another modification time or size) is a new asset.
+
+    Args:
+        spec: The world's ``MjSpec`` the assets are added to.
+    """
 
     def __init__(self, spec: mujoco.MjSpec) -> None:
         self.spec = spec
         self.names: dict[tuple[str, int, int, tuple[float, ...]], str] = {}
 
     def mark(self) -> int:
-        """A point to roll back to (the number of meshes so far)."""
+        """A point to roll back to.
+
+        Returns:
+            The number of meshes so far.
+        """
         return len(self.names)
 
     def rollback(self, mark: int) -> None:
-        """Delete the meshes added since ``mark`` (a load that failed leaves none behind: a
-        mesh MuJoCo cannot compile would break every later compile of the world)."""
+        """Delete the meshes added since ``mark``.
+
+        A load that failed leaves none behind: a mesh MuJoCo cannot compile would break every later
+        compile of the world.
+
+        Args:
+            mark: What :meth:`mark` returned before the load.
+        """
         for key, name in list(self.names.items())[mark:]:
             mesh = self.spec.mesh(name)
             if mesh is not None:
@@ -177,7 +200,19 @@ class MeshLibrary:
             del self.names[key]
 
     def get(self, shape: ShapePlan, file: str, where: str) -> str:
-        """The asset of a mesh shape of the plan (its file read there, once)."""
+        """The asset of a mesh shape of the plan (its file read there, once).
+
+        Args:
+            shape: The plan's mesh shape (its file and scale).
+            file: The robot's file, for the error.
+            where: Where in it the shape is, for the error.
+
+        Returns:
+            The mesh asset's name in the spec.
+
+        Raises:
+            UrdfStructureError: An .obj or .dae mesh with fewer than 4 vertices or no face.
+        """
         m = shape.mesh
         assert m is not None
         stat = os.stat(m.path)
@@ -481,9 +516,18 @@ def _set_shape(geom: mujoco.MjsGeom, s: ShapePlan, meshes: MeshLibrary, file: st
 
 
 def pair_friction(a: GeomContact, b: GeomContact) -> tuple[list[float], int]:
-    """The pair's contact values combined by PyBullet's rules
-    (:func:`simbridge.model.build_plan.combine_contact`), as MuJoCo's 5 friction values and
-    condim."""
+    """The pair's contact values combined by PyBullet's rules, as MuJoCo's.
+
+    The rules are :func:`simbridge.model.build_plan.combine_contact`'s.
+
+    Args:
+        a: One geom's contact values.
+        b: The other's.
+
+    Returns:
+        MuJoCo's 5 friction values (sliding twice, spinning, rolling twice) and the condim (3, 4
+        with spinning friction, 6 with rolling friction).
+    """
     c = combine_contact(a.contact, b.contact)
     mu, roll, spin = c.lateral_friction, c.rolling_friction, c.spinning_friction
     condim = 6 if roll > 0 else (4 if spin > 0 else 3)
@@ -500,8 +544,19 @@ def add_pairs(
     profile: Profile,
     margin: float,
 ) -> None:
-    """Explicit contact pairs between ``new`` and every robot in ``others``, and inside
-    ``new`` between the links its plan lets collide (:meth:`BuildPlan.self_collides`)."""
+    """Explicit contact pairs for a new robot.
+
+    Pairs between ``new`` and every robot in ``others``, and inside ``new`` between the links its
+    plan lets collide (:meth:`BuildPlan.self_collides`); ``new.pair_names`` records them.
+
+    Args:
+        spec: The world's ``MjSpec``.
+        new: The robot just built.
+        others: The robots already in the world.
+        profile: The physics settings (time step for the default solref) and the MuJoCo engine
+            settings (solref, solimp, margin, gap) it sets.
+        margin: The pairs' margin in metres, unless the engine settings give one.
+    """
     settings = profile.engine("mujoco")  # the engine settings the profile sets
     solref = list(settings.get("solref", (2.0 * profile.timestep, 1.0)))
     solimp = settings.get("solimp")
@@ -539,6 +594,14 @@ def add_pairs(
 
 
 def mass_bound_note(robot: RobotSpec) -> str:
+    """The manifest's note on a robot's links whose zero mass or inertia was raised.
+
+    Args:
+        robot: The robot, with its ``bounded_links``.
+
+    Returns:
+        One sentence naming the links and the bounds.
+    """
     return (
         f"links {robot.bounded_links} move but have zero mass or inertia: raised to "
         f"{MIN_MASS} kg / {MIN_INERTIA} kg m^2 (MuJoCo refuses zero)"

@@ -99,8 +99,23 @@ SPHERICAL_BRAKE_IMPULSE = 1000.0
 def spherical_error(
     qw: float, qx: float, qy: float, qz: float, tx: float, ty: float, tz: float, tw: float
 ) -> tuple[float, float, float]:
-    """Bullet's error of a spherical motor (:func:`simbridge.spherical.motor_error`) from the
-    joint quaternion q in MuJoCo's order (w, x, y, z) to the target t (x, y, z, w)."""
+    """Bullet's error of a spherical motor from the joint quaternion q to the target t.
+
+    The error is :func:`simbridge.spherical.motor_error`'s.
+
+    Args:
+        qw: The joint quaternion's w (MuJoCo's order: w, x, y, z).
+        qx: Its x.
+        qy: Its y.
+        qz: Its z.
+        tx: The target quaternion's x (order x, y, z, w).
+        ty: Its y.
+        tz: Its z.
+        tw: Its w.
+
+    Returns:
+        The error about the three axes (rad).
+    """
     return motor_error(qx, qy, qz, qw, tx, ty, tz, tw)
 
 
@@ -111,8 +126,13 @@ _NO_VALUES.setflags(write=False)
 
 
 class MotorTable:
-    """Motor settings of every movable joint of the world, in dof order (the order of MuJoCo's
-    friction rows). Arrays are float64 of shape (n,)."""
+    """Motor settings of every movable joint of the world, in dof order.
+
+    The dof order is the order of MuJoCo's friction rows. Arrays are float64 of shape (n,).
+
+    Args:
+        n: How many motor slots (one per movable joint, three per spherical joint).
+    """
 
     def __init__(self, n: int) -> None:
         self.n = n
@@ -164,8 +184,12 @@ class MotorTable:
         self.layout = 0
 
     def set_balls(self, balls: list[tuple[int, int, np.ndarray]]) -> None:
-        """The spherical joints: (first slot, qpos address of the quaternion, target x, y, z,
-        w) each, in slot order."""
+        """Set the spherical joints.
+
+        Args:
+            balls: ``(first slot, qpos address of the quaternion, target)`` per spherical joint, in
+                slot order; the target is a (4,) quaternion (x, y, z, w).
+        """
         nb = len(balls)
         self.ball = np.array([b[0] for b in balls], dtype=np.intp)
         self.ball_qadr = np.array([b[1] for b in balls], dtype=np.intp)
@@ -175,8 +199,14 @@ class MotorTable:
             self.ball_of[first : first + 3] = b
 
     def refresh(self, dt: float, force: np.ndarray, nv: int) -> None:
-        """Recompute the per-row arrays after a command; ``force`` is the force limit in use
-        (max_force, clamped to the effort limit when the profile enforces it)."""
+        """Recompute the per-row arrays after a command.
+
+        Args:
+            dt: The time step (s).
+            force: (n,) the force limit in use per slot (max_force, clamped to the effort limit when
+                the profile enforces it; N·m or N).
+            nv: The model's number of dofs.
+        """
         active = np.flatnonzero(force > 0.0)
         k = len(active)
         self.active = active
@@ -246,8 +276,14 @@ class MotorTable:
         return self._minv_rows
 
     def ball_errors(self, qpos: np.ndarray) -> np.ndarray:
-        """The spherical position motors' errors (:func:`spherical_error`), 3 per ball of
-        ``ball_pos_index``."""
+        """The spherical position motors' errors (:func:`spherical_error`).
+
+        Args:
+            qpos: The model's ``qpos``.
+
+        Returns:
+            A (3 b,) array: 3 per ball of ``ball_pos_index`` (rad), axis last.
+        """
         out: list[float] = []
         t = self.ball_pos_target.tolist()
         for i, a in enumerate(self.ball_pos_qadr.tolist()):
@@ -256,7 +292,14 @@ class MotorTable:
         return np.array(out)
 
     def aref_offset(self, qpos: np.ndarray) -> np.ndarray:
-        """The per-row offset of this step (without the kd != 1 term)."""
+        """The per-row offset of this step (without the kd != 1 term).
+
+        Args:
+            qpos: The model's ``qpos``.
+
+        Returns:
+            The (n_rows,) offset of each active row's reference acceleration.
+        """
         if len(self.position_rows) == 0 and len(self.ball_rows) == 0:
             return self.offset_rows
         out = self.offset_rows.copy()

@@ -78,12 +78,18 @@ class StateReads:
     # ---------------------------------------------------------------- tables
 
     def joint_info(self, body: int, joint: int) -> JointInfo:
+        """See Backend.joint_info. MuJoCo: the row of the model's joint table, kept at load."""
         return self._robots[body].table[joint]
 
     def num_joints(self, body: int) -> int:
+        """See Backend.num_joints. MuJoCo: the length of the model's joint table, kept at load."""
         return len(self._robots[body].table)
 
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        """See Backend.dynamics_info.
+
+        MuJoCo: the build plan's values, which the model was built from.
+        """
         return self._robots[body].spec.plan.dynamics_info(link)
 
     # ---------------------------------------------------------------- state
@@ -148,6 +154,11 @@ class StateReads:
         ]
 
     def link_state(self, body: int, link: int) -> LinkState:
+        """See Backend.link_state.
+
+        MuJoCo: read from the body's pose and velocity after the lazy forward kinematics, the body
+        frame turned back into the URDF link frame where model.py turned it.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -174,6 +185,10 @@ class StateReads:
         )
 
     def base_state(self, body: int) -> BaseState:
+        """See Backend.base_state.
+
+        MuJoCo: the free base's body frame is its centre-of-mass frame.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -223,6 +238,12 @@ class StateReads:
         return entry[2:]
 
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        """See Backend.joint_states.
+
+        MuJoCo: the torque is the motor row's ``efc_force`` of the last step (0 after a teleport or
+        a restore, until the next step). Refused (``SimBusyError``) from a MuJoCo callback inside
+        this thread's own step.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -257,6 +278,10 @@ class StateReads:
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
+        """See Backend.reset_joint_state.
+
+        MuJoCo: writes ``qpos``/``qvel``; the poses follow lazily.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -274,6 +299,11 @@ class StateReads:
 
     @exclusive
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        """See Backend.joint_states_multi_dof.
+
+        MuJoCo: a ball joint's ``qpos`` (w, x, y, z) is turned into (x, y, z, w); its torques are
+        its three motor rows' forces.
+        """
         c = self._w
         kernel = c.kernel
         if kernel is not None:
@@ -316,6 +346,10 @@ class StateReads:
         positions: list[list[float]],
         velocities: list[list[float]],
     ) -> None:
+        """See Backend.reset_joint_state_multi_dof.
+
+        MuJoCo: a ball's (x, y, z, w) written as (w, x, y, z).
+        """
         self._check_idle()
         robot = self._robots[body]
         c = self._w
@@ -337,6 +371,11 @@ class StateReads:
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
+        """See Backend.reset_base_state.
+
+        MuJoCo: a free base writes its free joint's ``qpos``/``qvel``; a fixed base moves the base
+        body in the model.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)

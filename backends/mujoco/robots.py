@@ -92,16 +92,35 @@ class Robot:
 
 
 def slot_joints(model: UrdfModel, movable: list[int]) -> list[int]:
-    """The joint of each motor slot of a robot: one per movable joint, three per spherical."""
+    """The joint of each motor slot of a robot: one per movable joint, three per spherical.
+
+    Args:
+        model: The robot.
+        movable: The indices of its movable joints.
+
+    Returns:
+        A joint index per slot, in slot order.
+    """
     return [j for j in movable for _ in range(3 if model.joints[j].type == "spherical" else 1)]
 
 
 def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> dict[str, np.ndarray]:
-    """The motor every movable joint starts with, per slot: PyBullet's brake (velocity 0,
-    impulse 1 N·s per step; on a spherical joint PyBullet's spherical motor, which holds the
-    joint at the identity quaternion with kp 0.2 and an impulse of 1000 N·m·s per step per
-    axis) or, under joint_brake "urdf_friction", the file's friction (a spherical joint's on
-    each axis). ``ball_target``: each spherical joint's target quaternion (x, y, z, w)."""
+    """The motor every movable joint starts with, per slot.
+
+    PyBullet's brake (velocity 0, impulse 1 N·s per step; on a spherical joint PyBullet's spherical
+    motor, which holds the joint at the identity quaternion with kp 0.2 and an impulse of 1000 N·m·s
+    per step per axis) or, under joint_brake "urdf_friction", the file's friction (a spherical
+    joint's on each axis).
+
+    Args:
+        model: The robot.
+        movable: The indices of its movable joints.
+        profile: The physics settings (time step, joint brake, effort limits).
+
+    Returns:
+        The motor table's fields (``MOTOR_FIELDS``), each an (n,) array per slot, and
+        ``ball_target``: each spherical joint's target quaternion (x, y, z, w), shape (b, 4).
+    """
     slots = [model.joints[j] for j in slot_joints(model, movable)]
     n = len(slots)
     ball = np.array([j.type == "spherical" for j in slots], dtype=bool)
@@ -162,8 +181,13 @@ class Compiled:
     warnings: list[int] = field(default_factory=list)  # MuJoCo's divergence warning counts
 
     def bad_warnings(self) -> int | None:
-        """The index (0 qpos, 1 qvel, 2 qacc) of a divergence warning raised since the last
-        call, or None; the counts are taken afresh either way."""
+        """The divergence warning MuJoCo raised since the last call, if any.
+
+        The counts are taken afresh either way.
+
+        Returns:
+            The warning's index (0 qpos, 1 qvel, 2 qacc), or None.
+        """
         w = self.d.warning
         for i, code in enumerate(BAD_WARNINGS):
             if w[code].number != self.warnings[i]:
@@ -172,12 +196,17 @@ class Compiled:
         return None
 
     def refresh_motors(self, commanded: np.ndarray | None = None) -> None:
-        """Push the motor table into the model (frictionloss, solref) and rebuild the rows
-        after a change of the table. ``commanded``: the motor slots a command has just
-        rewritten (the hot paths of other joints stay while the rows keep their layout, and so
-        do the bound commands the compiled loop writes); None: any entry may have changed (a
-        restored state, a new compile): every hot path is dropped and every bound command is
-        checked against the table again at the next step."""
+        """Push the motor table into the model and rebuild the rows after a change of the table.
+
+        The model's ``dof_frictionloss`` and ``dof_solref`` take the motors' force limits and gains.
+
+        Args:
+            commanded: The motor slots a command has just rewritten (the hot paths of other joints
+                stay while the rows keep their layout, and so do the bound commands the compiled
+                loop writes); None: any entry may have changed (a restored state, a new compile):
+                every hot path is dropped and every bound command is checked against the table again
+                at the next step.
+        """
         t, m = self.motors, self.m
         force = np.minimum(t.max_force, t.effort)
         m.dof_frictionloss[t.dof] = force
@@ -220,8 +249,13 @@ class Compiled:
             self.motor_rows_valid = False  # the last solve's rows belong to the old set
 
     def save_motor_state(self, robots: dict[int, Robot]) -> None:
-        """Copy the motor settings and pending torques back to each robot (before a compile
-        rebuilds the table)."""
+        """Copy the motor settings and pending torques back to each robot.
+
+        Called before a compile rebuilds the table.
+
+        Args:
+            robots: The world's robots, by body id.
+        """
         table = self.motors
         for robot in robots.values():
             idx = robot.slot_index
@@ -302,10 +336,22 @@ def _bind_kernel(c: Compiled) -> Any:
 def compile_state(
     m: Any, d: Any, robots: dict[int, Robot], profile: Profile, *, use_kernel: bool
 ) -> Compiled:
-    """The :class:`Compiled` state of a freshly compiled model: indices, the motor table in
-    dof order (the order of MuJoCo's friction rows) filled from each robot's motor state,
-    joint and link damping, pending torques, and the compiled loop (unless ``use_kernel`` is
-    False: the world refuses to step after an engine error or a divergence)."""
+    """The :class:`Compiled` state of a freshly compiled model.
+
+    Indices, the motor table in dof order (the order of MuJoCo's friction rows) filled from each
+    robot's motor state, joint and link damping, pending torques, and the compiled loop.
+
+    Args:
+        m: The ``MjModel``.
+        d: The ``MjData``.
+        robots: The world's robots, by body id.
+        profile: The physics settings.
+        use_kernel: Whether to make the compiled loop (False: the world refuses to step after an
+            engine error or a divergence).
+
+    Returns:
+        The compiled state.
+    """
     dt = profile.timestep
     owners = _index_robots(m, robots)
     order = np.argsort(np.asarray([o[2] for o in owners], dtype=np.intp), kind="stable")

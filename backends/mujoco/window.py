@@ -37,7 +37,14 @@ _HEADER = 2  # the counter and the close flag (window_process.py)
 
 
 def check_display(backend: str) -> None:
-    """DisplayError where no window can open (Linux without DISPLAY or WAYLAND_DISPLAY)."""
+    """Refuse a window where none can open (Linux without DISPLAY or WAYLAND_DISPLAY).
+
+    Args:
+        backend: The backend's name, for the message.
+
+    Raises:
+        DisplayError: On Linux with neither DISPLAY nor WAYLAND_DISPLAY set.
+    """
     if sys.platform.startswith("linux") and not (
         os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
     ):
@@ -67,7 +74,19 @@ def _end(proc: subprocess.Popen[bytes], shared: mmap.mmap, path: str, cwd: str) 
 
 
 class Viewer:
-    """A passive viewer window on one model and data (a new model needs a new window)."""
+    """A passive viewer window on one model and data (a new model needs a new window).
+
+    The window runs in a process of its own (window_process.py), reading the poses from a shared
+    file.
+
+    Args:
+        backend: The backend's name, for the error.
+        m: The ``mujoco.MjModel`` to show (pickled to the window's process).
+        d: The ``mujoco.MjData`` whose ``qpos`` and mocap poses it shows.
+
+    Raises:
+        DisplayError: The window's process did not open the viewer within ``OPEN_WAIT_S``.
+    """
 
     def __init__(self, backend: str, m: Any, d: Any) -> None:
         self._d = d

@@ -47,6 +47,11 @@ def _camera(mujoco: Any, m: Any, d: Any, cam: Any) -> None:
 
 
 def main() -> None:
+    """Show the model read from standard input until the close flag, the user or the parent
+    ends it.
+
+    The arguments come from ``sys.argv``: the shared file's path and the simulation's process id.
+    """
     shared, parent = sys.argv[1], int(sys.argv[2])
     try:
         import mujoco

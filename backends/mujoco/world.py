@@ -88,6 +88,10 @@ class Snapshots:
 
     @exclusive
     def snapshot(self) -> Any:
+        """See Backend.snapshot.
+
+        MuJoCo: ``mj_getState`` (``mjSTATE_INTEGRATION``) and the fixed bases.
+        """
         self._check_idle()
         self._refuse_broken()
         c = self._w
@@ -103,6 +107,11 @@ class Snapshots:
 
     @exclusive
     def restore(self, native: Any) -> bool:
+        """See Backend.restore.
+
+        MuJoCo: False for a snapshot of another compiled layout; the solver then starts cold
+        (``qacc_warmstart`` = 0), as a fresh ``MjData``.
+        """
         self._check_idle()
         self._refuse_broken()
         c = self._w
@@ -126,6 +135,10 @@ class Snapshots:
 
     @exclusive
     def set_time(self, time: float) -> None:
+        """See Backend.set_time.
+
+        MuJoCo: ``d.time`` set to the whole number of steps nearest ``time``.
+        """
         self._check_idle()
         steps = round(time / self._dt)
         if steps != self._steps:

@@ -62,7 +62,17 @@ _SCENE_FLAGS = ("enable_pcm", "enable_friction_every_iteration", "enable_enhance
 class PhysxBackend(
     StateReads, MotorCommands, BallJoints, ContactReads, LimitRows, Snapshots, Backend
 ):
-    """`Sim` on PhysX 5 (SAPIEN 3.0.3, CPU)."""
+    """`Sim` on PhysX 5 (SAPIEN 3.0.3, CPU).
+
+    Args:
+        profile: The physics settings to reproduce (time step, gravity, solver, defaults).
+        gui: Whether to open SAPIEN's window in a process of its own (window.py).
+
+    Raises:
+        BackendUnsupportedError: For a profile setting PhysX cannot reproduce
+            (``Backend.refuse_unsupported``), or ``gui`` where SAPIEN finds no Vulkan device.
+        DisplayError: With ``gui`` where the window cannot open.
+    """
 
     name = "physx"
     # PhysX keeps poses and velocities in float32 (DEPARTURES["precision"]): readable before an
@@ -155,6 +165,11 @@ class PhysxBackend(
         fixed_base: bool,
         options: LoadOptions,
     ) -> int:
+        """See Backend.load.
+
+        PhysX: one articulation per robot (a static actor for a body with no movable joint), built
+        from the build plan; a spherical joint as three revolutes (ball.py).
+        """
         self._check_idle()
         body = self._free_ids[-1] if self._free_ids else self._next_id
         plan = build_plan(
@@ -262,10 +277,15 @@ class PhysxBackend(
 
     @exclusive
     def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
+        """See Backend.load_scene.
+
+        PhysX: every body of the file under one hold of the Sim's lock.
+        """
         return super().load_scene(bodies, options)
 
     @exclusive
     def remove(self, body: int) -> None:
+        """See Backend.remove. PhysX: the body's entities leave the scene."""
         self._check_idle()
         self._keep_contacts_but(body)  # the scene's report would name removed components
         robot = self._robots.pop(body)
@@ -278,6 +298,7 @@ class PhysxBackend(
 
     @exclusive
     def reset(self) -> None:
+        """See Backend.reset. PhysX: a new, empty scene."""
         self._check_idle()
         self._robots.clear()
         self._next_id = 0
@@ -289,11 +310,20 @@ class PhysxBackend(
     reading = locking.reading
 
     def set_divergence_check(self, every_step: bool) -> None:
+        """See Backend.set_divergence_check.
+
+        PhysX: with True, the world is checked after every step.
+        """
         self._every_step = every_step
 
     # ---------------------------------------------------------------- stepping
 
     def step(self, n: int) -> None:
+        """See Backend.step.
+
+        PhysX: the motors, PyBullet's limit rows and link damping are applied around each
+        ``system.step()``.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -370,6 +400,7 @@ class PhysxBackend(
 
     @exclusive
     def close(self) -> None:
+        """See Backend.close. PhysX: the window closes; the scene and system are released."""
         if self._closed:
             return
         self._check_idle()
@@ -496,6 +527,10 @@ class PhysxBackend(
     )
 
     def manifest(self) -> dict[str, Any]:
+        """See Backend.manifest.
+
+        PhysX: the limit rule, friction combine, window and each body's departures.
+        """
         departures: dict[str, str] = dict(self.DEPARTURES)
         if self.profile.engine(self.name).get("limit_rule") == "pybullet":
             departures["joint limits"] = self.PYBULLET_LIMITS

@@ -42,7 +42,16 @@ SPHERICAL_ERP = 0.2  # Bullet's non-contact erp
 
 
 def angles_to_quat(a: float, b: float, c: float) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of Rx(a) Ry(b) Rz(c)."""
+    """The turn Rx(a) Ry(b) Rz(c) as a quaternion.
+
+    Args:
+        a: The turn about x (rad).
+        b: Then about y (rad).
+        c: Then about z (rad).
+
+    Returns:
+        The unit quaternion (x, y, z, w).
+    """
     qa = (math.sin(0.5 * a), 0.0, 0.0, math.cos(0.5 * a))
     qb = (0.0, math.sin(0.5 * b), 0.0, math.cos(0.5 * b))
     qc = (0.0, 0.0, math.sin(0.5 * c), math.cos(0.5 * c))
@@ -50,7 +59,14 @@ def angles_to_quat(a: float, b: float, c: float) -> tuple[float, float, float, f
 
 
 def quat_to_angles(q: tuple[float, ...]) -> tuple[float, float, float]:
-    """(a, b, c) with Rx(a) Ry(b) Rz(c) the turn of the unit quaternion ``q`` (x, y, z, w)."""
+    """The angles of a turn, the inverse of :func:`angles_to_quat`.
+
+    Args:
+        q: A unit quaternion (x, y, z, w).
+
+    Returns:
+        (a, b, c) in radians with Rx(a) Ry(b) Rz(c) the turn of ``q``; b within [-pi/2, pi/2].
+    """
     x, y, z, w = q
     r01 = 2.0 * (x * y - w * z)
     r00 = 1.0 - 2.0 * (y * y + z * z)
@@ -62,21 +78,47 @@ def quat_to_angles(q: tuple[float, ...]) -> tuple[float, float, float]:
 
 
 def rate_matrix(b: float, c: float) -> np.ndarray:
-    """J with w = J (a', b', c'), w in the child's (turned) frame."""
+    """The matrix J with w = J (a', b', c'), w in the child's (turned) frame.
+
+    Args:
+        b: The second angle (rad).
+        c: The third angle (rad).
+
+    Returns:
+        The (3, 3) matrix.
+    """
     cb, sb, cc, sc = math.cos(b), math.sin(b), math.cos(c), math.sin(c)
     return np.array([[cb * cc, sc, 0.0], [-cb * sc, cc, 0.0], [sb, 0.0, 1.0]])
 
 
 def spherical_error(q: tuple[float, ...], t: tuple[float, ...]) -> tuple[float, float, float]:
-    """Bullet's error of a spherical motor (:func:`simbridge.spherical.motor_error`) from q to
-    t (both x, y, z, w)."""
+    """Bullet's error of a spherical motor from q to t.
+
+    The error is :func:`simbridge.spherical.motor_error`'s.
+
+    Args:
+        q: The joint's quaternion (x, y, z, w).
+        t: The target quaternion (x, y, z, w).
+
+    Returns:
+        The error about the three axes (rad).
+    """
     return motor_error(*q, *t)
 
 
 def default_ball_motor(profile: Profile) -> dict[str, Any]:
-    """PyBullet's spherical motor at load: hold the identity (kp 0.2, 1000 N·m·s per step per
-    axis), or under joint_brake "urdf_friction" nothing (the file's friction is not a
-    spherical joint's)."""
+    """PyBullet's spherical motor at load.
+
+    It holds the identity (kp 0.2, 1000 N·m·s per step per axis), or under joint_brake
+    "urdf_friction" does nothing (the file's friction is not a spherical joint's).
+
+    Args:
+        profile: The physics settings (joint brake, time step).
+
+    Returns:
+        The motor's record: ``mode``, ``target`` (x, y, z, w), and per axis ``max_force`` (N·m),
+        ``kp``, ``kd`` and the pending ``torque``.
+    """
     brake = profile.joint_brake == "pybullet"
     force = SPHERICAL_BRAKE_IMPULSE / profile.timestep if brake else 0.0
     return {
@@ -114,6 +156,11 @@ class BallJoints:
 
     @exclusive
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        """See Backend.joint_states_multi_dof.
+
+        PhysX: a spherical joint read from its three revolutes (module docstring); no motor force is
+        reported (zeros).
+        """
         if self._diverged is not None:  # refused until reset, a body with no joints too
             raise self._diverged
         robot = self._robots[body]
@@ -148,6 +195,11 @@ class BallJoints:
         positions: list[list[float]],
         velocities: list[list[float]],
     ) -> None:
+        """See Backend.reset_joint_state_multi_dof.
+
+        PhysX: a spherical joint written as its three revolutes' angles and rates (least squares
+        near gimbal lock).
+        """
         self._check_idle()
         robot = self._robots[body]
         art = robot.built.articulation
@@ -176,6 +228,10 @@ class BallJoints:
         kp: list[list[float]],
         kd: list[list[float]],
     ) -> None:
+        """See Backend.set_joint_motor_multi_dof.
+
+        PhysX: the motor becomes the three revolute drives' velocity targets before each step.
+        """
         robot = self._robots[body]
         for j, t, f, p_, d_ in zip(joints.tolist(), targets, max_force, kp, kd, strict=True):
             motor = robot.balls[j]
@@ -207,6 +263,7 @@ class BallJoints:
     def set_joint_torque_multi_dof(
         self, body: int, joints: np.ndarray, torques: list[list[float]]
     ) -> None:
+        """See Backend.set_joint_torque_multi_dof. PhysX: applied through the three revolutes."""
         robot = self._robots[body]
         for j, t in zip(joints.tolist(), torques, strict=True):
             motor = robot.balls[j]
@@ -242,6 +299,10 @@ class BallJoints:
 
     @exclusive
     def spherical_states(self, body: int) -> list[SphericalJointState]:
+        """See Backend.spherical_states.
+
+        PhysX: read from the three revolutes and the motor's record.
+        """
         robot = self._robots[body]
         art = robot.built.articulation
         q, v = art.qpos, art.qvel
@@ -267,6 +328,10 @@ class BallJoints:
     def set_spherical_states(
         self, body: int, states: list[SphericalJointState], positions: bool
     ) -> None:
+        """See Backend.set_spherical_states.
+
+        PhysX: written to the three revolutes and the motor's record.
+        """
         robot = self._robots[body]
         art = robot.built.articulation
         q, v = art.qpos, art.qvel

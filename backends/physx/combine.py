@@ -99,8 +99,15 @@ def _px_material(material: Any, base: int) -> int | None:
 
 
 def set_product_combine(material: Any) -> bool:
-    """Give ``material`` PyBullet's product rule for friction and restitution; False (and
-    nothing done) where this SAPIEN build cannot be reached safely."""
+    """Give ``material`` PyBullet's product rule for friction and restitution.
+
+    Args:
+        material: A ``sapien.physx.PhysxMaterial``.
+
+    Returns:
+        Whether the rule took; False (and nothing done) where this SAPIEN build cannot be reached
+        safely.
+    """
     functions = _functions()
     if functions is None:
         return False
@@ -114,7 +121,11 @@ def set_product_combine(material: Any) -> bool:
 
 
 def product_combine_available() -> bool:
-    """Whether :func:`set_product_combine` works in this process (tried on a new material)."""
+    """Whether :func:`set_product_combine` works in this process (tried once, on a new material).
+
+    Returns:
+        True where it works.
+    """
     if "available" not in _state:
         _state["available"] = set_product_combine(sapien.physx.PhysxMaterial(0.5, 0.5, 0.0))
     return bool(_state["available"])

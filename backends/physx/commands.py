@@ -320,6 +320,11 @@ class MotorCommands:
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
         # the lock inline (locking.exclusive's body): this is a control loop's hot path
+        """See Backend.set_joint_velocity.
+
+        PhysX: the joint's drive takes the target velocity, its force limit the max force; a
+        repeated command on the same joints array only moves the targets.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -378,6 +383,10 @@ class MotorCommands:
         kp: list[float],
         kd: list[float],
     ) -> None:
+        """See Backend.set_joint_position.
+
+        PhysX: PyBullet's position law turned into a drive velocity target before each step.
+        """
         robot = self._robots[body]
         plan = robot.position_plans.get(id(joints))
         if (
@@ -426,6 +435,7 @@ class MotorCommands:
 
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
         # the lock inline (locking.exclusive's body): a control loop's hot path
+        """See Backend.set_joint_torque. PhysX: a joint named twice adds its torque twice."""
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -454,6 +464,7 @@ class MotorCommands:
 
     @exclusive
     def joint_commands(self, body: int) -> JointCommands:
+        """See Backend.joint_commands. PhysX: a spherical joint's row shows its first axis."""
         robot = self._robots[body]
         n = len(robot.table)
         mode = np.full(n, int(MotorMode.NONE), dtype=np.int8)
@@ -482,6 +493,10 @@ class MotorCommands:
 
     @exclusive
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """See Backend.set_joint_commands.
+
+        PhysX: spherical joints left to ``set_spherical_states``.
+        """
         robot = self._robots[body]
         robot.velocity_slots = None  # modes and gains change
         robot.velocity_plans.clear()

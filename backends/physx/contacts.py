@@ -67,6 +67,7 @@ class ContactReads:
 
     @exclusive
     def contact_points(self) -> list[ContactPoint]:
+        """See Backend.contact_points. PhysX: the contacts the scene reported for the last step."""
         if self._diverged is not None:
             raise self._diverged
         out = self._last_contacts()

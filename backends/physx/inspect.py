@@ -15,7 +15,17 @@ __all__ = ["backend_of", "scene", "robot", "articulation"]
 
 
 def backend_of(sim: Any) -> PhysxBackend:
-    """The :class:`PhysxBackend` behind ``sim`` (InvalidArgumentError for another backend)."""
+    """The :class:`PhysxBackend` behind ``sim``.
+
+    Args:
+        sim: A `Sim`.
+
+    Returns:
+        Its backend.
+
+    Raises:
+        InvalidArgumentError: ``sim`` runs on another backend.
+    """
     backend = getattr(sim, "_b", None)
     if not isinstance(backend, PhysxBackend):
         raise InvalidArgumentError(
@@ -25,15 +35,38 @@ def backend_of(sim: Any) -> PhysxBackend:
 
 
 def scene(sim: Any) -> Any:
-    """The world's ``sapien.Scene``."""
+    """The world's ``sapien.Scene``.
+
+    Args:
+        sim: A `Sim` on the PhysX backend.
+
+    Returns:
+        The scene.
+    """
     return backend_of(sim)._scene
 
 
 def robot(sim: Any, body: int) -> Robot:
-    """What the backend keeps of body ``body`` (model, joint table, PhysX objects, motors)."""
+    """What the backend keeps of one body.
+
+    Args:
+        sim: A `Sim` on the PhysX backend.
+        body: The body's id.
+
+    Returns:
+        Its :class:`Robot`: model, joint table, PhysX objects, motors.
+    """
     return backend_of(sim)._robots[body]
 
 
 def articulation(sim: Any, body: int) -> Any:
-    """Body ``body``'s ``PhysxArticulation`` (None for a static body)."""
+    """One body's ``PhysxArticulation``.
+
+    Args:
+        sim: A `Sim` on the PhysX backend.
+        body: The body's id.
+
+    Returns:
+        The articulation, or None for a static body.
+    """
     return robot(sim, body).built.articulation

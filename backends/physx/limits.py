@@ -64,10 +64,16 @@ LIMIT_RULES = ("hard", "pybullet")  # backends/settings_physx.py's limit_rule
 
 
 def limit_rows(robot: Robot, rule: str = "hard") -> None:
-    """Record ``robot``'s limited 1-DoF joints: their dof, PhysX joint and limits as PhysX
-    holds them (float32, so that a joint reset exactly at a limit is at it, not past).
-    ``rule`` ``"pybullet"``: PhysX's limits moved :data:`LIMIT_CLEAR` out, and the robot looked
-    at every step."""
+    """Record ``robot``'s limited 1-DoF joints.
+
+    Each one's dof, PhysX joint and limits as PhysX holds them (float32, so that a joint reset
+    exactly at a limit is at it, not past), in ``robot.limit_rows`` and ``robot.limit_of``.
+
+    Args:
+        robot: The robot, just built.
+        rule: ``"hard"``, PhysX's limits as they are; ``"pybullet"``: PhysX's limits moved
+            :data:`LIMIT_CLEAR` out, and the robot looked at every step.
+    """
     rows = []
     limit_of = [(-np.inf, np.inf)] * len(robot.table)
     for j in robot.movable:

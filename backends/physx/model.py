@@ -70,7 +70,15 @@ CONTACT_OFFSET = 0.01  # PhysX's default: contacts are made within 1 cm
 
 
 def pose(xyz: Vec3, quat: Quat) -> sapien.Pose:
-    """A SAPIEN pose from a position and an (x, y, z, w) quaternion."""
+    """A SAPIEN pose from a position and a quaternion.
+
+    Args:
+        xyz: The position (m).
+        quat: The orientation, a unit quaternion (x, y, z, w).
+
+    Returns:
+        The ``sapien.Pose`` (float32; SAPIEN's quaternion order w, x, y, z).
+    """
     return sapien.Pose(
         np.asarray(xyz, dtype=np.float32), np.asarray(xyzw_to_wxyz(quat), np.float32)
     )

@@ -107,12 +107,18 @@ class StateReads:
     # ---------------------------------------------------------------- tables
 
     def joint_info(self, body: int, joint: int) -> JointInfo:
+        """See Backend.joint_info. PhysX: the row of the model's joint table, kept at load."""
         return self._robots[body].table[joint]
 
     def num_joints(self, body: int) -> int:
+        """See Backend.num_joints. PhysX: the length of the model's joint table, kept at load."""
         return len(self._robots[body].table)
 
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        """See Backend.dynamics_info.
+
+        PhysX: the build plan's values, which the links were built from.
+        """
         plan = self._robots[body].built.plan
         assert plan is not None
         return plan.dynamics_info(link)
@@ -130,6 +136,7 @@ class StateReads:
     # much as the lock) and read each link through one pose call and its two velocity arrays.
 
     def link_state(self, body: int, link: int) -> LinkState:
+        """See Backend.link_state. PhysX: float32 poses and velocities, returned as floats."""
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -173,6 +180,7 @@ class StateReads:
         return x, y, z, qw, qx, qy, qz, lin, ang
 
     def base_state(self, body: int) -> BaseState:
+        """See Backend.base_state. PhysX: float32 poses and velocities, returned as floats."""
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -190,6 +198,11 @@ class StateReads:
             lock.release()
 
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        """See Backend.joint_states.
+
+        PhysX: the torque is the joint's incoming force along its axis (PhysX reports no drive
+        force); a static body's joints read zeros.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -265,6 +278,10 @@ class StateReads:
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
+        """See Backend.reset_joint_state.
+
+        PhysX: a joint set past its limit gets PyBullet's limit row from the next step on.
+        """
         self._check_idle()
         robot = self._robots[body]
         art = robot.built.articulation
@@ -295,6 +312,7 @@ class StateReads:
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
+        """See Backend.reset_base_state. PhysX: the other links follow the root at once."""
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -351,4 +369,8 @@ class StateReads:
             robot.built.articulation.root_pose = frame
 
     def set_time(self, time: float) -> None:
+        """See Backend.set_time.
+
+        PhysX: the step count set to the whole number nearest ``time / dt``.
+        """
         self._steps = round(time / self._dt)

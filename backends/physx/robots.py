@@ -105,8 +105,16 @@ class Robot:
     def slot_calls(
         self, slots: np.ndarray, effort: np.ndarray, ball: np.ndarray
     ) -> tuple[list[int], list[Any], list[float], list[bool]]:
-        """Motor ``slots`` as a list, their PhysX joints, their effort limits and which are
-        spherical, as Python values (cached per slots array; all of it fixed at load)."""
+        """Motor ``slots`` as Python values (cached per slots array; all of it fixed at load).
+
+        Args:
+            slots: (n,) ``np.intp`` motor slots.
+            effort: The robot's effort limit per slot (N·m or N, inf: none).
+            ball: Whether each slot is a spherical joint's.
+
+        Returns:
+            The slots as a list, their PhysX joints, their effort limits and which are spherical.
+        """
         key = id(slots)
         hit = self.call_cache.get(key)
         if hit is not None and hit[0] is slots:
@@ -121,7 +129,14 @@ class Robot:
         return out
 
     def slot_joints(self, slots: np.ndarray) -> list[Any]:
-        """The PhysX joints of motor ``slots`` (cached per slots array)."""
+        """The PhysX joints of motor ``slots`` (cached per slots array).
+
+        Args:
+            slots: (n,) ``np.intp`` motor slots.
+
+        Returns:
+            One PhysX joint per slot.
+        """
         key = id(slots)
         hit = self.joint_cache.get(key)
         if hit is not None and hit[0] is slots:
@@ -132,9 +147,20 @@ class Robot:
 
 
 def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> dict[str, np.ndarray]:
-    """PyBullet's motor at load per movable joint: the brake (velocity 0, impulse 1 N·s per
-    step), PyBullet's spherical motor on a spherical joint, or under joint_brake
-    "urdf_friction" the file's friction."""
+    """PyBullet's motor at load per movable joint.
+
+    The brake (velocity 0, impulse 1 N·s per step), PyBullet's spherical motor on a spherical joint,
+    or under joint_brake "urdf_friction" the file's friction.
+
+    Args:
+        model: The robot.
+        movable: The indices of its movable joints.
+        profile: The physics settings (time step, joint brake, effort limits).
+
+    Returns:
+        The motor table: per movable joint ``mode``, ``target``, ``max_force``, ``kp``, ``kd``,
+        ``effort``, ``torque``, ``applied`` and ``ball``, each an (n,) array.
+    """
     joints = [model.joints[j] for j in movable]
     n = len(joints)
     ball = np.array([j.type == "spherical" for j in joints], dtype=bool)
@@ -164,4 +190,12 @@ def default_motors(model: UrdfModel, movable: list[int], profile: Profile) -> di
 
 
 def movable_joints(table: list[JointInfo]) -> list[int]:
+    """The movable joints of a joint table.
+
+    Args:
+        table: The joint table.
+
+    Returns:
+        The indices of its joints that are not fixed, in order.
+    """
     return [j.index for j in table if j.type != JointType.FIXED]

@@ -119,8 +119,16 @@ def _reach(shapes: list[dict]) -> float:
 
 
 def world_parts(robots: Iterable[Any]) -> tuple[list[dict], list[Any]]:
-    """The world's parts for the window and, per part, what gives its pose: a moving link's
-    component, or a static body's entity. ``robots``: the backend's Robot records."""
+    """The world's parts for the window and, per part, what gives its pose.
+
+    Args:
+        robots: The backend's Robot records.
+
+    Returns:
+        The parts (each a dict: its ``shapes``, whether it is ``moving``, its ``reach`` in
+        metres) and, per part, what gives its pose: a moving link's component, or a static body's
+        entity.
+    """
     parts: list[dict] = []
     posers: list[Any] = []
     for robot in robots:
@@ -143,7 +151,16 @@ def world_parts(robots: Iterable[Any]) -> tuple[list[dict], list[Any]]:
 
 
 class Window:
-    """A window on the world, in a process of its own."""
+    """A window on the world, in a process of its own (window_process.py).
+
+    Args:
+        backend: The backend's name, for the errors.
+
+    Raises:
+        DisplayError: On Linux with neither DISPLAY nor WAYLAND_DISPLAY set, or when the window did
+            not open.
+        BackendUnsupportedError: SAPIEN found no Vulkan device to draw with.
+    """
 
     def __init__(self, backend: str) -> None:
         if sys.platform.startswith("linux") and not (
@@ -218,7 +235,11 @@ class Window:
         return f"SAPIEN's window did not open within {OPEN_WAIT_S:g} s"
 
     def show(self, robots: Iterable[Any]) -> None:
-        """A new world (a load, a removal, a reset): its parts and their poses."""
+        """A new world (a load, a removal, a reset): its parts and their poses.
+
+        Args:
+            robots: The backend's Robot records.
+        """
         parts, posers = world_parts(robots)
         generation = self._generation + 1
         folder = self._folder

@@ -52,7 +52,15 @@ def _qmul(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, float, flo
 
 
 class Scene:
-    """The render-only scene of one generation of the world."""
+    """The render-only scene of one generation of the world.
+
+    Args:
+        sapien: The ``sapien`` module (imported by :func:`main`).
+        np: The ``numpy`` module.
+        folder: The folder the simulation writes the world into.
+        generation: Which world: its parts in ``world.<generation>``, poses in
+            ``poses.<generation>``.
+    """
 
     def __init__(self, sapien: Any, np: Any, folder: str, generation: int) -> None:
         with open(os.path.join(folder, f"world.{generation}"), "rb") as f:
@@ -82,6 +90,7 @@ class Scene:
         self.place()
 
     def place(self) -> None:
+        """Put every part at the pose the simulation last wrote, and update the render."""
         Pose = self.sapien.Pose
         rows = self.poses[: len(self.entities)].tolist()  # (a world without parts has 1 row)
         for entity, row in zip(self.entities, rows, strict=True):
@@ -89,7 +98,11 @@ class Scene:
         self.scene.update_render()
 
     def centre(self) -> tuple[list[float], float] | None:
-        """The middle of the moving parts and their size (None: nothing moves)."""
+        """The middle of the moving parts and their size.
+
+        Returns:
+            The middle (m, world) and the size (m), or None: nothing moves (or it is past 1e6 m).
+        """
         if not self.moving:
             return None
         pts = self.poses[self.moving, :3]
@@ -130,9 +143,15 @@ def _shape(render: Any, np: Any, s: dict[str, Any]) -> Any:
 
 
 class Camera:
-    """An orbit camera: ``distance`` from ``target`` at ``yaw`` and ``pitch`` (rad, pitch
-    down). The robots' motion moves the target; a drag with the left button turns the camera
-    (SAPIEN's wheel delta did not reach this loop: no zoom)."""
+    """An orbit camera: ``distance`` from ``target`` at ``yaw`` and ``pitch`` (rad, pitch down).
+
+    The robots' motion moves the target; a drag with the left button turns the camera (SAPIEN's
+    wheel delta did not reach this loop: no zoom).
+
+    Args:
+        window: The ``sapien.render.RenderWindow``.
+        sapien: The ``sapien`` module.
+    """
 
     def __init__(self, window: Any, sapien: Any) -> None:
         self.window, self.sapien = window, sapien
@@ -140,18 +159,31 @@ class Camera:
         self.distance, self.yaw, self.pitch = 2.0 * DISTANCE, YAW, PITCH
 
     def aim(self, aimed: tuple[list[float], float] | None) -> None:
-        """At the robots (after a new world), from a distance that fits them."""
+        """At the robots (after a new world), from a distance that fits them.
+
+        Args:
+            aimed: :meth:`Scene.centre`'s middle and size, or None to keep the view.
+        """
         if aimed is not None:
             self.target, self.distance = aimed[0], max(MIN_DISTANCE, DISTANCE * aimed[1])
         self.place()
 
     def follow(self, aimed: tuple[list[float], float] | None) -> None:
+        """Move the target with the robots, the distance and angles kept.
+
+        Args:
+            aimed: :meth:`Scene.centre`'s middle and size, or None to keep the view.
+        """
         if aimed is not None:
             self.target = aimed[0]
             self.place()
 
     def mouse(self) -> bool:
-        """The user's drag since the last frame; whether the view changed."""
+        """Turn the camera by the user's drag since the last frame.
+
+        Returns:
+            Whether the view changed.
+        """
         w = self.window
         dx, dy = (float(v) for v in w.mouse_delta)
         if not (w.mouse_down(0) and (dx or dy)):
@@ -173,6 +205,10 @@ class Camera:
 
 
 def main() -> None:
+    """Draw the world the simulation writes until the close flag, the user or the parent ends it.
+
+    The arguments come from ``sys.argv``: the shared folder and the simulation's process id.
+    """
     folder, parent = sys.argv[1], int(sys.argv[2])
     try:
         import numpy as np

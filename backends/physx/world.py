@@ -45,10 +45,13 @@ class Snapshots:
 
     @exclusive
     def snapshot(self) -> Any:
-        """PhysX's own record of the world (``PhysxCpuSystem.pack``: every body's pose and
-        velocities, the articulations' joint state), for this world as it is now, with every
-        moving link's velocities as PhysX reports them: unpack recomputes those from the joint
-        velocities, and they are the link damping law's input (DEPARTURES["snapshot"])."""
+        """See Backend.snapshot.
+
+        PhysX: its own record of the world (``PhysxCpuSystem.pack``: every body's pose and
+        velocities, the articulations' joint state), for this world as it is now, with every moving
+        link's velocities as PhysX reports them: unpack recomputes those from the joint velocities,
+        and they are the link damping law's input (DEPARTURES["snapshot"]).
+        """
         velocities = {
             body: np.array(
                 [(link.linear_velocity, link.angular_velocity) for link in robot.built.links],
@@ -84,11 +87,14 @@ class Snapshots:
 
     @exclusive
     def restore(self, native: Any) -> bool:
-        """Unpack a snapshot of this very world (no load, remove or reset since), and put
-        back what it kept beside the blob: the link velocities, the static bodies' poses and
-        the limit rows' bookkeeping. PhysX keeps its contact caches out of the blob, and
-        unpack derives a floating base's link poses afresh: with a fixed base and no contacts
-        the next step is the same bits, else not (see DEPARTURES["snapshot"])."""
+        """See Backend.restore.
+
+        PhysX: unpacks a snapshot of this very world (no load, remove or reset since; False for any
+        other), and puts back what it kept beside the blob: the link velocities, the static bodies'
+        poses and the limit rows' bookkeeping. PhysX keeps its contact caches out of the blob, and
+        unpack derives a floating base's link poses afresh: with a fixed base and no contacts the
+        next step is the same bits, else not (see DEPARTURES["snapshot"]).
+        """
         self._check_idle()
         self._contacts_cache = None
         if (

@@ -110,7 +110,18 @@ _SELF_COLLISION_FLAGS = {
 class PyBulletBackend(
     ModelLoading, StateReads, MotorCommands, ContactReads, Snapshots, Rendering, Backend
 ):
-    """`Sim` on PyBullet (DIRECT, or GUI when asked)."""
+    """`Sim` on PyBullet (DIRECT, or GUI when asked).
+
+    Args:
+        profile: The physics settings to reproduce (time step, gravity, solver, defaults).
+        gui: Whether to connect with ``p.GUI`` (PyBullet's own window) instead of ``p.DIRECT``.
+
+    Raises:
+        BackendUnsupportedError: For a profile setting PyBullet cannot reproduce
+            (``Backend.refuse_unsupported``).
+        DisplayError: With ``gui`` where no X display can be opened, or where PyBullet's GUI
+            connection fails (PyBullet allows one GUI per process).
+    """
 
     name = "pybullet"
     _scene: Pending | None = None  # the MJCF/SDF file load_scene is loading
@@ -206,6 +217,12 @@ class PyBulletBackend(
         fixed_base: bool,
         options: LoadOptions,
     ) -> int:
+        """See Backend.load.
+
+        PyBullet: ``p.loadURDF`` on the file itself (model.py); a body past PyBullet's joint counts
+        (``MAX_BODY_JOINTS``, ``MAX_BODY_MOVABLE_JOINTS``) or with names too long for it is refused
+        (``BackendUnsupportedError``).
+        """
         movable = sum(j.type != "fixed" for j in model.joints)
         # the last movable joint's first position coordinate (its qIndex, after the base's 7)
         # must be under 128: measured, 121 one-coordinate joints load, 31 spherical ones (4
@@ -296,8 +313,11 @@ class PyBulletBackend(
         return body
 
     def load_scene(self, bodies: Sequence[SceneBody], options: LoadOptions) -> list[int]:
-        """``p.loadMJCF``/``p.loadSDF`` on the file itself (backends/pybullet/scene.py); each
-        body then goes through ``load`` as a URDF's does."""
+        """See Backend.load_scene.
+
+        PyBullet: ``p.loadMJCF``/``p.loadSDF`` on the file itself (backends/pybullet/scene.py); each
+        body then goes through ``load`` as a URDF's does.
+        """
         self._scene = Pending(bodies, _SELF_COLLISION_FLAGS[options.self_collision])
         try:
             return super().load_scene(bodies, options)
@@ -318,6 +338,10 @@ class PyBulletBackend(
             self._stepping.release()
 
     def remove(self, body: int) -> None:
+        """See Backend.remove.
+
+        PyBullet: ``p.removeBody``; an emptied world is renewed now and then.
+        """
         with self._idle():
             self._last_velocity = None
             p.removeBody(body, physicsClientId=self._c)
@@ -344,6 +368,7 @@ class PyBulletBackend(
         self._removed = 0
 
     def reset(self) -> None:
+        """See Backend.reset. PyBullet: ``p.resetSimulation``, the profile applied again."""
         with self._idle():
             self._reset()
 
@@ -364,10 +389,19 @@ class PyBulletBackend(
     reading = locking.reading
 
     def set_divergence_check(self, every_step: bool) -> None:
+        """See Backend.set_divergence_check.
+
+        PyBullet: the bodies probed after every step, else every 8th.
+        """
         self._check_every = 1 if every_step else _CHECK_EVERY
         self._next_check = self._steps + self._check_every
 
     def step(self, n: int) -> None:
+        """See Backend.step.
+
+        PyBullet: ``p.stepSimulation`` ``n`` times, the bodies probed for a non-finite state at the
+        divergence check's cadence.
+        """
         if self._diverged is not None:  # the state is NaN: no step makes it a simulation
             raise self._diverged
         lock = self._stepping
@@ -447,6 +481,7 @@ class PyBulletBackend(
         raise self._diverged
 
     def close(self) -> None:
+        """See Backend.close. PyBullet: ``p.disconnect``."""
         with self._idle():
             if self._c >= 0:
                 try:
@@ -463,6 +498,7 @@ class PyBulletBackend(
     # ---------------------------------------------------------------- description
 
     def manifest(self) -> dict[str, Any]:
+        """See Backend.manifest. PyBullet: the reference, with no departures."""
         try:
             engine_version = version("pybullet")
         except PackageNotFoundError:  # pragma: no cover

@@ -46,6 +46,11 @@ class MotorCommands:
     def set_joint_velocity(
         self, body: int, joints: np.ndarray, target: list[float], max_force: list[float]
     ) -> None:
+        """See Backend.set_joint_velocity.
+
+        PyBullet: ``p.setJointMotorControlArray`` with VELOCITY_CONTROL; the command in force
+        already is not sent again.
+        """
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -83,6 +88,10 @@ class MotorCommands:
         kp: list[float],
         kd: list[float],
     ) -> None:
+        """See Backend.set_joint_position.
+
+        PyBullet: ``p.setJointMotorControlArray``, POSITION_CONTROL.
+        """
         self._last_velocity = None
         p.setJointMotorControlArray(
             body,
@@ -98,6 +107,11 @@ class MotorCommands:
 
     @_exclusive
     def set_joint_torque(self, body: int, joints: np.ndarray, torque: list[float]) -> None:
+        """See Backend.set_joint_torque.
+
+        PyBullet: ``p.setJointMotorControlArray`` with TORQUE_CONTROL, each command within the
+        effort limit where the profile enforces it.
+        """
         self._last_velocity = None
         effort = self._bodies[body].effort
         if effort is not None:  # each command within the effort, as on MuJoCo
@@ -129,6 +143,10 @@ class MotorCommands:
         kp: list[list[float]],
         kd: list[list[float]],
     ) -> None:
+        """See Backend.set_joint_motor_multi_dof.
+
+        PyBullet: ``p.setJointMotorControlMultiDof``, POSITION_CONTROL.
+        """
         self._last_velocity = None
         self._spherical_motor(body, joints.tolist(), targets, max_force, kp, kd)
         for j, q, f, a, b in zip(joints.tolist(), targets, max_force, kp, kd, strict=True):
@@ -167,6 +185,11 @@ class MotorCommands:
     def set_joint_torque_multi_dof(
         self, body: int, joints: np.ndarray, torques: list[list[float]]
     ) -> None:
+        """See Backend.set_joint_torque_multi_dof.
+
+        PyBullet: ``p.setJointMotorControlMultiDof`` with TORQUE_CONTROL, within the effort limit
+        where the profile enforces it.
+        """
         self._last_velocity = None
         effort = self._bodies[body].effort
         for j, t in zip(joints.tolist(), torques, strict=True):
@@ -188,6 +211,11 @@ class MotorCommands:
 
     @_exclusive
     def spherical_states(self, body: int) -> list[SphericalJointState]:
+        """See Backend.spherical_states.
+
+        PyBullet: the motors from the records (PyBullet has no getter), the state from
+        ``p.getJointStatesMultiDof``.
+        """
         info = self._bodies[body]
         balls = [i for i in info.movable if info.table[i].type == JointType.SPHERICAL]
         rows = p.getJointStatesMultiDof(body, balls, physicsClientId=self._c)
@@ -214,8 +242,11 @@ class MotorCommands:
     def set_spherical_states(
         self, body: int, states: list[SphericalJointState], positions: bool
     ) -> None:
-        """Positions (unless a bit-exact restore put them back), the motors, and the pending
-        torques: those in force cancelled exactly (x + (-x) is 0), the new ones given."""
+        """See Backend.set_spherical_states.
+
+        PyBullet: the positions (unless a bit-exact restore put them back), the motors, and the
+        pending torques: those in force cancelled exactly (x + (-x) is 0), the new ones given.
+        """
         self._last_velocity = None
         c = self._c
         records = self._records
@@ -246,14 +277,21 @@ class MotorCommands:
 
     @_exclusive
     def joint_commands(self, body: int) -> JointCommands:
+        """See Backend.joint_commands.
+
+        PyBullet: from the records of the commands given (no getter).
+        """
         return self._records.commands(
             body, self._bodies[body].table, self.profile.joint_brake, self._dt, self._steps
         )
 
     @_exclusive
     def set_joint_commands(self, body: int, commands: JointCommands) -> None:
-        """Re-issue the motors that differ from those in force (a restore into the same world
-        sends none), then cancel the pending torques and give the new ones."""
+        """See Backend.set_joint_commands.
+
+        PyBullet: re-issues the motors that differ from those in force (a restore into the same
+        world sends none), then cancels the pending torques and gives the new ones.
+        """
         c = self._c
         now = self.joint_commands(body)
         info = self._bodies[body]

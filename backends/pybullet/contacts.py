@@ -18,8 +18,17 @@ __all__ = ["ContactReads", "contact_point"]
 
 
 def contact_point(r: tuple[Any, ...]) -> ContactPoint:
-    """One row of ``p.getContactPoints()`` (unfiltered: PyBullet's own order of A and B, in
-    which the friction fields are the friction force on A)."""
+    """One row of ``p.getContactPoints()`` as a contact point.
+
+    Unfiltered: PyBullet's own order of A and B, in which the friction fields are the friction force
+    on A.
+
+    Args:
+        r: PyBullet's row (14 fields).
+
+    Returns:
+        The :class:`~simbridge.types.ContactPoint`.
+    """
     return ContactPoint(
         int(r[0]), r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], r[10], r[11], r[12], r[13]
     )
@@ -36,6 +45,11 @@ class ContactReads:
 
     @_exclusive
     def contact_points(self) -> list[ContactPoint]:
+        """See Backend.contact_points.
+
+        PyBullet: ``p.getContactPoints()`` unfiltered; a non-finite value raises
+        ``SimulationDivergedError``.
+        """
         if self._diverged is not None:
             raise self._diverged
         # unfiltered: PyBullet keeps the friction fields in its own order of A and B when it

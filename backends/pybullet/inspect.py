@@ -19,8 +19,17 @@ __all__ = ["backend_of", "client_id", "set_check_every"]
 
 
 def backend_of(sim: Any) -> PyBulletBackend:
-    """The :class:`PyBulletBackend` behind ``sim`` (InvalidArgumentError for another backend,
-    or for a closed `Sim`)."""
+    """The :class:`PyBulletBackend` behind ``sim``.
+
+    Args:
+        sim: An open `Sim`.
+
+    Returns:
+        Its backend.
+
+    Raises:
+        InvalidArgumentError: ``sim`` runs on another backend, or is closed.
+    """
     backend = getattr(sim, "_b", None)
     if not isinstance(backend, PyBulletBackend):
         raise InvalidArgumentError(
@@ -30,16 +39,32 @@ def backend_of(sim: Any) -> PyBulletBackend:
 
 
 def client_id(sim: Any) -> int:
-    """The PyBullet physics client id of ``sim``'s world (the ``physicsClientId`` argument of
-    every raw PyBullet call); it is disconnected when the `Sim` closes."""
+    """The PyBullet physics client id of ``sim``'s world.
+
+    Args:
+        sim: An open `Sim` on the PyBullet backend.
+
+    Returns:
+        The ``physicsClientId`` argument of every raw PyBullet call; it is disconnected when the
+        `Sim` closes.
+    """
     return backend_of(sim)._c
 
 
 def set_check_every(sim: Any, every: int) -> None:
-    """Probe ``sim``'s bodies for a divergence (NaN or inf state) after every ``every``-th step
-    instead of the backend's default cadence, from the next step on; for benchmarks that time
-    the probe (bench/divergence.py). A teleport or a load still asks for a probe after the next
-    step."""
+    """Probe ``sim``'s bodies for a divergence after every ``every``-th step.
+
+    The probe (NaN or inf state) runs at that cadence instead of the backend's default, from the
+    next step on; for benchmarks that time the probe (bench/divergence.py). A teleport or a load
+    still asks for a probe after the next step.
+
+    Args:
+        sim: An open `Sim` on the PyBullet backend.
+        every: Steps between probes, at least 1.
+
+    Raises:
+        InvalidArgumentError: ``every`` is not an integer >= 1.
+    """
     if isinstance(every, bool) or not isinstance(every, int) or every < 1:
         raise InvalidArgumentError("every", f"expected an integer >= 1 (steps), got {every!r}")
     backend = backend_of(sim)

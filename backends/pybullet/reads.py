@@ -79,19 +79,27 @@ class StateReads:
         )
 
     def joint_info(self, body: int, joint: int) -> JointInfo:
+        """See Backend.joint_info. PyBullet: ``p.getJointInfo``'s row, read once at load."""
         return self._bodies[body].table[joint]
 
     def num_joints(self, body: int) -> int:
+        """See Backend.num_joints. PyBullet: ``p.getNumJoints``, read once at load."""
         return self._bodies[body].n
 
     @_exclusive
     def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        """See Backend.dynamics_info. PyBullet: ``p.getDynamicsInfo``."""
         r = p.getDynamicsInfo(body, link, physicsClientId=self._c)
         return DynamicsInfo(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7])
 
     # ---------------------------------------------------------------- state
 
     def link_state(self, body: int, link: int) -> LinkState:
+        """See Backend.link_state.
+
+        PyBullet: ``p.getLinkState`` with velocity and forward kinematics (the base from its base
+        reads); a non-finite value raises ``SimulationDivergedError``.
+        """
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
@@ -123,6 +131,11 @@ class StateReads:
         return LinkState(pos, orn, lp, lo, fpos, forn, lin, ang)
 
     def base_state(self, body: int) -> BaseState:
+        """See Backend.base_state.
+
+        PyBullet: ``p.getBasePositionAndOrientation`` and ``p.getBaseVelocity``; a non-finite value
+        raises ``SimulationDivergedError``.
+        """
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
@@ -139,6 +152,10 @@ class StateReads:
         return BaseState(pos, orn, lin, ang)
 
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        """See Backend.joint_states.
+
+        PyBullet: ``p.getJointStates``; a non-finite value raises ``SimulationDivergedError``.
+        """
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
@@ -161,6 +178,10 @@ class StateReads:
     def reset_joint_state(
         self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
     ) -> None:
+        """See Backend.reset_joint_state.
+
+        PyBullet: ``p.resetJointState``, probed after the next step.
+        """
         c = self._c
         for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
             p.resetJointState(body, j, q, v, physicsClientId=c)
@@ -175,6 +196,11 @@ class StateReads:
         linear_velocity: Vec3 | None,
         angular_velocity: Vec3 | None,
     ) -> None:
+        """See Backend.reset_base_state.
+
+        PyBullet: ``p.resetBasePositionAndOrientation`` (which zeroes the velocity: the current one
+        is written back unless given) and ``p.resetBaseVelocity``.
+        """
         if self._diverged is not None:  # it reads the state it keeps
             raise self._diverged
         self._next_check = self._steps + 1  # a teleport: probed after the next step
@@ -206,6 +232,7 @@ class StateReads:
     # ---------------------------------------------------------------- spherical joints
 
     def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        """See Backend.joint_states_multi_dof. PyBullet: ``p.getJointStatesMultiDof``."""
         if self._diverged is not None:
             raise self._diverged
         lock = self._stepping
@@ -228,6 +255,7 @@ class StateReads:
         positions: list[list[float]],
         velocities: list[list[float]],
     ) -> None:
+        """See Backend.reset_joint_state_multi_dof. PyBullet: ``p.resetJointStateMultiDof``."""
         c = self._c
         for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
             p.resetJointStateMultiDof(body, j, q, v, physicsClientId=c)

@@ -38,11 +38,21 @@ class Records:
         self.dead: list[tuple[int, int]] = []  # (generation, state id) of collected snapshots
 
     def loaded(self, body: int) -> None:
+        """A body was loaded: it starts with no command recorded (PyBullet's default motors).
+
+        Args:
+            body: The new body's id.
+        """
         self.motors[body] = {}
         self.baseline.pop(body, None)
         self.spherical[body] = {}
 
     def removed(self, body: int) -> None:
+        """A body was removed: its commands and pending torques go.
+
+        Args:
+            body: The removed body's id.
+        """
         self.motors.pop(body, None)
         self.baseline.pop(body, None)
         self.torques = [t for t in self.torques if t[1] != body]
@@ -50,6 +60,7 @@ class Records:
         self.spherical_torques = [t for t in self.spherical_torques if t[1] != body]
 
     def reset(self) -> None:
+        """The world was reset: every record goes, and the saved states' generation moves on."""
         self.motors.clear()
         self.baseline.clear()
         self.torques.clear()
@@ -68,12 +79,30 @@ class Records:
         kp: list[float] | None,
         kd: list[float] | None,
     ) -> None:
-        """A velocity (kp, kd None) or position command given."""
+        """A velocity (kp, kd None) or position command given.
+
+        Args:
+            body: The body's id.
+            joints: (n,) ``np.intp`` joint indices (kept: the next command on the same array
+                replaces this one).
+            mode: The ``MotorMode``.
+            target: n target velocities (rad/s or m/s) or positions (rad or m).
+            max_force: n force limits (N·m or N).
+            kp: n position gains, or None for a velocity command.
+            kd: n velocity gains, or None for a velocity command.
+        """
         # keyed by joints array, replaced by the next command on it; read back in ``order``
         self.motors[body][id(joints)] = (next(self.order), joints, mode, target, max_force, kp, kd)
 
     def torque(self, step: int, body: int, joints: np.ndarray, torque: list[float]) -> None:
-        """A torque command given before step ``step`` (as applied: after any effort clamp)."""
+        """A torque command given before step ``step`` (as applied: after any effort clamp).
+
+        Args:
+            step: The step count when it was given.
+            body: The body's id.
+            joints: (n,) ``np.intp`` joint indices.
+            torque: n torques or forces (N·m or N).
+        """
         log = self.torques
         if log and log[0][0] != step:
             log.clear()  # those of an earlier step acted and are gone
@@ -82,7 +111,19 @@ class Records:
     def commands(
         self, body: int, table: list[JointInfo], brake: str, dt: float, step: int
     ) -> JointCommands:
-        """The commands in force on ``body`` and its torques pending before step ``step``."""
+        """The commands in force on ``body`` and its torques pending before step ``step``.
+
+        Args:
+            body: The body's id.
+            table: Its joint table.
+            brake: The profile's ``joint_brake`` (the default motor: ``"pybullet"`` or
+                ``"urdf_friction"``).
+            dt: The time step (s), for the brake's force (1 N·s per step).
+            step: The step count now.
+
+        Returns:
+            The commands, one row per joint.
+        """
         n = len(table)
         base = self.baseline.get(body)
         if base is not None:
@@ -112,30 +153,64 @@ class Records:
         return JointCommands(mode, target, max_force, kp, kd, pending)
 
     def set(self, body: int, commands: JointCommands, step: int, movable: np.ndarray) -> None:
-        """``commands`` are now in force on ``body`` (the log starts again from them)."""
+        """``commands`` are now in force on ``body`` (the log starts again from them).
+
+        Args:
+            body: The body's id.
+            commands: The commands, one row per joint.
+            step: The step count now (the pending torques are this step's).
+            movable: ``np.intp`` indices of the body's movable joints.
+        """
         self.baseline[body] = JointCommands(*(np.array(a) for a in commands))
         self.motors[body] = {}
         self.torques = [t for t in self.torques if not (t[0] == step and t[1] == body)]
         self.torques.append((step, body, movable, commands.pending_torque[movable].tolist()))
 
     def restamp(self, old: int, new: int) -> None:
-        """The step counter moved from ``old`` to ``new`` (set_time): pending torques follow."""
+        """The step counter moved from ``old`` to ``new`` (set_time): pending torques follow.
+
+        Args:
+            old: The step count before.
+            new: The step count after.
+        """
         self.torques = [(new, *t[1:]) for t in self.torques if t[0] == old]
         self.spherical_torques = [(new, *t[1:]) for t in self.spherical_torques if t[0] == old]
 
     def spherical_motor(self, body: int, joint: int, motor: tuple[Any, ...]) -> None:
-        """A spherical joint's motor command: (mode, target, max_force, kp, kd)."""
+        """A spherical joint's motor command.
+
+        Args:
+            body: The body's id.
+            joint: The joint's index.
+            motor: (mode, target, max_force, kp, kd).
+        """
         self.spherical.setdefault(body, {})[joint] = motor
 
     def spherical_torque(self, step: int, body: int, joint: int, torque: list[float]) -> None:
-        """Torques on a spherical joint given before step ``step`` (as applied)."""
+        """Torques on a spherical joint given before step ``step`` (as applied).
+
+        Args:
+            step: The step count when they were given.
+            body: The body's id.
+            joint: The joint's index.
+            torque: The three torques (N·m).
+        """
         log = self.spherical_torques
         if log and log[0][0] != step:
             log.clear()  # those of an earlier step acted and are gone
         log.append((step, body, joint, torque))
 
     def spherical_pending(self, step: int, body: int, joint: int) -> list[float]:
-        """The torques pending on a spherical joint before step ``step`` (their sum)."""
+        """The torques pending on a spherical joint before step ``step`` (their sum).
+
+        Args:
+            step: The step count now.
+            body: The body's id.
+            joint: The joint's index.
+
+        Returns:
+            The three torques (N·m).
+        """
         out = [0.0, 0.0, 0.0]
         for s, b, j, torque in self.spherical_torques:
             if s == step and b == body and j == joint:
@@ -143,7 +218,14 @@ class Records:
         return out
 
     def spherical_set_pending(self, step: int, body: int, joint: int, torque: list[float]) -> None:
-        """``torque`` is now what is pending on the joint before step ``step``."""
+        """``torque`` is now what is pending on the joint before step ``step``.
+
+        Args:
+            step: The step count now.
+            body: The body's id.
+            joint: The joint's index.
+            torque: The three torques (N·m).
+        """
         self.spherical_torques = [
             t for t in self.spherical_torques if (t[0], t[1], t[2]) != (step, body, joint)
         ]

@@ -35,6 +35,7 @@ class Rendering:
         up: Vec3,
         fov: float,
     ) -> np.ndarray:
+        """See Backend.render. PyBullet: ``p.getCameraImage`` with TinyRenderer."""
         distance = math.dist(eye, target)
         view = p.computeViewMatrix(eye, target, up, physicsClientId=self._c)
         # near and far planes around the target: the depth buffer's precision where it matters

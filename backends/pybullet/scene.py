@@ -37,9 +37,16 @@ __all__ = ["Pending", "load_file", "named_table"]
 
 
 class Pending:
-    """One file's bodies while :meth:`PyBulletBackend.load_scene` loads them one by one through
-    ``load``: the first body's load hands the file to PyBullet, which makes every body at once;
-    each load then claims its own id. Ids nobody claimed (a later body refused) are removed."""
+    """One file's bodies while :meth:`PyBulletBackend.load_scene` loads them one by one.
+
+    They go through ``load``: the first body's load hands the file to PyBullet, which makes every
+    body at once; each load then claims its own id. Ids nobody claimed (a later body refused) are
+    removed.
+
+    Args:
+        bodies: The file's bodies, in PyBullet's order.
+        flags: ``p.loadMJCF``'s flags (the self-collision mode).
+    """
 
     def __init__(self, bodies: Sequence[SceneBody], flags: int) -> None:
         self.bodies = list(bodies)
@@ -48,6 +55,15 @@ class Pending:
         self.claimed: set[int] = set()
 
     def body(self, backend: PyBulletBackend, model: SceneBody) -> int:
+        """The id PyBullet gave one body of the file, claimed; the first call loads the file.
+
+        Args:
+            backend: The backend loading it.
+            model: The body, one of the file's.
+
+        Returns:
+            Its body id.
+        """
         if self.ids is None:
             self.ids = load_file(backend, self.bodies, self.flags)
         body = self.ids[model.body_index]
@@ -55,6 +71,11 @@ class Pending:
         return body
 
     def discard_unclaimed(self, backend: PyBulletBackend) -> None:
+        """Remove the bodies of the file that no load claimed.
+
+        Args:
+            backend: The backend that loaded them.
+        """
         for body in self.ids or []:
             if body not in self.claimed:
                 p.removeBody(body, physicsClientId=backend._c)
@@ -81,9 +102,23 @@ def _rewritten(bodies: Sequence[SceneBody]) -> bytes:
 
 
 def load_file(backend: PyBulletBackend, bodies: Sequence[SceneBody], flags: int) -> list[int]:
-    """``p.loadMJCF(path, flags)`` or ``p.loadSDF(path)`` on the bodies' file (through a
-    temporary copy for text, or for a file whose text changed since PyBullet first read it:
-    PyBullet caches files by name); the ids PyBullet returns."""
+    """``p.loadMJCF(path, flags)`` or ``p.loadSDF(path)`` on the bodies' file.
+
+    Through a temporary copy for text, or for a file whose text changed since PyBullet first read
+    it: PyBullet caches files by name.
+
+    Args:
+        backend: The backend to load into.
+        bodies: The file's bodies as simbridge read them, in PyBullet's order.
+        flags: ``p.loadMJCF``'s flags.
+
+    Returns:
+        The ids PyBullet returns, one per body.
+
+    Raises:
+        UrdfStructureError: PyBullet refused the file, or read other bodies, joints or links than
+            simbridge did (the bodies it made are removed).
+    """
     first = bodies[0]
     src = first.source
     kind = first.file_format
@@ -142,5 +177,13 @@ def _structure_difference(backend: PyBulletBackend, body: int, model: SceneBody)
 
 
 def named_table(table: list[JointInfo], model: SceneBody) -> list[JointInfo]:
-    """PyBullet's rows with the model's joint names (see the module docstring)."""
+    """PyBullet's rows with the model's joint names (see the module docstring).
+
+    Args:
+        table: PyBullet's joint table of the body.
+        model: The body as simbridge read it.
+
+    Returns:
+        The table, each row named as the model names its joint.
+    """
     return [row._replace(name=j.name) for row, j in zip(table, model.joints, strict=True)]

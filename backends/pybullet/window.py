@@ -22,7 +22,11 @@ PENDING_STEPS = 100  # step calls a camera set here may wait to be shown (then: 
 
 
 class Window:
-    """The GUI connection ``c``'s camera and drawing."""
+    """The GUI connection ``c``'s camera and drawing.
+
+    Args:
+        c: The PyBullet client id of the GUI connection.
+    """
 
     def __init__(self, c: int) -> None:
         self._c = c
@@ -35,7 +39,11 @@ class Window:
 
     @contextmanager
     def paused(self) -> Iterator[None]:
-        """No redraws while bodies are made."""
+        """No redraws while bodies are made.
+
+        Yields:
+            Nothing; rendering is off until the ``with`` block ends.
+        """
         p.configureDebugVisualizer(p.COV_ENABLE_RENDERING, 0, physicsClientId=self._c)
         try:
             yield
@@ -56,7 +64,11 @@ class Window:
         return lo, hi
 
     def aim(self, bodies: Iterable[tuple[int, bool]]) -> None:
-        """Look at the robots from a distance that fits them (after a load)."""
+        """Look at the robots from a distance that fits them (after a load).
+
+        Args:
+            bodies: ``(body id, whether its base is free)`` of each body in the world.
+        """
         lo, hi = self._robots(bodies)
         if not all(math.isfinite(v) for v in lo + hi):
             self._centre = None
@@ -73,7 +85,11 @@ class Window:
         self._pending, self._waited = (distance, target), 0
 
     def follow(self, bodies: Iterable[tuple[int, bool]]) -> None:
-        """Move the camera with the robots (after a step), keeping the user's angle and zoom."""
+        """Move the camera with the robots (after a step), keeping the user's angle and zoom.
+
+        Args:
+            bodies: ``(body id, whether its base is free)`` of each body in the world.
+        """
         if self._centre is None:
             return
         lo, hi = self._robots(bodies)

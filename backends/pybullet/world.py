@@ -28,7 +28,16 @@ __all__ = ["Saved", "Snapshots"]
 
 
 class Saved:
-    """One ``p.saveState`` snapshot and what it fits (see the module docstring)."""
+    """One ``p.saveState`` snapshot and what it fits (see the module docstring).
+
+    Args:
+        client: The PyBullet client id it was saved in.
+        records: The backend's records (their generation; a collected snapshot is listed in
+            ``records.dead`` for its state to be freed).
+        world: ``((body id, its _Body object), ...)`` of the world it was saved in.
+        state_id: ``p.saveState``'s id.
+        steps: The step count when it was saved.
+    """
 
     __slots__ = ("client", "generation", "world", "state_id", "steps", "__weakref__")
 
@@ -44,6 +53,16 @@ class Saved:
         done.atexit = False
 
     def fits(self, client: int, records: Records, world: tuple[Any, ...]) -> bool:
+        """Whether this snapshot can be restored into the world as it is now.
+
+        Args:
+            client: The PyBullet client id now.
+            records: The backend's records now.
+            world: ``((body id, its _Body object), ...)`` now.
+
+        Returns:
+            True for the same client, generation and bodies (the very objects).
+        """
         return (
             self.client == client
             and self.generation == records.generation
@@ -78,6 +97,7 @@ class Snapshots:
                 p.removeState(state_id, physicsClientId=self._c)
 
     def snapshot(self) -> Any:
+        """See Backend.snapshot. PyBullet: ``p.saveState``, kept with what world it fits."""
         if self._diverged is not None:
             raise self._diverged
         with self._idle():
@@ -86,6 +106,11 @@ class Snapshots:
             return Saved(self._c, self._records, self._world_key(), state_id, self._steps)
 
     def restore(self, native: Any) -> bool:
+        """See Backend.restore.
+
+        PyBullet: ``p.restoreState`` when the snapshot fits this world (False otherwise: PyBullet's
+        contact caches cannot be dropped, they stay).
+        """
         if self._diverged is not None:
             raise self._diverged
         with self._idle():
@@ -101,6 +126,10 @@ class Snapshots:
 
     @_exclusive
     def set_time(self, time: float) -> None:
+        """See Backend.set_time.
+
+        PyBullet: the step count moves; the pending torques' records follow.
+        """
         steps = round(time / self._dt)
         if steps != self._steps:
             self._records.restamp(self._steps, steps)
