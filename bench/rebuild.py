@@ -75,9 +75,9 @@ def phases(folder: Path, cache: Path) -> dict[str, tuple[float, float]]:
 
     t0, c0 = time.perf_counter(), time.process_time()
     from simbridge.compare import pipeline
-    from simbridge.compare.run import asked
     from simbridge.compare.report import html
     from simbridge.compare.report.rebuild import rebuild
+    from simbridge.compare.run import asked
 
     report_module: Any = sys.modules["simbridge.compare.report"]  # the package, not `report`
 
