@@ -51,6 +51,7 @@ from .window import Viewer, check_display
 from .world import Snapshots
 
 if TYPE_CHECKING:
+    from simbridge.model.mjcf_native import NativeMjcf
     from simbridge.model.scene import SceneBody
 
 __all__ = ["MujocoBackend"]
@@ -115,6 +116,7 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
     """
 
     name = "mujoco"
+    semantics = ("pybullet", "mujoco")
 
     NATIVE_DEFAULTS = {
         "gravity": (0.0, 0.0, -9.81),
@@ -159,6 +161,24 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
         self._closed = False
         self._c: Compiled | None = None
         self._new_world()
+
+    def mjcf_world(
+        self, native: NativeMjcf, gravity: Vec3 | None, timestep: float | None
+    ) -> Backend:
+        """See Backend.mjcf_world.
+
+        MuJoCo: :class:`~.native.NativeMujoco`, raw ``mj_step`` on the compiled model.
+
+        Raises:
+            BackendUnsupportedError: With ``gui`` (no viewer for it yet).
+        """
+        if self.gui:
+            raise BackendUnsupportedError(
+                self.name, "gui=True with semantics='mujoco'", "not yet: run without the viewer"
+            )
+        from .native import NativeMujoco
+
+        return NativeMujoco(self.profile, native, gravity, timestep)
 
     # ---------------------------------------------------------------- set-up
 

@@ -13,6 +13,7 @@ from simbridge.profiles import PROFILES, Profile, get_profile
 from simbridge.registry import available_backends, register
 from simbridge.sim import Sim
 from simbridge.types import (
+    ActuatorInfo,
     BaseState,
     BodyState,
     ContactPoint,
@@ -23,6 +24,7 @@ from simbridge.types import (
     JointType,
     LinkState,
     MotorMode,
+    SiteState,
     WorldState,
 )
 
@@ -40,6 +42,8 @@ __all__ = [
     "WorldState",
     "BodyState",
     "MotorMode",
+    "ActuatorInfo",
+    "SiteState",
     "Profile",
     "PROFILES",
     "get_profile",

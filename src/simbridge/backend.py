@@ -48,10 +48,18 @@ from simbridge.types import (
 if TYPE_CHECKING:
     from simbridge.bound import BoundCommand
     from simbridge.model.load_options import LoadOptions
+    from simbridge.model.mjcf_native import NativeMjcf
     from simbridge.model.scene import SceneBody
     from simbridge.model.urdf import UrdfModel
 
-__all__ = ["Backend"]
+__all__ = ["NATIVE_ONLY", "Backend"]
+
+# What a backend without MuJoCo's reading of MJCF says (BackendUnsupportedError's what, hint)
+NATIVE_ONLY = (
+    "MJCF read as MuJoCo reads it (load_mjcf(..., semantics='mujoco')) and its calls",
+    "it runs on the 'mujoco' backend only for now: Sim('mujoco'); "
+    "semantics='pybullet' (PyBullet's reading) runs on every backend",
+)
 
 
 class Backend(ABC):
@@ -73,6 +81,10 @@ class Backend(ABC):
     velocities): ``"float64"`` (PyBullet, MuJoCo: the default) or ``"float32"`` (PhysX). A
     declared fact, read without making an engine (:func:`simbridge.registry.state_dtype`).
     What compare does with it: docs/compare.md, "A float32 engine's perturbation"."""
+    semantics: ClassVar[tuple[str, ...]] = ("pybullet",)
+    """The readings of an MJCF file this backend runs (``Sim.load_mjcf(semantics=...)``):
+    ``"pybullet"`` (PyBullet's importer, every backend) and, where :meth:`mjcf_world` is
+    implemented, ``"mujoco"`` (MuJoCo's compiler). A declared fact, read before the file is."""
 
     def __init__(self, profile: Profile, gui: bool = False) -> None:
         self.profile = profile
@@ -727,6 +739,135 @@ class Backend(ABC):
         from simbridge.exceptions import BackendUnsupportedError
 
         raise BackendUnsupportedError(self.name, "setting the time (set_state)")
+
+    # ---------------------------------------------------------------- MuJoCo's reading of MJCF
+    # Not abstract: only a backend that declares "mujoco" in ``semantics`` implements them; the
+    # Sim resolves every name and checks every value and shape first.
+
+    def mjcf_world(
+        self, native: NativeMjcf, gravity: Vec3 | None, timestep: float | None
+    ) -> Backend:
+        """A new backend whose world is ``native``, the model as MuJoCo compiled it.
+
+        The Sim calls it on an empty world and uses the backend it returns in place of this
+        one (it closes this one) until ``reset()``.
+
+        Args:
+            native: The compiled model (:func:`simbridge.model.mjcf_native.compile_mjcf`).
+            gravity: The gravity the caller gave the Sim (m/s², world); None: the file's.
+            timestep: The time step the caller gave the Sim (s); None: the file's.
+
+        Returns:
+            The backend holding the model, stepping it as MuJoCo does.
+
+        Raises:
+            BackendUnsupportedError: The default: this backend runs PyBullet's reading only.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def set_actuator_controls(self, actuators: np.ndarray, values: list[float]) -> None:
+        """Write MuJoCo actuator controls (``d.ctrl``); they persist until written again.
+
+        Args:
+            actuators: (n,) ``np.intp`` actuator indices.
+            values: n finite controls, in the actuators' own units (clamped by MuJoCo to
+                ``ctrlrange`` where it is limited).
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def actuator_controls(self) -> np.ndarray:
+        """The actuator controls in force.
+
+        Returns:
+            (nu,) a copy of ``d.ctrl``.
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def generalized_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """MuJoCo's own generalized coordinates.
+
+        Returns:
+            Copies of ``qpos`` (nq,) and ``qvel`` (nv,), MuJoCo's order and conventions (a free
+            joint: position, quaternion w, x, y, z; linear velocity, world, of the body frame's
+            origin, angular velocity in the body frame).
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def set_generalized_state(self, qpos: np.ndarray | None, qvel: np.ndarray | None) -> None:
+        """Set ``qpos`` and ``qvel`` as given (MuJoCo's order; None keeps one).
+
+        Args:
+            qpos: (nq,) finite, or None.
+            qvel: (nv,) finite, or None.
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def reset_keyframe(self, key: int) -> None:
+        """Put the world in one ``<keyframe>`` (``mj_resetDataKeyframe``).
+
+        Args:
+            key: The keyframe's index.
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def sensor_data(self, sensor: int) -> np.ndarray:
+        """One sensor's values for the state as it stands.
+
+        Args:
+            sensor: The sensor's index.
+
+        Returns:
+            (dim,) a copy of its part of ``d.sensordata``, in MuJoCo's units and frames.
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def site_pose(self, site: int) -> tuple[Vec3, Quat]:
+        """One site's pose as it stands.
+
+        Args:
+            site: The site's index.
+
+        Returns:
+            Its position (m, world) and orientation (x, y, z, w).
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
 
     # ---------------------------------------------------------------- pictures
 

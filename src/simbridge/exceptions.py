@@ -23,10 +23,12 @@ __all__ = [
     "UrdfParseError",
     "UrdfStructureError",
     "MeshNotFoundError",
+    "MjcfCompileError",
     "UnsupportedJointError",
     "UnknownBodyError",
     "UnknownJointError",
     "UnknownLinkError",
+    "UnknownObjectError",
     "InvalidArgumentError",
     "InvalidProfileError",
     "InvalidEngineSettingError",
@@ -226,6 +228,21 @@ class UrdfStructureError(UrdfError):
         super().__init__(f"{_at(file, line)}: {element}: {detail}")
 
 
+class MjcfCompileError(UrdfError):
+    """An MJCF file MuJoCo's compiler refuses (``load_mjcf(..., semantics="mujoco")``).
+
+    Args:
+        file: The file's path (or ``<MJCF text>``).
+        detail: MuJoCo's own message, on one line.
+        line: The line MuJoCo names (1-based), None where it names none.
+    """
+
+    def __init__(self, file: str, detail: str, line: int | None = None):
+        self.file = file
+        self.line = line
+        super().__init__(f"{_at(file, line)}: MuJoCo's compiler refuses the MJCF: {detail}")
+
+
 class MeshNotFoundError(UrdfError, FileNotFoundError):
     """A mesh file found nowhere PyBullet looks.
 
@@ -369,6 +386,29 @@ class UnknownLinkError(SimbridgeError, LookupError):
         super().__init__(
             f"{_body_label(body_name, body, source)} has no link {link!r}{hint}; valid links "
             f"are -1 (base), indices 0..{len(names) - 1} or names {_choices(names)}"
+        )
+
+
+class UnknownObjectError(SimbridgeError, LookupError):
+    """An actuator, sensor, site or keyframe the MuJoCo model does not have
+    (``load_mjcf(..., semantics="mujoco")``'s calls).
+
+    Args:
+        kind: What was asked for (``"actuator"``).
+        item: The index or name given.
+        valid_names: The model's names of that kind, in MuJoCo's order.
+    """
+
+    def __init__(self, kind: str, item: object, valid_names: Iterable[str]):
+        names = list(valid_names)
+        self.kind = kind
+        if not names:
+            super().__init__(f"the model has no {kind} {item!r}: it has no {kind}s")
+            return
+        hint = did_you_mean(item, names) if isinstance(item, str) else ""
+        super().__init__(
+            f"the model has no {kind} {item!r}{hint}; valid {kind}s are indices "
+            f"0..{len(names) - 1} or names {_choices(names)}"
         )
 
 

@@ -28,6 +28,8 @@ __all__ = [
     "MotorMode",
     "JointCommands",
     "SphericalJointState",
+    "ActuatorInfo",
+    "SiteState",
     "BodyState",
     "WorldState",
 ]
@@ -375,3 +377,45 @@ class WorldState:
             A copy with ``native`` None: what another engine or world can take.
         """
         return replace(self, native=None)
+
+
+class ActuatorInfo(NamedTuple):
+    """One MuJoCo actuator of a model loaded with ``load_mjcf(..., semantics="mujoco")``
+    (``Sim.actuators()``), as MuJoCo compiled it."""
+
+    index: int  # type: ignore[assignment]  # shadows tuple.index, as JointInfo's
+    """Its index in MuJoCo's ``ctrl`` (``Sim.set_actuator_controls`` takes it)."""
+    name: str
+    """Its name in the file (``actuator<index>`` when unnamed)."""
+    transmission: str
+    """MuJoCo's transmission type: ``"joint"``, ``"jointinparent"``, ``"tendon"``,
+    ``"site"``, ``"slidercrank"``, ``"body"`` or ``"so3"``."""
+    target: str
+    """The name of the joint (tendon, site or body) it drives; ``""`` when unnamed."""
+    gear: tuple[float, float, float, float, float, float]
+    """MuJoCo's ``gear`` (the first entry scales a joint actuator's force)."""
+    ctrl_range: tuple[float, float] | None
+    """``ctrlrange`` where ``ctrllimited`` (MuJoCo clamps ``ctrl`` to it at every step), else
+    None."""
+    force_range: tuple[float, float] | None
+    """``forcerange`` where ``forcelimited`` (N·m or N), else None."""
+    dynamics: str
+    """MuJoCo's ``dyntype`` in lower case: ``"none"``, ``"integrator"``, ``"filter"``,
+    ``"filterexact"``, ``"muscle"``... (MuJoCo's ``mjtDyn``)."""
+    gain: str
+    """``gaintype`` in lower case: ``"fixed"``, ``"affine"``, ``"muscle"``... (``mjtGain``)."""
+    gain_params: tuple[float, float, float]
+    """The first three of ``gainprm`` (a motor: (1, 0, 0); a position actuator: (kp, 0, 0))."""
+    bias: str
+    """``biastype`` in lower case: ``"none"``, ``"affine"``, ``"muscle"``... (``mjtBias``)."""
+    bias_params: tuple[float, float, float]
+    """The first three of ``biasprm`` (a position actuator: (0, -kp, -kv))."""
+
+
+class SiteState(NamedTuple):
+    """A MuJoCo site's pose as it stands now (``Sim.site``)."""
+
+    position: Vec3
+    """m, world."""
+    orientation: Quat
+    """(x, y, z, w), world."""

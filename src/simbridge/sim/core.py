@@ -47,15 +47,22 @@ from simbridge.sim.arguments import flag, quat, vec, within
 from simbridge.sim.control import Control
 from simbridge.sim.lookups import Lookups, _Body, _Closed
 from simbridge.sim.multi_dof import MultiDof
+from simbridge.sim.native import NotGiven
 from simbridge.sim.pictures import Pictures
 from simbridge.sim.world import WorldStates
 
 if TYPE_CHECKING:
+    from simbridge.model.mjcf_native import NativeMjcf
     from simbridge.model.urdf_model import UrdfModel
+    from simbridge.types import ActuatorInfo, SiteState
 
 __all__ = ["DIVERGENCE_CHECKS", "Sim"]
 
 DIVERGENCE_CHECKS = ("periodic", "every_step")  # Sim(divergence_check=...)
+# Sim(gravity=..., timestep=...) not given: these, or the <option> of an MJCF read with
+# semantics="mujoco"
+DEFAULT_GRAVITY = NotGiven((0.0, 0.0, -9.8))
+DEFAULT_TIMESTEP = NotGiven(1.0 / 240.0)
 
 
 class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
@@ -64,8 +71,11 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
     Args:
         backend: registered backend name: ``"pybullet"``, ``"mujoco"``, or a third-party one
             (see :func:`simbridge.available_backends`).
-        gravity: world gravity (m/s²), set explicitly on every engine.
-        timestep: fixed step (s).
+        gravity: world gravity (m/s²), set explicitly on every engine; (0, 0, -9.8) when not
+            given, except under an MJCF read with ``semantics="mujoco"``, whose
+            ``<option gravity>`` then wins.
+        timestep: fixed step (s); 1/240 when not given, except under an MJCF read with
+            ``semantics="mujoco"``, whose ``<option timestep>`` then wins.
         profile: ``"pybullet"`` (PyBullet's defaults on every engine), ``"urdf"`` (the file's
             values, nothing hidden) or a :class:`~simbridge.Profile`.
         gui: open the engine's viewer. Raises :class:`~simbridge.exceptions.DisplayError`
@@ -93,8 +103,8 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
         self,
         backend: str = "pybullet",
         *,
-        gravity: Sequence[float] = (0.0, 0.0, -9.8),
-        timestep: float = 1.0 / 240.0,
+        gravity: Sequence[float] | NotGiven = DEFAULT_GRAVITY,
+        timestep: float | NotGiven = DEFAULT_TIMESTEP,
         profile: str | Profile = "pybullet",
         gui: bool = False,
         divergence_check: str = "periodic",
@@ -107,6 +117,15 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
         # id -> joint index arrays (from _joints) holding a spherical joint: the commands take
         # them to their multi-DoF path (kept alive here, so an id is never reused)
         self._multi_idx: dict[int, np.ndarray] = {}
+        self._native: NativeMjcf | None = None  # an MJCF read with semantics="mujoco"
+        gravity_given, timestep_given = (
+            (not isinstance(gravity, NotGiven)),
+            (not isinstance(timestep, NotGiven)),
+        )
+        if isinstance(gravity, NotGiven):
+            gravity = gravity.value
+        if isinstance(timestep, NotGiven):
+            timestep = timestep.value
         g = vec(gravity, 3, "gravity")
         try:
             if isinstance(timestep, bool) or not isinstance(timestep, (int, float, np.number)):
@@ -127,16 +146,28 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
         cls = load_backend(backend)
         self.backend: str = backend
         self._bodies: dict[int, _Body] = {}
-        engine = cls(prof, flag(gui, "gui"))
+        self.divergence_check: str = divergence_check
+        # what a new engine is made of (reset() after a model read with semantics="mujoco"),
+        # and the values the caller gave (that model's <option> gives the others)
+        self._make = (cls, prof, flag(gui, "gui"))
+        self._given: tuple[tuple[float, ...] | None, float | None] = (
+            g if gravity_given else None,
+            dt if timestep_given else None,
+        )
+        self._b = self._new_engine()
+        self._dt = dt
+        self._wall_start: float | None = None
+
+    def _new_engine(self) -> Backend:
+        """A new engine of this Sim's backend, profile and divergence check."""
+        cls, prof, gui = self._make
+        engine = cls(prof, gui)
         try:
-            engine.set_divergence_check(divergence_check == "every_step")
+            engine.set_divergence_check(self.divergence_check == "every_step")
         except BaseException:
             engine.close()
             raise
-        self._b = engine
-        self.divergence_check: str = divergence_check
-        self._dt = float(timestep)
-        self._wall_start: float | None = None
+        return engine
 
     # ---------------------------------------------------------------- lifecycle
 
@@ -283,6 +314,9 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
             from simbridge.sim.keywords import keyword_error
 
             raise keyword_error(self.load_urdf, pybullet)
+        from simbridge.sim.native import refuse_after_native
+
+        refuse_after_native(self, "load_urdf")
         pos = vec(base_position, 3, "base_position")
         within(pos, "base_position")
         orn = quat(base_orientation, "base_orientation", normalise=True)
@@ -340,29 +374,63 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
         )
 
     def load_mjcf(
-        self, source: str | os.PathLike[str], *, self_collision: bool | str | None = None
+        self,
+        source: str | os.PathLike[str],
+        *,
+        self_collision: bool | str | None = None,
+        semantics: str = "pybullet",
     ) -> tuple[int, ...]:
-        """Load every body of an MJCF file as ``p.loadMJCF`` does; return their ids.
+        """Load every body of an MJCF file; return their ids.
 
+        ``semantics="pybullet"`` (the default): as ``p.loadMJCF`` reads it, on every backend.
         One body per top-level ``<worldbody>`` ``<body>`` or ``<geom>``, in the file's order,
         each with PyBullet's links, joints, numbering and names (a body with several joints
-        gets massless links between them; see :mod:`simbridge.model.mjcf`). What PyBullet's importer
-        does not read (joint damping and armature, ``<option>``, ``density``, actuators...) is
-        not simulated on any backend; it is listed per body in :meth:`manifest` (``ignored``).
+        gets massless links between them; see :mod:`simbridge.model.mjcf`). What PyBullet's
+        importer does not read (joint damping and armature, ``<option>``, ``density``,
+        actuators...) is not simulated on any backend; it is listed per body in
+        :meth:`manifest` (``ignored``).
+
+        ``semantics="mujoco"``: the model as MuJoCo's compiler reads it and as ``mj_step``
+        runs it (``<default>`` classes, ``<option>``, ``<include>``, actuators, damping,
+        armature, contacts, keyframes, sensors, sites: all MuJoCo's), on the ``"mujoco"``
+        backend. One body per top-level ``<worldbody>`` ``<body>`` (a free joint: a floating
+        base; none: a fixed one), its joints in MuJoCo's order and names (the mapping:
+        :mod:`simbridge.model.mjcf_native`); the file's ``<option>`` gravity and time step
+        win over the Sim's unless the Sim was given them; no profile entry applies (no link
+        damping, no default motors): the model's actuators drive it
+        (:meth:`set_actuator_controls`). The model is the whole world: nothing loads with it
+        or after it until :meth:`reset`.
 
         Args:
             source: a file path, a name on the search path (``"mjcf/ant.xml"`` is found in
                 pybullet_data) or MJCF text.
             self_collision: as :meth:`load_urdf`'s (``loadMJCF``'s flags); None: the profile's.
+                Under ``semantics="mujoco"`` the file's contact settings rule: give None.
+            semantics: ``"pybullet"`` or ``"mujoco"``.
 
         Returns:
-            The body ids, in PyBullet's order (``p.loadMJCF``'s tuple).
+            The body ids, in PyBullet's order (``p.loadMJCF``'s tuple), or in MuJoCo's order
+            of the top-level bodies.
 
         Raises:
             UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
-            UnsupportedJointError (``ball`` and nested ``free`` joints): the message names the
-            file, the line and the element.
+            UnsupportedJointError (``ball`` and nested ``free`` joints): under "pybullet", the
+                message names the file, the line and the element.
+            MjcfCompileError: under "mujoco", MuJoCo's own message with the file and line.
+            BackendUnsupportedError: "mujoco" on a backend other than MuJoCo, into a world that
+                holds bodies, or any load after such a model.
+            InvalidArgumentError: another ``semantics``, or ``self_collision`` with "mujoco".
         """
+        from simbridge.sim.native import check_semantics, load_native
+
+        if check_semantics(semantics) == "mujoco":
+            if self_collision is not None:
+                raise InvalidArgumentError(
+                    "self_collision",
+                    "under semantics='mujoco' the file's contype/conaffinity and <contact> "
+                    "decide which geoms collide: give None",
+                )
+            return load_native(self, source)
         return self._load_scene(source, "mjcf", self_collision)
 
     def load_sdf(self, source: str | os.PathLike[str]) -> tuple[int, ...]:
@@ -390,7 +458,9 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
 
         from simbridge.model.load_options import load_options
         from simbridge.model.scene_reader import parse_scene
+        from simbridge.sim.native import refuse_after_native
 
+        refuse_after_native(self, f"load_{kind}")
         options = load_options(self._b.profile, self_collision=self_collision)
         # PyBullet's MJCF and SDF importers take the collision-box inertia (loadSDF has no flag
         # for the file's; an MJCF body's file inertia is MuJoCo's to compute)
@@ -426,7 +496,14 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
         """Remove every body and set time to 0 (``p.resetSimulation``)."""
         self._b.time  # noqa: B018 - raises SimClosedError after close()
         self._end_commands("reset changed the world")
-        self._b.reset()
+        if self._native is not None:  # back to an empty world of the Sim's own settings
+            old = self._b
+            self._b = self._new_engine()
+            self._native = None
+            self._dt = self._b.profile.timestep
+            old.close()
+        else:
+            self._b.reset()
         self._bodies.clear()
         self._wall_start = None
 
@@ -438,6 +515,171 @@ class Sim(Control, MultiDof, WorldStates, Pictures, Lookups):
     def body_name(self, body: int) -> str:
         """The ``<robot name>`` of a body."""
         return self._body(body).name
+
+    # ---------------------------------------------------------------- MuJoCo's reading
+
+    def actuators(self) -> tuple[ActuatorInfo, ...]:
+        """The model's actuators (``load_mjcf(..., semantics="mujoco")``), in MuJoCo's order.
+
+        Returns:
+            One :class:`~simbridge.types.ActuatorInfo` each: name, the joint it drives,
+            gear, ctrlrange, forcerange, gain and bias.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+        """
+        from simbridge.sim.native import native_model
+
+        return native_model(self, "actuators()").actuators
+
+    def set_actuator_controls(
+        self, controls: float | Sequence[float] | np.ndarray, actuators: Any = None
+    ) -> None:
+        """Write the model's actuator controls (MuJoCo's ``ctrl``); they hold until written
+        again, and MuJoCo clamps them to ``ctrlrange`` where it is limited.
+
+        Args:
+            controls: One value per actuator named, or per actuator of the model when
+                ``actuators`` is None (a Gymnasium action, for one).
+            actuators: None (all, in MuJoCo's order), an index or a name, or a sequence of
+                them.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+            UnknownObjectError: An actuator the model does not have.
+            InvalidArgumentError: The wrong number of controls, or one not finite.
+        """
+        from simbridge.sim.native import native_model, resolve, values
+
+        names = [a.name for a in native_model(self, "set_actuator_controls").actuators]
+        if actuators is None:
+            idx = np.arange(len(names), dtype=np.intp)
+        else:
+            many = not isinstance(actuators, (str, int, np.integer))
+            items = list(actuators) if many else [actuators]
+            idx = np.array([resolve(names, "actuator", a) for a in items], dtype=np.intp)
+        self._b.set_actuator_controls(idx, values(controls, len(idx), "controls").tolist())
+
+    def actuator_controls(self) -> np.ndarray:
+        """The actuator controls in force (MuJoCo's ``ctrl``).
+
+        Returns:
+            (nu,) float64, a copy.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+        """
+        from simbridge.sim.native import native_model
+
+        native_model(self, "actuator_controls()")
+        return self._b.actuator_controls()
+
+    def qpos(self) -> np.ndarray:
+        """MuJoCo's generalized positions, in its order and conventions (a free joint:
+        position, then quaternion w, x, y, z).
+
+        Returns:
+            (nq,) float64, a copy.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+        """
+        from simbridge.sim.native import native_model
+
+        native_model(self, "qpos()")
+        return self._b.generalized_state()[0]
+
+    def qvel(self) -> np.ndarray:
+        """MuJoCo's generalized velocities (a free joint: the body frame origin's linear
+        velocity, world, then the angular velocity in the body frame).
+
+        Returns:
+            (nv,) float64, a copy.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+        """
+        from simbridge.sim.native import native_model
+
+        native_model(self, "qvel()")
+        return self._b.generalized_state()[1]
+
+    def set_qpos_qvel(
+        self,
+        qpos: Sequence[float] | np.ndarray | None = None,
+        qvel: Sequence[float] | np.ndarray | None = None,
+    ) -> None:
+        """Set MuJoCo's ``qpos`` and ``qvel`` as given (Gymnasium's ``set_state``); None
+        keeps one. Nothing else changes (controls, time, the solver's warm start).
+
+        Args:
+            qpos: (nq,) finite values, MuJoCo's order, or None.
+            qvel: (nv,) finite values, or None.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+            InvalidArgumentError: A wrong length or a value not finite.
+        """
+        from simbridge.sim.native import native_model, values
+
+        m = native_model(self, "set_qpos_qvel").model
+        q = None if qpos is None else values(qpos, m.nq, "qpos")
+        v = None if qvel is None else values(qvel, m.nv, "qvel")
+        self._end_commands("set_qpos_qvel changed the world")
+        self._b.set_generalized_state(q, v)
+
+    def reset_keyframe(self, key: int | str) -> None:
+        """Put the world in one of the model's ``<keyframe>`` states (``mj_resetDataKeyframe``:
+        time, qpos, qvel, act, ctrl of the key).
+
+        Args:
+            key: The keyframe's index or name.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+            UnknownObjectError: A keyframe the model does not have.
+        """
+        from simbridge.sim.native import native_model, resolve
+
+        k = resolve(native_model(self, "reset_keyframe").keyframes, "keyframe", key)
+        self._end_commands("reset_keyframe changed the world")
+        self._b.reset_keyframe(k)
+
+    def sensor(self, sensor: int | str) -> np.ndarray:
+        """One of the model's sensors, for the state as it stands now.
+
+        Args:
+            sensor: The sensor's index or name.
+
+        Returns:
+            (dim,) float64, MuJoCo's values in its units and frames.
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+            UnknownObjectError: A sensor the model does not have.
+        """
+        from simbridge.sim.native import native_model, resolve
+
+        return self._b.sensor_data(resolve(native_model(self, "sensor").sensors, "sensor", sensor))
+
+    def site(self, site: int | str) -> SiteState:
+        """One of the model's sites, as it stands now.
+
+        Args:
+            site: The site's index or name.
+
+        Returns:
+            Its position (m, world) and orientation (x, y, z, w).
+
+        Raises:
+            BackendUnsupportedError: No model read with semantics='mujoco' is loaded.
+            UnknownObjectError: A site the model does not have.
+        """
+        from simbridge.sim.native import native_model, resolve
+        from simbridge.types import SiteState
+
+        pos, orn = self._b.site_pose(resolve(native_model(self, "site").sites, "site", site))
+        return SiteState(pos, orn)
 
     def step(self, n: int = 1, *, realtime: bool = False) -> None:
         """Advance ``n`` fixed steps.

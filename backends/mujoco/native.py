@@ -1,0 +1,491 @@
+"""An MJCF model run as MuJoCo runs it (``load_mjcf(source, semantics="mujoco")``).
+
+:class:`NativeMujoco` holds the compiled model (:mod:`simbridge.model.mjcf_native`) as the
+whole world and steps it with ``mujoco.mj_step``, nothing else: MuJoCo's integrator (RK4
+included), actuators, damping, armature and contacts, bit for bit raw MuJoCo under the same
+controls. No profile entry applies (no link damping, no default motors); the file's
+``<option>`` gives gravity and the time step unless the Sim was given them. The reads are
+simbridge's (centre-of-mass frames, quaternions x, y, z, w) computed from MuJoCo's data with
+``mj_kinematics``/``mj_comPos``/``mj_comVel`` (and ``mj_forward`` for sensors), which write no
+quantity ``mj_step`` reads: reading never changes a trajectory.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from simbridge.backend import Backend
+from simbridge.exceptions import BackendUnsupportedError, SimBusyError, SimulationDivergedError
+from simbridge.model.mjcf_native import NativeBody, NativeMjcf
+from simbridge.profiles import Profile
+from simbridge.types import (
+    BaseState,
+    DynamicsInfo,
+    JointCommands,
+    JointInfo,
+    JointStates,
+    JointType,
+    LinkState,
+    MotorMode,
+    Quat,
+    Vec3,
+)
+
+from .. import locking
+from ..locking import exclusive, wait_for_lock
+
+__all__ = ["NativeMujoco"]
+
+_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+_COMMANDS = (
+    "PyBullet's joint motors and torques under semantics='mujoco'",
+    "drive the model's own actuators: Sim.set_actuator_controls",
+)
+
+
+def _xyzw(q: np.ndarray) -> Quat:
+    return (float(q[1]), float(q[2]), float(q[3]), float(q[0]))
+
+
+def _wxyz(q: Quat) -> np.ndarray:
+    return np.array((q[3], q[0], q[1], q[2]), dtype=np.float64)
+
+
+def _v(a: np.ndarray) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+class NativeMujoco(Backend):
+    """The world of one MJCF model as MuJoCo compiles and steps it.
+
+    Args:
+        profile: The Sim's profile; only its gravity and time step are read, and only where
+            the Sim was given them.
+        native: The compiled model; this backend takes its ``MjModel`` over.
+        gravity: The gravity the caller gave the Sim (m/s², world), or None for the file's.
+        timestep: The time step the caller gave the Sim (s), or None for the file's.
+    """
+
+    name = "mujoco"
+
+    def __init__(
+        self,
+        profile: Profile,
+        native: NativeMjcf,
+        gravity: Vec3 | None = None,
+        timestep: float | None = None,
+    ) -> None:
+        m = native.model
+        if gravity is not None:
+            m.opt.gravity[:] = gravity
+        if timestep is not None:
+            m.opt.timestep = timestep
+        super().__init__(
+            profile.with_(gravity=_v(m.opt.gravity), timestep=float(m.opt.timestep)), False
+        )
+        self.native = native
+        self.m = m
+        self.d = mujoco.MjData(m)
+        self._bodies: dict[int, NativeBody] = dict(enumerate(native.bodies))
+        self._stepping = threading.RLock()
+        self._in_step = False
+        self._closed = False
+        self._stale = True
+        self._diverged: SimulationDivergedError | None = None
+
+    reading = locking.reading
+
+    # ---------------------------------------------------------------- world
+
+    @property
+    def time(self) -> float:
+        """See Backend.time. MuJoCo's ``d.time``."""
+        if self._closed:
+            from simbridge.exceptions import SimClosedError
+
+            raise SimClosedError()
+        return float(self.d.time)
+
+    def load(self, *args: Any, **kwargs: Any) -> int:
+        """See Backend.load.
+
+        Raises:
+            BackendUnsupportedError: Always: a model read with semantics='mujoco' is the whole
+                world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "loading into a world that holds a model read with semantics='mujoco'",
+            "that model is the whole world (its <option>, contacts and ground are MuJoCo's); "
+            "reset() the Sim or use another Sim",
+        )
+
+    def remove(self, body: int) -> None:
+        """See Backend.remove.
+
+        Raises:
+            BackendUnsupportedError: Always: the model's bodies are one compiled world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "removing one body of a model read with semantics='mujoco'",
+            "the model is one compiled world: reset() removes it whole",
+        )
+
+    @exclusive
+    def reset(self) -> None:
+        """See Backend.reset. Never reached: the Sim replaces this backend at ``reset()``."""
+        mujoco.mj_resetData(self.m, self.d)
+        self._stale = True
+        self._diverged = None
+
+    def step(self, n: int) -> None:
+        """See Backend.step.
+
+        MuJoCo: ``mujoco.mj_step(m, d, nstep=n)``, the model's own integrator; a state that
+        turned non-finite, or MuJoCo's bad-acceleration warning (after which it resets the
+        data), raises SimulationDivergedError.
+        """
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        if self._in_step:
+            lock.release()
+            raise SimBusyError()
+        self._in_step = True
+        try:
+            if self._diverged is not None:
+                raise self._diverged
+            if n <= 0:
+                return
+            d = self.d
+            warned = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+            mujoco.mj_step(self.m, d, nstep=n)
+            self._stale = True
+            if (
+                int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) != warned
+                or not np.isfinite(d.qpos).all()
+                or not np.isfinite(d.qvel).all()
+            ):
+                self._diverged = SimulationDivergedError(
+                    self.name, float(d.time), "MuJoCo's state (bad acceleration or non-finite)"
+                )
+                raise self._diverged
+        finally:
+            self._in_step = False
+            lock.release()
+
+    def close(self) -> None:
+        """See Backend.close."""
+        self._closed = True
+
+    def _fresh(self) -> None:
+        """Poses and velocities of the state as it stands (writes nothing mj_step reads)."""
+        if self._stale:
+            m, d = self.m, self.d
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_comVel(m, d)
+            self._stale = False
+
+    # ---------------------------------------------------------------- tables
+
+    def joint_info(self, body: int, joint: int) -> JointInfo:
+        """See Backend.joint_info (the rows of :mod:`simbridge.model.mjcf_native`)."""
+        return self._bodies[body].table[joint]
+
+    def num_joints(self, body: int) -> int:
+        """See Backend.num_joints: one row per MuJoCo joint but the free one."""
+        return len(self._bodies[body].table)
+
+    def _link_body(self, body: int, link: int) -> int:
+        """The MuJoCo body id a link reads (-1: the base; -1 of a massless root: -1)."""
+        b = self._bodies[body]
+        if link < 0:
+            return -1 if b.massless_root else b.body_id
+        return b.link_bodies[link]
+
+    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        """See Backend.dynamics_info: MuJoCo's body mass and inertia; the friction of the
+        body's first geom (sliding, torsional, rolling: MuJoCo's three), restitution 0."""
+        m = self.m
+        bid = self._link_body(body, link)
+        if bid < 0:  # a massless root
+            return DynamicsInfo(
+                0.0, 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0, 0, 0, 1.0), 0.0, 0.0, 0.0
+            )
+        g = int(m.body_geomadr[bid])
+        fr = m.geom_friction[g] if g >= 0 else np.zeros(3)
+        return DynamicsInfo(
+            float(m.body_mass[bid]),
+            float(fr[0]),
+            _v(m.body_inertia[bid]),
+            _v(m.body_ipos[bid]),
+            _xyzw(m.body_iquat[bid]),
+            0.0,
+            float(fr[2]),
+            float(fr[1]),
+        )
+
+    # ---------------------------------------------------------------- state
+
+    def _com(self, bid: int) -> tuple[Vec3, Quat, Vec3, Vec3]:
+        """A MuJoCo body's centre-of-mass pose and velocity (world)."""
+        d = self.d
+        q = np.empty(4)
+        mujoco.mju_mat2Quat(q, d.ximat[bid])
+        vel = np.empty(6)
+        mujoco.mj_objectVelocity(self.m, d, mujoco.mjtObj.mjOBJ_BODY, bid, vel, 0)
+        return _v(d.xipos[bid]), _xyzw(q), _v(vel[3:]), _v(vel[:3])
+
+    @exclusive
+    def base_state(self, body: int) -> BaseState:
+        """See Backend.base_state: the top-level body's centre of mass (a massless root: the
+        body's frame at qpos0, at rest)."""
+        self._fresh()
+        b = self._bodies[body]
+        if b.massless_root:
+            m = self.m
+            return BaseState(
+                _v(m.body_pos[b.body_id]),
+                _xyzw(m.body_quat[b.body_id]),
+                (0.0, 0.0, 0.0),
+                (0.0, 0.0, 0.0),
+            )
+        return BaseState(*self._com(b.body_id))
+
+    @exclusive
+    def link_state(self, body: int, link: int) -> LinkState:
+        """See Backend.link_state: the MuJoCo body of row ``link``."""
+        self._fresh()
+        m, d = self.m, self.d
+        bid = self._link_body(body, link)
+        pos, orn, lin, ang = self._com(bid)
+        return LinkState(
+            pos,
+            orn,
+            _v(m.body_ipos[bid]),
+            _xyzw(m.body_iquat[bid]),
+            _v(d.xpos[bid]),
+            _xyzw(d.xquat[bid]),
+            lin,
+            ang,
+        )
+
+    @exclusive
+    def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        """See Backend.joint_states: ``qpos``/``qvel`` at each joint's address (a ball joint:
+        its quaternion's x, as PyBullet's first coordinate), ``qfrc_actuator`` of the last
+        step."""
+        b, d = self._bodies[body], self.d
+        n = len(joints)
+        pos, vel, tau = np.zeros(n), np.zeros(n), np.zeros(n)
+        for k, j in enumerate(joints.tolist()):
+            row = b.table[j]
+            qa = row.q_index + (1 if row.type == JointType.SPHERICAL else 0)
+            pos[k] = d.qpos[qa]
+            vel[k] = d.qvel[row.u_index]
+            tau[k] = d.qfrc_actuator[row.u_index]
+        return JointStates(pos, vel, tau)
+
+    @exclusive
+    def reset_joint_state(
+        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
+    ) -> None:
+        """See Backend.reset_joint_state: writes ``qpos``/``qvel`` at the joints' addresses."""
+        b, d = self._bodies[body], self.d
+        for j, q, v in zip(joints.tolist(), positions, velocities, strict=True):
+            row = b.table[j]
+            d.qpos[row.q_index] = q
+            d.qvel[row.u_index] = v
+        self._stale = True
+
+    @exclusive
+    def reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        """See Backend.reset_base_state: the free joint's ``qpos``/``qvel`` from the centre
+        of mass's pose and velocity (MuJoCo's free joint holds the body frame's origin and
+        its angular velocity in the body frame)."""
+        b = self._bodies[body]
+        if b.free_joint < 0:
+            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
+            raise BackendUnsupportedError(
+                self.name,
+                "moving a fixed base of a model read with semantics='mujoco'",
+                "its place is the file's",
+            )
+        self._fresh()
+        m, d, bid = self.m, self.d, b.body_id
+        qa, va = int(m.jnt_qposadr[b.free_joint]), int(m.jnt_dofadr[b.free_joint])
+        com_pos, com_orn, lin, ang = self._com(bid)
+        pos = np.array(position if position is not None else com_pos)
+        qcom = _wxyz(orientation if orientation is not None else com_orn)
+        qframe = np.empty(4)
+        inv = np.empty(4)
+        mujoco.mju_negQuat(inv, m.body_iquat[bid])
+        mujoco.mju_mulQuat(qframe, qcom, inv)
+        offset = np.empty(3)  # frame origin -> centre of mass, world
+        mujoco.mju_rotVecQuat(offset, m.body_ipos[bid], qframe)
+        w = np.array(angular_velocity if angular_velocity is not None else ang)
+        v = np.array(linear_velocity if linear_velocity is not None else lin)
+        d.qpos[qa : qa + 3] = pos - offset
+        d.qpos[qa + 3 : qa + 7] = qframe
+        d.qvel[va : va + 3] = v - np.cross(w, offset)
+        local = np.empty(3)
+        mujoco.mju_rotVecQuat(local, w, np.array((qframe[0], *(-qframe[1:]))))
+        d.qvel[va + 3 : va + 6] = local
+        self._stale = True
+
+    # ---------------------------------------------------------------- PyBullet's commands
+
+    def set_joint_velocity(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_velocity.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_position(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_position.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_torque(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_torque.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def joint_commands(self, body: int) -> JointCommands:
+        """See Backend.joint_commands: no PyBullet motor, ever: every joint reads as a
+        released one (VELOCITY, target 0, max_force 0; kd 1), nothing pending."""
+        n = len(self._bodies[body].table)
+        z = np.zeros(n)
+        return JointCommands(
+            np.full(n, int(MotorMode.VELOCITY)), z, z.copy(), z.copy(), np.ones(n), z.copy()
+        )
+
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """See Backend.set_joint_commands: only released motors and no pending torque.
+
+        Raises:
+            BackendUnsupportedError: For any motor with a force, or a pending torque.
+        """
+        if np.asarray(commands.max_force).any() or np.asarray(commands.pending_torque).any():
+            raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    # ---------------------------------------------------------------- whole state
+
+    @exclusive
+    def snapshot(self) -> Any:
+        """See Backend.snapshot: ``mj_getState`` (``mjSTATE_INTEGRATION``: time, qpos, qvel,
+        act, warm start, ctrl, applied forces)."""
+        state = np.empty(mujoco.mj_stateSize(self.m, _STATE))
+        mujoco.mj_getState(self.m, self.d, state, _STATE)
+        return (id(self.m), state)
+
+    @exclusive
+    def restore(self, native: Any) -> bool:
+        """See Backend.restore: ``mj_setState`` for a snapshot of this model; otherwise a cold
+        solver start."""
+        if not (isinstance(native, tuple) and len(native) == 2 and native[0] == id(self.m)):
+            self.d.qacc_warmstart[:] = 0.0
+            return False
+        mujoco.mj_setState(self.m, self.d, native[1], _STATE)
+        self._stale = True
+        return True
+
+    @exclusive
+    def set_time(self, time: float) -> None:
+        """See Backend.set_time: ``d.time``, to the nearest whole step."""
+        dt = float(self.m.opt.timestep)
+        self.d.time = round(time / dt) * dt
+
+    def manifest(self) -> dict[str, Any]:
+        """See Backend.manifest: MuJoCo's reading, with the options in force."""
+        m = self.m
+        return {
+            "backend": self.name,
+            "engine_version": mujoco.__version__,
+            "semantics": "mujoco",
+            "model": self.native.display_name,
+            "option": {
+                "timestep": float(m.opt.timestep),
+                "gravity": _v(m.opt.gravity),
+                "integrator": mujoco.mjtIntegrator(int(m.opt.integrator)).name,
+            },
+            "sizes": {"nq": m.nq, "nv": m.nv, "nu": m.nu, "nbody": m.nbody},
+            "departures": {
+                "profile": "no profile entry applies under semantics='mujoco' but gravity "
+                "and the time step the Sim was given: the model is MuJoCo's"
+            },
+        }
+
+    # ---------------------------------------------------------------- MuJoCo's own calls
+
+    @exclusive
+    def set_actuator_controls(self, actuators: np.ndarray, values: list[float]) -> None:
+        """See Backend.set_actuator_controls: ``d.ctrl`` (MuJoCo clamps it to ``ctrlrange``
+        at each step)."""
+        self.d.ctrl[actuators] = values
+
+    @exclusive
+    def actuator_controls(self) -> np.ndarray:
+        """See Backend.actuator_controls: a copy of ``d.ctrl``."""
+        return self.d.ctrl.copy()
+
+    @exclusive
+    def generalized_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """See Backend.generalized_state: copies of ``d.qpos``, ``d.qvel``."""
+        return self.d.qpos.copy(), self.d.qvel.copy()
+
+    @exclusive
+    def set_generalized_state(self, qpos: np.ndarray | None, qvel: np.ndarray | None) -> None:
+        """See Backend.set_generalized_state: writes ``d.qpos``/``d.qvel`` as given."""
+        if qpos is not None:
+            self.d.qpos[:] = qpos
+        if qvel is not None:
+            self.d.qvel[:] = qvel
+        self._stale = True
+
+    @exclusive
+    def reset_keyframe(self, key: int) -> None:
+        """See Backend.reset_keyframe: ``mj_resetDataKeyframe`` (time, qpos, qvel, act,
+        ctrl, mocap of the key)."""
+        mujoco.mj_resetDataKeyframe(self.m, self.d, key)
+        self._stale = True
+        self._diverged = None
+
+    @exclusive
+    def sensor_data(self, sensor: int) -> np.ndarray:
+        """See Backend.sensor_data: ``d.sensordata`` of the state as it stands
+        (``mj_forward``, which leaves the next step's result unchanged)."""
+        m, d = self.m, self.d
+        mujoco.mj_forward(m, d)
+        self._stale = False
+        a, n = int(m.sensor_adr[sensor]), int(m.sensor_dim[sensor])
+        return d.sensordata[a : a + n].copy()
+
+    @exclusive
+    def site_pose(self, site: int) -> tuple[Vec3, Quat]:
+        """See Backend.site_pose: ``site_xpos`` and ``site_xmat`` as a quaternion."""
+        self._fresh()
+        q = np.empty(4)
+        mujoco.mju_mat2Quat(q, self.d.site_xmat[site])
+        return _v(self.d.site_xpos[site]), _xyzw(q)
