@@ -88,7 +88,8 @@ class BoundCommand:
         kp: list[float],
         kd: list[float],
     ) -> None:
-        """Made by ``Sim.velocity_command`` / ``Sim.position_command`` from checked values."""
+        """Made by ``Sim.velocity_command`` / ``Sim.position_command`` from checked values;
+        ``sim`` is the Sim's shared state (:class:`simbridge.sim.shared.Shared`)."""
         init = object.__setattr__
         init(self, "mode", mode)
         init(self, "body", body)
@@ -112,7 +113,7 @@ class BoundCommand:
         # a sum of floats is finite only if every one is (an overflow is told apart below)
         if not math.isfinite(sum(targets) + sum(force)) or (force and min(force) < 0.0):
             self._check(targets, force)
-        backend = self._sim._b
+        backend = self._sim.backend
         if self.mode == "velocity":
             backend.set_joint_velocity(self.body, self.joints, targets, force)
         else:
@@ -134,7 +135,7 @@ class BoundCommand:
         the motors keep the command last sent. Safe to call twice, and after a world change."""
         if self._why:
             return
-        self._sim._release_command(self)
+        self._sim.release(self)
         self._end("it was released")
 
     @property
