@@ -23,8 +23,11 @@ __all__ = ["bound_command", "reset_base_state", "reset_joint_state"]
 def reset_joint_state(
     s: Shared, body: int, joints: JointsArg, positions: Any, velocities: Any
 ) -> None:
-    """Teleport movable joints (:meth:`simbridge.Sim.reset_joint_state`, whose arguments
-    these are, but for ``s``, the Sim's shared state).
+    """Teleport movable joints (:meth:`simbridge.Sim.reset_joint_state`).
+
+    Args:
+        s: the Sim's shared state.
+        body, joints, positions, velocities: as :meth:`simbridge.Sim.reset_joint_state`'s.
 
     Raises:
         InvalidArgumentError: a spherical or fixed joint, a value of the wrong shape, not
@@ -51,8 +54,12 @@ def reset_base_state(
     linear_velocity: Sequence[float] | None,
     angular_velocity: Sequence[float] | None,
 ) -> None:
-    """Teleport the base (:meth:`simbridge.Sim.reset_base_state`, whose arguments these are,
-    but for ``s``, the Sim's shared state).
+    """Teleport the base (:meth:`simbridge.Sim.reset_base_state`).
+
+    Args:
+        s: the Sim's shared state.
+        body, position, orientation, linear_velocity, angular_velocity: as
+            :meth:`simbridge.Sim.reset_base_state`'s (None: keep the current value).
 
     Raises:
         InvalidArgumentError: a value of the wrong shape, not finite, out of range, or a

@@ -24,8 +24,8 @@ arrays), :mod:`~simbridge.sim.loading` (URDF, MJCF, SDF), :mod:`~simbridge.sim.c
 control loop (``step``, the ``set_joint_*`` commands, the state reads), written here against
 the shared object: a call more would cost those 2-4% (``python bench/ab.py``).
 
-This module is longer than the others (about 900 lines) for one reason: it is the whole public
-interface, and each method's docstring is its contract.
+This module is longer than the others (about 1,200 lines, half of them docstrings) for one
+reason: it is the whole public interface, and each method's docstring is its contract.
 """
 
 from __future__ import annotations
@@ -428,7 +428,10 @@ class Sim:
         self._wall_start = None
 
     def bodies(self) -> list[int]:
-        """Ids of the bodies in the world, in load order.
+        """Ids of the bodies in the world.
+
+        Returns:
+            The body ids, in load order.
 
         Raises:
             SimClosedError: the Sim is closed.
@@ -442,6 +445,9 @@ class Sim:
 
         Args:
             body: a body id.
+
+        Returns:
+            The name the file gave it.
 
         Raises:
             UnknownBodyError: no such body.
@@ -543,6 +549,9 @@ class Sim:
 
         Args:
             body: a body id.
+
+        Returns:
+            The number of joints.
 
         Raises:
             UnknownBodyError: no such body.
@@ -818,7 +827,8 @@ class Sim:
         if idx is None:
             idx = joint_indices(s, body, joints, True)
         if s.multi_idx and id(idx) in s.multi_idx:
-            return multi_dof.motor(s, body, idx, MotorMode.VELOCITY, target, max_force, 0, 1)
+            multi_dof.motor(s, body, idx, MotorMode.VELOCITY, target, max_force, 0, 1)
+            return
         if s.held:
             s.refuse_held(body, idx)
         n = len(idx)
@@ -894,7 +904,8 @@ class Sim:
         if idx is None:
             idx = joint_indices(s, body, joints, True)
         if s.multi_idx and id(idx) in s.multi_idx:
-            return multi_dof.motor(s, body, idx, MotorMode.POSITION, target, max_force, kp, kd)
+            multi_dof.motor(s, body, idx, MotorMode.POSITION, target, max_force, kp, kd)
+            return
         if s.held:
             s.refuse_held(body, idx)
         n = len(idx)
@@ -1174,5 +1185,9 @@ class Sim:
 
 
 def backends() -> list[str]:
-    """Registered backend names (:func:`simbridge.available_backends`)."""
+    """Registered backend names.
+
+    Returns:
+        The names, as :func:`simbridge.available_backends` gives them.
+    """
     return available_backends()

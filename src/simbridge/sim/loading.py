@@ -25,9 +25,14 @@ def load_urdf(
     fixed_base: Any,
     options: dict[str, Any],
 ) -> int:
-    """Load a robot (:meth:`simbridge.Sim.load_urdf`, whose arguments these are, but for
-    ``s``, the Sim's shared state, and ``options``: its ``global_scaling``, ``self_collision``,
-    ``inertia_source`` and ``merge_fixed_links`` by name).
+    """Load a robot (:meth:`simbridge.Sim.load_urdf`).
+
+    Args:
+        s: the Sim's shared state.
+        source, base_position, base_orientation, fixed_base: as
+            :meth:`simbridge.Sim.load_urdf`'s.
+        options: its ``global_scaling``, ``self_collision``, ``inertia_source`` and
+            ``merge_fixed_links``, by name.
 
     Returns:
         The body id.

@@ -56,18 +56,17 @@ def body_table(s: Shared, body: int, argument: str = "body") -> BodyTable:
 
 
 def joint_index(s: Shared, body: int, joint: int | str) -> int:
-    """The index of a joint given by index or name (:meth:`simbridge.Sim.joint_index`).
+    """:meth:`simbridge.Sim.joint_index` on the Sim's shared state.
 
     Args:
         s: the Sim's shared state.
-        body: a body id.
-        joint: an index (0 to n - 1) or a joint name.
+        body, joint: as the method's.
 
     Returns:
-        The joint's index.
+        The index (0 to n - 1).
 
     Raises:
-        UnknownJointError: no such joint (the message lists the body's joints).
+        UnknownJointError: as the method's.
         UnknownBodyError, InvalidArgumentError, SimClosedError: as :func:`body_table`.
     """
     b = body_table(s, body)
@@ -87,18 +86,17 @@ def joint_index(s: Shared, body: int, joint: int | str) -> int:
 
 
 def link_index(s: Shared, body: int, link: LinkArg) -> int:
-    """The index of a link given by index or name (:meth:`simbridge.Sim.link_index`).
+    """:meth:`simbridge.Sim.link_index` on the Sim's shared state.
 
     Args:
         s: the Sim's shared state.
-        body: a body id.
-        link: an index (-1 for the base, 0 to n - 1) or a link name (the root's: -1).
+        body, link: as the method's (-1 or the root's name: the base).
 
     Returns:
-        The link's index, -1 for the base.
+        The index (-1 to n - 1).
 
     Raises:
-        UnknownLinkError: no such link (the message lists the body's links).
+        UnknownLinkError: as the method's.
         UnknownBodyError, InvalidArgumentError, SimClosedError: as :func:`body_table`.
     """
     b = body_table(s, body)

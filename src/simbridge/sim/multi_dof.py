@@ -48,7 +48,12 @@ def reset_joint_state_multi_dof(
     s: Shared, body: int, joints: JointsArg, positions: Any, velocities: Any
 ) -> None:
     """Teleport joints with all their coordinates
-    (:meth:`simbridge.Sim.reset_joint_state_multi_dof`, whose arguments these are).
+    (:meth:`simbridge.Sim.reset_joint_state_multi_dof`).
+
+    Args:
+        s: the Sim's shared state.
+        body, joints, positions, velocities: as
+            :meth:`simbridge.Sim.reset_joint_state_multi_dof`'s.
 
     Raises:
         InvalidArgumentError: a fixed joint, a wrong number of coordinates, a value that is not

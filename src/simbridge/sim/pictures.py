@@ -27,8 +27,12 @@ def render(
     up: Sequence[float],
     fov: float,
 ) -> np.ndarray:
-    """Draw the world as it stands (:meth:`simbridge.Sim.render`, whose arguments these are,
-    but for ``s``, the Sim's shared state).
+    """Draw the world as it stands (:meth:`simbridge.Sim.render`).
+
+    Args:
+        s: the Sim's shared state.
+        width, height, eye, target, up, fov: as :meth:`simbridge.Sim.render`'s (pixels; m,
+            world; degrees).
 
     Returns:
         A (height, width, 3) ``uint8`` RGB array.

@@ -23,8 +23,14 @@ def contact_points(
     link_a: LinkArg | None,
     link_b: LinkArg | None,
 ) -> tuple[ContactPoint, ...]:
-    """The contact points of the last step (:meth:`simbridge.Sim.contact_points`, whose
-    arguments these are, but for ``s``, the Sim's shared state).
+    """The contact points of the last step (:meth:`simbridge.Sim.contact_points`).
+
+    Args:
+        s: the Sim's shared state.
+        body_a, body_b, link_a, link_b: as :meth:`simbridge.Sim.contact_points`'s (None: any).
+
+    Returns:
+        :class:`~simbridge.types.ContactPoint` records, the asked body (and link) as A.
 
     Raises:
         UnknownBodyError, UnknownLinkError: a body or link that is not there.
