@@ -113,9 +113,9 @@ def link_index(s: Shared, body: int, link: LinkArg) -> int:
     raise UnknownLinkError(b.name, link, b.link_names, body=int(body), source=b.load.get("source"))
 
 
-def _key(joints: JointsArg | None) -> Any:
+def _key(joints: JointsArg) -> Any:
     """A joints argument's cache key (an ordered, hashable form of it)."""
-    if joints is None or isinstance(joints, (int, str, np.integer)):
+    if isinstance(joints, (int, str, np.integer)):
         return joints
     if isinstance(joints, np.ndarray):
         return (joints.dtype.char, joints.tobytes())
@@ -156,8 +156,10 @@ def joint_indices(s: Shared, body: int, joints: JointsArg | None, movable: bool)
         UnknownJointError, UnknownBodyError, SimClosedError: as :func:`joint_index`.
     """
     b = body_table(s, body)
-    if type(joints) is np.ndarray:  # the hot path: no call
+    if type(joints) is np.ndarray:  # the hot paths (an array, every joint): no call
         key: Any = (joints.dtype.char, joints.tobytes())
+    elif joints is None:
+        key = None
     else:
         key = _key(joints)
     cache = b.movable_cache if movable else b.cache
