@@ -19,7 +19,8 @@ back on identical worlds, in a rotating order, so the machine's load falls on al
 * layer: ``Sim.step()`` as shipped (probe every 8th step); the ratio to "no check" is the
   check's cost (target: at most 1.02);
 * layer, every step: ``Sim.step()`` under ``Sim(divergence_check="every_step")`` (a probe
-  after every step: the step that diverged raises);
+  after every step: the step that diverged raises); measured 1.01-1.09x a step on PyBullet
+  (the figure the Sim's ``divergence_check`` docstring gave until issue 32 moved it here);
 * step(n): one ``Sim.step(n)`` call per block, without the probe and as shipped (it probes
   inside the call every 8th step).
 

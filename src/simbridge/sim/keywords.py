@@ -33,6 +33,12 @@ class Missing:
         return f"<not given: Sim.{self.call}() requires {self.argument}>"
 
     def error(self) -> PyBulletKeywordError:
+        """Python's "missing argument" error for this argument.
+
+        Returns:
+            A :class:`~simbridge.exceptions.PyBulletKeywordError` naming ``Sim.call()`` and
+            the argument (for the caller to raise).
+        """
         kind = "keyword-only" if self.keyword_only else "positional"
         return PyBulletKeywordError(
             f"Sim.{self.call}()", f"missing 1 required {kind} argument: {self.argument!r}"
@@ -118,7 +124,15 @@ PYBULLET_KEYWORDS: dict[str, dict[str, str]] = {
 def keyword_error(method: Any, extra: Mapping[str, Any]) -> PyBulletKeywordError:
     """The error of a call of ``method`` (a bound Sim method) given the keywords ``extra`` it
     does not take: each one and simbridge's name for it (or the closest), then the valid
-    keywords."""
+    keywords.
+
+    Args:
+        method: the bound Sim method called (its name and signature make the message).
+        extra: the keywords given that it does not take, by name.
+
+    Returns:
+        The :class:`~simbridge.exceptions.PyBulletKeywordError` to raise.
+    """
     call = f"Sim.{method.__name__}()"
     valid = [
         p.name

@@ -185,6 +185,14 @@ def check_state(state: Any, bodies: Mapping[int, Any]) -> list[CheckedBody]:
     """The bodies of ``state`` paired with this world's ``bodies`` (id -> an object with
     ``name``, ``joint_names`` and ``joint_types``, in load order), each checked.
 
+    Args:
+        state: what ``set_state`` was given.
+        bodies: body id -> its table (:class:`~simbridge.sim.shared.BodyTable`), in load
+            order.
+
+    Returns:
+        One :class:`CheckedBody` per body, in load order.
+
     Raises:
         InvalidArgumentError: ``state`` is no WorldState, holds other robots (by load order,
             ``<robot name>`` and joint names) or a bad value; the message says which.
