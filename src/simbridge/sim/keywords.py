@@ -20,7 +20,13 @@ __all__ = ["Missing", "PYBULLET_KEYWORDS", "keyword_error"]
 
 class Missing:
     """The default of a required argument of a Sim call: an argument check that meets it
-    raises :meth:`error`, Python's "missing argument" as a PyBulletKeywordError."""
+    raises :meth:`error`, Python's "missing argument" as a PyBulletKeywordError.
+
+    Args:
+        call: The Sim call's name (``"set_joint_velocity"``).
+        argument: The required argument's name.
+        keyword_only: Whether the argument is keyword-only (the message says which kind).
+    """
 
     __slots__ = ("call", "argument", "keyword_only")
 
