@@ -13,7 +13,8 @@ at module level or in a public class at module level, in a module whose name has
 - it has a docstring;
 - when it takes parameters beyond ``self``/``cls`` (``*args`` and ``**kwargs`` count by their
   names), its docstring has an ``Args:`` section naming each of them (``name:`` or
-  ``name (type):`` at the start of a line, ``*args``/``**kwargs`` with or without stars);
+  ``name (type):`` at the start of a line, or in a group sharing one description:
+  ``body, joints: as Sim.x's``; ``*args``/``**kwargs`` with or without stars);
 - when its return annotation is not ``None`` (and it has one), ``Returns:`` or ``Yields:``;
 - when its own body (not a nested function or class) has a ``raise`` with an exception, ``Raises:``
   (a bare ``raise`` re-raising is not counted, nor ``raise AssertionError(...)`` on a line that
@@ -73,6 +74,7 @@ SCOPE: tuple[Path, ...] = (
     CORE / "spherical.py",
     CORE / "model",
     CORE / "cli",
+    CORE / "sim",
     ROOT / "backends",
 )
 
@@ -111,7 +113,11 @@ def _names(function: ast.FunctionDef | ast.AsyncFunctionDef) -> list[str]:
 
 
 def _documents(args_text: str, name: str) -> bool:
-    pattern = rf"^\s*\**{re.escape(name)}\s*(\([^)]*\))?\s*:"
+    """Whether ``Args:`` names ``name`` at the start of an entry: ``name:``, ``name (type):``, or
+    in a group of parameters that share one description (``body, joints: as Sim.x's``)."""
+    one = rf"\**{re.escape(name)}\s*(\([^)]*\))?"
+    other = r"\**\w+"
+    pattern = rf"^\s*(?:{other}\s*,\s*)*{one}\s*(?:,\s*{other}\s*)*:"
     return re.search(pattern, args_text, re.MULTILINE) is not None
 
 

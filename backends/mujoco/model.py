@@ -591,18 +591,3 @@ def add_pairs(
         for b in new.geoms[k + 1 :]:
             if plan.self_collides(a.link, b.link):
                 add(a, b)
-
-
-def mass_bound_note(robot: RobotSpec) -> str:
-    """The manifest's note on a robot's links whose zero mass or inertia was raised.
-
-    Args:
-        robot: The robot, with its ``bounded_links``.
-
-    Returns:
-        One sentence naming the links and the bounds.
-    """
-    return (
-        f"links {robot.bounded_links} move but have zero mass or inertia: raised to "
-        f"{MIN_MASS} kg / {MIN_INERTIA} kg m^2 (MuJoCo refuses zero)"
-    )

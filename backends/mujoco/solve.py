@@ -6,11 +6,10 @@ contact), :func:`polish` removes the shortfall MuJoCo's solver leaves on the mot
 otherwise. The compiled loop (_mjkernel.c) does the same arithmetic in the same order.
 
 No BLAS or LAPACK: ``np.linalg.solve`` and ``@`` give other last bits on other OpenBLAS kernels
-(Haswell against SkylakeX, measured: 7 of the 10 recorded Python-loop trajectories moved on an
-AVX-512 machine). Every product and solve here is written as element-wise numpy operations or
-scalar arithmetic, each sum taken term by term in the compiled loop's order, so the Python loop
-gives the same bits on every processor, and the compiled loop's bits
-(tests/test_same_results.py).
+(what was measured: docs/mujoco_backend.md, "The Python loop is the reference"). Every product
+and solve here is written as element-wise numpy operations or scalar arithmetic, each sum taken
+term by term in the compiled loop's order, so the Python loop gives the same bits on every
+processor, and the compiled loop's bits (tests/test_same_results.py).
 """
 
 from __future__ import annotations

@@ -1,12 +1,11 @@
 """MuJoCo's passive viewer for ``Sim(gui=True)``: opened on a world, kept in step, closed.
 
 The window lives in a process of its own (window_process.py) with a copy of the model: the
-simulation writes each new state into a shared file and the window draws it. Measured under
-Xvfb (Mesa), MuJoCo's passive viewer in the simulation's own process hung it at ``close()`` in
-2 of 4 runs and crashed it in 1, and its scene was black (its camera frames the whole world,
-plane.urdf included: 283 m across). Here ``close()`` asks the window to go, waits
-:data:`CLOSE_WAIT_S` and kills it if it is still there: whatever the viewer does, the
-simulation's process goes on and exits cleanly. The camera tracks the robots.
+simulation writes each new state into a shared file and the window draws it: MuJoCo's passive
+viewer in the simulation's own process could hang or crash it at ``close()``, and its own camera
+framed the whole world (the runs: docs/mujoco_backend.md, "The window"). Here ``close()`` asks
+the window to go, waits :data:`CLOSE_WAIT_S` and kills it if it is still there: whatever the
+viewer does, the simulation's process goes on and exits cleanly. The camera tracks the robots.
 """
 
 from __future__ import annotations

@@ -7,9 +7,9 @@ one line on standard output says ``ready`` or why the window could not open. The
 holds float64 values: ``[0]`` a counter the simulation raises at every new state, ``[1]`` 1.0
 once the window is to close, then ``qpos``, ``mocap_pos`` and ``mocap_quat``.
 
-The process ends with ``os._exit(0)`` without tearing the viewer down: measured under Xvfb
-(Mesa), MuJoCo's passive viewer closed in the simulation's process hung it in 2 of 4 runs and
-crashed it in 1; the X server closes the window with the connection.
+The process ends with ``os._exit(0)`` without tearing the viewer down (the viewer's own close
+can hang or crash its process: docs/mujoco_backend.md, "The window"); the X server closes the
+window with the connection.
 """
 
 from __future__ import annotations

@@ -65,10 +65,10 @@ __all__ = ["PyBulletBackend"]
 # Divergence: every state read checks the values it returns (a few float additions), so no
 # read ever hands out a NaN or an infinity. Besides, every body is probed (one engine call each:
 # its base pose, or its leaf joints for a fixed base) after the first step following a load or
-# a teleport, and after every _CHECK_EVERY-th step: a probe costs 0.6-1.5 µs per body, 5-10 % of
-# a fixed KUKA's 11-16 µs step if taken at every step; one in 8 steps is under 2 % (measured:
-# python bench/divergence.py). A divergence nobody reads is raised by step at most 7 steps late;
-# Sim(divergence_check="every_step") probes after every step, for those who pay for it.
+# a teleport, and after every _CHECK_EVERY-th step, which keeps the check under 2 % of a step
+# (the figures: bench/divergence.py's docstring). A divergence nobody reads is raised by step at
+# most 7 steps late; Sim(divergence_check="every_step") probes after every step, for those who
+# pay for it.
 _CHECK_EVERY = 8
 # What PyBullet 3.2.7 can read and set of one body (measured on chains and trees, fixed or free
 # base): its state reads (getJointState(s), getLinkState, getBasePositionAndOrientation,
@@ -438,8 +438,8 @@ class PyBulletBackend(
     def _probe(self) -> None:
         """Probe every body for a non-finite state (one engine call per body that can move:
         a free base's pose; a fixed base's movable leaf joints, see _Body). The hot path of
-        the check (0.9 µs for one body, measured): a sum of the numbers, which is finite only
-        if each one is; the exact test in _probe_failed."""
+        the check (its cost: bench/divergence.py's docstring): a sum of the numbers, which is
+        finite only if each one is; the exact test in _probe_failed."""
         self._next_check = self._steps + self._check_every
         c = self._c
         isfinite = math.isfinite

@@ -4,7 +4,8 @@ commands.py): ``snapshot``/``restore`` through PyBullet's ``saveState``/``restor
 the time.
 
 :class:`Saved` is one ``p.saveState`` snapshot (positions, velocities and the contact caches
-with their warm-started impulses, kept in the physics client's memory; about 2.6 ms on r2d2).
+with their warm-started impulses, kept in the physics client's memory; its cost:
+docs/state_and_contacts.md).
 It fits only the world it was taken in: the same client, no load, remove or reset since. When
 it is garbage-collected its id is queued and removed by the backend on its next snapshot or
 restore, in the backend's own thread; a reset drops the queue (resetSimulation frees every

@@ -18,6 +18,9 @@ to hand to an engine; copy them into your own buffers). A backend must:
 * raise :class:`~simbridge.exceptions.SimulationDivergedError` from ``step`` when the state
   turns non-finite, and :class:`~simbridge.exceptions.BackendUnsupportedError` for anything it
   cannot do (never do nothing quietly).
+
+Over 600 lines on purpose: :class:`Backend` is one contract, and its methods' docstrings (their
+arguments, returns and errors) are what the author of a new engine reads, in one place.
 """
 
 from __future__ import annotations

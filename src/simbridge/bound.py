@@ -91,7 +91,8 @@ class BoundCommand:
         """Made by ``Sim.velocity_command`` / ``Sim.position_command`` from checked values.
 
         Args:
-            sim: The Sim the command is bound in.
+            sim: The Sim's shared state (:class:`simbridge.sim.shared.Shared`) the command
+                is bound in.
             mode: ``"velocity"`` or ``"position"``.
             body: The body's id.
             joints: (n,) ``np.intp`` indices of movable joints.
@@ -127,7 +128,7 @@ class BoundCommand:
         # a sum of floats is finite only if every one is (an overflow is told apart below)
         if not math.isfinite(sum(targets) + sum(force)) or (force and min(force) < 0.0):
             self._check(targets, force)
-        backend = self._sim._b
+        backend = self._sim.backend
         if self.mode == "velocity":
             backend.set_joint_velocity(self.body, self.joints, targets, force)
         else:
@@ -149,7 +150,7 @@ class BoundCommand:
         the motors keep the command last sent. Safe to call twice, and after a world change."""
         if self._why:
             return
-        self._sim._release_command(self)
+        self._sim.release(self)
         self._end("it was released")
 
     @property

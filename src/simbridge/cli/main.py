@@ -58,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     from simbridge import __version__, available_backends
     from simbridge.cli import cache as cli_cache
     from simbridge.cli import info as cli_info
+    from simbridge.cli import joints as cli_joints
     from simbridge.cli import study as cli_study
     from simbridge.cli.settings import add_settings_parser
 
@@ -72,7 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_report(sub)
     _add_scenarios(sub)
     _add_replay(sub)
-    _add_joints(sub, backends)
+    cli_joints.add_command(sub, backends, _verbose)
     _verbose(add_settings_parser(sub, backends))
     cli_study.add_commands(sub, _verbose, add_job_options)
     cli_cache.add_commands(sub, _verbose)
@@ -216,25 +217,6 @@ def _add_replay(sub: Any) -> None:
         "--port", type=int, default=8080, help="port (default: %(default)s, or the next free)"
     )
     _verbose(r)
-
-
-def _add_joints(sub: Any, backends: list[str]) -> None:
-    """``simbridge joints``: a URDF's joint table as a backend loads it."""
-    j = sub.add_parser(
-        "joints",
-        help="print a URDF's joint table as a backend loads it",
-        description="Print the joint table as a backend loads the URDF: one row per joint "
-        "(index, name, type, parent -> child link, position limits, max force and velocity, "
-        "axis in the child's inertial frame, damping, friction; units per joint type: rad, "
-        "N·m, rad/s for revolute joints, m, N, m/s for prismatic ones). --json gives every "
-        "joint's 17 fields in PyBullet's getJointInfo order.",
-    )
-    j.add_argument("urdf", metavar="URDF", help="a path or a name on the search path")
-    j.add_argument("--backend", default="pybullet", choices=backends)
-    j.add_argument("--fixed-base", action="store_true", help="load with a fixed base")
-    j.add_argument("--movable", action="store_true", help="movable joints only (not fixed)")
-    j.add_argument("--json", action="store_true", help="JSON on stdout, for machines")
-    _verbose(j)
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -419,101 +401,6 @@ def _scenarios(args: argparse.Namespace) -> int:
     return 0
 
 
-_UNITS = {  # per joint type: position, force, velocity, damping, friction
-    "revolute": ("rad", "N·m", "rad/s", "N·m·s/rad", "N·m"),
-    "prismatic": ("m", "N", "m/s", "N·s/m", "N"),
-}
-
-
-def _num(x: float, unit: str = "") -> str:
-    return f"{x:.6g} {unit}".rstrip()
-
-
-def _joint_rows(infos: list[Any], base: str) -> list[list[str]]:
-    """One row of text per joint, the table's columns (units per joint type)."""
-    rows = []
-    for j in infos:
-        kind = j.type.name.lower()
-        parent = base if j.parent_index < 0 else infos[j.parent_index].link_name
-        cells = [str(j.index), j.name, kind, f"{parent} -> {j.link_name}"]
-        units = _UNITS.get(kind)
-        if units is None:  # fixed: nothing moves
-            cells += ["-"] * 7
-        else:
-            pos, force, vel, damp, fric = units
-            limited = j.lower_limit <= j.upper_limit  # PyBullet's 0, -1: no limits
-            cells += [
-                _num(j.lower_limit, pos) if limited else "none",
-                _num(j.upper_limit, pos) if limited else "none",
-                _num(j.max_force, force),
-                _num(j.max_velocity, vel),
-                "(" + ", ".join(f"{a:.4g}" for a in j.axis) + ")",
-                _num(j.damping, damp),
-                _num(j.friction, fric),
-            ]
-        rows.append(cells)
-    return rows
-
-
-_HEADER = [
-    "index",
-    "name",
-    "type",
-    "parent -> child link",
-    "lower",
-    "upper",
-    "max force",
-    "max velocity",
-    "axis",
-    "damping",
-    "friction",
-]
-
-
-def _joints(args: argparse.Namespace) -> int:
-    import json
-
-    import simbridge
-    from simbridge.model.urdf import parse_urdf, resolve_source
-
-    base = parse_urdf(resolve_source(args.urdf)).base.name  # the root link: parent -1
-    with simbridge.Sim(args.backend) as sim:
-        body = sim.load_urdf(args.urdf, fixed_base=args.fixed_base)
-        infos = sim.joints(body)
-        robot = sim.body_name(body)
-    shown = [j for j in infos if j.type != simbridge.JointType.FIXED or not args.movable]
-    if args.json:
-        joints = []
-        for j in shown:
-            row = j._asdict()
-            row["type"] = {"name": j.type.name.lower(), "number": int(j.type)}
-            joints.append(row)
-        doc = {
-            "robot": robot,
-            "backend": args.backend,
-            "fixed_base": args.fixed_base,
-            "base_link": base,
-            "joints": joints,
-        }
-        print(json.dumps(doc, indent=2))
-        return 0
-    rows = [r for r, j in zip(_joint_rows(infos, base), infos, strict=True) if j in shown]
-    widths = [max(len(r[k]) for r in [_HEADER, *rows]) for k in range(len(_HEADER))]
-    right = {0, 4, 5, 6, 7, 9, 10}  # numbers: right-aligned
-    for r in [_HEADER, *rows]:
-        cells = [
-            c.rjust(w) if k in right else c.ljust(w)
-            for k, (c, w) in enumerate(zip(r, widths, strict=True))
-        ]
-        print("  ".join(cells).rstrip())
-    movable = sum(j.type != simbridge.JointType.FIXED for j in infos)
-    print(
-        f"{robot}: {len(infos)} joints, {movable} movable, base link {base}"
-        f"{' (fixed)' if args.fixed_base else ''}; backend {args.backend}"
-    )
-    return 0
-
-
 class _StderrLog(logging.StreamHandler):
     """The simbridge log on stderr (--verbose), clearing a progress bar drawn there first."""
 
@@ -550,7 +437,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             "compare": _compare,
             "report": _report,
             "scenarios": _scenarios,
-            "joints": _joints,
             "replay": _replay,
             "settings": _settings,
         }[args.command]

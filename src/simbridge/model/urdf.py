@@ -15,7 +15,10 @@ naming the file, the line and the element; a few things PyBullet loads are refus
 damping or friction, a zero joint axis, several root links (PyBullet crashes), and the joint
 types outside :data:`SUPPORTED_JOINT_TYPES`.
 
-Sources (files, names on the search path, URDF text) are :mod:`simbridge.model.urdf_source`'s part.
+Sources (files, names on the search path, URDF text) are :mod:`simbridge.model.urdf_source`'s part;
+attribute values read as PyBullet reads them, :mod:`simbridge.model.urdf_values`'s; a link's
+elements (geometry and meshes, inertial, contact, colours), :mod:`simbridge.model.urdf_elements`'s.
+This module reads the joints and the robot (:func:`parse_urdf`) and puts them in PyBullet's order.
 """
 
 from __future__ import annotations
@@ -23,24 +26,25 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import replace
-from pathlib import Path
 
-from simbridge.exceptions import (
-    MeshNotFoundError,
-    UnsupportedJointError,
-    UrdfStructureError,
-)
+from simbridge.exceptions import UnsupportedJointError, UrdfStructureError
 from simbridge.model.inertia import file_principal
-from simbridge.model.meshes import MeshReadError, mesh_vertices, pybullet_reads_stl
+from simbridge.model.urdf_elements import (  # noqa: F401 - MESH_FORMATS re-exported
+    MESH_FORMATS,
+    _contact,
+    _geometry,
+    _inertial,
+    _material_color,
+    _visual_color,
+    _without_unread_stl,
+)
 from simbridge.model.urdf_model import (
-    CONTACT_TAGS,
     Contact,
     Geometry,
     Inertial,
     Joint,
     Link,
     UrdfModel,
-    Vec3,
 )
 from simbridge.model.urdf_source import (  # noqa: F401 - re-exported: simbridge.model.urdf is the public module
     UrdfSource,
@@ -50,11 +54,11 @@ from simbridge.model.urdf_source import (  # noqa: F401 - re-exported: simbridge
     resolve_source,
     search_path,
 )
+from simbridge.model.urdf_values import _fmt, _Reader
 from simbridge.model.urdf_xml import (
     LOGGER,
     Leniency,
     XmlElement,
-    c_atof,
     pybullet_numbers,
     read_urdf_xml,
 )
@@ -87,328 +91,6 @@ _PLANAR_REFUSED = (
     "the joint origin, getJointStateMultiDof reads 2 of its 3 coordinates, resetJointStateMultiDof "
     "is ignored)"
 )
-MESH_FORMATS = (".obj", ".stl", ".dae")  # what PyBullet's URDF importer reads
-
-# ---------------------------------------------------------------- reading values
-
-
-def _fmt(values: Sequence[float]) -> str:
-    return "(" + ", ".join(f"{v:g}" for v in values) + ")"
-
-
-class _Reader:
-    """Attribute values read as PyBullet reads them (``atof``; vectors split at spaces), with
-    a note on the leniency record where a strict reading would differ, and errors that name
-    the file, the line and the element."""
-
-    def __init__(self, file: str, lenient: Leniency) -> None:
-        self.file = file
-        self.lenient = lenient
-
-    def error(self, elem: XmlElement | None, where: str, detail: str) -> UrdfStructureError:
-        return UrdfStructureError(self.file, where, detail, getattr(elem, "line", None))
-
-    def require(self, elem: XmlElement, attr: str, where: str) -> str:
-        text = elem.get(attr)
-        if text is None:
-            raise self.error(elem, where, f"has no {attr} attribute (PyBullet refuses it too)")
-        return text
-
-    def _finite(self, elem: XmlElement, where: str, values: Sequence[float], text: str) -> None:
-        if not all(math.isfinite(v) for v in values):
-            raise self.error(elem, where, f"numbers must be finite, got {text!r}")
-
-    def number(
-        self, elem: XmlElement | None, attr: str, default: float, where: str, required=False
-    ) -> float:
-        """One number (``atof`` of the whole attribute); ``default`` when it is absent."""
-        if elem is None:
-            return default
-        text = self.require(elem, attr, where) if required else elem.get(attr)
-        if text is None:
-            return default
-        value, whole = c_atof(text)
-        if not whole:
-            self.lenient.add(
-                elem.line, f"{where} {attr}={text!r} read as {value:g} (C atof: its leading number)"
-            )
-        self._finite(elem, f"{where} {attr}", (value,), text)
-        return value
-
-    def vector(self, elem: XmlElement, attr: str, n: int, where: str) -> tuple[float, ...] | None:
-        """PyBullet's ``parseVector3`` (n 3: the first 3 numbers, None for fewer) or
-        ``parseVector4`` (n 4: exactly 4, else None); None also when the attribute is absent.
-        The caller says what None stands for (and notes it)."""
-        text = elem.get(attr)
-        if text is None:
-            return None
-        values, clean = pybullet_numbers(text)
-        if len(values) < n or (n == 4 and len(values) != n):
-            return None
-        reasons = []
-        if not clean:
-            reasons.append(
-                "each space-separated piece read with C atof (its leading number, 0 if none)"
-            )
-        if len(values) > n:
-            reasons.append(f"the first {n} of {len(values)} numbers used")
-        if reasons:
-            self.lenient.add(
-                elem.line, f"{where} {text!r} read as {_fmt(values[:n])}: {'; '.join(reasons)}"
-            )
-        self._finite(elem, where, values[:n], text)
-        return tuple(values[:n])
-
-    def short(self, elem: XmlElement, attr: str, where: str, assumed: str) -> None:
-        self.lenient.add(
-            elem.line,
-            f"{where} {elem.get(attr)!r}: fewer than 3 numbers (split at spaces), read as "
-            f"{assumed}",
-        )
-
-    def origin(self, elem: XmlElement, where: str) -> tuple[Vec3, Vec3]:
-        """PyBullet's ``parseTransform``: xyz (0 0 0 if unreadable), rpy (none if unreadable)."""
-        origin = elem.find("origin")
-        if origin is None:
-            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-        xyz = self.vector(origin, "xyz", 3, f"{where} <origin xyz>")  # type: ignore[arg-type]
-        if xyz is None and origin.get("xyz") is not None:
-            self.short(origin, "xyz", f"{where} <origin xyz>", "(0, 0, 0)")  # type: ignore[arg-type]
-        rpy = self.vector(origin, "rpy", 3, f"{where} <origin rpy>")  # type: ignore[arg-type]
-        if rpy is None and origin.get("rpy") is not None:
-            self.short(origin, "rpy", f"{where} <origin rpy>", "no rotation")  # type: ignore[arg-type]
-        return xyz or (0.0, 0.0, 0.0), rpy or (0.0, 0.0, 0.0)  # type: ignore[return-value]
-
-
-# ---------------------------------------------------------------- elements
-
-
-def _geometry(
-    r: _Reader,
-    elem: XmlElement,
-    where: str,
-    src: UrdfSource,
-    rgba: tuple[float, float, float, float] | None,
-) -> Geometry:
-    file = src.display_name
-    xyz, rpy = r.origin(elem, where)
-    geom = elem.find("geometry")
-    if geom is None or len(geom) == 0:
-        raise r.error(elem, where, "has no <geometry> (PyBullet refuses it too)")
-    shape: XmlElement = geom[0]  # type: ignore[assignment]
-    tag, line = shape.tag, shape.line
-    name = elem.get("name", "")
-    common = {"rgba": rgba, "name": name, "line": elem.line}
-    if tag == "box":
-        r.require(shape, "size", f"{where} <box>")
-        size = r.vector(shape, "size", 3, f"{where} <box size>")
-        if size is None:
-            r.short(shape, "size", f"{where} <box size>", "(0, 0, 0)")
-            size = (0.0, 0.0, 0.0)
-        _sizes(r, shape, size, f"{where} <box size>")
-        return Geometry("box", xyz, rpy, size, **common)  # type: ignore[arg-type]
-    if tag in ("cylinder", "capsule"):
-        radius = r.number(shape, "radius", 0.0, f"{where} <{tag}>", required=True)
-        length = r.number(shape, "length", 0.0, f"{where} <{tag}>", required=True)
-        _sizes(r, shape, (radius, length), f"{where} <{tag} radius, length>")
-        return Geometry(tag, xyz, rpy, (radius, length), **common)  # type: ignore[arg-type]
-    if tag == "sphere":
-        radius = r.number(shape, "radius", 0.0, f"{where} <sphere>", required=True)
-        _sizes(r, shape, (radius,), f"{where} <sphere radius>")
-        return Geometry("sphere", xyz, rpy, (radius,), **common)  # type: ignore[arg-type]
-    if tag == "plane":
-        r.require(shape, "normal", f"{where} <plane>")
-        normal = r.vector(shape, "normal", 3, f"{where} <plane normal>")
-        if normal is None or not any(normal):
-            raise r.error(
-                shape,
-                f"{where} <plane normal>",
-                f"must be 3 numbers, not all 0, got {shape.get('normal')!r}",
-            )
-        return Geometry("plane", xyz, rpy, normal, **common)  # type: ignore[arg-type]
-    if tag == "mesh":
-        uri = shape.get("filename")
-        if not uri:
-            raise r.error(shape, f"{where} <mesh>", "has no filename (PyBullet refuses it too)")
-        scale: tuple[float, ...] = (1.0, 1.0, 1.0)
-        if shape.get("scale") is not None:
-            read = r.vector(shape, "scale", 3, f"{where} <mesh scale>")
-            if read is None:  # PyBullet: one number s is (s, s, s); no number leaves zeros
-                s = c_atof(shape.get("scale", ""))[0]
-                read = (s, s, s)
-                r.lenient.add(
-                    line,
-                    f"{where} <mesh scale> {shape.get('scale')!r} read as {_fmt(read)}: fewer "
-                    "than 3 numbers, PyBullet's workaround uses the first for all three",
-                )
-                r._finite(shape, f"{where} <mesh scale>", read, shape.get("scale", ""))
-            scale = read
-        path, tried = resolve_mesh(uri, src.mesh_from)
-        if not path.is_file():
-            odd = not_a_regular_file(tried)
-            if odd is not None:
-                raise r.error(shape, f"{where} <mesh>", f"mesh file {uri!r}: {odd}")
-            raise MeshNotFoundError(file, where, uri, tried, line)
-        if path.suffix.lower() not in MESH_FORMATS:
-            raise r.error(
-                shape,
-                f"{where} <mesh>",
-                f"{uri!r}: unsupported mesh format; valid: {', '.join(MESH_FORMATS)}",
-            )
-        if path.suffix.lower() == ".dae":
-            _check_collada(r, shape, path, uri, f"{where} <mesh>")
-        else:
-            _check_mesh(r, shape, path, uri, f"{where} <mesh>")
-        return Geometry("mesh", xyz, rpy, scale, mesh_path=path, mesh_uri=uri, **common)  # type: ignore[arg-type]
-    raise r.error(
-        shape,
-        where,
-        f"unknown geometry <{tag}>; valid: box, cylinder, sphere, capsule, mesh, plane",
-    )
-
-
-def _sizes(r: _Reader, elem: XmlElement, values: Sequence[float], where: str) -> None:
-    if any(v < 0 for v in values):
-        raise r.error(elem, where, f"sizes must be >= 0, got {tuple(values)}")
-
-
-def _check_mesh(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:
-    """Read an .obj/.stl before any engine does (the read is cached for the inertia and the
-    MuJoCo model): a file that is not one of its format is refused here (PyBullet loads random
-    bytes as a link without a shape, and an .obj's unreadable numbers as garbage inertia)."""
-    try:
-        mesh_vertices(path)
-    except MeshReadError as exc:
-        at = "" if exc.line is None else f" (line {exc.line})"
-        raise r.error(elem, where, f"{uri!r} cannot be read as a mesh{at}: {exc.detail}") from None
-    except OSError as exc:
-        raise r.error(elem, where, f"{uri!r} cannot be read: {exc.strerror}") from None
-
-
-def _without_unread_stl(file: str, shapes: list[Geometry], where: str) -> list[Geometry]:
-    """``shapes`` less the .stl meshes PyBullet does not read (an ASCII STL: PyBullet reads
-    binary ones only, :func:`~simbridge.model.meshes.pybullet_reads_stl`): PyBullet loads the link
-    without that shape and warns ("cannot extract mesh from"); every backend leaves it out
-    (its inertia, its collisions and its looks), with one warning per shape on the
-    ``simbridge.model.urdf`` logger naming the file, the line and the element."""
-    kept = []
-    for k, g in enumerate(shapes):
-        drop = (
-            g.kind == "mesh"
-            and g.mesh_path is not None
-            and g.mesh_path.suffix.lower() == ".stl"
-            and not pybullet_reads_stl(g.mesh_path)
-        )
-        if not drop:
-            kept.append(g)
-            continue
-        at = f"{file}:{g.line}" if g.line else file
-        LOGGER.warning(
-            "%s: %s #%d <mesh>: %r is not a binary STL, which PyBullet alone reads: the shape "
-            "is left out, as PyBullet leaves it out ('cannot extract mesh from')",
-            at,
-            where,
-            k,
-            g.mesh_uri,
-        )
-    return kept
-
-
-def _check_collada(r: _Reader, elem: XmlElement, path: Path, uri: str, where: str) -> None:
-    """Read a .dae before any engine does: PyBullet's COLLADA reader ends the process on some
-    malformed files (an empty <scene>), and MuJoCo's backend converts .dae through trimesh."""
-    try:
-        vertices = mesh_vertices(path)
-    except Exception as exc:  # noqa: BLE001 - any reader failure is a bad file
-        raise r.error(
-            elem, where, f"{uri!r} cannot be read as COLLADA ({type(exc).__name__}: {exc})"
-        ) from None
-    if len(vertices) < 3:
-        raise r.error(elem, where, f"{uri!r} holds no geometry (no vertices)")
-
-
-def _inertial(r: _Reader, elem: XmlElement | None, where: str) -> Inertial:
-    if elem is None:
-        return Inertial()
-    xyz, rpy = r.origin(elem, f"{where} <inertial>")
-    mass_elem = elem.find("mass")
-    if mass_elem is None:
-        raise r.error(elem, f"{where} <inertial>", "has no <mass> (PyBullet refuses it too)")
-    mass = r.number(mass_elem, "value", 0.0, f"{where} <mass>", required=True)  # type: ignore[arg-type]
-    if mass < 0:
-        raise r.error(mass_elem, f"{where} <mass>", f"mass must be >= 0, got {mass}")  # type: ignore[arg-type]
-    ie: XmlElement | None = elem.find("inertia")  # type: ignore[assignment]
-    if ie is None:
-        raise r.error(elem, f"{where} <inertial>", "has no <inertia> (PyBullet refuses it too)")
-    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-    present = [ie.get(k) is not None for k in keys]
-    if not all(present[k] for k in (0, 3, 5)):
-        raise r.error(
-            ie, f"{where} <inertia>", "needs at least ixx, iyy and izz (PyBullet refuses it too)"
-        )
-    # PyBullet reads the products of inertia only when all six are there
-    used = keys if all(present) else ("ixx", "iyy", "izz")
-    inertia = tuple(r.number(ie, k, 0.0, f"{where} <inertia>") if k in used else 0.0 for k in keys)
-    if not all(present) and any(present):
-        given = [k for k, p in zip(keys, present, strict=True) if p and k not in used]
-        if given:
-            r.lenient.add(
-                ie.line,
-                f"{where} <inertia>: {', '.join(given)} ignored "
-                "(PyBullet reads products of inertia only when all six are given)",
-            )
-    return Inertial(xyz, rpy, mass, inertia, True, line=ie.line)  # type: ignore[arg-type]
-
-
-def _contact(r: _Reader, elem: XmlElement | None, where: str) -> Contact:
-    if elem is None:
-        return Contact()
-    values: dict[str, float] = {}
-    for tag in CONTACT_TAGS:
-        child: XmlElement | None = elem.find(tag)  # type: ignore[assignment]
-        if child is not None:
-            values[tag] = r.number(child, "value", 0.0, f"{where} <contact><{tag}>", required=True)
-    return Contact(**values)
-
-
-def _material_color(
-    r: _Reader, elem: XmlElement, where: str
-) -> tuple[float, float, float, float] | None:
-    """A ``<material>``'s ``<color rgba>``: exactly 4 numbers, else (0, 0, 0, 0) as in PyBullet;
-    None without a color."""
-    color: XmlElement | None = elem.find("color")  # type: ignore[assignment]
-    if color is None or color.get("rgba") is None:
-        return None
-    rgba = r.vector(color, "rgba", 4, f"{where} <color rgba>")
-    if rgba is None:
-        r.lenient.add(
-            color.line,
-            f"{where} <color rgba> {color.get('rgba')!r}: not 4 numbers, read as (0, 0, 0, 0)",
-        )
-        return (0.0, 0.0, 0.0, 0.0)
-    return rgba  # type: ignore[return-value]
-
-
-def _visual_color(
-    r: _Reader,
-    visual: XmlElement,
-    where: str,
-    materials: dict[str, tuple[float, float, float, float] | None],
-) -> tuple[float, float, float, float] | None:
-    material: XmlElement | None = visual.find("material")  # type: ignore[assignment]
-    if material is None:
-        return None
-    name = material.get("name")
-    if name is None:
-        raise r.error(
-            material, f"{where} <material>", "has no name attribute (PyBullet refuses it too)"
-        )
-    if any(material.find(t) is not None for t in ("texture", "color", "specular")):
-        rgba = _material_color(r, material, f"{where} <material>")
-        materials[name] = rgba  # a local material replaces one of the same name
-        return rgba
-    return materials.get(name)
-
 
 # ---------------------------------------------------------------- parse
 

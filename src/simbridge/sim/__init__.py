@@ -1,11 +1,13 @@
 """The `Sim`: one robot-simulation interface, PyBullet's meaning, any engine.
 
-:mod:`~simbridge.sim.core` holds the `Sim` (construction, lifecycle, loading, stepping); its
-other calls live in parts, one job each: :mod:`~simbridge.sim.lookups` (ids, names, tables,
-state reads), :mod:`~simbridge.sim.control` (teleports, motor and bound commands),
-:mod:`~simbridge.sim.multi_dof` (spherical joints), :mod:`~simbridge.sim.world` (contacts,
-``get_state`` and ``set_state``) and :mod:`~simbridge.sim.pictures` (``render``). The argument
-checks are :mod:`~simbridge.sim.arguments`, PyBullet's keywords and names
+:mod:`~simbridge.sim.core` holds the `Sim`: its public methods, each documented, over one
+:class:`~simbridge.sim.shared.Shared` object (the backend, the bodies' tables, the bound
+commands in force). Its parts are functions taking that object, one job each:
+:mod:`~simbridge.sim.lookups` (bodies, joint and link indices, joint-index arrays),
+:mod:`~simbridge.sim.loading` (URDF, MJCF, SDF), :mod:`~simbridge.sim.control` (teleports,
+bound commands), :mod:`~simbridge.sim.multi_dof` (spherical joints), :mod:`~simbridge.sim.world`
+(contacts, ``get_state`` and ``set_state``) and :mod:`~simbridge.sim.pictures` (``render``). The
+argument checks are :mod:`~simbridge.sim.arguments`, PyBullet's keywords and names
 :mod:`~simbridge.sim.keywords` and :mod:`~simbridge.sim.pybullet_names`.
 """
 

@@ -34,7 +34,18 @@ def select(
     ``link_b``), None meaning any, each oriented with ``body_a`` as A; all points as the engine
     gave them when ``body_a`` is None. A point matching in both orientations (a robot touching
     itself) is kept once, in the engine's order. The caller checks that a link filter comes
-    with its body."""
+    with its body.
+
+    Args:
+        points: every contact point of the last step, as the backend reports them.
+        body_a: a body id; None: every point, as given.
+        link_a: a link index of ``body_a`` (-1 = base); None: any.
+        body_b: a body id; None: any.
+        link_b: a link index of ``body_b``; None: any.
+
+    Returns:
+        The matching points, ``body_a`` as A.
+    """
     pts = tuple(points)
     if body_a is None:
         return pts

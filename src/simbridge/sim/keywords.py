@@ -20,7 +20,13 @@ __all__ = ["Missing", "PYBULLET_KEYWORDS", "keyword_error"]
 
 class Missing:
     """The default of a required argument of a Sim call: an argument check that meets it
-    raises :meth:`error`, Python's "missing argument" as a PyBulletKeywordError."""
+    raises :meth:`error`, Python's "missing argument" as a PyBulletKeywordError.
+
+    Args:
+        call: The Sim call's name (``"set_joint_velocity"``).
+        argument: The required argument's name.
+        keyword_only: Whether the argument is keyword-only (the message says which kind).
+    """
 
     __slots__ = ("call", "argument", "keyword_only")
 
@@ -33,6 +39,12 @@ class Missing:
         return f"<not given: Sim.{self.call}() requires {self.argument}>"
 
     def error(self) -> PyBulletKeywordError:
+        """Python's "missing argument" error for this argument.
+
+        Returns:
+            A :class:`~simbridge.exceptions.PyBulletKeywordError` naming ``Sim.call()`` and
+            the argument (for the caller to raise).
+        """
         kind = "keyword-only" if self.keyword_only else "positional"
         return PyBulletKeywordError(
             f"Sim.{self.call}()", f"missing 1 required {kind} argument: {self.argument!r}"
@@ -118,7 +130,15 @@ PYBULLET_KEYWORDS: dict[str, dict[str, str]] = {
 def keyword_error(method: Any, extra: Mapping[str, Any]) -> PyBulletKeywordError:
     """The error of a call of ``method`` (a bound Sim method) given the keywords ``extra`` it
     does not take: each one and simbridge's name for it (or the closest), then the valid
-    keywords."""
+    keywords.
+
+    Args:
+        method: the bound Sim method called (its name and signature make the message).
+        extra: the keywords given that it does not take, by name.
+
+    Returns:
+        The :class:`~simbridge.exceptions.PyBulletKeywordError` to raise.
+    """
     call = f"Sim.{method.__name__}()"
     valid = [
         p.name

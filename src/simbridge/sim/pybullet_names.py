@@ -237,12 +237,26 @@ for _pybullet, _instead in NOT_OFFERED.items():
 
 
 def not_offered(name: str) -> tuple[str, str] | None:
-    """(PyBullet's name, what to use instead or "") for a PyBullet function simbridge does not
-    offer, ``name`` in PyBullet's spelling or in snake case, or None."""
+    """What to say of a PyBullet function simbridge does not offer.
+
+    Args:
+        name: the name asked for, in PyBullet's spelling or in snake case.
+
+    Returns:
+        (PyBullet's name, what to use instead or ""), or None when ``name`` is no such
+        function.
+    """
     return _NOT_BY_NAME.get(name)
 
 
 def equivalent(name: str) -> tuple[str, str] | None:
-    """(PyBullet's name, simbridge's equivalent) for ``name`` written in PyBullet's spelling or
-    in snake case (``get_link_state``), or None."""
+    """simbridge's equivalent of a PyBullet function.
+
+    Args:
+        name: the name asked for, in PyBullet's spelling or in snake case
+            (``get_link_state``).
+
+    Returns:
+        (PyBullet's name, simbridge's equivalent), or None when ``name`` has none.
+    """
     return _BY_NAME.get(name)

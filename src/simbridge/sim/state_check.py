@@ -27,14 +27,24 @@ _MODES = {int(m) for m in MotorMode}
 
 
 class CheckedBody(NamedTuple):
-    """One body of a checked state, as the backend calls take it."""
+    """One body of a checked state, as the backend calls take it.
 
-    body: int  # the id in the Sim being set
-    base: tuple[tuple[float, ...], ...]  # position, orientation (x, y, z, w), lin., ang. velocity
-    positions: np.ndarray  # (n,) all joints
-    velocities: np.ndarray  # (n,)
+    Attributes:
+        body: The body's id in the Sim being set.
+        base: The base's position (m), orientation (x, y, z, w), linear (m/s) and angular
+            (rad/s) velocity, world frame.
+        positions: (n,) every joint's position (rad or m).
+        velocities: (n,) every joint's velocity.
+        commands: The joint commands in force.
+        spherical: Every spherical joint's state, checked, in joint order.
+    """
+
+    body: int
+    base: tuple[tuple[float, ...], ...]
+    positions: np.ndarray
+    velocities: np.ndarray
     commands: JointCommands
-    spherical: list[SphericalJointState]  # every spherical joint, checked, joint order
+    spherical: list[SphericalJointState]
 
 
 def _vector(value: Any, n: int, where: str) -> tuple[float, ...]:
@@ -184,6 +194,14 @@ def _spherical(bs: BodyState, types: list[JointType], where: str) -> list[Spheri
 def check_state(state: Any, bodies: Mapping[int, Any]) -> list[CheckedBody]:
     """The bodies of ``state`` paired with this world's ``bodies`` (id -> an object with
     ``name``, ``joint_names`` and ``joint_types``, in load order), each checked.
+
+    Args:
+        state: what ``set_state`` was given.
+        bodies: body id -> its table (:class:`~simbridge.sim.shared.BodyTable`), in load
+            order.
+
+    Returns:
+        One :class:`CheckedBody` per body, in load order.
 
     Raises:
         InvalidArgumentError: ``state`` is no WorldState, holds other robots (by load order,

@@ -1,0 +1,193 @@
+"""What the parts of one `Sim` share: :class:`Shared`, one per Sim.
+
+The Sim's parts (:mod:`~simbridge.sim.lookups`, :mod:`~simbridge.sim.control`,
+:mod:`~simbridge.sim.multi_dof`, :mod:`~simbridge.sim.world`, :mod:`~simbridge.sim.pictures`,
+:mod:`~simbridge.sim.loading`) are plain functions taking this object; none of them holds state
+of its own. It keeps the backend, each body's tables, and the bound commands in force with the
+joints they hold; the bookkeeping of those commands (bind, refuse, release, end) is its own
+methods, so that the lists and the map of held joints change together.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from simbridge.backend import Backend
+from simbridge.bound import BoundCommand
+from simbridge.exceptions import InvalidArgumentError, SimClosedError
+from simbridge.types import JointType
+
+__all__ = ["BodyTable", "Shared"]
+
+
+@dataclass
+class BodyTable:
+    """One loaded body's names and indices, as the backend's joint table gives them.
+
+    Attributes:
+        name: the body's ``<robot name>``.
+        joint_names: joint i's name, by index.
+        link_names: link i's name (joint i's child), by index; the base is not listed.
+        joint_types: joint i's type, by index.
+        joint_index: joint name -> index.
+        link_index: link name -> index, the base's name -> -1.
+        cache: a joints argument (its key) -> its index array, for reads.
+        movable_cache: the same for commands (movable joints only).
+        load: how the body was loaded (its entry in ``Sim.manifest()["bodies"]``).
+    """
+
+    name: str
+    joint_names: list[str]
+    link_names: list[str]
+    joint_types: list[JointType]
+    joint_index: dict[str, int]
+    link_index: dict[str, int]
+    cache: dict[Any, np.ndarray] = field(default_factory=dict)  # joints arg -> indices
+    movable_cache: dict[Any, np.ndarray] = field(default_factory=dict)
+    load: dict[str, Any] = field(default_factory=dict)  # how it was loaded (the manifest's)
+
+    @property
+    def has_spherical(self) -> bool:
+        """True if one of the body's joints is spherical."""
+        return JointType.SPHERICAL in self.joint_types
+
+
+class _Closed:
+    """Stands in for the backend after close(): any use raises SimClosedError."""
+
+    def __getattr__(self, name: str) -> Any:
+        raise SimClosedError()
+
+
+class Shared:
+    """The state one Sim's parts share (one per Sim, made empty and closed by the Sim).
+
+    Attributes:
+        backend: the engine (a :class:`~simbridge.backend.Backend`); after ``close()`` a
+            stand-in whose every use raises :class:`~simbridge.exceptions.SimClosedError`.
+        name: the registered backend name (``"pybullet"``, ``"mujoco"``...).
+        dt: the fixed time step (s).
+        bodies: body id -> its :class:`BodyTable`, in load order.
+        commands: the bound commands, in binding order.
+        presend: those of them the Sim sends before each step (the backend steps the others).
+        held: body id -> joint index -> the bound command driving it.
+        multi_idx: id -> a joint index array (from :func:`~simbridge.sim.lookups.joint_indices`)
+            holding a spherical joint: the commands take such arrays to their multi-DoF path.
+            The arrays are kept alive here, so that an id is never reused.
+    """
+
+    __slots__ = ("backend", "name", "dt", "bodies", "commands", "presend", "held", "multi_idx")
+
+    def __init__(self) -> None:
+        """A closed world with no bodies; the Sim sets the backend, name and time step."""
+        self.backend: Backend = _Closed()  # type: ignore[assignment]
+        self.name = ""
+        self.dt = float("nan")
+        self.bodies: dict[int, BodyTable] = {}
+        self.commands: list[BoundCommand] = []
+        self.presend: list[BoundCommand] = []
+        self.held: dict[int, dict[int, BoundCommand]] = {}
+        self.multi_idx: dict[int, np.ndarray] = {}
+
+    @property
+    def closed(self) -> bool:
+        """True once the backend is released (or before it is made)."""
+        return isinstance(self.backend, _Closed)
+
+    def close(self) -> None:
+        """Drop the backend (already released or failed), the bodies and the bound commands."""
+        self.backend = _Closed()  # type: ignore[assignment]
+        self.bodies.clear()
+        self.end_commands("the Sim was closed")
+
+    # ---------------------------------------------------------------- bound commands
+
+    def bind(self, command: BoundCommand) -> BoundCommand:
+        """Send ``command`` once, mark its joints held and hand it to the backend.
+
+        Args:
+            command: a checked command on joints no other bound command holds.
+
+        Returns:
+            ``command``, now bound: sent before each step, by the Sim or by the backend.
+
+        Raises:
+            InvalidArgumentError: a value the first send refuses (nothing is bound then).
+            Whatever the backend's ``bind_command`` raises (the command is released first).
+        """
+        command.send()  # the first command, through the plain path
+        held = self.held.setdefault(command.body, {})
+        for j in command.joints.tolist():
+            held[j] = command
+        self.commands.append(command)
+        try:
+            stepped = self.backend.bind_command(command)
+        except BaseException:
+            self.release(command)
+            raise
+        if not stepped:
+            self.presend.append(command)
+        return command
+
+    def refuse_held(self, body: int, idx: np.ndarray) -> None:
+        """Refuse a plain motor command on joints a bound command holds.
+
+        Args:
+            body: a loaded body's id.
+            idx: ``(n,)`` joint indices.
+
+        Raises:
+            InvalidArgumentError: one of ``idx`` is held (the message names the joint).
+        """
+        held = self.held.get(body)
+        if not held:
+            return
+        for j in idx.tolist():
+            command = held.get(j)
+            if command is not None:
+                b = self.bodies[body]
+                raise InvalidArgumentError(
+                    "joints",
+                    f"joint {b.joint_names[j]!r} (index {j}) of body {b.name!r} is driven by a "
+                    f"bound {command.mode} command: write its targets, or release() it first",
+                )
+
+    def release(self, command: BoundCommand) -> None:
+        """Unbind one command (:meth:`BoundCommand.release`). The backend unbinds first: a
+        refusal (SimBusyError while another thread steps) leaves the command bound, here and
+        there.
+
+        Args:
+            command: a command bound by :meth:`bind` (one already released is ignored).
+
+        Raises:
+            SimBusyError: another thread is stepping the Sim.
+        """
+        if not isinstance(self.backend, _Closed):
+            self.backend.unbind_command(command)
+        if command in self.commands:
+            self.commands.remove(command)
+        if command in self.presend:
+            self.presend.remove(command)
+        held = self.held.get(command.body, {})
+        for j in command.joints.tolist():
+            if held.get(j) is command:
+                del held[j]
+        if not held:
+            self.held.pop(command.body, None)
+
+    def end_commands(self, why: str) -> None:
+        """End every bound command (a world change): each is unbound, then made stale.
+
+        Args:
+            why: what changed, for the StaleCommandError of a later use ("reset changed the
+                world").
+        """
+        if not self.commands:
+            return
+        for command in list(self.commands):
+            self.release(command)
+            command._end(why)
