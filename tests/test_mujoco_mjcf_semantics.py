@@ -22,6 +22,7 @@ from simbridge.exceptions import (
     BackendUnsupportedError,
     InvalidArgumentError,
     MjcfCompileError,
+    SimClosedError,
     UnknownObjectError,
 )
 from simbridge.types import JointType
@@ -170,6 +171,23 @@ def test_the_files_option_wins_unless_given() -> None:
         sim.reset()
         assert sim.timestep == 1 / 240 and sim.bodies() == []
         sim.load_urdf("plane.urdf")  # an ordinary world again
+
+
+def test_reset_remakes_the_sims_own_engine_and_close_ends_the_model() -> None:
+    sim = simbridge.Sim("mujoco", gravity=(0, 0, -2), divergence_check="every_step")
+    ids = sim.load_mjcf(MUJOCO_TEST_MODEL, semantics="mujoco")
+    sim.reset()  # a new engine of the Sim's own recipe: its gravity, time step and check
+    assert sim.gravity == (0.0, 0.0, -2.0) and sim.timestep == 1 / 240
+    assert sim.manifest()["divergence_check"] == "every_step"
+    with pytest.raises(BackendUnsupportedError, match="without a model read with"):
+        sim.qpos()
+    assert sim.load_mjcf(MUJOCO_TEST_MODEL, semantics="mujoco") == ids  # again after reset
+    sim.close()
+    assert sim.closed
+    with pytest.raises(SimClosedError):
+        sim.qpos()
+    with pytest.raises(SimClosedError):
+        sim.load_mjcf(MUJOCO_TEST_MODEL, semantics="mujoco")
 
 
 def test_the_model_is_the_whole_world() -> None:

@@ -18,13 +18,14 @@ The `Sim` is its public methods, each documented here, over one
 commands in force) that its parts take: :mod:`~simbridge.sim.lookups` (ids, names, joint-index
 arrays), :mod:`~simbridge.sim.loading` (URDF, MJCF, SDF), :mod:`~simbridge.sim.control`
 (teleports, bound commands), :mod:`~simbridge.sim.multi_dof` (spherical joints),
-:mod:`~simbridge.sim.world` (contacts, ``get_state`` and ``set_state``) and
-:mod:`~simbridge.sim.pictures` (``render``); the argument checks are
-:mod:`~simbridge.sim.arguments`. A method delegates to its part, but for the hot path of a
+:mod:`~simbridge.sim.world` (contacts, ``get_state`` and ``set_state``),
+:mod:`~simbridge.sim.pictures` (``render``) and :mod:`~simbridge.sim.native` (an MJCF read as
+MuJoCo reads it: actuators, ``qpos``/``qvel``, keyframes, sensors, sites); the argument checks
+are :mod:`~simbridge.sim.arguments`. A method delegates to its part, but for the hot path of a
 control loop (``step``, the ``set_joint_*`` commands, the state reads), written here against
 the shared object: a call more would cost those 2-4% (``python bench/ab.py``).
 
-This module is longer than the others (about 1,200 lines, half of them docstrings) for one
+This module is longer than the others (about 1,400 lines, half of them docstrings) for one
 reason: it is the whole public interface, and each method's docstring is its contract.
 """
 
@@ -52,12 +53,14 @@ from simbridge.exceptions import (
 )
 from simbridge.profiles import Profile, get_profile
 from simbridge.registry import available_backends, load_backend
-from simbridge.sim import control, loading, multi_dof, pictures, world
+from simbridge.sim import control, loading, multi_dof, native, pictures, world
 from simbridge.sim.arguments import _F64, JointsArg, LinkArg, command_values, flag, vec
 from simbridge.sim.keywords import Missing, keyword_error
 from simbridge.sim.lookups import body_table, joint_index, joint_indices, link_index
-from simbridge.sim.shared import Shared
+from simbridge.sim.native import NotGiven
+from simbridge.sim.shared import EngineRecipe, Shared
 from simbridge.types import (
+    ActuatorInfo,
     BaseState,
     ContactPoint,
     DynamicsInfo,
@@ -66,12 +69,17 @@ from simbridge.types import (
     JointStates,
     LinkState,
     MotorMode,
+    SiteState,
     WorldState,
 )
 
 __all__ = ["DIVERGENCE_CHECKS", "Sim"]
 
 DIVERGENCE_CHECKS = ("periodic", "every_step")  # Sim(divergence_check=...)
+# Sim(gravity=..., timestep=...) not given: these, or the <option> of an MJCF read with
+# semantics="mujoco"
+DEFAULT_GRAVITY = NotGiven((0.0, 0.0, -9.8))
+DEFAULT_TIMESTEP = NotGiven(1.0 / 240.0)
 
 # required arguments' defaults: a PyBullet keyword given in their place is named, not missed
 _RESET_POSITIONS = Missing("reset_joint_state", "positions")
@@ -88,8 +96,11 @@ class Sim:
     Args:
         backend: registered backend name: ``"pybullet"``, ``"mujoco"``, or a third-party one
             (see :func:`simbridge.available_backends`).
-        gravity: world gravity (m/s²), set explicitly on every engine.
-        timestep: fixed step (s).
+        gravity: world gravity (m/s²), set explicitly on every engine; (0, 0, -9.8) when not
+            given, except under an MJCF read with ``semantics="mujoco"``, whose
+            ``<option gravity>`` then wins.
+        timestep: fixed step (s); 1/240 when not given, except under an MJCF read with
+            ``semantics="mujoco"``, whose ``<option timestep>`` then wins.
         profile: ``"pybullet"`` (PyBullet's defaults on every engine), ``"urdf"`` (the file's
             values, nothing hidden) or a :class:`~simbridge.Profile`.
         gui: open the engine's viewer. Raises :class:`~simbridge.exceptions.DisplayError`
@@ -121,8 +132,8 @@ class Sim:
         self,
         backend: str = "pybullet",
         *,
-        gravity: Sequence[float] = (0.0, 0.0, -9.8),
-        timestep: float = 1.0 / 240.0,
+        gravity: Sequence[float] | NotGiven = DEFAULT_GRAVITY,
+        timestep: float | NotGiven = DEFAULT_TIMESTEP,
         profile: str | Profile = "pybullet",
         gui: bool = False,
         divergence_check: str = "periodic",
@@ -131,6 +142,12 @@ class Sim:
         # what the parts share; closed (its backend a stand-in) until the engine is made
         self._s = s = Shared()
         self._wall_start: float | None = None  # realtime pacing: wall clock at time 0
+        gravity_given = not isinstance(gravity, NotGiven)
+        timestep_given = not isinstance(timestep, NotGiven)
+        if isinstance(gravity, NotGiven):
+            gravity = gravity.value
+        if isinstance(timestep, NotGiven):
+            timestep = timestep.value
         g = vec(gravity, 3, "gravity")
         try:
             if isinstance(timestep, bool) or not isinstance(timestep, (int, float, np.number)):
@@ -150,15 +167,19 @@ class Sim:
             prof = prof.with_engine(backend, **engine_settings)
         cls = load_backend(backend)
         self.backend: str = backend
-        engine = cls(prof, flag(gui, "gui"))
-        try:
-            engine.set_divergence_check(divergence_check == "every_step")
-        except BaseException:
-            engine.close()
-            raise
-        s.backend = engine
+        # how a new engine is made (reset() after a model read with semantics="mujoco"), and
+        # the values the caller gave (that model's <option> gives the others)
+        s.recipe = EngineRecipe(
+            cls,
+            prof,
+            flag(gui, "gui"),
+            divergence_check == "every_step",
+            prof.gravity if gravity_given else None,
+            dt if timestep_given else None,
+        )
+        s.backend = s.recipe.make()
         s.name = backend
-        s.dt = float(timestep)
+        s.dt = dt
         self.divergence_check: str = divergence_check
 
     # ---------------------------------------------------------------- lifecycle
@@ -349,10 +370,15 @@ class Sim:
         )
 
     def load_mjcf(
-        self, source: str | os.PathLike[str], *, self_collision: bool | str | None = None
+        self,
+        source: str | os.PathLike[str],
+        *,
+        self_collision: bool | str | None = None,
+        semantics: str = "pybullet",
     ) -> tuple[int, ...]:
-        """Load every body of an MJCF file as ``p.loadMJCF`` does; return their ids.
+        """Load every body of an MJCF file; return their ids.
 
+        ``semantics="pybullet"`` (the default): as ``p.loadMJCF`` reads it, on every backend.
         One body per top-level ``<worldbody>`` ``<body>`` or ``<geom>``, in the file's order,
         each with PyBullet's links, joints, numbering and names (a body with several joints
         gets massless links between them; see :mod:`simbridge.model.mjcf`). What PyBullet's
@@ -360,19 +386,39 @@ class Sim:
         actuators...) is not simulated on any backend; it is listed per body in
         :meth:`manifest` (``ignored``).
 
+        ``semantics="mujoco"``: the model as MuJoCo's compiler reads it and as ``mj_step``
+        runs it (``<default>`` classes, ``<option>``, ``<include>``, actuators, damping,
+        armature, contacts, keyframes, sensors, sites: all MuJoCo's), on the ``"mujoco"``
+        backend. One body per top-level ``<worldbody>`` ``<body>`` (a free joint: a floating
+        base; none: a fixed one), its joints in MuJoCo's order and names (the mapping:
+        :mod:`simbridge.model.mjcf_native`); the file's ``<option>`` gravity and time step
+        win over the Sim's unless the Sim was given them; no profile entry applies (no link
+        damping, no default motors): the model's actuators drive it
+        (:meth:`set_actuator_controls`). The model is the whole world: nothing loads with it
+        or after it until :meth:`reset`.
+
         Args:
             source: a file path, a name on the search path (``"mjcf/ant.xml"`` is found in
                 pybullet_data) or MJCF text.
             self_collision: as :meth:`load_urdf`'s (``loadMJCF``'s flags); None: the profile's.
+                Under ``semantics="mujoco"`` the file's contact settings rule: give None.
+            semantics: ``"pybullet"`` or ``"mujoco"``.
 
         Returns:
-            The body ids, in PyBullet's order (``p.loadMJCF``'s tuple).
+            The body ids, in PyBullet's order (``p.loadMJCF``'s tuple), or in MuJoCo's order
+            of the top-level bodies.
 
         Raises:
             UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
-            UnsupportedJointError (``ball`` and nested ``free`` joints): the message names the
-            file, the line and the element.
+            UnsupportedJointError (``ball`` and nested ``free`` joints): under "pybullet", the
+                message names the file, the line and the element.
+            MjcfCompileError: under "mujoco", MuJoCo's own message with the file and line.
+            BackendUnsupportedError: "mujoco" on a backend other than MuJoCo, into a world that
+                holds bodies, or any load after such a model.
+            InvalidArgumentError: another ``semantics``, or ``self_collision`` with "mujoco".
         """
+        if native.check_semantics(semantics) == "mujoco":
+            return native.load_native(self._s, source, self_collision)
         return loading.load_scene(self._s, source, "mjcf", self_collision)
 
     def load_sdf(self, source: str | os.PathLike[str]) -> tuple[int, ...]:
@@ -423,7 +469,10 @@ class Sim:
         s = self._s
         s.backend.time  # noqa: B018 - raises SimClosedError after close()
         s.end_commands("reset changed the world")
-        s.backend.reset()
+        if s.native is None:
+            s.backend.reset()
+        else:  # back to an empty world of the Sim's own engine and settings
+            native.leave(s)
         s.bodies.clear()
         self._wall_start = None
 
@@ -454,6 +503,136 @@ class Sim:
             InvalidArgumentError: ``body`` is not an int.
         """
         return body_table(self._s, body).name
+
+    # ---------------------------------------------------------------- MuJoCo's reading
+
+    def actuators(self) -> tuple[ActuatorInfo, ...]:
+        """The model's actuators (``load_mjcf(..., semantics="mujoco")``), in MuJoCo's order.
+
+        Returns:
+            One :class:`~simbridge.types.ActuatorInfo` each: name, the joint it drives,
+            gear, ctrlrange, forcerange, gain and bias.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        """
+        return native.actuators(self._s)
+
+    def set_actuator_controls(
+        self, controls: float | Sequence[float] | np.ndarray, actuators: Any = None
+    ) -> None:
+        """Write the model's actuator controls (MuJoCo's ``ctrl``); they hold until written
+        again, and MuJoCo clamps them to ``ctrlrange`` where it is limited.
+
+        Args:
+            controls: one value per actuator named, or per actuator of the model when
+                ``actuators`` is None (a Gymnasium action, for one).
+            actuators: None (all, in MuJoCo's order), an index or a name, or a sequence of
+                them.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+            UnknownObjectError: an actuator the model does not have.
+            InvalidArgumentError: the wrong number of controls, or one not finite.
+        """
+        native.set_actuator_controls(self._s, controls, actuators)
+
+    def actuator_controls(self) -> np.ndarray:
+        """The actuator controls in force (MuJoCo's ``ctrl``).
+
+        Returns:
+            (nu,) float64, a copy.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        """
+        return native.actuator_controls(self._s)
+
+    def qpos(self) -> np.ndarray:
+        """MuJoCo's generalized positions, in its order and conventions (a free joint:
+        position, then quaternion w, x, y, z).
+
+        Returns:
+            (nq,) float64, a copy.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        """
+        return native.qpos(self._s)
+
+    def qvel(self) -> np.ndarray:
+        """MuJoCo's generalized velocities (a free joint: the body frame origin's linear
+        velocity, world, then the angular velocity in the body frame).
+
+        Returns:
+            (nv,) float64, a copy.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        """
+        return native.qvel(self._s)
+
+    def set_qpos_qvel(
+        self,
+        qpos: Sequence[float] | np.ndarray | None = None,
+        qvel: Sequence[float] | np.ndarray | None = None,
+    ) -> None:
+        """Set MuJoCo's ``qpos`` and ``qvel`` as given (Gymnasium's ``set_state``); None
+        keeps one. Nothing else changes (controls, time, the solver's warm start); every
+        bound command ends.
+
+        Args:
+            qpos: (nq,) finite values, MuJoCo's order, or None.
+            qvel: (nv,) finite values, or None.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+            InvalidArgumentError: a wrong length or a value not finite.
+        """
+        native.set_qpos_qvel(self._s, qpos, qvel)
+
+    def reset_keyframe(self, key: int | str) -> None:
+        """Put the world in one of the model's ``<keyframe>`` states (``mj_resetDataKeyframe``:
+        time, qpos, qvel, act, ctrl of the key); every bound command ends.
+
+        Args:
+            key: the keyframe's index or name.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+            UnknownObjectError: a keyframe the model does not have.
+        """
+        native.reset_keyframe(self._s, key)
+
+    def sensor(self, sensor: int | str) -> np.ndarray:
+        """One of the model's sensors, for the state as it stands now.
+
+        Args:
+            sensor: the sensor's index or name.
+
+        Returns:
+            (dim,) float64, MuJoCo's values in its units and frames.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+            UnknownObjectError: a sensor the model does not have.
+        """
+        return native.sensor(self._s, sensor)
+
+    def site(self, site: int | str) -> SiteState:
+        """One of the model's sites, as it stands now.
+
+        Args:
+            site: the site's index or name.
+
+        Returns:
+            Its position (m, world) and orientation (x, y, z, w).
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+            UnknownObjectError: a site the model does not have.
+        """
+        return native.site(self._s, site)
 
     # ---------------------------------------------------------------- stepping
 

@@ -9,6 +9,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from simbridge.sim.arguments import flag, quat, vec, within
+from simbridge.sim.native import refuse_after_native
 from simbridge.sim.shared import BodyTable, Shared
 
 if TYPE_CHECKING:
@@ -41,7 +42,9 @@ def load_urdf(
         UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
         UnsupportedJointError: the message names the file, the line and the element.
         InvalidArgumentError: a bad pose or option.
+        BackendUnsupportedError: the world holds an MJCF read with semantics='mujoco'.
     """
+    refuse_after_native(s, "load_urdf")
     pos = vec(base_position, 3, "base_position")
     within(pos, "base_position")
     orn = quat(base_orientation, "base_orientation", normalise=True)
@@ -96,10 +99,12 @@ def load_scene(
     Raises:
         UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
         UnsupportedJointError: the message names the file, the line and the element.
+        BackendUnsupportedError: the world holds an MJCF read with semantics='mujoco'.
     """
     from simbridge.model.load_options import load_options
     from simbridge.model.scene_reader import parse_scene
 
+    refuse_after_native(s, f"load_{kind}")
     options = load_options(s.backend.profile, self_collision=self_collision)
     # PyBullet's MJCF and SDF importers take the collision-box inertia (loadSDF has no flag
     # for the file's; an MJCF body's file inertia is MuJoCo's to compute)

@@ -1,9 +1,13 @@
 """The `Sim`'s MJCF read as MuJoCo reads it (``load_mjcf(source, semantics="mujoco")``) and
 MuJoCo's own calls on it: actuators, ``qpos``/``qvel``, keyframes, sensors, sites.
 
-A part of :class:`simbridge.Sim`: functions taking the Sim. The model's reading is
-:mod:`simbridge.model.mjcf_native`; the backend side is ``Backend.mjcf_world`` and the calls
-after it in :mod:`simbridge.backend`.
+A part of :class:`simbridge.Sim`: functions of its :class:`~simbridge.sim.shared.Shared`
+state, which holds the model (``native``) and how to make a new engine
+(:class:`~simbridge.sim.shared.EngineRecipe`, with the gravity and time step the caller gave).
+Loading such a model swaps the backend for the one ``Backend.mjcf_world`` makes, so the Sim's
+hot paths test no flag; ``reset()`` swaps back to a new engine of the recipe. The model's
+reading is :mod:`simbridge.model.mjcf_native`; the backend side is ``Backend.mjcf_world`` and
+the calls after it in :mod:`simbridge.backend`.
 """
 
 from __future__ import annotations
@@ -19,6 +23,8 @@ from simbridge.exceptions import (
     InvalidArgumentError,
     UnknownObjectError,
 )
+from simbridge.sim.shared import BodyTable, Shared
+from simbridge.types import ActuatorInfo, SiteState
 
 if TYPE_CHECKING:
     from simbridge.model.mjcf_native import NativeMjcf
@@ -26,11 +32,21 @@ if TYPE_CHECKING:
 __all__ = [
     "NotGiven",
     "WHOLE_WORLD",
+    "actuator_controls",
+    "actuators",
     "check_semantics",
+    "leave",
     "load_native",
     "native_model",
+    "qpos",
+    "qvel",
     "refuse_after_native",
+    "reset_keyframe",
     "resolve",
+    "sensor",
+    "set_actuator_controls",
+    "set_qpos_qvel",
+    "site",
     "values",
 ]
 
@@ -83,65 +99,76 @@ def check_semantics(semantics: Any) -> str:
     return semantics
 
 
-def refuse_after_native(sim: Any, call: str) -> None:
+def refuse_after_native(s: Shared, call: str) -> None:
     """Refuse a load into a world that holds a model read with semantics='mujoco'.
 
     Args:
-        sim: The Sim.
-        call: The call refused (for the message).
+        s: the Sim's shared state.
+        call: the call refused (for the message).
 
     Raises:
-        BackendUnsupportedError: When the Sim holds such a model.
+        BackendUnsupportedError: when the world holds such a model.
     """
-    if sim._native is not None:
+    if s.native is not None:
         raise BackendUnsupportedError(
-            sim.backend, f"{call} after an MJCF read with semantics='mujoco'", WHOLE_WORLD
+            s.name, f"{call} after an MJCF read with semantics='mujoco'", WHOLE_WORLD
         )
 
 
-def load_native(sim: Any, source: str | os.PathLike[str]) -> tuple[int, ...]:
+def load_native(
+    s: Shared, source: str | os.PathLike[str], self_collision: bool | str | None
+) -> tuple[int, ...]:
     """``load_mjcf(source, semantics="mujoco")``: see :meth:`simbridge.Sim.load_mjcf`.
 
     Args:
-        sim: An empty Sim.
-        source: A path, a name on the search path or MJCF text.
+        s: the Sim's shared state, its world empty.
+        source: a path, a name on the search path or MJCF text.
+        self_collision: must be None (the file's contact settings rule).
 
     Returns:
         The body ids (0, 1, ...), one per top-level body.
 
     Raises:
-        BackendUnsupportedError: A backend without MuJoCo's reading, or a world that is not
+        InvalidArgumentError: ``self_collision`` given.
+        BackendUnsupportedError: a backend without MuJoCo's reading, or a world that is not
             empty.
-        UrdfNotFoundError, MjcfCompileError: As :func:`~simbridge.model.mjcf_native.compile_mjcf`.
+        UrdfNotFoundError, MjcfCompileError: as :func:`~simbridge.model.mjcf_native.compile_mjcf`.
     """
     from simbridge.backend import NATIVE_ONLY
     from simbridge.model.mjcf_native import compile_mjcf
-    from simbridge.sim.lookups import _Body
 
-    b = sim._b
+    if self_collision is not None:
+        raise InvalidArgumentError(
+            "self_collision",
+            "under semantics='mujoco' the file's contype/conaffinity and <contact> "
+            "decide which geoms collide: give None",
+        )
+    b = s.backend
     b.time  # noqa: B018 - raises SimClosedError after close()
     if "mujoco" not in type(b).semantics:
-        raise BackendUnsupportedError(sim.backend, *NATIVE_ONLY)
-    refuse_after_native(sim, "load_mjcf(semantics='mujoco')")
-    if sim._bodies:
+        raise BackendUnsupportedError(s.name, *NATIVE_ONLY)
+    refuse_after_native(s, "load_mjcf(semantics='mujoco')")
+    if s.bodies:
         raise BackendUnsupportedError(
-            sim.backend,
+            s.name,
             "load_mjcf(semantics='mujoco') into a world that already holds bodies "
-            f"{list(sim._bodies)}",
+            f"{list(s.bodies)}",
             WHOLE_WORLD,
         )
+    recipe = s.recipe
+    assert recipe is not None  # made with the engine
     native = compile_mjcf(source)
-    sim._end_commands("load_mjcf changed the world")
-    new = b.mjcf_world(native, *sim._given)
+    s.end_commands("load_mjcf changed the world")
+    new = b.mjcf_world(native, recipe.gravity, recipe.timestep)
     b.close()
-    sim._b = new
-    sim._native = native
-    sim._dt = new.profile.timestep
+    s.backend = new
+    s.native = native
+    s.dt = new.profile.timestep
     for i, body in enumerate(native.bodies):
         names = [r.name for r in body.table]
         links = [r.link_name for r in body.table]
         types = [r.type for r in body.table]
-        sim._bodies[i] = _Body(
+        s.bodies[i] = BodyTable(
             body.name,
             names,
             links,
@@ -159,27 +186,205 @@ def load_native(sim: Any, source: str | os.PathLike[str]) -> tuple[int, ...]:
     return tuple(range(len(native.bodies)))
 
 
-def native_model(sim: Any, call: str) -> NativeMjcf:
-    """The model read with semantics='mujoco' the Sim holds.
+def leave(s: Shared) -> None:
+    """Drop the model read with semantics='mujoco' (``reset()``): the backend becomes a new
+    engine of the Sim's recipe, with the Sim's own gravity and time step, and the old one is
+    closed. The caller ends the bound commands and clears the bodies.
 
     Args:
-        sim: The Sim.
-        call: The call that needs it (for the message).
+        s: the Sim's shared state, holding such a model.
+
+    Raises:
+        Whatever making the engine raises (the model is kept then).
+    """
+    recipe = s.recipe
+    assert recipe is not None  # made with the engine
+    old = s.backend
+    s.backend = recipe.make()
+    s.native = None
+    s.dt = s.backend.profile.timestep
+    old.close()
+
+
+def native_model(s: Shared, call: str) -> NativeMjcf:
+    """The model read with semantics='mujoco' the world holds.
+
+    Args:
+        s: the Sim's shared state.
+        call: the call that needs it (for the message).
 
     Returns:
         The model.
 
     Raises:
-        BackendUnsupportedError: The Sim holds no such model.
+        BackendUnsupportedError: the world holds no such model.
+        SimClosedError: the Sim is closed.
     """
-    sim._b.time  # noqa: B018 - raises SimClosedError after close()
-    if sim._native is None:
+    s.backend.time  # noqa: B018 - raises SimClosedError after close()
+    if s.native is None:
         raise BackendUnsupportedError(
-            sim.backend,
+            s.name,
             f"{call} without a model read with semantics='mujoco'",
             "load one first: sim.load_mjcf(path, semantics='mujoco') (Sim('mujoco'))",
         )
-    return sim._native
+    return s.native
+
+
+def actuators(s: Shared) -> tuple[ActuatorInfo, ...]:
+    """:meth:`simbridge.Sim.actuators` on the Sim's shared state.
+
+    Args:
+        s: the Sim's shared state.
+
+    Returns:
+        The model's actuators, in MuJoCo's order.
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+    """
+    return native_model(s, "actuators()").actuators
+
+
+def set_actuator_controls(s: Shared, controls: Any, which: Any) -> None:
+    """:meth:`simbridge.Sim.set_actuator_controls` on the Sim's shared state.
+
+    Args:
+        s: the Sim's shared state.
+        controls: one value per actuator named, or per actuator of the model.
+        which: the method's ``actuators``: None (all), an index or a name, or a sequence.
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        UnknownObjectError: an actuator the model does not have.
+        InvalidArgumentError: the wrong number of controls, or one not finite.
+    """
+    names = [a.name for a in native_model(s, "set_actuator_controls").actuators]
+    if which is None:
+        idx = np.arange(len(names), dtype=np.intp)
+    else:
+        many = not isinstance(which, (str, int, np.integer))
+        items = list(which) if many else [which]
+        idx = np.array([resolve(names, "actuator", a) for a in items], dtype=np.intp)
+    s.backend.set_actuator_controls(idx, values(controls, len(idx), "controls").tolist())
+
+
+def actuator_controls(s: Shared) -> np.ndarray:
+    """:meth:`simbridge.Sim.actuator_controls` on the Sim's shared state.
+
+    Args:
+        s: the Sim's shared state.
+
+    Returns:
+        (nu,) float64, a copy of MuJoCo's ``ctrl``.
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+    """
+    native_model(s, "actuator_controls()")
+    return s.backend.actuator_controls()
+
+
+def qpos(s: Shared) -> np.ndarray:
+    """:meth:`simbridge.Sim.qpos` on the Sim's shared state.
+
+    Args:
+        s: the Sim's shared state.
+
+    Returns:
+        (nq,) float64, a copy.
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+    """
+    native_model(s, "qpos()")
+    return s.backend.generalized_state()[0]
+
+
+def qvel(s: Shared) -> np.ndarray:
+    """:meth:`simbridge.Sim.qvel` on the Sim's shared state.
+
+    Args:
+        s: the Sim's shared state.
+
+    Returns:
+        (nv,) float64, a copy.
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+    """
+    native_model(s, "qvel()")
+    return s.backend.generalized_state()[1]
+
+
+def set_qpos_qvel(s: Shared, qpos: Any, qvel: Any) -> None:
+    """:meth:`simbridge.Sim.set_qpos_qvel` on the Sim's shared state; every bound command
+    ends.
+
+    Args:
+        s: the Sim's shared state.
+        qpos, qvel: as the method's (None keeps one).
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        InvalidArgumentError: a wrong length or a value not finite.
+    """
+    m = native_model(s, "set_qpos_qvel").model
+    q = None if qpos is None else values(qpos, m.nq, "qpos")
+    v = None if qvel is None else values(qvel, m.nv, "qvel")
+    s.end_commands("set_qpos_qvel changed the world")
+    s.backend.set_generalized_state(q, v)
+
+
+def reset_keyframe(s: Shared, key: int | str) -> None:
+    """:meth:`simbridge.Sim.reset_keyframe` on the Sim's shared state; every bound command
+    ends.
+
+    Args:
+        s: the Sim's shared state.
+        key: the keyframe's index or name.
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        UnknownObjectError: a keyframe the model does not have.
+    """
+    k = resolve(native_model(s, "reset_keyframe").keyframes, "keyframe", key)
+    s.end_commands("reset_keyframe changed the world")
+    s.backend.reset_keyframe(k)
+
+
+def sensor(s: Shared, which: int | str) -> np.ndarray:
+    """:meth:`simbridge.Sim.sensor` on the Sim's shared state.
+
+    Args:
+        s: the Sim's shared state.
+        which: the sensor's index or name.
+
+    Returns:
+        (dim,) float64, MuJoCo's values in its units and frames.
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        UnknownObjectError: a sensor the model does not have.
+    """
+    return s.backend.sensor_data(resolve(native_model(s, "sensor").sensors, "sensor", which))
+
+
+def site(s: Shared, which: int | str) -> SiteState:
+    """:meth:`simbridge.Sim.site` on the Sim's shared state.
+
+    Args:
+        s: the Sim's shared state.
+        which: the site's index or name.
+
+    Returns:
+        Its position (m, world) and orientation (x, y, z, w).
+
+    Raises:
+        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        UnknownObjectError: a site the model does not have.
+    """
+    pos, orn = s.backend.site_pose(resolve(native_model(s, "site").sites, "site", which))
+    return SiteState(pos, orn)
 
 
 def resolve(names: Sequence[str], kind: str, item: Any) -> int:

@@ -2,25 +2,32 @@
 
 The Sim's parts (:mod:`~simbridge.sim.lookups`, :mod:`~simbridge.sim.control`,
 :mod:`~simbridge.sim.multi_dof`, :mod:`~simbridge.sim.world`, :mod:`~simbridge.sim.pictures`,
-:mod:`~simbridge.sim.loading`) are plain functions taking this object; none of them holds state
-of its own. It keeps the backend, each body's tables, and the bound commands in force with the
-joints they hold; the bookkeeping of those commands (bind, refuse, release, end) is its own
-methods, so that the lists and the map of held joints change together.
+:mod:`~simbridge.sim.loading`, :mod:`~simbridge.sim.native`) are plain functions taking this
+object; none of them holds state of its own. It keeps the backend, each body's tables, and the
+bound commands in force with the joints they hold; the bookkeeping of those commands (bind,
+refuse, release, end) is its own methods, so that the lists and the map of held joints change
+together. It also keeps how its engine was made (:class:`EngineRecipe`: a model read with
+``semantics="mujoco"`` replaces the engine, and ``reset()`` makes a new one) and that model
+(:mod:`~simbridge.sim.native`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from simbridge.backend import Backend
 from simbridge.bound import BoundCommand
 from simbridge.exceptions import InvalidArgumentError, SimClosedError
-from simbridge.types import JointType
+from simbridge.profiles import Profile
+from simbridge.types import JointType, Vec3
 
-__all__ = ["BodyTable", "Shared"]
+if TYPE_CHECKING:
+    from simbridge.model.mjcf_native import NativeMjcf
+
+__all__ = ["BodyTable", "EngineRecipe", "Shared"]
 
 
 @dataclass
@@ -55,6 +62,46 @@ class BodyTable:
         return JointType.SPHERICAL in self.joint_types
 
 
+@dataclass(frozen=True)
+class EngineRecipe:
+    """How a Sim's engine is made, and the gravity and time step its caller gave.
+
+    Attributes:
+        cls: the backend class.
+        profile: the profile, with the Sim's gravity and time step.
+        gui: open the engine's viewer.
+        every_step: ``Sim(divergence_check="every_step")``.
+        gravity: the gravity the caller gave (m/s², world); None: not given (an MJCF read with
+            ``semantics="mujoco"`` then takes its ``<option>``'s).
+        timestep: the time step the caller gave (s); None: not given, likewise.
+    """
+
+    cls: type[Backend]
+    profile: Profile
+    gui: bool
+    every_step: bool
+    gravity: Vec3 | None
+    timestep: float | None
+
+    def make(self) -> Backend:
+        """A new engine: an empty world of this profile, its divergence check set.
+
+        Returns:
+            The backend.
+
+        Raises:
+            Whatever the backend's constructor or ``set_divergence_check`` raises (an engine
+            made is closed first).
+        """
+        engine = self.cls(self.profile, self.gui)
+        try:
+            engine.set_divergence_check(self.every_step)
+        except BaseException:
+            engine.close()
+            raise
+        return engine
+
+
 class _Closed:
     """Stands in for the backend after close(): any use raises SimClosedError."""
 
@@ -77,15 +124,32 @@ class Shared:
         multi_idx: id -> a joint index array (from :func:`~simbridge.sim.lookups.joint_indices`)
             holding a spherical joint: the commands take such arrays to their multi-DoF path.
             The arrays are kept alive here, so that an id is never reused.
+        recipe: how the engine was made (:class:`EngineRecipe`); None before it is.
+        native: the model read with ``semantics="mujoco"`` the world holds (the backend is
+            then the one ``Backend.mjcf_world`` made), else None.
     """
 
-    __slots__ = ("backend", "name", "dt", "bodies", "commands", "presend", "held", "multi_idx")
+    __slots__ = (
+        "backend",
+        "name",
+        "dt",
+        "bodies",
+        "commands",
+        "presend",
+        "held",
+        "multi_idx",
+        "recipe",
+        "native",
+    )
 
     def __init__(self) -> None:
-        """A closed world with no bodies; the Sim sets the backend, name and time step."""
+        """A closed world with no bodies; the Sim sets the backend, name, time step and
+        recipe."""
         self.backend: Backend = _Closed()  # type: ignore[assignment]
         self.name = ""
         self.dt = float("nan")
+        self.recipe: EngineRecipe | None = None
+        self.native: NativeMjcf | None = None
         self.bodies: dict[int, BodyTable] = {}
         self.commands: list[BoundCommand] = []
         self.presend: list[BoundCommand] = []
@@ -100,6 +164,7 @@ class Shared:
     def close(self) -> None:
         """Drop the backend (already released or failed), the bodies and the bound commands."""
         self.backend = _Closed()  # type: ignore[assignment]
+        self.native = None
         self.bodies.clear()
         self.end_commands("the Sim was closed")
 
