@@ -2,7 +2,8 @@
 
 It is optional: built against the MuJoCo headers that the ``mujoco`` wheel ships (a build
 requirement in pyproject.toml); where it cannot be built (no C compiler), the package installs
-without it and the backend steps in Python, with the same results (tests/test_mujoco_kernel.py).
+without it and the backend steps in Python, with the same results
+(tests/backends/mujoco/test_mujoco_kernel.py).
 """
 
 from __future__ import annotations

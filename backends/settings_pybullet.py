@@ -2,8 +2,8 @@
 
 Imports no engine (read when a profile or a scenario is checked). The defaults are the values
 PyBullet's server starts a world with (PhysicsServerCommandProcessor, btContactSolverInfo),
-held by tests/test_engine_settings.py: each one given explicitly leaves a run bit for bit as
-it is with none given. The backend sends only the settings a profile sets.
+held by tests/interface/test_engine_settings.py: each one given explicitly leaves a run bit for bit
+as it is with none given. The backend sends only the settings a profile sets.
 Left out: ``contactBreakingThreshold`` (a process-wide global in Bullet: it would reach every
 other PyBullet world of the process), ``numSolverIterations`` (the profile's
 ``solver_iterations``), ``fixedTimeStep`` (the profile's ``timestep``).

@@ -39,7 +39,7 @@ measured rounds of one cycle per thread, kB per round) the six rows grew 1.3 to 
 round, MuJoCo's load-remove 17.5 (5.1 MB in all, inside --check's 10 MB allowance), with as
 many open files at the end as after the warm-up and no temporary file. The one fault two threads
 found was the MuJoCo step loop's loader (the first Sims of a process made at once: a raw
-KeyError), since fixed (tests/test_mujoco_kernel.py).
+KeyError), since fixed (tests/backends/mujoco/test_mujoco_kernel.py).
 """
 
 from __future__ import annotations

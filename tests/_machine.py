@@ -1,5 +1,5 @@
 """What decides the last bits of a result on this processor, for the tests that hold results
-bit for bit (tests/test_same_results.py, tests/compare/test_compare_same_results.py,
+bit for bit (tests/test_same_results.py, tests/compare/pipeline/test_compare_same_results.py,
 tests/test_readme.py) and the child processes that prove them under other kernels.
 
 Three things on an x86-64 machine choose code by the processor, each from its feature flags

@@ -8,12 +8,17 @@ stands: at the top, inside a function, or in a string given to ``getattr``.
   backend package's inspect module (``simbridge.backends.<name>.inspect``, for example
   ``simbridge.backends.mujoco.inspect``) is its door.
 - A test file imports a backend's modules only when it is that backend's own test file
-  (tests/test_<name>_*.py for the package backends/<name>/: every package under backends/ is a
-  backend and is covered alike, with no list to keep); bench/ may use the doors for its raw
-  floors.
+  (a file under tests/backends/<name>/ for the package backends/<name>/: every package under
+  backends/ is a backend and is covered alike, with no list to keep); bench/ may use the doors
+  for its raw floors.
 - The conformance suite (tests/conformance/) runs the same tests on every registered backend,
   a third-party one too: it speaks the public interface alone, with no private name of
   simbridge imported and no private attribute read.
+- Tests mirror the packages: a test file sits in the folder of what it tests (tests/interface/
+  for the modules at the top of src/simbridge, tests/<room>/ for each folder of it,
+  tests/backends/<name>/, tests/compare/<stage>/ for each package or module of compare/),
+  in tests/conformance/ or tests/hostile/, or at the top of tests/ when it checks the project
+  as a whole; every room of the core and every stage of compare has its folder.
 """
 
 from __future__ import annotations
@@ -32,9 +37,9 @@ def _backend_packages() -> tuple[str, ...]:
     return tuple(sorted(p.parent.name for p in (ROOT / "backends").glob("*/__init__.py")))
 
 
-def own_tests(backend: str) -> str:
-    """The pattern of a backend package's own test files."""
-    return f"test_{backend}_*.py"
+def own_tests(backend: str) -> Path:
+    """The folder of a backend package's own test files."""
+    return TESTS / "backends" / backend
 
 
 BACKENDS = _backend_packages()
@@ -109,7 +114,7 @@ def _foreign_backend_imports(
         backend = _backend_of_module(name, backends)
         if backend is None:
             continue
-        if not backend or path.parent != TESTS or not path.match(own_tests(backend)):
+        if not backend or not path.is_relative_to(own_tests(backend)):
             yield line, name
 
 
@@ -156,7 +161,7 @@ def test_no_file_reaches_into_a_sims_backend():
     assert not found, (
         "these read a Sim's backend (sim._b); use the public interface, or the backend's "
         "inspect module (simbridge.backends.<name>.inspect) from that backend's own test "
-        "file (tests/test_<name>_*.py):\n" + _report(found)
+        "file (tests/backends/<name>/):\n" + _report(found)
     )
 
 
@@ -166,7 +171,7 @@ def test_backend_modules_are_imported_only_by_their_own_test_files():
         for path in _files("tests")
         if (hits := list(_foreign_backend_imports(path, _tree(path))))
     }
-    own = ", ".join(f"tests/{own_tests(backend)}" for backend in BACKENDS)
+    own = ", ".join(f"{own_tests(backend).relative_to(ROOT)}/" for backend in BACKENDS)
     assert not found, (
         f"a backend's modules are looked into only from its own test file ({own}); these "
         "should use the public interface (sim.manifest(), sim.profile, ...) or move there:\n"
@@ -207,7 +212,7 @@ def test_the_rules_see_what_they_forbid():
     )
     assert sorted(line for line, _ in _backend_reaches(code)) == [7, 8]
     backends = ("mujoco", "physx", "pybullet")
-    elsewhere = TESTS / "test_core.py"
+    elsewhere = TESTS / "interface" / "test_core.py"
     assert [n for _, n in sorted(_foreign_backend_imports(elsewhere, code, backends))] == [
         "simbridge.backends.mujoco.inspect",
         "simbridge.backends.pybullet.inspect.client_id",
@@ -216,19 +221,19 @@ def test_the_rules_see_what_they_forbid():
         "simbridge.backends.physx.inspect",
     ]
     # in a backend's own test file, only the other backends' modules are flagged
-    own = TESTS / "test_mujoco_backend.py"
+    own = own_tests("mujoco") / "test_mujoco_backend.py"
     assert [n for _, n in sorted(_foreign_backend_imports(own, code, backends))] == [
         "simbridge.backends.pybullet.inspect.client_id",
         "simbridge.backends.pybullet.backend",
         "simbridge.backends.physx.inspect",
     ]
-    own = TESTS / "test_pybullet_backend.py"
+    own = own_tests("pybullet") / "test_pybullet_backend.py"
     assert [n for _, n in sorted(_foreign_backend_imports(own, code, backends))] == [
         "simbridge.backends.mujoco.inspect",
         "simbridge.backends.mujoco",
         "simbridge.backends.physx.inspect",
     ]
-    own = TESTS / "test_physx_backend.py"
+    own = own_tests("physx") / "test_physx_backend.py"
     assert [n for _, n in sorted(_foreign_backend_imports(own, code, backends))] == [
         "simbridge.backends.mujoco.inspect",
         "simbridge.backends.pybullet.inspect.client_id",
@@ -248,3 +253,46 @@ def test_the_rules_see_what_they_forbid():
         "sim._b._c",
         "simbridge._version",
     ]
+
+
+def _mirrors() -> dict[str, str]:
+    """Each folder of tests/ that may hold test files (from the repository root), and what it
+    tests: the project as a whole, the interface, each folder of the core, each backend, each
+    stage of compare (a package or a module of compare/), every backend at once, the hostile
+    corpus. Read from the tree, with no list to keep."""
+    core, compare = ROOT / "src" / "simbridge", ROOT / "compare"
+    folders = {
+        "tests": "the project as a whole",
+        "tests/interface": "src/simbridge/*.py",
+        "tests/conformance": "every registered backend",
+        "tests/hostile": "every reader and backend, fed hostile input",
+    }
+    for init in sorted(core.glob("*/__init__.py")):
+        folders[f"tests/{init.parent.name}"] = f"src/simbridge/{init.parent.name}/"
+    for backend in BACKENDS:
+        folders[f"tests/backends/{backend}"] = f"backends/{backend}/"
+    for init in sorted(compare.glob("*/__init__.py")):
+        folders[f"tests/compare/{init.parent.name}"] = f"compare/{init.parent.name}/"
+    for module in sorted(compare.glob("*.py")):
+        # compare/errors.py: its errors pickle and warn by their old path beside every other
+        # error of simbridge, in tests/interface/test_exceptions_pickle.py
+        if module.stem not in ("__init__", "errors"):
+            folders[f"tests/compare/{module.stem}"] = f"compare/{module.name}"
+    return folders
+
+
+def test_tests_mirror_the_packages():
+    """A test file sits in the folder of what it tests, and every room of the core and every
+    stage of compare has its tests (a new backend needs none of its own: tests/conformance/
+    runs on it)."""
+    mirrors = _mirrors()
+    folders = {str(path.parent.relative_to(ROOT)) for path in TESTS.rglob("test_*.py")}
+    stray = sorted(folders - set(mirrors))
+    assert not stray, (
+        f"these folders of tests/ mirror no package; a test file sits in one of {sorted(mirrors)}"
+        f": {stray}"
+    )
+    rooms = [f for f, what in mirrors.items() if what.startswith(("src/simbridge/", "compare/"))]
+    untested = sorted(f for f in rooms if f not in folders)
+    assert not untested, f"no tests in {untested}"
+    assert {"tests/model", "tests/sim", "tests/cli", "tests/compare/run"} <= set(rooms)

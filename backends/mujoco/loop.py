@@ -1,5 +1,6 @@
 """The step loop in Python: the reference the compiled loop (_mjkernel.c) follows, step for step
-and in the same order of arithmetic (tests/test_mujoco_kernel.py holds them together).
+and in the same order of arithmetic (tests/backends/mujoco/test_mujoco_kernel.py holds them
+together).
 
 Each step is ``mj_step1`` (positions, velocities, constraint rows), the layer's additions to the
 rows and forces (PyBullet's motor offsets and hard rows: motor_rows.py; PyBullet's joint-limit rule;

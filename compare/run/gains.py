@@ -8,7 +8,7 @@ the velocity change ``kp * (target - q) / dt - kd * v``. The step is in the law,
 a matrix ``M`` whose trace is ``2 - kp - kd`` and whose determinant is ``1 - kd``. Halve the
 step with the same gains and the error decays per step as fast as before, in half the time:
 twice as stiff (kuka-reach's own error, dt against dt/2, measured in
-tests/compare/test_gains.py).
+tests/compare/run/test_gains.py).
 
 :func:`held_gains` gives the gains at ``dt' = r * dt`` whose matrix has the eigenvalues of
 ``M`` to the power ``r`` (``r`` steps of ``dt'`` then do what one step of ``dt`` did, for

@@ -11,7 +11,7 @@ from one processor to the next:
   has AVX-512 (numpy's run-time dispatch), whose results differ from the other loops' in the
   last place.
 
-Measured (tests/compare/test_compare_same_results.py's cases, an AVX-512 machine against
+Measured (tests/compare/pipeline/test_compare_same_results.py's cases, an AVX-512 machine against
 itself with ``OPENBLAS_CORETYPE=Haswell`` and ``NPY_DISABLE_CPU_FEATURES`` naming its AVX-512
 targets): the ensembles' spawn offsets moved by one spacing (``np.linalg.norm`` of a rotation
 vector), laikago-stand's PyBullet spread went from 1.25 cm to 1.55 cm through it, and r2d2's
@@ -21,8 +21,8 @@ The functions here do the same work with operations every IEEE 754 processor rou
 numpy's element-wise ``+``, ``-``, ``*``, ``/`` and ``sqrt`` (correctly rounded, whatever the
 SIMD width; numpy fuses no multiply-add), added in index order, and ``math.acos`` (the C
 library's, the same on every x86-64 processor with FMA, which its variant is chosen by).
-tests/compare/test_compare_same_results.py proves the figures under other OpenBLAS kernels
-and with numpy's run-time dispatch turned down; tests/compare/test_portable.py keeps the
+tests/compare/pipeline/test_compare_same_results.py proves the figures under other OpenBLAS kernels
+and with numpy's run-time dispatch turned down; tests/compare/run/test_portable.py keeps the
 modules that make figures off the processor-dependent calls.
 """
 

@@ -5,7 +5,7 @@
 profile's inertia source; :func:`is_fixed_base` says whether PyBullet welds the root. The rules
 below were measured on pybullet 3.2.7 and read in bullet3's ``Importers/ImportURDFDemo``
 (``URDF2Bullet.cpp``, ``BulletUrdfImporter.cpp``); each is pinned by
-``tests/test_joint_table_and_inertia.py`` against PyBullet itself.
+``tests/model/test_joint_table_and_inertia.py`` against PyBullet itself.
 
 Collision-box inertia (PyBullet without ``URDF_USE_INERTIA_FROM_FILE``), a link of mass m > 0:
 

@@ -1,7 +1,7 @@
 """The joint table: the 17 fields of ``p.getJointInfo`` for every joint of a
 :class:`~simbridge.model.urdf.UrdfModel`, computed without PyBullet (the MuJoCo backend
-reports it as PyBullet would; ``tests/test_joint_table_and_inertia.py`` pins it against PyBullet
-itself).
+reports it as PyBullet would; ``tests/model/test_joint_table_and_inertia.py`` pins it against
+PyBullet itself).
 
 Frames are PyBullet's: the joint frame in the parent link's inertial (centre-of-mass) frame,
 the axis in the child link's inertial frame; quaternions (x, y, z, w); lengths in metres,

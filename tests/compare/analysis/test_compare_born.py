@@ -23,8 +23,8 @@ from simbridge.compare.report import summary as compare_summary
 from simbridge.compare.report.parts import parts_words
 from simbridge.compare.run.quantities import DEG
 
-DATA = Path(__file__).parent / "data"
-DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
+DATA = Path(__file__).parents[1] / "data"
+DOCS = Path(__file__).resolve().parents[3] / "docs" / "compare.md"
 PAIR = ["pybullet", "mujoco"]
 
 

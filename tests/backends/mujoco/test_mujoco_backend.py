@@ -372,7 +372,7 @@ def test_a_call_waiting_for_the_sim_when_another_thread_closes_it_is_refused():
 
     from simbridge.backends.mujoco.inspect import backend_of
 
-    sys.path.insert(0, str(Path(__file__).parent))
+    sys.path.insert(0, str(Path(__file__).parents[2]))
     from _closing_race import check_waiting_call_refused_after_close
 
     sim = simbridge.Sim("mujoco")

@@ -31,7 +31,7 @@ from simbridge.compare.report import replay as rp
 
 pytest.importorskip("viser", reason="the replay needs viser (simbridge[report])")
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from _chromium import Browser, chromium  # noqa: E402
 
 MB = 1_000_000

@@ -14,7 +14,7 @@ from simbridge.compare import compare, load_scenario, report, run
 from simbridge.compare.analysis.outcomes import success_interval
 from simbridge.compare.report import summary as compare_summary
 
-DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
+DOCS = Path(__file__).resolve().parents[3] / "docs" / "compare.md"
 
 
 @pytest.fixture(scope="module")

@@ -797,7 +797,7 @@ def test_the_python_loop_refuses_calls_from_another_thread_while_it_steps(monkey
     would be: the conformance suite's check (commands, teleports, reads, a second step from
     another thread during a step(n) raise SimBusyError and change nothing) on the Python
     loop, where they went through (a set_joint_velocity, a reset_base_state...)."""
-    monkeypatch.syspath_prepend(str(Path(__file__).parent / "conformance"))
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "conformance"))
     from test_world import (
         test_every_call_that_touches_the_world_is_refused_while_another_thread_steps as check,
     )
@@ -809,7 +809,7 @@ def test_the_python_loop_takes_racing_commands_and_teleports_whole(monkeypatch):
     """The conformance suite's race (one thread stepping, three commanding, giving torques and
     teleporting) on the Python loop, whose MuJoCo calls release the GIL mid-step: every call
     lands between two steps or is refused, no torque is lost."""
-    monkeypatch.syspath_prepend(str(Path(__file__).parent / "conformance"))
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "conformance"))
     from test_world import (
         test_commands_and_teleports_racing_a_stepping_thread_land_whole as check,
     )

@@ -20,7 +20,7 @@ from simbridge.compare.run.resync import PARTS, default_every, resync
 from simbridge.compare.scenario import load_scenario
 from simbridge.exceptions import InvalidArgumentError
 
-DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
+DOCS = Path(__file__).resolve().parents[3] / "docs" / "compare.md"
 
 
 @pytest.fixture(scope="module")

@@ -389,7 +389,7 @@ def test_friction_is_the_product_of_the_two_materials():
 
 @needs_sapien
 def test_a_waiting_call_is_refused_once_the_sim_is_closed():
-    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parents[2]))
     from _closing_race import check_waiting_call_refused_after_close
 
     from simbridge.backends.physx.inspect import backend_of
@@ -457,7 +457,7 @@ def test_an_unenforced_spherical_limit_is_warned_and_listed(caplog):
 def test_a_body_past_physx_articulation_size_is_refused_at_load():
     """255 links (root included) step; 256 crashed the process at the first step: refused at
     load naming the count, and the Sim goes on."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent / "conformance"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "conformance"))
     from _generated import arms_urdf, chain_urdf
 
     with simbridge.Sim("physx") as sim:

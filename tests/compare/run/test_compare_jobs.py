@@ -299,7 +299,7 @@ def test_the_jobs_bench_runs(tmp_path):
     import subprocess
     import sys
 
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     done = subprocess.run(
         [sys.executable, str(root / "bench" / "jobs.py"), "--size", "2", "--backends", "mujoco"]
         + ["--no-rebuild", "--cache", str(tmp_path / "cache")],

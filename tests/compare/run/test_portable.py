@@ -12,7 +12,7 @@ import pytest
 
 from simbridge.compare.run.portable import acos, dot, length, norm
 
-COMPARE = Path(__file__).resolve().parents[2] / "compare"
+COMPARE = Path(__file__).resolve().parents[3] / "compare"
 
 # calls whose last bits depend on the processor (compare/run/portable.py says why): OpenBLAS's
 # kernels and numpy's AVX-512 loops

@@ -21,7 +21,7 @@ from typing import Any
 from simbridge.compare import QUANTITIES
 from simbridge.compare.run.events import KINDS
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[1]
 DOC = HERE.parents[1] / "docs" / "compare.md"
 BASELINE = HERE / "data" / "baseline"
 HEADING = "### `summary.json`: every key"
@@ -90,7 +90,7 @@ def documented() -> set[str]:
 def conditional() -> set[str]:
     """The keys docs/compare.md's list marks as written only in some cases (``key  # only
     when ...``): not in every recorded summary, tested where they are written
-    (tests/compare/test_compare_every_engine.py)."""
+    (tests/compare/pipeline/test_compare_every_engine.py)."""
     text = DOC.read_text(encoding="utf-8")
     section = text.split(HEADING, 1)[1].split("```text", 1)[1].split("```", 1)[0]
     return {

@@ -28,8 +28,8 @@ from simbridge.compare.run.ensemble import run_ensembles
 from simbridge.compare.scenario import load_scenario
 from simbridge.exceptions import InvalidArgumentError
 
-BALANCED = Path(__file__).parent / "data" / "balanced-pendulum.toml"
-DOCS = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
+BALANCED = Path(__file__).parents[1] / "data" / "balanced-pendulum.toml"
+DOCS = Path(__file__).resolve().parents[3] / "docs" / "compare.md"
 
 
 def test_pendulum_agrees(other):

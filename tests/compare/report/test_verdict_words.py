@@ -21,7 +21,7 @@ from simbridge.compare.report.brief import brief
 from simbridge.compare.report.summary_json import verdict_dict
 from simbridge.compare.report.verdict import pair_words, verdict_lines
 
-BASELINE = Path(__file__).resolve().parent / "data" / "baseline"
+BASELINE = Path(__file__).resolve().parents[1] / "data" / "baseline"
 CASES = sorted(p.name for p in BASELINE.iterdir() if (p / "report.md").exists())
 
 

@@ -209,7 +209,7 @@ def test_judged_without_a_cache_judges_here(monkeypatch):
 
 def test_the_rebuild_bench_runs(tmp_path):
     """bench/rebuild.py on a small study prints its rows and phases (speed not asserted)."""
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     cache, out = tmp_path / "cache", tmp_path / "rep"
     _compare(cache, out, "--no-replay")
     done = subprocess.run(

@@ -12,7 +12,7 @@ from simbridge.compare import compare, load_scenario
 from simbridge.compare.errors import ScenarioError
 from simbridge.compare.run import studyjobs
 
-PENDULUM = (Path(__file__).resolve().parents[2] / "compare/scenarios/pendulum.toml").read_text()
+PENDULUM = (Path(__file__).resolve().parents[3] / "compare/scenarios/pendulum.toml").read_text()
 
 
 @pytest.fixture
@@ -61,7 +61,7 @@ def test_a_robot_not_found_lists_the_scenarios_folder_first(tmp_path, monkeypatc
     sub = tmp_path / "my" / "sub"
     sub.mkdir(parents=True)
     (sub / "foo.urdf").write_text(
-        (Path(__file__).resolve().parents[2] / "robots/pendulum.urdf").read_text()
+        (Path(__file__).resolve().parents[3] / "robots/pendulum.urdf").read_text()
     )
     path = sub / "mine.toml"
     path.write_text(PENDULUM.replace('urdf = "pendulum.urdf"', 'urdf = "fooo.urdf"', 1))
@@ -92,7 +92,7 @@ def test_a_robot_file_changed_since_is_read_again(tmp_path):
     """The joint names read are kept by file and its time and size: an edit is seen."""
     from simbridge.compare.scenario.robot_check import check_robots
 
-    robots = Path(__file__).resolve().parents[2] / "robots"
+    robots = Path(__file__).resolve().parents[3] / "robots"
     urdf = (robots / "pendulum.urdf").read_text()
     (tmp_path / "mine.urdf").write_text(urdf)
     path = tmp_path / "mine.toml"

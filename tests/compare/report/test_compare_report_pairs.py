@@ -433,7 +433,7 @@ def test_a_sweep_of_three_engines_draws_every_pair(tmp_path, monkeypatch):
         return save(fig, *args, **kwargs)
 
     monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
-    slide = Path(__file__).parent / "data" / "incline-slide.toml"
+    slide = Path(__file__).parents[1] / "data" / "incline-slide.toml"
     s = sweep(
         slide,
         ["pybullet", "mujoco", "physx"],

@@ -38,7 +38,7 @@ from simbridge.compare.study.points import Setting, apply_setting
 from simbridge.exceptions import InvalidArgumentError, InvalidProfileError
 from simbridge.profiles import derived_profile, get_profile
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 SLIDE = DATA / "incline-slide.toml"
 FALLS = DATA / "kuka-falls.toml"
 G_COS30 = 9.8 * math.cos(math.radians(30))

@@ -23,7 +23,7 @@ scipy and the engines); elsewhere the tests skip, saying which differs.
 To record them again (a change of results that is deliberate, committed on its own with the
 reason)::
 
-    .venv/bin/python tests/compare/test_compare_same_results.py
+    .venv/bin/python tests/compare/pipeline/test_compare_same_results.py
 """
 
 from __future__ import annotations
@@ -41,11 +41,11 @@ from typing import Any
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from _machine import kernel_variants, libm  # noqa: E402
 
-DATA = Path(__file__).resolve().parent / "data" / "baseline"
-ROOT = Path(__file__).resolve().parents[2]
+DATA = Path(__file__).resolve().parents[1] / "data" / "baseline"
+ROOT = Path(__file__).resolve().parents[3]
 
 # name -> (scenario, options of compare()); each a few seconds on one core
 CASES: dict[str, tuple[str, dict[str, Any]]] = {
@@ -174,7 +174,7 @@ def _masked(
 
 def _record(cases: list[str]) -> None:
     """Record the named cases (all when none are named: ``python
-    tests/compare/test_compare_same_results.py [CASE ...]``)."""
+    tests/compare/pipeline/test_compare_same_results.py [CASE ...]``)."""
     import shutil
     import tempfile
 
@@ -199,7 +199,7 @@ def _produce_all(dest: Path) -> None:
     """Every case's masked summary.json and report.md into ``dest`` (``CASE.json``,
     ``CASE.md``), its jobs run in this process, and the numpy targets this process has in
     ``targets.json``: what a child of :func:`test_the_same_figures_whatever_the_kernels`
-    does (``python tests/compare/test_compare_same_results.py --produce DIR``)."""
+    does (``python tests/compare/pipeline/test_compare_same_results.py --produce DIR``)."""
     import tempfile
 
     from _machine import numpy_targets

@@ -10,7 +10,7 @@ import pytest
 
 from simbridge.cli import main
 
-PENDULUM = (Path(__file__).resolve().parents[1] / "compare/scenarios/pendulum.toml").read_text()
+PENDULUM = (Path(__file__).resolve().parents[2] / "compare/scenarios/pendulum.toml").read_text()
 ARGS = ["--backends", "pybullet", "pybullet", "--duration", "0.1", "--ensemble", "1"]
 ARGS += ["--workers", "0", "--no-plots", "--no-replay"]
 

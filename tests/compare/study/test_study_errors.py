@@ -34,7 +34,7 @@ from simbridge.compare.study.explain import candidates, not_checked
 from simbridge.exceptions import InvalidArgumentError, InvalidProfileError
 from simbridge.profiles import get_profile
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 RACECAR = DATA / "racecar-drop.toml"
 TWO = ["pybullet", "mujoco"]
 WITH_PHYSX = ["pybullet", "physx"]  # PhysX lists departures no rule checks (spherical joints...)

@@ -213,7 +213,7 @@ def test_docs_say_the_default_run_is_three_engines_with_physx_installed():
     (2 min 19 s measured; the README's table: 117 s)."""
     from pathlib import Path
 
-    docs = Path(__file__).resolve().parents[2] / "docs" / "compare.md"
+    docs = Path(__file__).resolve().parents[3] / "docs" / "compare.md"
     text = " ".join(docs.read_text("utf-8").split())
     assert "a two-engine run stays under 30 s" in text
     assert "because it stays under 30 s" not in text
@@ -234,7 +234,7 @@ def test_the_terminal_headline_keeps_a_hyphenated_name_as_written(tmp_path, caps
 
     from simbridge.cli import main
 
-    shipped = Path(__file__).resolve().parents[2] / "compare" / "scenarios" / "pendulum.toml"
+    shipped = Path(__file__).resolve().parents[3] / "compare" / "scenarios" / "pendulum.toml"
     text = shipped.read_text("utf-8")
     first = next(x for x in text.splitlines() if x.startswith("name"))
     toml = tmp_path / "my-pendulum.toml"
