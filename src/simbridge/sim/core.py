@@ -558,7 +558,7 @@ class Sim:
         Raises:
             BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
         """
-        return native.qpos(self._s)
+        return native.generalized_state(self._s, "qpos()")[0]
 
     def qvel(self) -> np.ndarray:
         """MuJoCo's generalized velocities (a free joint: the body frame origin's linear
@@ -570,7 +570,7 @@ class Sim:
         Raises:
             BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
         """
-        return native.qvel(self._s)
+        return native.generalized_state(self._s, "qvel()")[1]
 
     def set_qpos_qvel(
         self,

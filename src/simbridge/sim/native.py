@@ -35,11 +35,10 @@ __all__ = [
     "actuator_controls",
     "actuators",
     "check_semantics",
+    "generalized_state",
     "leave",
     "load_native",
     "native_model",
-    "qpos",
-    "qvel",
     "refuse_after_native",
     "reset_keyframe",
     "resolve",
@@ -284,36 +283,21 @@ def actuator_controls(s: Shared) -> np.ndarray:
     return s.backend.actuator_controls()
 
 
-def qpos(s: Shared) -> np.ndarray:
-    """:meth:`simbridge.Sim.qpos` on the Sim's shared state.
+def generalized_state(s: Shared, call: str) -> tuple[np.ndarray, np.ndarray]:
+    """MuJoCo's ``qpos`` and ``qvel`` (:meth:`simbridge.Sim.qpos`, :meth:`simbridge.Sim.qvel`).
 
     Args:
         s: the Sim's shared state.
+        call: the call that reads them (for the message).
 
     Returns:
-        (nq,) float64, a copy.
+        Copies of ``qpos`` (nq,) and ``qvel`` (nv,), float64, MuJoCo's order.
 
     Raises:
         BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
     """
-    native_model(s, "qpos()")
-    return s.backend.generalized_state()[0]
-
-
-def qvel(s: Shared) -> np.ndarray:
-    """:meth:`simbridge.Sim.qvel` on the Sim's shared state.
-
-    Args:
-        s: the Sim's shared state.
-
-    Returns:
-        (nv,) float64, a copy.
-
-    Raises:
-        BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
-    """
-    native_model(s, "qvel()")
-    return s.backend.generalized_state()[1]
+    native_model(s, call)
+    return s.backend.generalized_state()
 
 
 def set_qpos_qvel(s: Shared, qpos: Any, qvel: Any) -> None:
