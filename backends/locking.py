@@ -5,9 +5,10 @@ call's own nested calls pass, and so do the stepping thread's bound-command send
 finds it taken by another thread waits for that thread's call to end, unless that call is a
 step (the holder set ``_in_step``): a step(n) runs for as long as n says, so the call is
 refused (SimBusyError) and nothing waits for it. The wait looks at the holder every
-WAIT_SLICE_S (four threads reading one Sim that nobody stepped were refused 8,456 times when no
-call waited; a wait of 1 ms still refused some across the GIL's 5 ms switch interval) and gives
-up after WAIT_LIMIT_S.
+WAIT_SLICE_S, the GIL's switch interval (a refusal instead of a wait, or a shorter slice,
+refuses readers that merely overlap: tests/conformance/test_world.py's
+``test_reads_from_several_threads_at_once_are_not_refused`` has the figures), and gives up
+after WAIT_LIMIT_S.
 
 A hot call takes the lock inline (``if not lock.acquire(False): wait_for_lock(self)``, then
 ``try``/``finally: lock.release()``): a decorator's extra call frame costs about as much as the

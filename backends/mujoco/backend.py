@@ -75,10 +75,9 @@ if mujoco.get_mju_user_warning() is None:  # leave a handler the user installed 
 CONTACT_MARGIN = 0.001
 
 # MuJoCo's compiler refuses a body tree deeper than 1023 bodies below the world ("depth limit
-# exceeded in signature computation"), after spending tens of seconds on it (measured, MuJoCo
-# 4.0: a 2000-link chain, 40 s): a robot whose joints nest deeper than this (its root is one
-# body) is refused before any compile. Near the limit a chain is slow anyway: 1000 links load in
-# 4 s and step in 1 s (python bench/limits.py).
+# exceeded in signature computation"), after spending tens of seconds on it: a robot whose
+# joints nest deeper than this (its root is one body) is refused before any compile. Near the
+# limit a chain is slow anyway (the figures: README's "Limits", python bench/limits.py).
 MAX_TREE_DEPTH = 1022
 
 

@@ -14,8 +14,8 @@ axes, about the tree's centre of mass, as ``mj_step1`` leaves it), the torque is
 principal axes (``ximat``) and turned back to the world, and each body's force and torque
 become generalised forces J^T f through ``cdof``, summed over the subtree of each dof's body
 (as MuJoCo's own recursive Newton-Euler pass does). Writing them into ``xfrc_applied`` instead
-gives the same forces but costs ``mj_fwdAcceleration`` a Jacobian per body (1.5 us per r2d2
-step, measured). The compiled step loop (``_mjkernel.c``) does the same in C.
+gives the same forces but costs ``mj_fwdAcceleration`` a Jacobian per body (its cost:
+docs/mujoco_backend.md, "Damping"). The compiled step loop (``_mjkernel.c``) does the same in C.
 
 ``btMultiBody::applyDeltaVeeMultiDof`` clamps every velocity coordinate (the 6 base coordinates
 and every joint) to +-maxJointVelocity (100); measured on PyBullet, the velocity after the whole

@@ -66,12 +66,11 @@ MOTOR_DMAX = 0.9999  # the impedance of motor rows (dof_solimp[0:2]), MuJoCo's l
 # reads efc_R/efc_D directly); the polish then removes the last 1e-6 (solve.polish).
 MOTOR_R_SCALE = 1e-2
 
-# PyBullet's joint-limit row (btMultiBodyJointLimitConstraint::createConstraintRows), measured
-# on raw PyBullet 3.2.7 (a hinge reset past its limit, nothing else acting): the row exists once
-# the joint is at or past its limit, only pushes the joint back in (unilateral), asks for zero
-# speed along it plus, while the penetration is under 0.04 (split impulse's threshold), a
-# push-back at LIMIT_ERP * penetration / dt (0.01 rad past: -0.48 rad/s at 1/240 s); deeper
-# than that the row only stops outward motion (0.05 or 0.3 rad past: the joint stays there).
+# PyBullet's joint-limit row (btMultiBodyJointLimitConstraint::createConstraintRows): the row
+# exists once the joint is at or past its limit, only pushes the joint back in (unilateral),
+# asks for zero speed along it plus, while the penetration is under 0.04 (split impulse's
+# threshold), a push-back at LIMIT_ERP * penetration / dt; deeper than that the row only stops
+# outward motion (measured on raw PyBullet: docs/mujoco_backend.md, "Joint limits").
 # The MuJoCo limit row is given that law: solref "direct" (-LIMIT_ERP / dt^2, -1 / dt) times
 # the impedance, a margin of LIMIT_MARGIN so that a joint exactly at its limit is held, the
 # rows hardened like the motor rows, and MuJoCo's position term K (pos - margin) replaced

@@ -3,14 +3,12 @@
 PyBullet's limit row (btMultiBodyJointLimitConstraint) exists once a joint is at or past its
 limit, only pushes the joint back in and asks for zero speed along it plus, while the
 penetration ``d`` is under :data:`LIMIT_DEEP`, a push-back at ``LIMIT_ERP d / dt``; deeper, it
-only stops outward motion (measured on raw PyBullet 3.2.7: slider.urdf reset 0.01 m past its
-limit leaves at -0.48 m/s and keeps that speed; 0.041 m or 0.3 m past, it stays there).
+only stops outward motion.
 
 PhysX's articulation limit puts a joint found past it back on the limit within the step and
-keeps the correction as speed: 0.8 of ``d / dt`` with 50 PGS position iterations (0.64 with
-one), so slider.urdf reset 0.3 m past its limit crosses to the far one at 57.6 m/s. Neither the
-links' max depenetration velocity nor TGS gives PyBullet's law; a joint max velocity only caps
-the speed (bench/physx_limit_reset.py measures each).
+keeps most of the correction as speed, and none of PhysX's own settings gives PyBullet's law
+(the measurements, raw PyBullet's and each PhysX setting's: docs/physx_backend.md, "Joint
+limits").
 
 While a joint is past its limit the backend stands in for the row. Before the step, PhysX's
 limit on the violated side is moved to where the row lets the joint be after it, ``q + vt dt``
@@ -26,14 +24,13 @@ looked at after one, and steps as before unless a joint is past its limit.
 
 The fix after the step is an impulse on the held joints: on a fixed base it moves the rest of
 the chain through the inverse mass matrix (PhysX's articulation at q, SAPIEN's Pinocchio model),
-as PyBullet's row impulse does (a free two-hinge chain, the elbow reset 0.039 rad past: the
-shoulder within 2.1e-5 rad of PyBullet, 2.4e-2 with that joint alone); on a floating base it is
-written to the held joints alone (the base's share is not reproduced).
+as PyBullet's row impulse does (how close that comes, and written to the held joint alone:
+docs/physx_backend.md); on a floating base it is written to the held joints alone (the base's
+share is not reproduced).
 
 Departure: a joint that arrives at its limit from inside is PhysX's (stopped on the limit;
 PyBullet's row, made only once a step starts at or past the limit, lets it pass by up to a
-step's travel and pushes it back: the slider at 1 m/s reaches 0.4042 m and returns at -0.2
-m/s).
+step's travel and pushes it back).
 
 The engine setting ``limit_rule`` (backends/settings_physx.py) chooses: ``"hard"`` (the default,
 all of the above) or ``"pybullet"``, PyBullet's rule on arrival too. Under ``"pybullet"`` PhysX's

@@ -42,10 +42,9 @@ __all__ = ["Window", "VULKAN_NEEDED"]
 
 OPEN_WAIT_S = 60.0  # the window's first frame: seconds on a loaded 2-core machine under Mesa
 CLOSE_WAIT_S = 3.0  # then the window's process is killed
-# a window whose process fails to open it is started again: 1 of about 70 openings under a
-# busy Xvfb (2 loaded cores) ended with SAPIEN finding no device, the ones around it opened;
-# at load 9 (the suite beside four other test runs) one window of test_gui's ten in a row
-# failed twice, the four before it opened: so twice more
+# a window whose process fails to open it is started again, twice: under a busy Xvfb SAPIEN
+# now and then finds no device where the openings around it do (docs/physx_backend.md, "The
+# window")
 OPEN_RETRIES = 2
 RETRY_PAUSE_S = 1.0  # before the first retry; twice that before the second
 HEADER = 3  # the counter, the close flag, the world's generation (window_process.py)

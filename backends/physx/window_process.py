@@ -10,7 +10,8 @@ the world's parts (a link, or a static body) with their shapes, ``FOLDER/poses.N
 ``ready`` once the first frame is drawn, or why the window could not open.
 
 The scene is drawn with the shaders beside this file (window_shader/): SAPIEN's own lit
-shaders took 24-37 s to compile on Mesa's lavapipe before the first frame, these about 1 s.
+shaders take many times longer to compile on Mesa's lavapipe before the first frame
+(docs/physx_backend.md, "The window").
 The process ends with ``os._exit(0)`` without tearing the window down (the X server closes it
 with the connection), as MuJoCo's window process does.
 """

@@ -80,13 +80,12 @@ MAX_BODY_JOINTS = 127
 MAX_BODY_MOVABLE_JOINTS = 121
 
 
-# PyBullet's removeBody keeps the body's collision shapes until the world is reset (r2d2: 0.6 MB
-# per load/step/remove cycle, raw PyBullet alike; resetSimulation frees them, 0.5 ms on an empty
-# world; python bench/soak.py). When remove() empties the world after this many removals since
+# PyBullet's removeBody keeps the body's collision shapes until the world is reset
+# (resetSimulation frees them). When remove() empties the world after this many removals since
 # the engine's world was new, and the ids PyBullet would hand out next are a new world's (0, 1,
 # 2, ...: the bodies were removed last-loaded first), the engine's world is made new: nothing
-# the Sim shows changes (ids, time, settings), and the memory stays bounded (r2d2 loaded and
-# removed 1000 times: 20 MB over the first cycles, then flat).
+# the Sim shows changes (ids, time, settings), and the memory stays bounded (the figures:
+# README's "Limits", python bench/soak.py).
 RECYCLE_AFTER_REMOVALS = 32
 
 

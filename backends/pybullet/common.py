@@ -131,7 +131,8 @@ def _x_display_problem() -> str | None:
     xlib.XOpenDisplay.restype = ctypes.c_void_p
     xlib.XOpenDisplay.argtypes = [ctypes.c_char_p]
     xlib.XCloseDisplay.argtypes = [ctypes.c_void_p]
-    for attempt in range(X_TRIES):  # measured: 3-8 % of connections to a busy Xvfb fail once
+    # a busy Xvfb refuses a connection now and then (docs/pybullet_backend.md, "The window")
+    for attempt in range(X_TRIES):
         display = xlib.XOpenDisplay(None)
         if display:
             xlib.XCloseDisplay(display)

@@ -1,8 +1,8 @@
 """PyBullet's own window for ``Sim(gui=True)``: its camera on the robots, loads without redraws.
 
-Measured under Xvfb (Mesa llvmpipe, 2 loaded cores): with the window drawing, loading r2d2
-took 17-19 s (a redraw per visual shape made); with drawing paused during the load, well under
-1 s. The side panels and their synthetic camera previews are hidden (``g`` in the window shows
+Drawing is paused while bodies are made: the window redraws after every visual shape made,
+which makes a load many times slower (the figures: docs/pybullet_backend.md, "The window").
+The side panels and their synthetic camera previews are hidden (``g`` in the window shows
 them again), so the window is the scene.
 """
 

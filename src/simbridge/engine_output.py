@@ -64,8 +64,8 @@ _classifiers: dict[str, Classifier] = {}
 _lock = threading.Lock()  # one window at a time in the process
 _owner: int | None = None  # the thread holding the window (read unlocked by that thread only)
 _open: list[tuple[int, int, IO[bytes]]] = []  # the open window's (fd, its copy, its file)
-# one anonymous file per fd, made on first use and emptied after each window (making two
-# files cost 40 to 400 us a window, measured on a shared machine; reusing them ~5 us)
+# one anonymous file per fd, made on first use and emptied after each window: making them
+# costs far more than emptying them (the figures: docs/compare.md, the engines' own output)
 _sinks: dict[int, IO[bytes]] = {}
 
 

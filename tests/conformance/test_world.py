@@ -251,7 +251,9 @@ def test_every_call_that_touches_the_world_is_refused_while_another_thread_steps
 def test_reads_from_several_threads_at_once_are_not_refused(make_sim):
     """Four threads reading one Sim that nobody steps all get their answers, equal to the
     single-threaded ones (PyBullet refused 8,456 of them with SimBusyError, naming a step
-    that was not there: each read held the Sim's lock and another read found it taken)."""
+    that was not there: each read held the Sim's lock and another read found it taken; a wait
+    of 1 ms for the lock still refused some across the GIL's 5 ms switch interval, hence
+    backends/locking.py's WAIT_SLICE_S of 5 ms)."""
     import threading
 
     sim = make_sim()
