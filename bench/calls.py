@@ -272,11 +272,8 @@ def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
     import sapien
 
     from simbridge.backends.physx import inspect
-    try:
-        from simbridge.backends.physx.commands import DRIVE_DAMPING
-    except ModuleNotFoundError:  # a tree from before backends/physx/motors.py was named
-        # commands.py (issue 32): bench/ab.py runs this file in both trees
-        from simbridge.backends.physx.motors import DRIVE_DAMPING  # type: ignore[no-redef]
+
+    DRIVE_DAMPING = cases.physx_drive_damping()
 
     scene, r = inspect.scene(w.sim), inspect.robot(w.sim, w.body)
     for moving in r.moving_links:  # PhysX's own link damping, the profile's k

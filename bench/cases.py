@@ -285,6 +285,17 @@ def mujoco_raw_drive(record: bool) -> Callable[[], float]:
 # ---------------------------------------------------------------- raw PhysX (SAPIEN)
 
 
+def physx_drive_damping() -> float:
+    """PhysX's drive damping of a velocity command, from backends/physx/commands.py, or from
+    motors.py in a tree from before the backends' one-name-per-part rename (issue 32): bench/ab.py
+    runs this tree's benchmarks in an older tree too."""
+    try:
+        from simbridge.backends.physx.commands import DRIVE_DAMPING
+    except ModuleNotFoundError:
+        from simbridge.backends.physx.motors import DRIVE_DAMPING  # type: ignore[no-redef]
+    return float(DRIVE_DAMPING)
+
+
 def _physx_raw_world(sim: simbridge.Sim, robot: int, native_damping: bool = True) -> tuple:
     """What a user of raw SAPIEN drives: the layer's world (the same articulation, shapes,
     materials and solver settings, built from the same model) with PhysX's own link damping
@@ -292,8 +303,8 @@ def _physx_raw_world(sim: simbridge.Sim, robot: int, native_damping: bool = True
     the idiomatic way (stiffness 0, the layer's damping, the force limit set where the schedule
     changes it, targets every step) and the other joints' brakes left as the layer set them."""
     from simbridge.backends.physx import inspect
-    from simbridge.backends.physx.commands import DRIVE_DAMPING
 
+    DRIVE_DAMPING = physx_drive_damping()
     r = inspect.robot(sim, robot)
     if native_damping:
         for link in r.moving_links:
