@@ -12,6 +12,8 @@ from _engines import installed_backends, require_backend
 
 import simbridge
 
+pytestmark = pytest.mark.slow  # among the slowest files: left out of the quick tier
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

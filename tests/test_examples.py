@@ -9,6 +9,8 @@ import pytest
 
 import simbridge
 
+pytestmark = pytest.mark.slow  # whole corpora (or examples' runs): left out of the quick tier
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 BACKENDS = ["pybullet", "mujoco"]  # the shipped backends
 

@@ -42,6 +42,7 @@ pytestmark = pytest.mark.skipif(
     reason="Xvfb is not installed: the window tests need a real X server "
     "(Debian: apt-get install xvfb; .ci/run installs it when run as root)",
 )
+pytestmark = [pytestmark, pytest.mark.slow]  # real windows, ten in a row
 
 
 @pytest.fixture(scope="module")

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # among the slowest files: left out of the quick tier
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -48,6 +48,7 @@ pytestmark = pytest.mark.skipif(
     f"variants, this is {engine_versions()} with {libm()!r}: other engine builds, and libm's "
     "other variants, give other bits",
 )
+pytestmark = [pytestmark, pytest.mark.slow]  # child processes under other kernels: minutes
 
 
 def _mismatches(expected: dict[str, str], got: dict[str, str]) -> list[str]:

@@ -32,6 +32,8 @@ from _gaps import gap
 from simbridge import exceptions as exc
 from simbridge.registry import load_backend
 
+pytestmark = pytest.mark.slow  # whole corpora (or examples' runs): left out of the quick tier
+
 try:
     ROOT = str(
         distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data")

@@ -32,6 +32,8 @@ from simbridge.model.joint_table import joint_table
 from simbridge.model.scene import SceneBody
 from simbridge.model.scene_reader import parse_scene
 
+pytestmark = pytest.mark.slow  # whole corpora (or examples' runs): left out of the quick tier
+
 DATA = _raw.DATA
 MJCF = sorted(os.path.relpath(f, DATA) for f in glob.glob(os.path.join(DATA, "mjcf", "*.xml")))
 SDF = sorted(

@@ -28,6 +28,8 @@ from simbridge.model.inertia import is_fixed_base, model_inertials
 from simbridge.model.joint_table import joint_table
 from simbridge.model.urdf import parse_urdf, resolve_source
 
+pytestmark = pytest.mark.slow  # whole corpora (or examples' runs): left out of the quick tier
+
 DATA = _raw.DATA
 ALL = sorted(
     os.path.relpath(f, DATA) for f in glob.glob(os.path.join(DATA, "**", "*.urdf"), recursive=True)

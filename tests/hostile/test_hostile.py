@@ -26,6 +26,8 @@ import _hostile_cases as h  # noqa: E402
 import _hostile_runner as runner  # noqa: E402
 import _hostile_suite as suite  # noqa: E402
 
+pytestmark = pytest.mark.slow  # among the slowest files: left out of the quick tier
+
 GROUP = (h.NEUTRAL, "pybullet")
 
 

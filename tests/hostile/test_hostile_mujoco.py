@@ -12,6 +12,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _hostile_suite as suite  # noqa: E402
 
+pytestmark = pytest.mark.slow  # among the slowest files: left out of the quick tier
+
 GROUP = ("mujoco",)
 
 

@@ -15,7 +15,7 @@ import _hostile_suite as suite  # noqa: E402
 GROUP = ("physx",)
 # _hostile_cases.BACKENDS leaves PhysX out where its engine is missing (no case then): the module
 # is skipped, or fails in CI (tests/_engines.py)
-pytestmark = pytest.mark.needs_backend("physx")
+pytestmark = [pytest.mark.needs_backend("physx"), pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")
