@@ -498,9 +498,11 @@ above sim/: only cli/ may import them."""
 def _floor(module: str) -> int | None:
     """A core module's floor (:data:`FLOORS`); None for the doors, the backends and compare."""
     parts = module.split(".")
-    if len(parts) == 1 or parts[0] != "simbridge" or parts[1] in ("backends", "compare"):
-        return None
-    if parts[1] == "__main__":
+    if (
+        len(parts) == 1
+        or parts[0] != "simbridge"
+        or parts[1] in ("backends", "compare", "__main__")
+    ):
         return None
     return FLOORS.get(parts[1], 0)
 
