@@ -18,7 +18,7 @@ and B = geom 2's (the Sim orients them as asked):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import mujoco
 import numpy as np
@@ -29,7 +29,7 @@ from simbridge.types import ContactPoint
 from ..locking import exclusive
 from .robots import Compiled, Robot
 
-__all__ = ["ContactReads"]
+__all__ = ["ContactReads", "contact_points_of"]
 
 
 class ContactReads:
@@ -57,7 +57,7 @@ class ContactReads:
         if cached is not None and cached[0] is c:
             return cached[1], cached[2]
         m = c.m
-        owner = np.full(m.ngeom, -1, np.intp)
+        owner = np.full(m.ngeom, -2, np.intp)
         link = np.full(m.ngeom, -2, np.intp)
         for robot in self._robots.values():
             for g in robot.spec.geoms:
@@ -81,59 +81,76 @@ class ContactReads:
             raise self._diverged
         else:
             self._py_mark()
-        m, d = c.m, c.d
-        n = d.ncon
-        if n == 0:
-            return []
         owner, link = self._geom_owners()
-        con = d.contact
-        geom = con.geom[:n]
-        dist = con.dist[:n] - con.includemargin[:n]
-        pos = con.pos[:n]
-        frame = con.frame[:n]
-        adr = con.efc_address[:n]
-        force = np.zeros((n, 6))
-        for i in range(n):
-            if adr[i] >= 0:
-                mujoco.mj_contactForce(m, d, i, force[i])
-        geom, pos, frame = geom.copy(), pos.copy(), frame.copy()  # views into d: taken now
-        normal = frame[:, 0:3]
-        on_a = pos - normal * (0.5 * dist)[:, None]
-        on_b = pos + normal * (0.5 * dist)[:, None]
-        rows = zip(
-            owner[geom[:, 0]].tolist(),
-            owner[geom[:, 1]].tolist(),
-            link[geom[:, 0]].tolist(),
-            link[geom[:, 1]].tolist(),
-            on_a.tolist(),
-            on_b.tolist(),
-            (-normal).tolist(),
-            dist.tolist(),
-            force[:, 0:3].tolist(),
-            (-frame[:, 3:6]).tolist(),
-            (-frame[:, 6:9]).tolist(),
-            strict=True,
-        )
-        out: list[ContactPoint] = []
-        for body_a, body_b, link_a, link_b, pa, pb, nb, dd, f, t1, t2 in rows:
-            if body_a < 0 or body_b < 0:
-                continue  # not a robot's collision geom (none is made so)
-            out.append(
-                ContactPoint(
-                    0,
-                    body_a,
-                    body_b,
-                    link_a,
-                    link_b,
-                    tuple(pa),
-                    tuple(pb),
-                    tuple(nb),
-                    dd,
-                    f[0],
-                    f[1],
-                    tuple(t1),
-                    f[2],
-                    tuple(t2),
-                )
+        return contact_points_of(c.m, c.d, owner, link)
+
+
+def contact_points_of(m: Any, d: Any, owner: np.ndarray, link: np.ndarray) -> list[ContactPoint]:
+    """The contact points of MuJoCo's ``d.contact`` (the last step's), as PyBullet gives them.
+
+    Args:
+        m: The compiled model.
+        d: Its data after a step.
+        owner: (ngeom,) the simbridge body of each geom: -1 for the world's own geoms (a
+            model read as MuJoCo reads it: its floor), -2 for a geom of no body (skipped).
+        link: (ngeom,) the PyBullet link index of each geom in its body (-1: the base).
+
+    Returns:
+        One point per MuJoCo contact between two geoms of bodies: the points on A and B, B's
+        normal (from B to A), the distance (margin taken off), the normal force and the two
+        friction forces along their directions.
+    """
+    n = d.ncon
+    if n == 0:
+        return []
+    con = d.contact
+    geom = con.geom[:n]
+    dist = con.dist[:n] - con.includemargin[:n]
+    pos = con.pos[:n]
+    frame = con.frame[:n]
+    adr = con.efc_address[:n]
+    force = np.zeros((n, 6))
+    for i in range(n):
+        if adr[i] >= 0:
+            mujoco.mj_contactForce(m, d, i, force[i])
+    geom, pos, frame = geom.copy(), pos.copy(), frame.copy()  # views into d: taken now
+    normal = frame[:, 0:3]
+    on_a = pos - normal * (0.5 * dist)[:, None]
+    on_b = pos + normal * (0.5 * dist)[:, None]
+    rows = zip(
+        owner[geom[:, 0]].tolist(),
+        owner[geom[:, 1]].tolist(),
+        link[geom[:, 0]].tolist(),
+        link[geom[:, 1]].tolist(),
+        on_a.tolist(),
+        on_b.tolist(),
+        (-normal).tolist(),
+        dist.tolist(),
+        force[:, 0:3].tolist(),
+        (-frame[:, 3:6]).tolist(),
+        (-frame[:, 6:9]).tolist(),
+        strict=True,
+    )
+    out: list[ContactPoint] = []
+    for body_a, body_b, link_a, link_b, pa, pb, nb, dd, f, t1, t2 in rows:
+        if body_a < -1 or body_b < -1:
+            continue  # a geom of no body (-2)
+        out.append(
+            ContactPoint(
+                0,
+                body_a,
+                body_b,
+                link_a,
+                link_b,
+                tuple(pa),
+                tuple(pb),
+                tuple(nb),
+                dd,
+                f[0],
+                f[1],
+                tuple(t1),
+                f[2],
+                tuple(t2),
             )
-        return out
+        )
+    return out

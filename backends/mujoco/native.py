@@ -24,6 +24,7 @@ from simbridge.model.mjcf_native import NativeBody, NativeMjcf
 from simbridge.profiles import Profile
 from simbridge.types import (
     BaseState,
+    ContactPoint,
     DynamicsInfo,
     JointCommands,
     JointInfo,
@@ -37,6 +38,7 @@ from simbridge.types import (
 
 from .. import locking
 from ..locking import exclusive, wait_for_lock
+from .contacts import contact_points_of
 
 __all__ = ["NativeMujoco"]
 
@@ -96,6 +98,7 @@ class NativeMujoco(Backend):
         self._closed = False
         self._stale = True
         self._diverged: SimulationDivergedError | None = None
+        self._geom_owners: tuple[np.ndarray, np.ndarray] | None = None
 
     reading = locking.reading
 
@@ -191,6 +194,35 @@ class NativeMujoco(Backend):
             mujoco.mj_comPos(m, d)
             mujoco.mj_comVel(m, d)
             self._stale = False
+
+    @exclusive
+    def contact_points(self) -> list[ContactPoint]:
+        """See Backend.contact_points: MuJoCo's ``d.contact`` of the last step, as the
+        MuJoCo backend gives it (:func:`~.contacts.contact_points_of`). A geom of a body that
+        has no joint row of its own belongs to the nearest ancestor's link; the world's own
+        geoms (the file's floor) to body -1, link -1."""
+        if self._diverged is not None:
+            raise self._diverged
+        owner, link = self._owners()
+        return contact_points_of(self.m, self.d, owner, link)
+
+    def _owners(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per geom: its simbridge body (-1: the world's) and link (-1: the base)."""
+        if self._geom_owners is None:
+            m = self.m
+            body_of = np.full(m.nbody, -1, np.intp)
+            link_of = np.full(m.nbody, -1, np.intp)
+            for i, b in self._bodies.items():
+                for row, mb in enumerate(b.link_bodies):
+                    link_of[mb] = row
+                for mb in range(1, m.nbody):
+                    if m.body_rootid[mb] == b.body_id:
+                        body_of[mb] = i
+            for mb in range(1, m.nbody):  # a body without a row: its parent's link
+                if link_of[mb] < 0 and m.body_parentid[mb] > 0:
+                    link_of[mb] = link_of[m.body_parentid[mb]]
+            self._geom_owners = (body_of[m.geom_bodyid], link_of[m.geom_bodyid])
+        return self._geom_owners
 
     # ---------------------------------------------------------------- tables
 

@@ -77,6 +77,10 @@ class RobotSpec:
     mass), zero from a scenario file, an ensemble's offsets otherwise)."""
     body: int = 0
     """An MJCF robot: which of the bodies its file makes (PyBullet's order)."""
+    semantics: str = "pybullet"
+    """An MJCF robot: how its file is read (``Sim.load_mjcf(semantics=...)``): ``"pybullet"``,
+    as ``p.loadMJCF`` reads it, or ``"mujoco"``, as MuJoCo compiles it (the file is then the
+    whole world: its floor, its ``<option>``, its actuators)."""
 
 
 @dataclass(frozen=True)
@@ -276,7 +280,7 @@ class Scenario:
         bodies are loaded with it) and return its body id."""
         source = self.resolve_urdf(robot)
         if robot.kind == "mjcf":
-            ids = sim.load_mjcf(source)
+            ids = sim.load_mjcf(source, semantics=robot.semantics)
             if robot.body >= len(ids):
                 raise ScenarioError(
                     self._where(),

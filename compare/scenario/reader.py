@@ -14,7 +14,12 @@ from typing import Any
 import simbridge
 from simbridge.engine_settings import freeze
 from simbridge.engine_settings import validate as validate_settings
-from simbridge.exceptions import InvalidEngineSettingError, did_you_mean
+from simbridge.exceptions import (
+    InvalidEngineSettingError,
+    MjcfCompileError,
+    UrdfNotFoundError,
+    did_you_mean,
+)
 from simbridge.transforms import quat_from_rpy
 
 from ..errors import ScenarioError
@@ -33,6 +38,9 @@ from .model import (
 )
 from .outcome_reader import read_outcome
 from .outcomes import Outcome
+
+MJCF_SEMANTICS = ("pybullet", "mujoco")
+"""How a scenario's MJCF robot may be read (``Sim.load_mjcf``'s ``semantics``)."""
 
 SCENARIO_KEYS = (
     "name",
@@ -69,9 +77,20 @@ class _Reader(TableReader):
                 "rpy",
                 "fixed_base",
                 "joint_positions",
+                "semantics",
             ),
         )
         kind = "mjcf" if "mjcf" in t else "urdf"
+        semantics = t.get("semantics", "pybullet")
+        if semantics not in MJCF_SEMANTICS:
+            raise self.error(
+                [*path, "semantics"],
+                f"expected one of {', '.join(map(repr, MJCF_SEMANTICS))}, got {semantics!r}",
+            )
+        if "semantics" in t and kind != "mjcf":
+            raise self.error(
+                [*path, "semantics"], "only for a robot from an MJCF file (mjcf = ...)"
+            )
         if kind == "mjcf":
             for key in ("urdf", "position", "orientation", "rpy", "fixed_base"):
                 if key in t:
@@ -114,7 +133,17 @@ class _Reader(TableReader):
         for k, v in jp.items():
             ref: JointRef = int(k) if k.isascii() and k.isdigit() else k
             joints.append((ref, self.number(v, [*path, "joint_positions", k])))
-        return RobotSpec(name, urdf, position, orientation, fixed, tuple(joints), kind, body)  # type: ignore[arg-type]
+        return RobotSpec(
+            name,
+            urdf,
+            position,
+            orientation,
+            fixed,
+            tuple(joints),
+            kind,
+            body,
+            semantics,  # type: ignore[arg-type]
+        )
 
     def command(
         self, t: Any, path: list[str | int], robots: dict[str, RobotSpec], subject: str
@@ -248,6 +277,11 @@ class _Reader(TableReader):
             raise self.error(["timestep"], str(exc)) from None
         gravity = self.vector(data.get("gravity", [0.0, 0.0, -9.8]), ["gravity"], 3)
         robots = self.robots(data)
+        native = [r for r in robots if r.semantics == "mujoco"]
+        if native:
+            timestep, gravity = self.native_world(
+                data, robots, native[0], source, timestep, gravity
+            )
         by_name = {r.name: r for r in robots}
         subject = self.string(data.get("subject", robots[-1].name), ["subject"])
         if subject not in by_name:
@@ -284,6 +318,41 @@ class _Reader(TableReader):
                 ["profile"], f"unknown profile {profile!r}; valid: {sorted(simbridge.PROFILES)}"
             )
         return profile
+
+    def native_world(
+        self,
+        data: dict[str, Any],
+        robots: list[RobotSpec],
+        native: RobotSpec,
+        source: Path | None,
+        timestep: float,
+        gravity: tuple[float, ...],
+    ) -> tuple[float, tuple[float, ...]]:
+        """The time step and gravity of a scenario whose robot is an MJCF read as MuJoCo reads
+        it: that file is the whole world (its only robot), and its ``<option>`` gives what the
+        scenario does not (MuJoCo's compiler reads it; its refusal is the scenario's error)."""
+        from simbridge.model.mjcf_native import compile_mjcf
+
+        at = ["robots", robots.index(native)]
+        if len(robots) > 1:
+            others = sorted(r.name for r in robots if r is not native)
+            raise self.error(
+                [*at, "semantics"],
+                f"an MJCF read as MuJoCo reads it is the whole world (its own floor and "
+                f"<option>): it cannot share the scenario with {others}",
+            )
+        path = native.urdf
+        if source is not None and (source.parent / path).is_file():
+            path = str(source.parent / path)
+        try:
+            option = compile_mjcf(path).model.opt
+        except (UrdfNotFoundError, MjcfCompileError) as exc:
+            raise self.error([*at, "mjcf"], str(exc)) from None
+        if "timestep" not in data:
+            timestep = float(option.timestep)
+        if "gravity" not in data:
+            gravity = tuple(float(g) for g in option.gravity)
+        return timestep, gravity
 
     def robots(self, data: dict[str, Any]) -> list[RobotSpec]:
         """The ``[[robots]]`` tables, at least one, each name once."""

@@ -56,6 +56,8 @@ def _lines(s: Scenario) -> Iterator[str]:
         yield f"{r.kind} = {_toml_value(r.urdf)}"
         if r.kind == "mjcf":
             yield f"body = {r.body}"
+            if r.semantics != "pybullet":
+                yield f"semantics = {_toml_value(r.semantics)}"
         else:
             yield f"position = {_toml_value(r.position)}"
             yield f"orientation = {_toml_value(r.orientation)}"

@@ -179,8 +179,8 @@ def test_an_unknown_scenario_is_bad_usage_listing_the_shipped_ones(capsys):
     assert err.startswith("usage: simbridge")
     assert err.splitlines()[-1] == (
         "simbridge compare: error: nosuch: no such scenario file, and not a shipped scenario; "
-        "shipped scenarios: ant-gait, double-pendulum, kuka-reach, laikago-stand, pendulum, r2d2, "
-        "r2d2-gentle, r2d2-goto, spinning-wheel"
+        "shipped scenarios: ant-gait, ant-mujoco, cheetah-mujoco, double-pendulum, kuka-reach, "
+        "laikago-stand, pendulum, r2d2, r2d2-gentle, r2d2-goto, spinning-wheel"
     )
 
 

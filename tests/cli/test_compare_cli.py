@@ -16,6 +16,8 @@ def test_scenarios_lists_one_line_each(capsys):
     lines = capsys.readouterr().out.splitlines()
     assert [line.split()[0] for line in lines] == [
         "ant-gait",
+        "ant-mujoco",
+        "cheetah-mujoco",
         "double-pendulum",
         "kuka-reach",
         "laikago-stand",
@@ -25,8 +27,8 @@ def test_scenarios_lists_one_line_each(capsys):
         "r2d2-goto",
         "spinning-wheel",
     ]
-    assert "tutorial" in lines[5]
-    assert "closed loop" in lines[7]
+    assert "tutorial" in lines[7]
+    assert "closed loop" in lines[9]
 
 
 @pytest.mark.parametrize(
@@ -75,7 +77,7 @@ def test_unknown_scenario_is_bad_usage(capsys):
     assert err.startswith("usage: simbridge compare ") and err.count(": error: ") == 1
     assert err.splitlines()[-1].startswith(
         "simbridge compare: error: no-such-scenario: no such scenario file, and not a shipped "
-        "scenario; shipped scenarios: ant-gait, double-pendulum, kuka-reach, laikago-stand,"
+        "scenario; shipped scenarios: ant-gait, ant-mujoco, cheetah-mujoco, double-pendulum,"
     )
 
 

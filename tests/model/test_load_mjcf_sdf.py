@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -425,3 +426,18 @@ def test_an_sdf_include_is_not_read_and_says_so(caplog):
         "included model is not loaded): line 2 uri='model://table'"
     ]
     assert any("<include> in <model>" in item for item in body.ignored)
+
+
+def test_a_file_in_an_installed_python_package_is_named_by_package_uri():
+    """``package://NAME/PATH``: PATH under the installed Python package NAME (ROS's scheme,
+    as a scenario names a model a package ships); a missing package or file is said."""
+    import mujoco
+
+    from simbridge.model.urdf_source import locate
+
+    found, itself = locate("package://mujoco/testdata/model.xml", kind="MJCF")
+    assert found == Path(mujoco.__file__).parent / "testdata" / "model.xml" and not itself
+    with pytest.raises(exc.UrdfNotFoundError, match="no Python package 'no_such_pkg' is installed"):
+        locate("package://no_such_pkg/a.xml", kind="MJCF")
+    with pytest.raises(exc.UrdfNotFoundError, match="testdata/no_such.xml"):
+        locate("package://mujoco/testdata/no_such.xml", kind="MJCF")

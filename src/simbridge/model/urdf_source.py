@@ -234,6 +234,32 @@ def not_found(
     return UrdfNotFoundError(shown_path(source), searched, kind, hint)
 
 
+PACKAGE_SCHEME = "package://"
+"""A file in an installed Python package: ``package://gymnasium/envs/mujoco/assets/ant.xml``
+(ROS's scheme, its package a Python one), as a scenario names a model a package ships."""
+
+
+def _in_python_package(text: str, kind: str) -> Path:
+    """The file a ``package://NAME/PATH`` names: PATH under the installed Python package NAME.
+
+    Raises:
+        UrdfNotFoundError: NAME is not installed (saying so), or has no file PATH.
+    """
+    name, _, rest = text[len(PACKAGE_SCHEME) :].partition("/")
+    spec = importlib.util.find_spec(name) if name.isidentifier() else None
+    if spec is None or not spec.submodule_search_locations:
+        raise UrdfNotFoundError(
+            text,
+            ["the installed Python packages"],
+            kind,
+            f" (no Python package {name!r} is installed here; it ships this file)",
+        )
+    path = Path(next(iter(spec.submodule_search_locations))) / rest
+    if not rest or not _is_file(path):
+        raise UrdfNotFoundError(text, [str(path)], kind)
+    return path
+
+
 def locate(
     source: str | os.PathLike[str],
     *,
@@ -261,6 +287,8 @@ def locate(
         UrdfNotFoundError: found nowhere (:func:`not_found`: every place searched, in order).
     """
     text = os.fspath(source)
+    if text.startswith(PACKAGE_SCHEME):
+        return _in_python_package(text, kind), False
     try:
         candidate = Path(text).expanduser()
     except (RuntimeError, ValueError):  # "~nosuchuser/..."

@@ -23,6 +23,7 @@ from simbridge.exceptions import (
     InvalidArgumentError,
     MjcfCompileError,
     SimClosedError,
+    UnknownBodyError,
     UnknownObjectError,
 )
 from simbridge.types import JointType
@@ -239,3 +240,33 @@ def test_bad_semantics_and_files_mujoco_refuses(tmp_path: Path) -> None:
         ):
             sim.load_mjcf(bad, semantics="mujoco")
         assert sim.bodies() == []
+
+
+@pytest.mark.skipif(not HAS_GYM, reason=NO_GYM)
+def test_contact_points_are_mujocos_own_with_the_floor_as_body_minus_one() -> None:
+    """The ant at rest on its file's floor: one contact per foot, each MuJoCo's own force
+    (``mj_contactForce`` of the same step), the floor (a geom of the world body) as body -1."""
+    path = _gym_asset("ant.xml")
+    m = mujoco.MjModel.from_xml_path(path)
+    d = mujoco.MjData(m)
+    mujoco.mj_step(m, d, nstep=100)
+    raw = np.zeros(6)
+    raw_total = 0.0
+    for i in range(d.ncon):
+        mujoco.mj_contactForce(m, d, i, raw)
+        raw_total += raw[0]
+    with simbridge.Sim("mujoco") as sim:
+        (ant,) = sim.load_mjcf(path, semantics="mujoco")
+        sim.step(100)
+        points = sim.contact_points(ant)
+        feet = sorted(c.link_a for c in points)
+        names = [sim.joint_info(ant, j).link_name for j in feet]
+        assert len(points) == d.ncon == 4
+        assert all(c.body_a == ant and c.body_b == -1 and c.link_b == -1 for c in points)
+        # each foot geom hangs from a body with no joint of its own: its ankle's link
+        assert names == ["body4", "body7", "body10", "body13"]
+        # B's normal points from the floor (B) up to the foot (A), as PyBullet's does
+        assert all(c.normal_on_b == pytest.approx((0.0, 0.0, 1.0)) for c in points)
+        assert sum(c.normal_force for c in points) == pytest.approx(raw_total, rel=1e-12)
+        with pytest.raises(UnknownBodyError):  # the world is no body a caller selects
+            sim.contact_points(-1)

@@ -18,6 +18,8 @@ from simbridge.compare.scenario import find_key_line
 
 SHIPPED = [
     "ant-gait",
+    "ant-mujoco",
+    "cheetah-mujoco",
     "double-pendulum",
     "kuka-reach",
     "laikago-stand",
@@ -140,7 +142,10 @@ def test_a_user_file_path_loads_and_resolves_urdfs_beside_it(tmp_path):
 
 
 def test_unknown_scenario_lists_the_shipped_ones():
-    with pytest.raises(ScenarioError, match="shipped scenarios: ant-gait, double-pendulum, kuka"):
+    with pytest.raises(
+        ScenarioError,
+        match="shipped scenarios: ant-gait, ant-mujoco, cheetah-mujoco, double-pendulum",
+    ):
         load_scenario("no-such-scenario")
 
 
