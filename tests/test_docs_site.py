@@ -1,7 +1,9 @@
 """The documentation site (mkdocs.yml, docs/): it builds with ``mkdocs build --strict`` (a broken
 link, a missing anchor, an API reference to a name that does not exist or a docstring griffe
 cannot read fails it, as any warning does), every Python block on it runs on its own
-(tests/_doc_blocks.py says how a block is marked), and the README's links into it land.
+(tests/_doc_blocks.py says how a block is marked), the README's links into it land, and what
+the pages say is held to the code where it can drift (the scenario one writes is valid, the
+PhysX section's rest offset is the setting's default).
 
 Needs the extra ``docs`` (in ``test``): without MkDocs the build test is skipped, saying so,
 and fails in CI (tests/_engines.py's rule).
@@ -92,3 +94,27 @@ def test_the_readmes_links_into_the_site_land():
         if anchor:
             headings = re.findall(r"^#+ (.+)$", (ROOT / target).read_text(encoding="utf-8"), re.M)
             assert anchor in {_slug(h) for h in headings}, f"{target} has no heading #{anchor}"
+
+
+def test_the_scenario_to_write_is_valid():
+    from simbridge.compare.scenario import loads_scenario
+
+    (block,) = [
+        b for b in blocks(DOCS / "comparing.md", "toml") if 'name = "my-pendulum"' in b.code
+    ]
+    scenario = loads_scenario(block.code, file="docs/comparing.md")
+    assert scenario.name == "my-pendulum"
+    assert [p.name for p in scenario.phases] == ["push", "swing"]
+
+
+def test_the_physx_section_gives_the_rest_offset_and_both_install_lines():
+    from simbridge.engine_settings import settings_for
+
+    text = (DOCS / "engines.md").read_text(encoding="utf-8")
+    section = text[text.index("## The PhysX backend") :] + "\n## "
+    section = " ".join(section[: section.index("\n## ")].split())
+    per_shape = settings_for("physx")["rest_offset"].default  # m
+    assert f"rest offset 0 ({per_shape * 1000:g} mm per shape instead" in section
+    assert f"two shapes rest {2 * per_shape * 1000:g} mm apart" in section
+    assert "(1 mm between two shapes" not in section
+    assert "`pip install 'simbridge[physx]'` (from a clone: `pip install -e '.[physx]'`" in section

@@ -196,7 +196,7 @@ class Sim:
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         raise AttributeError(
             f"{type(self).__name__!r} object has no attribute {name!r}; simbridge's "
-            f"equivalent of PyBullet's {found[0]} is {found[1]} (README: 'The interface')"
+            f"equivalent of PyBullet's {found[0]} is {found[1]} (docs/sim.md: 'The interface')"
         )
 
     def __reduce_ex__(self, protocol: Any) -> Any:
