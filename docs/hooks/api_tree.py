@@ -1,4 +1,5 @@
-"""A MkDocs hook: the package tree as it is installed, for mkdocstrings to read.
+"""A MkDocs hook: the package tree as it is installed, for mkdocstrings to read, and the
+docstrings' Sphinx roles made links.
 
 The installed package ``simbridge`` is put together from four folders (pyproject.toml's
 ``package-dir``: ``src/simbridge``, ``backends``, ``compare``, ``robots``); mkdocstrings reads
@@ -6,11 +7,18 @@ source files and finds ``simbridge.compare`` only inside ``src/simbridge``. This
 temporary ``simbridge/`` of symbolic links to those folders when the build starts and points
 the Python handler at it, so ``::: simbridge.compare.pipeline.compare`` resolves. The folders
 come from pyproject.toml itself: a new mapped folder needs no change here.
+
+The docstrings name other objects with Sphinx roles (``:func:`~simbridge.compare.compare```),
+which Markdown shows as the literal ``:func:`` before the name. :func:`on_page_content` turns
+each into a cross-reference that mkdocs-autorefs resolves to the object's place in the API
+reference (a name the reference does not render stays code, with no warning); ``~`` shows the
+last part of the name, as Sphinx does.
 """
 
 from __future__ import annotations
 
 import atexit
+import re
 import shutil
 import tempfile
 import tomllib
@@ -59,3 +67,28 @@ def on_config(config: Any) -> Any:
     handlers = config["plugins"]["mkdocstrings"].config["handlers"]
     handlers.setdefault("python", {})["paths"] = [str(build_tree(tree))]
     return config
+
+
+_ROLE = re.compile(r":(?:func|class|meth|mod|data|attr|exc|obj):<code>(~?)([\w.]+)</code>")
+
+
+def _role_link(match: re.Match[str]) -> str:
+    """One role's HTML: an optional autorefs cross-reference, or code for a relative name."""
+    tilde, target = match.groups()
+    shown = target.rsplit(".", 1)[-1] if tilde else target.lstrip(".")
+    if target.startswith("."):
+        return f"<code>{shown}</code>"
+    return f'<autoref identifier="{target}" optional><code>{shown}</code></autoref>'
+
+
+def on_page_content(html: str, **_: Any) -> str:
+    """Each ``:role:`name``` of a rendered docstring made a cross-reference (see above).
+
+    Args:
+        html: the page's HTML.
+        **_: MkDocs' other arguments (page, config, files), unused.
+
+    Returns:
+        The HTML with the roles replaced.
+    """
+    return _ROLE.sub(_role_link, html)
