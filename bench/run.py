@@ -21,7 +21,7 @@ row "raw applying PyBullet's link damping" is raw SAPIEN doing only the law's ca
 methods, one preallocated buffer); "raw with PyBullet's damping and speed clamp" does the clamp
 too and ends the drive in the layer's state bit for bit (the row's note checks it): the floor
 of the layer's work. Whole drives a second apart see the shared machine's load change; the same
-comparison step by step in pairs is bench/physx_drive_pairs.py (README, PhysX speed).
+comparison step by step in pairs is bench/physx_drive_pairs.py (docs/benchmarks.md, PhysX speed).
 """
 
 from __future__ import annotations

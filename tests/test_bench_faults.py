@@ -1,6 +1,6 @@
 """Smoke runs of the fault benchmarks (bench/divergence.py, bench/limits.py): they run and print
-their tables. Timings are never asserted here (they belong to the scripts' full runs, README
-"Limits"); what a row says about refusals is, since it does not depend on the machine."""
+their tables. Timings are never asserted here (they belong to the scripts' full runs,
+docs/limits.md); what a row says about refusals is, since it does not depend on the machine."""
 
 from __future__ import annotations
 

@@ -1,52 +1,29 @@
 """README.md's code: every ```python block runs on its own (a fresh interpreter, nothing
-defined before it), the quick start prints what the README says it prints, and the scenario of
-"Write your own scenario" is a valid scenario file."""
+defined before it; tests/_doc_blocks.py, shared with the site's pages) and the quick start
+prints what the README says it prints. The sections the README once held live on the site
+(docs/): tests/test_docs_site.py runs their blocks and checks their figures."""
 
 from __future__ import annotations
 
 import re
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-
-from simbridge.compare.scenario import loads_scenario
+from _doc_blocks import blocks, run_python
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 
-
-def _blocks(language: str) -> list[tuple[int, str]]:
-    """(line, code) of every fenced block of ``language`` in the README."""
-    text = README.read_text(encoding="utf-8")
-    found = []
-    for m in re.finditer(rf"^```{language}\n(.*?)^```$", text, re.S | re.M):
-        found.append((text.count("\n", 0, m.start()) + 1, m.group(1)))
-    return found
-
-
-def _run(code: str, tmp_path: Path) -> str:
-    done = subprocess.run(
-        [sys.executable, "-c", code],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert done.returncode == 0, done.stderr[-3000:]
-    return done.stdout
-
-
-PYTHON = _blocks("python")
+PYTHON = blocks(README, "python")
 
 
 def test_the_readme_has_its_blocks():
-    assert len(PYTHON) >= 4 and len(_blocks("toml")) >= 1
+    assert len(PYTHON) >= 1 and any("python3 -m venv" in b.code for b in blocks(README, "bash"))
 
 
-@pytest.mark.parametrize("line, code", PYTHON, ids=[f"line{n}" for n, _ in PYTHON])
-def test_every_python_block_runs_on_its_own(line, code, tmp_path):
-    _run(code, tmp_path)
+@pytest.mark.parametrize("block", PYTHON, ids=[f"line{b.line}" for b in PYTHON])
+def test_every_python_block_runs_on_its_own(block, tmp_path):
+    run_python(block, tmp_path)
 
 
 def _recorded_here() -> str | None:
@@ -82,29 +59,11 @@ def test_the_quick_start_prints_what_the_readme_shows(backend, tmp_path):
     why = _recorded_here()
     if why is not None:
         pytest.skip(f"the README's quick-start digits were {why}")
-    code = next(c for _, c in PYTHON if 'r2d2 = sim.load_urdf("r2d2.urdf"' in c)
-    assert 'simbridge.Sim("pybullet")' in code
-    out = _run(code.replace('Sim("pybullet")', f'Sim("{backend}")'), tmp_path)
+    block = next(b for b in PYTHON if 'r2d2 = sim.load_urdf("r2d2.urdf"' in b.code)
+    assert 'simbridge.Sim("pybullet")' in block.code
+    out = run_python(
+        block, tmp_path, code=block.code.replace('Sim("pybullet")', f'Sim("{backend}")')
+    )
     shown = re.search(rf'^Sim\("{backend}"\): +(\(.*\))$', README.read_text(encoding="utf-8"), re.M)
     assert shown is not None, f"the README shows no output for {backend}"
     assert out.strip() == shown.group(1)
-
-
-def test_the_scenario_to_write_is_valid():
-    (_, text), *_ = [(n, t) for n, t in _blocks("toml") if 'name = "my-pendulum"' in t]
-    scenario = loads_scenario(text, file="README.md")
-    assert scenario.name == "my-pendulum"
-    assert [p.name for p in scenario.phases] == ["push", "swing"]
-
-
-def test_the_physx_section_gives_the_rest_offset_and_both_install_lines():
-    from simbridge.engine_settings import settings_for
-
-    text = README.read_text(encoding="utf-8")
-    section = text[text.index("## The PhysX backend") :]
-    section = " ".join(section[: section.index("\n## ")].split())
-    per_shape = settings_for("physx")["rest_offset"].default  # m
-    assert f"rest offset 0 ({per_shape * 1000:g} mm per shape instead" in section
-    assert f"two shapes rest {2 * per_shape * 1000:g} mm apart" in section
-    assert "(1 mm between two shapes" not in section
-    assert "`pip install 'simbridge[physx]'` (from a clone: `pip install -e '.[physx]'`" in section

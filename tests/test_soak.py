@@ -1,5 +1,5 @@
 """Soak, in the suite: many Sim lifetimes and many loads in one Sim, per backend, with memory,
-open files and temporary files flat (bench/soak.py --check, README "Limits"): 1000 cycles a
+open files and temporary files flat (bench/soak.py --check, docs/limits.md): 1000 cycles a
 row (100 of them the warm-up), the count issue 15 asks of CI, on every installed backend
 (PhysX too where the physx extra is installed); one test per row (pattern, backend), each row
 in a process of its own. About 50 s on the shared 2-core machine for PyBullet and MuJoCo;

@@ -302,7 +302,9 @@ def explain(
     behaviour and rank the settings by the share of the gap each removes.
 
     Args:
-        scenario, backends, profile: as :func:`~simbridge.compare.compare`'s.
+        scenario: as :func:`~simbridge.compare.compare`'s.
+        backends: as :func:`~simbridge.compare.compare`'s.
+        profile: as :func:`~simbridge.compare.compare`'s.
         timestep: the time step of every run (default the scenario's).
         ensemble: runs per engine in every comparison (:data:`DEFAULT_ENSEMBLE`); at least 2
             for intervals.

@@ -100,8 +100,10 @@ def resolve(
     time step, at most ``limit`` times.
 
     Args:
-        scenario, backends, timesteps: as :func:`~simbridge.compare.compare`'s; the first time
-            step is the one halved (the others, a time-step sweep, are kept as given).
+        scenario: as :func:`~simbridge.compare.compare`'s.
+        backends: as :func:`~simbridge.compare.compare`'s.
+        timesteps: as :func:`~simbridge.compare.compare`'s; the first time step is the one
+            halved (the others, a time-step sweep, are kept as given).
         limit: halvings at most (0: none, the comparison alone).
         compare_args: passed to every :func:`~simbridge.compare.compare` call.
 

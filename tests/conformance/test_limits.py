@@ -1,6 +1,6 @@
 """The largest models, every backend: what each engine takes, and a typed error up front, before
 the engine spends its time, for what it cannot take (measured sizes and times: bench/limits.py,
-README "Limits")."""
+docs/limits.md)."""
 
 from __future__ import annotations
 

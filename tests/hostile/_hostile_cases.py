@@ -466,7 +466,9 @@ def urdf_values() -> None:
     case(
         "urdf-unnormalised-axis",
         cat,
-        accepts("a non-unit axis is kept as written and normalised by the engines (README)"),
+        accepts(
+            "a non-unit axis is kept as written and normalised by the engines (docs/engines.md)"
+        ),
         _load_text(template(axis="0 1e-6 0"), steps=10),
     )
 

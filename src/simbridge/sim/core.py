@@ -196,7 +196,7 @@ class Sim:
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         raise AttributeError(
             f"{type(self).__name__!r} object has no attribute {name!r}; simbridge's "
-            f"equivalent of PyBullet's {found[0]} is {found[1]} (README: 'The interface')"
+            f"equivalent of PyBullet's {found[0]} is {found[1]} (docs/sim.md: 'The interface')"
         )
 
     def __reduce_ex__(self, protocol: Any) -> Any:
@@ -347,7 +347,11 @@ class Sim:
             The new body's id (an int).
 
         Raises:
-            UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
+            UrdfNotFoundError: no file, no name on the search path, no URDF text.
+            UrdfParseError: XML that does not parse (file, line, column, element).
+            UrdfStructureError: what PyBullet refuses too (file, line, element).
+            MeshNotFoundError: a mesh found nowhere PyBullet looks (file, line, every
+                path tried).
             UnsupportedJointError: the message names the file, the line and the element.
             InvalidArgumentError: a bad pose or option.
             PyBulletKeywordError: a keyword it does not take (PyBullet's ``basePosition``,
@@ -409,8 +413,12 @@ class Sim:
             of the top-level bodies.
 
         Raises:
-            UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
-            UnsupportedJointError (``ball`` and nested ``free`` joints): under "pybullet", the
+            UrdfNotFoundError: no file, no name on the search path, no URDF text.
+            UrdfParseError: XML that does not parse (file, line, column, element).
+            UrdfStructureError: what PyBullet refuses too (file, line, element).
+            MeshNotFoundError: a mesh found nowhere PyBullet looks (file, line, every
+                path tried).
+            UnsupportedJointError: ``ball`` and nested ``free`` joints under "pybullet"; the
                 message names the file, the line and the element.
             MjcfCompileError: under "mujoco", MuJoCo's own message with the file and line.
             BackendUnsupportedError: "mujoco" on a backend other than MuJoCo, into a world that
@@ -437,7 +445,11 @@ class Sim:
             The body ids, in the file's order.
 
         Raises:
-            UrdfNotFoundError, UrdfParseError, UrdfStructureError, MeshNotFoundError,
+            UrdfNotFoundError: no file, no name on the search path, no URDF text.
+            UrdfParseError: XML that does not parse (file, line, column, element).
+            UrdfStructureError: what PyBullet refuses too (file, line, element).
+            MeshNotFoundError: a mesh found nowhere PyBullet looks (file, line, every
+                path tried).
             UnsupportedJointError: the message names the file, the line and the element.
         """
         return loading.load_scene(self._s, source, "sdf", False)

@@ -1,6 +1,6 @@
 """PyBullet's names of the Sim's calls: ``sim.getLinkState`` (or ``sim.get_link_state``) is an
-AttributeError that names simbridge's call (README's table "The interface" lists them all); a
-PyBullet function simbridge does not offer (``sim.applyExternalForce``) is a
+AttributeError that names simbridge's call (the table "The interface" in docs/sim.md lists them
+all); a PyBullet function simbridge does not offer (``sim.applyExternalForce``) is a
 :class:`~simbridge.exceptions.NotOfferedError` that says so and what to use instead, where
 something exists. Every function of PyBullet's module is in one table or the other."""
 

@@ -210,7 +210,7 @@ def test_two_profiles_of_one_engine_are_no_self_check(tmp_path, capsys):
 def test_docs_say_the_default_run_is_three_engines_with_physx_installed():
     """docs/compare.md gave 16 runs as the default 'because it stays under 30 s on two busy
     cores', measured on two engines; with PhysX installed the default run is three engines
-    (2 min 19 s measured; the README's table: 117 s)."""
+    (2 min 19 s measured; docs/comparing.md's table: 117 s)."""
     from pathlib import Path
 
     docs = Path(__file__).resolve().parents[3] / "docs" / "compare.md"

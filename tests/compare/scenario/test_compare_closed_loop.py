@@ -37,7 +37,7 @@ def test_r2d2_goto_behind_only_mujoco_reaches_it(goto):
         goto["mujoco"]["goal behind (-1.414, -1.414)"],
     )
     # PyBullet turns r2d2 about three times slower for the same wheel command: it circles the
-    # goal (closest 12.6 cm in 20 s, never within 5 cm: README); MuJoCo arrives at 9.72 s
+    # goal (closest 12.6 cm in 20 s, never within 5 cm: docs/comparing.md); MuJoCo arrives at 9.72 s
     assert a.success is False and a.value is None and a.figures.closest > 0.08
     assert b.success is True and 9.3 < b.value < 10.2 and b.figures.closest <= 0.05
 
@@ -46,7 +46,7 @@ def test_r2d2_goto_the_right_turn_takes_mujoco_half_the_time(goto):
     a, b = goto["pybullet"]["goal right (2, 0)"], goto["mujoco"]["goal right (2, 0)"]
     assert b.success is True and 8.2 < b.value < 8.9  # measured 8.55 s
     # PyBullet overshoots the turn and orbits: 19.8 s on the nominal run, not reached in most
-    # perturbed runs, never sooner than 15.5 s (README)
+    # perturbed runs, never sooner than 15.5 s (docs/comparing.md)
     assert a.value is None and a.figures.closest > 0.05
 
 
