@@ -24,7 +24,14 @@ from simbridge.sim import Sim
 if TYPE_CHECKING:
     from simbridge.envs.env import SimEnv
 
-__all__ = ["CONTROLLERS", "CartPoleLQR", "KukaReachDLS", "reference_controller"]
+__all__ = [
+    "CONTROLLERS",
+    "CartPoleLQR",
+    "DriveToGoal",
+    "HoldDefault",
+    "KukaReachDLS",
+    "reference_controller",
+]
 
 
 def _slices(env: SimEnv) -> dict[str, slice]:
@@ -126,7 +133,83 @@ class KukaReachDLS:
         return np.clip(step / self.scale, -1.0, 1.0).astype(np.float32)
 
 
-CONTROLLERS: dict[str, Any] = {"cartpole": CartPoleLQR, "kuka_reach": KukaReachDLS}
+class DriveToGoal:
+    """A unicycle law for a skid-steer base: forward speed ``v = min(k_v d, v_max) cos(e)`` and
+    turn rate ``w = k_w e`` from the goal's distance d and bearing e in the base frame (the
+    ``command_in_base`` term), turned into left and right wheel speeds ``(v -+ w b / 2) / r``.
+
+    Args:
+        env: a ``husky_goto`` env (wheels ordered front left, front right, rear left, rear
+            right).
+        radius: the wheel radius (m; husky.urdf's wheel cylinders: 0.17775).
+        track: the distance between left and right wheels (m; husky.urdf's 0.5708).
+        k_v: forward gain (1/s).
+        k_w: turn gain (1/s).
+        v_max: the speed limit (m/s).
+    """
+
+    def __init__(
+        self,
+        env: SimEnv,
+        radius: float = 0.17775,
+        track: float = 0.5708,
+        k_v: float = 1.5,
+        k_w: float = 3.0,
+        v_max: float = 1.0,
+    ) -> None:
+        self.radius, self.track = radius, track
+        self.k_v, self.k_w, self.v_max = k_v, k_w, v_max
+        self.scale = np.asarray(env.task.action.scale, dtype=np.float64)
+        self.goal = _slices(env)["command_in_base"]
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The action for ``obs``.
+
+        Args:
+            obs: the env's observation.
+
+        Returns:
+            ``(4,)`` float32 in [-1, 1]: wheel speeds over the action's scale.
+        """
+        gx, gy = (float(v) for v in obs[self.goal])
+        bearing = float(np.arctan2(gy, gx))
+        v = min(self.k_v * float(np.hypot(gx, gy)), self.v_max) * max(np.cos(bearing), 0.0)
+        w = self.k_w * bearing
+        left = (v - w * self.track / 2) / self.radius
+        right = (v + w * self.track / 2) / self.radius
+        wheels = np.array([left, right, left, right])
+        return np.clip(wheels / self.scale, -1.0, 1.0).astype(np.float32)
+
+
+class HoldDefault:
+    """Action 0 every step: under a ``pd`` action with offset ``default`` the PD holds the default
+    pose (the legged stand's reference).
+
+    Args:
+        env: an env whose action offset is ``default``.
+    """
+
+    def __init__(self, env: SimEnv) -> None:
+        self.n = len(env.task.action.joints)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The action for ``obs``.
+
+        Args:
+            obs: the env's observation (not read).
+
+        Returns:
+            ``(n,)`` float32 zeros.
+        """
+        return np.zeros(self.n, dtype=np.float32)
+
+
+CONTROLLERS: dict[str, Any] = {
+    "cartpole": CartPoleLQR,
+    "kuka_reach": KukaReachDLS,
+    "husky_goto": DriveToGoal,
+    "a1_stand": HoldDefault,
+}
 """Shipped task name -> its reference controller's class."""
 
 

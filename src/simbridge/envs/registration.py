@@ -9,6 +9,8 @@ __all__ = ["IDS", "register_envs"]
 IDS = {
     "simbridge/CartPole-v0": "cartpole",
     "simbridge/KukaReach-v0": "kuka_reach",
+    "simbridge/HuskyGoTo-v0": "husky_goto",
+    "simbridge/A1Stand-v0": "a1_stand",
 }
 """Gymnasium id -> shipped task name."""
 
