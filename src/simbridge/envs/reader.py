@@ -66,6 +66,12 @@ _TERMS = {
     "success": SUCCESSES,
 }
 
+_PARAM_KINDS = {
+    "limit": "number", "within": "number", "period": "number", "target": "number",
+    "relative": "bool", "terminate": "bool", "link": "name", "joint": "name",
+    "links": "names", "joints": "names",
+}  # fmt: skip
+
 
 def shipped_tasks() -> dict[str, Path]:
     """The tasks shipped with simbridge.
@@ -325,7 +331,19 @@ class _Reader(TableReader):
         self.keys(raw, [*path, "params"], need + may)
         for key in need:
             self.require(raw, [*path, "params"], key)
-        return dict(raw)
+        out = dict(raw)
+        for key, value in raw.items():
+            where = [*path, "params", key]
+            kind = _PARAM_KINDS[key]
+            if kind == "number":
+                out[key] = self.number(value, where)
+            elif kind == "bool" and not isinstance(value, bool):
+                raise self.error(where, f"expected true or false, got {value!r}")
+            elif kind == "name" and (isinstance(value, bool) or not isinstance(value, (str, int))):
+                raise self.error(where, f"expected a name or an index, got {value!r}")
+            elif kind == "names":
+                out[key] = self.names(value, where)
+        return out
 
     def term(self, t: dict[str, Any], path: list[str | int], kind: str) -> str:
         name = self.string(self.require(t, path, "term"), [*path, "term"])

@@ -79,13 +79,20 @@ class ActionSpec:
         robot: the robot (a :class:`RobotSpec` name) whose joints these are.
         joints: joint names, in the action's order.
         mode: one of :data:`ACTION_MODES`.
-        scale: per joint (rad, rad/s, N·m... per unit of action).
+        scale: per joint (rad, rad/s, N·m... per unit of action); one number: every joint.
         offset: one of :data:`ACTION_OFFSETS`.
         clip: the action's bound; the action space is ``[-clip, clip]``.
-        kp: per joint: position gain (``pd``: N·m/rad; ``position``: PyBullet's law).
-        kd: per joint: velocity gain (``pd``: N·m·s/rad; ``position``: PyBullet's law).
+        kp: per joint: position gain (``pd``: N·m/rad; ``position``: PyBullet's law, 0.1
+            when not given).
+        kd: per joint: velocity gain (``pd``: N·m·s/rad; ``position``: PyBullet's law, 1.0
+            when not given).
         max_force: per joint, N·m or N: the motor's force limit (``position``,
-            ``velocity``), the torque clip (``torque``, ``pd``).
+            ``velocity``), the torque clip (``torque``, ``pd``). Each per-joint field takes one
+            number for every joint.
+
+    Raises:
+        InvalidArgumentError: a mode or offset not listed, a per-joint field of another
+            length, gains missing from a ``pd`` or ``position`` action.
         latency: control steps between an action and its effect (0: at once); the actions
             before the first are zeros.
     """
@@ -100,6 +107,35 @@ class ActionSpec:
     kd: tuple[float, ...] = ()
     max_force: tuple[float, ...] = ()
     latency: int = 0
+
+    def __post_init__(self) -> None:
+        from simbridge.exceptions import InvalidArgumentError
+
+        n = len(self.joints)
+        if self.mode not in ACTION_MODES:
+            raise InvalidArgumentError("mode", f"expected one of {ACTION_MODES}, got {self.mode!r}")
+        if self.offset not in ACTION_OFFSETS:
+            raise InvalidArgumentError(
+                "offset", f"expected one of {ACTION_OFFSETS}, got {self.offset!r}"
+            )
+        if self.mode == "position":  # PyBullet's default gains
+            object.__setattr__(self, "kp", self.kp or (0.1,))
+            object.__setattr__(self, "kd", self.kd or (1.0,))
+        needed = {"pd": ("kp", "kd", "max_force")}
+        for name in ("scale", "kp", "kd", "max_force"):
+            raw = getattr(self, name)
+            values = (float(raw),) if isinstance(raw, (int, float)) else tuple(map(float, raw))
+            if not values and name in needed.get(self.mode, ("max_force",)):
+                raise InvalidArgumentError(name, f"a {self.mode} action needs {name}")
+            if len(values) == 1:
+                values = values * n
+            if values and len(values) != n:
+                raise InvalidArgumentError(
+                    name,
+                    f"expected one value or {n} (one per joint of {list(self.joints)}), "
+                    f"got {len(values)}",
+                )
+            object.__setattr__(self, name, values)
 
 
 @dataclass(frozen=True)
