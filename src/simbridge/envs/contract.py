@@ -109,6 +109,17 @@ def _action(env: SimEnv) -> dict[str, Any]:
     return out
 
 
+def _plain(value: Any) -> Any:
+    """JSON's types: tuples and mappings turned into lists and dicts, all the way down."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
 def contract(env: SimEnv) -> dict[str, Any]:
     """The contract of ``env`` (see :meth:`SimEnv.contract`).
 
@@ -119,7 +130,7 @@ def contract(env: SimEnv) -> dict[str, Any]:
         The contract as a JSON-ready dict.
     """
     t = env.task
-    return {
+    out = {
         "task": t.name,
         "source": t.source,
         "backend": env.backend,
@@ -139,3 +150,4 @@ def contract(env: SimEnv) -> dict[str, Any]:
         "success": [dataclasses.asdict(c) for c in t.success],
         "reset": t.reset,
     }
+    return _plain(out)
