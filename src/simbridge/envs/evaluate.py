@@ -6,7 +6,8 @@
 
 runs each shipped task's reference controller (or ``--policy module:callable``, called with the
 env and returning a callable observation -> action) on each engine over seeds 0..N-1 and prints
-one row per engine: successes of N, the rate and its 95% Wilson interval, the mean return.
+one row per engine: successes of N, the rate and its 95% Wilson interval, the mean return and
+steps, and the wall time per control step (policy included).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
+import time
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
@@ -125,8 +127,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--episodes", type=int, default=20)
     ap.add_argument("--policy", help="module:callable taking the env, returning obs -> action")
     args = ap.parse_args(argv)
-    print("| engine | successes | rate | 95% interval | mean return | mean steps |")
-    print("|---|---|---|---|---|---|")
+    print("| engine | successes | rate | 95% interval | mean return | mean steps | ms/step |")
+    print("|---|---|---|---|---|---|---|")
     for backend in args.backends:
         env = SimEnv(args.task, backend=backend)
         if args.policy:
@@ -134,12 +136,14 @@ def main(argv: Sequence[str] | None = None) -> None:
             policy = getattr(importlib.import_module(module), name)(env)
         else:
             policy = reference_controller(env)
+        start = time.perf_counter()
         rate, eps = success_rate(env, policy, range(args.episodes))
+        ms = (time.perf_counter() - start) * 1e3 / sum(e.steps for e in eps)
         env.close()
         print(
             f"| {backend} | {rate.successes}/{rate.n} | {rate.successes / rate.n:.2f} | "
             f"{rate.low:.2f}-{rate.high:.2f} | {np.mean([e.ret for e in eps]):.1f} | "
-            f"{np.mean([e.steps for e in eps]):.0f} |"
+            f"{np.mean([e.steps for e in eps]):.0f} | {ms:.2f} |"
         )
 
 
