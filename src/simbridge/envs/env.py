@@ -315,6 +315,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
     def _actuate(self, applied: np.ndarray) -> None:
         """Turn the (delayed) action into targets and run ``decimation`` physics steps."""
         sim, w, a = self.sim, self.world, self.task.action
+        base: np.ndarray | float
         if a.offset == "default":
             base = w.default
         elif a.offset == "current":

@@ -10,6 +10,7 @@ import math
 import os
 import re
 import tomllib
+from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -59,7 +60,7 @@ TASK_KEYS = (
 )
 """The keys at a task file's top level."""
 
-_TERMS = {
+_TERMS: dict[str, Mapping[str, Any]] = {
     "observation": OBSERVATIONS,
     "rewards": REWARDS,
     "terminations": TERMINATIONS,
@@ -138,7 +139,7 @@ def _keystr(path: list[str | int]) -> str:
 class _Reader(TableReader):
     """A task file's checks: the scenario reader's, raising :class:`TaskFileError`."""
 
-    def error(self, path: Any, detail: str) -> TaskFileError:  # type: ignore[override]
+    def error(self, path: Any, detail: str) -> TaskFileError:
         return TaskFileError(self.file, _keystr(list(path)), detail, find_key_line(self.text, path))
 
     def integer(self, t: dict[str, Any], key: str, default: int, low: int) -> int:
@@ -192,7 +193,7 @@ class _Reader(TableReader):
             commands=self.commands(data),
             randomisation=self.randomisation(data),
             profile=self.string(data.get("profile", "pybullet"), ["profile"]),
-            gravity=self.vector(data.get("gravity", [0, 0, -9.8]), ["gravity"], 3),  # type: ignore[arg-type]
+            gravity=self.vector(data.get("gravity", [0, 0, -9.8]), ["gravity"], 3),
             reset=self.choice(data, [], "reset", "restore", RESET_MODES),
             camera=self.camera(data),
             source=None if self.file.startswith("<") else self.file,
@@ -238,8 +239,8 @@ class _Reader(TableReader):
                 RobotSpec(
                     name=self.string(t.get("name", Path(urdf).stem), [*path, "name"]),
                     urdf=urdf,
-                    position=self.vector(t.get("position", [0, 0, 0]), [*path, "position"], 3),  # type: ignore[arg-type]
-                    orientation=orientation,  # type: ignore[arg-type]
+                    position=self.vector(t.get("position", [0, 0, 0]), [*path, "position"], 3),
+                    orientation=orientation,
                     fixed_base=fixed,
                     joint_positions={
                         k: self.number(v, [*path, "joint_positions", k]) for k, v in jp.items()
@@ -419,7 +420,7 @@ class _Reader(TableReader):
         return Randomisation(
             self.number(t.get("joint_position", 0.0), [*path, "joint_position"], nonneg=True),
             self.number(t.get("joint_velocity", 0.0), [*path, "joint_velocity"], nonneg=True),
-            self.vector(t.get("base_position", [0, 0, 0]), [*path, "base_position"], 3),  # type: ignore[arg-type]
+            self.vector(t.get("base_position", [0, 0, 0]), [*path, "base_position"], 3),
             self.number(t.get("base_yaw", 0.0), [*path, "base_yaw"], nonneg=True),
             self.names(t.get("joints", []), [*path, "joints"]),
         )
