@@ -191,3 +191,27 @@ def test_kuka_action_offsets(offset):
     err = np.abs(q - env.world.default).max()
     env.close()
     assert (err < 0.02) if offset == "default" else (err > 0.02)
+
+
+def test_contacts_and_gait_phase_terms():
+    base = load_task("husky_goto")
+    wheels = ("front_left_wheel_link", "front_right_wheel_link")
+    terms = (
+        ObsTerm("contacts", params={"links": wheels}),
+        ObsTerm("gait_phase", params={"period": 0.5}),
+        ObsTerm("base_height"),
+    )
+    env = SimEnv(dataclasses.replace(base, observation=terms), backend="mujoco")
+    env.reset(seed=0)
+    obs = [env.step(np.zeros(4, np.float32))[0] for _ in range(15)][-1]
+    c = env.contract()
+    z = env.sim.base_state(env.world.body).position[2]
+    env.close()
+    assert [t["entries"] for t in c["observation"]["terms"]][:2] == [
+        [f"contacts[{w}]" for w in wheels],
+        ["gait_phase[sin]", "gait_phase[cos]"],
+    ]
+    assert obs[:2].tolist() == [1.0, 1.0]  # the wheels rest on the plane
+    phase = 2 * np.pi * 15 * base.control_dt / 0.5
+    np.testing.assert_allclose(obs[2:4], [np.sin(phase), np.cos(phase)], atol=1e-6)
+    assert obs[4] == np.float32(z)
