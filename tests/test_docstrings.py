@@ -75,6 +75,7 @@ SCOPE: tuple[Path, ...] = (
     CORE / "model",
     CORE / "cli",
     CORE / "sim",
+    CORE / "envs",
     ROOT / "backends",
 )
 

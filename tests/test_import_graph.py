@@ -486,13 +486,14 @@ def test_the_backend_rule_sees_a_foreign_import(tmp_path):
 
 # ---------------------------------------------------------------- the core's floors
 
-FLOORS = {"interface": 0, "model": 0, "sim": 1, "cli": 2}
+FLOORS = {"interface": 0, "model": 0, "sim": 1, "envs": 2, "cli": 3}
 """The core's rooms and their floors: the interface (simbridge's own plain modules: the Backend
 contract, types, exceptions, profiles, registry, settings, transforms...) and ``model/`` (files
 read into build plans, whose types the Backend contract names) at the bottom, then ``sim/`` (the
-`Sim` and its parts), then ``cli/``. A module imports its own floor and the floors below it.
-The package's doors (``simbridge/__init__``, re-exporting the `Sim`, and ``__main__``) stand
-above sim/: only cli/ may import them."""
+`Sim` and its parts), then ``envs/`` (Gymnasium environments over the Sim), then ``cli/``. A
+module imports its own floor and the floors below it. The package's doors
+(``simbridge/__init__``, re-exporting the `Sim`, and ``__main__``) stand above sim/: only cli/
+may import them."""
 
 
 def _floor(module: str) -> int | None:

@@ -47,6 +47,9 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/compare/report/markdown.py",
         "simbridge/compare/scenarios/r2d2-goto.toml",
         "simbridge/compare/scenarios/goto.py",  # a shipped scenario's controller, beside it
+        "simbridge/envs/env.py",  # the Gymnasium environments and their shipped tasks
+        "simbridge/envs/tasks/cartpole.toml",
+        "simbridge/envs/tasks/a1_stand.toml",
         "simbridge/robots/r2d2.urdf",
         "simbridge/robots/plane.urdf",
         "simbridge/robots/plane.mtl",  # the ground's checker (its look alone)

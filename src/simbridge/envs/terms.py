@@ -1,0 +1,236 @@
+"""The named terms a task is made of: observations, rewards, terminations and successes, each a
+function of the running world (:class:`World`) and the term's parameters.
+
+Frames and units: SI; ``base_*`` terms are in the base's frame (the base's centre-of-mass
+frame, as :meth:`simbridge.Sim.base_state` reports it); joint terms follow the action's joint
+order. Each observation term's size is fixed by the task (its entries are named in the env's
+contract).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from simbridge.sim import Sim
+from simbridge.transforms import quat_to_matrix
+
+__all__ = ["OBSERVATIONS", "REWARDS", "SUCCESSES", "TERMINATIONS", "World", "term_names"]
+
+
+@dataclass
+class World:
+    """What a term reads: the Sim and the task's bodies as an env runs them.
+
+    Attributes:
+        sim: the Sim.
+        body: the action robot's body id.
+        bodies: robot name -> body id.
+        joints: the action joints' indices on ``body``, in the action's order.
+        joint_names: their names.
+        default: the action joints' default positions, ``(n,)``.
+        last_action: the last action the policy gave (clipped), ``(n,)``.
+        commands: the episode's command vector, ``(m,)``.
+        time: seconds since the episode's reset.
+        pose: the action robot's default pose, joint name -> position (others at 0).
+    """
+
+    sim: Sim
+    body: int
+    bodies: dict[str, int]
+    joints: np.ndarray
+    joint_names: tuple[str, ...]
+    default: np.ndarray
+    last_action: np.ndarray
+    commands: np.ndarray
+    time: float = 0.0
+    pose: Mapping[str, float] = field(default_factory=dict)
+
+    def rotation(self) -> np.ndarray:
+        """The base's orientation.
+
+        Returns:
+            A (3, 3) matrix taking base-frame vectors to the world frame.
+        """
+        return quat_to_matrix(self.sim.base_state(self.body).orientation)
+
+    def link_position(self, link: str | int) -> np.ndarray:
+        """A link's centre of mass.
+
+        Args:
+            link: a link name or index of the action robot; ``-1``: the base.
+
+        Returns:
+            ``(3,)``: its position (m, world).
+        """
+        if link == -1:
+            return np.asarray(self.sim.base_state(self.body).position)
+        return np.asarray(self.sim.link_state(self.body, link).com_position)
+
+
+def _q(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    if "joints" not in p:
+        q = w.sim.joint_states(w.body, w.joints).positions
+        return q - w.default if p.get("relative", False) else q
+    q = w.sim.joint_states(w.body, list(p["joints"])).positions
+    if p.get("relative", False):
+        q = q - np.array([w.pose.get(j, 0.0) for j in p["joints"]])
+    return q
+
+
+def _qd(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    return w.sim.joint_states(w.body, list(p.get("joints", w.joints))).velocities
+
+
+def _gravity(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    return w.rotation().T @ np.array([0.0, 0.0, -1.0])
+
+
+def _lin(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    return w.rotation().T @ np.asarray(w.sim.base_state(w.body).linear_velocity)
+
+
+def _ang(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    return w.rotation().T @ np.asarray(w.sim.base_state(w.body).angular_velocity)
+
+
+def _phase(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    a = 2 * math.pi * w.time / float(p.get("period", 1.0))
+    return np.array([math.sin(a), math.cos(a)])
+
+
+def _contacts(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    links = p.get("links", ())
+    return np.array([1.0 if w.sim.contact_points(w.body, link_a=k) else 0.0 for k in links])
+
+
+def _link_to_command(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    return w.commands[:3] - w.link_position(p["link"])
+
+
+def _command_in_base(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    """The command's first two entries (a goal x, y in the world) in the base's heading frame."""
+    s = w.sim.base_state(w.body)
+    x, y, z, qw = s.orientation
+    yaw = math.atan2(2 * (qw * z + x * y), 1 - 2 * (y * y + z * z))
+    dx, dy = w.commands[0] - s.position[0], w.commands[1] - s.position[1]
+    c, n = math.cos(yaw), math.sin(yaw)
+    return np.array([c * dx + n * dy, -n * dx + c * dy])
+
+
+OBSERVATIONS: dict[str, Callable[[World, Mapping[str, Any]], np.ndarray]] = {
+    # (n,) rad or m; params: joints (names; default: the action's), relative (bool): minus
+    # the default pose
+    "joint_pos": _q,
+    "joint_vel": _qd,  # (n,) rad/s or m/s; params: joints
+    "base_lin_vel": _lin,  # (3,) m/s, base frame
+    "base_ang_vel": _ang,  # (3,) rad/s, base frame
+    "projected_gravity": _gravity,  # (3,) unit gravity direction, base frame
+    "base_height": lambda w, p: np.array([w.sim.base_state(w.body).position[2]]),  # (1,) m
+    "last_action": lambda w, p: w.last_action.copy(),  # (n,)
+    "commands": lambda w, p: w.commands.copy(),  # (m,)
+    "gait_phase": _phase,  # (2,) sin, cos of 2 pi t / period; params: period (s)
+    "contacts": _contacts,  # (k,) 1.0 where the link touches anything; params: links
+    "link_pos": lambda w, p: w.link_position(p["link"]),  # (3,) m, world; params: link
+    "link_to_command": _link_to_command,  # (3,) command[:3] - link (m, world); params: link
+    "command_in_base": _command_in_base,  # (2,) goal x, y in the base's heading frame (m)
+}
+"""Observation term -> function (world, params) -> float64 array."""
+
+
+def _dist(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.linalg.norm(a - b))
+
+
+def _goal_distance(w: World, p: Mapping[str, Any]) -> float:
+    return _dist(np.asarray(w.sim.base_state(w.body).position[:2]), w.commands[:2])
+
+
+def _link_distance(w: World, p: Mapping[str, Any]) -> float:
+    return _dist(w.link_position(p["link"]), w.commands[:3])
+
+
+def _tilt(w: World) -> float:
+    return math.acos(max(-1.0, min(1.0, -float(_gravity(w, {})[2]))))
+
+
+def _joint_value(w: World, p: Mapping[str, Any]) -> float:
+    return float(w.sim.joint_states(w.body, [p["joint"]]).positions[0])
+
+
+REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
+    "alive": lambda w, p: 1.0,
+    "link_distance": lambda w, p: -_link_distance(w, p),  # params: link
+    "goal_distance": lambda w, p: -_goal_distance(w, p),
+    "action_l2": lambda w, p: -float(np.sum(w.last_action**2)),
+    "joint_vel_l2": lambda w, p: -float(np.sum(_qd(w, {}) ** 2)),
+    "joint_pos_error": lambda w, p: -float(np.sum(_q(w, {"relative": True}) ** 2)),
+    "upright": lambda w, p: -float(np.sum(_gravity(w, p)[:2] ** 2)),
+    "height_error": lambda w, p: -((w.sim.base_state(w.body).position[2] - p["target"]) ** 2),
+}
+"""Reward term -> function (world, params) -> value (weighted by the task)."""
+
+TERMINATIONS: dict[str, Callable[[World, Mapping[str, Any]], bool]] = {
+    # params: joint, limit: |q| above limit (rad or m)
+    "joint_pos_outside": lambda w, p: abs(_joint_value(w, p)) > p["limit"],
+    # params: limit (m): the base's centre of mass below it
+    "base_height_below": lambda w, p: w.sim.base_state(w.body).position[2] < p["limit"],
+    # params: limit (rad): the base's z axis that far from world up
+    "tilt_above": lambda w, p: _tilt(w) > p["limit"],
+}
+"""Failure -> test (world, params) -> True when the episode ends as a failure."""
+
+SUCCESSES: dict[str, Callable[[World, Mapping[str, Any]], bool]] = {
+    # no failure until the episode's end (tested at truncation)
+    "survive": lambda w, p: True,
+    # params: link, within (m): the link's centre of mass that near command[:3]
+    "link_near_command": lambda w, p: _link_distance(w, p) < p["within"],
+    # params: within (m): the base's x, y that near command[:2]
+    "base_near_command": lambda w, p: _goal_distance(w, p) < p["within"],
+}
+"""Success -> test (world, params); the episode succeeds when every test holds (a ``terminate``
+parameter ends it there; otherwise it is tested at the episode's last step)."""
+
+PARAMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    # name -> (required params, optional params)
+    "joint_pos": ((), ("relative", "joints")),
+    "joint_vel": ((), ("joints",)),
+    "gait_phase": ((), ("period",)),
+    "contacts": (("links",), ()),
+    "link_pos": (("link",), ()),
+    "link_to_command": (("link",), ()),
+    "link_distance": (("link",), ()),
+    "height_error": (("target",), ()),
+    "joint_pos_outside": (("joint", "limit"), ()),
+    "base_height_below": (("limit",), ()),
+    "tilt_above": (("limit",), ()),
+    "link_near_command": (("link", "within"), ("terminate",)),
+    "base_near_command": (("within",), ("terminate",)),
+    "survive": ((), ()),
+}
+"""A term's parameters: those it needs and those it may take (others are refused)."""
+
+
+def term_names(kind: str) -> tuple[str, ...]:
+    """The terms of one kind.
+
+    Args:
+        kind: ``"observation"``, ``"reward"``, ``"termination"`` or ``"success"``.
+
+    Returns:
+        Their names, sorted.
+
+    Raises:
+        KeyError: another kind.
+    """
+    table: dict[str, Mapping[str, Any]] = {
+        "observation": OBSERVATIONS,
+        "reward": REWARDS,
+        "termination": TERMINATIONS,
+        "success": SUCCESSES,
+    }
+    return tuple(sorted(table[kind]))
