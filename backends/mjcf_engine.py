@@ -1,0 +1,609 @@
+"""An MJCF model read as MuJoCo reads it, stepped by an engine that is not MuJoCo
+(``load_mjcf(source, semantics="mujoco")`` on PyBullet and PhysX).
+
+:class:`MjcfOnEngine` is the part every such engine shares (no engine is imported here): the
+engine builds the plans of :mod:`simbridge.model.mjcf_native_plan` and steps them; a
+:class:`~simbridge.model.mjcf_mirror.Mirror` of the compiled model turns the engine's state
+into MuJoCo's ``qpos``/``qvel`` and gives, by MuJoCo's own functions, every step's actuator,
+spring and damping forces (applied as joint torques for that step) and every read (frames,
+centres of mass, sites, sensors), so that a read means on every engine what it means on
+MuJoCo. A subclass supplies five hooks: :meth:`engine_state`, :meth:`write_engine_state`,
+:meth:`apply_forces`, :meth:`step_engine` and :meth:`close_engine`, and its departures.
+
+No profile entry applies (no link damping, no default motors): the file's ``<option>`` gives
+gravity and the time step unless the Sim was given them.
+"""
+
+from __future__ import annotations
+
+import threading
+from abc import abstractmethod
+from typing import Any
+
+import numpy as np
+
+from simbridge.backend import Backend
+from simbridge.exceptions import (
+    BackendUnsupportedError,
+    SimBusyError,
+    SimClosedError,
+    SimulationDivergedError,
+)
+from simbridge.model.mjcf_mirror import Mirror
+from simbridge.model.mjcf_native import NativeBody, NativeMjcf
+from simbridge.model.mjcf_native_plan import plan_departures, refuse_unsimulated
+from simbridge.profiles import Profile
+from simbridge.transforms import quat_multiply, quat_rotate
+from simbridge.types import (
+    BaseState,
+    DynamicsInfo,
+    JointCommands,
+    JointInfo,
+    JointStates,
+    JointType,
+    LinkState,
+    MotorMode,
+    Quat,
+    Vec3,
+)
+
+from . import locking
+from .locking import exclusive, wait_for_lock
+
+__all__ = ["MjcfOnEngine"]
+
+_COMMANDS = (
+    "PyBullet's joint motors and torques under semantics='mujoco'",
+    "drive the model's own actuators: Sim.set_actuator_controls",
+)
+
+
+def _xyzw(q: np.ndarray) -> Quat:
+    return (float(q[1]), float(q[2]), float(q[3]), float(q[0]))
+
+
+def _wxyz(q: Quat) -> np.ndarray:
+    return np.array((q[3], q[0], q[1], q[2]), dtype=np.float64)
+
+
+def _v(a: Any) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def _conj(q: Quat) -> Quat:
+    return (-q[0], -q[1], -q[2], q[3])
+
+
+class MjcfOnEngine(Backend):
+    """The world of one MJCF model as MuJoCo compiles it, stepped by another engine.
+
+    Args:
+        profile: The Sim's profile; only its gravity and time step are read, and only where
+            the Sim was given them.
+        native: The compiled model.
+        gravity: The gravity the caller gave the Sim (m/s², world), or None for the file's.
+        timestep: The time step the caller gave the Sim (s), or None for the file's.
+
+    Raises:
+        MjcfFeatureUnsupportedError: A feature only MuJoCo simulates (tendons, equality
+            constraints, flex bodies...), named with its element.
+    """
+
+    engine_version: str = ""
+
+    def __init__(
+        self,
+        profile: Profile,
+        native: NativeMjcf,
+        gravity: Vec3 | None = None,
+        timestep: float | None = None,
+    ) -> None:
+        refuse_unsimulated(native, self.name)
+        m = native.model
+        if gravity is not None:
+            m.opt.gravity[:] = gravity
+        if timestep is not None:
+            m.opt.timestep = timestep
+        super().__init__(
+            profile.with_(gravity=_v(m.opt.gravity), timestep=float(m.opt.timestep)), False
+        )
+        self.native = native
+        self.m = m
+        self.mirror = Mirror(m)
+        self.d = self.mirror.d
+        self.dt = float(m.opt.timestep)
+        self.ctrl = np.zeros(m.nu)
+        self._bodies: dict[int, NativeBody] = dict(enumerate(native.bodies))
+        self._limited = [  # hinge and slide joints with a range
+            j for j in range(m.njnt) if m.jnt_limited[j] and int(m.jnt_type[j]) in (2, 3)
+        ]
+        self._stepping = threading.RLock()
+        self._in_step = False
+        self._closed = False
+        self._synced = False  # the mirror holds the engine's state
+        self._time = 0.0
+        self._diverged: SimulationDivergedError | None = None
+
+    reading = locking.reading
+
+    # ---------------------------------------------------------------- the engine's hooks
+
+    @abstractmethod
+    def engine_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """The engine's state in MuJoCo's conventions.
+
+        Returns:
+            ``qpos`` (nq,) and ``qvel`` (nv,), MuJoCo's order (a free joint: the body frame's
+            position, quaternion w, x, y, z; the origin's velocity, world; the angular
+            velocity, body frame).
+        """
+
+    @abstractmethod
+    def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Put the engine in a state given in MuJoCo's conventions.
+
+        Args:
+            qpos: (nq,) MuJoCo's generalized positions.
+            qvel: (nv,) MuJoCo's generalized velocities.
+        """
+
+    @abstractmethod
+    def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
+        """Apply generalized forces for the next step.
+
+        Args:
+            qfrc: (nv,) actuator, spring, gravity compensation and fluid forces.
+            damping: (nv,) MuJoCo's ``dof_damping`` (the engine applies it its own way).
+            mass: (nv, nv) the joint-space inertia without armature.
+        """
+
+    def implicit_damping(self, damping: np.ndarray, mass: np.ndarray) -> np.ndarray:
+        """The damping force that stops the next step's velocity as implicit Euler does:
+        ``-D (I + dt M^-1 D)^-1 qdot`` (an explicit ``-D qdot`` diverges where the joint's
+        inertia is below ``dt d / 2``: the ant's hips without armature).
+
+        Args:
+            damping: (nv,) MuJoCo's ``dof_damping``.
+            mass: (nv, nv) the joint-space inertia the engine simulates.
+
+        Returns:
+            (nv,) the generalized damping force of the mirror's state.
+        """
+        if not damping.any():
+            return np.zeros_like(damping)
+        a = np.eye(len(damping)) + self.dt * np.linalg.solve(mass, np.diag(damping))
+        return -damping * np.linalg.solve(a, self.d.qvel)
+
+    def limit_recovery(self, mass: np.ndarray) -> np.ndarray:
+        """The force that brings a joint outside its range back in, MuJoCo's way, for an
+        engine whose limit only stops a joint from leaving its range (PyBullet's: measured, a
+        hinge that starts 0.5 rad outside its range stays there).
+
+        MuJoCo's limit row of violation ``r = dist - margin < 0`` asks for the reference
+        acceleration ``a = -b v - k r`` (``b = 2 / (dmax tc)``, ``k = d / (dmax² tc² dr²)``,
+        ``(tc, dr)`` the joint's ``solref``, ``dmax`` its ``solimp[1]``, ``d`` the impedance,
+        linear from ``solimp[0]`` to ``dmax`` over ``solimp[2]``) and gets ``d`` of it: the
+        force here is ``d m_eff a``, ``m_eff = 1 / (M^-1)_ii``, the rest of the joint's
+        acceleration left out (a named departure: ``limit_recovery``).
+
+        Args:
+            mass: (nv, nv) the joint-space inertia the engine simulates.
+
+        Returns:
+            (nv,) the force, 0 on every joint inside its range.
+        """
+        m, d = self.m, self.d
+        out = np.zeros(m.nv)
+        inv = None
+        for j in self._limited:
+            qa, va = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+            q, v = float(d.qpos[qa]), float(d.qvel[va])
+            lo, hi = m.jnt_range[j]
+            margin = float(m.jnt_margin[j])
+            r, sign = (q - lo - margin, 1.0) if q - lo < hi - q else (hi - q - margin, -1.0)
+            if r >= 0.0:
+                continue
+            if inv is None:
+                inv = np.linalg.inv(mass)
+            tc, dr = (float(x) for x in m.jnt_solref[j][:2])
+            dmin, dmax, width = (float(x) for x in m.jnt_solimp[j][:3])
+            imp = dmin + (dmax - dmin) * min(-r / width, 1.0) if width > 0 else dmax
+            tc = max(tc, 2.0 * self.dt)  # MuJoCo's own floor on the time constant
+            b, k = 2.0 / (dmax * tc), imp / (dmax**2 * tc**2 * dr**2)
+            a = -b * (sign * v) - k * r  # in the violation's coordinate
+            out[va] = sign * imp * a / inv[va, va]
+        return out
+
+    @abstractmethod
+    def step_engine(self) -> None:
+        """One engine step of ``self.dt``."""
+
+    @abstractmethod
+    def close_engine(self) -> None:
+        """Release the engine's world."""
+
+    def engine_departures(self) -> dict[str, str]:
+        """The engine's own departures beyond :func:`plan_departures`.
+
+        Returns:
+            Departure name -> what the engine does instead (none by default).
+        """
+        return {}
+
+    # ---------------------------------------------------------------- world
+
+    def _sync(self) -> None:
+        """The mirror holds the engine's state, its frames fresh."""
+        if not self._synced:
+            self.mirror.set_state(*self.engine_state())
+            self._synced = True
+        self.mirror.refresh()
+
+    @property
+    def time(self) -> float:
+        """See Backend.time: steps taken times the time step."""
+        if self._closed:
+            raise SimClosedError()
+        return self._time
+
+    def load(self, *args: Any, **kwargs: Any) -> int:
+        """See Backend.load.
+
+        Raises:
+            BackendUnsupportedError: Always: a model read with semantics='mujoco' is the whole
+                world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "loading into a world that holds a model read with semantics='mujoco'",
+            "that model is the whole world; reset() the Sim or use another Sim",
+        )
+
+    def remove(self, body: int) -> None:
+        """See Backend.remove.
+
+        Raises:
+            BackendUnsupportedError: Always: the model's bodies are one compiled world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "removing one body of a model read with semantics='mujoco'",
+            "the model is one compiled world: reset() removes it whole",
+        )
+
+    @exclusive
+    def reset(self) -> None:
+        """See Backend.reset: the model's ``qpos0``, at rest (the Sim replaces this backend
+        at ``reset()``)."""
+        self.write_engine_state(self.m.qpos0.copy(), np.zeros(self.m.nv))
+        self._synced = False
+        self._time = 0.0
+        self._diverged = None
+
+    def step(self, n: int) -> None:
+        """See Backend.step: each engine step applies MuJoCo's actuator, spring and damping
+        forces of the state at its start; a non-finite state raises SimulationDivergedError."""
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        if self._in_step:
+            lock.release()
+            raise SimBusyError()
+        self._in_step = True
+        try:
+            if self._diverged is not None:
+                raise self._diverged
+            mirror = self.mirror
+            for _ in range(max(n, 0)):
+                mirror.set_state(*self.engine_state())
+                self.apply_forces(*mirror.forces(self.ctrl))
+                self.step_engine()
+                self._time += self.dt
+            self._synced = False
+            if n > 0:
+                q, v = self.engine_state()
+                if not (np.isfinite(q).all() and np.isfinite(v).all()):
+                    self._diverged = SimulationDivergedError(
+                        self.name, self._time, "the engine's state (non-finite)"
+                    )
+                    raise self._diverged
+        finally:
+            self._in_step = False
+            lock.release()
+
+    def close(self) -> None:
+        """See Backend.close."""
+        if not self._closed:
+            self._closed = True
+            self.close_engine()
+
+    # ---------------------------------------------------------------- tables
+
+    def joint_info(self, body: int, joint: int) -> JointInfo:
+        """See Backend.joint_info (the rows of :mod:`simbridge.model.mjcf_native`)."""
+        return self._bodies[body].table[joint]
+
+    def num_joints(self, body: int) -> int:
+        """See Backend.num_joints: one row per MuJoCo joint but the free one."""
+        return len(self._bodies[body].table)
+
+    def _link_body(self, body: int, link: int) -> int:
+        """The MuJoCo body id a link reads (-1: a massless root's base)."""
+        b = self._bodies[body]
+        if link < 0:
+            return -1 if b.massless_root else b.body_id
+        return b.link_bodies[link]
+
+    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
+        """See Backend.dynamics_info: MuJoCo's body mass and inertia, as on the MuJoCo
+        backend; the friction of the body's first geom."""
+        m = self.m
+        bid = self._link_body(body, link)
+        if bid < 0:
+            return DynamicsInfo(
+                0.0, 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0, 0, 0, 1.0), 0.0, 0.0, 0.0
+            )
+        g = int(m.body_geomadr[bid])
+        fr = m.geom_friction[g] if g >= 0 else np.zeros(3)
+        return DynamicsInfo(
+            float(m.body_mass[bid]),
+            float(fr[0]),
+            _v(m.body_inertia[bid]),
+            _v(m.body_ipos[bid]),
+            _xyzw(m.body_iquat[bid]),
+            0.0,
+            float(fr[2]),
+            float(fr[1]),
+        )
+
+    # ---------------------------------------------------------------- state (MuJoCo's reads)
+
+    def _com(self, bid: int) -> tuple[Vec3, Quat, Vec3, Vec3]:
+        """A MuJoCo body's centre-of-mass pose and velocity (world), from the mirror."""
+        pos, q, lin, ang = self.mirror.body_com(bid)
+        return _v(pos), (float(q[0]), float(q[1]), float(q[2]), float(q[3])), _v(lin), _v(ang)
+
+    @exclusive
+    def base_state(self, body: int) -> BaseState:
+        """See Backend.base_state: the top-level body's centre of mass (a massless root: the
+        body's frame at qpos0, at rest)."""
+        self._sync()
+        b = self._bodies[body]
+        if b.massless_root:
+            m = self.m
+            return BaseState(
+                _v(m.body_pos[b.body_id]),
+                _xyzw(m.body_quat[b.body_id]),
+                (0.0, 0.0, 0.0),
+                (0.0, 0.0, 0.0),
+            )
+        return BaseState(*self._com(b.body_id))
+
+    @exclusive
+    def link_state(self, body: int, link: int) -> LinkState:
+        """See Backend.link_state: the MuJoCo body of row ``link``, from the engine's state."""
+        self._sync()
+        m, d = self.m, self.d
+        bid = self._link_body(body, link)
+        pos, orn, lin, ang = self._com(bid)
+        return LinkState(
+            pos,
+            orn,
+            _v(m.body_ipos[bid]),
+            _xyzw(m.body_iquat[bid]),
+            _v(d.xpos[bid]),
+            _xyzw(d.xquat[bid]),
+            lin,
+            ang,
+        )
+
+    @exclusive
+    def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
+        """See Backend.joint_states: ``qpos``/``qvel`` at each joint's address (a ball joint:
+        its quaternion's x), and the actuator force MuJoCo's formulas gave the last step."""
+        self._sync()
+        b, d = self._bodies[body], self.d
+        n = len(joints)
+        pos, vel, tau = np.zeros(n), np.zeros(n), np.zeros(n)
+        for k, j in enumerate(joints.tolist()):
+            row = b.table[j]
+            qa = row.q_index + (1 if row.type == JointType.SPHERICAL else 0)
+            pos[k] = d.qpos[qa]
+            vel[k] = d.qvel[row.u_index]
+            tau[k] = d.qfrc_actuator[row.u_index]
+        return JointStates(pos, vel, tau)
+
+    def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Put the engine and the mirror in this state."""
+        self.write_engine_state(qpos, qvel)
+        self.mirror.set_state(qpos, qvel)
+        self._synced = True
+
+    @exclusive
+    def reset_joint_state(
+        self, body: int, joints: np.ndarray, positions: list[float], velocities: list[float]
+    ) -> None:
+        """See Backend.reset_joint_state: ``qpos``/``qvel`` at the joints' addresses."""
+        self._sync()
+        q, v = self.d.qpos.copy(), self.d.qvel.copy()
+        b = self._bodies[body]
+        for j, p, w in zip(joints.tolist(), positions, velocities, strict=True):
+            row = b.table[j]
+            q[row.q_index] = p
+            v[row.u_index] = w
+        self._write(q, v)
+
+    @exclusive
+    def reset_base_state(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        """See Backend.reset_base_state: the free joint's ``qpos``/``qvel`` from the centre
+        of mass's pose and velocity (as the MuJoCo backend does)."""
+        b = self._bodies[body]
+        if b.free_joint < 0:
+            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
+            raise BackendUnsupportedError(
+                self.name,
+                "moving a fixed base of a model read with semantics='mujoco'",
+                "its place is the file's",
+            )
+        self._sync()
+        m, d, bid = self.m, self.d, b.body_id
+        qa, va = int(m.jnt_qposadr[b.free_joint]), int(m.jnt_dofadr[b.free_joint])
+        com_pos, com_orn, lin, ang = self._com(bid)
+        pos = np.array(position if position is not None else com_pos)
+        qcom = orientation if orientation is not None else com_orn
+        qframe = quat_multiply(qcom, _conj(_xyzw(m.body_iquat[bid])))
+        offset = np.array(quat_rotate(qframe, _v(m.body_ipos[bid])))
+        w = np.array(angular_velocity if angular_velocity is not None else ang)
+        v = np.array(linear_velocity if linear_velocity is not None else lin)
+        q, qd = d.qpos.copy(), d.qvel.copy()
+        q[qa : qa + 3] = pos - offset
+        q[qa + 3 : qa + 7] = _wxyz(qframe)
+        qd[va : va + 3] = v - np.cross(w, offset)
+        qd[va + 3 : va + 6] = quat_rotate(_conj(qframe), _v(w))
+        self._write(q, qd)
+
+    # ---------------------------------------------------------------- PyBullet's commands
+
+    def set_joint_velocity(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_velocity.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_position(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_position.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_torque(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_torque.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def joint_commands(self, body: int) -> JointCommands:
+        """See Backend.joint_commands: every joint reads as a released motor."""
+        n = len(self._bodies[body].table)
+        z = np.zeros(n)
+        return JointCommands(
+            np.full(n, int(MotorMode.VELOCITY)), z, z.copy(), z.copy(), np.ones(n), z.copy()
+        )
+
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """See Backend.set_joint_commands: only released motors and no pending torque.
+
+        Raises:
+            BackendUnsupportedError: For any motor with a force, or a pending torque.
+        """
+        if np.asarray(commands.max_force).any() or np.asarray(commands.pending_torque).any():
+            raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    # ---------------------------------------------------------------- whole state
+
+    @exclusive
+    def snapshot(self) -> Any:
+        """See Backend.snapshot: time, ``qpos``, ``qvel`` and the controls."""
+        q, v = self.engine_state()
+        return (id(self), self._time, q, v, self.ctrl.copy())
+
+    @exclusive
+    def restore(self, native: Any) -> bool:
+        """See Backend.restore: a snapshot of this world is written back (the engine's
+        contact caches start afresh)."""
+        if not (isinstance(native, tuple) and len(native) == 5 and native[0] == id(self)):
+            return False
+        self._time = native[1]
+        self.ctrl[:] = native[4]
+        self._write(native[2], native[3])
+        return True
+
+    @exclusive
+    def set_time(self, time: float) -> None:
+        """See Backend.set_time: to the nearest whole step."""
+        self._time = round(time / self.dt) * self.dt
+
+    def manifest(self) -> dict[str, Any]:
+        """See Backend.manifest: MuJoCo's reading on this engine, its departures named."""
+        m = self.m
+        return {
+            "backend": self.name,
+            "engine_version": self.engine_version,
+            "semantics": "mujoco",
+            "model": self.native.display_name,
+            "option": {
+                "timestep": float(m.opt.timestep),
+                "gravity": _v(m.opt.gravity),
+            },
+            "sizes": {"nq": m.nq, "nv": m.nv, "nu": m.nu, "nbody": m.nbody},
+            "departures": {
+                "profile": "no profile entry applies under semantics='mujoco' but gravity "
+                "and the time step the Sim was given: the model is MuJoCo's",
+                **plan_departures(self.native, self.name),
+                **self.engine_departures(),
+            },
+        }
+
+    # ---------------------------------------------------------------- MuJoCo's own calls
+
+    @exclusive
+    def set_actuator_controls(self, actuators: np.ndarray, values: list[float]) -> None:
+        """See Backend.set_actuator_controls: held, and clamped to ``ctrlrange`` where
+        limited at each step, as MuJoCo does."""
+        self.ctrl[actuators] = values
+
+    @exclusive
+    def actuator_controls(self) -> np.ndarray:
+        """See Backend.actuator_controls: a copy of the controls."""
+        return self.ctrl.copy()
+
+    @exclusive
+    def generalized_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """See Backend.generalized_state: the engine's state in MuJoCo's conventions."""
+        q, v = self.engine_state()
+        return q.copy(), v.copy()
+
+    @exclusive
+    def set_generalized_state(self, qpos: np.ndarray | None, qvel: np.ndarray | None) -> None:
+        """See Backend.set_generalized_state."""
+        q, v = self.engine_state()
+        self._write(
+            q if qpos is None else np.asarray(qpos), v if qvel is None else np.asarray(qvel)
+        )
+
+    @exclusive
+    def reset_keyframe(self, key: int) -> None:
+        """See Backend.reset_keyframe: the key's time, ``qpos``, ``qvel`` and ``ctrl``."""
+        m = self.m
+        self._time = float(m.key_time[key])
+        if m.nu:
+            self.ctrl[:] = m.key_ctrl[key]
+        self._write(m.key_qpos[key].copy(), m.key_qvel[key].copy())
+        self._diverged = None
+
+    @exclusive
+    def sensor_data(self, sensor: int) -> np.ndarray:
+        """See Backend.sensor_data: MuJoCo's sensor of the engine's state (contact and force
+        sensors are MuJoCo's own contacts of that state, not the engine's)."""
+        self._sync()
+        return self.mirror.sensor(sensor, self.ctrl)
+
+    @exclusive
+    def site_pose(self, site: int) -> tuple[Vec3, Quat]:
+        """See Backend.site_pose: MuJoCo's site frame of the engine's state."""
+        self._sync()
+        q = self.mirror.quat(self.d.site_xmat[site])
+        return _v(self.d.site_xpos[site]), (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
