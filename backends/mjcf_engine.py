@@ -117,6 +117,9 @@ class MjcfOnEngine(Backend):
         self._limited = [  # hinge and slide joints with a range
             j for j in range(m.njnt) if m.jnt_limited[j] and int(m.jnt_type[j]) in (2, 3)
         ]
+        self._recovering: set[int] = set()  # joints placed outside their range
+        # the step before's velocity, inertia, bias and applied force (with_armature)
+        self._last: tuple[np.ndarray, ...] | None = None
         self._stepping = threading.RLock()
         self._in_step = False
         self._closed = False
@@ -174,20 +177,62 @@ class MjcfOnEngine(Backend):
         a = np.eye(len(damping)) + self.dt * np.linalg.solve(mass, np.diag(damping))
         return -damping * np.linalg.solve(a, self.d.qvel)
 
-    def limit_recovery(self, mass: np.ndarray) -> np.ndarray:
-        """The force that brings a joint outside its range back in, MuJoCo's way, for an
-        engine whose limit only stops a joint from leaving its range (PyBullet's: measured, a
-        hinge that starts 0.5 rad outside its range stays there).
+    def with_armature(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> np.ndarray:
+        """The generalized force that gives an engine without armature MuJoCo's motion with it:
+        ``f - A (M + A)^-1 (f - c + fc)``, ``f`` the forces with the damping made implicit in
+        ``M + A`` and the recovery of a joint placed outside its range, ``c`` MuJoCo's bias
+        forces (gravity, Coriolis) of the mirror's state, ``fc`` the contact and limit forces
+        the engine applied in the step before (``M qdd - applied + c`` of that step, its
+        ``qdd`` the change of velocity over dt; 0 after a write of the state). Then
+        ``M qdd = f - A qdd_a - c + fc`` gives ``qdd = qdd_a = (M + A)^-1 (f - c + fc)``:
+        exact where no contact or limit acts; where one does, its force is one step old (the
+        departure ``armature``). Without ``fc`` a standing robot's joints get ``-A`` times
+        their free-fall acceleration: measured, the ant's hips driven to their limits.
+
+        Args:
+            qfrc: (nv,) actuator, spring, gravity compensation and fluid forces.
+            damping: (nv,) MuJoCo's ``dof_damping``.
+            mass: (nv, nv) the joint-space inertia without armature.
+
+        Returns:
+            (nv,) the force to apply for the next step.
+        """
+        arm = self.m.dof_armature
+        v, c = self.d.qvel, self.d.qfrc_bias
+        full = mass + np.diag(arm)
+        f = qfrc + self.implicit_damping(damping, full)
+        fc = np.zeros_like(f)
+        if self._last is not None:  # the engine's constraint forces of the step before
+            v0, mass0, c0, applied0 = self._last
+            fc = mass0 @ ((v - v0) / self.dt) - applied0 + c0
+        if self._recovering:
+            f = f + self.limit_recovery(full, np.linalg.solve(full, f - c + fc))
+        out = f - arm * np.linalg.solve(full, f - c + fc) if arm.any() else f
+        self._last = (v.copy(), mass.copy(), c.copy(), out)
+        return out
+
+    def limit_recovery(self, mass: np.ndarray, free: np.ndarray) -> np.ndarray:
+        """The force that brings a joint placed outside its range back in, MuJoCo's way, for
+        an engine whose limit only stops a joint from leaving its range (PyBullet's: measured,
+        a hinge that starts 0.5 rad outside its range stays there). It acts from a write of
+        the state (the load, ``set_qpos_qvel``, a keyframe...) until the joint is first back
+        in its range, and never on a joint the motion carries out (the engine's limit stops
+        that one; both at once double the correction and diverge: measured on half_cheetah).
 
         MuJoCo's limit row of violation ``r = dist - margin < 0`` asks for the reference
         acceleration ``a = -b v - k r`` (``b = 2 / (dmax tc)``, ``k = d / (dmax² tc² dr²)``,
         ``(tc, dr)`` the joint's ``solref``, ``dmax`` its ``solimp[1]``, ``d`` the impedance,
-        linear from ``solimp[0]`` to ``dmax`` over ``solimp[2]``) and gets ``d`` of it: the
-        force here is ``d m_eff a``, ``m_eff = 1 / (M^-1)_ii``, the rest of the joint's
-        acceleration left out (a named departure: ``limit_recovery``).
+        linear from ``solimp[0]`` to ``dmax`` over ``solimp[2]``) and gets
+        ``(1 - d) a0 + d a``, ``a0`` the joint's acceleration without the limit: the force
+        here is ``d m_eff (a - a0)``, ``m_eff = 1 / (M^-1)_ii``, never pulling (MuJoCo's
+        limit force is >= 0: the joint coasts through the end of its range at the speed the
+        push gave it, 9.6 rad/s for the ant's ankles), one row at a time (a named
+        departure: ``limit_recovery``).
 
         Args:
-            mass: (nv, nv) the joint-space inertia the engine simulates.
+            mass: (nv, nv) the joint-space inertia (armature included where the engine
+                simulates it or :meth:`with_armature` gives it).
+            free: (nv,) the acceleration without the limit, ``M^-1 (f - c)``.
 
         Returns:
             (nv,) the force, 0 on every joint inside its range.
@@ -195,13 +240,12 @@ class MjcfOnEngine(Backend):
         m, d = self.m, self.d
         out = np.zeros(m.nv)
         inv = None
-        for j in self._limited:
+        for j in list(self._recovering):
             qa, va = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
             q, v = float(d.qpos[qa]), float(d.qvel[va])
-            lo, hi = m.jnt_range[j]
-            margin = float(m.jnt_margin[j])
-            r, sign = (q - lo - margin, 1.0) if q - lo < hi - q else (hi - q - margin, -1.0)
-            if r >= 0.0:
+            r, sign = self._violation(j, q)
+            if r >= 0.0:  # back in its range: the engine's own limit holds it from now on
+                self._recovering.discard(j)
                 continue
             if inv is None:
                 inv = np.linalg.inv(mass)
@@ -211,7 +255,8 @@ class MjcfOnEngine(Backend):
             tc = max(tc, 2.0 * self.dt)  # MuJoCo's own floor on the time constant
             b, k = 2.0 / (dmax * tc), imp / (dmax**2 * tc**2 * dr**2)
             a = -b * (sign * v) - k * r  # in the violation's coordinate
-            out[va] = sign * imp * a / inv[va, va]
+            # a limit pushes, never pulls (MuJoCo's unilateral row: force >= 0)
+            out[va] = sign * max(0.0, imp * (a - sign * free[va])) / inv[va, va]
         return out
 
     @abstractmethod
@@ -275,8 +320,7 @@ class MjcfOnEngine(Backend):
     def reset(self) -> None:
         """See Backend.reset: the model's ``qpos0``, at rest (the Sim replaces this backend
         at ``reset()``)."""
-        self.write_engine_state(self.m.qpos0.copy(), np.zeros(self.m.nv))
-        self._synced = False
+        self._write(self.m.qpos0.copy(), np.zeros(self.m.nv))
         self._time = 0.0
         self._diverged = None
 
@@ -413,11 +457,24 @@ class MjcfOnEngine(Backend):
             tau[k] = d.qfrc_actuator[row.u_index]
         return JointStates(pos, vel, tau)
 
+    def _violation(self, j: int, q: float) -> tuple[float, float]:
+        """A limited joint's MuJoCo violation ``r`` (dist - margin: < 0 violated) at the
+        nearer end of its range, and that end's sign (+1 the lower, -1 the upper)."""
+        lo, hi = self.m.jnt_range[j]
+        margin = float(self.m.jnt_margin[j])
+        return (q - lo - margin, 1.0) if q - lo < hi - q else (hi - q - margin, -1.0)
+
     def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
-        """Put the engine and the mirror in this state."""
+        """Put the engine and the mirror in this state; note the joints placed outside their
+        range (:meth:`limit_recovery`)."""
         self.write_engine_state(qpos, qvel)
         self.mirror.set_state(qpos, qvel)
         self._synced = True
+        self._last = None
+        adr = self.m.jnt_qposadr
+        self._recovering = {
+            j for j in self._limited if self._violation(j, float(qpos[adr[j]]))[0] < 0.0
+        }
 
     @exclusive
     def reset_joint_state(

@@ -134,7 +134,7 @@ class NativePyBullet(MjcfOnEngine):
         self._ground = None if ground is None else self._build(ground)
         self._filters()
         self._layout()
-        self.write_engine_state(m.qpos0.copy(), np.zeros(m.nv))
+        self._write(m.qpos0.copy(), np.zeros(m.nv))
 
     def _build(self, plan: BuildPlan) -> int:
         """``p.createMultiBody`` of one plan; PyBullet's defaults undone."""
@@ -289,7 +289,7 @@ class NativePyBullet(MjcfOnEngine):
         the damping of :meth:`implicit_damping`; a free base's force and torque as
         external forces."""
         c = self._c
-        tau = qfrc + self.implicit_damping(damping, mass) + self.limit_recovery(mass)
+        tau = self.with_armature(qfrc, damping, mass)
         for body, i, kind, _, va, _ in self._rows:
             if kind == JointType.SPHERICAL:
                 p.setJointMotorControlMultiDof(
