@@ -7,9 +7,10 @@ MuJoCo's masses and inertias), the world body's geoms as one static actor. MuJoC
 properties PhysX has are PhysX's: ``armature`` is the joint's armature, ``damping`` a drive of
 stiffness 0, that damping and target velocity 0 (implicit, as MuJoCo's Euler integrates it).
 Each step applies MuJoCo's actuator and spring forces (``set_qf``), a ``frictionloss`` as the
-force that stops the joint within the step, clamped to the frictionloss, and the recovery of a
-joint placed outside its range (the shared part, ``backends/mjcf_engine.py``). A ball joint is
-refused (PhysX's three-revolute ball of this backend is not mapped to MuJoCo's quaternion yet).
+force that stops the joint within the step, clamped to the frictionloss, and MuJoCo's soft
+joint limits (the joints have no PhysX limit; the shared part, ``backends/mjcf_engine.py``).
+A ball joint is refused (PhysX's three-revolute ball of this backend is not mapped to MuJoCo's
+quaternion yet).
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ class NativePhysx(MjcfOnEngine):
 
     name = "physx"
     state_dtype = "float32"
+    soft_limits = True  # MuJoCo's soft limit (docs/mjcf_mujoco_reading.md: measured closer)
     engine_version = sapien.__version__
 
     def __init__(
@@ -76,7 +78,7 @@ class NativePhysx(MjcfOnEngine):
         physx.set_scene_config(cfg)
         self._scene = sapien.Scene([physx.PhysxCpuSystem()])
         self._scene.timestep = self.dt
-        self.plans = native_plans(native)
+        self.plans = native_plans(native, limits=not self.soft_limits)
         self._built = [
             build_robot(self._scene, plan, SOLVER_ITERATIONS, k + 1)
             for k, plan in enumerate(self.plans)

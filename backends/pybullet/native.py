@@ -6,8 +6,9 @@ top-level body (link i = MuJoCo's joint-table row i, MuJoCo's masses and inertia
 static body for the world body's geoms. Nothing of PyBullet's profile applies: link damping 0,
 no joint-velocity clamp, the default motors released (a joint with ``frictionloss`` keeps a
 velocity motor of target 0 and that force: Coulomb friction as PyBullet's motors make it).
-Each step applies MuJoCo's actuator and spring forces as joint torques, and the joint damping
-implicitly in the joint-space inertia (the shared part, ``backends/mjcf_engine.py``).
+Each step applies MuJoCo's actuator and spring forces as joint torques, the joint damping
+implicitly in the joint-space inertia, the armature as a force and MuJoCo's soft joint limits
+(the joints have no PyBullet limit; the shared part, ``backends/mjcf_engine.py``).
 """
 
 from __future__ import annotations
@@ -115,6 +116,7 @@ class NativePyBullet(MjcfOnEngine):
 
     name = "pybullet"
     engine_version = "3.2.7"
+    soft_limits = True  # MuJoCo's limit on M + A (PyBullet's hard limit stops M alone)
 
     def __init__(
         self,
@@ -128,7 +130,7 @@ class NativePyBullet(MjcfOnEngine):
         m = self.m
         p.setGravity(*map(float, m.opt.gravity), physicsClientId=c)
         p.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=0, physicsClientId=c)
-        self.plans = native_plans(native)
+        self.plans = native_plans(native, limits=not self.soft_limits)
         self._ids = [self._build(plan) for plan in self.plans]
         ground = ground_plan(native)
         self._ground = None if ground is None else self._build(ground)
@@ -203,7 +205,7 @@ class NativePyBullet(MjcfOnEngine):
                 j = nb.joint_ids[i]
                 fl = float(m.dof_frictionloss[row.u_index])
                 self._rows.append((body, i, row.type, row.q_index, row.u_index, fl))
-                if row.type != JointType.SPHERICAL and m.jnt_limited[j]:
+                if row.type != JointType.SPHERICAL and m.jnt_limited[j] and not self.soft_limits:
                     ref = float(m.qpos0[row.q_index])  # the engine's 0 is MuJoCo's qpos0
                     p.changeDynamics(
                         body, i, jointLowerLimit=float(m.jnt_range[j][0]) - ref,

@@ -302,14 +302,15 @@ def _contact(m: Any, geoms: list[int]) -> tuple[ContactValues, CollisionFilter]:
     return values, CollisionFilter(int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
 
 
-def _joint_plan(m: Any, nb: NativeBody, row: int, fr: _Frames) -> JointPlan:
-    """Row ``row``'s joint: the child link frame in the parent's, MuJoCo's axis and range."""
+def _joint_plan(m: Any, nb: NativeBody, row: int, fr: _Frames, limits: bool) -> JointPlan:
+    """Row ``row``'s joint: the child link frame in the parent's, MuJoCo's axis and range
+    (none when ``limits`` is False)."""
     info = nb.table[row]
     j = nb.joint_ids[row]
     pp, prot = fr.link(nb, info.parent_index)
     cp, crot = fr.link(nb, row)
     kind = _JOINT_KIND[info.type]
-    limited = bool(m.jnt_limited[j]) and kind != "spherical"
+    limited = limits and bool(m.jnt_limited[j]) and kind != "spherical"
     if kind == "continuous" and limited:
         kind = "revolute"
     return JointPlan(
@@ -351,11 +352,13 @@ def _excluded(m: Any, nb: NativeBody, owner: dict[int, int]) -> frozenset[tuple[
     return frozenset(pairs)
 
 
-def native_plans(native: NativeMjcf) -> tuple[BuildPlan, ...]:
+def native_plans(native: NativeMjcf, limits: bool = True) -> tuple[BuildPlan, ...]:
     """One build plan per top-level body of the compiled model (the module docstring).
 
     Args:
         native: The compiled model.
+        limits: Whether the joints carry MuJoCo's ranges as the engine's own limits (False:
+            no joint is limited in the plan; the backend applies MuJoCo's soft limit itself).
 
     Returns:
         The plans, in MuJoCo's order of the top-level bodies; link i of plan k is row i of
@@ -386,7 +389,7 @@ def native_plans(native: NativeMjcf) -> tuple[BuildPlan, ...]:
                     row,
                     nb.name if row < 0 else nb.table[row].link_name,
                     None if row < 0 else nb.table[row].parent_index,
-                    None if row < 0 else _joint_plan(m, nb, row, fr),
+                    None if row < 0 else _joint_plan(m, nb, row, fr, limits),
                     inertial,
                     fixed,
                     tuple(s for s in shapes if s.kind != "plane" or row < 0),
@@ -460,11 +463,18 @@ def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
         "friction_combination": "a pair's friction is the engine's combination, not MuJoCo's "
         "element-wise max; one friction per link (its first colliding geom's)",
     }
+    if m.jnt_limited.any():
+        out["joint_limits"] = (
+            "a joint's range is MuJoCo's soft limit computed here, a force each step: "
+            "d m_eff (a_ref - a0) from solref/solimp, one row at a time, never pulling; the "
+            "engine's own limits are off"
+        )
     if m.dof_armature.any():
         out["armature"] = (
             "joint armature is PhysX's joint armature"
             if engine == "physx"
-            else "joint armature is dropped: PyBullet has no rotor inertia"
+            else "joint armature is a force each step, -A (M + A)^-1 (f - c + fc), fc the "
+            "contact forces of the step before: exact without contact, one step late with it"
         )
     if m.dof_damping.any():
         out["joint_damping"] = (
