@@ -25,6 +25,7 @@ import numpy as np
 from simbridge.backend import Backend
 from simbridge.exceptions import (
     BackendUnsupportedError,
+    MjcfFeatureUnsupportedError,
     SimBusyError,
     SimClosedError,
     SimulationDivergedError,
@@ -86,7 +87,7 @@ class MjcfOnEngine(Backend):
 
     Raises:
         MjcfFeatureUnsupportedError: A feature only MuJoCo simulates (tendons, equality
-            constraints, flex bodies...), named with its element.
+            constraints, flex bodies...), or a ball joint (not yet), named with its element.
     """
 
     engine_version: str = ""
@@ -103,6 +104,17 @@ class MjcfOnEngine(Backend):
         timestep: float | None = None,
     ) -> None:
         refuse_unsimulated(native, self.name)
+        for nb in native.bodies:
+            for row in nb.table:
+                if row.type == JointType.SPHERICAL:
+                    raise MjcfFeatureUnsupportedError(
+                        native.display_name,
+                        self.name,
+                        "<joint type='ball'>",
+                        row.name,
+                        "not yet: measured on PyBullet, a ball pendulum's qpos is 0.28 off "
+                        "MuJoCo's after 0.4 s; PhysX's ball is three revolute joints",
+                    )
         m = native.model
         if gravity is not None:
             m.opt.gravity[:] = gravity

@@ -9,8 +9,7 @@ stiffness 0, that damping and target velocity 0 (implicit, as MuJoCo's Euler int
 Each step applies MuJoCo's actuator and spring forces (``set_qf``), a ``frictionloss`` as the
 force that stops the joint within the step, clamped to the frictionloss, and MuJoCo's soft
 joint limits (the joints have no PhysX limit; the shared part, ``backends/mjcf_engine.py``).
-A ball joint is refused (PhysX's three-revolute ball of this backend is not mapped to MuJoCo's
-quaternion yet).
+A ball joint is refused (backends/mjcf_engine.py).
 """
 
 from __future__ import annotations
@@ -21,11 +20,10 @@ import numpy as np
 import sapien
 from sapien import physx
 
-from simbridge.exceptions import MjcfFeatureUnsupportedError
 from simbridge.model.mjcf_native import NativeMjcf
 from simbridge.model.mjcf_native_plan import ground_plan, native_plans
 from simbridge.profiles import Profile
-from simbridge.types import JointType, Vec3
+from simbridge.types import Vec3
 
 from ..mjcf_engine import MjcfOnEngine
 from .model import build_robot
@@ -62,16 +60,6 @@ class NativePhysx(MjcfOnEngine):
     ) -> None:
         super().__init__(profile, native, gravity, timestep)
         m = self.m
-        for nb in native.bodies:
-            for row in nb.table:
-                if row.type == JointType.SPHERICAL:
-                    raise MjcfFeatureUnsupportedError(
-                        native.display_name,
-                        self.name,
-                        "<joint type='ball'>",
-                        row.name,
-                        "not yet mapped onto PhysX's three revolute joints",
-                    )
         cfg = physx.PhysxSceneConfig()
         cfg.gravity = np.asarray(m.opt.gravity, dtype=np.float32)
         cfg.enable_tgs = False

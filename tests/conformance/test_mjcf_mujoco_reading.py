@@ -180,15 +180,23 @@ EQUALITY = """<mujoco><worldbody>
 </worldbody><equality><joint name="same" joint1="j1" joint2="j2"/></equality></mujoco>"""
 
 
+BALL = """<mujoco><worldbody><body name="a" pos="0 0 1"><joint name="shoulder" type="ball"/>
+<geom type="capsule" fromto="0 0 0 0.3 0.1 -0.4" size="0.05"/></body></worldbody></mujoco>"""
+
+
 @pytest.mark.parametrize(
     ("text", "feature", "element"),
-    [(TENDON, "<tendon>", "coupling"), (EQUALITY, "<equality>", "same")],
+    [
+        (TENDON, "<tendon>", "coupling"),
+        (EQUALITY, "<equality>", "same"),
+        (BALL, "<joint type='ball'>", "shoulder"),  # not yet on PyBullet and PhysX
+    ],
 )
 def test_what_only_mujoco_simulates_is_refused_by_name(
     backend: str, text: str, feature: str, element: str
 ) -> None:
-    """A tendon or an equality constraint: MuJoCo runs it; another engine refuses it, naming
-    the feature and its element, and keeps its world as it was."""
+    """A tendon or an equality constraint (and, for now, a ball joint): MuJoCo runs it; another
+    engine refuses it, naming the feature and its element, and keeps its world as it was."""
     with simbridge.Sim(backend) as sim:
         if backend == "mujoco":
             sim.load_mjcf(text, semantics="mujoco")
@@ -205,3 +213,27 @@ def test_what_only_mujoco_simulates_is_refused_by_name(
             sim.load_mjcf(text, semantics="mujoco")
         assert (info.value.feature, info.value.element) == (feature, element)
         sim.load_urdf("r2d2.urdf")  # the world is the Sim's own still
+
+
+FRICTIONLOSS = """<mujoco><option gravity="0 0 0" timestep="0.001"/>
+<worldbody><body name="arm"><joint name="hinge" type="hinge" axis="0 0 1" frictionloss="1"/>
+<inertial pos="0.5 0 0" mass="2" diaginertia="0.01 0.01 0.01"/></body></worldbody>
+<actuator><motor name="m" joint="hinge"/></actuator></mujoco>"""
+
+
+def test_frictionloss_holds_below_it_and_slips_above(backend: str) -> None:
+    """A hinge with frictionloss 1 N·m: a 0.5 N·m motor leaves it (nearly) still for 0.1 s
+    (MuJoCo's soft friction creeps to 0.0010 rad/s, PhysX's clamped force 0.0010, PyBullet's
+    velocity motor 0), a 2 N·m one turns it at (2 - 1) t / I (within 2 %: PhysX measured 1 %
+    over, its friction force one step late)."""
+    if not _reads_mujoco(backend):
+        pytest.skip(f"{backend!r} does not declare MuJoCo's reading of MJCF")
+    with simbridge.Sim(backend) as sim:
+        sim.load_mjcf(FRICTIONLOSS, semantics="mujoco")
+        sim.set_actuator_controls([0.5])
+        sim.step(100)
+        assert abs(float(sim.qvel()[0])) < 0.002
+        sim.set_qpos_qvel([0.0], [0.0])
+        sim.set_actuator_controls([2.0])
+        sim.step(100)
+        assert float(sim.qvel()[0]) == pytest.approx(1.0 * 0.1 / ARM_INERTIA, rel=0.02)
