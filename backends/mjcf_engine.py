@@ -49,6 +49,7 @@ from simbridge.types import (
 )
 
 from . import locking
+from . import mjcf_forces as forces
 from .locking import exclusive, wait_for_lock
 
 __all__ = ["MjcfOnEngine"]
@@ -177,33 +178,23 @@ class MjcfOnEngine(Backend):
         """
 
     def implicit_damping(self, damping: np.ndarray, mass: np.ndarray) -> np.ndarray:
-        """The damping force that stops the next step's velocity as implicit Euler does:
-        ``-D (I + dt M^-1 D)^-1 qdot`` (an explicit ``-D qdot`` diverges where the joint's
-        inertia is below ``dt d / 2``: the ant's hips without armature).
+        """:func:`~.mjcf_forces.implicit_damping` of the mirror's state.
 
         Args:
             damping: (nv,) MuJoCo's ``dof_damping``.
             mass: (nv, nv) the joint-space inertia the engine simulates.
 
         Returns:
-            (nv,) the generalized damping force of the mirror's state.
+            (nv,) the generalized damping force.
         """
-        if not damping.any():
-            return np.zeros_like(damping)
-        a = np.eye(len(damping)) + self.dt * np.linalg.solve(mass, np.diag(damping))
-        return -damping * np.linalg.solve(a, self.d.qvel)
+        return forces.implicit_damping(damping, mass, self.d.qvel, self.dt)
 
     def with_armature(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> np.ndarray:
-        """The generalized force that gives an engine without armature MuJoCo's motion with it:
-        ``f - A (M + A)^-1 (f - c + fc)``, ``f`` the forces with the damping made implicit in
-        ``M + A`` and the recovery of a joint placed outside its range, ``c`` MuJoCo's bias
-        forces (gravity, Coriolis) of the mirror's state, ``fc`` the contact and limit forces
-        the engine applied in the step before (``M qdd - applied + c`` of that step, its
-        ``qdd`` the change of velocity over dt; 0 after a write of the state). Then
-        ``M qdd = f - A qdd_a - c + fc`` gives ``qdd = qdd_a = (M + A)^-1 (f - c + fc)``:
-        exact where no contact or limit acts; where one does, its force is one step old (the
-        departure ``armature``). Without ``fc`` a standing robot's joints get ``-A`` times
-        their free-fall acceleration: measured, the ant's hips driven to their limits.
+        """The force for the next step of an engine without armature (PyBullet): the damping
+        implicit in ``M + A``, MuJoCo's soft limits and :func:`~.mjcf_forces.armature_force`,
+        ``fc`` the engine's constraint forces of the step before (0 after a write of the
+        state; without it a standing robot's joints get ``-A`` times their free-fall
+        acceleration: measured, the ant's hips driven to their limits).
 
         Args:
             qfrc: (nv,) actuator, spring, gravity compensation and fluid forces.
@@ -223,60 +214,33 @@ class MjcfOnEngine(Backend):
             fc = mass0 @ ((v - v0) / self.dt) - applied0 + c0
         if self._recovering:
             f = f + self.limit_recovery(full, np.linalg.solve(full, f - c + fc))
-        out = f - arm * np.linalg.solve(full, f - c + fc) if arm.any() else f
+        out = forces.armature_force(arm, full, f, c - fc) if arm.any() else f
         self._last = (v.copy(), mass.copy(), c.copy(), out)
         return out
 
     def limit_recovery(self, mass: np.ndarray, free: np.ndarray) -> np.ndarray:
-        """MuJoCo's soft joint limit as a force. With :attr:`soft_limits` (PyBullet, PhysX) it
-        is every limited joint's limit, every step, the engine's limits off: measured on the
-        ant in the air, 1 s of actuation, the joints' RMS difference from raw MuJoCo under Euler
-        fell from 0.42 to 0.009 rad on PyBullet (its hard limit stops the joint without its
-        armature) and from 0.11 to 0.0007 rad on PhysX. Without it, only a joint placed outside
-        its range (the load, ``set_qpos_qvel``, a keyframe...) gets it, until it is back in
-        its range (PyBullet's limit does not push such a joint back: measured, a hinge placed
-        0.5 rad outside its range stays there; with the engine's limit acting too, the
-        correction doubles and half_cheetah diverges).
-
-        MuJoCo's limit row of violation ``r = dist - margin < 0`` asks for the reference
-        acceleration ``a = -b v - k r`` (``b = 2 / (dmax tc)``, ``k = d / (dmax² tc² dr²)``,
-        ``(tc, dr)`` the joint's ``solref``, ``dmax`` its ``solimp[1]``, ``d`` the impedance,
-        linear from ``solimp[0]`` to ``dmax`` over ``solimp[2]``) and gets
-        ``(1 - d) a0 + d a``, ``a0`` the joint's acceleration without the limit: the force
-        here is ``d m_eff (a - a0)``, ``m_eff = 1 / (M^-1)_ii``, never pulling (MuJoCo's
-        limit force is >= 0: the joint coasts through the end of its range at the speed the
-        push gave it, 9.6 rad/s for the ant's ankles), one row at a time (a named
-        departure: ``limit_recovery``).
+        """MuJoCo's soft joint limit as a force (:func:`~.mjcf_forces.soft_limit_force`). With
+        :attr:`soft_limits` (PyBullet, PhysX) every limited joint's, every step, the engine's
+        limits off: measured on the ant in the air, 1 s of actuation, the joints' RMS difference
+        from raw MuJoCo under Euler fell from 0.42 to 0.009 rad on PyBullet (its hard limit
+        stops the joint without its armature) and from 0.11 to 0.0007 rad on PhysX. Without
+        it, only a joint placed outside its range (the load, ``set_qpos_qvel``, a keyframe...)
+        gets it, until it is back in its range (PyBullet's limit does not push such a joint
+        back: measured, a hinge placed 0.5 rad outside its range stays there; with the
+        engine's limit acting too the correction doubles and half_cheetah diverges).
 
         Args:
-            mass: (nv, nv) the joint-space inertia (armature included where the engine
-                simulates it or :meth:`with_armature` gives it).
+            mass: (nv, nv) the joint-space inertia, armature included.
             free: (nv,) the acceleration without the limit, ``M^-1 (f - c)``.
 
         Returns:
             (nv,) the force, 0 on every joint inside its range.
         """
-        m, d = self.m, self.d
-        out = np.zeros(m.nv)
-        inv = None
-        for j in list(self._recovering):
-            qa, va = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
-            q, v = float(d.qpos[qa]), float(d.qvel[va])
-            r, sign = self._violation(j, q)
-            if r >= 0.0:
-                if not self.soft_limits:  # back in its range: the engine's limit holds it now
-                    self._recovering.discard(j)
-                continue
-            if inv is None:
-                inv = np.linalg.inv(mass)
-            tc, dr = (float(x) for x in m.jnt_solref[j][:2])
-            dmin, dmax, width = (float(x) for x in m.jnt_solimp[j][:3])
-            imp = dmin + (dmax - dmin) * min(-r / width, 1.0) if width > 0 else dmax
-            tc = max(tc, 2.0 * self.dt)  # MuJoCo's own floor on the time constant
-            b, k = 2.0 / (dmax * tc), imp / (dmax**2 * tc**2 * dr**2)
-            a = -b * (sign * v) - k * r  # in the violation's coordinate
-            # a limit pushes, never pulls (MuJoCo's unilateral row: force >= 0)
-            out[va] = sign * max(0.0, imp * (a - sign * free[va])) / inv[va, va]
+        out, inside = forces.soft_limit_force(
+            self.m, sorted(self._recovering), self.d.qpos, self.d.qvel, mass, free, self.dt
+        )
+        if not self.soft_limits:  # back in its range: the engine's limit holds it now
+            self._recovering -= inside
         return out
 
     @abstractmethod
@@ -477,13 +441,6 @@ class MjcfOnEngine(Backend):
             tau[k] = d.qfrc_actuator[row.u_index]
         return JointStates(pos, vel, tau)
 
-    def _violation(self, j: int, q: float) -> tuple[float, float]:
-        """A limited joint's MuJoCo violation ``r`` (dist - margin: < 0 violated) at the
-        nearer end of its range, and that end's sign (+1 the lower, -1 the upper)."""
-        lo, hi = self.m.jnt_range[j]
-        margin = float(self.m.jnt_margin[j])
-        return (q - lo - margin, 1.0) if q - lo < hi - q else (hi - q - margin, -1.0)
-
     def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
         """Put the engine and the mirror in this state; note the joints placed outside their
         range (:meth:`limit_recovery`)."""
@@ -495,7 +452,9 @@ class MjcfOnEngine(Backend):
         self._recovering = (
             set(self._limited)
             if self.soft_limits
-            else {j for j in self._limited if self._violation(j, float(qpos[adr[j]]))[0] < 0.0}
+            else {
+                j for j in self._limited if forces.violation(self.m, j, float(qpos[adr[j]]))[0] < 0
+            }
         )
 
     @exclusive

@@ -9,7 +9,9 @@ figures of docs/mjcf_mujoco_reading.md.
    (RK4, the file's) and raw MuJoCo under Euler; PyBullet also with its armature force turned
    off (``armature 0``), which measures what that force buys;
 3. **running**: the half cheetah under the same pattern for 5 s: its x, height and pitch;
-4. the cost of a step.
+4. **every model of gymnasium's MuJoCo tasks** under ``0.5 sin(2 pi t + i)`` for 2 s: the
+   first three coordinates of ``qpos`` on each engine, or the refusal;
+5. the cost of a step (printed with 1).
 
 ::
 
@@ -79,6 +81,24 @@ def standing() -> None:
                 out.append(float(sim.qpos()[2]))
             us = (time.perf_counter() - t0) / marks[-1] * 1e6
         print(f"   {engine:39s}" + "".join(f"{z:9.4f}" for z in out) + f"   {us:6.0f} us/step")
+    print("   the same, the torso placed 1e-9, -1e-9, 2e-9 and 1e-8 m higher: range of each figure")
+    for engine in ENGINES:
+        runs = []
+        for eps in (1e-9, -1e-9, 2e-9, 1e-8):
+            with simbridge.Sim(engine) as sim:
+                sim.load_mjcf(path, semantics="mujoco")
+                q = sim.qpos()
+                q[2] += eps
+                sim.set_qpos_qvel(q, None)
+                heights = []
+                for n in marks:
+                    sim.step(n - round(sim.time / 0.01))
+                    heights.append(float(sim.qpos()[2]))
+                runs.append(heights)
+        lo, hi = np.min(runs, axis=0), np.max(runs, axis=0)
+        print(
+            f"   {engine:39s}" + "".join(f"  {a:.3f}-{b:.3f}" for a, b in zip(lo, hi, strict=True))
+        )
 
 
 def _air_run(step: Callable[[np.ndarray], np.ndarray], nu: int, steps: int) -> np.ndarray:
@@ -153,7 +173,28 @@ def running() -> None:
         print(f"   {engine:9s} {marks[0]}  {marks[1]}")
 
 
+def corpus() -> None:
+    """Every gymnasium MuJoCo model, 2 s of a small pattern, on the three engines."""
+    folder = Path(asset("ant.xml")).parent
+    print("4. gymnasium's models, 0.5 sin(2 pi t + i) for 2 s: qpos[:3], or the refusal")
+    for path in sorted(folder.glob("*.xml")):
+        row = [f"   {path.name:29s}"]
+        for engine in ENGINES:
+            try:
+                with simbridge.Sim(engine) as sim:
+                    sim.load_mjcf(path, semantics="mujoco")
+                    nu = len(sim.actuators())
+                    for k in range(200):
+                        sim.set_actuator_controls(0.5 * pattern(k * 0.01, nu))
+                        sim.step(1)
+                    row.append(f"{engine} {np.round(sim.qpos()[:3], 2).tolist()}")
+            except simbridge.exceptions.SimbridgeError as exc:
+                row.append(f"{engine} {type(exc).__name__}: {str(exc)[:70]}")
+        print(" | ".join(row))
+
+
 if __name__ == "__main__":
     standing()
     in_the_air()
     running()
+    corpus()
