@@ -22,7 +22,7 @@ from simbridge.model.mjcf_native_plan import ground_plan, native_plans
 from simbridge.model.plan_records import BuildPlan, LinkPlan, ShapePlan
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_multiply, quat_rotate
-from simbridge.types import JointType, Quat, Vec3
+from simbridge.types import Quat, Vec3
 
 from ..mjcf_engine import MjcfOnEngine
 from .output import p  # pybullet, imported with its banner captured
@@ -33,7 +33,6 @@ _JOINTS = {
     "revolute": p.JOINT_REVOLUTE,
     "continuous": p.JOINT_REVOLUTE,
     "prismatic": p.JOINT_PRISMATIC,
-    "spherical": p.JOINT_SPHERICAL,
 }
 
 
@@ -195,40 +194,37 @@ class NativePyBullet(MjcfOnEngine):
         group/mask, PyBullet's rule the same OR rule)."""
 
     def _layout(self) -> None:
-        """Each row's joint (body, PyBullet index, type, qpos/qvel address, qpos0, friction);
-        the default motors released."""
+        """Each body's joints (PyBullet indices, ``qpos``/``qvel`` addresses, ``qpos0``); the
+        default motors released, a ``frictionloss`` kept as a velocity motor of target 0 and
+        that force (hinge and slide only: the shared part refuses a ball joint)."""
         c, m = self._c, self.m
-        self._rows: list[tuple[int, int, JointType, int, int, float]] = []
+        # per body: (PyBullet id, joint indices, qpos addresses, qvel addresses)
+        self._joints: list[tuple[int, list[int], np.ndarray, np.ndarray]] = []
         for k, nb in enumerate(self.native.bodies):
             body = self._ids[k]
+            idx = list(range(len(nb.table)))
+            qa = np.array([row.q_index for row in nb.table], dtype=np.intp)
+            va = np.array([row.u_index for row in nb.table], dtype=np.intp)
+            self._joints.append((body, idx, qa, va))
             for i, row in enumerate(nb.table):
                 j = nb.joint_ids[i]
-                fl = float(m.dof_frictionloss[row.u_index])
-                self._rows.append((body, i, row.type, row.q_index, row.u_index, fl))
-                if row.type != JointType.SPHERICAL and m.jnt_limited[j] and not self.soft_limits:
+                if m.jnt_limited[j] and not self.soft_limits:
                     ref = float(m.qpos0[row.q_index])  # the engine's 0 is MuJoCo's qpos0
                     p.changeDynamics(
                         body, i, jointLowerLimit=float(m.jnt_range[j][0]) - ref,
                         jointUpperLimit=float(m.jnt_range[j][1]) - ref, physicsClientId=c,
                     )  # fmt: skip
-                if row.type == JointType.SPHERICAL:
-                    p.setJointMotorControlMultiDof(
-                        body, i, p.POSITION_CONTROL, targetPosition=[0, 0, 0, 1],
-                        positionGain=0, velocityGain=1, force=[fl, fl, fl],
-                        physicsClientId=c,
-                    )  # fmt: skip
-                else:
-                    p.setJointMotorControl2(
-                        body, i, p.VELOCITY_CONTROL, targetVelocity=0.0, force=fl,
-                        physicsClientId=c,
-                    )  # fmt: skip
-        self._scalar = [r for r in self._rows if r[2] != JointType.SPHERICAL]
+            if idx:
+                p.setJointMotorControlArray(
+                    body, idx, p.VELOCITY_CONTROL, targetVelocities=[0.0] * len(idx),
+                    forces=m.dof_frictionloss[va].tolist(), physicsClientId=c,
+                )  # fmt: skip
 
     # ---------------------------------------------------------------- the engine's hooks
 
     def engine_state(self) -> tuple[np.ndarray, np.ndarray]:
         """See MjcfOnEngine.engine_state: the free base's body frame from PyBullet's centre of
-        mass; hinge and slide angles plus ``qpos0``; ball quaternions w, x, y, z."""
+        mass; hinge and slide positions plus ``qpos0``."""
         c, m = self._c, self.m
         q, v = m.qpos0.copy(), np.zeros(m.nv)
         for k, nb in enumerate(self.native.bodies):
@@ -245,15 +241,11 @@ class NativePyBullet(MjcfOnEngine):
             w = np.array(ang)
             v[va : va + 3] = np.array(lin) - np.cross(w, off)
             v[va + 3 : va + 6] = quat_rotate(_conj(frame), ang)
-        for body, i, kind, qa, va, _ in self._rows:
-            if kind == JointType.SPHERICAL:
-                pos, vel, *_ = p.getJointStateMultiDof(body, i, physicsClientId=c)
-                q[qa : qa + 4] = (pos[3], pos[0], pos[1], pos[2])
-                v[va : va + 3] = vel
-            else:
-                pos, vel, *_ = p.getJointState(body, i, physicsClientId=c)
-                q[qa] = m.qpos0[qa] + pos
-                v[va] = vel
+        for body, idx, qa, va in self._joints:
+            if idx:
+                states = p.getJointStates(body, idx, physicsClientId=c)
+                q[qa] += [s[0] for s in states]
+                v[va] = [s[1] for s in states]
         return q, v
 
     def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
@@ -274,34 +266,22 @@ class NativePyBullet(MjcfOnEngine):
             ang = np.array(quat_rotate(frame, tuple(qvel[va + 3 : va + 6])))
             lin = qvel[va : va + 3] + np.cross(ang, off)
             p.resetBaseVelocity(body, lin.tolist(), ang.tolist(), physicsClientId=c)
-        for body, i, kind, qa, va, _ in self._rows:
-            if kind == JointType.SPHERICAL:
-                w = qpos[qa : qa + 4]
-                p.resetJointStateMultiDof(
-                    body, i, [w[1], w[2], w[3], w[0]], list(qvel[va : va + 3]),
-                    physicsClientId=c,
-                )  # fmt: skip
-            else:
+        for body, idx, qa, va in self._joints:
+            for i, a, b in zip(idx, qa.tolist(), va.tolist(), strict=True):
                 p.resetJointState(
-                    body, i, float(qpos[qa] - m.qpos0[qa]), float(qvel[va]), physicsClientId=c
+                    body, i, float(qpos[a] - m.qpos0[a]), float(qvel[b]), physicsClientId=c
                 )
 
     def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
-        """See MjcfOnEngine.apply_forces: joint torques (``TORQUE_CONTROL``, one step) with
-        the damping of :meth:`implicit_damping`; a free base's force and torque as
-        external forces."""
-        c = self._c
+        """See MjcfOnEngine.apply_forces: joint torques (``TORQUE_CONTROL``, one step) of
+        :meth:`with_armature`; a free base's force and torque as external forces."""
+        c, m = self._c, self.m
         tau = self.with_armature(qfrc, damping, mass)
-        for body, i, kind, _, va, _ in self._rows:
-            if kind == JointType.SPHERICAL:
-                p.setJointMotorControlMultiDof(
-                    body, i, p.TORQUE_CONTROL, force=tau[va : va + 3].tolist(), physicsClientId=c
+        for body, idx, _, va in self._joints:
+            if idx:
+                p.setJointMotorControlArray(
+                    body, idx, p.TORQUE_CONTROL, forces=tau[va].tolist(), physicsClientId=c
                 )
-            else:
-                p.setJointMotorControl2(
-                    body, i, p.TORQUE_CONTROL, force=float(tau[va]), physicsClientId=c
-                )
-        m = self.m
         for k, nb in enumerate(self.native.bodies):
             if nb.free_joint < 0:
                 continue
