@@ -20,8 +20,9 @@ import numpy as np
 import sapien
 from sapien import physx
 
+from simbridge.exceptions import MjcfFeatureUnsupportedError
 from simbridge.model.mjcf_native import NativeMjcf
-from simbridge.model.mjcf_native_plan import ground_plan, native_plans
+from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
 from simbridge.profiles import Profile
 from simbridge.types import Vec3
 
@@ -60,6 +61,14 @@ class NativePhysx(MjcfOnEngine):
     ) -> None:
         super().__init__(profile, native, gravity, timestep)
         m = self.m
+        for _, _, _, _, pair in cross_excludes(native):
+            raise MjcfFeatureUnsupportedError(
+                native.display_name,
+                self.name,
+                "<contact><exclude> between two top-level bodies",
+                pair,
+                "not yet: PhysX's collision groups here filter within one articulation",
+            )
         cfg = physx.PhysxSceneConfig()
         cfg.gravity = np.asarray(m.opt.gravity, dtype=np.float32)
         cfg.enable_tgs = False

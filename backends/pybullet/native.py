@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from simbridge.model.mjcf_native import NativeMjcf
-from simbridge.model.mjcf_native_plan import ground_plan, native_plans
+from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
 from simbridge.model.plan_records import BuildPlan, LinkPlan, ShapePlan
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_multiply, quat_rotate
@@ -133,6 +133,10 @@ class NativePyBullet(MjcfOnEngine):
         self._ids = [self._build(plan) for plan in self.plans]
         ground = ground_plan(native)
         self._ground = None if ground is None else self._build(ground)
+        ids = {**dict(enumerate(self._ids)), -1: self._ground}
+        for ka, ra, kb, rb, _ in cross_excludes(native):  # <exclude> across bodies
+            if ids[ka] is not None and ids[kb] is not None:
+                p.setCollisionFilterPair(ids[ka], ids[kb], ra, rb, 0, physicsClientId=c)
         self._filters()
         self._layout()
         self._write(m.qpos0.copy(), np.zeros(m.nv))

@@ -25,7 +25,8 @@ MuJoCo's joint order:
   when its ``condim`` >= 4, rolling when 6 (:class:`~simbridge.model.plan_records.
   ContactValues`, restitution 0); its filter is that geom's ``contype`` (group) and
   ``conaffinity`` (mask), MuJoCo's rule being the plan's OR rule; the parent-child pairs
-  MuJoCo filters (``filterparent``) and every ``<contact><exclude>`` are ``excluded_pairs``;
+  MuJoCo filters (``filterparent``) and every ``<contact><exclude>`` within one body are
+  ``excluded_pairs``; one between two top-level bodies is :func:`cross_excludes`';
 * **refused** (:func:`refuse_unsimulated`): what no engine but MuJoCo simulates: tendons,
   equality constraints, flex (composite) bodies, explicit ``<contact><pair>``, actuators that
   are not on a joint or that carry activation dynamics, height fields, and a body that hangs
@@ -59,6 +60,7 @@ from simbridge.types import JointType, Quat, Vec3
 
 __all__ = [
     "ELLIPSOID_POINTS",
+    "cross_excludes",
     "ground_plan",
     "native_plans",
     "plan_departures",
@@ -350,6 +352,36 @@ def _excluded(m: Any, nb: NativeBody, owner: dict[int, int]) -> frozenset[tuple[
             r1, r2 = owner[b1], owner[b2]
             pairs.add((min(r1, r2), max(r1, r2)))
     return frozenset(pairs)
+
+
+def cross_excludes(native: NativeMjcf) -> tuple[tuple[int, int, int, int, str], ...]:
+    """The ``<contact><exclude>`` pairs between two top-level bodies (or one and the world
+    body), which no single plan holds.
+
+    Args:
+        native: The compiled model.
+
+    Returns:
+        ``(plan a, link a, plan b, link b, "body1/body2")`` per pair: plans by index in
+        :func:`native_plans` (-1: the world body's :func:`ground_plan`, link -1), links by row
+        (-1 = the base).
+    """
+    m = native.model
+    where: dict[int, tuple[int, int]] = {0: (-1, -1)}
+    for k, nb in enumerate(native.bodies):
+        for b, row in _owner(m, nb).items():
+            where[b] = (k, row)
+    out = []
+    for i in range(m.nexclude):
+        sig = int(m.exclude_signature[i])
+        b1, b2 = sig >> 16, sig & 0xFFFF
+        (k1, r1), (k2, r2) = where.get(b1, (-1, -1)), where.get(b2, (-1, -1))
+        if k1 != k2:
+            names = [
+                mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}" for b in (b1, b2)
+            ]
+            out.append((k1, r1, k2, r2, "/".join(names)))
+    return tuple(out)
 
 
 def native_plans(native: NativeMjcf, limits: bool = True) -> tuple[BuildPlan, ...]:
