@@ -21,7 +21,8 @@ MuJoCo's joint order:
   compiled vertices, in the geom frame) are the plan's shapes, placed from MuJoCo's geom
   frames at ``qpos0``; an ``ellipsoid`` becomes the convex hull of
   :data:`ELLIPSOID_POINTS` points on its surface (a named departure); a height field is refused;
-* **contacts**: a link's friction is its first colliding geom's: sliding always, torsional
+* **contacts**: a geom with ``contype`` and ``conaffinity`` 0 is no collision shape; a link's
+  friction is its first colliding geom's: sliding always, torsional
   when its ``condim`` >= 4, rolling when 6 (:class:`~simbridge.model.plan_records.
   ContactValues`, restitution 0); its filter is that geom's ``contype`` (group) and
   ``conaffinity`` (mask), MuJoCo's rule being the plan's OR rule; the parent-child pairs
@@ -62,6 +63,7 @@ __all__ = [
     "ELLIPSOID_POINTS",
     "cross_excludes",
     "ground_plan",
+    "mixed_links",
     "native_plans",
     "plan_departures",
     "refuse_unsimulated",
@@ -288,12 +290,49 @@ def _shape(
     return ShapePlan(k, kind, _v(pos), _xyzw(_quat(rot)), out_size, mesh, False, ground, None, name)
 
 
+def _colliding(m: Any, bodies: list[int]) -> list[int]:
+    """The bodies' geoms that can touch anything (``contype`` or ``conaffinity`` not 0): a
+    geom with both 0 is MuJoCo's visual-only geom and is no collision shape here."""
+    return [
+        g
+        for b in bodies
+        for g in range(int(m.body_geomadr[b]), int(m.body_geomadr[b] + m.body_geomnum[b]))
+        if m.geom_contype[g] or m.geom_conaffinity[g]
+    ]
+
+
+def _key(m: Any, g: int) -> tuple[Any, ...]:
+    """What a link takes of one geom: friction, condim, contype, conaffinity."""
+    return (tuple(m.geom_friction[g]), int(m.geom_condim[g]), int(m.geom_contype[g]),
+            int(m.geom_conaffinity[g]))  # fmt: skip
+
+
+def mixed_links(native: NativeMjcf) -> tuple[str, ...]:
+    """The links whose colliding geoms differ in friction, ``condim``, ``contype`` or
+    ``conaffinity``: the link takes its first geom's (the departure ``link_contact_values``).
+
+    Args:
+        native: The compiled model.
+
+    Returns:
+        The links' names (a row's link, or a top-level body for its base).
+    """
+    m = native.model
+    out = []
+    for nb in native.bodies:
+        owner = _owner(m, nb)
+        for row in range(-1, len(nb.table)):
+            keys = {_key(m, g) for g in _colliding(m, [b for b, r in owner.items() if r == row])}
+            if len(keys) > 1:
+                out.append(nb.name if row < 0 else nb.table[row].link_name)
+    return tuple(out)
+
+
 def _contact(m: Any, geoms: list[int]) -> tuple[ContactValues, CollisionFilter]:
     """A link's friction and filter: its first colliding geom's (MuJoCo's condim rule)."""
-    live = [g for g in geoms if m.geom_contype[g] or m.geom_conaffinity[g]] or geoms
-    if not live:
+    if not geoms:
         return ContactValues(1.0, 0.0, 0.0, 0.0), CollisionFilter(0, 0)
-    g = live[0]
+    g = geoms[0]
     fr, condim = m.geom_friction[g], int(m.geom_condim[g])
     values = ContactValues(
         float(fr[0]),
@@ -405,11 +444,7 @@ def native_plans(native: NativeMjcf, limits: bool = True) -> tuple[BuildPlan, ..
         for row in range(-1, len(nb.table)):
             frame = fr.link(nb, row)
             carried = [b for b, r in owner.items() if r == row]
-            geoms = [
-                g
-                for b in carried
-                for g in range(int(m.body_geomadr[b]), int(m.body_geomadr[b] + m.body_geomnum[b]))
-            ]
+            geoms = _colliding(m, carried)
             contact, filt = _contact(m, geoms)
             shapes = tuple(_shape(native, fr, g, frame, k) for k, g in enumerate(geoms))
             fixed = row < 0 and nb.free_joint < 0
@@ -456,15 +491,14 @@ def ground_plan(native: NativeMjcf) -> BuildPlan | None:
 
     Returns:
         A fixed-base plan of one link at the world origin, or None when the world body has
-        no geom.
+        no colliding geom.
     """
     m = native.model
-    n = int(m.body_geomnum[0])
-    if n == 0:
+    geoms = _colliding(m, [0])
+    if not geoms:
         return None
     fr = _Frames(m)
     frame = (np.zeros(3), np.eye(3))
-    geoms = list(range(int(m.body_geomadr[0]), int(m.body_geomadr[0]) + n))
     contact, filt = _contact(m, geoms)
     shapes = tuple(_shape(native, fr, g, frame, k) for k, g in enumerate(geoms))
     zero = LinkInertial(0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
@@ -520,6 +554,12 @@ def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
             "joint frictionloss is a PhysX drive with a force limit" if engine == "physx"
             else "joint frictionloss is a velocity motor with target 0 and force frictionloss"
         )  # fmt: skip
+    mixed = mixed_links(native)
+    if mixed:
+        out["link_contact_values"] = (
+            "one friction, condim and contype/conaffinity per link, its first colliding geom's; "
+            f"these links' geoms differ: {list(mixed)}"
+        )
     if (m.geom_type == int(_G.mjGEOM_ELLIPSOID)).any():
         out["ellipsoid"] = f"an ellipsoid is the convex hull of {ELLIPSOID_POINTS} points on it"
     if m.nu:
