@@ -392,8 +392,8 @@ class Sim:
         backend; PyBullet and PhysX build the same compiled model and step it themselves,
         MuJoCo's actuator, spring, damping, armature and soft-limit forces computed for them,
         each feature they do not reproduce a named departure in :meth:`manifest`
-        (docs/mjcf_mujoco_reading.md). One body per top-level ``<worldbody>`` ``<body>`` (a free joint: a floating
-        base; none: a fixed one), its joints in MuJoCo's order and names (the mapping:
+        (docs/mjcf_mujoco_reading.md). One body per top-level ``<worldbody>`` ``<body>`` (a
+        free joint: a floating base; none: a fixed one), its joints in MuJoCo's order and names (the mapping:
         :mod:`simbridge.model.mjcf_native`); the file's ``<option>`` gravity and time step
         win over the Sim's unless the Sim was given them; no profile entry applies (no link
         damping, no default motors): the model's actuators drive it
