@@ -393,10 +393,10 @@ class Sim:
         MuJoCo's actuator, spring, damping, armature and soft-limit forces computed for them,
         each feature they do not reproduce a named departure in :meth:`manifest`
         (docs/mjcf_mujoco_reading.md). One body per top-level ``<worldbody>`` ``<body>`` (a
-        free joint: a floating base; none: a fixed one), its joints in MuJoCo's order and names (the mapping:
-        :mod:`simbridge.model.mjcf_native`); the file's ``<option>`` gravity and time step
-        win over the Sim's unless the Sim was given them; no profile entry applies (no link
-        damping, no default motors): the model's actuators drive it
+        free joint: a floating base; none: a fixed one), its joints in MuJoCo's order and
+        names (the mapping: :mod:`simbridge.model.mjcf_native`); the file's ``<option>``
+        gravity and time step win over the Sim's unless the Sim was given them; no profile
+        entry applies (no link damping, no default motors): the model's actuators drive it
         (:meth:`set_actuator_controls`). The model is the whole world: nothing loads with it
         or after it until :meth:`reset`.
 
