@@ -392,8 +392,15 @@ def _engine_imports(tree: ast.Module) -> list[tuple[int, str]]:
 # Core modules allowed an engine, each with its reason. simbridge.model.mjcf_native reads an MJCF
 # file with MuJoCo's own compiler (load_mjcf(..., semantics="mujoco"): the model as MuJoCo
 # compiles it is the truth there, and mujoco is a core dependency); the Sim imports it only for
-# that reading, so `import simbridge` still loads no engine.
-ENGINE_READERS = {"simbridge.model.mjcf_native": {"mujoco"}}
+# that reading, so `import simbridge` still loads no engine. mjcf_native_plan turns that compiled
+# model into the build plans PyBullet and PhysX build, and mjcf_mirror evaluates MuJoCo's own
+# actuator, spring and damping formulas and reads on their state (the same reading on every
+# engine); the backends that run that reading import them, nothing else does.
+ENGINE_READERS = {
+    "simbridge.model.mjcf_native": {"mujoco"},
+    "simbridge.model.mjcf_native_plan": {"mujoco"},
+    "simbridge.model.mjcf_mirror": {"mujoco"},
+}
 
 
 def _layer_breaches(

@@ -20,6 +20,7 @@ from sapien import physx
 
 from simbridge.backend import Backend
 from simbridge.exceptions import (
+    BackendUnsupportedError,
     SimBusyError,
     SimulationDivergedError,
 )
@@ -44,6 +45,7 @@ from .window import Window
 from .world import Snapshots
 
 if TYPE_CHECKING:
+    from simbridge.model.mjcf_native import NativeMjcf
     from simbridge.model.scene import SceneBody
 
 __all__ = ["PhysxBackend"]
@@ -75,6 +77,7 @@ class PhysxBackend(
     """
 
     name = "physx"
+    semantics = ("pybullet", "mujoco")
     # PhysX keeps poses and velocities in float32 (DEPARTURES["precision"]): readable before an
     # engine is made, for a perturbation this engine can represent
     state_dtype = "float32"
@@ -149,6 +152,27 @@ class PhysxBackend(
     @property
     def time(self) -> float:
         return self._steps * self._dt
+
+    def mjcf_world(
+        self, native: NativeMjcf, gravity: Vec3 | None, timestep: float | None
+    ) -> Backend:
+        """See Backend.mjcf_world.
+
+        PhysX: :class:`~.native.NativePhysx`, the compiled model built as articulations,
+        MuJoCo's armature and damping on the joints, its actuator and spring forces as joint
+        forces.
+
+        Raises:
+            BackendUnsupportedError: With ``gui`` (no window for it yet).
+            MjcfFeatureUnsupportedError: A feature only MuJoCo simulates, or a ball joint.
+        """
+        if self.gui:
+            raise BackendUnsupportedError(
+                self.name, "gui=True with semantics='mujoco'", "not yet: run without the window"
+            )
+        from .native import NativePhysx
+
+        return NativePhysx(self.profile, native, gravity, timestep)
 
     # ---------------------------------------------------------------- world
 

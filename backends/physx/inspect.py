@@ -11,7 +11,7 @@ from simbridge.exceptions import InvalidArgumentError
 from .backend import PhysxBackend
 from .robots import Robot
 
-__all__ = ["backend_of", "scene", "robot", "articulation"]
+__all__ = ["mjcf_world", "backend_of", "scene", "robot", "articulation"]
 
 
 def backend_of(sim: Any) -> PhysxBackend:
@@ -70,3 +70,28 @@ def articulation(sim: Any, body: int) -> Any:
         The articulation, or None for a static body.
     """
     return robot(sim, body).built.articulation
+
+
+def mjcf_world(sim: Any) -> Any:
+    """The world of an MJCF model read with ``semantics="mujoco"`` on this engine.
+
+    Args:
+        sim: A `Sim` that loaded such a model on the 'physx' backend.
+
+    Returns:
+        Its :class:`~.native.NativePhysx`: ``plans`` (the build plans, link i = MuJoCo's row i),
+        ``mirror`` (MuJoCo's data of the engine's state) and the engine's objects.
+
+    Raises:
+        InvalidArgumentError: ``sim`` holds no such world on this engine.
+    """
+    from .native import NativePhysx
+
+    backend = getattr(sim, "_b", None)
+    if not isinstance(backend, NativePhysx):
+        raise InvalidArgumentError(
+            "sim",
+            "a Sim on the 'physx' backend holding an MJCF read with semantics='mujoco' is "
+            f"needed, got {type(backend).__name__}",
+        )
+    return backend

@@ -20,7 +20,7 @@ import threading
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from simbridge.backend import Backend
 from simbridge.engine_output import captured
@@ -37,6 +37,9 @@ from simbridge.types import (
     Quat,
     Vec3,
 )
+
+if TYPE_CHECKING:
+    from simbridge.model.mjcf_native import NativeMjcf
 
 from .. import locking
 from .commands import MotorCommands
@@ -123,6 +126,7 @@ class PyBulletBackend(
     """
 
     name = "pybullet"
+    semantics = ("pybullet", "mujoco")
     _scene: Pending | None = None  # the MJCF/SDF file load_scene is loading
 
     NATIVE_DEFAULTS = {
@@ -187,6 +191,26 @@ class PyBulletBackend(
         self._fresh = 0
         self._removed = 0
         self._configure()
+
+    def mjcf_world(
+        self, native: NativeMjcf, gravity: Vec3 | None, timestep: float | None
+    ) -> Backend:
+        """See Backend.mjcf_world.
+
+        PyBullet: :class:`~.native.NativePyBullet`, the compiled model built with
+        ``p.createMultiBody``, MuJoCo's actuator, spring and damping forces as joint torques.
+
+        Raises:
+            BackendUnsupportedError: With ``gui`` (no window for it yet).
+            MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
+        """
+        if self.gui:
+            raise BackendUnsupportedError(
+                self.name, "gui=True with semantics='mujoco'", "not yet: run without the window"
+            )
+        from .native import NativePyBullet
+
+        return NativePyBullet(self.profile, native, gravity, timestep)
 
     def _configure(self) -> None:
         c = self._c

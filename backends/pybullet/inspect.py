@@ -15,7 +15,7 @@ from simbridge.exceptions import InvalidArgumentError
 
 from .backend import PyBulletBackend
 
-__all__ = ["backend_of", "client_id", "set_check_every"]
+__all__ = ["mjcf_world", "backend_of", "client_id", "set_check_every"]
 
 
 def backend_of(sim: Any) -> PyBulletBackend:
@@ -70,3 +70,28 @@ def set_check_every(sim: Any, every: int) -> None:
     backend = backend_of(sim)
     backend._check_every = every
     backend._next_check = backend._steps + every
+
+
+def mjcf_world(sim: Any) -> Any:
+    """The world of an MJCF model read with ``semantics="mujoco"`` on this engine.
+
+    Args:
+        sim: A `Sim` that loaded such a model on the 'pybullet' backend.
+
+    Returns:
+        Its :class:`~.native.NativePyBullet`: ``plans`` (the build plans, link i = MuJoCo's row i),
+        ``mirror`` (MuJoCo's data of the engine's state) and the engine's objects.
+
+    Raises:
+        InvalidArgumentError: ``sim`` holds no such world on this engine.
+    """
+    from .native import NativePyBullet
+
+    backend = getattr(sim, "_b", None)
+    if not isinstance(backend, NativePyBullet):
+        raise InvalidArgumentError(
+            "sim",
+            "a Sim on the 'pybullet' backend holding an MJCF read with semantics='mujoco' is "
+            f"needed, got {type(backend).__name__}",
+        )
+    return backend

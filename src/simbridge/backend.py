@@ -60,7 +60,7 @@ __all__ = ["NATIVE_ONLY", "Backend"]
 # What a backend without MuJoCo's reading of MJCF says (BackendUnsupportedError's what, hint)
 NATIVE_ONLY = (
     "MJCF read as MuJoCo reads it (load_mjcf(..., semantics='mujoco')) and its calls",
-    "it runs on the 'mujoco' backend only for now: Sim('mujoco'); "
+    "it runs on the 'mujoco', 'pybullet' and 'physx' backends: Sim('mujoco'); "
     "semantics='pybullet' (PyBullet's reading) runs on every backend",
 )
 

@@ -21,6 +21,7 @@ __all__ = [
     "UnknownBackendError",
     "BackendNotInstalledError",
     "BackendUnsupportedError",
+    "MjcfFeatureUnsupportedError",
     "DisplayError",
     "UrdfError",
     "UrdfNotFoundError",
@@ -153,6 +154,28 @@ class BackendUnsupportedError(BackendError, NotImplementedError):
     def __init__(self, backend: str, what: str, hint: str = ""):
         msg = f"backend {backend!r} does not support {what}"
         super().__init__(msg + (f": {hint}" if hint else ""))
+
+
+class MjcfFeatureUnsupportedError(BackendUnsupportedError):
+    """An MJCF feature that only MuJoCo simulates, in a model read with semantics='mujoco' on
+    another engine (a tendon, an equality constraint, a flex body...): refused, never dropped.
+
+    Args:
+        file: The model's file (or ``<MJCF text>``).
+        backend: The backend's name.
+        feature: The feature as the file writes it (``"<tendon>"``).
+        element: The first element of it in the model (its name, or ``#<id>``).
+        reason: Why the engine cannot simulate it.
+    """
+
+    def __init__(self, file: str, backend: str, feature: str, element: str, reason: str):
+        self.feature = feature
+        self.element = element
+        super().__init__(
+            backend,
+            f"{feature} ({element!r} in {file}) under semantics='mujoco' ({reason})",
+            "only the 'mujoco' backend simulates it: Sim('mujoco'), or remove the element",
+        )
 
 
 class DisplayError(BackendError, RuntimeError):

@@ -393,11 +393,14 @@ class Sim:
         ``semantics="mujoco"``: the model as MuJoCo's compiler reads it and as ``mj_step``
         runs it (``<default>`` classes, ``<option>``, ``<include>``, actuators, damping,
         armature, contacts, keyframes, sensors, sites: all MuJoCo's), on the ``"mujoco"``
-        backend. One body per top-level ``<worldbody>`` ``<body>`` (a free joint: a floating
-        base; none: a fixed one), its joints in MuJoCo's order and names (the mapping:
-        :mod:`simbridge.model.mjcf_native`); the file's ``<option>`` gravity and time step
-        win over the Sim's unless the Sim was given them; no profile entry applies (no link
-        damping, no default motors): the model's actuators drive it
+        backend; PyBullet and PhysX build the same compiled model and step it themselves,
+        MuJoCo's actuator, spring, damping, armature and soft-limit forces computed for them,
+        each feature they do not reproduce a named departure in :meth:`manifest`
+        (docs/mjcf_mujoco_reading.md). One body per top-level ``<worldbody>`` ``<body>`` (a
+        free joint: a floating base; none: a fixed one), its joints in MuJoCo's order and
+        names (the mapping: :mod:`simbridge.model.mjcf_native`); the file's ``<option>``
+        gravity and time step win over the Sim's unless the Sim was given them; no profile
+        entry applies (no link damping, no default motors): the model's actuators drive it
         (:meth:`set_actuator_controls`). The model is the whole world: nothing loads with it
         or after it until :meth:`reset`.
 
@@ -421,8 +424,11 @@ class Sim:
             UnsupportedJointError: ``ball`` and nested ``free`` joints under "pybullet"; the
                 message names the file, the line and the element.
             MjcfCompileError: under "mujoco", MuJoCo's own message with the file and line.
-            BackendUnsupportedError: "mujoco" on a backend other than MuJoCo, into a world that
-                holds bodies, or any load after such a model.
+            BackendUnsupportedError: "mujoco" on a backend without that reading, into a world
+                that holds bodies, or any load after such a model.
+            MjcfFeatureUnsupportedError: under "mujoco" on PyBullet or PhysX, a feature only
+                MuJoCo simulates (``<tendon>``, ``<equality>``, flex, ``<pair>``...), named
+                with its element.
             InvalidArgumentError: another ``semantics``, or ``self_collision`` with "mujoco".
         """
         if native.check_semantics(semantics) == "mujoco":

@@ -224,7 +224,7 @@ def native_model(s: Shared, call: str) -> NativeMjcf:
         raise BackendUnsupportedError(
             s.name,
             f"{call} without a model read with semantics='mujoco'",
-            "load one first: sim.load_mjcf(path, semantics='mujoco') (Sim('mujoco'))",
+            "load one first: sim.load_mjcf(path, semantics='mujoco')",
         )
     return s.native
 

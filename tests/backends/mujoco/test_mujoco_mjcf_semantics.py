@@ -22,6 +22,7 @@ from simbridge.exceptions import (
     BackendUnsupportedError,
     InvalidArgumentError,
     MjcfCompileError,
+    MjcfFeatureUnsupportedError,
     SimClosedError,
     UnknownBodyError,
     UnknownObjectError,
@@ -211,13 +212,17 @@ def test_the_model_is_the_whole_world() -> None:
 
 
 @pytest.mark.parametrize("backend", ["pybullet", "physx"])
-def test_other_engines_refuse_mujocos_reading(backend: str) -> None:
+def test_other_engines_refuse_what_only_mujoco_simulates(backend: str) -> None:
+    """MuJoCo's test model has a spatial tendon: PyBullet and PhysX run MuJoCo's reading
+    (tests/backends/<engine>/test_*_mjcf_mujoco.py) but refuse a tendon by its name, and the
+    world stays as it was."""
     if backend == "physx" and importlib.util.find_spec("sapien") is None:
         pytest.skip("sapien is not installed")
     with simbridge.Sim(backend) as sim:
         with pytest.raises(
-            BackendUnsupportedError,
-            match=r"does not support MJCF read as MuJoCo reads it .*'mujoco' backend only for now",
+            MjcfFeatureUnsupportedError,
+            match=r"'\w+' does not support <tendon> \('spatial' in .*model\.xml\) under "
+            r"semantics='mujoco' \(a tendon couples joints.*only the 'mujoco' backend",
         ):
             sim.load_mjcf(MUJOCO_TEST_MODEL, semantics="mujoco")
         with pytest.raises(BackendUnsupportedError, match="without a model read with"):

@@ -1,0 +1,496 @@
+"""An MJCF model read as MuJoCo reads it, stepped by an engine that is not MuJoCo
+(``load_mjcf(source, semantics="mujoco")`` on PyBullet and PhysX).
+
+:class:`MjcfOnEngine` is the part every such engine shares (no engine is imported here): the
+engine builds the plans of :mod:`simbridge.model.mjcf_native_plan` and steps them; a
+:class:`~simbridge.model.mjcf_mirror.Mirror` of the compiled model turns the engine's state
+into MuJoCo's ``qpos``/``qvel`` and gives, by MuJoCo's own functions, every step's actuator,
+spring and damping forces (applied as joint torques for that step) and every read (frames,
+centres of mass, sites, sensors), so that a read means on every engine what it means on
+MuJoCo. A subclass supplies five hooks: :meth:`engine_state`, :meth:`write_engine_state`,
+:meth:`apply_forces`, :meth:`step_engine` and :meth:`close_engine`, and its departures.
+
+No profile entry applies (no link damping, no default motors): the file's ``<option>`` gives
+gravity and the time step unless the Sim was given them.
+"""
+
+from __future__ import annotations
+
+import threading
+from abc import abstractmethod
+from typing import Any
+
+import numpy as np
+
+from simbridge.backend import Backend
+from simbridge.exceptions import (
+    BackendUnsupportedError,
+    MjcfFeatureUnsupportedError,
+    SimBusyError,
+    SimClosedError,
+    SimulationDivergedError,
+)
+from simbridge.model.mjcf_mirror import Mirror
+from simbridge.model.mjcf_native import NativeBody, NativeMjcf
+from simbridge.model.mjcf_native_plan import plan_departures, refuse_unsimulated
+from simbridge.profiles import Profile
+from simbridge.types import (
+    JointCommands,
+    JointType,
+    MotorMode,
+    Quat,
+    Vec3,
+)
+
+from . import locking
+from . import mjcf_forces as forces
+from .locking import exclusive, wait_for_lock
+from .mjcf_reads import MjcfReads
+
+__all__ = ["MjcfOnEngine"]
+
+_COMMANDS = (
+    "PyBullet's joint motors and torques under semantics='mujoco'",
+    "drive the model's own actuators: Sim.set_actuator_controls",
+)
+
+
+def _xyzw(q: np.ndarray) -> Quat:
+    return (float(q[1]), float(q[2]), float(q[3]), float(q[0]))
+
+
+def _wxyz(q: Quat) -> np.ndarray:
+    return np.array((q[3], q[0], q[1], q[2]), dtype=np.float64)
+
+
+def _v(a: Any) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def _conj(q: Quat) -> Quat:
+    return (-q[0], -q[1], -q[2], q[3])
+
+
+class MjcfOnEngine(MjcfReads, Backend):
+    """The world of one MJCF model as MuJoCo compiles it, stepped by another engine.
+
+    Args:
+        profile: The Sim's profile; only its gravity and time step are read, and only where
+            the Sim was given them.
+        native: The compiled model.
+        gravity: The gravity the caller gave the Sim (m/s², world), or None for the file's.
+        timestep: The time step the caller gave the Sim (s), or None for the file's.
+
+    Raises:
+        MjcfFeatureUnsupportedError: A feature only MuJoCo simulates (tendons, equality
+            constraints, flex bodies...), or a ball joint (not yet), named with its element.
+    """
+
+    engine_version: str = ""
+    soft_limits: bool = False
+    """True: the engine's joints have no limits of their own and :meth:`limit_recovery` is
+    every limited joint's limit, every step (MuJoCo's soft limit, acting on the inertia with
+    armature); False: the engine's limits, the recovery only for a joint placed outside."""
+
+    def __init__(
+        self,
+        profile: Profile,
+        native: NativeMjcf,
+        gravity: Vec3 | None = None,
+        timestep: float | None = None,
+    ) -> None:
+        refuse_unsimulated(native, self.name)
+        for nb in native.bodies:
+            for row in nb.table:
+                if row.type == JointType.SPHERICAL:
+                    raise MjcfFeatureUnsupportedError(
+                        native.display_name,
+                        self.name,
+                        "<joint type='ball'>",
+                        row.name,
+                        "not yet: measured on PyBullet, a ball pendulum's qpos is 0.28 off "
+                        "MuJoCo's after 0.4 s; PhysX's ball is three revolute joints",
+                    )
+        m = native.model
+        if gravity is not None:
+            m.opt.gravity[:] = gravity
+        if timestep is not None:
+            m.opt.timestep = timestep
+        super().__init__(
+            profile.with_(gravity=_v(m.opt.gravity), timestep=float(m.opt.timestep)), False
+        )
+        self.native = native
+        self.m = m
+        self.mirror = Mirror(m)
+        self.d = self.mirror.d
+        self.dt = float(m.opt.timestep)
+        self.ctrl = np.zeros(m.nu)
+        self._bodies: dict[int, NativeBody] = dict(enumerate(native.bodies))
+        self._limited = [  # hinge and slide joints with a range
+            j for j in range(m.njnt) if m.jnt_limited[j] and int(m.jnt_type[j]) in (2, 3)
+        ]
+        self._recovering: set[int] = set()  # joints placed outside their range
+        # the step before's velocity, inertia, bias and applied force (with_armature)
+        self._last: tuple[np.ndarray, ...] | None = None
+        self._stepping = threading.RLock()
+        self._in_step = False
+        self._closed = False
+        self._synced = False  # the mirror holds the engine's state
+        self._time = 0.0
+        self._diverged: SimulationDivergedError | None = None
+
+    reading = locking.reading
+
+    # ---------------------------------------------------------------- the engine's hooks
+
+    @abstractmethod
+    def engine_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """The engine's state in MuJoCo's conventions.
+
+        Returns:
+            ``qpos`` (nq,) and ``qvel`` (nv,), MuJoCo's order (a free joint: the body frame's
+            position, quaternion w, x, y, z; the origin's velocity, world; the angular
+            velocity, body frame).
+        """
+
+    @abstractmethod
+    def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Put the engine in a state given in MuJoCo's conventions.
+
+        Args:
+            qpos: (nq,) MuJoCo's generalized positions.
+            qvel: (nv,) MuJoCo's generalized velocities.
+        """
+
+    @abstractmethod
+    def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
+        """Apply generalized forces for the next step.
+
+        Args:
+            qfrc: (nv,) actuator, spring, gravity compensation and fluid forces.
+            damping: (nv,) MuJoCo's ``dof_damping`` (the engine applies it its own way).
+            mass: (nv, nv) the joint-space inertia without armature.
+        """
+
+    def implicit_damping(self, damping: np.ndarray, mass: np.ndarray) -> np.ndarray:
+        """:func:`~.mjcf_forces.implicit_damping` of the mirror's state.
+
+        Args:
+            damping: (nv,) MuJoCo's ``dof_damping``.
+            mass: (nv, nv) the joint-space inertia the engine simulates.
+
+        Returns:
+            (nv,) the generalized damping force.
+        """
+        return forces.implicit_damping(damping, mass, self.d.qvel, self.dt)
+
+    def with_armature(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> np.ndarray:
+        """The force for the next step of an engine without armature (PyBullet): the damping
+        implicit in ``M + A``, MuJoCo's soft limits and :func:`~.mjcf_forces.armature_force`,
+        ``fc`` the engine's constraint forces of the step before (0 after a write of the
+        state; without it a standing robot's joints get ``-A`` times their free-fall
+        acceleration: measured, the ant's hips driven to their limits).
+
+        Args:
+            qfrc: (nv,) actuator, spring, gravity compensation and fluid forces.
+            damping: (nv,) MuJoCo's ``dof_damping``.
+            mass: (nv, nv) the joint-space inertia without armature.
+
+        Returns:
+            (nv,) the force to apply for the next step.
+        """
+        arm = self.m.dof_armature
+        v, c = self.d.qvel, self.d.qfrc_bias
+        full = mass + np.diag(arm)
+        f = qfrc + self.implicit_damping(damping, full)
+        fc = np.zeros_like(f)
+        if self._last is not None:  # the engine's constraint forces of the step before
+            v0, mass0, c0, applied0 = self._last
+            fc = mass0 @ ((v - v0) / self.dt) - applied0 + c0
+        if self._recovering:
+            f = f + self.limit_recovery(full, np.linalg.solve(full, f - c + fc))
+        out = forces.armature_force(arm, full, f, c - fc) if arm.any() else f
+        self._last = (v.copy(), mass.copy(), c.copy(), out)
+        return out
+
+    def limit_recovery(self, mass: np.ndarray, free: np.ndarray) -> np.ndarray:
+        """MuJoCo's soft joint limit as a force (:func:`~.mjcf_forces.soft_limit_force`). With
+        :attr:`soft_limits` (PyBullet, PhysX) every limited joint's, every step, the engine's
+        limits off: measured on the ant in the air, 1 s of actuation, the joints' RMS difference
+        from raw MuJoCo under Euler fell from 0.42 to 0.009 rad on PyBullet (its hard limit
+        stops the joint without its armature) and from 0.11 to 0.0007 rad on PhysX. Without
+        it, only a joint placed outside its range (the load, ``set_qpos_qvel``, a keyframe...)
+        gets it, until it is back in its range (PyBullet's limit does not push such a joint
+        back: measured, a hinge placed 0.5 rad outside its range stays there; with the
+        engine's limit acting too the correction doubles and half_cheetah diverges).
+
+        Args:
+            mass: (nv, nv) the joint-space inertia, armature included.
+            free: (nv,) the acceleration without the limit, ``M^-1 (f - c)``.
+
+        Returns:
+            (nv,) the force, 0 on every joint inside its range.
+        """
+        out, inside = forces.soft_limit_force(
+            self.m, sorted(self._recovering), self.d.qpos, self.d.qvel, mass, free, self.dt
+        )
+        if not self.soft_limits:  # back in its range: the engine's limit holds it now
+            self._recovering -= inside
+        return out
+
+    @abstractmethod
+    def step_engine(self) -> None:
+        """One engine step of ``self.dt``."""
+
+    @abstractmethod
+    def close_engine(self) -> None:
+        """Release the engine's world."""
+
+    def engine_departures(self) -> dict[str, str]:
+        """The engine's own departures beyond :func:`plan_departures`.
+
+        Returns:
+            Departure name -> what the engine does instead (none by default).
+        """
+        return {}
+
+    # ---------------------------------------------------------------- world
+
+    def _sync(self) -> None:
+        """The mirror holds the engine's state, its frames fresh."""
+        if not self._synced:
+            self.mirror.set_state(*self.engine_state())
+            self._synced = True
+        self.mirror.refresh()
+
+    @property
+    def time(self) -> float:
+        """See Backend.time: steps taken times the time step."""
+        if self._closed:
+            raise SimClosedError()
+        return self._time
+
+    def load(self, *args: Any, **kwargs: Any) -> int:
+        """See Backend.load.
+
+        Raises:
+            BackendUnsupportedError: Always: a model read with semantics='mujoco' is the whole
+                world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "loading into a world that holds a model read with semantics='mujoco'",
+            "that model is the whole world; reset() the Sim or use another Sim",
+        )
+
+    def remove(self, body: int) -> None:
+        """See Backend.remove.
+
+        Raises:
+            BackendUnsupportedError: Always: the model's bodies are one compiled world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "removing one body of a model read with semantics='mujoco'",
+            "the model is one compiled world: reset() removes it whole",
+        )
+
+    @exclusive
+    def reset(self) -> None:
+        """See Backend.reset: the model's ``qpos0``, at rest (the Sim replaces this backend
+        at ``reset()``)."""
+        self._write(self.m.qpos0.copy(), np.zeros(self.m.nv))
+        self._time = 0.0
+        self._diverged = None
+
+    def step(self, n: int) -> None:
+        """See Backend.step: each engine step applies MuJoCo's actuator, spring and damping
+        forces of the state at its start; a non-finite state raises SimulationDivergedError."""
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        if self._in_step:
+            lock.release()
+            raise SimBusyError()
+        self._in_step = True
+        try:
+            if self._diverged is not None:
+                raise self._diverged
+            mirror = self.mirror
+            for _ in range(max(n, 0)):
+                mirror.set_state(*self.engine_state())
+                self.apply_forces(*mirror.forces(self.ctrl))
+                self.step_engine()
+                self._time += self.dt
+            self._synced = False
+            if n > 0:
+                q, v = self.engine_state()
+                if not (np.isfinite(q).all() and np.isfinite(v).all()):
+                    self._diverged = SimulationDivergedError(
+                        self.name, self._time, "the engine's state (non-finite)"
+                    )
+                    raise self._diverged
+        finally:
+            self._in_step = False
+            lock.release()
+
+    def close(self) -> None:
+        """See Backend.close."""
+        if not self._closed:
+            self._closed = True
+            self.close_engine()
+
+    def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Put the engine and the mirror in this state; note the joints placed outside their
+        range (:meth:`limit_recovery`)."""
+        self.write_engine_state(qpos, qvel)
+        self.mirror.set_state(qpos, qvel)
+        self._synced = True
+        self._last = None
+        adr = self.m.jnt_qposadr
+        self._recovering = (
+            set(self._limited)
+            if self.soft_limits
+            else {
+                j for j in self._limited if forces.violation(self.m, j, float(qpos[adr[j]]))[0] < 0
+            }
+        )
+
+    # ---------------------------------------------------------------- PyBullet's commands
+
+    def set_joint_velocity(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_velocity.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_position(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_position.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_torque(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_torque.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def joint_commands(self, body: int) -> JointCommands:
+        """See Backend.joint_commands: every joint reads as a released motor."""
+        n = len(self._bodies[body].table)
+        z = np.zeros(n)
+        return JointCommands(
+            np.full(n, int(MotorMode.VELOCITY)), z, z.copy(), z.copy(), np.ones(n), z.copy()
+        )
+
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """See Backend.set_joint_commands: only released motors and no pending torque.
+
+        Raises:
+            BackendUnsupportedError: For any motor with a force, or a pending torque.
+        """
+        if np.asarray(commands.max_force).any() or np.asarray(commands.pending_torque).any():
+            raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    # ---------------------------------------------------------------- whole state
+
+    @exclusive
+    def snapshot(self) -> Any:
+        """See Backend.snapshot: time, ``qpos``, ``qvel`` and the controls."""
+        q, v = self.engine_state()
+        return (id(self), self._time, q, v, self.ctrl.copy())
+
+    @exclusive
+    def restore(self, native: Any) -> bool:
+        """See Backend.restore: a snapshot of this world is written back (the engine's
+        contact caches start afresh)."""
+        if not (isinstance(native, tuple) and len(native) == 5 and native[0] == id(self)):
+            return False
+        self._time = native[1]
+        self.ctrl[:] = native[4]
+        self._write(native[2], native[3])
+        return True
+
+    @exclusive
+    def set_time(self, time: float) -> None:
+        """See Backend.set_time: to the nearest whole step."""
+        self._time = round(time / self.dt) * self.dt
+
+    def manifest(self) -> dict[str, Any]:
+        """See Backend.manifest: MuJoCo's reading on this engine, its departures named."""
+        m = self.m
+        return {
+            "backend": self.name,
+            "engine_version": self.engine_version,
+            "semantics": "mujoco",
+            "model": self.native.display_name,
+            "option": {
+                "timestep": float(m.opt.timestep),
+                "gravity": _v(m.opt.gravity),
+            },
+            "sizes": {"nq": m.nq, "nv": m.nv, "nu": m.nu, "nbody": m.nbody},
+            "departures": {
+                "profile": "no profile entry applies under semantics='mujoco' but gravity "
+                "and the time step the Sim was given: the model is MuJoCo's",
+                **plan_departures(self.native, self.name),
+                **self.engine_departures(),
+            },
+        }
+
+    # ---------------------------------------------------------------- MuJoCo's own calls
+
+    @exclusive
+    def set_actuator_controls(self, actuators: np.ndarray, values: list[float]) -> None:
+        """See Backend.set_actuator_controls: held, and clamped to ``ctrlrange`` where
+        limited at each step, as MuJoCo does."""
+        self.ctrl[actuators] = values
+
+    @exclusive
+    def actuator_controls(self) -> np.ndarray:
+        """See Backend.actuator_controls: a copy of the controls."""
+        return self.ctrl.copy()
+
+    @exclusive
+    def generalized_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """See Backend.generalized_state: the engine's state in MuJoCo's conventions."""
+        q, v = self.engine_state()
+        return q.copy(), v.copy()
+
+    @exclusive
+    def set_generalized_state(self, qpos: np.ndarray | None, qvel: np.ndarray | None) -> None:
+        """See Backend.set_generalized_state."""
+        q, v = self.engine_state()
+        self._write(
+            q if qpos is None else np.asarray(qpos), v if qvel is None else np.asarray(qvel)
+        )
+
+    @exclusive
+    def reset_keyframe(self, key: int) -> None:
+        """See Backend.reset_keyframe: the key's time, ``qpos``, ``qvel`` and ``ctrl``."""
+        m = self.m
+        self._time = float(m.key_time[key])
+        if m.nu:
+            self.ctrl[:] = m.key_ctrl[key]
+        self._write(m.key_qpos[key].copy(), m.key_qvel[key].copy())
+        self._diverged = None
+
+    @exclusive
+    def sensor_data(self, sensor: int) -> np.ndarray:
+        """See Backend.sensor_data: MuJoCo's sensor of the engine's state (contact and force
+        sensors are MuJoCo's own contacts of that state, not the engine's)."""
+        self._sync()
+        return self.mirror.sensor(sensor, self.ctrl)
+
+    @exclusive
+    def site_pose(self, site: int) -> tuple[Vec3, Quat]:
+        """See Backend.site_pose: MuJoCo's site frame of the engine's state."""
+        self._sync()
+        q = self.mirror.quat(self.d.site_xmat[site])
+        return _v(self.d.site_xpos[site]), (float(q[0]), float(q[1]), float(q[2]), float(q[3]))

@@ -1,0 +1,126 @@
+"""MuJoCo's joint forces that an engine without them gets from simbridge, each step, under
+``load_mjcf(source, semantics="mujoco")`` (no engine is imported here): implicit joint damping,
+armature, and MuJoCo's soft joint limits. Used by ``backends/mjcf_engine.py``; every array is
+in MuJoCo's generalized coordinates (nv,), ``mass`` the joint-space inertia (nv, nv).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+__all__ = ["armature_force", "implicit_damping", "soft_limit_force", "violation"]
+
+
+def implicit_damping(
+    damping: np.ndarray, mass: np.ndarray, qvel: np.ndarray, dt: float
+) -> np.ndarray:
+    """The damping force that stops the next step's velocity as implicit Euler does:
+    ``-D (I + dt M^-1 D)^-1 qdot`` (an explicit ``-D qdot`` diverges where a joint's inertia is
+    below ``dt d / 2``: the ant's hips without armature).
+
+    Args:
+        damping: (nv,) MuJoCo's ``dof_damping``.
+        mass: (nv, nv) the joint-space inertia the motion has.
+        qvel: (nv,) the velocities.
+        dt: the time step (s).
+
+    Returns:
+        (nv,) the generalized damping force.
+    """
+    if not damping.any():
+        return np.zeros_like(damping)
+    a = np.eye(len(damping)) + dt * np.linalg.solve(mass, np.diag(damping))
+    return -damping * np.linalg.solve(a, qvel)
+
+
+def armature_force(
+    armature: np.ndarray, mass: np.ndarray, f: np.ndarray, bias: np.ndarray
+) -> np.ndarray:
+    """The force that gives an engine without armature the motion with it:
+    ``f - A (M + A)^-1 (f - c')``. The engine's ``M_e qdd = f - A qdd_a - c'`` then gives
+    ``qdd = qdd_a = (M_e + A)^-1 (f - c')`` exactly, where ``c'`` holds every other force on
+    the engine's joints (MuJoCo's bias forces less the constraint forces the engine applied in
+    the step before: one step late where a contact acts, the departure ``armature``).
+
+    Args:
+        armature: (nv,) MuJoCo's ``dof_armature``.
+        mass: (nv, nv) the joint-space inertia with armature, ``M_e + A``.
+        f: (nv,) the forces simbridge applies (actuators, springs, damping, limits).
+        bias: (nv,) ``c'``.
+
+    Returns:
+        (nv,) the force to apply.
+    """
+    return f - armature * np.linalg.solve(mass, f - bias)
+
+
+def violation(m: Any, j: int, q: float) -> tuple[float, float]:
+    """A limited joint's MuJoCo violation at the nearer end of its range.
+
+    Args:
+        m: the compiled ``MjModel``.
+        j: the joint's id (a limited hinge or slide).
+        q: its ``qpos``.
+
+    Returns:
+        ``r`` (dist - margin; < 0: violated) and that end's sign (+1 the lower, -1 the upper).
+    """
+    lo, hi = m.jnt_range[j]
+    margin = float(m.jnt_margin[j])
+    return (q - lo - margin, 1.0) if q - lo < hi - q else (hi - q - margin, -1.0)
+
+
+def soft_limit_force(
+    m: Any,
+    joints: Sequence[int],
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    mass: np.ndarray,
+    free: np.ndarray,
+    dt: float,
+) -> tuple[np.ndarray, set[int]]:
+    """MuJoCo's soft joint limits as forces, one row at a time.
+
+    MuJoCo's limit row of violation ``r = dist - margin < 0`` asks for the reference
+    acceleration ``a = -b v - k r`` (``b = 2 / (dmax tc)``, ``k = d / (dmax² tc² dr²)``,
+    ``(tc, dr)`` the joint's ``solref`` (``tc`` at least 2 dt, as MuJoCo floors it), ``dmax``
+    its ``solimp[1]``, ``d`` the impedance, linear from ``solimp[0]`` to ``dmax`` over
+    ``solimp[2]``) and gets ``(1 - d) a0 + d a``, ``a0`` the joint's acceleration without the
+    limit: the force is ``d m_eff (a - a0)``, ``m_eff = 1 / (M^-1)_ii``, never pulling
+    (MuJoCo's limit force is >= 0: a joint pushed back coasts through the end of its range at
+    the speed the push gave it, 9.6 rad/s for the ant's ankles).
+
+    Args:
+        m: the compiled ``MjModel``.
+        joints: the limited hinge and slide joints to consider.
+        qpos: (nq,) the positions.
+        qvel: (nv,) the velocities.
+        mass: (nv, nv) the joint-space inertia, armature included.
+        free: (nv,) the acceleration without the limits.
+        dt: the time step (s).
+
+    Returns:
+        (nv,) the force, and the joints of ``joints`` inside their range.
+    """
+    out = np.zeros(m.nv)
+    inside: set[int] = set()
+    inv = None
+    for j in joints:
+        qa, va = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+        r, sign = violation(m, j, float(qpos[qa]))
+        if r >= 0.0:
+            inside.add(j)
+            continue
+        if inv is None:
+            inv = np.linalg.inv(mass)
+        tc, dr = (float(x) for x in m.jnt_solref[j][:2])
+        dmin, dmax, width = (float(x) for x in m.jnt_solimp[j][:3])
+        imp = dmin + (dmax - dmin) * min(-r / width, 1.0) if width > 0 else dmax
+        tc = max(tc, 2.0 * dt)
+        b, k = 2.0 / (dmax * tc), imp / (dmax**2 * tc**2 * dr**2)
+        a = -b * (sign * float(qvel[va])) - k * r  # in the violation's coordinate
+        out[va] = sign * max(0.0, imp * (a - sign * free[va])) / inv[va, va]
+    return out, inside

@@ -1,0 +1,211 @@
+"""An MJCF model read as MuJoCo reads it, stepped by PhysX (``load_mjcf(source,
+semantics="mujoco")`` on ``Sim("physx")``).
+
+The plans of :mod:`simbridge.model.mjcf_native_plan` are built by the backend's own builder
+(:func:`~.model.build_robot`: one articulation per top-level body, link i = MuJoCo's row i,
+MuJoCo's masses and inertias), the world body's geoms as one static actor. MuJoCo's joint
+properties PhysX has are PhysX's: ``armature`` is the joint's armature, ``damping`` a drive of
+stiffness 0, that damping and target velocity 0 (implicit, as MuJoCo's Euler integrates it).
+Each step applies MuJoCo's actuator and spring forces (``set_qf``), a ``frictionloss`` as the
+force that stops the joint within the step, clamped to the frictionloss, and MuJoCo's soft
+joint limits (the joints have no PhysX limit; the shared part, ``backends/mjcf_engine.py``).
+A ball joint is refused (backends/mjcf_engine.py).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import sapien
+from sapien import physx
+
+from simbridge.exceptions import MjcfFeatureUnsupportedError
+from simbridge.model.mjcf_native import NativeMjcf
+from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
+from simbridge.profiles import Profile
+from simbridge.types import Vec3
+
+from ..mjcf_engine import MjcfOnEngine
+from .model import build_robot
+
+__all__ = ["NativePhysx"]
+
+SOLVER_ITERATIONS = 50  # position iterations of each articulation (PyBullet's count)
+
+
+class NativePhysx(MjcfOnEngine):
+    """The world of one MJCF model as MuJoCo compiles it, stepped by PhysX.
+
+    Args:
+        profile: The Sim's profile (only gravity and the time step given to the Sim).
+        native: The compiled model.
+        gravity: The gravity the caller gave (m/s², world), or None for the file's.
+        timestep: The time step the caller gave (s), or None for the file's.
+
+    Raises:
+        MjcfFeatureUnsupportedError: A feature only MuJoCo simulates, or a ball joint.
+    """
+
+    name = "physx"
+    state_dtype = "float32"
+    soft_limits = True  # MuJoCo's soft limit (docs/mjcf_mujoco_reading.md: measured closer)
+    engine_version = sapien.__version__
+
+    def __init__(
+        self,
+        profile: Profile,
+        native: NativeMjcf,
+        gravity: Vec3 | None = None,
+        timestep: float | None = None,
+    ) -> None:
+        super().__init__(profile, native, gravity, timestep)
+        m = self.m
+        for _, _, _, _, pair in cross_excludes(native):
+            raise MjcfFeatureUnsupportedError(
+                native.display_name,
+                self.name,
+                "<contact><exclude> between two top-level bodies",
+                pair,
+                "not yet: PhysX's collision groups here filter within one articulation",
+            )
+        cfg = physx.PhysxSceneConfig()
+        cfg.gravity = np.asarray(m.opt.gravity, dtype=np.float32)
+        cfg.enable_tgs = False
+        physx.set_scene_config(cfg)
+        self._scene = sapien.Scene([physx.PhysxCpuSystem()])
+        self._scene.timestep = self.dt
+        self.plans = native_plans(native, limits=not self.soft_limits)
+        self._built = [
+            build_robot(self._scene, plan, SOLVER_ITERATIONS, k + 1)
+            for k, plan in enumerate(self.plans)
+        ]
+        ground = ground_plan(native)
+        if ground is not None:
+            build_robot(self._scene, ground, SOLVER_ITERATIONS, len(self.plans) + 1)
+        self._layout()
+        self._write(m.qpos0.copy(), np.zeros(m.nv))
+
+    def _layout(self) -> None:
+        """Each row's PhysX dof (its place in the articulation's ``qpos``); MuJoCo's armature
+        and damping on the joints; PhysX's joint friction 0."""
+        m = self.m
+        self._rows: list[tuple[int, int, int, int]] = []  # (body, dof, qpos adr, qvel adr)
+        self._fl = np.zeros(m.nv)
+        for k, nb in enumerate(self.native.bodies):
+            built = self._built[k]
+            if built.articulation is None:
+                continue
+            active = [j.name for j in built.articulation.get_active_joints()]
+            for i, row in enumerate(nb.table):
+                joint = built.links[i + 1].joint
+                dof = active.index(joint.name)  # the plan's joint names are MuJoCo's rows'
+                self._rows.append((k, dof, row.q_index, row.u_index))
+                joint.armature = np.array([m.dof_armature[row.u_index]], dtype=np.float32)
+                joint.friction = 0.0
+                d = float(m.dof_damping[row.u_index])
+                if d > 0.0:
+                    joint.set_drive_properties(0.0, d, 3.0e38, "force")
+                    joint.set_drive_velocity_target(0.0)
+                self._fl[row.u_index] = float(m.dof_frictionloss[row.u_index])
+        self._rows_of = [[r for r in self._rows if r[0] == k] for k in range(len(self._built))]
+
+    # ---------------------------------------------------------------- the engine's hooks
+
+    def engine_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """See MjcfOnEngine.engine_state: a free base's root link frame is MuJoCo's body frame
+        (SAPIEN's pose, w, x, y, z); its velocity from the centre of mass's."""
+        m = self.m
+        q, v = m.qpos0.copy(), np.zeros(m.nv)
+        for k, nb in enumerate(self.native.bodies):
+            art = self._built[k].articulation
+            if art is None:
+                continue
+            if nb.free_joint >= 0:
+                qa, va = int(m.jnt_qposadr[nb.free_joint]), int(m.jnt_dofadr[nb.free_joint])
+                root = self._built[k].links[0]
+                pose = root.entity_pose
+                q[qa : qa + 3] = pose.p
+                q[qa + 3 : qa + 7] = pose.q
+                rot = pose.to_transformation_matrix()[:3, :3]
+                off = rot @ self.plans[k].links[0].inertial.position
+                w = np.asarray(root.angular_velocity, dtype=float)
+                v[va : va + 3] = np.asarray(root.linear_velocity, dtype=float) - np.cross(w, off)
+                v[va + 3 : va + 6] = rot.T @ w
+            aq, av = art.qpos, art.qvel
+            for _, dof, qa, va in self._rows_of[k]:
+                q[qa] = m.qpos0[qa] + float(aq[dof])
+                v[va] = float(av[dof])
+        return q, v
+
+    def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """See MjcfOnEngine.write_engine_state."""
+        m = self.m
+        for k, nb in enumerate(self.native.bodies):
+            art = self._built[k].articulation
+            if art is None:
+                continue
+            if nb.free_joint >= 0:
+                qa, va = int(m.jnt_qposadr[nb.free_joint]), int(m.jnt_dofadr[nb.free_joint])
+                w4 = qpos[qa + 3 : qa + 7] / np.linalg.norm(qpos[qa + 3 : qa + 7])
+                pose = sapien.Pose(
+                    np.asarray(qpos[qa : qa + 3], np.float32), np.asarray(w4, np.float32)
+                )
+                art.root_pose = pose
+                rot = pose.to_transformation_matrix()[:3, :3]
+                off = rot @ self.plans[k].links[0].inertial.position
+                w = rot @ qvel[va + 3 : va + 6]
+                art.root_linear_velocity = np.asarray(
+                    qvel[va : va + 3] + np.cross(w, off), np.float32
+                )
+                art.root_angular_velocity = np.asarray(w, np.float32)
+            aq, av = art.qpos.copy(), art.qvel.copy()
+            for _, dof, qa, va in self._rows_of[k]:
+                aq[dof] = qpos[qa] - m.qpos0[qa]
+                av[dof] = qvel[va]
+            art.qpos = aq
+            art.qvel = av
+
+    def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
+        """See MjcfOnEngine.apply_forces: ``set_qf`` per articulation; damping and armature
+        are the joints' own (drives, armature); frictionloss and the recovery of a joint placed
+        outside its range added here."""
+        m, d = self.m, self.d
+        full = mass + np.diag(m.dof_armature)
+        f = qfrc.copy()
+        if self._fl.any():  # the force that stops the joint within the step, clamped
+            inv = np.linalg.inv(full)
+            m_eff = 1.0 / np.maximum(np.diagonal(inv), 1e-12)
+            f -= np.clip(m_eff * d.qvel / self.dt, -self._fl, self._fl)
+        if self._recovering:
+            free = np.linalg.solve(full, f - damping * d.qvel - d.qfrc_bias)
+            f += self.limit_recovery(full, free)
+        for k, built in enumerate(self._built):
+            art = built.articulation
+            if art is None:
+                continue
+            qf = np.zeros(art.dof, dtype=np.float32)
+            for _, dof, _, va in self._rows_of[k]:
+                qf[dof] = f[va]
+            art.set_qf(qf)
+
+    def step_engine(self) -> None:
+        """See MjcfOnEngine.step_engine: ``scene.step()``."""
+        self._scene.step()
+
+    def close_engine(self) -> None:
+        """See MjcfOnEngine.close_engine: the scene is dropped."""
+        self._scene = None  # type: ignore[assignment]
+        self._built = []
+
+    def engine_departures(self) -> dict[str, Any]:
+        """See MjcfOnEngine.engine_departures.
+
+        Returns:
+            PhysX's own: float32 state, its contact offsets.
+        """
+        return {
+            "precision": "PhysX keeps poses and velocities in float32",
+            "contact_margin": "a geom's margin and gap are PhysX's contact offset (0.01 m) and "
+            "rest offset (0.0005 m)",
+        }

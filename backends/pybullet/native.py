@@ -1,0 +1,322 @@
+"""An MJCF model read as MuJoCo reads it, stepped by PyBullet (``load_mjcf(source,
+semantics="mujoco")`` on ``Sim("pybullet")``).
+
+The plans of :mod:`simbridge.model.mjcf_native_plan` become one ``p.createMultiBody`` per
+top-level body (link i = MuJoCo's joint-table row i, MuJoCo's masses and inertias) and one
+static body for the world body's geoms. Nothing of PyBullet's profile applies: link damping 0,
+no joint-velocity clamp, the default motors released (a joint with ``frictionloss`` keeps a
+velocity motor of target 0 and that force: Coulomb friction as PyBullet's motors make it).
+Each step applies MuJoCo's actuator and spring forces as joint torques, the joint damping
+implicitly in the joint-space inertia, the armature as a force and MuJoCo's soft joint limits
+(the joints have no PyBullet limit; the shared part, ``backends/mjcf_engine.py``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from simbridge.model.mjcf_native import NativeMjcf
+from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
+from simbridge.model.plan_records import BuildPlan, LinkPlan, ShapePlan
+from simbridge.profiles import Profile
+from simbridge.transforms import quat_multiply, quat_rotate
+from simbridge.types import Quat, Vec3
+
+from ..mjcf_engine import MjcfOnEngine
+from .output import p  # pybullet, imported with its banner captured
+
+__all__ = ["NativePyBullet"]
+
+_JOINTS = {
+    "revolute": p.JOINT_REVOLUTE,
+    "continuous": p.JOINT_REVOLUTE,
+    "prismatic": p.JOINT_PRISMATIC,
+}
+
+
+def _conj(q: Quat) -> Quat:
+    return (-q[0], -q[1], -q[2], q[3])
+
+
+def _shape_args(s: ShapePlan) -> dict[str, Any]:
+    """``createCollisionShapeArray``'s entry of one plan shape."""
+    if s.kind == "sphere":
+        return {"shapeType": p.GEOM_SPHERE, "radius": s.size[0]}
+    if s.kind == "capsule":
+        return {"shapeType": p.GEOM_CAPSULE, "radius": s.size[0], "height": s.size[1]}
+    if s.kind == "cylinder":
+        return {"shapeType": p.GEOM_CYLINDER, "radius": s.size[0], "height": s.size[1]}
+    if s.kind == "box":
+        return {"shapeType": p.GEOM_BOX, "halfExtents": [0.5 * v for v in s.size]}
+    if s.kind == "plane":
+        return {"shapeType": p.GEOM_PLANE, "planeNormal": list(s.size)}
+    assert s.mesh is not None
+    return {"shapeType": p.GEOM_MESH, "vertices": np.asarray(s.mesh.vertices).tolist()}
+
+
+def _collision(c: int, link: LinkPlan) -> int:
+    """The link's compound collision shape (-1: none)."""
+    if not link.collisions:
+        return -1
+    args = [_shape_args(s) for s in link.collisions]
+    keys = ("shapeType", "radius", "halfExtents", "length", "planeNormal", "vertices")
+    arrays: dict[str, list[Any]] = {k: [] for k in keys}
+    for a in args:
+        arrays["shapeType"].append(a["shapeType"])
+        arrays["radius"].append(a.get("radius", 0.5))
+        arrays["halfExtents"].append(a.get("halfExtents", [1.0, 1.0, 1.0]))
+        arrays["length"].append(a.get("height", 1.0))
+        arrays["planeNormal"].append(a.get("planeNormal", [0.0, 0.0, 1.0]))
+    if len(args) == 1:  # one shape: createCollisionShape places it; meshes take vertices
+        a = dict(args[0])
+        s = link.collisions[0]
+        return p.createCollisionShape(
+            **a,
+            collisionFramePosition=s.position,
+            collisionFrameOrientation=s.orientation,
+            physicsClientId=c,
+        )
+    if any("vertices" in a for a in args):  # several shapes with a mesh: one body link each
+        raise_mesh = [s.name for s in link.collisions if s.kind == "mesh"]
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(
+            "pybullet",
+            f"a mesh geom among several geoms of one link ({raise_mesh} of {link.name!r}) "
+            "under semantics='mujoco'",
+            "not yet: one mesh geom per body, or Sim('mujoco')",
+        )
+    return p.createCollisionShapeArray(
+        shapeTypes=arrays["shapeType"],
+        radii=arrays["radius"],
+        halfExtents=arrays["halfExtents"],
+        lengths=arrays["length"],
+        planeNormals=arrays["planeNormal"],
+        collisionFramePositions=[s.position for s in link.collisions],
+        collisionFrameOrientations=[s.orientation for s in link.collisions],
+        physicsClientId=c,
+    )
+
+
+class NativePyBullet(MjcfOnEngine):
+    """The world of one MJCF model as MuJoCo compiles it, stepped by PyBullet.
+
+    Args:
+        profile: The Sim's profile (only gravity and the time step given to the Sim).
+        native: The compiled model.
+        gravity: The gravity the caller gave (m/s², world), or None for the file's.
+        timestep: The time step the caller gave (s), or None for the file's.
+
+    Raises:
+        MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
+    """
+
+    name = "pybullet"
+    engine_version = "3.2.7"
+    soft_limits = True  # MuJoCo's limit on M + A (PyBullet's hard limit stops M alone)
+
+    def __init__(
+        self,
+        profile: Profile,
+        native: NativeMjcf,
+        gravity: Vec3 | None = None,
+        timestep: float | None = None,
+    ) -> None:
+        super().__init__(profile, native, gravity, timestep)
+        c = self._c = p.connect(p.DIRECT)
+        m = self.m
+        p.setGravity(*map(float, m.opt.gravity), physicsClientId=c)
+        p.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=0, physicsClientId=c)
+        self.plans = native_plans(native, limits=not self.soft_limits)
+        self._ids = [self._build(plan) for plan in self.plans]
+        ground = ground_plan(native)
+        self._ground = None if ground is None else self._build(ground)
+        ids = {**dict(enumerate(self._ids)), -1: self._ground}
+        for ka, ra, kb, rb, _ in cross_excludes(native):  # <exclude> across bodies
+            if ids[ka] is not None and ids[kb] is not None:
+                p.setCollisionFilterPair(ids[ka], ids[kb], ra, rb, 0, physicsClientId=c)
+        self._filters()
+        self._layout()
+        self._write(m.qpos0.copy(), np.zeros(m.nv))
+
+    def _build(self, plan: BuildPlan) -> int:
+        """``p.createMultiBody`` of one plan; PyBullet's defaults undone."""
+        c = self._c
+        base, links = plan.links[0], plan.links[1:]
+        ine = base.inertial
+        body = p.createMultiBody(
+            baseMass=ine.mass,
+            baseCollisionShapeIndex=_collision(c, base),
+            basePosition=plan.base_position,
+            baseOrientation=plan.base_orientation,
+            baseInertialFramePosition=ine.position,
+            baseInertialFrameOrientation=ine.orientation,
+            linkMasses=[lk.inertial.mass for lk in links],
+            linkCollisionShapeIndices=[_collision(c, lk) for lk in links],
+            linkVisualShapeIndices=[-1] * len(links),
+            linkPositions=[lk.joint.position for lk in links],  # type: ignore[union-attr]
+            linkOrientations=[lk.joint.orientation for lk in links],  # type: ignore[union-attr]
+            linkInertialFramePositions=[lk.inertial.position for lk in links],
+            linkInertialFrameOrientations=[lk.inertial.orientation for lk in links],
+            linkParentIndices=[lk.parent + 1 for lk in links],  # type: ignore[operator]
+            linkJointTypes=[_JOINTS[lk.joint.type] for lk in links],  # type: ignore[union-attr]
+            linkJointAxis=[lk.joint.axis for lk in links],  # type: ignore[union-attr]
+            flags=p.URDF_USE_SELF_COLLISION,
+            physicsClientId=c,
+        )
+        for lk in plan.links:
+            p.changeDynamics(
+                body,
+                lk.index,
+                lateralFriction=lk.contact.lateral_friction,
+                spinningFriction=lk.contact.spinning_friction,
+                rollingFriction=lk.contact.rolling_friction,
+                restitution=0.0,
+                linearDamping=0.0,
+                angularDamping=0.0,
+                jointDamping=0.0,
+                maxJointVelocity=1e10,
+                physicsClientId=c,
+            )
+            if lk.inertial.mass > 0.0 and lk.index >= 0:
+                p.changeDynamics(
+                    body, lk.index, localInertiaDiagonal=lk.inertial.diagonal, physicsClientId=c
+                )
+            p.setCollisionFilterGroupMask(
+                body, lk.index, lk.filter.group, lk.filter.mask, physicsClientId=c
+            )
+        if plan.links[0].inertial.mass > 0.0:
+            p.changeDynamics(body, -1, localInertiaDiagonal=ine.diagonal, physicsClientId=c)
+        for a, b in plan.excluded_pairs:
+            p.setCollisionFilterPair(body, body, a, b, 0, physicsClientId=c)
+        return body
+
+    def _filters(self) -> None:
+        """No contact between bodies MuJoCo would not pair (contype/conaffinity is the plans'
+        group/mask, PyBullet's rule the same OR rule)."""
+
+    def _layout(self) -> None:
+        """Each body's joints (PyBullet indices, ``qpos``/``qvel`` addresses, ``qpos0``); the
+        default motors released, a ``frictionloss`` kept as a velocity motor of target 0 and
+        that force (hinge and slide only: the shared part refuses a ball joint)."""
+        c, m = self._c, self.m
+        # per body: (PyBullet id, joint indices, qpos addresses, qvel addresses)
+        self._joints: list[tuple[int, list[int], np.ndarray, np.ndarray]] = []
+        for k, nb in enumerate(self.native.bodies):
+            body = self._ids[k]
+            idx = list(range(len(nb.table)))
+            qa = np.array([row.q_index for row in nb.table], dtype=np.intp)
+            va = np.array([row.u_index for row in nb.table], dtype=np.intp)
+            self._joints.append((body, idx, qa, va))
+            for i, row in enumerate(nb.table):
+                j = nb.joint_ids[i]
+                if m.jnt_limited[j] and not self.soft_limits:
+                    ref = float(m.qpos0[row.q_index])  # the engine's 0 is MuJoCo's qpos0
+                    p.changeDynamics(
+                        body, i, jointLowerLimit=float(m.jnt_range[j][0]) - ref,
+                        jointUpperLimit=float(m.jnt_range[j][1]) - ref, physicsClientId=c,
+                    )  # fmt: skip
+            if idx:
+                p.setJointMotorControlArray(
+                    body, idx, p.VELOCITY_CONTROL, targetVelocities=[0.0] * len(idx),
+                    forces=m.dof_frictionloss[va].tolist(), physicsClientId=c,
+                )  # fmt: skip
+
+    # ---------------------------------------------------------------- the engine's hooks
+
+    def engine_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """See MjcfOnEngine.engine_state: the free base's body frame from PyBullet's centre of
+        mass; hinge and slide positions plus ``qpos0``."""
+        c, m = self._c, self.m
+        q, v = m.qpos0.copy(), np.zeros(m.nv)
+        for k, nb in enumerate(self.native.bodies):
+            if nb.free_joint < 0:
+                continue
+            body, ine = self._ids[k], self.plans[k].links[0].inertial
+            pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+            lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+            frame = quat_multiply(orn, _conj(ine.orientation))
+            off = np.array(quat_rotate(frame, ine.position))
+            qa, va = int(m.jnt_qposadr[nb.free_joint]), int(m.jnt_dofadr[nb.free_joint])
+            q[qa : qa + 3] = np.array(pos) - off
+            q[qa + 3 : qa + 7] = (frame[3], frame[0], frame[1], frame[2])
+            w = np.array(ang)
+            v[va : va + 3] = np.array(lin) - np.cross(w, off)
+            v[va + 3 : va + 6] = quat_rotate(_conj(frame), ang)
+        for body, idx, qa, va in self._joints:
+            if idx:
+                states = p.getJointStates(body, idx, physicsClientId=c)
+                q[qa] += [s[0] for s in states]
+                v[va] = [s[1] for s in states]
+        return q, v
+
+    def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """See MjcfOnEngine.write_engine_state."""
+        c, m = self._c, self.m
+        for k, nb in enumerate(self.native.bodies):
+            if nb.free_joint < 0:
+                continue
+            body, ine = self._ids[k], self.plans[k].links[0].inertial
+            qa, va = int(m.jnt_qposadr[nb.free_joint]), int(m.jnt_dofadr[nb.free_joint])
+            w4 = qpos[qa + 3 : qa + 7] / np.linalg.norm(qpos[qa + 3 : qa + 7])
+            frame = (float(w4[1]), float(w4[2]), float(w4[3]), float(w4[0]))
+            off = np.array(quat_rotate(frame, ine.position))
+            orn = quat_multiply(frame, ine.orientation)
+            p.resetBasePositionAndOrientation(
+                body, (qpos[qa : qa + 3] + off).tolist(), orn, physicsClientId=c
+            )
+            ang = np.array(quat_rotate(frame, tuple(qvel[va + 3 : va + 6])))
+            lin = qvel[va : va + 3] + np.cross(ang, off)
+            p.resetBaseVelocity(body, lin.tolist(), ang.tolist(), physicsClientId=c)
+        for body, idx, qa, va in self._joints:
+            for i, a, b in zip(idx, qa.tolist(), va.tolist(), strict=True):
+                p.resetJointState(
+                    body, i, float(qpos[a] - m.qpos0[a]), float(qvel[b]), physicsClientId=c
+                )
+
+    def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
+        """See MjcfOnEngine.apply_forces: joint torques (``TORQUE_CONTROL``, one step) of
+        :meth:`with_armature`; a free base's force and torque as external forces."""
+        c, m = self._c, self.m
+        tau = self.with_armature(qfrc, damping, mass)
+        for body, idx, _, va in self._joints:
+            if idx:
+                p.setJointMotorControlArray(
+                    body, idx, p.TORQUE_CONTROL, forces=tau[va].tolist(), physicsClientId=c
+                )
+        for k, nb in enumerate(self.native.bodies):
+            if nb.free_joint < 0:
+                continue
+            va = int(m.jnt_dofadr[nb.free_joint])
+            f = tau[va : va + 6]
+            if f.any():
+                d, body = self.d, self._ids[k]
+                qa = int(m.jnt_qposadr[nb.free_joint])
+                w4 = d.qpos[qa + 3 : qa + 7]
+                frame = (float(w4[1]), float(w4[2]), float(w4[3]), float(w4[0]))
+                origin = d.qpos[qa : qa + 3].tolist()
+                p.applyExternalForce(
+                    body, -1, f[:3].tolist(), origin, p.WORLD_FRAME, physicsClientId=c
+                )
+                torque = quat_rotate(frame, tuple(f[3:]))
+                p.applyExternalTorque(body, -1, list(torque), p.WORLD_FRAME, physicsClientId=c)
+
+    def step_engine(self) -> None:
+        """See MjcfOnEngine.step_engine: ``p.stepSimulation``."""
+        p.stepSimulation(physicsClientId=self._c)
+
+    def close_engine(self) -> None:
+        """See MjcfOnEngine.close_engine: ``p.disconnect``."""
+        try:
+            p.disconnect(physicsClientId=self._c)
+        except p.error:
+            pass
+
+    def engine_departures(self) -> dict[str, str]:
+        """See MjcfOnEngine.engine_departures."""
+        return {
+            "contact_margin": "a geom's margin and gap are PyBullet's collision margin "
+            "(0.04 m on primitives in its collision detection, contacts from distance 0)",
+        }

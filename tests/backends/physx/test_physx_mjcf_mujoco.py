@@ -1,0 +1,74 @@
+"""PhysX's own links of an MJCF read as MuJoCo reads it: each MuJoCo body's frame where
+MuJoCo's forward kinematics puts it, for the same ``qpos``, within 1e-6 m (PhysX's float32:
+measured 2e-7 m at most), MuJoCo's joint armature on PhysX's joints, and the whole body's mass
+and centre of mass MuJoCo's (welded bodies merged into their link). The calls every engine
+shares: tests/conformance/test_mjcf_mujoco_reading.py."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+import simbridge
+from simbridge.backends.physx.inspect import mjcf_world
+
+pytestmark = pytest.mark.skipif(
+    importlib.util.find_spec("gymnasium") is None,
+    reason="gymnasium is not installed: pip install 'gymnasium[mujoco]==1.4.0'",
+)
+
+
+def _gym_asset(name: str) -> str:
+    spec = importlib.util.find_spec("gymnasium")
+    assert spec is not None and spec.origin is not None
+    return str(Path(spec.origin).parent / "envs" / "mujoco" / "assets" / name)
+
+
+@pytest.mark.parametrize("name", ["ant.xml", "half_cheetah.xml"])
+def test_physxs_frames_are_mujocos(name: str) -> None:
+    path = _gym_asset(name)
+    m = mujoco.MjModel.from_xml_path(path)
+    d = mujoco.MjData(m)
+    q = m.qpos0 + np.random.default_rng(7).uniform(-0.3, 0.3, m.nq)
+    if m.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE:
+        q[3:7] /= np.linalg.norm(q[3:7])
+    d.qpos[:] = q
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    with simbridge.Sim("physx") as sim:
+        sim.load_mjcf(path, semantics="mujoco")
+        sim.set_qpos_qvel(q, np.zeros(m.nv))
+        world = mjcf_world(sim)
+        for k, nb in enumerate(world.native.bodies):
+            links = world._built[k].links
+            masses, coms = [], []
+            for i, j in enumerate(nb.joint_ids):
+                link = links[i + 1]
+                assert float(link.joint.armature[0]) == pytest.approx(
+                    m.dof_armature[m.jnt_dofadr[j]], rel=1e-6
+                )
+                last = i + 1 == len(nb.joint_ids) or nb.link_bodies[i + 1] != nb.link_bodies[i]
+                if not last:  # an intermediate link of a body with several joints
+                    continue
+                b = nb.link_bodies[i]
+                pose = link.entity_pose
+                frame = d.xpos[b] + d.xmat[b].reshape(3, 3) @ m.jnt_pos[j]
+                np.testing.assert_allclose(pose.p, frame, atol=1e-6)
+                rot = pose.to_transformation_matrix()[:3, :3]
+                np.testing.assert_allclose(rot, d.xmat[b].reshape(3, 3), atol=1e-6)
+            for i, link in enumerate(links):
+                if i == 0 and nb.free_joint < 0:
+                    continue  # a welded base
+                plan = world.plans[k].links[i].inertial
+                if plan.mass == 0.0:
+                    continue  # a massless link: PhysX's minimum mass stands for it
+                masses.append(link.mass)
+                coms.append((link.entity_pose * link.cmass_local_pose).p)
+            assert sum(masses) == pytest.approx(m.body_subtreemass[nb.body_id], rel=1e-6)
+            if nb.free_joint >= 0:
+                com = np.sum(np.array(masses)[:, None] * np.array(coms), axis=0) / sum(masses)
+                np.testing.assert_allclose(com, d.subtree_com[nb.body_id], atol=1e-6)

@@ -1,0 +1,68 @@
+"""PyBullet's own bodies of an MJCF read as MuJoCo reads it: each MuJoCo body's frame where
+MuJoCo's forward kinematics puts it, for the same ``qpos``, within 1e-6 m, and the whole
+body's mass and centre of mass MuJoCo's (welded bodies merged into their link). The calls
+every engine shares: tests/conformance/test_mjcf_mujoco_reading.py."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pybullet as p
+import pytest
+
+import simbridge
+from simbridge.backends.pybullet.inspect import mjcf_world
+
+pytestmark = pytest.mark.skipif(
+    importlib.util.find_spec("gymnasium") is None,
+    reason="gymnasium is not installed: pip install 'gymnasium[mujoco]==1.4.0'",
+)
+
+
+def _gym_asset(name: str) -> str:
+    spec = importlib.util.find_spec("gymnasium")
+    assert spec is not None and spec.origin is not None
+    return str(Path(spec.origin).parent / "envs" / "mujoco" / "assets" / name)
+
+
+@pytest.mark.parametrize("name", ["ant.xml", "half_cheetah.xml"])
+def test_pybullets_frames_are_mujocos(name: str) -> None:
+    path = _gym_asset(name)
+    m = mujoco.MjModel.from_xml_path(path)
+    d = mujoco.MjData(m)
+    q = m.qpos0 + np.random.default_rng(7).uniform(-0.3, 0.3, m.nq)
+    if m.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE:
+        q[3:7] /= np.linalg.norm(q[3:7])
+    d.qpos[:] = q
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    with simbridge.Sim("pybullet") as sim:
+        sim.load_mjcf(path, semantics="mujoco")
+        sim.set_qpos_qvel(q, np.zeros(m.nv))
+        world = mjcf_world(sim)
+        c = world._c
+        for k, nb in enumerate(world.native.bodies):
+            body = world._ids[k]
+            for i, j in enumerate(nb.joint_ids):
+                last = i + 1 == len(nb.joint_ids) or nb.link_bodies[i + 1] != nb.link_bodies[i]
+                if not last:  # an intermediate link of a body with several joints
+                    continue
+                b = nb.link_bodies[i]
+                state = p.getLinkState(body, i, computeForwardKinematics=1, physicsClientId=c)
+                frame = d.xpos[b] + d.xmat[b].reshape(3, 3) @ m.jnt_pos[j]
+                np.testing.assert_allclose(state[4], frame, atol=1e-6)
+                rot = np.array(p.getMatrixFromQuaternion(state[5])).reshape(3, 3)
+                np.testing.assert_allclose(rot, d.xmat[b].reshape(3, 3), atol=1e-6)
+            masses = [p.getDynamicsInfo(body, -1, physicsClientId=c)[0]]
+            coms = [p.getBasePositionAndOrientation(body, physicsClientId=c)[0]]
+            for i in range(len(nb.joint_ids)):
+                masses.append(p.getDynamicsInfo(body, i, physicsClientId=c)[0])
+                coms.append(p.getLinkState(body, i, physicsClientId=c)[0])
+            top = nb.body_id
+            assert sum(masses) == pytest.approx(m.body_subtreemass[top], rel=1e-9)
+            if nb.free_joint >= 0:  # a massless root's base is welded: its mass 0 is PyBullet's
+                com = np.sum(np.array(masses)[:, None] * np.array(coms), axis=0) / sum(masses)
+                np.testing.assert_allclose(com, d.subtree_com[top], atol=1e-6)
