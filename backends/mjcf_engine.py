@@ -35,6 +35,7 @@ from simbridge.model.mjcf_native import NativeBody, NativeMjcf
 from simbridge.model.mjcf_native_plan import plan_departures, refuse_unsimulated
 from simbridge.profiles import Profile
 from simbridge.types import (
+    ContactPoint,
     JointCommands,
     JointType,
     MotorMode,
@@ -333,6 +334,27 @@ class MjcfOnEngine(MjcfReads, Backend):
         finally:
             self._in_step = False
             lock.release()
+
+    @exclusive
+    def contact_points(self) -> list[ContactPoint]:
+        """See Backend.contact_points: the engine's own points of the last step
+        (:meth:`engine_contacts`), its bodies as the Sim numbers them, link ``i`` the body's
+        joint row ``i``, and the file's world geoms (its floor) body -1, link -1, as on the
+        MuJoCo backend."""
+        if self._diverged is not None:
+            raise self._diverged
+        return self.engine_contacts()
+
+    def engine_contacts(self) -> list[ContactPoint]:
+        """The engine's contact points of the last step (see :meth:`contact_points`).
+
+        Returns:
+            The points, A and B in the engine's order, the bodies as the Sim numbers them.
+
+        Raises:
+            BackendUnsupportedError: An engine that does not give them.
+        """
+        raise BackendUnsupportedError(self.name, "contact points under semantics='mujoco'")
 
     def close(self) -> None:
         """See Backend.close."""

@@ -24,9 +24,10 @@ from simbridge.exceptions import MjcfFeatureUnsupportedError
 from simbridge.model.mjcf_native import NativeMjcf
 from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
 from simbridge.profiles import Profile
-from simbridge.types import Vec3
+from simbridge.types import ContactPoint, Vec3
 
 from ..mjcf_engine import MjcfOnEngine
+from .contacts import ContactReads
 from .model import build_robot
 
 __all__ = ["NativePhysx"]
@@ -34,7 +35,7 @@ __all__ = ["NativePhysx"]
 SOLVER_ITERATIONS = 50  # position iterations of each articulation (PyBullet's count)
 
 
-class NativePhysx(MjcfOnEngine):
+class NativePhysx(MjcfOnEngine, ContactReads):
     """The world of one MJCF model as MuJoCo compiles it, stepped by PhysX.
 
     Args:
@@ -81,8 +82,12 @@ class NativePhysx(MjcfOnEngine):
             for k, plan in enumerate(self.plans)
         ]
         ground = ground_plan(native)
+        self._ground = None
         if ground is not None:
-            build_robot(self._scene, ground, SOLVER_ITERATIONS, len(self.plans) + 1)
+            self._ground = build_robot(self._scene, ground, SOLVER_ITERATIONS, len(self.plans) + 1)
+        self._dt = self.dt
+        self._contacts_cache: list[ContactPoint] | None = None
+        self._contacts_kept: list[ContactPoint] | None = None  # no body is ever removed
         self._layout()
         self._write(m.qpos0.copy(), np.zeros(m.nv))
 
@@ -192,6 +197,26 @@ class NativePhysx(MjcfOnEngine):
     def step_engine(self) -> None:
         """See MjcfOnEngine.step_engine: ``scene.step()``."""
         self._scene.step()
+        self._contacts_cache = None
+
+    def _owners(self) -> dict[int, tuple[int, int]]:
+        """id of each PhysX component -> (the Sim's body, link): link ``i`` is the body's
+        joint row ``i``; the file's world geoms (its floor) body -1, link -1."""
+        out: dict[int, tuple[int, int]] = {}
+        for body, built in enumerate(self._built):
+            if built.static:
+                out[id(built.actor)] = (body, -1)
+            for k, comp in enumerate(built.links):
+                out[id(comp)] = (body, k - 1)
+        if self._ground is not None:
+            out[id(self._ground.actor)] = (-1, -1)
+        return out
+
+    def engine_contacts(self) -> list[ContactPoint]:
+        """See MjcfOnEngine.engine_contacts: the points SAPIEN's scene reported for the last
+        step, as the PhysX backend reads them (:class:`~.contacts.ContactReads`)."""
+        out = self._contacts_cache = self._last_contacts()
+        return out
 
     def close_engine(self) -> None:
         """See MjcfOnEngine.close_engine: the scene is dropped."""

@@ -13,18 +13,21 @@ implicitly in the joint-space inertia, the armature as a force and MuJoCo's soft
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
+from simbridge.exceptions import SimulationDivergedError
 from simbridge.model.mjcf_native import NativeMjcf
 from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
 from simbridge.model.plan_records import BuildPlan, LinkPlan, ShapePlan
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_multiply, quat_rotate
-from simbridge.types import Quat, Vec3
+from simbridge.types import ContactPoint, Quat, Vec3
 
 from ..mjcf_engine import MjcfOnEngine
+from .contacts import contact_point
 from .output import p  # pybullet, imported with its banner captured
 
 __all__ = ["NativePyBullet"]
@@ -302,6 +305,26 @@ class NativePyBullet(MjcfOnEngine):
                 )
                 torque = quat_rotate(frame, tuple(f[3:]))
                 p.applyExternalTorque(body, -1, list(torque), p.WORLD_FRAME, physicsClientId=c)
+
+    def engine_contacts(self) -> list[ContactPoint]:
+        """See MjcfOnEngine.engine_contacts: ``p.getContactPoints()``, PyBullet's rows with
+        its body ids turned into the Sim's (the ground's into -1); a non-finite value raises
+        SimulationDivergedError."""
+        sim_id = {engine: k for k, engine in enumerate(self._ids)}
+        if self._ground is not None:
+            sim_id[self._ground] = -1
+        out = []
+        for r in p.getContactPoints(physicsClientId=self._c):
+            a, b = sim_id.get(r[1]), sim_id.get(r[2])
+            if a is None or b is None:
+                continue
+            if not all(map(math.isfinite, (*r[5], *r[6], *r[7], r[8], r[9], r[10], r[12]))):
+                self._diverged = SimulationDivergedError(
+                    self.name, self._time, "a contact point (non-finite)"
+                )
+                raise self._diverged
+            out.append(contact_point((r[0], a, b, *r[3:])))
+        return out
 
     def step_engine(self) -> None:
         """See MjcfOnEngine.step_engine: ``p.stepSimulation``."""

@@ -17,6 +17,7 @@ import simbridge
 from simbridge.engine_settings import freeze, merge, thaw
 from simbridge.exceptions import InvalidArgumentError
 from simbridge.transforms import quat_multiply
+from simbridge.types import JointType
 
 from ..errors import ScenarioError
 from .controllers import ControllerSpec
@@ -290,6 +291,9 @@ class Scenario:
                 )
             body = ids[robot.body]
             if robot.position != (0.0, 0.0, 0.0) or robot.orientation != (0.0, 0.0, 0.0, 1.0):
+                if robot.semantics == "mujoco" and not _free(sim, body):
+                    _nudge_joints(sim, body, robot)
+                    return body
                 base = sim.base_state(body)  # its centre-of-mass frame, where the file put it
                 sim.reset_base_state(
                     body,
@@ -342,3 +346,31 @@ def format_timestep(dt: float) -> str:
     if float(frac) == dt and frac.numerator == 1:
         return f"1/{frac.denominator}"
     return repr(dt)
+
+
+def _free(sim: simbridge.Sim, body: int) -> bool:
+    """Whether a body of a model read as MuJoCo reads it has a free joint: ``qpos`` holds 7
+    coordinates more than its joint rows' (one body: the scenario's whole world)."""
+    rows = [sim.joint_info(body, j) for j in range(sim.num_joints(body))]
+    sizes = {JointType.REVOLUTE: 1, JointType.PRISMATIC: 1, JointType.SPHERICAL: 4}
+    return len(sim.qpos()) > sum(sizes.get(r.type, 0) for r in rows)
+
+
+def _nudge_joints(sim: simbridge.Sim, body: int, robot: RobotSpec) -> None:
+    """An ensemble's offset of a model read as MuJoCo reads it whose base the file fixes (no
+    free joint: its place is the file's): the offset moves its hinge and slide coordinates
+    instead, coordinate ``i`` by component ``i mod 6`` of (displacement, rotation vector) (m
+    or rad: the same 1e-9 scale), so its members start apart as a free base's do."""
+    x, y, z, w = robot.orientation
+    half = math.atan2(math.sqrt(x * x + y * y + z * z), w)
+    scale = 2.0 * half / math.sin(half) if half > 1e-12 else 2.0
+    offset = [*robot.position, x * scale, y * scale, z * scale]
+    qpos = sim.qpos()
+    scalar = [
+        sim.joint_info(body, j).q_index
+        for j in range(sim.num_joints(body))
+        if sim.joint_info(body, j).type in (JointType.REVOLUTE, JointType.PRISMATIC)
+    ]
+    for i, adr in enumerate(scalar):
+        qpos[adr] += offset[i % 6]
+    sim.set_qpos_qvel(qpos=qpos)

@@ -169,6 +169,34 @@ def test_the_ant_stands_at_gymnasiums_height_or_the_departure_is_named(backend: 
     assert 0.3 < heights[0] < 0.7, heights  # standing, not collapsed (0.25 m) nor thrown
 
 
+@pytest.mark.skipif(not HAS_GYM, reason=NO_GYM)
+def test_the_ant_rests_on_its_feet_on_the_files_floor(backend: str) -> None:
+    """Contact points under MuJoCo's reading: after 5 s at rest the ant touches its file's
+    floor (the world's geom: body -1, link -1) with its four feet only (the geoms of the bodies
+    without joints below each ankle: the ankle rows 1, 3, 5, 7), each point's normal up from
+    the floor, and the points carry its weight: the mean over 0.5 s of the total normal force
+    within 2% of m g (measured: MuJoCo 1.0000, PyBullet 1.0001; at 2 s PyBullet's ant still
+    sinks and carries 0.946)."""
+    if not _reads_mujoco(backend):
+        pytest.skip(f"{backend!r} does not declare MuJoCo's reading of MJCF")
+    path = _gym_asset("ant.xml")
+    m = mujoco.MjModel.from_xml_path(path)
+    weight = float(np.sum(m.body_mass)) * float(-m.opt.gravity[2])
+    with simbridge.Sim(backend) as sim:
+        (ant,) = sim.load_mjcf(path, semantics="mujoco")
+        sim.step(500)
+        totals = []
+        for _ in range(50):
+            sim.step()
+            points = sim.contact_points(ant)
+            totals.append(sum(c.normal_force for c in points))
+        assert {(c.body_a, c.link_a, c.body_b, c.link_b) for c in points} == {
+            (ant, row, -1, -1) for row in (1, 3, 5, 7)
+        }
+        assert all(np.allclose(c.normal_on_b, (0.0, 0.0, 1.0), atol=1e-3) for c in points)
+    assert float(np.mean(totals)) == pytest.approx(weight, rel=0.02)
+
+
 TENDON = """<mujoco><worldbody>
 <body name="a"><joint name="j1" type="hinge"/><geom size="0.1"/>
 <body name="b" pos="0 0 -0.3"><joint name="j2" type="hinge"/><geom size="0.1"/></body></body>

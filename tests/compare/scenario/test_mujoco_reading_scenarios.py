@@ -14,7 +14,9 @@ import pytest
 
 from simbridge import compare
 from simbridge.compare import dumps_scenario, load_scenario, loads_scenario
+from simbridge.compare.analysis.verdict import VERDICTS
 from simbridge.compare.errors import ScenarioError
+from simbridge.compare.run.offsets import perturbed
 from simbridge.model.urdf_source import locate
 
 ANT = "package://gymnasium/envs/mujoco/assets/ant.xml"
@@ -118,3 +120,31 @@ def test_shipped_scenarios_run_on_mujoco_as_raw_mujoco_does(name):
         col = list(body.joint_names).index("rootx")
         assert body.joint_positions[-1, col] == qpos[0]
     assert all(o.success for o in tr.outcomes.values()), tr.outcomes
+
+
+@pytest.mark.skipif(importlib.util.find_spec("gymnasium") is None, reason="needs gymnasium")
+@pytest.mark.parametrize("name", ["ant-mujoco", "cheetah-mujoco"])
+def test_every_pair_of_engines_is_judged(name):
+    """Issue 33's done-when, short: the scenario runs on the three engines and every pair gets
+    a verdict."""
+    c = compare.compare(
+        name, ["pybullet", "mujoco", "physx"], duration=0.2, ensemble=2, workers=0, cache=False
+    )
+    assert len(c.pairs) == 3
+    assert all(pair.verdict.verdict in VERDICTS for pair in c.pairs)
+
+
+@pytest.mark.parametrize("backend", ["pybullet", "mujoco", "physx"])
+def test_an_offset_of_a_fixed_base_moves_the_joints(backend):
+    """The cheetah's base is fixed in its file (rootx, rootz, rooty are joints): an ensemble
+    member's offset moves its hinge and slide coordinates, 1e-9 apart, not refused."""
+    sc = load_scenario("cheetah-mujoco").truncated(0.01)
+    scale = 1e4 if backend == "physx" else 1.0  # PhysX's float32 state: offsets of 1e-5
+    dpos = np.array([[1e-9, -2e-9, 3e-9]]) * scale
+    drot = np.array([[0.0, 4e-9, 0.0]]) * scale
+    nominal = compare.run(sc, backend).bodies["cheetah"]
+    moved = compare.run(perturbed(sc, dpos, drot), backend).bodies["cheetah"]
+    gap = moved.joint_positions[0] - nominal.joint_positions[0]
+    # rootx, rootz, rooty, then the six leg joints: components 0..5, 0..2 of the offset
+    want = np.array([1e-9, -2e-9, 3e-9, 0.0, 4e-9, 0.0, 1e-9, -2e-9, 3e-9]) * scale
+    assert np.allclose(gap, want, rtol=0, atol=5e-11 * scale)
