@@ -67,6 +67,23 @@ def test_mcnemar_counts_the_discordant_pairs():
     assert mcnemar([True, False], [True, False])[2] == 1.0
 
 
+def test_the_training_engine_runs_first_and_a_repeat_is_labelled():
+    from simbridge.envs.paired import parse_engines
+
+    engines = parse_engines(
+        ["pybullet", "mujoco", "mujoco", "physx+lateral_friction=0.9"],
+        "mujoco",
+        "pybullet",
+        ["pybullet", "mujoco", "physx"],
+    )
+    assert [(e.label, e.backend, e.profile) for e in engines] == [
+        ("mujoco", "mujoco", "pybullet"),
+        ("pybullet", "pybullet", "pybullet"),
+        ("mujoco#2", "mujoco", "pybullet"),
+        ("physx+lateral_friction=0.9", "physx", "pybullet+lateral_friction=0.9"),
+    ]
+
+
 def test_the_same_engine_twice_shows_no_difference(tmp_path):
     result = sim2sim(
         "reference", "husky_goto", trained_on="pybullet", backends=["pybullet"], episodes=6

@@ -69,8 +69,19 @@ def add_command(
 
 
 def _sim2sim(args: argparse.Namespace) -> int:
-    from simbridge.envs.sim2sim import sim2sim
-    from simbridge.envs.sim2sim_report import headline, write
+    import sys
+
+    try:
+        from simbridge.envs.sim2sim import sim2sim
+        from simbridge.envs.sim2sim_report import headline, write
+    except ModuleNotFoundError as exc:  # the envs extra
+        if exc.name != "gymnasium":
+            raise
+        print(
+            'simbridge: error: sim2sim needs Gymnasium: pip install "simbridge[envs]"',
+            file=sys.stderr,
+        )
+        return 1
 
     result = sim2sim(
         args.policy,

@@ -19,7 +19,16 @@ from simbridge.envs.task import Task
 from simbridge.exceptions import InvalidArgumentError, UnknownBackendError
 from simbridge.profiles import _literal
 
-__all__ = ["NAN_ACTION", "Engine", "EngineRun", "Record", "mcnemar", "parse_engines", "run_engine"]
+__all__ = [
+    "NAN_ACTION",
+    "Engine",
+    "EngineRun",
+    "Record",
+    "mcnemar",
+    "parse_engines",
+    "run_engine",
+    "simulated",
+]
 
 NAN_ACTION = "nan_action"
 """An episode's failure when the policy returned a NaN or infinite entry."""
@@ -85,9 +94,10 @@ def parse_engines(
     """
     from simbridge.profiles import derived_profile
 
-    ordered = [trained_on, *[s for s in specs]]
-    if trained_on in specs:
-        ordered.remove(trained_on)  # the first of specs naming it is the training run
+    rest = list(specs)
+    if trained_on in rest:
+        rest.remove(trained_on)  # the first of specs naming it is the training run
+    ordered = [trained_on, *rest]
     out: list[Engine] = []
     for spec in ordered:
         backend, _, rest = spec.partition("+")
@@ -147,6 +157,29 @@ def _episode(env: SimEnv, policy: Any, spec: str, seed: int) -> Record:
             )
 
 
+def simulated(engine: Engine) -> dict[str, Any]:
+    """What an engine simulates beyond the task: its profile's entries and its own settings.
+
+    Args:
+        engine: the engine.
+
+    Returns:
+        ``profile_entries`` (every entry of the profile but its name, time step and gravity,
+        which the task states) and ``engine_settings`` (every setting of the backend with the
+        value it takes: :func:`simbridge.engine_settings.effective`), JSON-ready.
+    """
+    from simbridge.engine_settings import effective
+    from simbridge.profiles import get_profile
+
+    prof = get_profile(engine.profile)
+    entries = {
+        k: list(v) if isinstance(v, tuple) else v
+        for k, v in prof.as_dict().items()
+        if k not in ("name", "engines", "timestep", "gravity")
+    }
+    return {"profile_entries": entries, "engine_settings": effective(engine.backend, prof)}
+
+
 def run_engine(task: Task, engine: Engine, policy: str, seeds: Sequence[int]) -> EngineRun:
     """The policy's episodes on one engine, one per seed.
 
@@ -169,6 +202,7 @@ def run_engine(task: Task, engine: Engine, policy: str, seeds: Sequence[int]) ->
         records = [_episode(env, pol, policy, s) for s in seeds]
         contract = env.contract()
         contract["profile"] = engine.profile
+        contract["simulated"] = simulated(engine)
         return EngineRun(engine, records, contract, time.perf_counter() - start)
     finally:
         env.close()

@@ -54,8 +54,25 @@ def _joint_values(contract: dict[str, Any], key: str) -> str:
     return ", ".join(f"{j[key]:g}" for j in contract["action"]["joint_table"])
 
 
+CONTACT_ENTRIES = (
+    "lateral_friction",
+    "read_urdf_contact",
+    "solver_iterations",
+    "apply_joint_damping",
+    "max_joint_velocity",
+    "enforce_effort_limit",
+    "enforce_velocity_limit",
+)
+"""Profile entries the contract table always shows; any other entry shows where engines differ."""
+
+
+def _settings_text(settings: dict[str, Any]) -> str:
+    return ", ".join(f"{k} {v}" for k, v in settings.items())
+
+
 def contract_rows(result: Sim2SimResult) -> list[tuple[str, list[str]]]:
-    """The contract table's rows: a name and one value per engine.
+    """The contract table's rows: a name and one value per engine (the task's contract, then
+    the profile entries and engine settings each engine runs).
 
     Args:
         result: the run.
@@ -96,7 +113,22 @@ def contract_rows(result: Sim2SimResult) -> list[tuple[str, list[str]]]:
         row("velocity limit", lambda c: _joint_values(c, "max_velocity")),
         row("joint damping", lambda c: _joint_values(c, "damping")),
         row("joint friction", lambda c: _joint_values(c, "friction")),
+        *_simulated_rows(cs),
     ]
+
+
+def _simulated_rows(cs: list[dict[str, Any]]) -> list[tuple[str, list[str]]]:
+    entries = [c["simulated"]["profile_entries"] for c in cs]
+    keys = [
+        k
+        for k in entries[0]
+        if k in CONTACT_ENTRIES or any(e.get(k) != entries[0][k] for e in entries)
+    ]
+    rows = [(f"profile: {k}", [str(e.get(k)) for e in entries]) for k in keys]
+    rows.append(
+        ("engine settings", [_settings_text(c["simulated"]["engine_settings"]) for c in cs])
+    )
+    return rows
 
 
 def _rates_table(result: Sim2SimResult) -> list[str]:
@@ -197,8 +229,8 @@ def markdown(result: Sim2SimResult) -> str:
     ]
     for name, values in contract_rows(result):
         departs = "yes" if any(v != values[0] for v in values[1:]) else ""
-        if name == "backend":
-            departs = ""
+        if name in ("backend", "engine settings", "engine joint index"):
+            departs = ""  # each backend's own
         lines.append(f"| {name} | " + " | ".join(values) + f" | {departs} |")
     lines += [
         "",
