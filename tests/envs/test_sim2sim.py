@@ -238,3 +238,21 @@ def test_unknown_task_and_engine(args, message, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("simbridge: error: ")
     assert __import__("re").search(message, err), err
+
+
+@pytest.mark.parametrize(
+    ("policy", "message"),
+    [
+        ("no_such_module_here:act", "module 'no_such_module_here' does not import"),
+        (
+            "simbridge.envs.controllers:Nope",
+            "has no attribute 'Nope'; public names there: .*'DriveToGoal'",
+        ),
+        ("simbridge.envs.controllers:CONTROLLERS", "'CONTROLLERS' is a dict, not a callable"),
+        ("policy.bin", "expected 'reference', module:callable, or a file ending in .jit, .onnx"),
+        ("missing.onnx", "'missing.onnx': no such file"),
+    ],
+)
+def test_a_policy_that_does_not_load_says_why(policy, message):
+    with pytest.raises(PolicyError, match=message):
+        sim2sim(policy, "cartpole", trained_on="pybullet", backends=[], episodes=1)

@@ -94,10 +94,10 @@ def parse_engines(
     """
     from simbridge.profiles import derived_profile
 
-    rest = list(specs)
-    if trained_on in rest:
-        rest.remove(trained_on)  # the first of specs naming it is the training run
-    ordered = [trained_on, *rest]
+    others = list(specs)
+    if trained_on in others:
+        others.remove(trained_on)  # the first of specs naming it is the training run
+    ordered = [trained_on, *others]
     out: list[Engine] = []
     for spec in ordered:
         backend, _, rest = spec.partition("+")

@@ -71,21 +71,22 @@ def _from_module(spec: str, env: SimEnv) -> Policy:
                 spec, f"{module_name!r} has no attribute {attr!r}; public names there: {names}"
             )
         obj = getattr(obj, part)
-    if inspect.isclass(obj):
+    if inspect.isclass(obj):  # a class: made for the env
+        cls: Any = obj
         params = [
             p
-            for p in inspect.signature(obj).parameters.values()
+            for p in inspect.signature(cls).parameters.values()
             if p.default is p.empty and p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)
         ]
-        obj = obj(env) if params else obj()
+        obj = cls(env) if params else cls()
     if not callable(obj):
         raise PolicyError(spec, f"{attr!r} is a {type(obj).__name__}, not a callable obs -> action")
-    return obj  # type: ignore[no-any-return]
+    return obj
 
 
 def _onnx(path: Path, env: SimEnv) -> Policy:
     try:
-        import onnxruntime
+        import onnxruntime  # type: ignore[import-untyped]
     except ImportError:
         raise PolicyRuntimeMissingError(str(path), "ONNX", "pip install onnxruntime") from None
     try:
@@ -93,7 +94,7 @@ def _onnx(path: Path, env: SimEnv) -> Policy:
     except Exception as exc:  # onnxruntime raises its own classes for a bad file
         raise PolicyError(str(path), f"the ONNX file does not load ({_one_line(exc)})") from None
     inp = session.get_inputs()[0]
-    size = int(env.observation_space.shape[0])
+    size = int(np.prod(env.observation_space.shape or (0,)))
     declared = inp.shape[-1] if inp.shape else None
     if isinstance(declared, int) and declared != size:
         raise PolicyError(
@@ -112,7 +113,7 @@ def _onnx(path: Path, env: SimEnv) -> Policy:
 
 def _torchscript(path: Path) -> Policy:
     try:
-        import torch
+        import torch  # type: ignore[import-not-found]
     except ImportError:
         raise PolicyRuntimeMissingError(
             str(path), "TorchScript", "pip install torch (the CPU build is enough)"
@@ -134,7 +135,7 @@ def _torchscript(path: Path) -> Policy:
 
 def _sb3(path: Path) -> Policy:
     try:
-        import stable_baselines3
+        import stable_baselines3  # type: ignore[import-not-found]
     except ImportError:
         raise PolicyRuntimeMissingError(
             str(path), "Stable-Baselines3", 'pip install "simbridge[rl]" (stable-baselines3)'
@@ -187,7 +188,7 @@ def load_policy(spec: str, env: SimEnv) -> Policy:
                 f"task {env.task.name!r} has no reference controller; those that do: "
                 f"{sorted(CONTROLLERS)}",
             )
-        return CONTROLLERS[env.task.name](env)  # type: ignore[no-any-return]
+        return CONTROLLERS[env.task.name](env)
     path = Path(spec)
     if path.suffix.lower() in FILE_KINDS:
         if not path.is_file():
