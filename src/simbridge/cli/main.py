@@ -15,6 +15,8 @@
   simbridge joints r2d2.urdf --movable        the joint table as a backend loads it
   simbridge joints r2d2.urdf --json           the same, every field, for machines
   simbridge replay reports/r2d2               a report's 3D replay, live in the browser
+  simbridge sim2sim reference --task husky_goto --trained-on pybullet
+                                              a policy on every engine: paired success rates
 
 stdout carries the results alone; the engines' own banners and warnings go to the log, which
 --verbose (-v) shows on stderr.
@@ -59,6 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     from simbridge.cli import cache as cli_cache
     from simbridge.cli import info as cli_info
     from simbridge.cli import joints as cli_joints
+    from simbridge.cli import sim2sim as cli_sim2sim
     from simbridge.cli import study as cli_study
     from simbridge.cli.settings import add_settings_parser
 
@@ -74,6 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scenarios(sub)
     _add_replay(sub)
     cli_joints.add_command(sub, backends, _verbose)
+    cli_sim2sim.add_command(sub, backends, _verbose)
     _verbose(add_settings_parser(sub, backends))
     cli_study.add_commands(sub, _verbose, add_job_options)
     cli_cache.add_commands(sub, _verbose)

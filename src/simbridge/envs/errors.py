@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 from simbridge.exceptions import InvalidArgumentError, SimbridgeError
 
-__all__ = ["ActionError", "TaskFileError"]
+__all__ = ["ActionError", "PolicyError", "PolicyRuntimeMissingError", "TaskFileError"]
 
 
 class TaskFileError(SimbridgeError, ValueError):
@@ -45,4 +45,34 @@ class ActionError(InvalidArgumentError):
             "action",
             f"{detail}; task {task!r} takes an action of shape ({len(joints)},), one "
             f"{mode} entry per joint in this order: {list(joints)}",
+        )
+
+
+class PolicyError(SimbridgeError, ValueError):
+    """A policy that cannot be loaded or does not fit the task: a bad ``module:callable``, a file
+    that does not load, an output or input of another size than the task's layout.
+
+    Args:
+        policy: the policy as given (a path or ``module:callable``).
+        detail: what is wrong and what would be right.
+    """
+
+    def __init__(self, policy: str, detail: str):
+        self.policy = policy
+        super().__init__(f"policy {policy!r}: {detail}")
+
+
+class PolicyRuntimeMissingError(SimbridgeError, ImportError):
+    """A policy file whose runtime is not installed (onnxruntime, torch, stable-baselines3).
+
+    Args:
+        policy: the policy file.
+        kind: the file's kind (``ONNX``, ``TorchScript``, ``Stable-Baselines3``).
+        install: what to install (``pip install onnxruntime``).
+    """
+
+    def __init__(self, policy: str, kind: str, install: str):
+        self.policy = policy
+        super().__init__(
+            f"policy {policy!r}: a {kind} file needs a runtime that is not installed: {install}"
         )

@@ -1,0 +1,112 @@
+"""``simbridge sim2sim POLICY --task T --trained-on ENGINE``: a policy trained on one engine, run
+on paired seeds on every engine (:func:`simbridge.envs.sim2sim.sim2sim`), into report.md and
+summary.json, with a headline on stdout."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from simbridge.cli.args import nonnegative_int, positive_int
+
+__all__ = ["add_command"]
+
+DESCRIPTION = """\
+Run POLICY on the task's paired seeds on every engine, the training engine first, and write
+report.md and summary.json: success per engine with a 95%% Wilson interval and N, McNemar's
+exact test against the training engine, returns with bootstrap intervals, survival, clipped
+actions, sign changes, and the contract engine beside engine.
+
+POLICY: 'reference' (the task's reference controller), module:callable (a function obs ->
+action, or a class made with the env: simbridge.envs.controllers:DriveToGoal), or a file:
+.onnx (onnxruntime), .pt/.ts/.jit (TorchScript), .zip (Stable-Baselines3).
+
+An engine is BACKEND or BACKEND+KEY=VALUE: the task's profile with an entry or engine setting
+changed (mujoco+lateral_friction=0.05).
+"""
+
+
+def add_command(
+    sub: Any, backends: list[str], verbose: Callable[[argparse.ArgumentParser], None]
+) -> None:
+    """Add ``simbridge sim2sim`` (its parser's ``handler`` set).
+
+    Args:
+        sub: The top-level parser's subparsers.
+        backends: The installed backends' names (the default engines).
+        verbose: Adds ``--verbose`` to a parser.
+    """
+    p = sub.add_parser(
+        "sim2sim",
+        help="check a trained policy on every engine: paired success rates and the contract",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("policy", metavar="POLICY", help="reference, module:callable or a policy file")
+    p.add_argument("--task", required=True, help="a shipped task's name or a task file")
+    p.add_argument(
+        "--trained-on", required=True, metavar="ENGINE", help="the engine it was trained on"
+    )
+    p.add_argument(
+        "--backends",
+        nargs="+",
+        metavar="ENGINE",
+        default=list(backends),
+        help=f"engines to run it on (default: every installed one: {', '.join(backends)})",
+    )
+    p.add_argument("--episodes", type=positive_int, default=20, metavar="N")
+    p.add_argument("--seed", type=nonnegative_int, default=0, metavar="S", help="first seed")
+    p.add_argument("--out", type=Path, help="report folder (default: reports/sim2sim-<task>/)")
+    p.add_argument(
+        "--explain",
+        action="store_true",
+        help="rank the settings that, moved toward the training engine, recover success",
+    )
+    verbose(p)
+    p.set_defaults(handler=_sim2sim)
+
+
+def _sim2sim(args: argparse.Namespace) -> int:
+    import sys
+
+    try:
+        from simbridge.envs.sim2sim import sim2sim
+        from simbridge.envs.sim2sim_report import headline, write
+    except ModuleNotFoundError as exc:  # the envs extra
+        if exc.name != "gymnasium":
+            raise
+        print(
+            'simbridge: error: sim2sim needs Gymnasium: pip install "simbridge[envs]"',
+            file=sys.stderr,
+        )
+        return 1
+
+    result = sim2sim(
+        args.policy,
+        args.task,
+        trained_on=args.trained_on,
+        backends=args.backends,
+        episodes=args.episodes,
+        seed=args.seed,
+    )
+    if args.explain:
+        from simbridge.envs.sim2sim_explain import explain_drops
+
+        explain_drops(args.task, result)
+    out = args.out or Path("reports") / f"sim2sim-{result.task}"
+    files = write(result, out)
+    for line in headline(result):
+        print(line)
+    for e in result.explain:
+        for c in e["candidates"]:
+            if c["rank"] == 1:
+                print(
+                    f"explain {e['engine']}: {c['setting']} recovers {c['successes']}/{e['n']} "
+                    f"(from {e['before']}/{e['n']})"
+                )
+        if e.get("note"):
+            print(f"explain {e['engine']}: {e['note']}")
+    print(f"wrote {', '.join(str(f) for f in files)}")
+    return 0

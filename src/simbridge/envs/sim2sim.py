@@ -1,0 +1,253 @@
+"""``simbridge sim2sim``: does a policy trained on one engine still succeed on the others?
+(:func:`sim2sim`)
+
+The policy (:func:`simbridge.envs.policies.load_policy`) runs the same seeds on every engine,
+the training engine first: the same seed gives the same initial state and commands on each
+(``SimEnv.reset(seed=...)``), so the episodes pair up. Per engine:
+
+- success, successes of N with a 95% Wilson interval (:func:`simbridge.envs.evaluate.wilson`);
+- against the training engine, the paired difference judged by McNemar's exact test: a
+  two-sided binomial test of the discordant pairs (seeds that succeed on one engine only)
+  against one half (:func:`mcnemar`);
+- the mean return and the mean paired return difference, each with a 95% bootstrap interval
+  (percentile, :data:`BOOTSTRAP_RESAMPLES` resamples of the episodes);
+- episode length, the share of episodes still running (not failed) at each quarter of the
+  episode (Kaplan-Meier: a success or a truncation ends an episode without a failure), the
+  median time to failure;
+- the share of steps with a clipped action entry and the action's sign changes per step (summed
+  over its entries): a policy that saturates or chatters on one engine only;
+- a NaN or infinite action ends its episode as a failure (``failure = "nan_action"``), counted
+  and said in the report, never passed to the engine.
+
+A policy whose training engine succeeds on less than :data:`TRAINED_FLOOR` of the seeds points
+at the contract (joint order, observation layout and scales, action meaning, gains, dt and
+decimation), not at the engines: the headline says so.
+
+An engine is named ``BACKEND`` or ``BACKEND+KEY=VALUE+...``: the task's profile with those
+entries or engine settings changed (:func:`simbridge.profiles.derived_profile`), e.g.
+``mujoco+lateral_friction=0.05``. The same engine may appear twice (its label then takes
+``#2``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from simbridge.envs.evaluate import Rate, wilson
+from simbridge.envs.paired import (
+    NAN_ACTION,
+    Engine,
+    EngineRun,
+    Record,
+    mcnemar,
+    parse_engines,
+    run_engine,
+)
+from simbridge.envs.task import Task
+from simbridge.exceptions import InvalidArgumentError
+
+__all__ = [
+    "ALPHA",
+    "BOOTSTRAP_RESAMPLES",
+    "TRAINED_FLOOR",
+    "Engine",
+    "EngineFigures",
+    "EngineRun",
+    "Interval",
+    "Record",
+    "Sim2SimResult",
+    "figures",
+    "mcnemar",
+    "parse_engines",
+    "run_engine",
+    "sim2sim",
+    "NAN_ACTION",
+]
+
+ALPHA = 0.05
+"""The significance level of McNemar's test in the verdicts."""
+BOOTSTRAP_RESAMPLES = 2000
+"""Resamples of each bootstrap interval."""
+TRAINED_FLOOR = 0.5
+"""A training engine's success share below this: the policy points at the contract."""
+
+
+class Interval(NamedTuple):
+    """A value with a 95% interval."""
+
+    value: float
+    """The estimate."""
+    low: float
+    """The interval's lower end."""
+    high: float
+    """Its upper end."""
+
+
+@dataclass
+class EngineFigures:
+    """One engine's figures, each against the training engine where paired."""
+
+    label: str
+    rate: Rate
+    discordant: tuple[int, int]  # (training succeeded here failed, training failed here succeeded)
+    p_value: float  # McNemar's exact test against the training engine (1.0 for itself)
+    ret: Interval
+    ret_difference: Interval  # paired, this engine minus the training engine
+    steps: Interval
+    survival: list[float]  # share not failed at 1/4, 1/2, 3/4 and all of the episode
+    median_failure_s: float | None  # among failed episodes, None without one
+    failures: dict[str, int]
+    clipped_share: float
+    sign_changes: float
+    nan_actions: int
+
+    @property
+    def verdict(self) -> str:
+        """``same`` (p >= :data:`ALPHA`), ``drop`` or ``rise`` against the training engine."""
+        if self.p_value >= ALPHA:
+            return "same"
+        b, c = self.discordant
+        return "drop" if b > c else "rise"
+
+
+@dataclass
+class Sim2SimResult:
+    """A sim2sim run: its inputs, every engine's episodes, figures and the explanation."""
+
+    task: str
+    policy: str
+    trained_on: str
+    seeds: list[int]
+    runs: list[EngineRun]
+    figures: list[EngineFigures]
+    explain: list[dict[str, Any]] = field(default_factory=list)  # sim2sim_explain's, if run
+
+    @property
+    def points_at_contract(self) -> bool:
+        """True when the training engine's success share is below :data:`TRAINED_FLOOR`."""
+        r = self.figures[0].rate
+        return r.successes / r.n < TRAINED_FLOOR
+
+
+def _bootstrap_mean(values: Sequence[float], seed: int) -> Interval:
+    """The mean with a 95% percentile bootstrap interval (a point where every value is equal)."""
+    from scipy.stats import bootstrap
+
+    x = np.asarray(values, dtype=np.float64)
+    mean = float(np.mean(x))
+    if x.size < 2 or np.all(x == x[0]):
+        return Interval(mean, mean, mean)
+    res = bootstrap(
+        (x,),
+        np.mean,
+        n_resamples=BOOTSTRAP_RESAMPLES,
+        method="percentile",
+        random_state=np.random.default_rng(seed),
+    )
+    ci = res.confidence_interval
+    return Interval(mean, float(ci.low), float(ci.high))
+
+
+def _survival(records: Sequence[Record], episode_steps: int) -> list[float]:
+    """Kaplan-Meier: the share not failed at 1/4, 1/2, 3/4 and all of ``episode_steps``; an
+    episode that ended without a failure is censored at its length."""
+    out = []
+    for quarter in (1, 2, 3, 4):
+        horizon = episode_steps * quarter / 4
+        s = 1.0
+        times = sorted({r.steps for r in records if r.failure and r.steps <= horizon})
+        for t in times:
+            at_risk = sum(r.steps >= t for r in records)
+            died = sum(r.steps == t and r.failure is not None for r in records)
+            s *= 1 - died / at_risk
+        out.append(s)
+    return out
+
+
+def figures(runs: Sequence[EngineRun], seed: int = 0) -> list[EngineFigures]:
+    """Every engine's figures against the first (the training engine).
+
+    Args:
+        runs: the engines' runs, the training engine first, the same seeds in the same order.
+        seed: the bootstrap's seed.
+
+    Returns:
+        One :class:`EngineFigures` per run.
+    """
+    base = runs[0].records
+    out = []
+    for run in runs:
+        rec = run.records
+        ok = [r.success for r in rec]
+        b, c, p = mcnemar([r.success for r in base], ok)
+        fails = [r.steps for r in rec if r.failure]
+        dt = float(run.contract["control_dt"])
+        counts: dict[str, int] = {}
+        for r in rec:
+            if r.failure:
+                counts[r.failure] = counts.get(r.failure, 0) + 1
+        out.append(
+            EngineFigures(
+                label=run.engine.label,
+                rate=wilson(sum(ok), len(ok)),
+                discordant=(b, c),
+                p_value=p,
+                ret=_bootstrap_mean([r.ret for r in rec], seed),
+                ret_difference=_bootstrap_mean(
+                    [r.ret - q.ret for r, q in zip(rec, base, strict=True)], seed
+                ),
+                steps=_bootstrap_mean([r.steps for r in rec], seed),
+                survival=_survival(rec, int(run.contract["episode_steps"])),
+                median_failure_s=float(np.median(fails)) * dt if fails else None,
+                failures=counts,
+                clipped_share=float(np.mean([r.clipped_share for r in rec])),
+                sign_changes=float(np.mean([r.sign_changes for r in rec])),
+                nan_actions=counts.get(NAN_ACTION, 0),
+            )
+        )
+    return out
+
+
+def sim2sim(
+    policy: str,
+    task: Task | str,
+    *,
+    trained_on: str,
+    backends: Sequence[str] = ("pybullet", "mujoco", "physx"),
+    episodes: int = 20,
+    seed: int = 0,
+) -> Sim2SimResult:
+    """Run ``policy`` on ``task`` over paired seeds on every engine, the training engine first.
+
+    Args:
+        policy: ``reference``, ``module:callable`` or a policy file
+            (:func:`~simbridge.envs.policies.load_policy`).
+        task: a :class:`Task`, a shipped task's name or a task file.
+        trained_on: the engine the policy was trained on (``BACKEND[+KEY=VALUE...]``).
+        backends: the engines to check it on (the training engine is added first if absent).
+        episodes: episodes per engine (seeds ``seed .. seed + episodes - 1``).
+        seed: the first seed (and the bootstrap's).
+
+    Returns:
+        The :class:`Sim2SimResult`.
+
+    Raises:
+        InvalidArgumentError: ``episodes`` below 1.
+        UnknownBackendError: an engine that is not registered.
+        TaskFileError: an unknown task.
+        PolicyError: a policy that does not load or does not fit the task.
+    """
+    from simbridge.envs.reader import load_task
+    from simbridge.registry import available_backends
+
+    if episodes < 1:
+        raise InvalidArgumentError("episodes", f"expected at least 1, got {episodes}")
+    t = task if isinstance(task, Task) else load_task(task)
+    engines = parse_engines(backends, trained_on, t.profile, available_backends())
+    seeds = list(range(seed, seed + episodes))
+    runs = [run_engine(t, e, policy, seeds) for e in engines]
+    return Sim2SimResult(t.name, policy, trained_on, seeds, runs, figures(runs, seed))

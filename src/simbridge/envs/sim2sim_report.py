@@ -1,0 +1,307 @@
+"""The outputs of ``simbridge sim2sim``: the terminal headline (:func:`headline`), report.md
+(:func:`markdown`) and summary.json (:func:`summary`), written by :func:`write`.
+
+report.md holds a headline per engine, the table of rates with Wilson intervals and McNemar
+p-values against the training engine, returns and lengths with bootstrap intervals, survival,
+clipped actions and sign changes, the failures by name (NaN actions among them), the ranking of
+``--explain`` where it ran, and the contract table, engine beside engine, its rows marked where
+an engine departs from the training engine.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from simbridge.envs.sim2sim import ALPHA, TRAINED_FLOOR, EngineFigures, Sim2SimResult
+
+__all__ = ["contract_rows", "headline", "markdown", "summary", "write"]
+
+
+def _rate(f: EngineFigures) -> str:
+    r = f.rate
+    return f"{r.successes}/{r.n} ({r.low:.2f}-{r.high:.2f})"
+
+
+def headline(result: Sim2SimResult) -> list[str]:
+    """One line per engine: its success, the interval, the verdict against the training engine.
+
+    Args:
+        result: the run.
+
+    Returns:
+        The lines (the training engine's first; a last line when it points at the contract).
+    """
+    lines = []
+    for i, f in enumerate(result.figures):
+        if i == 0:
+            what = "training engine"
+        else:
+            what = f"{f.verdict} against {result.figures[0].label} (McNemar p = {f.p_value:.3g})"
+        nan = f", {f.nan_actions} NaN action(s)" if f.nan_actions else ""
+        lines.append(f"{f.label}: success {_rate(f)}, {what}{nan}")
+    if result.points_at_contract:
+        lines.append(
+            f"the policy succeeds on less than {TRAINED_FLOOR:.0%} of the seeds on its training "
+            "engine: look at the contract (joint order, observation layout and scales, action "
+            "meaning, gains, dt and decimation) before the engines"
+        )
+    return lines
+
+
+def _joint_values(contract: dict[str, Any], key: str) -> str:
+    return ", ".join(f"{j[key]:g}" for j in contract["action"]["joint_table"])
+
+
+CONTACT_ENTRIES = (
+    "lateral_friction",
+    "read_urdf_contact",
+    "solver_iterations",
+    "apply_joint_damping",
+    "max_joint_velocity",
+    "enforce_effort_limit",
+    "enforce_velocity_limit",
+)
+"""Profile entries the contract table always shows; any other entry shows where engines differ."""
+
+
+def _settings_text(settings: dict[str, Any]) -> str:
+    return ", ".join(f"{k} {v}" for k, v in settings.items())
+
+
+def contract_rows(result: Sim2SimResult) -> list[tuple[str, list[str]]]:
+    """The contract table's rows: a name and one value per engine (the task's contract, then
+    the profile entries and engine settings each engine runs).
+
+    Args:
+        result: the run.
+
+    Returns:
+        ``(row name, [value per engine])`` in the table's order.
+    """
+    cs = [r.contract for r in result.runs]
+
+    def row(name: str, fn: Any) -> tuple[str, list[str]]:
+        return name, [str(fn(c)) for c in cs]
+
+    return [
+        row("backend", lambda c: c["backend"]),
+        row("profile", lambda c: c["profile"]),
+        row(
+            "dt x decimation",
+            lambda c: f"{c['timestep']:.6g} s x {c['decimation']} = {c['control_dt']:.6g} s",
+        ),
+        row("joint order (action)", lambda c: ", ".join(c["action"]["joints"])),
+        row(
+            "engine joint index",
+            lambda c: ", ".join(str(j["index"]) for j in c["action"]["joint_table"]),
+        ),
+        row(
+            "observation layout",
+            lambda c: (
+                ", ".join(f"{t['name']}[{t['size']}]" for t in c["observation"]["terms"])
+                + f" x{c['observation']['history']}"
+            ),
+        ),
+        row("action meaning", lambda c: c["action"]["meaning"]),
+        row(
+            "gains kp / kd / max_force",
+            lambda c: f"{c['action']['kp']} / {c['action']['kd']} / {c['action']['max_force']}",
+        ),
+        row("effort limit (joint table)", lambda c: _joint_values(c, "max_force")),
+        row("velocity limit", lambda c: _joint_values(c, "max_velocity")),
+        row("joint damping", lambda c: _joint_values(c, "damping")),
+        row("joint friction", lambda c: _joint_values(c, "friction")),
+        *_simulated_rows(cs),
+    ]
+
+
+def _simulated_rows(cs: list[dict[str, Any]]) -> list[tuple[str, list[str]]]:
+    entries = [c["simulated"]["profile_entries"] for c in cs]
+    keys = [
+        k
+        for k in entries[0]
+        if k in CONTACT_ENTRIES or any(e.get(k) != entries[0][k] for e in entries)
+    ]
+    rows = [(f"profile: {k}", [str(e.get(k)) for e in entries]) for k in keys]
+    rows.append(
+        ("engine settings", [_settings_text(c["simulated"]["engine_settings"]) for c in cs])
+    )
+    return rows
+
+
+def _rates_table(result: Sim2SimResult) -> list[str]:
+    out = [
+        "| engine | success (95% Wilson) | discordant (lost, won) | McNemar p | verdict | "
+        "mean return (95% bootstrap) | return minus training | mean steps | "
+        "not failed at 1/4, 1/2, 3/4, end | median time to failure | clipped steps | "
+        "sign changes / step |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for i, f in enumerate(result.figures):
+        verdict = "training engine" if i == 0 else f.verdict
+        mtf = "-" if f.median_failure_s is None else f"{f.median_failure_s:.2f} s"
+        out.append(
+            f"| {f.label} | {_rate(f)} | {f.discordant[0]}, {f.discordant[1]} | "
+            f"{f.p_value:.3g} | {verdict} | {f.ret.value:.1f} ({f.ret.low:.1f} to "
+            f"{f.ret.high:.1f}) | {f.ret_difference.value:+.1f} ({f.ret_difference.low:+.1f} "
+            f"to {f.ret_difference.high:+.1f}) | {f.steps.value:.0f} ({f.steps.low:.0f}-"
+            f"{f.steps.high:.0f}) | {', '.join(f'{s:.2f}' for s in f.survival)} | {mtf} | "
+            f"{f.clipped_share:.1%} | {f.sign_changes:.2f} |"
+        )
+    return out
+
+
+def _explain_lines(result: Sim2SimResult) -> list[str]:
+    out = ["", "## Which setting recovers the success (--explain)", ""]
+    if not result.explain:
+        return out + ["No engine dropped significantly: nothing to explain.", ""]
+    for e in result.explain:
+        out.append(
+            f"**{e['engine']}**: {e['before']}/{e['n']} against the training engine's "
+            f"{e['training']}/{e['n']}."
+        )
+        out.append("")
+        if e.get("note"):
+            out += [e["note"], ""]
+            continue
+        out += [
+            "| rank | setting moved toward the training engine | success after (95% Wilson) | "
+            "p against before | share of the drop recovered | why |",
+            "|---|---|---|---|---|---|",
+        ]
+        for c in e["candidates"]:
+            lo, hi = c["interval"]
+            tied = sum(o["rank"] == c["rank"] for o in e["candidates"]) > 1
+            rank = f"{c['rank']}{'=' if tied else ''}"
+            out.append(
+                f"| {rank} | {c['setting']} | {c['successes']}/{e['n']} ({lo:.2f}-{hi:.2f}) | "
+                f"{c['p_value']:.3g} | {c['recovered']:.0%} | {c['why']} |"
+            )
+        out.append("")
+    return out
+
+
+def markdown(result: Sim2SimResult) -> str:
+    """report.md's text.
+
+    Args:
+        result: the run.
+
+    Returns:
+        The Markdown.
+    """
+    n = len(result.seeds)
+    lines = [
+        f"# sim2sim: {result.policy} on {result.task}",
+        "",
+        f"Trained on **{result.trained_on}**; {n} paired episodes per engine (seeds "
+        f"{result.seeds[0]}-{result.seeds[-1]}: the same initial states and commands on every "
+        f"engine). Verdicts: McNemar's exact test on the discordant seeds against the training "
+        f"engine at p < {ALPHA}.",
+        "",
+        *[f"- {line}" for line in headline(result)],
+        "",
+        "## Success and behaviour per engine",
+        "",
+        *_rates_table(result),
+        "",
+    ]
+    for f in result.figures:
+        if f.failures:
+            named = ", ".join(f"{k} {v}" for k, v in sorted(f.failures.items()))
+            lines.append(f"- {f.label} failures: {named}")
+            if f.nan_actions:
+                lines.append(
+                    f"  - {f.nan_actions} episode(s) ended on a NaN or infinite action from the "
+                    "policy, counted as failures and never passed to the engine"
+                )
+    if result.explain or any(f.verdict == "drop" for f in result.figures[1:]):
+        lines += _explain_lines(result)
+    train = result.runs[0].contract
+    lines += [
+        "",
+        "## The contract, engine beside engine",
+        "",
+        "| | " + " | ".join(f.label for f in result.figures) + " | departs |",
+        "|---|" + "---|" * (len(result.figures) + 1),
+    ]
+    for name, values in contract_rows(result):
+        departs = "yes" if any(v != values[0] for v in values[1:]) else ""
+        if name in ("backend", "engine settings", "engine joint index"):
+            departs = ""  # each backend's own
+        lines.append(f"| {name} | " + " | ".join(values) + f" | {departs} |")
+    lines += [
+        "",
+        f"The training engine's contract states the task {train['task']!r} ({train['source']}).",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def summary(result: Sim2SimResult) -> dict[str, Any]:
+    """summary.json's content.
+
+    Args:
+        result: the run.
+
+    Returns:
+        A JSON-ready dict: the inputs, per engine its figures and episodes, the explanation,
+        every engine's contract.
+    """
+    engines = []
+    for run, f in zip(result.runs, result.figures, strict=True):
+        engines.append(
+            {
+                "label": f.label,
+                "backend": run.engine.backend,
+                "profile": run.engine.profile,
+                "successes": f.rate.successes,
+                "n": f.rate.n,
+                "interval": [f.rate.low, f.rate.high],
+                "discordant": list(f.discordant),
+                "p_value": f.p_value,
+                "verdict": f.verdict,
+                "return": f.ret._asdict(),
+                "return_difference": f.ret_difference._asdict(),
+                "steps": f.steps._asdict(),
+                "survival_quarters": f.survival,
+                "median_time_to_failure_s": f.median_failure_s,
+                "failures": f.failures,
+                "nan_actions": f.nan_actions,
+                "clipped_share": f.clipped_share,
+                "sign_changes_per_step": f.sign_changes,
+                "wall_s": run.wall_s,
+                "episodes": [r._asdict() for r in run.records],
+                "contract": run.contract,
+            }
+        )
+    return {
+        "task": result.task,
+        "policy": result.policy,
+        "trained_on": result.trained_on,
+        "seeds": result.seeds,
+        "alpha": ALPHA,
+        "points_at_contract": result.points_at_contract,
+        "headline": headline(result),
+        "engines": engines,
+        "explain": result.explain,
+    }
+
+
+def write(result: Sim2SimResult, out: Path) -> list[Path]:
+    """Write report.md and summary.json into ``out`` (made if missing).
+
+    Args:
+        result: the run.
+        out: the folder.
+
+    Returns:
+        The files written.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    md, js = out / "report.md", out / "summary.json"
+    md.write_text(markdown(result), encoding="utf-8")
+    js.write_text(json.dumps(summary(result), indent=2) + "\n", encoding="utf-8")
+    return [md, js]
