@@ -1509,6 +1509,12 @@ static struct PyModuleDef module = {
     module_methods,
 };
 
+/* The MuJoCo release whose headers this was compiled against, as its wheel names it: setup.py
+ * defines it from the build environment's mujoco (kernel.py shows it beside the one running). */
+#ifndef SIMBRIDGE_MUJOCO_RELEASE
+#define SIMBRIDGE_MUJOCO_RELEASE "unknown"
+#endif
+
 PyMODINIT_FUNC PyInit__mjkernel(void) {
   if (PyType_Ready(&KernelType) < 0) return NULL;
   PyObject* mod = PyModule_Create(&module);
@@ -1516,6 +1522,7 @@ PyMODINIT_FUNC PyInit__mjkernel(void) {
   Py_INCREF(&KernelType);
   if (PyModule_AddObject(mod, "Kernel", (PyObject*)&KernelType) < 0 ||
       PyModule_AddIntConstant(mod, "HEADER_VERSION", mjVERSION_HEADER) < 0 ||
+      PyModule_AddStringConstant(mod, "MUJOCO_RELEASE", SIMBRIDGE_MUJOCO_RELEASE) < 0 ||
       PyModule_AddIntConstant(mod, "LIMIT_RULES", 1) < 0 ||
       PyModule_AddIntConstant(mod, "SIZEOF_MJDATA", (long)sizeof(mjData)) < 0 ||
       PyModule_AddIntConstant(mod, "SIZEOF_MJMODEL", (long)sizeof(mjModel)) < 0) {
