@@ -17,6 +17,7 @@ MuJoCo that runs and falls back, saying so, when they differ.
 
 from __future__ import annotations
 
+import glob
 import importlib.util
 import os
 import sys
@@ -78,6 +79,23 @@ class BuildStepLoop(build_ext):
         except (CCompilerError, BaseError) as exc:  # no compiler, a compile or link error
             _say(f"the compiled step loop ({ext.sources[0]}) was not built ({exc}): {FALLBACK}")
 
+    def copy_extensions_to_source(self) -> None:
+        """An editable install copies the loop into the checkout: there, a loop of an older
+        build under another file name (``_mjkernel.cpython-311-*.so``, from before the abi3
+        build) would be imported before the new one (CPython tries its own suffix first), so it
+        is removed."""
+        super().copy_extensions_to_source()
+        build_py = self.get_finalized_command("build_py")
+        for ext in self.extensions:
+            package, _, name = ext.name.rpartition(".")
+            folder = build_py.get_package_dir(package)
+            new = os.path.basename(self.get_ext_filename(ext.name))
+            if not os.path.exists(os.path.join(folder, new)):
+                continue  # not built (no compiler): nothing replaces the old one
+            for old in glob.glob(os.path.join(folder, f"{name}.*")):
+                if os.path.basename(old) != new and old.endswith((".so", ".pyd", ".dylib")):
+                    os.remove(old)
+
 
 _include = _mujoco_include()
 if not _include:
@@ -89,12 +107,18 @@ _roots = mapped_roots()
 setup(
     packages=packages(_roots),
     cmdclass={"build_ext": BuildStepLoop},
+    # the step loop keeps to CPython 3.11's limited API: one wheel, cp311-abi3, for 3.11 and later
+    options={"bdist_wheel": {"py_limited_api": "cp311"}},
     ext_modules=[
         Extension(
             "simbridge.backends.mujoco._mjkernel",
             sources=["backends/mujoco/_mjkernel.c"],
             include_dirs=_include,
-            define_macros=[("SIMBRIDGE_MUJOCO_RELEASE", f'"{_mujoco_release()}"')],
+            define_macros=[
+                ("SIMBRIDGE_MUJOCO_RELEASE", f'"{_mujoco_release()}"'),
+                ("Py_LIMITED_API", "0x030B0000"),
+            ],
+            py_limited_api=True,
             extra_compile_args=["-O2", "-std=c11"],
             optional=True,
         )
