@@ -55,9 +55,9 @@ _FUNCTIONS = (
 _state: dict[str, Any] = {}
 _lock = threading.Lock()  # one loader at a time (_load)
 _REBUILD = (
-    "rebuild it against the installed MuJoCo: `pip install setuptools wheel`, then `pip install "
-    "--no-build-isolation --no-deps --force-reinstall -e .` in simbridge's folder (for an "
-    "installed copy: the same with `simbridge` in place of `-e .`)"
+    "rebuild it against the installed MuJoCo: `pip install -U 'setuptools>=77' wheel`, then "
+    "`pip install --no-build-isolation --no-deps --force-reinstall -e .` in simbridge's folder "
+    "(for an installed copy: the same with `simbridge` in place of `-e .`)"
 )
 
 
