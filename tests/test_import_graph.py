@@ -29,11 +29,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _declared_packages() -> list[str]:
-    """The packages the distribution installs (pyproject.toml's [tool.setuptools] packages):
-    an editable install maps simbridge.backends and simbridge.compare from their own folders,
-    so walking simbridge's own folder would not find them."""
+    """The packages mapped to folders (pyproject.toml's [tool.setuptools] package-dir; setup.py
+    installs every package below each): an editable install maps simbridge.backends and
+    simbridge.compare from their own folders, so walking simbridge's own folder would not find
+    them. The walk below goes down into each one's subpackages."""
     data = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
-    return list(data["tool"]["setuptools"]["packages"])
+    return list(data["tool"]["setuptools"]["package-dir"])
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:

@@ -23,6 +23,13 @@
  * commands.py (set_velocity), and the module's Python type at the end.
  */
 #define PY_SSIZE_T_CLEAN
+/* CPython's limited API as of 3.11 (the buffer protocol joined it in 3.11): one build, a
+ * cp311-abi3 wheel, loads in 3.11 and every later CPython (setup.py: py_limited_api). Hence
+ * the heap type made from a spec and the checked PyList_GetItem/PyFloat_AsDouble in place of
+ * the macros: the same values; a command plus a step timed alike, docs/install.md. */
+#ifndef Py_LIMITED_API
+#define Py_LIMITED_API 0x030B0000
+#endif
 #include <Python.h>
 #include <math.h>
 #include <setjmp.h>
@@ -166,7 +173,9 @@ static PyObject* set_busy_error(PyObject* mod, PyObject* cls) {
     return NULL;
   }
   Py_INCREF(cls);
-  Py_XSETREF(busy_error, cls);
+  PyObject* old = busy_error;
+  busy_error = cls;
+  Py_XDECREF(old);
   Py_RETURN_NONE;
 }
 
@@ -272,7 +281,9 @@ static void release_all(Kernel* self) {
 static void Kernel_dealloc(Kernel* self) {
   release_all(self);
   Py_XDECREF(self->owners);
-  Py_TYPE(self)->tp_free((PyObject*)self);
+  PyTypeObject* type = Py_TYPE((PyObject*)self);
+  ((freefunc)PyType_GetSlot(type, Py_tp_free))(self);
+  Py_DECREF(type);
 }
 
 /* Kernel(model, data, model_address, data_address, functions, dt)
@@ -285,7 +296,7 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   unsigned long long maddr, daddr;
   double dt;
   if (!PyArg_ParseTuple(args, "OOKKOd", &model, &data, &maddr, &daddr, &fns, &dt)) return -1;
-  if (!PyTuple_Check(fns) || PyTuple_GET_SIZE(fns) != N_ADDRESSES) {
+  if (!PyTuple_Check(fns) || PyTuple_Size(fns) != N_ADDRESSES) {
     PyErr_Format(PyExc_ValueError, "functions: a tuple of %d addresses", N_ADDRESSES);
     return -1;
   }
@@ -295,7 +306,7 @@ static int Kernel_init(Kernel* self, PyObject* args, PyObject* kw) {
   }
   void* f[N_ADDRESSES];
   for (int i = 0; i < N_ADDRESSES; i++) {
-    f[i] = PyLong_AsVoidPtr(PyTuple_GET_ITEM(fns, i));
+    f[i] = PyLong_AsVoidPtr(PyTuple_GetItem(fns, i));
     if (!f[i]) {
       if (!PyErr_Occurred()) PyErr_Format(PyExc_ValueError, "function %d: null address", i);
       return -1;
@@ -1202,19 +1213,19 @@ static void write_position(Kernel* self, const Py_ssize_t* ix, const double* loh
 /* Two lists of n exact Python floats into buf (2 x n): 0, or -1 with an exception. Exact
  * floats (what Sim's checks produce): reading them runs no Python code. */
 static int read_lists(PyObject* a, PyObject* b, Py_ssize_t n, double* buf, const char* what) {
-  if (!PyList_Check(a) || !PyList_Check(b) || PyList_GET_SIZE(a) != n ||
-      PyList_GET_SIZE(b) != n) {
+  if (!PyList_Check(a) || !PyList_Check(b) || PyList_Size(a) != n ||
+      PyList_Size(b) != n) {
     PyErr_Format(PyExc_ValueError, "%s: two lists of n floats (n = %zd)", what, n);
     return -1;
   }
   for (Py_ssize_t i = 0; i < n; i++) {
-    PyObject *x = PyList_GET_ITEM(a, i), *y = PyList_GET_ITEM(b, i);
+    PyObject *x = PyList_GetItem(a, i), *y = PyList_GetItem(b, i);
     if (!PyFloat_CheckExact(x) || !PyFloat_CheckExact(y)) {
       PyErr_Format(PyExc_TypeError, "%s: the lists hold Python floats", what);
       return -1;
     }
-    buf[i] = PyFloat_AS_DOUBLE(x);
-    buf[n + i] = PyFloat_AS_DOUBLE(y);
+    buf[i] = PyFloat_AsDouble(x);
+    buf[n + i] = PyFloat_AsDouble(y);
   }
   return 0;
 }
@@ -1286,15 +1297,15 @@ static PyObject* Kernel_add_torque(Kernel* self, PyObject* const* args, Py_ssize
   if (arr_take(&ix, args[0], 'n', -1, "slots") < 0) return NULL;
   Py_ssize_t n = arr_len(&ix);
   PyObject* tl = args[1];
-  int ok = PyList_Check(tl) && PyList_GET_SIZE(tl) == n;
+  int ok = PyList_Check(tl) && PyList_Size(tl) == n;
   for (Py_ssize_t i = 0; ok && i < n; i++)
-    ok = IP(ix)[i] >= 0 && IP(ix)[i] < arr_len(&self->tq) && PyFloat_CheckExact(PyList_GET_ITEM(tl, i));
+    ok = IP(ix)[i] >= 0 && IP(ix)[i] < arr_len(&self->tq) && PyFloat_CheckExact(PyList_GetItem(tl, i));
   if (!ok) {
     arr_release(&ix);
     PyErr_SetString(PyExc_ValueError, "add_torque: slots in range and a list of as many floats");
     return NULL;
   }
-  for (Py_ssize_t i = 0; i < n; i++) DP(self->tq)[IP(ix)[i]] += PyFloat_AS_DOUBLE(PyList_GET_ITEM(tl, i));
+  for (Py_ssize_t i = 0; i < n; i++) DP(self->tq)[IP(ix)[i]] += PyFloat_AsDouble(PyList_GetItem(tl, i));
   arr_release(&ix);
   Py_RETURN_NONE;
 }
@@ -1435,7 +1446,11 @@ static PyObject* Kernel_timers(Kernel* self, PyObject* unused) {
   PyObject* out = PyList_New(N_TIMERS);
   if (!out) return NULL;
   for (int i = 0; i < N_TIMERS; i++) {
-    PyList_SET_ITEM(out, i, PyFloat_FromDouble(timers[i]));
+    PyObject* t = PyFloat_FromDouble(timers[i]);
+    if (!t || PyList_SetItem(out, i, t) < 0) {  /* SetItem takes t, even on failure */
+      Py_DECREF(out);
+      return NULL;
+    }
     timers[i] = 0.0;
   }
   return out;
@@ -1492,30 +1507,38 @@ static PyGetSetDef Kernel_getset[] = {
     {NULL, NULL, NULL, NULL, NULL},
 };
 
-static PyTypeObject KernelType = {
-    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "simbridge.backends._mjkernel.Kernel",
-    .tp_basicsize = sizeof(Kernel),
-    .tp_flags = Py_TPFLAGS_DEFAULT,
-    .tp_doc = "The MuJoCo backend's step loop (see backends/_mjkernel.c).",
-    .tp_new = PyType_GenericNew,
-    .tp_init = (initproc)Kernel_init,
-    .tp_dealloc = (destructor)Kernel_dealloc,
-    .tp_methods = Kernel_methods,
-    .tp_getset = Kernel_getset,
+static PyType_Slot Kernel_slots[] = {
+    {Py_tp_doc, "The MuJoCo backend's step loop (see backends/_mjkernel.c)."},
+    {Py_tp_new, PyType_GenericNew},
+    {Py_tp_init, (initproc)Kernel_init},
+    {Py_tp_dealloc, (destructor)Kernel_dealloc},
+    {Py_tp_methods, Kernel_methods},
+    {Py_tp_getset, Kernel_getset},
+    {0, NULL},
 };
+static PyType_Spec Kernel_spec = {"simbridge.backends._mjkernel.Kernel", sizeof(Kernel), 0,
+                                  Py_TPFLAGS_DEFAULT, Kernel_slots};
+
 
 static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, "_mjkernel", "The MuJoCo backend's step loop in C.", -1,
     module_methods,
 };
 
+/* The MuJoCo release whose headers this was compiled against, as its wheel names it: setup.py
+ * defines it from the build environment's mujoco (kernel.py shows it beside the one running). */
+#ifndef SIMBRIDGE_MUJOCO_RELEASE
+#define SIMBRIDGE_MUJOCO_RELEASE "unknown"
+#endif
+
 PyMODINIT_FUNC PyInit__mjkernel(void) {
-  if (PyType_Ready(&KernelType) < 0) return NULL;
+  PyObject* kernel_type = PyType_FromSpec(&Kernel_spec);
+  if (!kernel_type) return NULL;
   PyObject* mod = PyModule_Create(&module);
   if (!mod) return NULL;
-  Py_INCREF(&KernelType);
-  if (PyModule_AddObject(mod, "Kernel", (PyObject*)&KernelType) < 0 ||
+  if (PyModule_AddObject(mod, "Kernel", kernel_type) < 0 ||
       PyModule_AddIntConstant(mod, "HEADER_VERSION", mjVERSION_HEADER) < 0 ||
+      PyModule_AddStringConstant(mod, "MUJOCO_RELEASE", SIMBRIDGE_MUJOCO_RELEASE) < 0 ||
       PyModule_AddIntConstant(mod, "LIMIT_RULES", 1) < 0 ||
       PyModule_AddIntConstant(mod, "SIZEOF_MJDATA", (long)sizeof(mjData)) < 0 ||
       PyModule_AddIntConstant(mod, "SIZEOF_MJMODEL", (long)sizeof(mjModel)) < 0) {

@@ -22,7 +22,15 @@ import mujoco
 
 from simbridge.exceptions import SimBusyError, SlowStepWarning
 
-__all__ = ["ENV", "kernel_class", "functions", "reason", "warn_if_lost", "describe"]
+__all__ = [
+    "ENV",
+    "kernel_class",
+    "functions",
+    "reason",
+    "warn_if_lost",
+    "built_against",
+    "describe",
+]
 
 ENV = "SIMBRIDGE_MUJOCO_STEP"  # "python" forces the Python step loop
 _FUNCTIONS = (
@@ -47,21 +55,24 @@ _FUNCTIONS = (
 _state: dict[str, Any] = {}
 _lock = threading.Lock()  # one loader at a time (_load)
 _REBUILD = (
-    "rebuild it against the installed MuJoCo: `pip install setuptools wheel`, then `pip install "
-    "--no-build-isolation --no-deps --force-reinstall -e .` in simbridge's folder (for an "
-    "installed copy: the same with `simbridge` in place of `-e .`)"
+    "rebuild it against the installed MuJoCo: `pip install -U 'setuptools>=77' wheel`, then "
+    "`pip install --no-build-isolation --no-deps --force-reinstall -e .` in simbridge's folder "
+    "(for an installed copy: the same with `simbridge` in place of `-e .`)"
 )
 
 
 def _version(header: int) -> str:
-    """MuJoCo's header version number (e.g. 400) as its release name (4.0.0)."""
+    """MuJoCo's header version number as its release name: 4000000 is 4.0.0 (MuJoCo 4 gives
+    three digits to the minor and patch numbers), 331 is 3.3.1 (before 4: one digit each)."""
+    if header >= 1_000_000:
+        return f"{header // 1_000_000}.{header // 1000 % 1000}.{header % 1000}"
     return f"{header // 100}.{header // 10 % 10}.{header % 10}"
 
 
 def _find() -> dict[str, Any]:
     """The loader's answer: the ``Kernel`` type (or None), MuJoCo's function addresses, and
     why the kernel is not used ("" when it is)."""
-    found: dict[str, Any] = {"class": None, "functions": ()}
+    found: dict[str, Any] = {"class": None, "functions": (), "built": None}
     try:
         _mjkernel = importlib.import_module(f"{__package__}._mjkernel")  # the C extension
     except ImportError as exc:
@@ -70,9 +81,13 @@ def _find() -> dict[str, Any]:
             f"C compiler exists: {_REBUILD}"
         )
         return found
+    # the release setup.py compiled in; a loop built before it was recorded: read the header's
+    found["built"] = getattr(_mjkernel, "MUJOCO_RELEASE", None) or _version(
+        _mjkernel.HEADER_VERSION
+    )
     if mujoco.mj_version() != _mjkernel.HEADER_VERSION:
         found["reason"] = (
-            f"the compiled step loop was built for MuJoCo {_version(_mjkernel.HEADER_VERSION)}, "
+            f"the compiled step loop was built for MuJoCo {found['built']}, "
             f"this is MuJoCo {mujoco.__version__}: {_REBUILD}"
         )
         return found
@@ -119,6 +134,7 @@ def _load() -> None:
         found = _find()
         _state["class"] = found["class"]
         _state["functions"] = found["functions"]
+        _state["built"] = found["built"]
         _state["reason"] = found["reason"]
 
 
@@ -157,14 +173,31 @@ def reason() -> str:
     return _state["reason"]
 
 
+def built_against() -> str | None:
+    """The MuJoCo release whose headers the installed compiled loop was built against (its
+    ``HEADER_VERSION``), whether or not it is used.
+
+    Returns:
+        The release (e.g. ``4.0.0``), or None when no compiled loop is installed.
+    """
+    _load()
+    return _state["built"]
+
+
 def describe() -> str:
     """The step loop in use, for ``simbridge info``.
 
     Returns:
-        ``step loop: compiled (C)``, or the Python one and why.
+        ``step loop: compiled (C), built against MuJoCo X (running Y)``, or the Python one and
+        why (the MuJoCo it was built against among the reasons).
     """
     why = reason()
-    return "step loop: " + ("compiled (C)" if not why else f"Python, about 12x slower: {why}")
+    if why:
+        return f"step loop: Python, about 12x slower: {why}"
+    return (
+        f"step loop: compiled (C), built against MuJoCo {built_against()} "
+        f"(running {mujoco.__version__})"
+    )
 
 
 def warn_if_lost() -> None:

@@ -1,7 +1,8 @@
-"""``simbridge info``: the lines a bug report needs. Which engines are installed and their
-versions, which MuJoCo step loop runs (the compiled one, or the Python one and why), whether
-windows can open (an X display; a Vulkan driver for PhysX's), what decides the last bits of a
-result on this processor, and the study cache's place and size.
+"""``simbridge info``: the lines a bug report needs. How simbridge is installed (editable from a
+checkout, or a wheel) and where it is imported from, which engines are installed and their
+versions, which MuJoCo step loop runs (the compiled one and the MuJoCo it was built against, or
+the Python one and why), whether windows can open (an X display; a Vulkan driver for PhysX's),
+what decides the last bits of a result on this processor, and the study cache's place and size.
 
 The engines are not imported here: their versions are their distributions' (the registry's
 ``engine_dists``), and what a backend says of its own build comes from the backend's module
@@ -11,6 +12,7 @@ The engines are not imported here: their versions are their distributions' (the 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 from collections.abc import Callable
@@ -18,7 +20,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-__all__ = ["add_command", "info_lines", "described", "display_lines"]
+__all__ = ["add_command", "info_lines", "described", "install_line", "display_lines"]
 
 
 def add_command(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) -> None:
@@ -31,8 +33,9 @@ def add_command(sub: Any, verbose: Callable[[argparse.ArgumentParser], None]) ->
     p = sub.add_parser(
         "info",
         help="what is installed and how it runs here: the lines a bug report needs",
-        description="Print the engines installed and their versions, the MuJoCo step loop in "
-        "use (compiled, or Python and why), whether windows can open (X, Vulkan), what decides "
+        description="Print how simbridge is installed (editable or a wheel), the engines "
+        "installed and their versions, the MuJoCo step loop in use (compiled, and the MuJoCo it "
+        "was built against, or Python and why), whether windows can open (X, Vulkan), what decides "
         "the last bits of results on this processor, and the study cache's folder and size.",
     )
     verbose(p)
@@ -64,6 +67,38 @@ def described(name: str) -> str | None:
         return None
     module, _, function = target.partition(":")
     return str(getattr(import_module(module), function)())
+
+
+def install_line(dist_name: str = "simbridge") -> str:
+    """How simbridge is installed here, read from its distribution's metadata (PEP 610's
+    ``direct_url.json``): editable from a checkout, a wheel (from an index, a file or a folder
+    built into one), or not installed at all (imported from a folder on the path).
+
+    Args:
+        dist_name: The distribution to read (``simbridge``; another name in tests).
+
+    Returns:
+        The ``install:`` line, ending with the folder ``import simbridge`` resolves to.
+    """
+    import simbridge
+
+    where = Path(simbridge.__file__).resolve().parent
+    try:
+        dist = metadata.distribution(dist_name)
+    except metadata.PackageNotFoundError:
+        return f"install: none (no {dist_name} distribution found); imported from {where}"
+    direct = json.loads(dist.read_text("direct_url.json") or "{}")
+    url = str(direct.get("url", ""))
+    source = url.removeprefix("file://") if url.startswith("file://") else url
+    if direct.get("dir_info", {}).get("editable"):
+        kind = f"editable, from the checkout {source}"
+    elif "archive_info" in direct:
+        kind = f"a wheel, from {source}"
+    elif "dir_info" in direct:
+        kind = f"a wheel built from the folder {source}"
+    else:
+        kind = "a wheel, from a package index"
+    return f"install: {kind}; imported from {where}"
 
 
 def display_lines(env: dict[str, str] | None = None) -> list[str]:
@@ -149,7 +184,8 @@ def info_lines() -> list[str]:
     """Every line ``simbridge info`` prints.
 
     Returns:
-        The lines: simbridge's and Python's versions, each engine, windows, numerics, the cache.
+        The lines: simbridge's and Python's versions, how it is installed, each engine (MuJoCo's
+        step loop with the MuJoCo it was built against), windows, numerics, the cache.
     """
     from simbridge import __version__
     from simbridge.cli.cache import fmt_size
@@ -159,6 +195,7 @@ def info_lines() -> list[str]:
     lines = [
         f"simbridge {__version__} (Python {platform.python_version()}, "
         f"{platform.system()} {platform.machine()})",
+        install_line(),
         "engines:",
     ]
     for name in available_backends():

@@ -19,6 +19,7 @@ import sys
 import sysconfig
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -49,6 +50,19 @@ def test_kernel_is_built_and_used_where_a_compiler_exists():
     with simbridge.Sim("mujoco") as sim:
         assert compiled(sim).kernel is not None
         assert sim.manifest()["step_loop"].startswith("compiled")
+
+
+def test_the_loop_records_the_mujoco_it_was_built_against():
+    assert mujoco_kernel._version(4000000) == "4.0.0"  # MuJoCo 4's header number (mujoco.h)
+    assert mujoco_kernel._version(331) == "3.3.1"  # MuJoCo 3's: one digit each
+    if _compiler() is None:  # pragma: no cover - machines without a C compiler
+        pytest.skip("no C compiler: no compiled loop to ask")
+    # setup.py compiles the build environment's mujoco release in (MUJOCO_RELEASE)
+    running = mujoco.__version__
+    assert mujoco_kernel.built_against() == running
+    assert mujoco_kernel.describe() == (
+        f"step loop: compiled (C), built against MuJoCo {running} (running {running})"
+    )
 
 
 def test_environment_variable_selects_the_python_loop(monkeypatch):
