@@ -8,7 +8,7 @@ backend; and the writes of one joint's or the base's state. A part of :class:`Mj
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -53,7 +53,7 @@ def _conj(q: Quat) -> Quat:
 class MjcfReads:
     """The joint table, reads and state writes of :class:`~.mjcf_engine.MjcfOnEngine`."""
 
-    name: str
+    name: ClassVar[str]
     m: Any
     d: Any
     mirror: Mirror

@@ -220,7 +220,7 @@ class NativePhysx(MjcfOnEngine, ContactReads):
 
     def close_engine(self) -> None:
         """See MjcfOnEngine.close_engine: the scene is dropped."""
-        self._scene = None  # type: ignore[assignment]
+        self._scene = None
         self._built = []
 
     def engine_departures(self) -> dict[str, Any]:

@@ -248,11 +248,11 @@ class NativePyBullet(MjcfOnEngine):
             w = np.array(ang)
             v[va : va + 3] = np.array(lin) - np.cross(w, off)
             v[va + 3 : va + 6] = quat_rotate(_conj(frame), ang)
-        for body, idx, qa, va in self._joints:
+        for body, idx, qas, vas in self._joints:
             if idx:
                 states = p.getJointStates(body, idx, physicsClientId=c)
-                q[qa] += [s[0] for s in states]
-                v[va] = [s[1] for s in states]
+                q[qas] += [s[0] for s in states]
+                v[vas] = [s[1] for s in states]
         return q, v
 
     def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
@@ -273,8 +273,8 @@ class NativePyBullet(MjcfOnEngine):
             ang = np.array(quat_rotate(frame, tuple(qvel[va + 3 : va + 6])))
             lin = qvel[va : va + 3] + np.cross(ang, off)
             p.resetBaseVelocity(body, lin.tolist(), ang.tolist(), physicsClientId=c)
-        for body, idx, qa, va in self._joints:
-            for i, a, b in zip(idx, qa.tolist(), va.tolist(), strict=True):
+        for body, idx, qas, vas in self._joints:
+            for i, a, b in zip(idx, qas.tolist(), vas.tolist(), strict=True):
                 p.resetJointState(
                     body, i, float(qpos[a] - m.qpos0[a]), float(qvel[b]), physicsClientId=c
                 )
@@ -284,10 +284,10 @@ class NativePyBullet(MjcfOnEngine):
         :meth:`with_armature`; a free base's force and torque as external forces."""
         c, m = self._c, self.m
         tau = self.with_armature(qfrc, damping, mass)
-        for body, idx, _, va in self._joints:
+        for body, idx, _, vas in self._joints:
             if idx:
                 p.setJointMotorControlArray(
-                    body, idx, p.TORQUE_CONTROL, forces=tau[va].tolist(), physicsClientId=c
+                    body, idx, p.TORQUE_CONTROL, forces=tau[vas].tolist(), physicsClientId=c
                 )
         for k, nb in enumerate(self.native.bodies):
             if nb.free_joint < 0:

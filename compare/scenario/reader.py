@@ -136,13 +136,13 @@ class _Reader(TableReader):
         return RobotSpec(
             name,
             urdf,
-            position,
-            orientation,
+            position,  # type: ignore[arg-type]
+            orientation,  # type: ignore[arg-type]
             fixed,
             tuple(joints),
             kind,
             body,
-            semantics,  # type: ignore[arg-type]
+            semantics,
         )
 
     def command(
@@ -333,7 +333,7 @@ class _Reader(TableReader):
         scenario does not (MuJoCo's compiler reads it; its refusal is the scenario's error)."""
         from simbridge.model.mjcf_native import compile_mjcf
 
-        at = ["robots", robots.index(native)]
+        at: list[str | int] = ["robots", robots.index(native)]
         if len(robots) > 1:
             others = sorted(r.name for r in robots if r is not native)
             raise self.error(

@@ -262,7 +262,8 @@ def _shape(
     pos = frot.T @ (fr.d.geom_xpos[g] - fp)
     rot = frot.T @ fr.d.geom_xmat[g].reshape(3, 3)
     size = m.geom_size[g]
-    mesh, ground, out_size = None, None, ()
+    mesh, ground = None, None
+    out_size: tuple[float, ...] = ()
     if kind == "plane":  # MuJoCo's planes are infinite for collisions
         out_size = (0.0, 0.0, 1.0)
         ground = GroundPlan(_v(pos), _xyzw(_quat(rot)), None)
@@ -286,7 +287,7 @@ def _shape(
             uri = f"ellipsoid {name!r}"
         kind = "mesh"
         out_size = (1.0, 1.0, 1.0)
-        mesh = MeshPlan(Path(native.display_name), uri, out_size, verts, verts, faces)
+        mesh = MeshPlan(Path(native.display_name), uri, (1.0, 1.0, 1.0), verts, verts, faces)
     return ShapePlan(k, kind, _v(pos), _xyzw(_quat(rot)), out_size, mesh, False, ground, None, name)
 
 
