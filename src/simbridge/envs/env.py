@@ -99,6 +99,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self.backend = backend
         n = len(t.action.joints)
         self._scale = np.broadcast_to(np.asarray(t.action.scale, float), (n,)).copy()
+        self._limit = np.asarray(t.action.max_force, float)  # the torque modes' clip
         self._snapshot: Any = None
         self._shadow: Sim | None = None  # PyBullet's pictures of an engine that draws none
         self._diverged = False
@@ -308,7 +309,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             ) from None
         if a.shape != (len(t.joints),):
             raise ActionError(f"got shape {a.shape}", self.task.name, t.joints, t.mode)
-        if (np.abs(a) <= t.clip).all():  # finite and within the clip (NaN compares False)
+        if np.abs(a).max(initial=0.0) <= t.clip:  # finite and within the clip (NaN compares False)
             return a.copy(), 0  # the caller may reuse its array
         if not np.isfinite(a).all():
             bad = [t.joints[i] for i in np.flatnonzero(~np.isfinite(a))]
@@ -342,7 +343,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             sim.set_joint_velocity(w.body, w.joints, target, max_force=np.asarray(a.max_force))
             sim.step(n)
         elif a.mode == "torque":  # the same torque each physics step: clipped once
-            tau = np.clip(target, -np.asarray(a.max_force), np.asarray(a.max_force))
+            tau = np.minimum(np.maximum(target, -self._limit), self._limit)
             for _ in range(n):
                 sim.set_joint_torque(w.body, w.joints, tau)
                 sim.step()
