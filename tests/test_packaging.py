@@ -87,6 +87,8 @@ def test_wheel_contains_every_package_and_the_robots(wheel):
         "simbridge/envs/env.py",  # the Gymnasium environments and their shipped tasks
         "simbridge/envs/tasks/cartpole.toml",
         "simbridge/envs/tasks/a1_stand.toml",
+        "simbridge/envs/policies/cartpole_ppo.npz",  # the shipped trained policy, and as ONNX
+        "simbridge/envs/policies/cartpole_ppo.onnx",
         "simbridge/robots/r2d2.urdf",
         "simbridge/robots/plane.urdf",
         "simbridge/robots/plane.mtl",  # the ground's checker (its look alone)

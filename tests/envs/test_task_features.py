@@ -215,3 +215,26 @@ def test_contacts_and_gait_phase_terms():
     phase = 2 * np.pi * 15 * base.control_dt / 0.5
     np.testing.assert_allclose(obs[2:4], [np.sin(phase), np.cos(phase)], atol=1e-6)
     assert obs[4] == np.float32(z)
+
+
+def test_observation_and_terminations_read_the_world_after_each_step(backend: str) -> None:
+    """The joint read every term shares is taken once per control step and never reused across
+    one: each observation equals a direct ``Sim.joint_states`` after that step or reset, and a
+    pole pushed past its limit ends the episode at the step it crosses."""
+    env = SimEnv("cartpole", backend=backend)
+    try:
+        sim, body = env.sim, env.world.body
+        obs, _ = env.reset(seed=5)
+        for k in range(40):
+            s = sim.joint_states(body, ["slider_to_cart", "cart_to_pole"])
+            direct = np.concatenate([s.positions, s.velocities]).astype(np.float32)
+            np.testing.assert_array_equal(obs, direct, err_msg=f"step {k}")
+            obs, _, terminated, _, info = env.step(np.array([1.0], np.float32))
+            pole = sim.joint_states(body, ["cart_to_pole"]).positions[0]
+            assert terminated == (abs(pole) > 0.2095), (k, pole, info)
+            if terminated:
+                assert info["failure"] == "joint_pos_outside"
+                break
+        assert terminated, "a full push for 40 steps topples the pole"
+    finally:
+        env.close()

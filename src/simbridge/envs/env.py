@@ -99,6 +99,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self.backend = backend
         n = len(t.action.joints)
         self._scale = np.broadcast_to(np.asarray(t.action.scale, float), (n,)).copy()
+        self._limit = np.asarray(t.action.max_force, float)  # the torque modes' clip
         self._snapshot: Any = None
         self._shadow: Sim | None = None  # PyBullet's pictures of an engine that draws none
         self._diverged = False
@@ -208,6 +209,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             self._build()
         self._diverged = False
         self._randomise(options or {})
+        self.world.stale()
         self._steps = 0
         self._history.clear()
         frame = self._frame()
@@ -278,6 +280,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             info.update(failure="diverged", is_success=False)
             obs = self._observation()
             return obs, 0.0, True, False, info
+        w.stale()
         w.last_action = a
         w.time += t.control_dt
         self._steps += 1
@@ -306,6 +309,8 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             ) from None
         if a.shape != (len(t.joints),):
             raise ActionError(f"got shape {a.shape}", self.task.name, t.joints, t.mode)
+        if np.abs(a).max(initial=0.0) <= t.clip:  # finite and within the clip (NaN compares False)
+            return a.copy(), 0  # the caller may reuse its array
         if not np.isfinite(a).all():
             bad = [t.joints[i] for i in np.flatnonzero(~np.isfinite(a))]
             raise ActionError(f"got a non-finite value for {bad}", self.task.name, t.joints, t.mode)
@@ -337,15 +342,17 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         elif a.mode == "velocity":
             sim.set_joint_velocity(w.body, w.joints, target, max_force=np.asarray(a.max_force))
             sim.step(n)
+        elif a.mode == "torque":  # the same torque each physics step: clipped once
+            tau = np.minimum(np.maximum(target, -self._limit), self._limit)
+            for _ in range(n):
+                sim.set_joint_torque(w.body, w.joints, tau)
+                sim.step()
         else:
             limit = np.asarray(a.max_force)
             kp, kd = np.asarray(a.kp), np.asarray(a.kd)
             for _ in range(n):
-                if a.mode == "pd":
-                    s = sim.joint_states(w.body, w.joints)
-                    tau = kp * (target - s.positions) - kd * s.velocities
-                else:
-                    tau = target
+                s = sim.joint_states(w.body, w.joints)
+                tau = kp * (target - s.positions) - kd * s.velocities
                 sim.set_joint_torque(w.body, w.joints, np.clip(tau, -limit, limit))
                 sim.step()
 
@@ -363,11 +370,11 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             v = np.asarray(OBSERVATIONS[term.name](self.world, term.params), dtype=np.float64)
             if term.noise:
                 v = v + rng.uniform(-term.noise, term.noise, v.shape)
-            parts.append(v * np.asarray(term.scale))
+            parts.append(v if term.scale == 1.0 else v * np.asarray(term.scale))
         return np.concatenate(parts) if parts else np.zeros(0)
 
     def _observation(self) -> np.ndarray:
-        obs = np.concatenate(self._history)
+        obs = self._history[0] if len(self._history) == 1 else np.concatenate(self._history)
         norm = self.task.normalisation
         if norm is not None:
             obs = (obs - np.asarray(norm.mean)) / np.sqrt(np.asarray(norm.var) + norm.epsilon)

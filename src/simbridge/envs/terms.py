@@ -10,7 +10,7 @@ contract).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -49,6 +49,39 @@ class World:
     commands: np.ndarray
     time: float = 0.0
     pose: Mapping[str, float] = field(default_factory=dict)
+    _read: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    _index: dict[tuple[str | int, ...], np.ndarray] = field(default_factory=dict, repr=False)
+
+    def joint_states(
+        self, joints: Sequence[str | int] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The action robot's joint positions and velocities, read from the engine once per
+        control step (one ``Sim.joint_states`` of every joint, which every joint term shares,
+        until :meth:`stale`).
+
+        Args:
+            joints: joint names (or indices); None: the action's joints, in its order.
+
+        Returns:
+            ``(positions, velocities)``, ``(n,)`` each, in ``joints``' order.
+        """
+        if self._read is None:
+            s = self.sim.joint_states(self.body)
+            self._read = (np.asarray(s.positions), np.asarray(s.velocities))
+        if joints is None:
+            idx = self.joints
+        else:
+            key = tuple(joints)
+            idx = self._index.get(key)  # type: ignore[assignment]
+            if idx is None:
+                idx = self._index[key] = np.array(
+                    [j if isinstance(j, int) else self.sim.joint_index(self.body, j) for j in key]
+                )
+        return self._read[0][idx], self._read[1][idx]
+
+    def stale(self) -> None:
+        """Forget the joint read: the world has moved (a step, a reset)."""
+        self._read = None
 
     def rotation(self) -> np.ndarray:
         """The base's orientation.
@@ -74,16 +107,16 @@ class World:
 
 def _q(w: World, p: Mapping[str, Any]) -> np.ndarray:
     if "joints" not in p:
-        q = w.sim.joint_states(w.body, w.joints).positions
+        q = w.joint_states()[0]
         return q - w.default if p.get("relative", False) else q
-    q = w.sim.joint_states(w.body, list(p["joints"])).positions
+    q = w.joint_states(p["joints"])[0]
     if p.get("relative", False):
         q = q - np.array([w.pose.get(j, 0.0) for j in p["joints"]])
     return q
 
 
 def _qd(w: World, p: Mapping[str, Any]) -> np.ndarray:
-    return w.sim.joint_states(w.body, list(p.get("joints", w.joints))).velocities
+    return w.joint_states(p.get("joints"))[1]
 
 
 def _gravity(w: World, p: Mapping[str, Any]) -> np.ndarray:
@@ -159,7 +192,7 @@ def _tilt(w: World) -> float:
 
 
 def _joint_value(w: World, p: Mapping[str, Any]) -> float:
-    return float(w.sim.joint_states(w.body, [p["joint"]]).positions[0])
+    return float(w.joint_states([p["joint"]])[0][0])
 
 
 REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
