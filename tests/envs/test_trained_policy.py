@@ -21,7 +21,7 @@ def test_reaches_90_percent_on_its_training_engine() -> None:
     env = SimEnv("cartpole", backend="mujoco")
     try:
         policy = cartpole_ppo(env)
-        assert policy.meta["trained_on"] == "mujoco"
+        assert policy.policy.meta["trained_on"] == "mujoco"
         rate, episodes = success_rate(env, policy, range(50))
     finally:
         env.close()

@@ -31,7 +31,15 @@ from simbridge.exceptions import InvalidArgumentError
 if TYPE_CHECKING:
     from simbridge.envs.env import SimEnv
 
-__all__ = ["ACTIVATIONS", "MlpPolicy", "cartpole_ppo", "load_mlp", "save_mlp", "shipped_policy"]
+__all__ = [
+    "ACTIVATIONS",
+    "CartPolePPO",
+    "MlpPolicy",
+    "cartpole_ppo",
+    "load_mlp",
+    "save_mlp",
+    "shipped_policy",
+]
 
 ACTIVATIONS = ("tanh", "relu")
 """The hidden layers' activations a file may name."""
@@ -234,18 +242,33 @@ def shipped_policy(name: str) -> MlpPolicy:
         return load_mlp(path)
 
 
-def cartpole_ppo(env: SimEnv) -> MlpPolicy:
-    """The shipped PPO cart-pole policy, for ``--policy simbridge.envs.policy:cartpole_ppo``.
+class CartPolePPO:
+    """The shipped PPO cart-pole policy (``simbridge.envs.policy:cartpole_ppo``): a class
+    made once per env, as both ``simbridge sim2sim`` and ``evaluate --policy`` make a
+    ``module:callable`` class, then called observation -> action.
 
     Args:
         env: a ``cartpole`` env (its sizes are checked).
 
-    Returns:
-        observation -> action (the mean action, clipped to [-1, 1]).
-
     Raises:
         InvalidArgumentError: an env of other observation or action sizes.
     """
-    policy = shipped_policy("cartpole_ppo")
-    policy.check_env(env)
-    return policy
+
+    def __init__(self, env: SimEnv) -> None:
+        self.policy = shipped_policy("cartpole_ppo")
+        self.policy.check_env(env)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The mean action for ``obs``, clipped to [-1, 1].
+
+        Args:
+            obs: the env's observation.
+
+        Returns:
+            The action.
+        """
+        return self.policy(obs)
+
+
+cartpole_ppo = CartPolePPO
+"""The name commands and the docs give the shipped policy."""
