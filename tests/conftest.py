@@ -5,7 +5,8 @@ command-line run a test starts, which inherits the environment) writes the user'
 And the order of the suite under ``pytest -n 2 --dist loadfile`` (README): pytest-xdist hands
 out whole modules, those with the most tests first, so a long module of one test (the soak,
 about 155 s) came last and ran alone while the other worker stood idle. The modules in
-:data:`SCHEDULED_FIRST` are handed out before all others; the rest keep xdist's order."""
+:data:`SCHEDULED_FIRST` are handed out before all others, longest first; the rest keep xdist's
+order."""
 
 from __future__ import annotations
 
@@ -15,9 +16,29 @@ from typing import Any
 
 import pytest
 
-SCHEDULED_FIRST = ("tests/test_soak.py",)
-"""Modules (paths from the repository root) that take minutes as a whole: handed out first
-under ``--dist loadfile``, so that the other worker runs the rest of the suite meanwhile."""
+SCHEDULED_FIRST = (
+    "tests/test_soak.py",
+    "tests/test_same_results.py",
+    "tests/compare/pipeline/test_compare_same_results.py",
+    "tests/test_conformance_neutrality.py",
+    "tests/test_gui.py",
+    "tests/test_gui_mujoco.py",
+    "tests/hostile/test_hostile.py",
+    "tests/hostile/test_hostile_mujoco.py",
+    "tests/hostile/test_hostile_physx.py",
+    "tests/test_docs_site.py",
+    "tests/test_bench.py",
+    "tests/conformance/test_pybullet_data.py",
+    "tests/test_packaging.py",
+)
+"""Modules (paths from the repository root) that take a minute or more as a whole, longest
+first (``pytest -m slow -n 1 --durations=60``, 2026-11-29, the machine shared: the soak's six
+rows 510 s, same-results 400 s, the report figures' same-results 250 s, the neutrality run
+144 s, each window file 130-170 s, each hostile corpus 90-110 s; the site's blocks, the bench
+smoke runs, pybullet_data's files and the wheel about a minute each): handed out first under
+``--dist loadfile``, longest first, so that neither worker is left with a long module at the
+end while the other stands idle (xdist hands out the modules with the most tests first, which
+put these modules of few tests last)."""
 
 
 @pytest.hookimpl(optionalhook=True)  # a pytest-xdist hook: without xdist it is never called

@@ -296,3 +296,13 @@ def test_tests_mirror_the_packages():
     untested = sorted(f for f in rooms if f not in folders)
     assert not untested, f"no tests in {untested}"
     assert {"tests/model", "tests/sim", "tests/cli", "tests/compare/run"} <= set(rooms)
+
+
+def test_the_modules_scheduled_first_exist():
+    """tests/conftest.py hands its long modules out first under --dist loadfile: a module
+    renamed or moved would silently fall back to xdist's order (long modules last)."""
+    from conftest import SCHEDULED_FIRST
+
+    root = Path(__file__).resolve().parents[1]
+    assert [m for m in SCHEDULED_FIRST if not (root / m).is_file()] == []
+    assert len(set(SCHEDULED_FIRST)) == len(SCHEDULED_FIRST)
