@@ -32,8 +32,11 @@ class Pattern:
 
 def distance_travelled(trajectory, robot: str) -> float:
     """How far (m) the robot's base moved in the horizontal plane, start to end."""
-    xy = trajectory.bodies[robot].base_position[:, 0:2]
-    return float(np.linalg.norm(xy[-1] - xy[0]))
+    dx, dy = (
+        trajectory.bodies[robot].base_position[-1, 0:2]
+        - trajectory.bodies[robot].base_position[0, 0:2]
+    )
+    return math.sqrt(float(dx) * float(dx) + float(dy) * float(dy))  # no BLAS: portable.py
 
 
 def joint_travel(trajectory, robot: str, joint: str) -> float:

@@ -13,6 +13,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from _gaps import gap
 
 import simbridge
 from simbridge.exceptions import BackendUnsupportedError, MjcfFeatureUnsupportedError
@@ -113,19 +114,23 @@ def test_mujocos_joint_table_and_coordinates(backend: str, name: str) -> None:
         np.testing.assert_allclose(sim.qvel(), v, atol=10 * tol)
         manifest = sim.manifest()
         assert manifest["semantics"] == "mujoco"
-        if backend != "mujoco":
+        if not _steps_raw(backend):
             departures = manifest["departures"]
             assert {"mujoco_soft_contacts", "integrator", "actuators"} <= set(departures)
             assert ("armature" in departures) == bool(m.dof_armature.any())
 
 
 ANT_SECONDS = (0.5, 5.0)
-# How each engine's ant stands against raw MuJoCo at 5 s (bench/mjcf_mujoco_reading.py):
-# (the reference, the tolerance in m). PyBullet: Gymnasium's own figure (RK4), measured 0.0160
-# off (0.5278 against 0.5438); PhysX: MuJoCo under Euler, measured 0.0065 off (0.6052 against
-# 0.6117), its feet held by PhysX's static friction where MuJoCo's creep (the departures
-# "integrator" and "mujoco_soft_contacts", asserted named in its manifest).
-ANT_BOUNDS = {"pybullet": ("rk4", 0.025), "physx": ("euler", 0.01)}
+
+
+def _steps_raw(backend: str) -> bool:
+    """Whether ``backend`` steps MuJoCo's reading with raw mj_step: it declares no gap of the
+    ant's height against raw MuJoCo (tests/conformance/_gaps.py: each other engine's reference,
+    RK4 or Euler, and its measured bound)."""
+    return (
+        gap(backend, "mjcf_ant_height_rk4") is None
+        and gap(backend, "mjcf_ant_height_euler") is None
+    )
 
 
 def _raw_heights(path: str, integrator: int | None) -> list[float]:
@@ -144,7 +149,7 @@ def _raw_heights(path: str, integrator: int | None) -> list[float]:
 def test_the_ant_stands_at_gymnasiums_height_or_the_departure_is_named(backend: str) -> None:
     """Gymnasium's ant, zero controls, from ``qpos0``: raw MuJoCo (RK4, the file's) stands at
     0.5930 m after 0.5 s and 0.5438 m after 5 s, and at 0.6206 / 0.6117 m under its Euler
-    integrator. Each engine within its measured bound of its reference (ANT_BOUNDS); the
+    integrator. Each engine within its measured bound of its reference (_gaps.py); the
     MuJoCo backend is raw MuJoCo exactly; another engine names the integrator and MuJoCo's
     soft contacts as departures."""
     if not _reads_mujoco(backend):
@@ -160,11 +165,14 @@ def test_the_ant_stands_at_gymnasiums_height_or_the_departure_is_named(backend: 
         for t in ANT_SECONDS:
             sim.step(round(t / 0.01) - round(sim.time / 0.01))
             heights.append(float(sim.qpos()[2]))
-        if backend == "mujoco":
+        if _steps_raw(backend):
             assert heights == refs["rk4"]
             return
         assert {"integrator", "mujoco_soft_contacts"} <= set(sim.manifest()["departures"])
-    ref, tol = ANT_BOUNDS.get(backend, ("rk4", 0.1))
+    rk4 = gap(backend, "mjcf_ant_height_rk4")
+    euler = gap(backend, "mjcf_ant_height_euler")
+    ref, tol = ("rk4", rk4) if rk4 is not None else ("euler", euler)
+    assert tol is not None
     assert abs(heights[1] - refs[ref][1]) < tol, (backend, heights, refs)
     assert 0.3 < heights[0] < 0.7, heights  # standing, not collapsed (0.25 m) nor thrown
 
@@ -226,7 +234,7 @@ def test_what_only_mujoco_simulates_is_refused_by_name(
     """A tendon or an equality constraint (and, for now, a ball joint): MuJoCo runs it; another
     engine refuses it, naming the feature and its element, and keeps its world as it was."""
     with simbridge.Sim(backend) as sim:
-        if backend == "mujoco":
+        if _steps_raw(backend):
             sim.load_mjcf(text, semantics="mujoco")
             sim.step(2)
             return
@@ -303,7 +311,7 @@ def test_contype_conaffinity_and_exclude_filter_contacts(backend: str, exclude: 
         pytest.skip(f"{backend!r} does not declare MuJoCo's reading of MJCF")
     text = STACK.format(contact=EXCLUDE if exclude else "")
     with simbridge.Sim(backend) as sim:
-        if exclude and backend == "physx":
+        if exclude and gap(backend, "mjcf_exclude_across_bodies") is not None:
             with pytest.raises(MjcfFeatureUnsupportedError, match=r"'low/high'"):
                 sim.load_mjcf(text, semantics="mujoco")
             return
@@ -364,6 +372,6 @@ def test_a_snapshot_restores_and_reset_empties_the_world(backend: str) -> None:
         unbroken = sim.qpos()
         sim.set_state(state)
         sim.step(30)
-        np.testing.assert_allclose(sim.qpos(), unbroken, atol=0.0 if backend == "mujoco" else tol)
+        np.testing.assert_allclose(sim.qpos(), unbroken, atol=0.0 if _steps_raw(backend) else tol)
         sim.reset()
         assert sim.load_urdf("r2d2.urdf") == 0
