@@ -73,12 +73,15 @@ def verdict_lines_html(summary: dict[str, Any], colours: dict[str, str]) -> str:
     head = summary["headline"]
     runs = (summary.get("ensemble") or {}).get("size")
     per = f", {runs} runs per engine" if isinstance(runs, int) and runs > 1 else ""
-    rows = "".join(_pair_line(p, colours) for p in _pairs(summary))
+    pairs = _pairs(summary)
+    rows = "".join(_pair_line(p, colours) for p in pairs)
+    gaps = [(p.get("verdict") or {}).get("gap") or {} for p in pairs]
+    brackets = ", 95% intervals in brackets" if any(g.get("low") is not None for g in gaps) else ""
     return (
         '<section id="verdicts"><ul>'
         f"{rows}</ul>"
-        f'<p class="note">Judged on the {html.escape(head["title"])}{per}, 95% intervals in '
-        "brackets; the sections below say why.</p></section>"
+        f'<p class="note">Judged on the {html.escape(head["title"])}{per}{brackets}; the '
+        "sections below say why.</p></section>"
     )
 
 

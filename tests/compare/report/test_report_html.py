@@ -171,8 +171,12 @@ def test_figures_are_inlined(tmp_path):
     assert page.count('src="data:image/png;base64,') == len(pngs)
     for name in pngs:
         assert f'src="{name}"' not in page
-    # --no-replay: no viewer, no ghosts file
+    # --no-replay: no viewer, no ghosts file; the verdict still opens the page, and with one
+    # run per engine it claims no interval
     assert "<iframe" not in page
+    top = page[page.index('<section id="verdicts">') : page.index("<details")]
+    assert top.count("<li data-verdict=") == 1 and "95% interval" not in top
+    assert "a median gap" not in top and "the gap of " in top
     assert not (tmp_path / rp.GHOSTS_FILE).exists()
 
 
