@@ -12,11 +12,14 @@ Two robots: r2d2 resting on plane.urdf (4 wheels commanded, link 2 read) and a f
 KUKA iiwa (7 joints commanded, link 6 read). Every call is timed per call over a loop of
 ``--calls`` calls (a command alternates two targets, so every call is a new command; a step
 row times single ``sim.step()`` calls, contact-free: r2d2 reset into the air before each
-repeat, the KUKA in free space). Each repeat times every row once, in turn (PyBullet layer,
-MuJoCo layer, PhysX layer, then the raw calls), and the table gives the medians (``--stat
-min``: the least) over ``--repeats`` repeats, less the loop's own cost (a call of an empty
-lambda, measured the same way). Each ratio is an engine's layer call over PyBullet's layer call,
-the target (../shared/PERFORMANCE.md, issues 11 and 21) at most 1.5x for every engine.
+repeat, the KUKA in free space; the ``contact_points`` row reads r2d2 resting on the plane,
+put back and settled before each timing, every call converting the step's points afresh: the
+number of points each engine reports is said under the table). Each repeat times every row
+once, in turn (PyBullet layer, MuJoCo layer, PhysX layer, then the raw calls), and the table
+gives the medians (``--stat min``: the least) over ``--repeats`` repeats, less the loop's own
+cost (a call of an empty lambda, measured the same way). Each ratio is an engine's layer call
+over PyBullet's layer call, the target (../shared/PERFORMANCE.md, issues 11 and 21) at most
+1.5x for every engine.
 
 Raw calls: PyBullet's own function on the same client (``setJointMotorControlArray``,
 ``getLinkState(computeLinkVelocity=1, computeForwardKinematics=1)``...); for MuJoCo, what a raw
@@ -94,6 +97,7 @@ class World:
     """One robot on one backend: the Sim, the body, the joints commanded, the link read."""
 
     def __init__(self, backend: str, robot: str) -> None:
+        self.backend = backend
         self.sim = simbridge.Sim(backend)
         if robot == "r2d2":
             self.sim.load_urdf("plane.urdf")
@@ -155,6 +159,7 @@ def _pybullet_raw(w: World) -> dict[str, Callable[[Any], object]]:
             b, pose[0], pose[1], physicsClientId=c
         ),
         "step": lambda _: p.stepSimulation(physicsClientId=c),
+        "contact_points": lambda _: p.getContactPoints(physicsClientId=c),
         "two groups": lambda i: p.setJointMotorControlArray(
             b,
             _groups(w)[i],
@@ -250,6 +255,16 @@ def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
             m.body_pos[base] = pose[0]
             m.body_quat[base] = pose[1]
 
+    lm, ld = inspect.model_and_data(w.sim)  # the layer's own world: its contacts
+
+    def contacts(_: object) -> object:
+        n = ld.ncon
+        con = ld.contact
+        force = np.zeros((n, 6))
+        for i in range(n):
+            mujoco.mj_contactForce(lm, ld, i, force[i])
+        return con.geom[:n].copy(), con.pos[:n].copy(), con.frame[:n].copy(), force
+
     return {
         "set_joint_velocity": ctrl,
         "set_joint_position": ctrl,
@@ -262,6 +277,7 @@ def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
         "reset_joint_state": reset_joints,
         "reset_base_state": reset_base,
         "step": lambda _: mujoco.mj_step(m, d),
+        "contact_points": contacts,
     }
 
 
@@ -318,6 +334,12 @@ def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
     def reset_base(pose: tuple[np.ndarray, np.ndarray]) -> None:
         art.root_pose = sapien.Pose(pose[0], pose[1])
 
+    def contacts(_: object) -> object:
+        return [
+            (c.bodies, [(q.position, q.normal, q.impulse, q.separation) for q in c.points])
+            for c in scene.get_contacts()
+        ]
+
     def two_groups(i: int) -> None:
         for j in groups[i]:
             j.set_drive_velocity_target(1.0 + i)
@@ -344,6 +366,7 @@ def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
         "reset_joint_state": reset_joints,
         "reset_base_state": reset_base,
         "step": lambda _: scene.step(),
+        "contact_points": contacts,
         "two groups": two_groups,
         "mode change": mode_change,
     }
@@ -375,6 +398,7 @@ def rows_for(
     for backend, w in worlds.items():
         s, b, link = w.sim, w.body, w.link
         groups = _groups(w)
+        fresh = _fresh_contacts(w)
         layer[backend] = {
             "set_joint_velocity": lambda t, s=s, b=b, j=w.joints: s.set_joint_velocity(
                 b, j, t, max_force=50.0
@@ -401,6 +425,7 @@ def rows_for(
             "reset_joint_state": lambda q, s=s, b=b, j=w.np_joints: s.reset_joint_state(b, j, q),
             "reset_base_state": lambda pose, s=s, b=b: s.reset_base_state(b, pose[0], pose[1]),
             "step": lambda _, s=s: s.step(),
+            "contact_points": lambda _, s=s, f=fresh: (f(), s.contact_points()),
             "two groups": lambda i, s=s, b=b, g=groups: s.set_joint_velocity(
                 b, g[i], 1.0 + i, max_force=50.0
             ),
@@ -444,6 +469,7 @@ def rows_for(
         ("reset_joint_state(commanded joints)", "reset_joint_state", pos, pos, ""),
         ("reset_base_state(pose)", "reset_base_state", poses, poses, ""),
         ("step, contact-free", "step", (0, 0), (0, 0), ""),
+        ("contact_points", "contact_points", (0, 0), (0, 0), _points_note(worlds)),  # r2d2 rests
         (
             "set_joint_velocity, two joint groups in turn",
             "two groups",
@@ -477,6 +503,7 @@ def rows_for(
         "reset_joint_state(commanded joints)": "reset_joint_state",
         "reset_base_state(pose)": "reset_base_state",
         "step, contact-free": "step",
+        "contact_points": "contact_points",
         "set_joint_velocity, two joint groups in turn": "two groups",
         "velocity <-> position command in turn": "mode change",
     }
@@ -506,6 +533,39 @@ def _alternating(fn: Callable[[Any], object], args: tuple[Any, Any]) -> Callable
 
 def _lists(pair: tuple[Any, Any]) -> tuple[Any, Any]:
     return tuple(v.tolist() if isinstance(v, np.ndarray) else v for v in pair)  # type: ignore[return-value]
+
+
+def _fresh_contacts(w: World) -> Callable[[], None]:
+    """What makes each timed ``contact_points`` call convert the step's points: PhysX's layer
+    keeps the points it gave until the next step (a second read of one step is a lookup), so
+    its cache is emptied first; the other engines read theirs afresh at every call."""
+    if w.backend != "physx":
+        return lambda: None
+    from simbridge.backends.physx import inspect
+
+    backend = inspect.backend_of(w.sim)
+
+    def empty() -> None:
+        backend._contacts_cache = None
+
+    return empty
+
+
+def _settle(worlds: list[World]) -> None:
+    """r2d2 back on the plane at rest, wheels stopped, and 240 steps: resting on its contacts."""
+    for w in worlds:
+        w.sim.set_joint_velocity(w.body, w.joints, 0.0, max_force=50.0)
+        w.sim.reset_base_state(w.body, (0, 0, cases.START_Z), (0, 0, 0, 1), (0, 0, 0), (0, 0, 0))
+        w.sim.step(240)
+
+
+def _points_note(worlds: dict[str, World]) -> str:
+    """How many points each engine reports (r2d2 resting on the plane; none for the KUKA)."""
+    if any(w.link != 2 for w in worlds.values()):  # the KUKA, in free space
+        return "no contact: the call's own cost"
+    _settle(list(worlds.values()))
+    counts = ", ".join(f"{b} {len(w.sim.contact_points())}" for b, w in worlds.items())
+    return f"points: {counts}"
 
 
 def _prepare_step(worlds: list[World]) -> Callable[[], None]:
@@ -680,6 +740,7 @@ def calls_table(backends: list[str], reps: int, n: int) -> dict[str, int]:
     print(f"| call | {' | '.join(head)} |")
     print("|------" * (len(head) + 1) + "|")
     missed = dict.fromkeys(others, 0)
+    notes: list[str] = []  # said under the table
     for robot in ("r2d2", "kuka"):
         worlds = {b: World(b, robot) for b in backends}
         raw_worlds = {"physx": World("physx", robot)} if "physx" in backends else {}
@@ -691,6 +752,9 @@ def calls_table(backends: list[str], reps: int, n: int) -> dict[str, int]:
             prepare = None
             if row.name == "r2d2: step, contact-free":
                 prepare = _prepare_step([*worlds.values(), *raw_worlds.values()])
+            elif row.name == "r2d2: contact_points":
+                both = [*worlds.values(), *raw_worlds.values()]
+                prepare = lambda both=both: _settle(both)  # noqa: E731
             time_row(row, n, reps, prepare)
             pb = row.times.get("pybullet")
             ratios = []
@@ -706,8 +770,13 @@ def calls_table(backends: list[str], reps: int, n: int) -> dict[str, int]:
             cells = [fmt_us(row.times.get(b)) for b in backends] + ratios
             cells += [fmt_us(row.times.get(f"raw {b}")) for b in backends]
             print(f"| {row.name} | {' | '.join(cells)} |")
+            if row.name == "r2d2: contact_points":
+                notes.append(f"{row.name}: {row.note} (one call reads them all)")
         for w in [*worlds.values(), *raw_worlds.values()]:
             w.sim.close()
+    print()
+    for note in notes:
+        print(note)
     return missed
 
 

@@ -83,6 +83,7 @@ def test_calls_table_times_every_call_on_every_engine():
         "reset_joint_state(commanded joints)",
         "reset_base_state(pose)",
         "step, contact-free",
+        "contact_points",
     ):
         assert call in names, f"{call!r} missing:\n{proc.stdout}"
     assert len(calls) == 2 * len(names)  # each call on both robots
@@ -97,10 +98,19 @@ def test_calls_table_times_every_call_on_every_engine():
             floor = "<0.01" in (pb, cells[k])
             assert (cells[r] == "") if floor else float(cells[r].split()[0]) > 0, line
     # every engine has a raw figure for the step and the reads a raw user makes
-    for call in ("step, contact-free", "link_state(link)", "joint_states(commanded joints)"):
+    for call in (
+        "step, contact-free",
+        "link_state(link)",
+        "joint_states(commanded joints)",
+        "contact_points",
+    ):
         line = next(line for line in calls if line.startswith(f"| r2d2: {call} |"))
         cells = [c.strip() for c in line.strip("|").split("|")]
         assert all(float(cells[k]) > 0 for k in raw), line
+    # r2d2 rests on its contacts in the contact_points row: every engine reports some points
+    said = next(line for line in lines if line.startswith("r2d2: contact_points: points: "))
+    counts = dict(x.split() for x in said.partition(": points: ")[2].split(" (")[0].split(", "))
+    assert set(counts) == {e.lower() for e in engines} and all(int(v) > 0 for v in counts.values())
     assert any("position_command targets" in line for line in lines)
     drive = [line for line in lines if line.startswith(tuple(f"| {e.lower()} |" for e in engines))]
     assert len(drive) == len(engines) and all(float(line.split("|")[6]) > 0 for line in drive)

@@ -67,3 +67,46 @@ def test_the_quick_start_prints_what_the_readme_shows(backend, tmp_path):
     shown = re.search(rf'^Sim\("{backend}"\): +(\(.*\))$', README.read_text(encoding="utf-8"), re.M)
     assert shown is not None, f"the README shows no output for {backend}"
     assert out.strip() == shown.group(1)
+
+
+def _extras_of(line: str) -> list[str]:
+    """The extras a README command installs: ``pip install -q -e '.[a,b]'`` -> [a, b]."""
+    m = re.search(r"pip install -q -e '\.\[([a-z,]+)\]'", line)
+    assert m is not None, line
+    return m.group(1).split(",")
+
+
+def test_command_1_installs_and_compares_every_engine():
+    """README command 1, the main job: one line that makes the venv, installs simbridge with
+    the extras that every engine shipped with simbridge needs beyond the core dependencies
+    (PhysX's SAPIEN is the ``physx`` extra) and the replay's (``report``), then compares r2d2
+    on every installed engine (compare's default)."""
+    import tomllib
+
+    from simbridge import registry
+
+    text = README.read_text(encoding="utf-8")
+    setup = text[text.index("## Set-up: two commands") :]
+    lines = [x for x in setup.splitlines() if x.startswith("python3 -m venv .venv")]
+    line = next(x for x in lines if "simbridge compare" in x)
+    assert line.endswith("&& .venv/bin/simbridge compare r2d2"), line
+    extras = _extras_of(line)
+    meta = tomllib.loads((README.parent / "pyproject.toml").read_text(encoding="utf-8"))
+    project = meta["project"]
+
+    def names(reqs: list[str]) -> set[str]:
+        return {re.split(r"[<>=!~\[; ]", r, maxsplit=1)[0].lower() for r in reqs}
+
+    installed = names(project["dependencies"])
+    for extra in extras:
+        installed |= names(project["optional-dependencies"][extra])
+    shipped = [
+        n
+        for n in registry.available_backends()
+        if registry.backend_spec(n).entry_point.startswith("simbridge.backends.")
+    ]
+    assert {"pybullet", "mujoco", "physx"} <= set(shipped)
+    for name in shipped:
+        dists = registry.engine_dists(name)
+        assert set(dists) - {"numpy"} <= installed, (name, dists, extras)
+    assert "viser" in installed  # report.html's 3D replay

@@ -33,13 +33,32 @@ REST = 2.0 * REST_OFFSET
 
 
 def _perpendicular(n: np.ndarray) -> np.ndarray:
-    a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    d = np.cross(n, a)
-    return d / np.linalg.norm(d)
+    """A unit vector perpendicular to each row of ``n`` (``(k, 3)`` unit normals -> ``(k, 3)``):
+    ``n`` crossed with x, or with y where ``n`` is within 26 degrees of x (the products of
+    ``np.cross(n, axis)``, written out)."""
+    n0, n1, n2 = n[:, 0], n[:, 1], n[:, 2]
+    near_x = np.abs(n0) >= 0.9
+    y = near_x.astype(float)  # the axis's y (1 where near x), its x is 1 - y, its z 0
+    x = 1.0 - y
+    d = np.empty_like(n)
+    d[:, 0] = n1 * 0.0 - n2 * y
+    d[:, 1] = n2 * x - n0 * 0.0
+    d[:, 2] = n0 * y - n1 * x
+    return d / np.sqrt(_dot(d, d))[:, None]
 
 
-def _vec(v: Any) -> tuple[float, float, float]:
-    return (float(v[0]), float(v[1]), float(v[2]))
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise dot products of two ``(k, 3)`` arrays -> ``(k,)``, summed x, y, z in turn."""
+    return u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1] + u[:, 2] * v[:, 2]
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise cross products of two ``(k, 3)`` arrays -> ``(k, 3)``."""
+    out = np.empty_like(u)
+    out[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
 
 
 class ContactReads:
@@ -84,46 +103,62 @@ class ContactReads:
         if self._contacts_kept is not None:
             return self._contacts_kept
         owners = self._owners()
-        inv_dt = 1.0 / self._dt
         # the engine setting rest_offset, where the profile sets one (settings_physx.py)
         given = self.profile.engine("physx").get("rest_offset")
         rest = REST if given is None else 2.0 * float(given)
-        out: list[ContactPoint] = []
+        pairs: list[tuple[int, int, int, int]] = []  # (body A, body B, link A, link B)
+        fields: list[Any] = []  # per point: position, normal, impulse (3 each), separation
         for contact in self._scene.get_contacts():
             a = owners.get(id(contact.bodies[0]))
             b = owners.get(id(contact.bodies[1]))
             if a is None or b is None:
                 continue
             for point in contact.points:
-                n = np.asarray(point.normal, dtype=float)
-                impulse = np.asarray(point.impulse, dtype=float) * inv_dt
-                normal_force = float(np.dot(impulse, n))
-                tangential = impulse - normal_force * n
-                size = float(np.linalg.norm(tangential))
-                d1 = tangential / size if size > 0.0 else _perpendicular(n)
-                d2 = np.cross(n, d1)
-                dist = float(point.separation) - rest
-                on_b = np.asarray(point.position, dtype=float)
-                on_a = on_b + dist * n
-                out.append(
-                    ContactPoint(
-                        0,
-                        a[0],
-                        b[0],
-                        a[1],
-                        b[1],
-                        _vec(on_a),
-                        _vec(on_b),
-                        _vec(n),
-                        dist,
-                        max(normal_force, 0.0),
-                        size,
-                        _vec(d1),
-                        0.0,
-                        _vec(d2),
-                    )
-                )
-        return out
+                pairs.append((a[0], b[0], a[1], b[1]))
+                fields.extend((point.position, point.normal, point.impulse))
+                fields.append((point.separation, 0.0, 0.0))
+        if not pairs:
+            return []
+        return self._points(pairs, np.array(fields, dtype=float).reshape(-1, 4, 3), rest)
+
+    def _points(
+        self, pairs: list[tuple[int, int, int, int]], raw: np.ndarray, rest: float
+    ) -> list[ContactPoint]:
+        """The points, all at once: ``pairs`` (body A, body B, link A, link B) per point and
+        ``raw`` ``(k, 4, 3)``: PhysX's position (on B), normal (on B), impulse (N s) and
+        separation (``raw[:, 3, 0]``, m) per point."""
+        on_b = raw[:, 0]  # (k, 3)
+        n = raw[:, 1]  # (k, 3)
+        force = raw[:, 2] * (1.0 / self._dt)  # (k, 3) N
+        normal_force = _dot(force, n)  # (k,)
+        tangential = force - normal_force[:, None] * n  # (k, 3)
+        size = np.sqrt(_dot(tangential, tangential))  # (k,)
+        moving = size > 0.0  # PhysX gives no friction impulse: mostly not
+        d1 = tangential / np.where(moving, size, 1.0)[:, None]
+        if not moving.all():
+            d1 = np.where(moving[:, None], d1, _perpendicular(n))
+        d2 = _cross(n, d1)
+        dist = raw[:, 3, 0] - rest  # (k,)
+        on_a = on_b + dist[:, None] * n
+        pushed = np.where(normal_force < 0.0, 0.0, normal_force)  # max(f, 0.0): -0.0 kept
+        rows = zip(
+            pairs,
+            on_a.tolist(),
+            on_b.tolist(),
+            n.tolist(),
+            dist.tolist(),
+            pushed.tolist(),
+            size.tolist(),
+            d1.tolist(),
+            d2.tolist(),
+            strict=True,
+        )
+        return [
+            ContactPoint(
+                0, *who, tuple(pa), tuple(pb), tuple(nb), d, f, fs, tuple(t1), 0.0, tuple(t2)
+            )
+            for who, pa, pb, nb, d, f, fs, t1, t2 in rows
+        ]
 
     def _keep_contacts_but(self, body: int) -> None:
         """Before ``body`` is removed: the last step's points less its own, read while every

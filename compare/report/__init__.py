@@ -86,7 +86,7 @@ def report(
     path.write_text(text, encoding="utf-8")
     from .html import write_html
 
-    _, engines = write_html(comparison, text, out, replay=replay)
+    _, engines = write_html(comparison, text, out, replay=replay, summary=figures)
     if engines is not None and trajectories:
         from .replay import save_ghosts
 

@@ -1,10 +1,12 @@
 """``report.html``: the report as one self-contained page that opens from disk, offline.
 
-The text and tables are report.md's (rendered by markdown-it-py), the figures are inlined as
-``data:`` URIs, and, after the headline, the 3D replay (:mod:`.replay`): viser's viewer with the
-recorded scene in an ``<iframe srcdoc>``, the engines' colours with a checkbox each (to hide or
-show an engine, its ensemble's ghosts and its event markers), a checkbox for the ghosts, and
-the events as a clickable timeline and list that move the viewer's time scrubber there.
+It opens on the picture: the title, every pair's verdict in a line (:mod:`.html_top`), then the
+3D replay (:mod:`.replay`): viser's viewer with the recorded scene in an ``<iframe srcdoc>``
+sized to fit the first screen, the engines' colours with a checkbox each (to hide or show an
+engine, its ensemble's ghosts and its event markers), a checkbox for the ghosts, and the events
+as a clickable timeline and list that move the viewer's time scrubber there. The prose follows:
+report.md's text and tables (rendered by markdown-it-py, the figures inlined as ``data:``
+URIs), its opening statements unfolded and each ``##`` section a ``<details>`` to open.
 """
 
 from __future__ import annotations
@@ -26,9 +28,22 @@ th { background: #f3f3f3; }
 img { max-width: 100%; }
 code { background: #f4f4f4; padding: 0 0.2em; border-radius: 3px; }
 pre { background: #f4f4f4; padding: 0.7em; overflow-x: auto; }
-#replay-section { border: 1px solid #ddd; border-radius: 6px; padding: 0.6em 0.8em;
-  margin: 1.2em 0; background: #fafafa; }
-#replay { width: 100%; height: 560px; border: 1px solid #ccc; background: #fff; }
+h1 { font-size: 1.6em; margin: 0.2em 0 0.3em; }
+#verdicts ul { margin: 0.2em 0; padding-left: 1.2em; }
+#verdicts li { margin: 0.1em 0; }
+#verdicts .word { font-weight: 600; }
+#verdicts .note { margin: 0.2em 0 0.4em; }
+#replay-section { border: 1px solid #ddd; border-radius: 6px; padding: 0.4em 0.8em;
+  margin: 0.4em 0 1em; background: #fafafa; }
+#replay-section h2 { font-size: 1.1em; margin: 0 1em 0 0; display: inline; }
+#replay { width: 100%; height: max(340px, calc(100vh - 260px)); border: 1px solid #ccc;
+  background: #fff; display: block; margin-top: 0.3em; }
+details.section { border-top: 1px solid #ddd; padding: 0.1em 0; }
+details.section > summary { cursor: pointer; padding: 0.2em 0; }
+details.section > summary h2 { display: inline; font-size: 1.25em; margin: 0; }
+details.section[open] > summary { margin-bottom: 0.4em; }
+.folds { margin: 0.6em 0 0.2em; }
+.folds button { font-size: 0.85em; cursor: pointer; }
 .engines label { margin-right: 1.2em; white-space: nowrap; }
 .swatch { display: inline-block; width: 0.9em; height: 0.9em; border-radius: 2px;
   vertical-align: -0.1em; margin-right: 0.3em; }
@@ -101,6 +116,16 @@ _JS = """
 """
 
 
+_FOLD_JS = """
+for (const b of document.querySelectorAll('button[data-fold]')) {
+  b.addEventListener('click', () => {
+    const open = b.dataset.fold === 'open';
+    for (const d of document.querySelectorAll('details.section')) d.open = open;
+  });
+}
+"""
+
+
 def _data_uri(path: Path) -> str:
     kind = {".png": "image/png", ".gif": "image/gif", ".jpg": "image/jpeg", ".svg": "image/svg+xml"}
     mime = kind.get(path.suffix.lower(), "application/octet-stream")
@@ -161,14 +186,14 @@ def _replay_section(engines: list[Any], viewer: str, duration: float) -> str:
     )
     return (
         '<section id="replay-section"><h2>Replay</h2>'
-        '<p class="note">Every engine\'s recorded nominal run in one scene (drag to turn, '
-        "scroll to zoom). Under the view: play and pause, the time scrubber and the speed; "
-        "the tree icon lists the scene's nodes. Spheres mark the events below from the instant "
-        "they happen; click an event to move the scrubber there.</p>"
-        f'<div class="engines">{boxes}</div>'
+        f'<span class="engines">{boxes}</span>'
         f'<iframe id="replay" title="3D replay" srcdoc="{html.escape(viewer, quote=True)}">'
         "</iframe>"
-        f"{events}</section>"
+        '<p class="note">Every engine\'s recorded nominal run in one scene, each robot tinted '
+        "in its engine's colour (drag to turn, scroll to zoom). Under the view: play and pause, "
+        "the time scrubber and the speed; the tree icon lists the scene's nodes. Spheres mark "
+        "the events below from the instant they happen; click an event to move the scrubber "
+        f"there.</p>{events}</section>"
     )
 
 
@@ -180,27 +205,57 @@ def render_html(
     engines: list[Any] | None = None,
     viewer: str | None = None,
     note: str = "",
+    summary: dict[str, Any] | None = None,
 ) -> str:
-    """The page: report.md's text with the figures of ``folder`` inlined and, with ``viewer``
-    (:func:`~.replay.replay_html`) and ``engines``, the replay section after the headline (else
-    ``note`` there, if any)."""
-    body = _markdown_html(markdown_text, folder)
-    section = ""
+    """The page, in the order a reader wants it: report.md's title; with ``summary`` the
+    verdict of every pair in a line each (:func:`~.html_top.verdict_lines_html`); with
+    ``viewer`` (:func:`~.replay.replay_html`) and ``engines`` the replay section (else ``note``
+    there, if any); then report.md's opening statements and its sections, each a ``<details>``
+    to fold (:func:`~.html_top.fold_sections`), with the figures of ``folder`` inlined.
+
+    Args:
+        markdown_text: report.md's text.
+        folder: the report folder, whose figures are inlined.
+        title: the page's ``<title>``.
+        engines: the replay's engines (:class:`~.replay.ReplayEngine`), for its legend.
+        viewer: the replay's viewer document; None: no replay.
+        note: said where the replay would be, when there is none.
+        summary: ``summary.json``'s dict; None: no verdict lines.
+
+    Returns:
+        The page's HTML.
+    """
+    from .html_top import fold_sections, verdict_lines_html
+    from .replay import ENGINE_COLOURS
+
+    head, opening, sections = fold_sections(_markdown_html(markdown_text, folder))
+    top = ""
+    if summary is not None:
+        labels = summary["labels"]
+        colours = {x: ENGINE_COLOURS[k % len(ENGINE_COLOURS)] for k, x in enumerate(labels)}
+        top = verdict_lines_html(summary, colours)
     script = ""
     if viewer is not None and engines:
         tr = engines[0].trajectory
-        section = _replay_section(engines, viewer, float(tr.time[-1] - tr.time[0]))
+        top += _replay_section(engines, viewer, float(tr.time[-1] - tr.time[0]))
         script = f"<script>{_JS}</script>"
     elif note:
-        section = f'<p class="note">{html.escape(note)}</p>'
-    if section:
-        at = body.find("<h2")
-        body = body + section if at < 0 else body[:at] + section + body[at:]
+        top += f'<p class="note">{html.escape(note)}</p>'
+    if opening.strip():
+        opening = (
+            '<details class="section" id="in-words" open><summary><h2>The verdict in words'
+            f"</h2></summary>\n{opening}</details>\n"
+        )
+    folds = (
+        '<p class="folds"><button type="button" data-fold="open">Open every section</button> '
+        '<button type="button" data-fold="close">Fold every section</button></p>'
+    )
     return (
         '<!doctype html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f"<title>{html.escape(title)}</title><style>{_CSS}</style></head>"
-        f"<body>{body}{script}</body></html>\n"
+        f"<body>{head}{top}{folds}{opening}{sections}"
+        f"<script>{_FOLD_JS}</script>{script}</body></html>\n"
     )
 
 
@@ -210,10 +265,12 @@ def write_html(
     out: Path,
     *,
     replay: bool = True,
+    summary: dict[str, Any] | None = None,
 ) -> tuple[Path, list[Any] | None]:
     """Write ``out/report.html`` from report.md's text and the figures in ``out``; with
-    ``replay`` (and viser installed) the 3D replay too. Returns its path and the replay's
-    engines (None without a replay)."""
+    ``replay`` (and viser installed) the 3D replay too, and with ``summary`` (``summary.json``'s
+    dict) every pair's verdict over it. Returns its path and the replay's engines (None without
+    a replay)."""
     from . import replay as rp
 
     engines = viewer = None
@@ -229,7 +286,9 @@ def write_html(
             "`simbridge replay` on this folder, or run the comparison again."
         )
     title = f"simbridge: {comparison.scenario.name}"
-    page = render_html(markdown_text, out, title=title, engines=engines, viewer=viewer, note=note)
+    page = render_html(
+        markdown_text, out, title=title, engines=engines, viewer=viewer, note=note, summary=summary
+    )
     path = out / "report.html"
     path.write_text(page, encoding="utf-8")
     return path, engines

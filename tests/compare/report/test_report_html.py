@@ -76,6 +76,92 @@ def test_page_is_one_offline_file(written):
     assert (out / "report.html").stat().st_size < 5 * MB
 
 
+def _at(page: str, marker: str) -> int:
+    at = page.find(marker)
+    assert at >= 0, f"{marker!r} not on the page"
+    return at
+
+
+def test_page_opens_on_the_verdicts_then_the_replay_then_folded_prose(written):
+    """The title, every pair's verdict in a line, the replay; then report.md's opening
+    statements and each of its sections in a <details> whose <summary> is its heading, in
+    report.md's order, the opening one unfolded."""
+    c, out = written
+    page = (out / "report.html").read_text(encoding="utf-8")
+    summary = json.loads((out / "summary.json").read_text())
+    title, verdicts = _at(page, "<h1>"), _at(page, '<section id="verdicts">')
+    replay, prose = _at(page, '<section id="replay-section">'), _at(page, "<details")
+    assert title < verdicts < replay < prose
+    lines = re.findall(r'<li data-verdict="(\w+)">(.*?)</li>', page[verdicts:replay])
+    assert [v for v, _ in lines] == [summary["verdict"]["verdict"]]
+    # both engines' legend swatches, then the pair's name and its verdict word with its gap
+    blue, orange = rp.ENGINE_COLOURS[:2]
+    assert lines[0][1].startswith(
+        f'<span class="swatch" style="background:{blue}"></span>'
+        f'<span class="swatch" style="background:{orange}"></span><b>pybullet and mujoco</b>: '
+    )
+    assert f'<span class="word">{summary["verdict"]["verdict"]}' in lines[0][1]
+    assert " [" in lines[0][1] and "]" in lines[0][1]  # the judged gap's 95% interval
+    # the prose: one fold per section of report.md, with its heading, in its order
+    md = (out / "report.md").read_text(encoding="utf-8")
+    headings = re.findall(r"^## (.+)$", md, re.M)
+    folds = re.findall(
+        r'<details class="section"( id="in-words")?( open)?><summary><h2>(.*?)</h2>', page
+    )
+    assert [html.unescape(re.sub("<[^>]+>", "", h)) for *_, h in folds[1:]] == [
+        re.sub(r"`([^`]*)`", r"\1", h) for h in headings
+    ]
+    assert folds[0][:2] == (' id="in-words"', " open")  # the opening statements, unfolded
+    assert all(not o for _, o, _ in folds[1:])  # every section folded
+    assert page[prose:].count("</details>") == len(folds)
+    assert not re.search(r"<h2[ >]", page[:replay])  # nothing of the prose before the replay
+
+
+def _mesh_colours(rec: dict, label: str) -> np.ndarray:
+    """The colours (0-255 RGB) of every mesh of ``label``'s robots in the recorded scene."""
+    return np.array(
+        [
+            m["props"]["color"]
+            for _, m in rec["messages"]
+            if m.get("type") == "MeshMessage" and m["name"].startswith(f"/{label}/")
+        ],
+        dtype=float,
+    )
+
+
+def _hue(rgb: np.ndarray) -> float:
+    """Hue in degrees of one RGB colour (any scale)."""
+    import colorsys
+
+    r, g, b = (float(x) for x in rgb / max(float(np.max(rgb)), 1e-12))
+    return 360.0 * colorsys.rgb_to_hsv(r, g, b)[0]
+
+
+def _hue_gap(a: float, b: float) -> float:
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def _legend_hues(c) -> list[float]:
+    return [_hue(rp._rgb(rp.ENGINE_COLOURS[k])) for k in range(len(c.labels))]
+
+
+def test_each_engines_robot_is_tinted_in_its_legend_colour(written):
+    """Every mesh of an engine's robot has its legend colour's hue (the same colours as the
+    figures' legend, matplotlib's), whatever the URDF's own colour (r2d2: blue, white, grey),
+    only darker for the darker parts."""
+    c, out = written
+    rec = _recording((out / "report.html").read_text(encoding="utf-8"))
+    legend = _legend_hues(c)
+    for k, label in enumerate(c.labels):
+        colours = _mesh_colours(rec, label)
+        assert len(colours) >= 15, label
+        for rgb in colours:
+            assert _hue_gap(_hue(rgb), legend[k]) < 3.0, (label, rgb)
+        # the URDF's light and dark parts stay apart: white parts at the colour, blue darker
+        assert np.ptp(colours.max(axis=1)) > 60, (label, colours)
+    assert rp._tint((1.0, 1.0, 1.0, 1.0), "#ff7f0e") == (255, 127, 14)
+
+
 def test_figures_are_inlined(tmp_path):
     c = compare("r2d2", ["pybullet", "mujoco"], duration=0.2, ensemble=1, resync_every=0)
     report(c, tmp_path, replay=False)
@@ -85,8 +171,12 @@ def test_figures_are_inlined(tmp_path):
     assert page.count('src="data:image/png;base64,') == len(pngs)
     for name in pngs:
         assert f'src="{name}"' not in page
-    # --no-replay: no viewer, no ghosts file
+    # --no-replay: no viewer, no ghosts file; the verdict still opens the page, and with one
+    # run per engine it claims no interval
     assert "<iframe" not in page
+    top = page[page.index('<section id="verdicts">') : page.index("<details")]
+    assert top.count("<li data-verdict=") == 1 and "95% interval" not in top
+    assert "a median gap" not in top and "the gap of " in top
     assert not (tmp_path / rp.GHOSTS_FILE).exists()
 
 
@@ -270,6 +360,86 @@ def test_chromium_draws_the_replay_from_disk(written, browser):
     b.js("document.querySelectorAll('input[data-engine]').forEach(x => x.click())")
     hidden = _settled_view(b, lambda v: _changed(later, v) > 1e-4)
     assert _changed(later, hidden) > 1e-4
+    assert b.errors == [], b.errors
+
+
+def _open_replay(b: Browser, page: Path) -> None:
+    """Open ``page`` and wait for the replay's canvas; the viewer's notice that WebGL runs in
+    software (headless Chromium's SwiftShader, not a user's GPU) taken off the view."""
+    b.open(page)
+    b.wait_for(
+        "document.getElementById('replay').contentDocument.querySelector('canvas') !== null"
+        " && window.simbridgeSeek(0.05)",
+        timeout=120,
+    )
+    b.pump(1.0)
+    b.js(
+        "(() => { const d = document.getElementById('replay').contentDocument;"
+        " for (const e of d.querySelectorAll('[class*=Notification]')) e.remove(); return 1; })()"
+    )
+
+
+def test_chromium_first_screen_is_the_verdicts_and_the_replay(written, browser):
+    """At 1280x800, the page as it opens: the verdict lines and the whole replay (its view and
+    its playback bar) on the first screen, the prose under it; a section opens on a click of
+    its heading, and the buttons fold and open them all."""
+    _, out = written
+    b = browser
+    b.call(
+        "Emulation.setDeviceMetricsOverride",
+        width=1280,
+        height=800,
+        deviceScaleFactor=1,
+        mobile=False,
+    )
+    try:
+        _open_replay(b, out / "report.html")
+        box = json.loads(
+            b.js(
+                "JSON.stringify({h: window.innerHeight, y: window.scrollY,"
+                " verdicts: document.getElementById('verdicts').getBoundingClientRect().bottom,"
+                " top: document.getElementById('replay').getBoundingClientRect().top,"
+                " bottom: document.getElementById('replay').getBoundingClientRect().bottom,"
+                " prose: document.querySelector('details').getBoundingClientRect().top})"
+            )
+        )
+        assert box["h"] == 800 and box["y"] == 0
+        assert box["verdicts"] <= box["top"] < box["bottom"] <= box["h"], box
+        assert box["prose"] >= box["bottom"], box
+        opened = "[...document.querySelectorAll('details.section')].map(d => d.open)"
+        assert b.js(opened) == [True] + [False] * (len(b.js(opened)) - 1)
+        b.js("document.querySelectorAll('details.section summary')[2].click()")
+        assert b.js(opened)[2] is True
+        b.js("document.querySelector('button[data-fold=close]').click()")
+        assert not any(b.js(opened))
+        b.js("document.querySelector('button[data-fold=open]').click()")
+        assert all(b.js(opened))
+        assert b.errors == [], b.errors
+    finally:
+        b.call("Emulation.clearDeviceMetricsOverride")
+
+
+def test_chromium_draws_each_engine_in_its_legend_colour(written, browser):
+    """Each engine alone in the view (the others' and the ghosts' boxes unticked): the pixels
+    its robot covers, against the view with no engine, have its legend colour's hue."""
+    c, out = written
+    b = browser
+    _open_replay(b, out / "report.html")
+    b.js("document.getElementById('ghosts').click()")  # the ensembles' points off
+    b.js("window.simbridgeSeek(0.3)")
+    boxes = "document.querySelectorAll('input[data-engine]')"
+    b.js(f"{boxes}.forEach(x => {{ if (x.checked) x.click(); }})")
+    empty = _settled_view(b, lambda v: v.std() > 0.02)
+    legend = _legend_hues(c)
+    for k, label in enumerate(c.labels):
+        b.js(f"{boxes}.forEach((x, i) => {{ if (x.checked !== (i === {k})) x.click(); }})")
+        alone = _settled_view(b, lambda v: _changed(empty, v) > 1e-4)
+        changed = alone[np.abs(alone - empty).max(axis=2) > 0.1]  # the robot and its shadow
+        coloured = changed[np.ptp(changed, axis=1) > 0.15]  # the robot: not the grey shadow
+        assert len(coloured) > 200, (label, len(coloured))
+        hues = np.array([_hue(x) for x in coloured])
+        near = [np.mean([_hue_gap(h, x) < 20.0 for h in hues]) for x in legend]
+        assert near[k] > 0.9 and max(near[:k] + near[k + 1 :], default=0.0) < 0.05, (label, near)
     assert b.errors == [], b.errors
 
 
