@@ -155,9 +155,22 @@ class ContactReads:
         )
         return [
             ContactPoint(
-                0, *who, tuple(pa), tuple(pb), tuple(nb), d, f, fs, tuple(t1), 0.0, tuple(t2)
-            )
-            for who, pa, pb, nb, d, f, fs, t1, t2 in rows
+                0,
+                ba,
+                bb,
+                la,
+                lb,
+                tuple(pa),
+                tuple(pb),
+                tuple(nb),
+                d,
+                f,
+                fs,
+                tuple(t1),
+                0.0,
+                tuple(t2),
+            )  # fmt: skip
+            for (ba, bb, la, lb), pa, pb, nb, d, f, fs, t1, t2 in rows
         ]
 
     def _keep_contacts_but(self, body: int) -> None:
