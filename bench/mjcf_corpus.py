@@ -242,44 +242,59 @@ def _engine_run(sim: Any, m: Any, pattern: bool, steps: int) -> np.ndarray:
 
 def mujoco_reading(engine: str, path: Path, m: Any, refs: dict[str, Any]) -> dict[str, Any]:
     """One engine's row under ``semantics="mujoco"`` (``m`` raw MuJoCo's model)."""
-    import simbridge
 
     row: dict[str, Any] = {}
-    with simbridge.Sim(engine) as sim:
-        bodies = sim.load_mjcf(str(path), semantics="mujoco")
-        start = sim.get_state()
+    with _open(engine, path, m, "mujoco") as sim:
+        bodies = sim.bodies()
         names = [sim.joint_info(b, j).name for b in bodies for j in range(sim.num_joints(b))]
         row["joints"] = len(names)
         row["names_are_mujocos"] = names == refs["joint_names"]
-        if refs["coords"].size or m.nu:
+        if m.njnt:
             row["fk_qpos0"] = _frames_error(m, _link_frames(engine, sim), refs["fk0"])
             sim.set_qpos_qvel(refs["qrand"], np.zeros(m.nv))
             row["fk_random"] = _frames_error(m, _link_frames(engine, sim), refs["fkr"])
-        _dynamics(row, sim, m, refs, start)
+    _dynamics(row, engine, path, m, refs)
     return row
 
 
-def _dynamics(row: dict[str, Any], sim: Any, m: Any, refs: dict[str, Any], start: Any) -> None:
-    """Hold, drop and tracking of a Sim already loaded under MuJoCo's reading."""
+def _open(engine: str, path: Path, m: Any, reading: str) -> Any:
+    """A Sim with the model loaded under ``reading`` (PyBullet's: the file's time step and
+    gravity given to the Sim)."""
+    import simbridge
+
+    if reading == "mujoco":
+        sim = simbridge.Sim(engine)
+        sim.load_mjcf(str(path), semantics="mujoco")
+        return sim
+    dt, g = float(m.opt.timestep), tuple(map(float, m.opt.gravity))
+    sim = simbridge.Sim(engine, timestep=dt, gravity=g)
+    sim.load_mjcf(str(path))
+    return sim
+
+
+def _dynamics(row: dict[str, Any], engine: str, path: Path, m: Any, refs: dict) -> None:
+    """Hold, drop and tracking under MuJoCo's reading, each in a fresh Sim."""
     import simbridge
 
     adr, steps = refs["coords"], refs["steps"]
     if not adr.size:
         return
     try:
-        sim.set_state(start)
-        held = _engine_run(sim, m, False, steps)
+        with _open(engine, path, m, "mujoco") as sim:
+            held = _engine_run(sim, m, False, steps)
         row["hold"] = float(np.max(np.abs(held[:, adr] - refs["hold"][:, adr])))
         if refs["free"] >= 0:
             z = refs["free"] + 2
             row["drop"] = {"engine": float(held[-1, z]), "raw": float(refs["hold"][-1, z])}
         if m.nu:
-            sim.set_state(start)
-            tracked = _engine_run(sim, m, True, steps)
+            with _open(engine, path, m, "mujoco") as sim:
+                tracked = _engine_run(sim, m, True, steps)
             gap = tracked[:, adr] - refs["track"][:, adr]
             row["tracking"] = float(np.sqrt(np.mean(gap**2)))
     except simbridge.exceptions.SimulationDivergedError as exc:
         row["diverged"] = " ".join(str(exc).split())[:300]
+    except Exception as exc:  # a call the checks need, refused: said with its class
+        row["dynamics_error"] = _short(f"{type(exc).__name__}: {exc}")[:300]
 
 
 # -------------------------------------------------------------- PyBullet's reading
@@ -391,14 +406,10 @@ def _bases(sim: Any) -> list[Any]:
 
 def pybullet_reading(engine: str, path: Path, m: Any, refs: dict[str, Any]) -> dict[str, Any]:
     """One engine's row under ``semantics="pybullet"``."""
-    import simbridge
 
     row: dict[str, Any] = {}
-    with simbridge.Sim(
-        engine, timestep=float(m.opt.timestep), gravity=tuple(map(float, m.opt.gravity))
-    ) as sim:
-        bodies = sim.load_mjcf(str(path))
-        start = sim.get_state()
+    with _open(engine, path, m, "pybullet") as sim:
+        bodies = tuple(sim.bodies())
         table = _pybullet_table(sim, bodies)
         matched = _matched(m, table)
         row["joints"] = len(table)
@@ -410,18 +421,21 @@ def pybullet_reading(engine: str, path: Path, m: Any, refs: dict[str, Any]) -> d
             for a, b, j in matched:
                 sim.reset_joint_state(b, j, refs["qrand_load"][a] - m.qpos0[a])
             row["fk_random"] = _pybullet_fk(sim, links, refs["fkr_load"])
-        if matched:
-            _pybullet_dynamics(row, sim, m, refs, matched, start)
+    if matched:
+        _pybullet_dynamics(row, engine, path, m, refs, matched)
     return row
 
 
-def _pybullet_dynamics(row: dict, sim: Any, m: Any, refs: dict, matched: list, start: Any) -> None:
+def _pybullet_dynamics(
+    row: dict, engine: str, path: Path, m: Any, refs: dict, matched: list
+) -> None:
+    """Hold, drop and tracking under PyBullet's reading, each in a fresh Sim."""
     import simbridge
 
     adr, steps = [a for a, _b, _j in matched], refs["steps"]
     try:
-        sim.set_state(start)
-        held, zs = _pybullet_run(sim, m, matched, None, steps)
+        with _open(engine, path, m, "pybullet") as sim:
+            held, zs = _pybullet_run(sim, m, matched, None, steps)
         row["hold"] = float(np.max(np.abs(held - refs["hold"][:, adr])))
         if refs["free"] >= 0:
             z = refs["free"] + 2
@@ -435,11 +449,13 @@ def _pybullet_dynamics(row: dict, sim: Any, m: Any, refs: dict, matched: list, s
         if why is not None or not m.nu:
             row["tracking_not_run"] = why or "no actuators"
             return
-        sim.set_state(start)
-        tracked, _ = _pybullet_run(sim, m, matched, motors, steps)
+        with _open(engine, path, m, "pybullet") as sim:
+            tracked, _ = _pybullet_run(sim, m, matched, motors, steps)
         row["tracking"] = float(np.sqrt(np.mean((tracked - refs["track"][:, adr]) ** 2)))
     except simbridge.exceptions.SimulationDivergedError as exc:
         row["diverged"] = " ".join(str(exc).split())[:300]
+    except Exception as exc:  # a call the checks need, refused: said with its class
+        row["dynamics_error"] = _short(f"{type(exc).__name__}: {exc}")[:300]
 
 
 # ---------------------------------------------------------------------- one model
@@ -473,9 +489,20 @@ def references(m: Any) -> dict[str, Any]:
     }
 
 
+def _status(exc: Exception) -> str:
+    """``refused``: an engine refuses a feature by name; ``not read``: the reading's own rules
+    refuse the file (PyBullet's importer's, reproduced); ``fails``: anything else."""
+    from simbridge import exceptions as e
+
+    if isinstance(exc, e.MjcfFeatureUnsupportedError | e.BackendUnsupportedError):
+        return "refused"
+    if isinstance(exc, e.UrdfStructureError | e.MeshNotFoundError):
+        return "not read"
+    return "fails"
+
+
 def run_model(label: str, path: Path) -> list[dict[str, Any]]:
     """Every reading on every engine for one model: its rows."""
-    import simbridge
 
     m = mujoco.MjModel.from_xml_path(str(path))
     refs = references(m)
@@ -488,10 +515,8 @@ def run_model(label: str, path: Path) -> list[dict[str, Any]]:
                 do = mujoco_reading if reading == "mujoco" else pybullet_reading
                 row.update(do(engine, path, m, refs))
                 row["status"] = "loads"
-            except simbridge.exceptions.MjcfFeatureUnsupportedError as exc:
-                row.update(status="refused", why=_short(f"{type(exc).__name__}: {exc}"))
             except Exception as exc:  # recorded with its class: the bench says why
-                row.update(status="fails", why=_short(f"{type(exc).__name__}: {exc}"))
+                row.update(status=_status(exc), why=_short(f"{type(exc).__name__}: {exc}"))
             row["seconds"] = round(time.perf_counter() - t0, 2)
             rows.append(row)
     return rows
@@ -519,6 +544,8 @@ def _cells(r: dict[str, Any]) -> list[str]:
     hold = _num(r.get("hold"), ".3f")
     if "diverged" in r:
         hold = f"diverged: {r['diverged'][:60]}"
+    if "dynamics_error" in r:
+        hold = f"not run: {r['dynamics_error'][:90]}"
     return ["loads", f"{r['joints']} ({names})", fk, hold, drop_s, track]
 
 
