@@ -8,7 +8,11 @@ fragment (listed, not run); a file whose root is not ``<mujoco>`` is not a model
 schema); a file raw MuJoCo refuses to compile is listed with MuJoCo's message. Every other file
 is a model, and for each reading and engine the bench records:
 
-- **loads** or **refused** (the exception's class and text: the feature's name) or **fails**;
+- **loads**, **refused** (an engine refuses a feature: ``MjcfFeatureUnsupportedError`` or
+  ``BackendUnsupportedError``, naming it), **not read** (the reading's own rules refuse the
+  file: PyBullet's importer's, reproduced, ``UrdfStructureError``/``MeshNotFoundError``) or
+  **fails** (anything else), with the exception's class and text; under PyBullet's reading the
+  ``<include>``s PyBullet's importer drops (listed in the manifest's ``ignored``);
 - the **joint table**: the movable joints' count, and whether their names are MuJoCo's hinge
   and slide joints in MuJoCo's order (``semantics="mujoco"``) or by name (PyBullet's reading);
 - **FK**: the engine's own frame of every body that carries a joint
@@ -413,6 +417,12 @@ def pybullet_reading(engine: str, path: Path, m: Any, refs: dict[str, Any]) -> d
         table = _pybullet_table(sim, bodies)
         matched = _matched(m, table)
         row["joints"] = len(table)
+        row["ignored_includes"] = [
+            text
+            for body in sim.manifest()["bodies"].values()
+            for text in body.get("ignored", [])
+            if "<include>" in text
+        ]
         row["names_matched"] = f"{len(matched)} of {len(refs['coords'])}"
         links = _pybullet_links(sim, bodies, m)
         row["fk_bodies"] = f"{len(links)} of {m.nbody - 1}"
@@ -546,7 +556,10 @@ def _cells(r: dict[str, Any]) -> list[str]:
         hold = f"diverged: {r['diverged'][:60]}"
     if "dynamics_error" in r:
         hold = f"not run: {r['dynamics_error'][:90]}"
-    return ["loads", f"{r['joints']} ({names})", fk, hold, drop_s, track]
+    status = "loads"
+    if r.get("ignored_includes"):
+        status += " without its `<include>`s (in the manifest's `ignored`)"
+    return [status, f"{r['joints']} ({names})", fk, hold, drop_s, track]
 
 
 def markdown(rows: list[dict[str, Any]], sorted_: dict[str, Any]) -> str:
