@@ -11,7 +11,7 @@ from simbridge.exceptions import InvalidArgumentError
 from .backend import PhysxBackend
 from .robots import Robot
 
-__all__ = ["mjcf_world", "backend_of", "scene", "robot", "articulation"]
+__all__ = ["mjcf_world", "mjcf_link_frames", "backend_of", "scene", "robot", "articulation"]
 
 
 def backend_of(sim: Any) -> PhysxBackend:
@@ -95,3 +95,36 @@ def mjcf_world(sim: Any) -> Any:
             f"needed, got {type(backend).__name__}",
         )
     return backend
+
+
+def mjcf_link_frames(sim: Any) -> list[tuple[int, int, Any, Any]]:
+    """The engine's own frame of each MuJoCo body that carries a joint, for an MJCF read with
+    ``semantics="mujoco"``: the frame of its link at the joint's anchor,
+    as the engine holds it (the link's ``entity_pose``, float32).
+
+    Args:
+        sim: A `Sim` on the 'physx' backend holding such a model.
+
+    Returns:
+        One ``(body, joint, position, rotation)`` per row that ends a MuJoCo body (the
+        intermediate links of a body with several joints are left out): the MuJoCo body and
+        joint ids, the anchor's world position (3,) in m and the link's rotation matrix (3, 3),
+        world from link. MuJoCo puts the same frame at ``xpos[body] + xmat[body] @
+        jnt_pos[joint]`` with rotation ``xmat[body]``.
+
+    Raises:
+        InvalidArgumentError: ``sim`` holds no such world on this engine.
+    """
+    import numpy as np
+
+    world = mjcf_world(sim)
+    out = []
+    for k, nb in enumerate(world.native.bodies):
+        links = world._built[k].links
+        for i, j in enumerate(nb.joint_ids):
+            if i + 1 < len(nb.joint_ids) and nb.link_bodies[i + 1] == nb.link_bodies[i]:
+                continue  # an intermediate link of a body with several joints
+            pose = links[i + 1].entity_pose
+            rot = pose.to_transformation_matrix()[:3, :3]
+            out.append((int(nb.link_bodies[i]), int(j), np.array(pose.p, float), np.array(rot)))
+    return out
