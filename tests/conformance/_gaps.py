@@ -30,6 +30,7 @@ __all__ = [
     "gap",
     "gap_names",
     "known_bug",
+    "steps_mujocos_reading_raw",
     "tolerance",
     "usable_backends",
 ]
@@ -359,6 +360,14 @@ def known_bug(backend: str | None, name: str) -> KnownBug | None:
     if backend is None:
         return None
     return declared(KNOWN_BUGS[name], backend)  # as gap(): a subclass answers as its base
+
+
+def steps_mujocos_reading_raw(backend: str) -> bool:
+    """Whether ``backend`` steps an MJCF read as MuJoCo reads it with raw mj_step: it declares
+    no gap of the ant's height against raw MuJoCo (``mjcf_ant_height_rk4`` or ``_euler``: each
+    other engine's reference and its measured bound)."""
+    names = ("mjcf_ant_height_rk4", "mjcf_ant_height_euler")
+    return all(gap(backend, name) is None for name in names)
 
 
 def gap(backend: str, name: str) -> float | None:

@@ -13,7 +13,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from _gaps import gap
+from _gaps import gap, steps_mujocos_reading_raw
 
 import simbridge
 from simbridge.exceptions import BackendUnsupportedError, MjcfFeatureUnsupportedError
@@ -123,14 +123,7 @@ def test_mujocos_joint_table_and_coordinates(backend: str, name: str) -> None:
 ANT_SECONDS = (0.5, 5.0)
 
 
-def _steps_raw(backend: str) -> bool:
-    """Whether ``backend`` steps MuJoCo's reading with raw mj_step: it declares no gap of the
-    ant's height against raw MuJoCo (tests/conformance/_gaps.py: each other engine's reference,
-    RK4 or Euler, and its measured bound)."""
-    return (
-        gap(backend, "mjcf_ant_height_rk4") is None
-        and gap(backend, "mjcf_ant_height_euler") is None
-    )
+_steps_raw = steps_mujocos_reading_raw
 
 
 def _raw_heights(path: str, integrator: int | None) -> list[float]:
