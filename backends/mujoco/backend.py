@@ -77,7 +77,7 @@ CONTACT_MARGIN = 0.001
 # MuJoCo's compiler refuses a body tree deeper than 1023 bodies below the world ("depth limit
 # exceeded in signature computation"), after spending tens of seconds on it: a robot whose
 # joints nest deeper than this (its root is one body) is refused before any compile. Near the
-# limit a chain is slow anyway (the figures: README's "Limits", python bench/limits.py).
+# limit a chain is slow anyway (the figures: docs/limits.md, python bench/limits.py).
 MAX_TREE_DEPTH = 1022
 
 

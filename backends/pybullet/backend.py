@@ -88,7 +88,7 @@ MAX_BODY_MOVABLE_JOINTS = 121
 # the engine's world was new, and the ids PyBullet would hand out next are a new world's (0, 1,
 # 2, ...: the bodies were removed last-loaded first), the engine's world is made new: nothing
 # the Sim shows changes (ids, time, settings), and the memory stays bounded (the figures:
-# README's "Limits", python bench/soak.py).
+# docs/limits.md, python bench/soak.py).
 RECYCLE_AFTER_REMOVALS = 32
 
 

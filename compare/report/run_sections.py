@@ -85,7 +85,8 @@ def setup_section(c: Comparison, s: dict[str, Any]) -> list[str]:
     lines += [
         "",
         "A profile departure is a documented place where an engine cannot reproduce the "
-        "chosen profile (every one is in the README's departures table and in `summary.json` "
+        "chosen profile (every one is in the departures table of the documentation's engines "
+        "page, docs/engines.md, and in `summary.json` "
         "under `manifest`); the count is those that apply to this scenario out of the engine's "
         "all, each named in [Profile departures that apply here]"
         "(#profile-departures-that-apply-here).",
