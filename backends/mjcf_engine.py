@@ -36,9 +36,7 @@ from simbridge.model.mjcf_native_plan import plan_departures, refuse_unsimulated
 from simbridge.profiles import Profile
 from simbridge.types import (
     ContactPoint,
-    JointCommands,
     JointType,
-    MotorMode,
     Quat,
     Vec3,
 )
@@ -49,11 +47,6 @@ from .locking import exclusive, wait_for_lock
 from .mjcf_reads import MjcfReads
 
 __all__ = ["MjcfOnEngine"]
-
-_COMMANDS = (
-    "PyBullet's joint motors and torques under semantics='mujoco'",
-    "drive the model's own actuators: Sim.set_actuator_controls",
-)
 
 
 def _xyzw(q: np.ndarray) -> Quat:
@@ -379,47 +372,6 @@ class MjcfOnEngine(MjcfReads, Backend):
         )
 
     # ---------------------------------------------------------------- PyBullet's commands
-
-    def set_joint_velocity(self, *args: Any, **kwargs: Any) -> None:
-        """See Backend.set_joint_velocity.
-
-        Raises:
-            BackendUnsupportedError: Always (the model's actuators drive it).
-        """
-        raise BackendUnsupportedError(self.name, *_COMMANDS)
-
-    def set_joint_position(self, *args: Any, **kwargs: Any) -> None:
-        """See Backend.set_joint_position.
-
-        Raises:
-            BackendUnsupportedError: Always (the model's actuators drive it).
-        """
-        raise BackendUnsupportedError(self.name, *_COMMANDS)
-
-    def set_joint_torque(self, *args: Any, **kwargs: Any) -> None:
-        """See Backend.set_joint_torque.
-
-        Raises:
-            BackendUnsupportedError: Always (the model's actuators drive it).
-        """
-        raise BackendUnsupportedError(self.name, *_COMMANDS)
-
-    def joint_commands(self, body: int) -> JointCommands:
-        """See Backend.joint_commands: every joint reads as a released motor."""
-        n = len(self._bodies[body].table)
-        z = np.zeros(n)
-        return JointCommands(
-            np.full(n, int(MotorMode.VELOCITY)), z, z.copy(), z.copy(), np.ones(n), z.copy()
-        )
-
-    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
-        """See Backend.set_joint_commands: only released motors and no pending torque.
-
-        Raises:
-            BackendUnsupportedError: For any motor with a force, or a pending torque.
-        """
-        if np.asarray(commands.max_force).any() or np.asarray(commands.pending_torque).any():
-            raise BackendUnsupportedError(self.name, *_COMMANDS)
 
     # ---------------------------------------------------------------- whole state
 

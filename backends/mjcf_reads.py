@@ -18,10 +18,12 @@ from simbridge.transforms import quat_multiply, quat_rotate
 from simbridge.types import (
     BaseState,
     DynamicsInfo,
+    JointCommands,
     JointInfo,
     JointStates,
     JointType,
     LinkState,
+    MotorMode,
     Quat,
     Vec3,
 )
@@ -50,8 +52,16 @@ def _conj(q: Quat) -> Quat:
     return (-q[0], -q[1], -q[2], q[3])
 
 
+_COMMANDS = (
+    "PyBullet's joint motors and torques under semantics='mujoco'",
+    "drive the model's own actuators: Sim.set_actuator_controls",
+)
+
+
 class MjcfReads:
-    """The joint table, reads and state writes of :class:`~.mjcf_engine.MjcfOnEngine`."""
+    """The joint table, reads, state writes and refused PyBullet commands of an MJCF read as
+    MuJoCo reads it: :class:`~.mjcf_engine.MjcfOnEngine`'s and the MuJoCo backend's
+    :class:`~.mujoco.native.NativeMujoco`'s."""
 
     name: ClassVar[str]
     m: Any
@@ -214,3 +224,47 @@ class MjcfReads:
         qd[va : va + 3] = v - np.cross(w, offset)
         qd[va + 3 : va + 6] = quat_rotate(_conj(qframe), _v(w))
         self._write(q, qd)
+
+    # ---------------------------------------------------------------- PyBullet's commands
+    # Refused under this reading on every engine: the model's own actuators drive it.
+
+    def set_joint_velocity(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_velocity.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_position(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_position.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def set_joint_torque(self, *args: Any, **kwargs: Any) -> None:
+        """See Backend.set_joint_torque.
+
+        Raises:
+            BackendUnsupportedError: Always (the model's actuators drive it).
+        """
+        raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def joint_commands(self, body: int) -> JointCommands:
+        """See Backend.joint_commands: every joint reads as a released motor."""
+        n = len(self._bodies[body].table)
+        z = np.zeros(n)
+        return JointCommands(
+            np.full(n, int(MotorMode.VELOCITY)), z, z.copy(), z.copy(), np.ones(n), z.copy()
+        )
+
+    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
+        """See Backend.set_joint_commands: only released motors and no pending torque.
+
+        Raises:
+            BackendUnsupportedError: For any motor with a force, or a pending torque.
+        """
+        if np.asarray(commands.max_force).any() or np.asarray(commands.pending_torque).any():
+            raise BackendUnsupportedError(self.name, *_COMMANDS)

@@ -23,30 +23,21 @@ from simbridge.exceptions import BackendUnsupportedError, SimBusyError, Simulati
 from simbridge.model.mjcf_native import NativeBody, NativeMjcf
 from simbridge.profiles import Profile
 from simbridge.types import (
-    BaseState,
     ContactPoint,
-    DynamicsInfo,
-    JointCommands,
-    JointInfo,
     JointStates,
     JointType,
-    LinkState,
-    MotorMode,
     Quat,
     Vec3,
 )
 
 from .. import locking
 from ..locking import exclusive, wait_for_lock
+from ..mjcf_reads import MjcfReads
 from .contacts import contact_points_of
 
 __all__ = ["NativeMujoco"]
 
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
-_COMMANDS = (
-    "PyBullet's joint motors and torques under semantics='mujoco'",
-    "drive the model's own actuators: Sim.set_actuator_controls",
-)
 
 
 def _xyzw(q: np.ndarray) -> Quat:
@@ -61,7 +52,7 @@ def _v(a: np.ndarray) -> Vec3:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
-class NativeMujoco(Backend):
+class NativeMujoco(MjcfReads, Backend):
     """The world of one MJCF model as MuJoCo compiles and steps it.
 
     Args:
@@ -186,7 +177,7 @@ class NativeMujoco(Backend):
         """See Backend.close."""
         self._closed = True
 
-    def _fresh(self) -> None:
+    def _sync(self) -> None:
         """Poses and velocities of the state as it stands (writes nothing mj_step reads)."""
         if self._stale:
             m, d = self.m, self.d
@@ -224,89 +215,20 @@ class NativeMujoco(Backend):
             self._geom_owners = (body_of[m.geom_bodyid], link_of[m.geom_bodyid])
         return self._geom_owners
 
-    # ---------------------------------------------------------------- tables
-
-    def joint_info(self, body: int, joint: int) -> JointInfo:
-        """See Backend.joint_info (the rows of :mod:`simbridge.model.mjcf_native`)."""
-        return self._bodies[body].table[joint]
-
-    def num_joints(self, body: int) -> int:
-        """See Backend.num_joints: one row per MuJoCo joint but the free one."""
-        return len(self._bodies[body].table)
-
-    def _link_body(self, body: int, link: int) -> int:
-        """The MuJoCo body id a link reads (-1: the base; -1 of a massless root: -1)."""
-        b = self._bodies[body]
-        if link < 0:
-            return -1 if b.massless_root else b.body_id
-        return b.link_bodies[link]
-
-    def dynamics_info(self, body: int, link: int) -> DynamicsInfo:
-        """See Backend.dynamics_info: MuJoCo's body mass and inertia; the friction of the
-        body's first geom (sliding, torsional, rolling: MuJoCo's three), restitution 0."""
-        m = self.m
-        bid = self._link_body(body, link)
-        if bid < 0:  # a massless root
-            return DynamicsInfo(
-                0.0, 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0, 0, 0, 1.0), 0.0, 0.0, 0.0
-            )
-        g = int(m.body_geomadr[bid])
-        fr = m.geom_friction[g] if g >= 0 else np.zeros(3)
-        return DynamicsInfo(
-            float(m.body_mass[bid]),
-            float(fr[0]),
-            _v(m.body_inertia[bid]),
-            _v(m.body_ipos[bid]),
-            _xyzw(m.body_iquat[bid]),
-            0.0,
-            float(fr[2]),
-            float(fr[1]),
-        )
-
     # ---------------------------------------------------------------- state
+    # The joint table, base_state, link_state and dynamics_info are MjcfReads' (the other
+    # engines' reads of this reading): they read this backend's own MjData, kept fresh by
+    # _sync, through _com below.
 
     def _com(self, bid: int) -> tuple[Vec3, Quat, Vec3, Vec3]:
-        """A MuJoCo body's centre-of-mass pose and velocity (world)."""
+        """A MuJoCo body's centre-of-mass pose and velocity (world), from the backend's own
+        ``MjData`` (MjcfReads' reads call it)."""
         d = self.d
         q = np.empty(4)
         mujoco.mju_mat2Quat(q, d.ximat[bid])
         vel = np.empty(6)
         mujoco.mj_objectVelocity(self.m, d, mujoco.mjtObj.mjOBJ_BODY, bid, vel, 0)
         return _v(d.xipos[bid]), _xyzw(q), _v(vel[3:]), _v(vel[:3])
-
-    @exclusive
-    def base_state(self, body: int) -> BaseState:
-        """See Backend.base_state: the top-level body's centre of mass (a massless root: the
-        body's frame at qpos0, at rest)."""
-        self._fresh()
-        b = self._bodies[body]
-        if b.massless_root:
-            m = self.m
-            return BaseState(
-                _v(m.body_pos[b.body_id]),
-                _xyzw(m.body_quat[b.body_id]),
-                (0.0, 0.0, 0.0),
-                (0.0, 0.0, 0.0),
-            )
-        return BaseState(*self._com(b.body_id))
-
-    @exclusive
-    def link_state(self, body: int, link: int) -> LinkState:
-        """See Backend.link_state: the MuJoCo body of row ``link``."""
-        self._fresh()
-        m, d = self.m, self.d
-        bid = self._link_body(body, link)
-        pos, orn, lin, ang = self._com(bid)
-        return LinkState(
-            pos,
-            orn,
-            _v(m.body_ipos[bid]),
-            _xyzw(m.body_iquat[bid]),
-            _v(d.xpos[bid]),
-            _xyzw(d.xquat[bid]),
-            lin,
-            ang,
-        )
 
     @exclusive
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
@@ -356,7 +278,7 @@ class NativeMujoco(Backend):
                 "moving a fixed base of a model read with semantics='mujoco'",
                 "its place is the file's",
             )
-        self._fresh()
+        self._sync()
         m, d, bid = self.m, self.d, b.body_id
         qa, va = int(m.jnt_qposadr[b.free_joint]), int(m.jnt_dofadr[b.free_joint])
         com_pos, com_orn, lin, ang = self._com(bid)
@@ -379,48 +301,6 @@ class NativeMujoco(Backend):
         self._stale = True
 
     # ---------------------------------------------------------------- PyBullet's commands
-
-    def set_joint_velocity(self, *args: Any, **kwargs: Any) -> None:
-        """See Backend.set_joint_velocity.
-
-        Raises:
-            BackendUnsupportedError: Always (the model's actuators drive it).
-        """
-        raise BackendUnsupportedError(self.name, *_COMMANDS)
-
-    def set_joint_position(self, *args: Any, **kwargs: Any) -> None:
-        """See Backend.set_joint_position.
-
-        Raises:
-            BackendUnsupportedError: Always (the model's actuators drive it).
-        """
-        raise BackendUnsupportedError(self.name, *_COMMANDS)
-
-    def set_joint_torque(self, *args: Any, **kwargs: Any) -> None:
-        """See Backend.set_joint_torque.
-
-        Raises:
-            BackendUnsupportedError: Always (the model's actuators drive it).
-        """
-        raise BackendUnsupportedError(self.name, *_COMMANDS)
-
-    def joint_commands(self, body: int) -> JointCommands:
-        """See Backend.joint_commands: no PyBullet motor, ever: every joint reads as a
-        released one (VELOCITY, target 0, max_force 0; kd 1), nothing pending."""
-        n = len(self._bodies[body].table)
-        z = np.zeros(n)
-        return JointCommands(
-            np.full(n, int(MotorMode.VELOCITY)), z, z.copy(), z.copy(), np.ones(n), z.copy()
-        )
-
-    def set_joint_commands(self, body: int, commands: JointCommands) -> None:
-        """See Backend.set_joint_commands: only released motors and no pending torque.
-
-        Raises:
-            BackendUnsupportedError: For any motor with a force, or a pending torque.
-        """
-        if np.asarray(commands.max_force).any() or np.asarray(commands.pending_torque).any():
-            raise BackendUnsupportedError(self.name, *_COMMANDS)
 
     # ---------------------------------------------------------------- whole state
 
@@ -517,7 +397,7 @@ class NativeMujoco(Backend):
     @exclusive
     def site_pose(self, site: int) -> tuple[Vec3, Quat]:
         """See Backend.site_pose: ``site_xpos`` and ``site_xmat`` as a quaternion."""
-        self._fresh()
+        self._sync()
         q = np.empty(4)
         mujoco.mju_mat2Quat(q, self.d.site_xmat[site])
         return _v(self.d.site_xpos[site]), _xyzw(q)
