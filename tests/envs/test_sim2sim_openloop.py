@@ -22,7 +22,7 @@ from simbridge.cli.main import main
 from simbridge.envs.errors import TaskFileError, UnknownTrainingEngineError
 from simbridge.envs.reader import load_task, loads_task, shipped_tasks
 from simbridge.envs.sim2sim import sim2sim
-from simbridge.envs.sim2sim_report import markdown, summary
+from simbridge.envs.sim2sim_report import headline, markdown, summary
 from simbridge.envs.task import TrainedSpec
 from simbridge.exceptions import InvalidArgumentError
 
@@ -122,6 +122,29 @@ def test_a_policy_trained_outside_is_judged_against_its_stated_contract(tmp_path
     assert s["external"]["stated"]["joint damping"] == "0.5"
     assert s["openloop"] is None
     assert result.points_at_contract is False
+
+
+def test_an_outside_policy_failing_everywhere_points_at_its_stated_contract(tmp_path, monkeypatch):
+    (tmp_path / "push_policy.py").write_text("def push(obs):\n    return [1.0]\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    result = sim2sim(
+        "push_policy:push",
+        "cartpole",
+        trained_on="external:gymnasium",
+        backends=["pybullet", "mujoco"],
+        episodes=2,
+    )
+    assert [f.rate.successes for f in result.figures] == [0, 0]
+    assert result.points_at_contract
+    lines = headline(result)
+    assert lines[-1].startswith("the policy succeeds on less than 50% of the seeds on every engine")
+    assert "contract stated for gymnasium" in lines[-1]
+    table = [line for line in markdown(result).splitlines() if line.startswith("| pybullet | 0/2")]
+    assert table and table[0].split(" | ")[2:5] == [
+        "-",
+        "-",
+        "-",
+    ]  # nothing against a training engine
 
 
 def test_a_task_file_states_its_training_run():
