@@ -37,6 +37,7 @@ __all__ = [
     "NOT_STATED",
     "UNREAD",
     "PAIRED_COLUMNS",
+    "PAIRED_FIELDS",
     "Pair",
     "blank_paired_columns",
     "headline",
@@ -54,6 +55,8 @@ UNREAD = (ARMATURE,)
 """Rows the engines' columns cannot fill (``-``): never marked as departing."""
 PAIRED_COLUMNS = ("discordant (lost, won)", "McNemar p", "verdict", "return minus training")
 """The rates table's columns against a training engine: empty for an outside policy."""
+PAIRED_FIELDS = ("discordant", "p_value", "verdict", "return_difference")
+"""summary.json's fields of an engine against a training engine: None for an outside policy."""
 
 
 class Pair(NamedTuple):

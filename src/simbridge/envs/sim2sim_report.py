@@ -298,6 +298,9 @@ def summary(result: Sim2SimResult) -> dict[str, Any]:
                 "contract": run.contract,
             }
         )
+    if outside(result.trained_on):  # no training engine: every pair is in "external"
+        for e in engines:
+            e.update(dict.fromkeys(sim2sim_external.PAIRED_FIELDS))
     return {
         "task": result.task,
         "policy": result.policy,
