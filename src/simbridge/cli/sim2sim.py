@@ -134,7 +134,7 @@ def _sim2sim(args: argparse.Namespace) -> int:
     files = write(result, out)
     for line in headline(result):
         print(line)
-    from simbridge.envs.sim2sim_openloop import lines
+    from simbridge.envs.sim2sim_openloop_report import lines
 
     for line in lines(result.openloop):
         print(line)

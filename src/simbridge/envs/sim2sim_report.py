@@ -6,8 +6,8 @@ p-values against the training engine, returns and lengths with bootstrap interva
 clipped actions and sign changes, the failures by name (NaN actions among them), the ranking of
 ``--explain`` where it ran, and the contract table, engine beside engine, its rows marked where
 an engine departs from the training engine; the open-loop replays where they ran
-(:mod:`.sim2sim_openloop`); for a policy trained outside simbridge, every pair of engines and
-the stated contract as the table's first column (:mod:`.sim2sim_external`).
+(:mod:`.sim2sim_openloop_report`); for a policy trained outside simbridge, every pair of
+engines and the stated contract as the table's first column (:mod:`.sim2sim_external`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from simbridge.envs import sim2sim_external, sim2sim_openloop
+from simbridge.envs import sim2sim_external, sim2sim_openloop_report
 from simbridge.envs.sim2sim import ALPHA, TRAINED_FLOOR, EngineFigures, Sim2SimResult
 from simbridge.envs.trained_on import outside
 
@@ -232,7 +232,7 @@ def markdown(result: Sim2SimResult) -> str:
     lines += sim2sim_external.pairs_section(result)
     if not ext and (result.explain or any(f.verdict == "drop" for f in result.figures[1:])):
         lines += _explain_lines(result)
-    lines += sim2sim_openloop.section(result.openloop)
+    lines += sim2sim_openloop_report.section(result.openloop)
     train = result.runs[0].contract
     labels, rows = sim2sim_external.with_stated(
         result, [f.label for f in result.figures], contract_rows(result)
@@ -311,7 +311,7 @@ def summary(result: Sim2SimResult) -> dict[str, Any]:
         "headline": headline(result),
         "engines": engines,
         "explain": result.explain,
-        "openloop": sim2sim_openloop.summary(result.openloop),
+        "openloop": sim2sim_openloop_report.summary(result.openloop),
         "external": sim2sim_external.summary(result, contract_rows(result)),
     }
 
