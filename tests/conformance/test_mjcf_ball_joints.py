@@ -107,8 +107,11 @@ def _random_state(m: mujoco.MjModel, seed: int) -> tuple[np.ndarray, np.ndarray]
 
 
 def _angle_between(q1: np.ndarray, q2: np.ndarray) -> float:
-    """The rotation angle (rad) between two unit quaternions w, x, y, z."""
-    return 2.0 * float(np.arccos(min(1.0, abs(float(np.dot(q1, q2))))))
+    """The rotation angle (rad) between two unit quaternions w, x, y, z: of ``q1^-1 q2``,
+    ``2 atan2(|v|, |w|)`` (exact near 0, where ``arccos`` of the dot product is 1e-7 off)."""
+    rel = np.empty(4)
+    mujoco.mju_mulQuat(rel, np.array((q1[0], -q1[1], -q1[2], -q1[3])), np.asarray(q2, float))
+    return 2.0 * float(np.arctan2(np.linalg.norm(rel[1:]), abs(rel[0])))
 
 
 def _raw_run(m: mujoco.MjModel, seconds: float) -> np.ndarray:
