@@ -18,7 +18,7 @@ import pytest
 from _gaps import gap, steps_mujocos_reading_raw
 
 import simbridge
-from simbridge.exceptions import MjcfFeatureUnsupportedError
+from simbridge.exceptions import BackendUnsupportedError, MjcfFeatureUnsupportedError
 from simbridge.types import JointType
 
 # dm_control's mujoco/testing/assets/model_with_ball_joints.xml (two ball joints, damping 0.005,
@@ -278,3 +278,18 @@ def test_an_actuator_on_a_ball_joint_is_refused_by_name(backend: str) -> None:
         with pytest.raises(MjcfFeatureUnsupportedError, match=r"<actuator> on a ball.*'twist'"):
             sim.load_mjcf(BALL_ACTUATED, semantics="mujoco")
         assert sim.bodies() == []
+
+
+def test_a_fixed_base_takes_its_own_pose_only(backend: str) -> None:
+    """The chain's base is welded where the file puts it: its own pose (what a state of this
+    model holds, on any engine) is accepted and changes nothing; another is refused."""
+    _skip_unless_mujocos_reading(backend)
+    with simbridge.Sim(backend) as sim:
+        (body,) = sim.load_mjcf(CHAIN, semantics="mujoco")
+        sim.step(10)
+        base, q = sim.base_state(body), sim.qpos()
+        sim.reset_base_state(body, base.position, base.orientation, (0, 0, 0), (0, 0, 0))
+        assert np.array_equal(sim.qpos(), q)
+        moved = (base.position[0] + 0.1, *base.position[1:])
+        with pytest.raises(BackendUnsupportedError, match="moving a fixed base"):
+            sim.reset_base_state(body, moved)
