@@ -571,13 +571,13 @@ def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
             "3.0.3 builds no spherical articulation joint), read and written as MuJoCo's "
             "quaternion and body-frame angular velocity: gimbal lock where the middle angle "
             "reaches +-90 degrees; its armature is the three revolutes' (exact at the zero "
-            "pose), its damping a force implicit in the joint-space inertia, its range MuJoCo's "
-            "cone computed here"
+            "pose), its damping a force implicit in every force as MuJoCo's Euler makes it, its "
+            "range MuJoCo's cone computed here"
             if engine == "physx"
             else "a ball joint is PyBullet's spherical joint (it turns the child's inertial "
             "frame), read and written as MuJoCo's quaternion and body-frame angular velocity; "
-            "its range is MuJoCo's cone computed here, its damping and armature forces as on "
-            "the hinges"
+            "its range is MuJoCo's cone computed here, its damping implicit in every force as "
+            "MuJoCo's Euler makes it, its armature a force as on the hinges"
         )
     if m.nu:
         out["actuators"] = (
