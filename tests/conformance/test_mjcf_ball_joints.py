@@ -144,7 +144,7 @@ def test_ball_joints_are_spherical_rows_in_mujocos_layout(backend: str) -> None:
     """Each ball joint is a SPHERICAL row at MuJoCo's addresses; ``qpos()``/``qvel()`` have
     MuJoCo's ``nq``/``nv`` and read ``qpos0`` at rest after the load; a random state written
     reads back (float32 engines to their precision), and the joint's multi-DoF state is that
-    state's quaternion (x, y, z, w) and angular velocity."""
+    state's quaternion (x, y, z, w) and angular velocity; a multi-DoF reset writes them."""
     _skip_unless_mujocos_reading(backend)
     m = mujoco.MjModel.from_xml_string(CHAIN)
     tol = _state_tol(backend)
@@ -166,6 +166,12 @@ def test_ball_joints_are_spherical_rows_in_mujocos_layout(backend: str) -> None:
         elbow = sim.joint_states_multi_dof(body, ["elbow"])[0]
         np.testing.assert_allclose(elbow.position, sim.qpos()[[5, 6, 7, 4]], atol=10 * tol)
         np.testing.assert_allclose(elbow.velocity, sim.qvel()[3:6], atol=10 * tol)
+        turn = np.array((0.1, -0.2, 0.3, 0.9))  # x, y, z, w; the Sim normalises it
+        sim.reset_joint_state_multi_dof(body, "shoulder", turn, (0.5, -0.25, 1.0))
+        turn /= np.linalg.norm(turn)
+        np.testing.assert_allclose(sim.qpos()[:4], turn[[3, 0, 1, 2]], atol=10 * tol)
+        np.testing.assert_allclose(sim.qvel()[:3], (0.5, -0.25, 1.0), atol=10 * tol)
+        np.testing.assert_allclose(sim.qpos()[4:], q[4:], atol=10 * tol)  # the elbow kept
         if not steps_mujocos_reading_raw(backend):
             assert "ball_joints" in sim.manifest()["departures"]
 
