@@ -11,8 +11,8 @@ force that stops the joint within the step, clamped to the frictionloss, and MuJ
 joint limits (the joints have no PhysX limit; the shared part, ``backends/mjcf_engine.py``).
 A ball joint is the backend's spherical joint (``ball.py``: three revolutes about the child's
 inertial axes, SAPIEN 3.0.3 building no spherical articulation joint), read and written in
-MuJoCo's ball coordinates; its damping is a force each step, implicit in the joint-space
-inertia (as on PyBullet), its armature the three revolutes' armature.
+MuJoCo's ball coordinates; its damping is a force each step, implicit in every force as
+MuJoCo's Euler makes it, its armature the three revolutes' armature.
 """
 
 from __future__ import annotations
@@ -215,12 +215,11 @@ class NativePhysx(MjcfOnEngine, ContactReads):
     def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
         """See MjcfOnEngine.apply_forces: ``set_qf`` per articulation; damping and armature
         are the joints' own (drives, armature) but a ball joint's damping, a force implicit in
-        the joint-space inertia; frictionloss and MuJoCo's soft limits added here; a ball
+        every force (MuJoCo's Euler); frictionloss and MuJoCo's soft limits added here; a ball
         joint's three forces (child body frame) as its revolutes' ``J^T R(I)^T f``."""
         m, d = self.m, self.d
         full = mass + np.diag(m.dof_armature)
         f = qfrc.copy()
-
         if self._fl.any():  # the force that stops the joint within the step, clamped
             inv = np.linalg.inv(full)
             m_eff = 1.0 / np.maximum(np.diagonal(inv), 1e-12)
