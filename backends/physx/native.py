@@ -12,11 +12,13 @@ joint limits (the joints have no PhysX limit; the shared part, ``backends/mjcf_e
 A ball joint is the backend's spherical joint (``ball.py``: three revolutes about the child's
 inertial axes, SAPIEN 3.0.3 building no spherical articulation joint), read and written in
 MuJoCo's ball coordinates; its damping is a force each step, implicit in every force as
-MuJoCo's Euler makes it, its armature the three revolutes' armature.
+MuJoCo's Euler makes it, its armature the three revolutes' armature plus the force that makes
+it MuJoCo's (:meth:`NativePhysx._armature_correction`).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -38,6 +40,18 @@ from .model import build_robot
 __all__ = ["NativePhysx"]
 
 SOLVER_ITERATIONS = 50  # position iterations of each articulation (PyBullet's count)
+
+
+def _matrix(q: Quat) -> np.ndarray:
+    """The rotation matrix of a unit quaternion (x, y, z, w)."""
+    x, y, z, w = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def _v3(a: np.ndarray) -> Vec3:
@@ -224,12 +238,13 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             inv = np.linalg.inv(full)
             m_eff = 1.0 / np.maximum(np.diagonal(inv), 1e-12)
             f -= np.clip(m_eff * d.qvel / self.dt, -self._fl, self._fl)
-        if self._ball_damping.any():  # implicit in every force, as MuJoCo's Euler makes it
+        if self._balls:  # the balls' damping implicit in every force (MuJoCo's Euler)
             ball = self._ball_damping
             damping = damping - ball
             implicit = full + self.dt * np.diag(ball)
             acc = np.linalg.solve(implicit, f - (damping + ball) * d.qvel - d.qfrc_bias)
             f -= ball * (d.qvel + self.dt * acc)
+            f += self._armature_correction(acc)
         if self._recovering:
             free = np.linalg.solve(full, f - damping * d.qvel - d.qfrc_bias)
             f += self.limit_recovery(full, free)
@@ -248,6 +263,43 @@ class NativePhysx(MjcfOnEngine, ContactReads):
                     jac = rate_matrix(float(aq[dofs[1]]), float(aq[dofs[2]]))
                     qf[list(dofs)] = jac.T @ local
             art.set_qf(qf)
+
+    def _armature_correction(self, acc: np.ndarray) -> np.ndarray:
+        """The force that turns the armature PhysX gives a ball's three revolutes (``A`` on
+        their angle rates) into MuJoCo's (``A`` on the angular velocity): on the revolutes it
+        is ``A J^-T (J^-1 w' + (J^-1)' w)`` in the child's inertial frame, MuJoCo's ``A w'``;
+        the difference, in the body frame, is added (0 at the zero pose; left out where the
+        middle angle is within 6° of +-90°, ``|det J| = |cos b| < 0.1``).
+
+        Args:
+            acc: (nv,) the acceleration expected this step (MuJoCo's coordinates).
+
+        Returns:
+            (nv,) the correction, 0 but on the balls' velocities.
+        """
+        m = self.m
+        out = np.zeros(m.nv)
+        for k, built in enumerate(self._built):
+            art = built.articulation
+            if art is None or not self._balls_of[k]:
+                continue
+            aq, av = art.qpos, art.qvel
+            for _, dofs, _, va, inertial in self._balls_of[k]:
+                arm = float(m.dof_armature[va])
+                b, c = float(aq[dofs[1]]), float(aq[dofs[2]])
+                if arm == 0.0 or abs(math.cos(b)) < 0.1:
+                    continue
+                jac = rate_matrix(b, c)
+                inv = np.linalg.inv(jac)
+                rates = np.array([av[i] for i in dofs], dtype=float)
+                eps = 1e-6  # J's rate of change along the motion, by a difference
+                ahead = rate_matrix(b + eps * rates[1], c + eps * rates[2])
+                inv_rate = -inv @ ((ahead - jac) / eps) @ inv
+                rot = _matrix(inertial)
+                wdot = rot.T @ acc[va : va + 3]
+                engine = arm * inv.T @ (inv @ wdot + inv_rate @ (jac @ rates))
+                out[va : va + 3] = rot @ (engine - arm * wdot)
+        return out
 
     def step_engine(self) -> None:
         """See MjcfOnEngine.step_engine: ``scene.step()``."""
