@@ -68,6 +68,7 @@ class EffortProbe:
         self.upper = np.array([j.upper_limit for j in limited], dtype=np.float64)
         self._tol = np.minimum(LIMIT_TOLERANCE, 0.01 * (self.upper - self.lower))
         self._limited_key = tuple(int(i) for i in self.limited)
+        self._last: tuple[np.ndarray | None, bool] = (None, False)
         self.steps = self.saturated = self.control_steps = self.at_limit = 0
 
     def install(self) -> EffortProbe:
@@ -96,10 +97,15 @@ class EffortProbe:
                 modes); None: the engine's motors set them, read back.
         """
         self.steps += 1
+        if torque is not None and torque is self._last[0]:  # the torque mode's held torque
+            self.saturated += self._last[1]
+            return
         if torque is None:
             w = self.env.world
             torque = self.env.sim.joint_states(w.body, w.joints).applied_torques
-        self.saturated += bool(np.any(np.abs(torque) >= self._threshold))
+        hit = bool(np.any(np.abs(torque) >= self._threshold))
+        self._last = (torque, hit)
+        self.saturated += hit
 
     def after_control_step(self) -> None:
         """Count the control step just taken (``env.step``): its joints against their limits."""

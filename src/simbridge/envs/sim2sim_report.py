@@ -189,7 +189,7 @@ def _explain_lines(result: Sim2SimResult) -> list[str]:
 
 def _survival_lines(result: Sim2SimResult, figure: str | None) -> list[str]:
     """The time-to-failure section: the figure, and the replayed seed where one was chosen."""
-    out = ["", "## Time to failure", ""]
+    out = ["## Time to failure", ""]
     if figure is not None:
         out += [
             f"![Kaplan-Meier survival of every engine]({figure})",
@@ -211,7 +211,6 @@ def _survival_lines(result: Sim2SimResult, figure: str | None) -> list[str]:
         out += [
             f"report.html replays {result.replay.why}. `simbridge replay` on this folder serves "
             "the same scene live.",
-            "",
         ]
     return out
 
@@ -251,7 +250,7 @@ def markdown(result: Sim2SimResult, *, figure: str | None = None) -> str:
                     f"  - {f.nan_actions} episode(s) ended on a NaN or infinite action from the "
                     "policy, counted as failures and never passed to the engine"
                 )
-    lines += _survival_lines(result, figure)
+    lines += [""] * (lines[-1] != "") + _survival_lines(result, figure)
     if result.explain or any(f.verdict == "drop" for f in result.figures[1:]):
         lines += _explain_lines(result)
     train = result.runs[0].contract
