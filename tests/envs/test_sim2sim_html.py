@@ -295,10 +295,14 @@ def test_report_html_opens_on_the_headline_then_the_replay(policies, tmp_path, c
         assert (out / f).is_file()
 
 
-def test_without_fail_on_drop_a_drop_exits_0_and_no_drop_exits_0(policies, tmp_path):
+def test_without_fail_on_drop_a_drop_exits_0_and_no_drop_exits_0(policies, tmp_path, capsys):
     base = ["sim2sim", f"{policies}:LqrOnPybulletOnly", "--task", "cartpole", "--no-replay"]
     drop = [*base, "--trained-on", "pybullet", "--backends", "mujoco", "--episodes", "6"]
     assert main([*drop, "--out", str(tmp_path / "a")]) == 0
     assert not (tmp_path / "a" / "trajectories").exists()
+    page = (tmp_path / "a" / "report.html").read_text(encoding="utf-8")
+    assert 'id="headline"' in page and 'id="replay"' not in page
     same = [*base, "--trained-on", "pybullet", "--backends", "pybullet", "--episodes", "1"]
     assert main([*same, "--out", str(tmp_path / "b"), "--fail-on-drop"]) == 0
+    bad = ["sim2sim", "reference", "--task", "cartpol", "--trained-on", "pybullet"]
+    assert main([*bad, "--out", str(tmp_path / "c"), "--fail-on-drop"]) == 1  # an error stays 1
