@@ -63,9 +63,6 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # 0.6052 against 0.6117, its feet held by PhysX's static friction where MuJoCo's creep).
     "mjcf_ant_height_rk4": {"pybullet": 0.025},
     "mjcf_ant_height_euler": {"physx": 0.01},
-    # PhysX refuses an <exclude> between two top-level bodies (its collision groups here filter
-    # within one articulation): not yet built, refused by name (size: none, a refusal).
-    "mjcf_exclude_across_bodies": {"physx": 0.0},
     # PhysX keeps every state in float32 (SAPIEN 3.0.3: joint positions and velocities, link
     # poses and velocities; float32 spacing 1.2e-7 at 1, so 1.2e-7 m at 1 m): a value written
     # reads back as its float32 rounding, and a closed form worked out in double is met to a few
