@@ -198,14 +198,32 @@ class MjcfOnEngine(MjcfReads, Backend):
         full = mass + np.diag(arm)
         f = qfrc + self.implicit_damping(damping, full)
         fc = np.zeros_like(f)
+        q = self.d.qpos
         if self._last is not None:  # the engine's constraint forces of the step before
-            v0, mass0, c0, applied0 = self._last
-            fc = mass0 @ ((v - v0) / self.dt) - applied0 + c0
+            q0, v0, mass0, c0, applied0 = self._last
+            fc = mass0 @ (self.velocity_change(q0, v0, q, v) / self.dt) - applied0 + c0
         if self._recovering:
             f = f + self.limit_recovery(full, np.linalg.solve(full, f - c + fc))
         out = forces.armature_force(arm, full, f, c - fc) if arm.any() else f
-        self._last = (v.copy(), mass.copy(), c.copy(), out)
+        self._last = (q.copy(), v.copy(), mass.copy(), c.copy(), out)
         return out
+
+    def velocity_change(
+        self, q0: np.ndarray, v0: np.ndarray, q1: np.ndarray, v1: np.ndarray
+    ) -> np.ndarray:
+        """The step's change of velocity as MuJoCo's ``qacc * dt`` at the step's start, for
+        the constraint forces of :meth:`with_armature`.
+
+        Args:
+            q0: (nq,) the start's positions; v0: (nv,) its velocities (MuJoCo's conventions).
+            q1: (nq,) the end's positions; v1: (nv,) its velocities.
+
+        Returns:
+            (nv,) by default ``v1 - v0``; an engine that steps a free body's centre-of-mass
+            velocity and world angular velocity gives that change in MuJoCo's coordinates of
+            the start (:func:`~.mjcf_forces.free_velocity_change`).
+        """
+        return v1 - v0
 
     def limit_recovery(self, mass: np.ndarray, free: np.ndarray) -> np.ndarray:
         """MuJoCo's soft joint limit as a force (:func:`~.mjcf_forces.soft_limit_force`). With
