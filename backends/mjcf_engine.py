@@ -215,8 +215,10 @@ class MjcfOnEngine(MjcfReads, Backend):
         the constraint forces of :meth:`with_armature`.
 
         Args:
-            q0: (nq,) the start's positions; v0: (nv,) its velocities (MuJoCo's conventions).
-            q1: (nq,) the end's positions; v1: (nv,) its velocities.
+            q0: (nq,) the start's positions (MuJoCo's conventions).
+            v0: (nv,) the start's velocities.
+            q1: (nq,) the end's positions.
+            v1: (nv,) the end's velocities.
 
         Returns:
             (nv,) by default ``v1 - v0``; an engine that steps a free body's centre-of-mass
