@@ -25,7 +25,6 @@ import numpy as np
 from simbridge.backend import Backend
 from simbridge.exceptions import (
     BackendUnsupportedError,
-    MjcfFeatureUnsupportedError,
     SimBusyError,
     SimClosedError,
     SimulationDivergedError,
@@ -34,9 +33,9 @@ from simbridge.model.mjcf_mirror import Mirror
 from simbridge.model.mjcf_native import NativeBody, NativeMjcf
 from simbridge.model.mjcf_native_plan import plan_departures, refuse_unsimulated
 from simbridge.profiles import Profile
+from simbridge.transforms import quat_multiply, quat_rotate
 from simbridge.types import (
     ContactPoint,
-    JointType,
     Quat,
     Vec3,
 )
@@ -46,7 +45,7 @@ from . import mjcf_forces as forces
 from .locking import exclusive, wait_for_lock
 from .mjcf_reads import MjcfReads
 
-__all__ = ["MjcfOnEngine"]
+__all__ = ["MjcfOnEngine", "ball_from_inertial", "ball_to_inertial"]
 
 
 def _xyzw(q: np.ndarray) -> Quat:
@@ -65,6 +64,44 @@ def _conj(q: Quat) -> Quat:
     return (-q[0], -q[1], -q[2], q[3])
 
 
+def ball_from_inertial(inertial: Quat, quat: Quat, angular: Vec3) -> tuple[np.ndarray, np.ndarray]:
+    """A ball joint's MuJoCo coordinates from an engine's spherical joint that turns the
+    child's inertial frame (PyBullet's, and PhysX's three revolutes, ``backends/physx/ball.py``).
+
+    MuJoCo's ball ``qpos`` turns the child body's frame (its link frame here, the body frame at
+    the anchor) from its pose at ``qpos0``; with ``I`` the inertial frame in that frame, the
+    engine's turn ``q`` of the inertial frame is MuJoCo's ``I q I^-1``, and its angular velocity
+    (child's inertial frame) is ``R(I) w`` in the body frame.
+
+    Args:
+        inertial: ``I``, the link's inertial orientation in its link frame (x, y, z, w).
+        quat: The engine's joint quaternion (x, y, z, w).
+        angular: The engine's joint angular velocity (rad/s, the child's inertial frame).
+
+    Returns:
+        MuJoCo's ``qpos`` (4,) w, x, y, z and ``qvel`` (3,) (rad/s, child body frame).
+    """
+    turn = quat_multiply(quat_multiply(inertial, quat), _conj(inertial))
+    return _wxyz(turn), np.array(quat_rotate(inertial, _v(angular)))
+
+
+def ball_to_inertial(inertial: Quat, qpos: np.ndarray, qvel: np.ndarray) -> tuple[Quat, Vec3]:
+    """The inverse of :func:`ball_from_inertial`.
+
+    Args:
+        inertial: ``I``, the link's inertial orientation in its link frame (x, y, z, w).
+        qpos: (4,) MuJoCo's ball ``qpos``, w, x, y, z (normalised here).
+        qvel: (3,) MuJoCo's ball ``qvel`` (rad/s, child body frame).
+
+    Returns:
+        The engine's joint quaternion (x, y, z, w) and angular velocity (child's inertial
+        frame).
+    """
+    w4 = np.asarray(qpos, dtype=float) / float(np.linalg.norm(qpos))
+    turn = quat_multiply(quat_multiply(_conj(inertial), _xyzw(w4)), inertial)
+    return turn, quat_rotate(_conj(inertial), _v(qvel))
+
+
 class MjcfOnEngine(MjcfReads, Backend):
     """The world of one MJCF model as MuJoCo compiles it, stepped by another engine.
 
@@ -77,7 +114,7 @@ class MjcfOnEngine(MjcfReads, Backend):
 
     Raises:
         MjcfFeatureUnsupportedError: A feature only MuJoCo simulates (tendons, equality
-            constraints, flex bodies...), or a ball joint (not yet), named with its element.
+            constraints, flex bodies...), named with its element.
     """
 
     engine_version: str = ""
@@ -94,17 +131,6 @@ class MjcfOnEngine(MjcfReads, Backend):
         timestep: float | None = None,
     ) -> None:
         refuse_unsimulated(native, self.name)
-        for nb in native.bodies:
-            for row in nb.table:
-                if row.type == JointType.SPHERICAL:
-                    raise MjcfFeatureUnsupportedError(
-                        native.display_name,
-                        self.name,
-                        "<joint type='ball'>",
-                        row.name,
-                        "not yet: measured on PyBullet, a ball pendulum's qpos is 0.28 off "
-                        "MuJoCo's after 0.4 s; PhysX's ball is three revolute joints",
-                    )
         m = native.model
         if gravity is not None:
             m.opt.gravity[:] = gravity
@@ -120,10 +146,14 @@ class MjcfOnEngine(MjcfReads, Backend):
         self.dt = float(m.opt.timestep)
         self.ctrl = np.zeros(m.nu)
         self._bodies: dict[int, NativeBody] = dict(enumerate(native.bodies))
-        self._limited = [  # hinge and slide joints with a range
-            j for j in range(m.njnt) if m.jnt_limited[j] and int(m.jnt_type[j]) in (2, 3)
+        self._limited = [  # hinge, slide and ball joints with a range
+            j for j in range(m.njnt) if m.jnt_limited[j] and int(m.jnt_type[j]) in (1, 2, 3)
         ]
         self._recovering: set[int] = set()  # joints placed outside their range
+        self.ball_dofs = np.zeros(m.nv, dtype=bool)  # the ball joints' velocities
+        for j in range(m.njnt):
+            if int(m.jnt_type[j]) == 1:  # mjJNT_BALL
+                self.ball_dofs[int(m.jnt_dofadr[j]) : int(m.jnt_dofadr[j]) + 3] = True
         # the step before's velocity, inertia, bias and applied force (with_armature)
         self._last: tuple[np.ndarray, ...] | None = None
         self._stepping = threading.RLock()
@@ -196,15 +226,23 @@ class MjcfOnEngine(MjcfReads, Backend):
         arm = self.m.dof_armature
         v, c = self.d.qvel, self.d.qfrc_bias
         full = mass + np.diag(arm)
-        f = qfrc + self.implicit_damping(damping, full)
+        ball = np.where(self.ball_dofs, damping, 0.0)  # the ball joints' damping
+        f = qfrc + self.implicit_damping(damping - ball, full)
         fc = np.zeros_like(f)
         q = self.d.qpos
         if self._last is not None:  # the engine's constraint forces of the step before
             q0, v0, mass0, c0, applied0 = self._last
             fc = mass0 @ (self.velocity_change(q0, v0, q, v) / self.dt) - applied0 + c0
+        # a ball joint's damping is implicit in every force, as MuJoCo's Euler makes it: the
+        # acceleration (M + A + dt D)^-1 (f - c + fc - D v), given through the engine's M
+        # (a spinning thin body's axis has dt D / I near 10: an explicit force there is off)
+        implicit = full + self.dt * np.diag(ball)
         if self._recovering:
-            f = f + self.limit_recovery(full, np.linalg.solve(full, f - c + fc))
-        out = forces.armature_force(arm, full, f, c - fc) if arm.any() else f
+            f = f + self.limit_recovery(full, np.linalg.solve(implicit, f - c + fc - ball * v))
+        if ball.any():
+            out = mass @ np.linalg.solve(implicit, f - c + fc - ball * v) + c - fc
+        else:
+            out = forces.armature_force(arm, full, f, c - fc) if arm.any() else f
         self._last = (q.copy(), v.copy(), mass.copy(), c.copy(), out)
         return out
 
@@ -387,11 +425,15 @@ class MjcfOnEngine(MjcfReads, Backend):
             set(self._limited)
             if self.soft_limits
             else {
-                j for j in self._limited if forces.violation(self.m, j, float(qpos[adr[j]]))[0] < 0
+                j
+                for j in self._limited
+                if forces.violation(self.m, j, self._joint_qpos(qpos, adr[j], j))[0] < 0
             }
         )
 
-    # ---------------------------------------------------------------- PyBullet's commands
+    def _joint_qpos(self, qpos: np.ndarray, adr: int, j: int) -> float | np.ndarray:
+        """Joint ``j``'s coordinates at ``adr``: a number, or a ball joint's quaternion (4,)."""
+        return qpos[adr : adr + 4] if int(self.m.jnt_type[j]) == 1 else float(qpos[adr])
 
     # ---------------------------------------------------------------- whole state
 

@@ -1,11 +1,13 @@
 """MuJoCo's joint forces that an engine without them gets from simbridge, each step, under
 ``load_mjcf(source, semantics="mujoco")`` (no engine is imported here): implicit joint damping,
-armature, and MuJoCo's soft joint limits. Used by ``backends/mjcf_engine.py``; every array is
-in MuJoCo's generalized coordinates (nv,), ``mass`` the joint-space inertia (nv, nv).
+armature, and MuJoCo's soft joint limits (hinge, slide and ball). Used by
+``backends/mjcf_engine.py``; every array is in MuJoCo's generalized coordinates (nv,), ``mass``
+the joint-space inertia (nv, nv).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -13,11 +15,14 @@ import numpy as np
 
 __all__ = [
     "armature_force",
+    "ball_angle",
     "free_velocity_change",
     "implicit_damping",
     "soft_limit_force",
     "violation",
 ]
+
+_BALL = 1  # mujoco.mjtJoint.mjJNT_BALL (no engine is imported here)
 
 
 def implicit_damping(
@@ -63,20 +68,47 @@ def armature_force(
     return f - armature * np.linalg.solve(mass, f - bias)
 
 
-def violation(m: Any, j: int, q: float) -> tuple[float, float]:
+def ball_angle(quat: np.ndarray) -> tuple[float, np.ndarray]:
+    """A ball joint's rotation angle and axis, as MuJoCo's limit reads them (``mju_quat2Vel``:
+    ``2 atan2(|v|, w)`` wrapped into [-pi, pi] along ``v / |v|``, then the vector's norm).
+
+    Args:
+        quat: (4,) the joint's ``qpos``, w, x, y, z.
+
+    Returns:
+        The angle (rad, >= 0) and the unit axis (3,) in the child body's frame (any unit
+        vector at angle 0).
+    """
+    q = np.asarray(quat, dtype=float)
+    s = float(np.linalg.norm(q[1:4]))
+    if s == 0.0:
+        return 0.0, np.array((1.0, 0.0, 0.0))
+    angle = 2.0 * math.atan2(s, float(q[0]))
+    if angle > math.pi:
+        angle -= 2.0 * math.pi
+    axis = q[1:4] / s
+    return (angle, axis) if angle >= 0.0 else (-angle, -axis)
+
+
+def violation(m: Any, j: int, q: float | np.ndarray) -> tuple[float, float]:
     """A limited joint's MuJoCo violation at the nearer end of its range.
 
     Args:
         m: the compiled ``MjModel``.
-        j: the joint's id (a limited hinge or slide).
-        q: its ``qpos``.
+        j: the joint's id (a limited hinge, slide or ball).
+        q: its ``qpos`` (a ball joint: its quaternion (4,), w, x, y, z).
 
     Returns:
-        ``r`` (dist - margin; < 0: violated) and that end's sign (+1 the lower, -1 the upper).
+        ``r`` (dist - margin; < 0: violated) and that end's sign (+1 the lower, -1 the upper;
+        a ball joint: -1, its rotation angle against ``max(range)``, MuJoCo's cone).
     """
+    if int(m.jnt_type[j]) == _BALL:
+        angle, _ = ball_angle(np.asarray(q, dtype=float))
+        return float(max(m.jnt_range[j])) - angle - float(m.jnt_margin[j]), -1.0
+    x = float(q)
     lo, hi = m.jnt_range[j]
     margin = float(m.jnt_margin[j])
-    return (q - lo - margin, 1.0) if q - lo < hi - q else (hi - q - margin, -1.0)
+    return (x - lo - margin, 1.0) if x - lo < hi - x else (hi - x - margin, -1.0)
 
 
 def soft_limit_force(
@@ -99,9 +131,16 @@ def soft_limit_force(
     (MuJoCo's limit force is >= 0: a joint pushed back coasts through the end of its range at
     the speed the push gave it, 9.6 rad/s for the ant's ankles).
 
+    A ball joint's row is MuJoCo's cone: ``r = max(range) - angle - margin`` with ``angle``
+    the quaternion's rotation angle (:func:`ball_angle`) and the row's Jacobian ``J = -n`` on
+    its three velocities (``n`` the rotation axis, child body frame); its force is MuJoCo's
+    single-row solution ``(a - a0) / (A + R)``, ``A = J M^-1 J'``, ``R = (1 - d) / d`` times
+    MuJoCo's diagonal estimate ``dof_invweight0`` (a hinge's: ``d m_eff (a - a0)``, the estimate
+    taken as ``A``).
+
     Args:
         m: the compiled ``MjModel``.
-        joints: the limited hinge and slide joints to consider.
+        joints: the limited hinge, slide and ball joints to consider.
         qpos: (nq,) the positions.
         qvel: (nv,) the velocities.
         mass: (nv, nv) the joint-space inertia, armature included.
@@ -116,7 +155,8 @@ def soft_limit_force(
     inv = None
     for j in joints:
         qa, va = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
-        r, sign = violation(m, j, float(qpos[qa]))
+        ball = int(m.jnt_type[j]) == _BALL
+        r, sign = violation(m, j, qpos[qa : qa + 4] if ball else float(qpos[qa]))
         if r >= 0.0:
             inside.add(j)
             continue
@@ -127,6 +167,18 @@ def soft_limit_force(
         imp = dmin + (dmax - dmin) * min(-r / width, 1.0) if width > 0 else dmax
         tc = max(tc, 2.0 * dt)
         b, k = 2.0 / (dmax * tc), imp / (dmax**2 * tc**2 * dr**2)
+        if ball:  # the row's Jacobian: -axis on the joint's three velocities
+            jac = -ball_angle(qpos[qa : qa + 4])[1]
+            dofs = slice(va, va + 3)
+            a = -b * float(jac @ qvel[dofs]) - k * r
+            # MuJoCo's row: (a - a0) / (A + R), R = (1 - d) / d times its diagonal estimate,
+            # the joint's dof_invweight0 (a ball's mean over its three dofs, far above A where
+            # one axis spins a thin body: the cone is then softer than d m_eff (a - a0) says)
+            big_a = float(jac @ inv[dofs, dofs] @ jac)
+            soft = (1.0 - imp) / imp * float(m.dof_invweight0[va])
+            scalar = (a - float(jac @ free[dofs])) / (big_a + soft)
+            out[dofs] = jac * max(0.0, scalar)
+            continue
         a = -b * (sign * float(qvel[va])) - k * r  # in the violation's coordinate
         out[va] = sign * max(0.0, imp * (a - sign * free[va])) / inv[va, va]
     return out, inside

@@ -20,11 +20,13 @@ from simbridge.types import (
     DynamicsInfo,
     JointCommands,
     JointInfo,
+    JointStateMultiDof,
     JointStates,
     JointType,
     LinkState,
     MotorMode,
     Quat,
+    SphericalJointState,
     Vec3,
 )
 
@@ -189,6 +191,46 @@ class MjcfReads:
             v[row.u_index] = w
         self._write(q, v)
 
+    def keep_fixed_base(
+        self,
+        body: int,
+        position: Vec3 | None,
+        orientation: Quat | None,
+        linear_velocity: Vec3 | None,
+        angular_velocity: Vec3 | None,
+    ) -> None:
+        """A fixed base keeps the file's place: a pose asked for that is the one it has
+        (``Sim.set_state`` of a state of this model, on any engine) is accepted and changes
+        nothing; another is refused.
+
+        Args:
+            body: The body's id.
+            position: The base's centre of mass asked for (m, world), or None.
+            orientation: Its orientation asked for (x, y, z, w), or None.
+            linear_velocity: Its linear velocity asked for (m/s, world), or None.
+            angular_velocity: Its angular velocity asked for (rad/s, world), or None.
+
+        Raises:
+            InvalidArgumentError: A velocity that is not 0.
+            BackendUnsupportedError: A pose that is not the base's own (within 1e-9).
+        """
+        self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
+        base = self.base_state(body)
+        same = (position is None or np.allclose(position, base.position, rtol=0, atol=1e-9)) and (
+            orientation is None
+            or min(
+                float(np.abs(np.subtract(orientation, base.orientation)).max()),
+                float(np.abs(np.add(orientation, base.orientation)).max()),
+            )
+            <= 1e-9
+        )
+        if not same:
+            raise BackendUnsupportedError(
+                self.name,
+                "moving a fixed base of a model read with semantics='mujoco'",
+                "its place is the file's",
+            )
+
     @exclusive
     def reset_base_state(
         self,
@@ -202,12 +244,8 @@ class MjcfReads:
         of mass's pose and velocity (as the MuJoCo backend does)."""
         b = self._bodies[body]
         if b.free_joint < 0:
-            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
-            raise BackendUnsupportedError(
-                self.name,
-                "moving a fixed base of a model read with semantics='mujoco'",
-                "its place is the file's",
-            )
+            self.keep_fixed_base(body, position, orientation, linear_velocity, angular_velocity)
+            return
         self._sync()
         m, d, bid = self.m, self.d, b.body_id
         qa, va = int(m.jnt_qposadr[b.free_joint]), int(m.jnt_dofadr[b.free_joint])
@@ -224,6 +262,116 @@ class MjcfReads:
         qd[va : va + 3] = v - np.cross(w, offset)
         qd[va + 3 : va + 6] = quat_rotate(_conj(qframe), _v(w))
         self._write(q, qd)
+
+    # ---------------------------------------------------------------- ball joints
+    # A ball joint is a SPHERICAL row; its coordinates are MuJoCo's own: the quaternion that
+    # turns the child body's frame from its pose at qpos0 (read x, y, z, w, as simbridge's
+    # spherical joints), and the angular velocity relative to the parent in the child body's
+    # frame (rad/s). Under this reading those frames are MuJoCo's body frames, not the
+    # inertial frames PyBullet's reading uses (the same numbers on every engine).
+
+    @exclusive
+    def joint_states_multi_dof(self, body: int, joints: np.ndarray) -> list[JointStateMultiDof]:
+        """See Backend.joint_states_multi_dof: MuJoCo's ``qpos``/``qvel`` of each joint (a ball
+        joint: its quaternion x, y, z, w and angular velocity, child body frame) and the
+        actuator force MuJoCo's formulas gave the last step."""
+        self._sync()
+        b, d = self._bodies[body], self.d
+        out = []
+        for j in joints.tolist():
+            row = b.table[j]
+            qa, va = row.q_index, row.u_index
+            if row.type == JointType.SPHERICAL:
+                out.append(
+                    JointStateMultiDof(
+                        _xyzw(d.qpos[qa : qa + 4]),
+                        _v(d.qvel[va : va + 3]),
+                        _v(d.qfrc_actuator[va : va + 3]),
+                    )
+                )
+            elif row.type == JointType.FIXED:
+                out.append(JointStateMultiDof((), (), ()))
+            else:
+                out.append(
+                    JointStateMultiDof(
+                        (float(d.qpos[qa]),), (float(d.qvel[va]),), (float(d.qfrc_actuator[va]),)
+                    )
+                )
+        return out
+
+    @exclusive
+    def reset_joint_state_multi_dof(
+        self,
+        body: int,
+        joints: np.ndarray,
+        positions: list[list[float]],
+        velocities: list[list[float]],
+    ) -> None:
+        """See Backend.reset_joint_state_multi_dof: ``qpos``/``qvel`` at the joints' addresses
+        (a ball joint's quaternion x, y, z, w written as MuJoCo's w, x, y, z)."""
+        self._sync()
+        q, v = self.d.qpos.copy(), self.d.qvel.copy()
+        b = self._bodies[body]
+        for j, pos, vel in zip(joints.tolist(), positions, velocities, strict=True):
+            row = b.table[j]
+            qa, va = row.q_index, row.u_index
+            if row.type == JointType.SPHERICAL:
+                q[qa : qa + 4] = _wxyz((pos[0], pos[1], pos[2], pos[3]))
+                v[va : va + 3] = vel[:3]
+            else:
+                q[qa], v[va] = pos[0], vel[0]
+        self._write(q, v)
+
+    @exclusive
+    def spherical_states(self, body: int) -> list[SphericalJointState]:
+        """See Backend.spherical_states: each ball joint's MuJoCo coordinates (x, y, z, w; the
+        angular velocity in the child body's frame) and a released motor (a brake of force 0,
+        as :meth:`joint_commands` reads every joint)."""
+        self._sync()
+        d = self.d
+        out = []
+        for j, row in enumerate(self._bodies[body].table):
+            if row.type != JointType.SPHERICAL:
+                continue
+            qa, va = row.q_index, row.u_index
+            zero = (0.0, 0.0, 0.0)
+            out.append(
+                SphericalJointState(
+                    j,
+                    _xyzw(d.qpos[qa : qa + 4]),
+                    _v(d.qvel[va : va + 3]),
+                    int(MotorMode.VELOCITY),
+                    (0.0, 0.0, 0.0, 1.0),
+                    zero,
+                    zero,
+                    (1.0, 1.0, 1.0),
+                    zero,
+                )
+            )
+        return out
+
+    @exclusive
+    def set_spherical_states(
+        self, body: int, states: list[SphericalJointState], positions: bool
+    ) -> None:
+        """See Backend.set_spherical_states: the positions and velocities (unless a bit-exact
+        restore put them back); only released motors and no pending torque.
+
+        Raises:
+            BackendUnsupportedError: For a motor with a force, or a pending torque.
+        """
+        if any(any(e.motor_max_force) or any(e.pending_torque) for e in states):
+            raise BackendUnsupportedError(self.name, *_COMMANDS)
+        if not positions or not states:
+            return
+        self._sync()
+        q, v = self.d.qpos.copy(), self.d.qvel.copy()
+        table = self._bodies[body].table
+        for e in states:
+            row = table[e.joint]
+            q[row.q_index : row.q_index + 4] = _wxyz(e.position)
+            v[row.u_index : row.u_index + 3] = e.velocity
+        self._write(q, v)
 
     # ---------------------------------------------------------------- PyBullet's commands
     # Refused under this reading on every engine: the model's own actuators drive it.

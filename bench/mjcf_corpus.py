@@ -23,7 +23,8 @@ is a model, and for each reading and engine the bench records:
   load and with every hinge and slide that PyBullet's table names set to MuJoCo's value less
   ``qpos0`` (PyBullet's zero is the file's pose), the base left where the file puts it;
 - **hold**: zero controls for 1 s from ``qpos0``: the largest hinge or slide coordinate gap to
-  raw MuJoCo over the run (rad or m);
+  raw MuJoCo over the run (rad or m); a model with ball joints also its largest ball gap (the
+  rotation angle between the engine's joint quaternion and raw MuJoCo's, rad: ``ball``);
 - **drop** (a model with a free joint): its height after that second against raw MuJoCo's
   (under PyBullet's reading: the base's centre of mass moved, against the free joint's
   position moved);
@@ -64,6 +65,7 @@ PACKAGES = ("gymnasium", "dm_control")
 SECONDS = 1.0
 HINGE_SLIDE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 FREE = int(mujoco.mjtJoint.mjJNT_FREE)
+BALL = int(mujoco.mjtJoint.mjJNT_BALL)
 
 
 # ------------------------------------------------------------------------------ the corpus
@@ -159,6 +161,24 @@ def coords(m: Any) -> np.ndarray:
     return np.array(
         [m.jnt_qposadr[j] for j in range(m.njnt) if m.jnt_type[j] in HINGE_SLIDE], dtype=int
     )
+
+
+def ball_coords(m: Any) -> np.ndarray:
+    """The ``qpos`` addresses of the ball joints' quaternions, shape (k,)."""
+    return np.array([m.jnt_qposadr[j] for j in range(m.njnt) if m.jnt_type[j] == BALL], int)
+
+
+def ball_gap(a: np.ndarray, b: np.ndarray, adr: np.ndarray) -> float:
+    """The largest rotation angle (rad) between two runs' ball joints, over the runs: of
+    ``qa^-1 qb``, ``2 atan2(|v|, |w|)`` (exact near 0, where ``arccos`` of a dot product is
+    1e-7 off)."""
+    out = 0.0
+    for k in adr:
+        qa, qb = a[:, k : k + 4], b[:, k : k + 4]
+        w = np.sum(qa * qb, axis=1)  # the real part of conj(qa) qb
+        v = qa[:, :1] * qb[:, 1:] - qb[:, :1] * qa[:, 1:] - np.cross(qa[:, 1:], qb[:, 1:])
+        out = max(out, float(np.max(2.0 * np.arctan2(np.linalg.norm(v, axis=1), np.abs(w)))))
+    return out
 
 
 def free_adr(m: Any) -> int:
@@ -280,13 +300,16 @@ def _dynamics(row: dict[str, Any], engine: str, path: Path, m: Any, refs: dict) 
     """Hold, drop and tracking under MuJoCo's reading, each in a fresh Sim."""
     import simbridge
 
-    adr, steps = refs["coords"], refs["steps"]
-    if not adr.size:
+    adr, steps, balls = refs["coords"], refs["steps"], ball_coords(m)
+    if not adr.size and not balls.size:
         return
     try:
         with _open(engine, path, m, "mujoco") as sim:
             held = _engine_run(sim, m, False, steps)
-        row["hold"] = float(np.max(np.abs(held[:, adr] - refs["hold"][:, adr])))
+        if adr.size:
+            row["hold"] = float(np.max(np.abs(held[:, adr] - refs["hold"][:, adr])))
+        if balls.size:
+            row["hold_ball"] = ball_gap(held, refs["hold"], balls)
         if refs["free"] >= 0:
             z = refs["free"] + 2
             row["drop"] = {"engine": float(held[-1, z]), "raw": float(refs["hold"][-1, z])}
@@ -552,6 +575,8 @@ def _cells(r: dict[str, Any]) -> list[str]:
     drop_s = f"{drop['engine']:.3f} vs {drop['raw']:.3f}" if drop else ""
     track = _num(r.get("tracking"), ".3f") or r.get("tracking_not_run", "")
     hold = _num(r.get("hold"), ".3f")
+    if "hold_ball" in r:
+        hold = f"{hold}; ball {_num(r['hold_ball'], '.1e')}".lstrip("; ")
     if "diverged" in r:
         hold = f"diverged: {r['diverged'][:60]}"
     if "dynamics_error" in r:

@@ -1,9 +1,10 @@
 """simbridge installed as users install it: a wheel built from this checkout carries every
 package (every folder with an ``__init__.py`` under the folders pyproject.toml maps into
 ``simbridge``) and the robots, states the Python versions it supports, installs into a clean
-virtual environment with no checkout and runs a comparison there; an sdist built without a C
-compiler installs with the Python step loop and says so at build, in ``simbridge info`` and when
-the first MuJoCo Sim is made; a step loop built for another MuJoCo is said the same way.
+virtual environment with no checkout and runs the README's main job there (shortened); an
+sdist built without a C compiler installs with the Python step loop and says so at build, in
+``simbridge info`` and when the first MuJoCo Sim is made; a step loop built for another MuJoCo
+is said the same way.
 
 Time (pip's cache warm, a 2-core machine shared with other jobs): the whole file 124 s; the sdist
 and the wheel built from it 30 s, the clean environment 45 s (dependencies from pip's cache, no
@@ -29,6 +30,7 @@ pytestmark = pytest.mark.slow  # among the slowest files: left out of the quick 
 
 ROOT = Path(__file__).resolve().parents[1]
 FALLBACK = "the MuJoCo backend will step in Python, about 12x slower"  # setup.py's build warning
+MAIN_JOB_EXTRAS = ("report", "physx")  # what the README's command 1 installs (test_readme)
 
 
 def _compiler() -> str | None:
@@ -174,14 +176,17 @@ def test_wheel_states_the_python_it_supports(wheel):
 
 @pytest.fixture(scope="module")
 def clean_venv(wheel, tmp_path_factory) -> Path:
-    """A new virtual environment, outside the checkout, with the wheel and its dependencies
-    installed (from pip's cache where it holds them; no .pyc compiled: 42 s against 91 s)."""
+    """A new virtual environment, outside the checkout, with the wheel installed as the
+    README's command 1 installs the checkout: with the extras ``report`` (the 3D replay) and
+    ``physx`` (the third engine), and their dependencies (from pip's cache where it holds them;
+    no .pyc compiled: 42 s against 91 s; the two extras add about 8 s of CPU, mostly SAPIEN's
+    435 MB unpacked)."""
     venv = tmp_path_factory.mktemp("venv") / "env"
     _run([sys.executable, "-m", "venv", "--without-pip", str(venv)])
     python = venv / "bin" / "python"
     _run(
         [sys.executable, "-m", "pip", "--python", str(python), "install", "-q", "--no-compile"]
-        + [str(wheel)]
+        + [f"simbridge[{','.join(MAIN_JOB_EXTRAS)}] @ {wheel.as_uri()}"]
     )
     return venv
 
@@ -194,7 +199,11 @@ def _clean_env(**more: str) -> dict[str, str]:
     return env | more
 
 
-def test_the_wheel_in_a_clean_venv_runs_a_comparison(wheel, clean_venv, tmp_path):
+def test_the_wheel_in_a_clean_venv_runs_the_main_job(wheel, clean_venv, tmp_path):
+    """The README's command 1 (``simbridge compare r2d2``: every installed engine, the figures
+    and report.html with its 3D replay) from the installed wheel, shortened to 0.5 s of the
+    drive and two runs per engine (9 s of CPU; the whole job is about a minute on two cores,
+    which the README's own command 1 runs)."""
     python = clean_venv / "bin" / "python"
     where = _run(
         [str(python), "-c", "import simbridge; print(simbridge.__file__)"],
@@ -206,11 +215,13 @@ def test_the_wheel_in_a_clean_venv_runs_a_comparison(wheel, clean_venv, tmp_path
     assert not package.is_relative_to(ROOT)
     out = tmp_path / "report"
     cmd = [str(clean_venv / "bin" / "simbridge"), "compare", "r2d2"]
-    cmd += ["--backends", "pybullet", "mujoco", "--duration", "0.25", "--ensemble", "1"]
-    cmd += ["--no-plots", "--no-replay", "--no-cache", "--workers", "0", "--out", str(out)]
+    cmd += ["--duration", "0.5", "--ensemble", "2", "--no-cache", "--out", str(out)]
     _run(cmd, cwd=tmp_path, env=_clean_env(XDG_CACHE_HOME=str(tmp_path / "cache")))
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["backends"] == ["pybullet", "mujoco"] and (out / "report.md").is_file()
+    assert summary["backends"] == ["pybullet", "mujoco", "physx"]  # every engine, none left out
+    assert (out / "report.md").is_file() and (out / "paths.png").stat().st_size > 10_000
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert 'id="replay"' in html and (out / "replay_ghosts.npz").is_file()  # the 3D replay
     assert Path(summary["scenario_file"]).is_relative_to(package)  # the wheel's scenario
     loop = summary["manifest"]["engines"]["mujoco"]["step_loop"]
     if _compiler() is not None:

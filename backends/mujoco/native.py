@@ -272,12 +272,8 @@ class NativeMujoco(MjcfReads, Backend):
         its angular velocity in the body frame)."""
         b = self._bodies[body]
         if b.free_joint < 0:
-            self.refuse_fixed_base_velocity(body, linear_velocity, angular_velocity)
-            raise BackendUnsupportedError(
-                self.name,
-                "moving a fixed base of a model read with semantics='mujoco'",
-                "its place is the file's",
-            )
+            self.keep_fixed_base(body, position, orientation, linear_velocity, angular_velocity)
+            return
         self._sync()
         m, d, bid = self.m, self.d, b.body_id
         qa, va = int(m.jnt_qposadr[b.free_joint]), int(m.jnt_dofadr[b.free_joint])
@@ -300,7 +296,11 @@ class NativeMujoco(MjcfReads, Backend):
         d.qvel[va + 3 : va + 6] = local
         self._stale = True
 
-    # ---------------------------------------------------------------- PyBullet's commands
+    def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Put ``d.qpos``/``d.qvel`` as given (MjcfReads' writes of a ball joint's state)."""
+        self.d.qpos[:] = qpos
+        self.d.qvel[:] = qvel
+        self._stale = True
 
     # ---------------------------------------------------------------- whole state
 

@@ -164,7 +164,7 @@ class PhysxBackend(
 
         Raises:
             BackendUnsupportedError: With ``gui`` (no window for it yet).
-            MjcfFeatureUnsupportedError: A feature only MuJoCo simulates, or a ball joint.
+            MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
         """
         if self.gui:
             raise BackendUnsupportedError(

@@ -9,11 +9,16 @@ stiffness 0, that damping and target velocity 0 (implicit, as MuJoCo's Euler int
 Each step applies MuJoCo's actuator and spring forces (``set_qf``), a ``frictionloss`` as the
 force that stops the joint within the step, clamped to the frictionloss, and MuJoCo's soft
 joint limits (the joints have no PhysX limit; the shared part, ``backends/mjcf_engine.py``).
-A ball joint is refused (backends/mjcf_engine.py).
+A ball joint is the backend's spherical joint (``ball.py``: three revolutes about the child's
+inertial axes, SAPIEN 3.0.3 building no spherical articulation joint), read and written in
+MuJoCo's ball coordinates; its damping is a force each step, implicit in every force as
+MuJoCo's Euler makes it, its armature the three revolutes' armature plus the force that makes
+it MuJoCo's (:meth:`NativePhysx._armature_correction`).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -25,9 +30,11 @@ from simbridge.model.mjcf_native import NativeMjcf
 from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
 from simbridge.model.plan_records import BuildPlan
 from simbridge.profiles import Profile
-from simbridge.types import ContactPoint, Vec3
+from simbridge.transforms import quat_rotate
+from simbridge.types import ContactPoint, JointType, Quat, Vec3
 
-from ..mjcf_engine import MjcfOnEngine
+from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
+from .ball import angles_to_quat, quat_to_angles, rate_matrix
 from .contacts import ContactReads
 from .model import build_robot, ignore_bits, needed_pairs
 
@@ -98,6 +105,22 @@ def _shared_filters(
     return tags, ignore
 
 
+def _matrix(q: Quat) -> np.ndarray:
+    """The rotation matrix of a unit quaternion (x, y, z, w)."""
+    x, y, z, w = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _v3(a: np.ndarray) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
 class NativePhysx(MjcfOnEngine, ContactReads):
     """The world of one MJCF model as MuJoCo compiles it, stepped by PhysX.
 
@@ -108,7 +131,7 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         timestep: The time step the caller gave (s), or None for the file's.
 
     Raises:
-        MjcfFeatureUnsupportedError: A feature only MuJoCo simulates, or a ball joint.
+        MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
     """
 
     name = "physx"
@@ -150,19 +173,40 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         self._write(m.qpos0.copy(), np.zeros(m.nv))
 
     def _layout(self) -> None:
-        """Each row's PhysX dof (its place in the articulation's ``qpos``); MuJoCo's armature
-        and damping on the joints; PhysX's joint friction 0."""
+        """Each row's PhysX dof (its place in the articulation's ``qpos``; a ball joint's three
+        revolutes); MuJoCo's armature and damping on the joints; PhysX's joint friction 0."""
         m = self.m
         self._rows: list[tuple[int, int, int, int]] = []  # (body, dof, qpos adr, qvel adr)
+        # every ball joint: (body, its three revolutes' dofs, qpos adr, qvel adr, the child's
+        # inertial frame in its link frame, x, y, z, w: the revolutes turn it)
+        self._balls: list[tuple[int, tuple[int, int, int], int, int, Quat]] = []
         self._fl = np.zeros(m.nv)
+        self._ball_damping = np.zeros(m.nv)  # applied as a force (apply_forces)
         for k, nb in enumerate(self.native.bodies):
             built = self._built[k]
             if built.articulation is None:
                 continue
-            active = [j.name for j in built.articulation.get_active_joints()]
+            active = built.articulation.get_active_joints()
+            names = [j.name for j in active]
             for i, row in enumerate(nb.table):
+                n = 3 if row.type == JointType.SPHERICAL else 1
+                self._fl[row.u_index : row.u_index + n] = m.dof_frictionloss[
+                    row.u_index : row.u_index + n
+                ]
+                if row.type == JointType.SPHERICAL:
+                    dofs = tuple(names.index(f"{row.name}#{a}") for a in range(3))
+                    inertial = self.plans[k].links[i + 1].inertial.orientation
+                    self._balls.append((k, dofs, row.q_index, row.u_index, inertial))  # type: ignore[arg-type]
+                    for a, dof in enumerate(dofs):
+                        joint = active[dof]
+                        joint.armature = np.array([m.dof_armature[row.u_index + a]], np.float32)
+                        joint.friction = 0.0
+                    self._ball_damping[row.u_index : row.u_index + 3] = m.dof_damping[
+                        row.u_index : row.u_index + 3
+                    ]
+                    continue
                 joint = built.links[i + 1].joint
-                dof = active.index(joint.name)  # the plan's joint names are MuJoCo's rows'
+                dof = names.index(joint.name)  # the plan's joint names are MuJoCo's rows'
                 self._rows.append((k, dof, row.q_index, row.u_index))
                 joint.armature = np.array([m.dof_armature[row.u_index]], dtype=np.float32)
                 joint.friction = 0.0
@@ -170,8 +214,8 @@ class NativePhysx(MjcfOnEngine, ContactReads):
                 if d > 0.0:
                     joint.set_drive_properties(0.0, d, 3.0e38, "force")
                     joint.set_drive_velocity_target(0.0)
-                self._fl[row.u_index] = float(m.dof_frictionloss[row.u_index])
         self._rows_of = [[r for r in self._rows if r[0] == k] for k in range(len(self._built))]
+        self._balls_of = [[b for b in self._balls if b[0] == k] for k in range(len(self._built))]
 
     # ---------------------------------------------------------------- the engine's hooks
 
@@ -199,6 +243,11 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             for _, dof, qa, va in self._rows_of[k]:
                 q[qa] = m.qpos0[qa] + float(aq[dof])
                 v[va] = float(av[dof])
+            for _, dofs, qa, va, inertial in self._balls_of[k]:
+                a, b, c = (float(aq[d]) for d in dofs)
+                w = rate_matrix(b, c) @ np.array([av[d] for d in dofs], dtype=float)
+                quat = angles_to_quat(a, b, c)
+                q[qa : qa + 4], v[va : va + 3] = ball_from_inertial(inertial, quat, _v3(w))
         return q, v
 
     def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
@@ -226,13 +275,20 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             for _, dof, qa, va in self._rows_of[k]:
                 aq[dof] = qpos[qa] - m.qpos0[qa]
                 av[dof] = qvel[va]
+            for _, dofs, qa, va, inertial in self._balls_of[k]:
+                quat, w = ball_to_inertial(inertial, qpos[qa : qa + 4], qvel[va : va + 3])
+                a, b, c = quat_to_angles(quat)
+                rates = np.linalg.lstsq(rate_matrix(b, c), np.asarray(w), rcond=None)[0]
+                for d, x, u in zip(dofs, (a, b, c), rates, strict=True):
+                    aq[d], av[d] = x, u
             art.qpos = aq
             art.qvel = av
 
     def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
         """See MjcfOnEngine.apply_forces: ``set_qf`` per articulation; damping and armature
-        are the joints' own (drives, armature); frictionloss and the recovery of a joint placed
-        outside its range added here."""
+        are the joints' own (drives, armature) but a ball joint's damping, a force implicit in
+        every force (MuJoCo's Euler); frictionloss and MuJoCo's soft limits added here; a ball
+        joint's three forces (child body frame) as its revolutes' ``J^T R(I)^T f``."""
         m, d = self.m, self.d
         full = mass + np.diag(m.dof_armature)
         f = qfrc.copy()
@@ -240,6 +296,13 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             inv = np.linalg.inv(full)
             m_eff = 1.0 / np.maximum(np.diagonal(inv), 1e-12)
             f -= np.clip(m_eff * d.qvel / self.dt, -self._fl, self._fl)
+        if self._balls:  # the balls' damping implicit in every force (MuJoCo's Euler)
+            ball = self._ball_damping
+            damping = damping - ball
+            implicit = full + self.dt * np.diag(ball)
+            acc = np.linalg.solve(implicit, f - (damping + ball) * d.qvel - d.qfrc_bias)
+            f -= ball * (d.qvel + self.dt * acc)
+            f += self._armature_correction(acc)
         if self._recovering:
             free = np.linalg.solve(full, f - damping * d.qvel - d.qfrc_bias)
             f += self.limit_recovery(full, free)
@@ -250,7 +313,51 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             qf = np.zeros(art.dof, dtype=np.float32)
             for _, dof, _, va in self._rows_of[k]:
                 qf[dof] = f[va]
+            if self._balls_of[k]:
+                aq = art.qpos
+                for _, dofs, _, va, inertial in self._balls_of[k]:
+                    local = np.array(quat_rotate((-inertial[0], -inertial[1], -inertial[2],
+                                                  inertial[3]), _v3(f[va : va + 3])))  # fmt: skip
+                    jac = rate_matrix(float(aq[dofs[1]]), float(aq[dofs[2]]))
+                    qf[list(dofs)] = jac.T @ local
             art.set_qf(qf)
+
+    def _armature_correction(self, acc: np.ndarray) -> np.ndarray:
+        """The force that turns the armature PhysX gives a ball's three revolutes (``A`` on
+        their angle rates) into MuJoCo's (``A`` on the angular velocity): on the revolutes it
+        is ``A J^-T (J^-1 w' + (J^-1)' w)`` in the child's inertial frame, MuJoCo's ``A w'``;
+        the difference, in the body frame, is added (0 at the zero pose; left out where the
+        middle angle is within 6° of +-90°, ``|det J| = |cos b| < 0.1``).
+
+        Args:
+            acc: (nv,) the acceleration expected this step (MuJoCo's coordinates).
+
+        Returns:
+            (nv,) the correction, 0 but on the balls' velocities.
+        """
+        m = self.m
+        out = np.zeros(m.nv)
+        for k, built in enumerate(self._built):
+            art = built.articulation
+            if art is None or not self._balls_of[k]:
+                continue
+            aq, av = art.qpos, art.qvel
+            for _, dofs, _, va, inertial in self._balls_of[k]:
+                arm = float(m.dof_armature[va])
+                b, c = float(aq[dofs[1]]), float(aq[dofs[2]])
+                if arm == 0.0 or abs(math.cos(b)) < 0.1:
+                    continue
+                jac = rate_matrix(b, c)
+                inv = np.linalg.inv(jac)
+                rates = np.array([av[i] for i in dofs], dtype=float)
+                eps = 1e-6  # J's rate of change along the motion, by a difference
+                ahead = rate_matrix(b + eps * rates[1], c + eps * rates[2])
+                inv_rate = -inv @ ((ahead - jac) / eps) @ inv
+                rot = _matrix(inertial)
+                wdot = rot.T @ acc[va : va + 3]
+                engine = arm * inv.T @ (inv @ wdot + inv_rate @ (jac @ rates))
+                out[va : va + 3] = rot @ (engine - arm * wdot)
+        return out
 
     def step_engine(self) -> None:
         """See MjcfOnEngine.step_engine: ``scene.step()``."""

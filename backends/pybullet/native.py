@@ -24,9 +24,9 @@ from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native
 from simbridge.model.plan_records import BuildPlan, LinkPlan, ShapePlan
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_multiply, quat_rotate
-from simbridge.types import ContactPoint, Quat, Vec3
+from simbridge.types import ContactPoint, JointType, Quat, Vec3
 
-from ..mjcf_engine import MjcfOnEngine
+from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
 from ..mjcf_forces import free_velocity_change
 from .contacts import contact_point
 from .output import p  # pybullet, imported with its banner captured
@@ -37,6 +37,7 @@ _JOINTS = {
     "revolute": p.JOINT_REVOLUTE,
     "continuous": p.JOINT_REVOLUTE,
     "prismatic": p.JOINT_PRISMATIC,
+    "spherical": p.JOINT_SPHERICAL,
 }
 
 
@@ -204,19 +205,33 @@ class NativePyBullet(MjcfOnEngine):
     def _layout(self) -> None:
         """Each body's joints (PyBullet indices, ``qpos``/``qvel`` addresses, ``qpos0``); the
         default motors released, a ``frictionloss`` kept as a velocity motor of target 0 and
-        that force (hinge and slide only: the shared part refuses a ball joint)."""
+        that force; a ball joint's spherical motor a brake (kp 0, kd 1) of that force per axis,
+        or released."""
         c, m = self._c, self.m
-        # per body: (PyBullet id, joint indices, qpos addresses, qvel addresses)
+        # per body: (PyBullet id, hinge and slide joint indices, qpos addresses, qvel addresses)
         self._joints: list[tuple[int, list[int], np.ndarray, np.ndarray]] = []
+        # every ball joint: (PyBullet id, joint index, qpos address, qvel address, the child's
+        # inertial frame in its link frame, x, y, z, w: PyBullet's spherical joint turns it)
+        self._balls: list[tuple[int, int, int, int, Quat]] = []
         for k, nb in enumerate(self.native.bodies):
             body = self._ids[k]
-            idx = list(range(len(nb.table)))
-            qa = np.array([row.q_index for row in nb.table], dtype=np.intp)
-            va = np.array([row.u_index for row in nb.table], dtype=np.intp)
+            rows = [(i, row) for i, row in enumerate(nb.table) if row.type != JointType.SPHERICAL]
+            idx = [i for i, _ in rows]
+            qa = np.array([row.q_index for _, row in rows], dtype=np.intp)
+            va = np.array([row.u_index for _, row in rows], dtype=np.intp)
             self._joints.append((body, idx, qa, va))
             for i, row in enumerate(nb.table):
                 j = nb.joint_ids[i]
-                if m.jnt_limited[j] and not self.soft_limits:
+                if row.type == JointType.SPHERICAL:
+                    inertial = self.plans[k].links[i + 1].inertial.orientation
+                    self._balls.append((body, i, row.q_index, row.u_index, inertial))
+                    fl = float(m.dof_frictionloss[row.u_index])
+                    p.setJointMotorControlMultiDof(
+                        body, i, p.POSITION_CONTROL, targetPosition=[0.0, 0.0, 0.0, 1.0],
+                        positionGain=[0.0] * 3, velocityGain=[1.0] * 3, force=[fl] * 3,
+                        damping=[1.0] * 3, physicsClientId=c,
+                    )  # fmt: skip
+                elif m.jnt_limited[j] and not self.soft_limits:
                     ref = float(m.qpos0[row.q_index])  # the engine's 0 is MuJoCo's qpos0
                     p.changeDynamics(
                         body, i, jointLowerLimit=float(m.jnt_range[j][0]) - ref,
@@ -254,6 +269,9 @@ class NativePyBullet(MjcfOnEngine):
                 states = p.getJointStates(body, idx, physicsClientId=c)
                 q[qas] += [s[0] for s in states]
                 v[vas] = [s[1] for s in states]
+        for body, i, qa, va, inertial in self._balls:
+            quat, w = p.getJointStateMultiDof(body, i, physicsClientId=c)[:2]
+            q[qa : qa + 4], v[va : va + 3] = ball_from_inertial(inertial, quat, w)
         return q, v
 
     def write_engine_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
@@ -279,6 +297,9 @@ class NativePyBullet(MjcfOnEngine):
                 p.resetJointState(
                     body, i, float(qpos[a] - m.qpos0[a]), float(qvel[b]), physicsClientId=c
                 )
+        for body, i, qa, va, inertial in self._balls:
+            quat, w = ball_to_inertial(inertial, qpos[qa : qa + 4], qvel[va : va + 3])
+            p.resetJointStateMultiDof(body, i, quat, w, physicsClientId=c)
 
     def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
         """See MjcfOnEngine.apply_forces: joint torques (``TORQUE_CONTROL``, one step) of
@@ -290,6 +311,11 @@ class NativePyBullet(MjcfOnEngine):
                 p.setJointMotorControlArray(
                     body, idx, p.TORQUE_CONTROL, forces=tau[vas].tolist(), physicsClientId=c
                 )
+        for body, i, _, va, inertial in self._balls:  # about the child's inertial axes
+            torque = quat_rotate(_conj(inertial), tuple(tau[va : va + 3]))
+            p.setJointMotorControlMultiDof(
+                body, i, p.TORQUE_CONTROL, force=list(torque), physicsClientId=c
+            )
         for k, nb in enumerate(self.native.bodies):
             if nb.free_joint < 0:
                 continue

@@ -209,23 +209,19 @@ EQUALITY = """<mujoco><worldbody>
 </worldbody><equality><joint name="same" joint1="j1" joint2="j2"/></equality></mujoco>"""
 
 
-BALL = """<mujoco><worldbody><body name="a" pos="0 0 1"><joint name="shoulder" type="ball"/>
-<geom type="capsule" fromto="0 0 0 0.3 0.1 -0.4" size="0.05"/></body></worldbody></mujoco>"""
-
-
 @pytest.mark.parametrize(
     ("text", "feature", "element"),
     [
         (TENDON, "<tendon>", "coupling"),
         (EQUALITY, "<equality>", "same"),
-        (BALL, "<joint type='ball'>", "shoulder"),  # not yet on PyBullet and PhysX
     ],
 )
 def test_what_only_mujoco_simulates_is_refused_by_name(
     backend: str, text: str, feature: str, element: str
 ) -> None:
-    """A tendon or an equality constraint (and, for now, a ball joint): MuJoCo runs it; another
-    engine refuses it, naming the feature and its element, and keeps its world as it was."""
+    """A tendon or an equality constraint: MuJoCo runs it; another engine refuses it, naming
+    the feature and its element, and keeps its world as it was (a ball joint loads:
+    test_mjcf_ball_joints.py)."""
     with simbridge.Sim(backend) as sim:
         if _steps_raw(backend):
             sim.load_mjcf(text, semantics="mujoco")

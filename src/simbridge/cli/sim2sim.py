@@ -24,7 +24,13 @@ action, or a class made with the env: simbridge.envs.controllers:DriveToGoal), o
 .onnx (onnxruntime), .pt/.ts/.jit (TorchScript), .zip (Stable-Baselines3).
 
 An engine is BACKEND or BACKEND+KEY=VALUE: the task's profile with an entry or engine setting
-changed (mujoco+lateral_friction=0.05).
+changed (mujoco+lateral_friction=0.05). A policy trained outside simbridge: --trained-on
+external:NAME (external:isaaclab); the task states its contract, every engine is evaluated
+against it and every pair of engines is tested.
+
+The training engine's actions of the first K seeds (--openloop K) are replayed open loop on
+every engine and judged by compare's verdicts (agree, chaotic, unresolved, differ): where the
+physics parts.
 """
 
 
@@ -47,7 +53,10 @@ def add_command(
     p.add_argument("policy", metavar="POLICY", help="reference, module:callable or a policy file")
     p.add_argument("--task", required=True, help="a shipped task's name or a task file")
     p.add_argument(
-        "--trained-on", required=True, metavar="ENGINE", help="the engine it was trained on"
+        "--trained-on",
+        required=True,
+        metavar="ENGINE",
+        help="the engine it was trained on, or external:NAME for a training run outside simbridge",
     )
     p.add_argument(
         "--backends",
@@ -63,6 +72,21 @@ def add_command(
         "--explain",
         action="store_true",
         help="rank the settings that, moved toward the training engine, recover success",
+    )
+    p.add_argument(
+        "--openloop",
+        type=nonnegative_int,
+        default=4,
+        metavar="K",
+        help="replay the training engine's actions of the first K seeds open loop on every "
+        "engine (default 4; 0: none)",
+    )
+    p.add_argument(
+        "--openloop-ensemble",
+        type=positive_int,
+        default=8,
+        metavar="N",
+        help="runs per engine and seed of the open-loop replays, all but one perturbed (default 8)",
     )
     verbose(p)
     p.set_defaults(handler=_sim2sim)
@@ -82,7 +106,16 @@ def _sim2sim(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 1
+    from simbridge.envs.trained_on import outside
 
+    if args.explain and outside(args.trained_on) is not None:
+        from simbridge.exceptions import InvalidArgumentError
+
+        raise InvalidArgumentError(
+            "--explain",
+            f"trained outside simbridge ({args.trained_on}): no training engine to move "
+            "settings toward",
+        )
     result = sim2sim(
         args.policy,
         args.task,
@@ -90,6 +123,8 @@ def _sim2sim(args: argparse.Namespace) -> int:
         backends=args.backends,
         episodes=args.episodes,
         seed=args.seed,
+        openloop=args.openloop,
+        openloop_ensemble=args.openloop_ensemble,
     )
     if args.explain:
         from simbridge.envs.sim2sim_explain import explain_drops
@@ -98,6 +133,10 @@ def _sim2sim(args: argparse.Namespace) -> int:
     out = args.out or Path("reports") / f"sim2sim-{result.task}"
     files = write(result, out)
     for line in headline(result):
+        print(line)
+    from simbridge.envs.sim2sim_openloop_report import lines
+
+    for line in lines(result.openloop):
         print(line)
     for e in result.explain:
         for c in e["candidates"]:

@@ -149,5 +149,6 @@ def contract(env: SimEnv) -> dict[str, Any]:
         "terminations": [dataclasses.asdict(c) for c in t.terminations],
         "success": [dataclasses.asdict(c) for c in t.success],
         "reset": t.reset,
+        "trained": None if t.trained is None else dataclasses.asdict(t.trained),
     }
     return _plain(out)

@@ -5,9 +5,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from simbridge.exceptions import InvalidArgumentError, SimbridgeError
+from simbridge.exceptions import InvalidArgumentError, SimbridgeError, UnknownBackendError
 
-__all__ = ["ActionError", "PolicyError", "PolicyRuntimeMissingError", "TaskFileError"]
+__all__ = [
+    "ActionError",
+    "PolicyError",
+    "PolicyRuntimeMissingError",
+    "TaskFileError",
+    "UnknownTrainingEngineError",
+]
 
 
 class TaskFileError(SimbridgeError, ValueError):
@@ -75,4 +81,21 @@ class PolicyRuntimeMissingError(SimbridgeError, ImportError):
         self.policy = policy
         super().__init__(
             f"policy {policy!r}: a {kind} file needs a runtime that is not installed: {install}"
+        )
+
+
+class UnknownTrainingEngineError(UnknownBackendError):
+    """A training engine (``--trained-on``) that is no registered backend and not of the form
+    ``external:NAME``, which a policy trained outside simbridge takes.
+
+    Args:
+        name: the backend asked for.
+        available: the registered backends (listed in the message, the closest suggested).
+    """
+
+    def __init__(self, name: str, available: Sequence[str]):
+        super().__init__(name, available)
+        self.args = (
+            f"trained_on: {self.args[0]}; a policy trained outside simbridge is named "
+            "external:NAME (external:isaaclab, external:mujoco-playground, external:gymnasium)",
         )

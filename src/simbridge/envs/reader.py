@@ -31,11 +31,12 @@ from simbridge.envs.task import (
     RewardTerm,
     RobotSpec,
     Task,
+    TrainedSpec,
 )
 from simbridge.envs.terms import OBSERVATIONS, PARAMS, REWARDS, SUCCESSES, TERMINATIONS
 from simbridge.transforms import quat_from_rpy
 
-__all__ = ["TASK_KEYS", "load_task", "loads_task", "shipped_tasks"]
+__all__ = ["TASK_KEYS", "TRAINED_KEYS", "load_task", "loads_task", "shipped_tasks"]
 
 TASK_KEYS = (
     "name",
@@ -57,8 +58,12 @@ TASK_KEYS = (
     "commands",
     "randomisation",
     "camera",
+    "trained",
 )
 """The keys at a task file's top level."""
+
+TRAINED_KEYS = ("framework", "effort_limit", "velocity_limit", "damping", "friction", "armature")
+"""The keys of a task file's ``[trained]`` table (:class:`~simbridge.envs.task.TrainedSpec`)."""
 
 _TERMS: dict[str, Mapping[str, Any]] = {
     "observation": OBSERVATIONS,
@@ -197,7 +202,19 @@ class _Reader(TableReader):
             reset=self.choice(data, [], "reset", "restore", RESET_MODES),
             camera=self.camera(data),
             source=None if self.file.startswith("<") else self.file,
+            trained=self.trained(data, len(data["action"]["joints"])),  # after the action's checks
         )
+
+    def trained(self, data: dict[str, Any], n: int) -> TrainedSpec | None:
+        if "trained" not in data:
+            return None
+        t, path = data["trained"], ["trained"]
+        if not isinstance(t, dict):
+            raise self.error(path, "expected a table ([trained])")
+        self.keys(t, path, TRAINED_KEYS)
+        per = {k: self.per_joint(t[k], [*path, k], n, nonneg=True) for k in t if k != "framework"}
+        framework = self.string(t["framework"], [*path, "framework"]) if "framework" in t else ""
+        return TrainedSpec(framework=framework, **per)
 
     def tables(self, data: dict[str, Any], key: str, least: int) -> list[Any]:
         raw = data.get(key, [])

@@ -27,6 +27,12 @@ An engine is named ``BACKEND`` or ``BACKEND+KEY=VALUE+...``: the task's profile 
 entries or engine settings changed (:func:`simbridge.profiles.derived_profile`), e.g.
 ``mujoco+lateral_friction=0.05``. The same engine may appear twice (its label then takes
 ``#2``).
+
+``trained_on="external:NAME"`` evaluates a policy trained outside simbridge against the contract
+its task states: no engine is the training engine, every pair is tested
+(:mod:`simbridge.envs.sim2sim_external`). ``openloop=K`` replays the training engine's actions of
+the first K seeds open loop on every engine and judges where the physics parts
+(:mod:`simbridge.envs.sim2sim_openloop`).
 """
 
 from __future__ import annotations
@@ -125,12 +131,16 @@ class Sim2SimResult:
     runs: list[EngineRun]
     figures: list[EngineFigures]
     explain: list[dict[str, Any]] = field(default_factory=list)  # sim2sim_explain's, if run
+    openloop: Any = None  # sim2sim_openloop.OpenLoop, if run
 
     @property
     def points_at_contract(self) -> bool:
-        """True when the training engine's success share is below :data:`TRAINED_FLOOR`."""
-        r = self.figures[0].rate
-        return r.successes / r.n < TRAINED_FLOOR
+        """True when the training engine's success share is below :data:`TRAINED_FLOOR` (for a
+        policy trained outside simbridge: every engine's)."""
+        from simbridge.envs.trained_on import outside
+
+        rates = [f.rate for f in (self.figures if outside(self.trained_on) else self.figures[:1])]
+        return max(r.successes / r.n for r in rates) < TRAINED_FLOOR
 
 
 def _bootstrap_mean(values: Sequence[float], seed: int) -> Interval:
@@ -220,6 +230,8 @@ def sim2sim(
     backends: Sequence[str] = ("pybullet", "mujoco", "physx"),
     episodes: int = 20,
     seed: int = 0,
+    openloop: int = 0,
+    openloop_ensemble: int = 8,
 ) -> Sim2SimResult:
     """Run ``policy`` on ``task`` over paired seeds on every engine, the training engine first.
 
@@ -227,27 +239,50 @@ def sim2sim(
         policy: ``reference``, ``module:callable`` or a policy file
             (:func:`~simbridge.envs.policies.load_policy`).
         task: a :class:`Task`, a shipped task's name or a task file.
-        trained_on: the engine the policy was trained on (``BACKEND[+KEY=VALUE...]``).
+        trained_on: the engine the policy was trained on (``BACKEND[+KEY=VALUE...]``), or
+            ``external:NAME`` for a training run outside simbridge (``external:isaaclab``):
+            then ``backends`` run in their order, none of them the training engine.
         backends: the engines to check it on (the training engine is added first if absent).
         episodes: episodes per engine (seeds ``seed .. seed + episodes - 1``).
         seed: the first seed (and the bootstrap's).
+        openloop: replay the training engine's actions of the first ``openloop`` seeds open
+            loop on every engine (0: none; the command line's default is 4; none for an
+            outside policy).
+        openloop_ensemble: runs per engine and seed of the replays.
 
     Returns:
         The :class:`Sim2SimResult`.
 
     Raises:
-        InvalidArgumentError: ``episodes`` below 1.
-        UnknownBackendError: an engine that is not registered.
+        InvalidArgumentError: ``episodes`` below 1, ``openloop`` below 0.
+        UnknownBackendError: an engine that is not registered
+            (``UnknownTrainingEngineError`` for ``trained_on``, naming the external form).
         TaskFileError: an unknown task.
         PolicyError: a policy that does not load or does not fit the task.
     """
     from simbridge.envs.reader import load_task
+    from simbridge.envs.trained_on import check_trained_on, outside
     from simbridge.registry import available_backends
 
     if episodes < 1:
         raise InvalidArgumentError("episodes", f"expected at least 1, got {episodes}")
+    if openloop < 0:
+        raise InvalidArgumentError("openloop", f"expected 0 or more seeds, got {openloop}")
+    available = available_backends()
+    check_trained_on(trained_on, available)
+    external = outside(trained_on) is not None
+    if external and not backends:
+        raise InvalidArgumentError("backends", "an outside policy needs at least one engine")
     t = task if isinstance(task, Task) else load_task(task)
-    engines = parse_engines(backends, trained_on, t.profile, available_backends())
+    first = backends[0] if external else trained_on  # outside: the engines in their order
+    engines = parse_engines(backends, first, t.profile, available)
     seeds = list(range(seed, seed + episodes))
     runs = [run_engine(t, e, policy, seeds) for e in engines]
-    return Sim2SimResult(t.name, policy, trained_on, seeds, runs, figures(runs, seed))
+    result = Sim2SimResult(t.name, policy, trained_on, seeds, runs, figures(runs, seed))
+    if openloop and not external:
+        from simbridge.envs.sim2sim_openloop import openloop as replay
+
+        result.openloop = replay(
+            t, engines, policy, seeds[:openloop], ensemble=openloop_ensemble, seed=seed
+        )
+    return result

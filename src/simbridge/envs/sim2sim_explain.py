@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from simbridge.envs.evaluate import wilson
 from simbridge.envs.task import Task
+from simbridge.exceptions import InvalidArgumentError
 
 if TYPE_CHECKING:
     from simbridge.envs.paired import Engine
@@ -71,11 +72,21 @@ def explain_drops(task: Task | str, result: Sim2SimResult) -> list[dict[str, Any
         ``setting`` in words, ``why``, ``successes``, ``interval``, ``p_value`` against before,
         ``recovered`` share of the drop, ``rank``, shared by equal successes), and ``note`` when
         there was nothing to try.
+
+    Raises:
+        InvalidArgumentError: a policy trained outside simbridge (no training engine).
     """
     from simbridge.compare.study.points import _with_change, format_value
     from simbridge.envs.paired import Engine, mcnemar, run_engine
     from simbridge.envs.reader import load_task
+    from simbridge.envs.trained_on import outside
 
+    if outside(result.trained_on):
+        raise InvalidArgumentError(
+            "explain",
+            f"trained outside simbridge ({result.trained_on}): no training engine to move "
+            "settings toward",
+        )
     task = task if isinstance(task, Task) else load_task(task)
     train = result.runs[0]
     trained_ok = [r.success for r in train.records]

@@ -5,7 +5,9 @@ report.md holds a headline per engine, the table of rates with Wilson intervals 
 p-values against the training engine, returns and lengths with bootstrap intervals, survival,
 clipped actions and sign changes, the failures by name (NaN actions among them), the ranking of
 ``--explain`` where it ran, and the contract table, engine beside engine, its rows marked where
-an engine departs from the training engine.
+an engine departs from the training engine; the open-loop replays where they ran
+(:mod:`.sim2sim_openloop_report`); for a policy trained outside simbridge, every pair of
+engines and the stated contract as the table's first column (:mod:`.sim2sim_external`).
 """
 
 from __future__ import annotations
@@ -14,7 +16,9 @@ import json
 from pathlib import Path
 from typing import Any
 
+from simbridge.envs import sim2sim_external, sim2sim_openloop_report
 from simbridge.envs.sim2sim import ALPHA, TRAINED_FLOOR, EngineFigures, Sim2SimResult
+from simbridge.envs.trained_on import outside
 
 __all__ = ["contract_rows", "headline", "markdown", "summary", "write"]
 
@@ -33,6 +37,8 @@ def headline(result: Sim2SimResult) -> list[str]:
     Returns:
         The lines (the training engine's first; a last line when it points at the contract).
     """
+    if outside(result.trained_on):
+        return sim2sim_external.headline(result)
     lines = []
     for i, f in enumerate(result.figures):
         if i == 0:
@@ -193,19 +199,25 @@ def markdown(result: Sim2SimResult) -> str:
         The Markdown.
     """
     n = len(result.seeds)
+    ext = outside(result.trained_on)
+    trained = (
+        f"Trained outside simbridge (**{ext}**)" if ext else f"Trained on **{result.trained_on}**"
+    )
+    against = "every other engine" if ext else "the training engine"
+    rates = _rates_table(result)
     lines = [
         f"# sim2sim: {result.policy} on {result.task}",
         "",
-        f"Trained on **{result.trained_on}**; {n} paired episodes per engine (seeds "
+        f"{trained}; {n} paired episodes per engine (seeds "
         f"{result.seeds[0]}-{result.seeds[-1]}: the same initial states and commands on every "
-        f"engine). Verdicts: McNemar's exact test on the discordant seeds against the training "
-        f"engine at p < {ALPHA}.",
+        f"engine). Verdicts: McNemar's exact test on the discordant seeds against {against} "
+        f"at p < {ALPHA}.",
         "",
         *[f"- {line}" for line in headline(result)],
         "",
         "## Success and behaviour per engine",
         "",
-        *_rates_table(result),
+        *(sim2sim_external.blank_paired_columns(rates) if ext else rates),
         "",
     ]
     for f in result.figures:
@@ -217,26 +229,35 @@ def markdown(result: Sim2SimResult) -> str:
                     f"  - {f.nan_actions} episode(s) ended on a NaN or infinite action from the "
                     "policy, counted as failures and never passed to the engine"
                 )
-    if result.explain or any(f.verdict == "drop" for f in result.figures[1:]):
+    lines += sim2sim_external.pairs_section(result)
+    if not ext and (result.explain or any(f.verdict == "drop" for f in result.figures[1:])):
         lines += _explain_lines(result)
+    lines += sim2sim_openloop_report.section(result.openloop)
     train = result.runs[0].contract
+    labels, rows = sim2sim_external.with_stated(
+        result, [f.label for f in result.figures], contract_rows(result)
+    )
     lines += [
         "",
         "## The contract, engine beside engine",
         "",
-        "| | " + " | ".join(f.label for f in result.figures) + " | departs |",
-        "|---|" + "---|" * (len(result.figures) + 1),
+        "| | " + " | ".join(labels) + " | departs |",
+        "|---|" + "---|" * (len(labels) + 1),
     ]
-    for name, values in contract_rows(result):
-        departs = "yes" if any(v != values[0] for v in values[1:]) else ""
-        if name in ("backend", "engine settings", "engine joint index"):
+    for name, values in rows:
+        ref = values[1:] if values[0] == sim2sim_external.NOT_STATED else values  # engines alone
+        departs = "yes" if any(v != ref[0] for v in ref[1:]) else ""
+        if name in ("backend", "engine settings", "engine joint index", *sim2sim_external.UNREAD):
             departs = ""  # each backend's own
         lines.append(f"| {name} | " + " | ".join(values) + f" | {departs} |")
-    lines += [
-        "",
-        f"The training engine's contract states the task {train['task']!r} ({train['source']}).",
-        "",
-    ]
+    said = f"The training engine's contract states the task {train['task']!r} ({train['source']})."
+    if ext:
+        said = (
+            f"The stated column is the task {train['task']!r} ({train['source']}), the contract of "
+            f"the training run outside simbridge ({ext}); a row it does not state is marked where "
+            "the engines differ among themselves."
+        )
+    lines += ["", said, ""]
     return "\n".join(lines)
 
 
@@ -277,6 +298,9 @@ def summary(result: Sim2SimResult) -> dict[str, Any]:
                 "contract": run.contract,
             }
         )
+    if outside(result.trained_on):  # no training engine: every pair is in "external"
+        for e in engines:
+            e.update(dict.fromkeys(sim2sim_external.PAIRED_FIELDS))
     return {
         "task": result.task,
         "policy": result.policy,
@@ -287,6 +311,8 @@ def summary(result: Sim2SimResult) -> dict[str, Any]:
         "headline": headline(result),
         "engines": engines,
         "explain": result.explain,
+        "openloop": sim2sim_openloop_report.summary(result.openloop),
+        "external": sim2sim_external.summary(result, contract_rows(result)),
     }
 
 

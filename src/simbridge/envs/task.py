@@ -26,6 +26,7 @@ __all__ = [
     "RewardTerm",
     "RobotSpec",
     "Task",
+    "TrainedSpec",
 ]
 
 ACTION_MODES = ("position", "velocity", "torque", "pd")
@@ -242,6 +243,33 @@ class Randomisation:
 
 
 @dataclass(frozen=True)
+class TrainedSpec:
+    """The training run of a policy trained outside simbridge (Isaac Lab, MuJoCo Playground,
+    Gymnasium), as far as the rest of the task does not state it: the action joints' dynamics
+    the training simulator had. The contract table sets them beside every engine's joint
+    table. The rest of the contract (joint order, observation layout and scales, action meaning
+    and scale, gains, dt and decimation) is the task's own.
+
+    Attributes:
+        framework: where it was trained (``"isaaclab"``), as ``--trained-on external:NAME``
+            names it.
+        effort_limit: per action joint (N·m or N); one number: every joint; empty: not stated.
+        velocity_limit: likewise (rad/s or m/s).
+        damping: likewise (N·m·s/rad or N·s/m).
+        friction: likewise (N·m or N).
+        armature: likewise (kg·m² or kg): the rotor inertia added to each joint, which the
+            Sim interface does not read back from an engine (shown as stated only).
+    """
+
+    framework: str = ""
+    effort_limit: tuple[float, ...] = ()
+    velocity_limit: tuple[float, ...] = ()
+    damping: tuple[float, ...] = ()
+    friction: tuple[float, ...] = ()
+    armature: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
 class Task:
     """Everything an environment needs.
 
@@ -268,6 +296,7 @@ class Task:
         reset: one of :data:`RESET_MODES`.
         camera: ``{"eye": [x, y, z], "target": [x, y, z]}`` for ``render_mode="rgb_array"``.
         source: the file it was read from, if any.
+        trained: a policy's training run outside simbridge (its joints' dynamics), or None.
     """
 
     name: str
@@ -290,6 +319,7 @@ class Task:
     reset: str = "restore"
     camera: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     source: str | None = None
+    trained: TrainedSpec | None = None
 
     @property
     def control_dt(self) -> float:

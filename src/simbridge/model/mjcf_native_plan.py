@@ -11,7 +11,9 @@ MuJoCo's joint order:
 * **frames**: a row's link frame is its MuJoCo body's frame moved to the joint's anchor
   (``jnt_pos``), at ``qpos0``; a free or fixed base's link frame is the body frame; a massless
   root's is the body frame at ``qpos0``. ``JointPlan.position``/``orientation`` place the
-  child link frame in the parent's; the axis is ``jnt_axis`` (body frame, unit);
+  child link frame in the parent's; the axis is ``jnt_axis`` (body frame, unit); a ball joint
+  is a ``spherical`` joint about the anchor, never limited in the plan (MuJoCo's cone is the
+  backend's force: ``backends/mjcf_forces.py``);
 * **inertia**: MuJoCo's ``body_mass``, ``body_inertia`` in the ``body_iquat`` frame at
   ``body_ipos``. A body without a joint moves with its nearest ancestor's row (or the base);
   its mass is merged into that link (the composite's mass, centre of mass and principal
@@ -580,6 +582,20 @@ def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
         )
     if (m.geom_type == int(_G.mjGEOM_ELLIPSOID)).any():
         out["ellipsoid"] = f"an ellipsoid is the convex hull of {ELLIPSOID_POINTS} points on it"
+    if (m.jnt_type == int(mujoco.mjtJoint.mjJNT_BALL)).any():
+        out["ball_joints"] = (
+            "a ball joint is three revolute joints about the child's inertial axes (SAPIEN "
+            "3.0.3 builds no spherical articulation joint), read and written as MuJoCo's "
+            "quaternion and body-frame angular velocity: gimbal lock where the middle angle "
+            "reaches +-90 degrees; its armature is the three revolutes' plus a force that makes "
+            "it MuJoCo's (left out within 6 degrees of the lock), its damping implicit in "
+            "every force as MuJoCo's Euler makes it, its range MuJoCo's cone computed here"
+            if engine == "physx"
+            else "a ball joint is PyBullet's spherical joint (it turns the child's inertial "
+            "frame), read and written as MuJoCo's quaternion and body-frame angular velocity; "
+            "its range is MuJoCo's cone computed here, its damping implicit in every force as "
+            "MuJoCo's Euler makes it, its armature a force as on the hinges"
+        )
     if m.nu:
         out["actuators"] = (
             "actuator forces are MuJoCo's formulas (gain, bias, gear, ctrlrange, forcerange) "

@@ -143,9 +143,22 @@ def test_keyframe_sensor_site_and_state() -> None:
         assert np.array_equal(sim.qpos(), d.qpos)
         assert np.array_equal(sim.sensor(3), d.sensordata[m.sensor_adr[3] :][: m.sensor_dim[3]])
         assert sim.site("head").position == tuple(d.site_xpos[1])
-        # get_state of ball joints under this reading: not yet (a known gap, refused)
-        with pytest.raises(BackendUnsupportedError, match="spherical joints"):
-            sim.get_state()
+        # get_state/set_state with its ball joints: MuJoCo's own state back, bit for bit
+        sim.step(5)
+        state = sim.get_state()
+        loose = sim.get_state(exact=False)
+        balls = [e for b in state.bodies for e in b.spherical]
+        assert balls and balls[0].position == tuple(
+            sim.qpos()[sim.joint_info(0, balls[0].joint).q_index :][[1, 2, 3, 0]]
+        )
+        sim.step(10)
+        after = sim.qpos()
+        sim.set_state(state)
+        sim.step(10)
+        assert np.array_equal(sim.qpos(), after)
+        sim.set_state(loose)  # the portable state alone (no MjData snapshot)
+        sim.step(10)
+        assert np.allclose(sim.qpos(), after, atol=1e-9)
 
 
 @pytest.mark.skipif(not HAS_GYM, reason=NO_GYM)

@@ -34,6 +34,7 @@ import math
 import os
 import platform
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -195,11 +196,13 @@ def _record(cases: list[str]) -> None:
         print(case, file=sys.stderr)
 
 
-def _produce_all(dest: Path) -> None:
+def _produce_all(dest: Path, jobs: Path | None = None) -> None:
     """Every case's masked summary.json and report.md into ``dest`` (``CASE.json``,
-    ``CASE.md``), its jobs run in this process, and the numpy targets this process has in
-    ``targets.json``: what a child of :func:`test_the_same_figures_whatever_the_kernels`
-    does (``python tests/compare/pipeline/test_compare_same_results.py --produce DIR``)."""
+    ``CASE.md``), its jobs run in this process (or read from the cache folder ``jobs``, which
+    holds only the jobs' results: every verdict, figure and report line is computed here), and
+    the numpy targets this process has in ``targets.json``: what a child of
+    :func:`test_the_same_figures_whatever_the_kernels` does (``python
+    tests/compare/pipeline/test_compare_same_results.py --produce DIR [--jobs CACHE]``)."""
     import tempfile
 
     from _machine import numpy_targets
@@ -208,7 +211,7 @@ def _produce_all(dest: Path) -> None:
     (dest / "targets.json").write_text(json.dumps(numpy_targets()), encoding="utf-8")
     for case in CASES:
         with tempfile.TemporaryDirectory() as tmp:
-            summary, text = _masked(case, Path(tmp), workers=0)
+            summary, text = _masked(case, Path(tmp), jobs if jobs else False, workers=0)
         (dest / f"{case}.json").write_text(json.dumps(summary, allow_nan=True), "utf-8")
         (dest / f"{case}.md").write_text(text, encoding="utf-8")
 
@@ -290,7 +293,7 @@ def test_a_warm_cache_gives_the_recorded_figures(case, tmp_path, module_cache):
 
 
 @pytest.mark.slow
-def test_the_same_figures_whatever_the_kernels(tmp_path):
+def test_the_same_figures_whatever_the_kernels(tmp_path, module_cache):
     """Every case, in one child process per kernel choice (tests/_machine.py: numpy's
     run-time targets turned down a level at a time, each with an OpenBLAS kernel of that
     level), gives the recorded summary.json and report.md bit for bit, as the parent's
@@ -299,6 +302,16 @@ def test_the_same_figures_whatever_the_kernels(tmp_path):
     jobs in their own process (workers=0), side by side, and say which numpy targets they had
     and which OpenBLAS kernel loaded (``OPENBLAS_VERBOSE=2``), so a variable that did not
     take fails the test rather than proving nothing.
+
+    The children start from the engines' runs of this module's cases (a copy of the module
+    cache's ``jobs`` folder and nothing derived from it: no verdict, figure or report text),
+    where those ran first, as they do in the module's order: what a kernel could move here is
+    the figures computed from the runs, and every one of them is computed again in each child.
+    The runs themselves are proven kernel-free by tests/test_same_results.py (the Python step
+    loop under the same variants, the compiled loop and PyBullet calling no BLAS). A child
+    given no jobs runs them too, as before (``-k`` this test alone): about 26 s of CPU a child
+    then, measured 2026-11-29 against 5 s from the jobs (the same nine cases, figures and
+    reports alike).
 
     Measured before compare/run/portable.py (an AVX-512 machine, the figures recorded on an
     AVX2 one): 61 figures of 9 cases moved in this test's AVX2 child, laikago-stand's report
@@ -316,6 +329,9 @@ def test_the_same_figures_whatever_the_kernels(tmp_path):
             env.pop("NPY_DISABLE_CPU_FEATURES", None)
         dest = tmp_path / f"variant{k}"
         cmd = [sys.executable, str(Path(__file__).resolve()), "--produce", str(dest)]
+        if (module_cache / "jobs").is_dir():  # the runs alone, copied: nothing derived
+            shutil.copytree(module_cache / "jobs", tmp_path / f"cache{k}" / "jobs")
+            cmd += ["--jobs", str(tmp_path / f"cache{k}")]
         proc = subprocess.Popen(
             cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
         )
@@ -346,6 +362,7 @@ def test_the_same_figures_whatever_the_kernels(tmp_path):
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--produce"]:
-        _produce_all(Path(sys.argv[2]))
+        jobs = Path(sys.argv[4]) if sys.argv[3:4] == ["--jobs"] else None
+        _produce_all(Path(sys.argv[2]), jobs)
     else:
         _record(sys.argv[1:])
