@@ -85,6 +85,8 @@ def test_link_states_of_chosen_links_in_the_order_given(make_sim):
     )
     one = sim.link_states(body, 4)
     np.testing.assert_array_equal(_block(one), _rows(sim, body, [4]))
+    none = sim.link_states(body, [])
+    assert [np.shape(f) for f in none] == [(0, 3), (0, 4)] * 3 + [(0, 3), (0, 3)]
     root = sim.link_states(body, [KUKA_ROOT, 1])  # the base by its URDF link name
     np.testing.assert_array_equal(_block(root), _rows(sim, body, [-1, 1]))
 
