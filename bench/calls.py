@@ -6,6 +6,7 @@ engine call.
     python bench/calls.py --backends mujoco --stat min   # one engine; the least of the repeats
     python bench/calls.py --backends pybullet,physx      # PhysX against PyBullet
     python bench/calls.py --stat min --clock cpu         # a machine busier than its cores
+    python bench/calls.py --only link_state      # the rows whose name holds the text, alone
     python bench/ab.py BEFORE_TREE AFTER_TREE    # two source trees' runs in turn, compared
 
 Two robots: r2d2 resting on plane.urdf (4 wheels commanded, link 2 read) and a fixed-base
@@ -121,6 +122,7 @@ def _pybullet_raw(w: World) -> dict[str, Callable[[Any], object]]:
     b, j, link, n = w.body, w.joints, w.link, len(w.joints)
     forces = [50.0] * n
     gains = ([0.1] * n, [1.0] * n)
+    every = list(range(p.getNumJoints(b, physicsClientId=c)))  # every link
 
     def reset_joints(q: list[float]) -> None:
         for i, v in zip(j, q, strict=True):
@@ -149,6 +151,17 @@ def _pybullet_raw(w: World) -> dict[str, Callable[[Any], object]]:
         "base_state": lambda _: (
             p.getBasePositionAndOrientation(b, physicsClientId=c),
             p.getBaseVelocity(b, physicsClientId=c),
+        ),
+        "link_states": lambda _: (
+            p.getBasePositionAndOrientation(b, physicsClientId=c),
+            p.getBaseVelocity(b, physicsClientId=c),
+            p.getLinkStates(
+                b,
+                every,
+                computeLinkVelocity=1,
+                computeForwardKinematics=1,
+                physicsClientId=c,
+            ),
         ),
         "joint_states": lambda _: p.getJointStates(b, j, physicsClientId=c),
         "joint_info": lambda _: p.getJointInfo(b, link, physicsClientId=c),
@@ -219,6 +232,9 @@ def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
     qadr = m.jnt_qposadr[jid].copy()
     dofs = m.jnt_dofadr[jid].copy()
     link = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, r.spec.body_names[w.link + 1])
+    bodies = np.array(  # every link's body, the base first
+        [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name) for name in r.spec.body_names]
+    )
     base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, r.spec.body_names[0])
     free = m.body_jntadr[base] >= 0 and m.jnt_type[m.body_jntadr[base]] == 0
     a = m.jnt_qposadr[m.body_jntadr[base]] if free else -1
@@ -229,6 +245,9 @@ def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
 
     def link_state(_: object) -> object:
         return d.xipos[link].copy(), d.xquat[link].copy(), d.xpos[link].copy(), d.cvel[link].copy()
+
+    def link_states(_: object) -> object:
+        return d.xipos[bodies], d.xquat[bodies], d.xpos[bodies], d.cvel[bodies]
 
     def base_state(_: object) -> object:
         if free:
@@ -270,6 +289,7 @@ def _mujoco_raw(w: World) -> dict[str, Callable[[Any], object]]:
         "set_joint_position": ctrl,
         "set_joint_torque": ctrl,
         "link_state": link_state,
+        "link_states": link_states,
         "base_state": base_state,
         "joint_states": lambda _: (d.qpos[qadr].copy(), d.qvel[dofs].copy()),
         "dynamics_info": dynamics,
@@ -300,6 +320,7 @@ def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
     link = r.built.links[w.link + 1]
     root = r.built.links[0]
     link_cm, root_cm = link.cmass_local_pose, root.cmass_local_pose  # fixed at load
+    every = [(k, k.cmass_local_pose) for k in r.built.links]  # every link, the base first
     dofs = r.dof[w.joints]
     qf = np.zeros(art.dof, dtype=np.float32)
     groups = tuple([r.joints[j] for j in g] for g in _groups(w))
@@ -322,6 +343,12 @@ def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
 
     def base_state(_: object) -> object:
         return root.entity_pose * root_cm, root.linear_velocity, root.angular_velocity
+
+    def link_states(_: object) -> object:
+        return [
+            (k.entity_pose * cm, k.entity_pose, k.linear_velocity, k.angular_velocity)
+            for k, cm in every
+        ]
 
     def reset_joints(q: np.ndarray) -> None:
         qpos = art.qpos
@@ -359,6 +386,7 @@ def _physx_raw(w: World) -> dict[str, Callable[[Any], object]]:
         "set_joint_position": position,
         "set_joint_torque": torque,
         "link_state": link_state,
+        "link_states": link_states,
         "base_state": base_state,
         "joint_states": lambda _: (art.qpos[dofs], art.qvel[dofs]),
         "dynamics_info": lambda _: (link.mass, link.inertia, link_cm),
@@ -399,6 +427,7 @@ def rows_for(
         s, b, link = w.sim, w.body, w.link
         groups = _groups(w)
         fresh = _fresh_contacts(w)
+        every = range(-1, s.num_joints(b))  # the base and every link
         layer[backend] = {
             "set_joint_velocity": lambda t, s=s, b=b, j=w.joints: s.set_joint_velocity(
                 b, j, t, max_force=50.0
@@ -416,6 +445,8 @@ def rows_for(
             "set_joint_torque np": lambda t, s=s, b=b, j=w.np_joints: s.set_joint_torque(b, j, t),
             "link_state": lambda _, s=s, b=b, lk=link: s.link_state(b, lk),
             "link_state(-1)": lambda _, s=s, b=b: s.link_state(b, -1),
+            "link_states": lambda _, s=s, b=b: s.link_states(b),
+            "link_state each": lambda _, s=s, b=b, ls=every: [s.link_state(b, k) for k in ls],
             "base_state": lambda _, s=s, b=b: s.base_state(b),
             "joint_states": lambda _, s=s, b=b, j=w.np_joints: s.joint_states(b, j),
             "joint_states(all)": lambda _, s=s, b=b: s.joint_states(b),
@@ -460,6 +491,8 @@ def rows_for(
         ("set_joint_torque (numpy)", "set_joint_torque", tq, tq, ""),
         ("link_state(link)", "link_state", (0, 0), (0, 0), "velocity + fresh pose"),
         ("link_state(-1)", "", (0, 0), (0, 0), "the base as a link"),
+        ("link_states(every link)", "link_states", (0, 0), (0, 0), "the base and every link"),
+        ("link_state of every link, a call each", "", (0, 0), (0, 0), "what link_states saves"),
         ("base_state", "base_state", (0, 0), (0, 0), ""),
         ("joint_states(commanded joints)", "joint_states", (0, 0), (0, 0), ""),
         ("joint_states(all)", "", (0, 0), (0, 0), ""),
@@ -494,6 +527,8 @@ def rows_for(
         "set_joint_torque (numpy)": "set_joint_torque np",
         "link_state(link)": "link_state",
         "link_state(-1)": "link_state(-1)",
+        "link_states(every link)": "link_states",
+        "link_state of every link, a call each": "link_state each",
         "base_state": "base_state",
         "joint_states(commanded joints)": "joint_states",
         "joint_states(all)": "joint_states(all)",
@@ -704,6 +739,11 @@ def main(argv: list[str] | None = None) -> int:
         help="wall time (default) or this process's CPU time (a machine with more runnable "
         "work than cores)",
     )
+    parser.add_argument(
+        "--only",
+        metavar="TEXT",
+        help="time only the calls table's rows whose name holds TEXT (link_state), no other table",
+    )
     args = parser.parse_args(argv)
     use_clock(args.clock)
     reps, n = max(1, args.repeats), 200 if args.quick else max(10, args.calls)
@@ -719,20 +759,22 @@ def main(argv: list[str] | None = None) -> int:
         f" | {args.stat}s of {reps} repeats of {n} calls, {args.clock} clock"
     )
     print()
-    missed = calls_table(backends, reps, n)
-    position_table(backends, reps, 240 if args.quick else 1000)
-    drive_table(backends, reps)
-    if "physx" in backends:
-        physx_bounds(reps, n)
+    missed = calls_table(backends, reps, n, args.only)
+    if args.only is None:
+        position_table(backends, reps, 240 if args.quick else 1000)
+        drive_table(backends, reps)
+        if "physx" in backends:
+            physx_bounds(reps, n)
     print()
     for b, count in missed.items():
         print(f"{LABEL[b]} calls over {TARGET}x PyBullet's: {count}")
     return 0
 
 
-def calls_table(backends: list[str], reps: int, n: int) -> dict[str, int]:
-    """The table of single calls; returns per engine how many of its calls miss the 1.5x
-    target (PyBullet's layer call being the reference)."""
+def calls_table(backends: list[str], reps: int, n: int, only: str | None = None) -> dict[str, int]:
+    """The table of single calls (only the rows whose name holds ``only``, where given);
+    returns per engine how many of its calls miss the 1.5x target (PyBullet's layer call being
+    the reference)."""
     others = [b for b in backends if b != "pybullet"] if "pybullet" in backends else []
     head = [f"{LABEL[b]} µs" for b in backends]
     head += [f"{LABEL[b]}/PyBullet" for b in others]
@@ -746,6 +788,8 @@ def calls_table(backends: list[str], reps: int, n: int) -> dict[str, int]:
         raw_worlds = {"physx": World("physx", robot)} if "physx" in backends else {}
         rows = rows_for(robot, worlds, raw_worlds)
         for row in rows:
+            if only is not None and only not in row.name:
+                continue
             for col in row.columns.values():  # warm up: caches, first compile of a path
                 col(0)
                 col(1)

@@ -76,6 +76,8 @@ def test_calls_table_times_every_call_on_every_engine():
         "set_joint_position (numpy)",
         "set_joint_torque (list)",
         "link_state(link)",
+        "link_states(every link)",
+        "link_state of every link, a call each",
         "base_state",
         "joint_states(commanded joints)",
         "joint_info",
@@ -101,6 +103,7 @@ def test_calls_table_times_every_call_on_every_engine():
     for call in (
         "step, contact-free",
         "link_state(link)",
+        "link_states(every link)",
         "joint_states(commanded joints)",
         "contact_points",
     ):
@@ -119,6 +122,34 @@ def test_calls_table_times_every_call_on_every_engine():
     if "PhysX" in engines:  # the bounds table: raw, raw + the layer's work, the layer
         bounds = [line for line in lines[end:] if line.startswith("| kuka: step, contact-free")]
         assert len(bounds) == 1 and all(float(c) > 0 for c in bounds[0].split("|")[2:5])
+
+
+def test_calls_only_times_the_rows_named():
+    """bench/calls.py --only TEXT: the calls table's rows whose name holds TEXT, on both
+    robots, and no other table."""
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "bench" / "calls.py"),
+            "--quick",
+            "--repeats",
+            "1",
+            "--backends",
+            "pybullet,mujoco",
+            "--only",
+            "link_states",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = [line for line in proc.stdout.splitlines() if line.startswith(("| r2d2", "| kuka"))]
+    assert [row.split("|")[1].strip() for row in rows] == [
+        "r2d2: link_states(every link)",
+        "kuka: link_states(every link)",
+    ]
+    assert "position_command targets" not in proc.stdout  # the other tables left out
 
 
 def test_physx_floor_row_ends_the_drive_in_the_layers_state():

@@ -1083,6 +1083,28 @@ static PyObject* Kernel_last_error(Kernel* self, PyObject* unused) {
                               "replace");
 }
 
+/* The 20 doubles of body_state for body ``bid`` into ``o``: centre-of-mass position,
+ * orientation (x, y, z, w), world linear and angular velocity, link-frame position and
+ * orientation (x, y, z, w). Returns 1 when the centre of mass's position is finite. */
+static int write_body_state(Kernel* self, long bid, double* o) {
+  const mjModel* m = self->m;
+  mjData* d = self->d;
+  double q[4], v[6];
+  self->mat2quat(q, d->ximat + 9 * bid);
+  self->objvel(m, d, mjOBJ_BODY, (int)bid, v, 0);
+  const double* p = d->xipos + 3 * bid;
+  const double* fp = d->xpos + 3 * bid;
+  const double* fq = d->xquat + 4 * bid;
+  double r[20] = {p[0], p[1], p[2], q[1], q[2], q[3], q[0], v[3], v[4], v[5], v[0], v[1], v[2],
+                  fp[0], fp[1], fp[2], fq[1], fq[2], fq[3], fq[0]};
+  int finite = 1;
+  for (int i = 0; i < 20; i++) {
+    o[i] = r[i];
+    if (i < 3 && !isfinite(r[i])) finite = 0;
+  }
+  return finite;
+}
+
 /* body_state(body_id, fresh, out): out[0:20] = centre-of-mass position, orientation (x, y, z,
  * w), world linear and angular velocity, link-frame position and orientation (x, y, z, w);
  * with fresh, first mj_kinematics, mj_comPos, mj_comVel (the lazy refresh after a step).
@@ -1094,7 +1116,6 @@ static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize
       parse_int_flag(args, nargs, 3, "body_state(body_id, fresh, out)", &bid, &fresh) < 0)
     return NULL;
   const mjModel* m = self->m;
-  mjData* d = self->d;
   if (bid < 0 || bid >= m->nbody) {
     PyErr_Format(PyExc_ValueError, "body id %ld outside 0..%d", bid, (int)m->nbody - 1);
     return NULL;
@@ -1111,20 +1132,59 @@ static PyObject* Kernel_body_state(Kernel* self, PyObject* const* args, Py_ssize
     if (PyErr_Occurred()) return NULL; /* a Python callback's exception, as in step() */
     Py_RETURN_NONE; /* a MuJoCo error: last_error() says which */
   }
-  double* o = (double*)out.buf;
-  double q[4], v[6];
-  self->mat2quat(q, d->ximat + 9 * bid);
-  self->objvel(m, d, mjOBJ_BODY, (int)bid, v, 0);
-  const double* p = d->xipos + 3 * bid;
-  const double* fp = d->xpos + 3 * bid;
-  const double* fq = d->xquat + 4 * bid;
-  double r[20] = {p[0], p[1], p[2], q[1], q[2], q[3], q[0], v[3], v[4], v[5], v[0], v[1], v[2],
-                  fp[0], fp[1], fp[2], fq[1], fq[2], fq[3], fq[0]};
-  int finite = 1;
-  for (int i = 0; i < 20; i++) {
-    o[i] = r[i];
-    if (i < 3 && !isfinite(r[i])) finite = 0;
+  int finite = write_body_state(self, bid, (double*)out.buf);
+  PyBuffer_Release(&out);
+  return PyBool_FromLong(finite);
+}
+
+/* bodies_state(body_ids, fresh, out): body_state of each body of ``body_ids`` (a C-contiguous
+ * array of C longs, np.intp on the platforms built for) into row k of ``out`` (a float64 array
+ * of len(body_ids) x 20), in one call: the same floats as body_state, body by body. Returns
+ * False when a pose is not finite, None when MuJoCo raised an error (last_error()). */
+static PyObject* Kernel_bodies_state(Kernel* self, PyObject* const* args, Py_ssize_t nargs) {
+  if (nargs != 3) {
+    PyErr_SetString(PyExc_TypeError, "bodies_state(body_ids, fresh, out)");
+    return NULL;
   }
+  int fresh = PyObject_IsTrue(args[1]);
+  if (fresh < 0 || refuse_if_busy(self) < 0) return NULL;
+  Py_buffer ids, out;
+  if (PyObject_GetBuffer(args[0], &ids, PyBUF_C_CONTIGUOUS) < 0) return NULL;
+  if (ids.itemsize != sizeof(long) || ids.len % (Py_ssize_t)sizeof(long)) {
+    PyBuffer_Release(&ids);
+    PyErr_SetString(PyExc_ValueError, "body_ids: an array of C longs (np.intp)");
+    return NULL;
+  }
+  Py_ssize_t n = ids.len / (Py_ssize_t)sizeof(long);
+  const long* bids = (const long*)ids.buf;
+  const mjModel* m = self->m;
+  for (Py_ssize_t k = 0; k < n; k++) {
+    if (bids[k] < 0 || bids[k] >= m->nbody) {
+      PyBuffer_Release(&ids);
+      PyErr_Format(PyExc_ValueError, "body id %ld outside 0..%d", bids[k], (int)m->nbody - 1);
+      return NULL;
+    }
+  }
+  if (PyObject_GetBuffer(args[2], &out, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+    PyBuffer_Release(&ids);
+    return NULL;
+  }
+  if (out.len != 20 * n * (Py_ssize_t)sizeof(double) || out.itemsize != sizeof(double)) {
+    PyBuffer_Release(&ids);
+    PyBuffer_Release(&out);
+    PyErr_SetString(PyExc_ValueError, "out: a float64 array of len(body_ids) x 20");
+    return NULL;
+  }
+  if (fresh && guarded(self, 1, 0, 0) == 4) {
+    PyBuffer_Release(&ids);
+    PyBuffer_Release(&out);
+    if (PyErr_Occurred()) return NULL; /* a Python callback's exception, as in step() */
+    Py_RETURN_NONE; /* a MuJoCo error: last_error() says which */
+  }
+  double* o = (double*)out.buf;
+  int finite = 1;
+  for (Py_ssize_t k = 0; k < n; k++) finite &= write_body_state(self, bids[k], o + 20 * k);
+  PyBuffer_Release(&ids);
   PyBuffer_Release(&out);
   return PyBool_FromLong(finite);
 }
@@ -1487,6 +1547,8 @@ static PyMethodDef Kernel_methods[] = {
      "remove_command(handle): unbind a command"},
     {"body_state", (PyCFunction)(void (*)(void))Kernel_body_state, METH_FASTCALL,
      "body_state(body_id, fresh, out) -> pose is finite"},
+    {"bodies_state", (PyCFunction)(void (*)(void))Kernel_bodies_state, METH_FASTCALL,
+     "bodies_state(body_ids, fresh, out) -> every pose is finite"},
     {NULL, NULL, 0, NULL},
 };
 

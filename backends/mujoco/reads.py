@@ -24,6 +24,7 @@ from simbridge.transforms import (
     xyzw_to_wxyz,
 )
 from simbridge.types import (
+    LINK_STATE_WIDTH,
     BaseState,
     DynamicsInfo,
     JointInfo,
@@ -31,6 +32,7 @@ from simbridge.types import (
     JointStates,
     JointType,
     LinkState,
+    LinkStates,
     Quat,
     Vec3,
 )
@@ -45,6 +47,19 @@ _PY_BUSY = (
     "this Sim is stepping in another thread (or in a MuJoCo callback of its own step); a Sim "
     "takes one call at a time (give each thread its own Sim)"
 )
+
+
+def _local_inertials(robot: Robot) -> np.ndarray:
+    """``(links + 1, 7)``: each link's inertial frame in its link frame (position, quaternion
+    x, y, z, w), base first, kept in the robot's cache (under -1, which no ``id()`` is) for as
+    long as its spec's inertials are the same list."""
+    hit = robot.cache.get(-1)
+    inertials = robot.spec.inertials
+    if hit is None or hit[0] is not inertials:
+        rows = np.array([(*i.position, *i.orientation) for i in inertials], dtype=np.float64)
+        hit = (inertials, rows.reshape(len(inertials), 7))
+        robot.cache[-1] = hit
+    return hit[1]
 
 
 class StateReads:
@@ -183,6 +198,60 @@ class StateReads:
             (v[7], v[8], v[9]),
             (v[10], v[11], v[12]),
         )
+
+    def _states_of(self, bids: np.ndarray, body: int) -> np.ndarray:
+        """:meth:`_state_of` of each MuJoCo body of ``bids`` (``np.intp``), row by row: ``(n,
+        20)`` float64, in one kernel call where the compiled loop has one (under the Sim's
+        lock)."""
+        c = self._w
+        out = np.empty((len(bids), 20))
+        kernel = c.kernel
+        batch = getattr(kernel, "bodies_state", None)  # a loop built before it: body by body
+        if batch is not None:
+            finite = batch(bids, c.stale, out)
+            if finite is None:
+                self._engine_failed(kernel.last_error())
+            c.stale = False
+            if not finite:
+                raise SimulationDivergedError(self.name, self.time, f"body {body} pose")
+            return out
+        for k, bid in enumerate(bids.tolist()):
+            out[k] = self._state_of(bid, body)
+        return out
+
+    def link_states(self, body: int, links: np.ndarray) -> LinkStates:
+        """See Backend.link_states.
+
+        MuJoCo: every body's pose and velocity in one pass after the lazy forward kinematics
+        (one call of the compiled loop), the body frames turned back into URDF link frames
+        where model.py turned them, as :meth:`link_state`.
+        """
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            robot = self._robots[body]
+            rows = links + 1
+            v = self._states_of(robot.body_ids.take(rows), body)
+        finally:
+            lock.release()
+        block = np.empty((len(links), LINK_STATE_WIDTH))
+        block[:, 0:7] = v[:, 0:7]  # centre of mass: position, orientation
+        block[:, 7:14] = _local_inertials(robot).take(rows, axis=0)
+        block[:, 14:21] = v[:, 13:20]  # link frame
+        block[:, 21:27] = v[:, 7:13]  # velocities
+        spec = robot.spec
+        if spec.base_offset is not None or spec.link_offsets:
+            for k, link in enumerate(links.tolist()):
+                if link == -1:
+                    turn = spec.base_offset
+                else:
+                    turn = spec.link_offsets.get(link) if spec.link_offsets else None
+                if turn is not None:  # as link_state: the same floats, the same operations
+                    f = v[k, 13:20].tolist()
+                    frame = transform_multiply(((f[0], f[1], f[2]), (f[3], f[4], f[5], f[6])), turn)
+                    block[k, 14:21] = (*frame[0], *frame[1])
+        return LinkStates.of(block)
 
     def base_state(self, body: int) -> BaseState:
         """See Backend.base_state.

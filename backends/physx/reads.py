@@ -18,11 +18,13 @@ from simbridge.exceptions import SimulationDivergedError
 from simbridge.profiles import Profile
 from simbridge.transforms import transform_inverse, transform_multiply
 from simbridge.types import (
+    LINK_STATE_WIDTH,
     BaseState,
     DynamicsInfo,
     JointInfo,
     JointStates,
     LinkState,
+    LinkStates,
     Quat,
     Vec3,
 )
@@ -153,6 +155,50 @@ class StateReads:
             )
         finally:
             lock.release()
+
+    def link_states(self, body: int, links: np.ndarray) -> LinkStates:
+        """See Backend.link_states. PhysX: every link of ``links`` read in one loop under one
+        lock (its pose and two velocity arrays, as :meth:`_link_read`), the floats of
+        :meth:`link_state` row by row, checked finite once for all (SAPIEN's CPU articulation
+        has no batched link read)."""
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            robot = self._robots[body]
+            inertials = robot.built.inertials
+            flat: list[float] = []
+            add = flat.extend
+            if robot.static:
+                for link in links.tolist():
+                    ine = inertials[link + 1]
+                    st = self._static_link_state(robot, link, (ine.position, ine.orientation))
+                    add((*st[0], *st[1], *st[2], *st[3], *st[4], *st[5], *st[6], *st[7]))
+                return LinkStates.of(np.array(flat).reshape(len(links), LINK_STATE_WIDTH))
+            comps = robot.built.links
+            restored = robot.restored_velocities
+            for link in links.tolist():
+                ine = inertials[link + 1]
+                local = (ine.position, ine.orientation)
+                comp = comps[link + 1]
+                x, y, z, qw, qx, qy, qz = _pose_floats(comp.entity_pose)
+                com = _com_frame(x, y, z, qx, qy, qz, qw, local)
+                add(com[0])
+                add(com[1])
+                add(local[0])
+                add(local[1])
+                add((x, y, z, qx, qy, qz, qw))
+                if restored is None:
+                    add(comp.linear_velocity.tolist())
+                    add(comp.angular_velocity.tolist())
+                else:  # set back by a restore (the backend's), until the next step or write
+                    add(restored[link + 1].ravel().tolist())
+            block = np.array(flat).reshape(len(links), LINK_STATE_WIDTH)
+            if self._diverged is not None or not np.isfinite(block).all():
+                self._readable(block, body)
+        finally:
+            lock.release()
+        return LinkStates.of(block)
 
     def _static_link_state(self, robot: Robot, link: int, local: tuple[Vec3, Quat]) -> LinkState:
         base = _frame(robot.built.entities[0].pose)

@@ -8,12 +8,14 @@ from __future__ import annotations
 import math
 import threading
 from contextlib import AbstractContextManager
+from itertools import chain
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from simbridge.exceptions import SimulationDivergedError
 from simbridge.types import (
+    LINK_STATE_WIDTH,
     BaseState,
     DynamicsInfo,
     JointInfo,
@@ -21,6 +23,7 @@ from simbridge.types import (
     JointStates,
     JointType,
     LinkState,
+    LinkStates,
     Quat,
     Vec3,
 )
@@ -30,6 +33,8 @@ from .output import p  # pybullet, imported with its banner captured
 from .records import Records
 
 __all__ = ["StateReads"]
+
+_flat = chain.from_iterable
 
 
 class StateReads:
@@ -123,12 +128,60 @@ class StateReads:
             lin, ang = p.getBaseVelocity(body, physicsClientId=c)
         finally:
             lock.release()
+        return self._base_link_state(body, pos, orn, lin, ang)
+
+    def _base_link_state(self, body: int, pos: Vec3, orn: Quat, lin: Vec3, ang: Vec3) -> LinkState:
+        """The base as a link, from its base reads (checked finite here): its URDF link frame
+        is the centre-of-mass frame times the inverse of its inertial frame."""
         if not _finite_base(pos, orn, lin, ang) and not _all_finite(pos, orn, lin, ang):
             self._diverge(f"body {body} base state")
         lp, lo = self._bodies[body].base_inertial
         inv_pos, inv_orn = p.invertTransform(lp, lo)
         fpos, forn = p.multiplyTransforms(pos, orn, inv_pos, inv_orn)
         return LinkState(pos, orn, lp, lo, fpos, forn, lin, ang)
+
+    def link_states(self, body: int, links: np.ndarray) -> LinkStates:
+        """See Backend.link_states.
+
+        PyBullet: one ``p.getLinkStates`` of every link asked for, with velocity and forward
+        kinematics (the base, if asked for, from its base reads, as ``link_state``); a
+        non-finite value raises ``SimulationDivergedError``.
+        """
+        if self._diverged is not None:
+            raise self._diverged
+        idx = links.tolist()
+        moving = [k for k in idx if k >= 0]
+        lock = self._stepping
+        if not lock.acquire(False):
+            wait_for_lock(self)
+        try:
+            c = self._c
+            rows = (
+                p.getLinkStates(
+                    body,
+                    moving,
+                    computeLinkVelocity=1,
+                    computeForwardKinematics=1,
+                    physicsClientId=c,
+                )
+                if moving
+                else []
+            )
+            if len(moving) != len(idx):
+                pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+                lin, ang = p.getBaseVelocity(body, physicsClientId=c)
+        finally:
+            lock.release()
+        if len(moving) != len(idx):  # the base, where it stands among the links
+            rows = list(rows)
+            rows.insert(idx.index(-1), self._base_link_state(body, pos, orn, lin, ang))
+        n = len(idx)  # each row 8 tuples, LinkState's fields: 27 floats
+        block = np.fromiter(_flat(_flat(rows)), np.float64, n * LINK_STATE_WIDTH).reshape(
+            n, LINK_STATE_WIDTH
+        )
+        if not np.isfinite(block).all():
+            self._diverge(f"body {body} link states")
+        return LinkStates.of(block)
 
     def base_state(self, body: int) -> BaseState:
         """See Backend.base_state.

@@ -418,15 +418,13 @@ class _Recorder:
 
     def record(self, row: int) -> None:
         sim, body = self.sim, self.body
-        base = sim.link_state(body, -1)
+        links = sim.link_states(body)  # every link, the base first: self.links' order
         out = self.base[row]
-        out[0:3] = base.link_frame_position
-        out[3:7] = base.link_frame_orientation
-        out[7:10] = base.linear_velocity
-        out[10:13] = base.angular_velocity
-        self.links_xyz[row, 0] = base.com_position
-        for k in range(1, len(self.links)):
-            self.links_xyz[row, k] = sim.link_state(body, self.links[k]).com_position
+        out[0:3] = links.link_frame_position[0]
+        out[3:7] = links.link_frame_orientation[0]
+        out[7:10] = links.linear_velocity[0]
+        out[10:13] = links.angular_velocity[0]
+        self.links_xyz[row] = links.com_position
         if len(self.joint_indices):
             js = sim.joint_states(body, self.joint_indices)
             self.q[row] = js.positions

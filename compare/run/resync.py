@@ -312,17 +312,15 @@ def _observe(
     sim: simbridge.Sim, body: int, joints: np.ndarray, links: list[int]
 ) -> dict[str, np.ndarray]:
     """The subject's state as :func:`~simbridge.compare.run.run` records a row (the same
-    calls): base link frame pose, base velocities, joints, link centres of mass."""
-    base = sim.link_state(body, -1)
+    calls, ``Sim.link_states`` and ``Sim.joint_states``): base link frame pose, base
+    velocities, joints, link centres of mass."""
+    ls = sim.link_states(body, links)
     out = {
-        "base_position": np.array(base.link_frame_position, dtype=np.float64),
-        "base_orientation": np.array(base.link_frame_orientation, dtype=np.float64),
-        "base_linear_velocity": np.array(base.linear_velocity, dtype=np.float64),
-        "base_angular_velocity": np.array(base.angular_velocity, dtype=np.float64),
-        "link_positions": np.array(
-            [base.com_position] + [sim.link_state(body, k).com_position for k in links[1:]],
-            dtype=np.float64,
-        ),
+        "base_position": ls.link_frame_position[0].copy(),
+        "base_orientation": ls.link_frame_orientation[0].copy(),
+        "base_linear_velocity": ls.linear_velocity[0].copy(),
+        "base_angular_velocity": ls.angular_velocity[0].copy(),
+        "link_positions": ls.com_position.copy(),
     }
     if len(joints):
         js = sim.joint_states(body, joints)

@@ -21,6 +21,8 @@ __all__ = [
     "JointInfo",
     "DynamicsInfo",
     "LinkState",
+    "LinkStates",
+    "LINK_STATE_WIDTH",
     "BaseState",
     "JointStates",
     "JointStateMultiDof",
@@ -131,6 +133,60 @@ class LinkState(NamedTuple):
     """World linear velocity of the centre of mass (m/s)."""
     angular_velocity: Vec3
     """World angular velocity (rad/s)."""
+
+
+LINK_STATE_WIDTH = 27
+"""The floats of one :class:`LinkState` laid end to end (3 + 4 + 3 + 4 + 3 + 4 + 3 + 3): a row
+of the block a :class:`LinkStates` is made of."""
+
+
+class LinkStates(NamedTuple):
+    """Several links' :class:`LinkState`, one row per link in the order asked for
+    (``Sim.link_states``): each field the same quantity as :class:`LinkState`'s, stacked.
+
+    Row k holds the very floats ``Sim.link_state(body, links[k])`` returns (the same engine
+    reads, made in one pass). The fields are float64 views of one ``(n, 27)`` block whose rows
+    are :class:`LinkState`'s floats end to end (:meth:`of`); quaternions (x, y, z, w).
+    """
+
+    com_position: np.ndarray  # (n, 3)
+    """(n, 3) m, world: each link's centre of mass (``linkWorldPosition``)."""
+    com_orientation: np.ndarray  # (n, 4)
+    """(n, 4) x, y, z, w, world: each link's inertial frame."""
+    local_inertial_position: np.ndarray  # (n, 3)
+    """(n, 3) m: the centre of mass in the link frame."""
+    local_inertial_orientation: np.ndarray  # (n, 4)
+    """(n, 4) x, y, z, w: the inertial frame in the link frame."""
+    link_frame_position: np.ndarray  # (n, 3)
+    """(n, 3) m, world: the URDF link frame's origin (``worldLinkFramePosition``)."""
+    link_frame_orientation: np.ndarray  # (n, 4)
+    """(n, 4) x, y, z, w, world: the URDF link frame."""
+    linear_velocity: np.ndarray  # (n, 3)
+    """(n, 3) m/s, world: the centre of mass's linear velocity."""
+    angular_velocity: np.ndarray  # (n, 3)
+    """(n, 3) rad/s, world."""
+
+    @classmethod
+    def of(cls, block: np.ndarray) -> LinkStates:
+        """The fields of a float64 ``(n, 27)`` block whose rows are :class:`LinkState`'s floats
+        end to end (views of it, no copy).
+
+        Args:
+            block: ``(n, LINK_STATE_WIDTH)`` float64.
+
+        Returns:
+            The :class:`LinkStates` over ``block``.
+        """
+        return cls(
+            block[:, 0:3],
+            block[:, 3:7],
+            block[:, 7:10],
+            block[:, 10:14],
+            block[:, 14:17],
+            block[:, 17:21],
+            block[:, 21:24],
+            block[:, 24:27],
+        )
 
 
 class BaseState(NamedTuple):

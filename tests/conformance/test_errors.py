@@ -457,6 +457,7 @@ def _reads(sim, body):
     return {
         "base_state": lambda: [v for part in sim.base_state(body) for v in part],
         "link_state": lambda: [v for part in sim.link_state(body, 0) for v in part],
+        "link_states": lambda: np.concatenate(sim.link_states(body), axis=1).ravel().tolist(),
         "joint_states": lambda: np.concatenate(sim.joint_states(body)[:3]).tolist(),
         "contact_points": lambda: [
             v

@@ -98,6 +98,7 @@ def _reads(backend: str) -> dict[str, str]:
                 found += _leaves(
                     sim.link_state(body, link), simbridge.LinkState, f"{name}.link_state[{link}]"
                 )
+            found += _leaves(sim.link_states(body), simbridge.LinkStates, f"{name}.link_states")
             found += _leaves(sim.base_state(body), simbridge.BaseState, f"{name}.base_state")
             found += _leaves(sim.joint_states(body), simbridge.JointStates, f"{name}.joint_states")
             multi = sim.joint_states_multi_dof(body)

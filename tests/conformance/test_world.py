@@ -224,6 +224,7 @@ def test_every_call_that_touches_the_world_is_refused_while_another_thread_steps
         "reset_base_state": lambda: sim.reset_base_state(robot, position=(1, 2, 3)),
         "base_state": lambda: sim.base_state(robot),
         "link_state": lambda: sim.link_state(robot, 2),
+        "link_states": lambda: sim.link_states(robot),
         "joint_states": lambda: sim.joint_states(robot),
         "contact_points": lambda: sim.contact_points(),
         "get_state": lambda: sim.get_state(),

@@ -103,6 +103,7 @@ def _after_divergence(ctx: h.Ctx) -> dict[str, Any]:
             reads[f"base_state({body})"] = lambda b=body, s=sim: s.base_state(b)
             reads[f"joint_states({body})"] = lambda b=body, s=sim: s.joint_states(b)
             reads[f"link_state({body}, -1)"] = lambda b=body, s=sim: s.link_state(b, -1)
+            reads[f"link_states({body})"] = lambda b=body, s=sim: s.link_states(b)
             if sim.num_joints(body):
                 reads[f"link_state({body}, 0)"] = lambda b=body, s=sim: s.link_state(b, 0)
         reads["get_state()"] = lambda s=sim: s.get_state()

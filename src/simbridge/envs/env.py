@@ -307,6 +307,11 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _check_action(self, action: Any) -> tuple[np.ndarray, int]:
         t = self.task.action
+        if type(action) is np.ndarray and action.dtype.kind == "f" and action.ndim == 1:
+            values = action.tolist()  # a float array, the common case: checked in floats
+            clip = t.clip
+            if len(values) == len(t.joints) and all(-clip <= v <= clip for v in values):
+                return np.array(values, dtype=np.float64), 0  # finite, within (NaN: False)
         try:
             a = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError):

@@ -51,6 +51,7 @@ class World:
     pose: Mapping[str, float] = field(default_factory=dict)
     _read: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     _index: dict[tuple[str | int, ...], np.ndarray] = field(default_factory=dict, repr=False)
+    _one: dict[str | int, int] = field(default_factory=dict, repr=False)  # joint -> index
 
     def joint_states(
         self, joints: Sequence[str | int] | None = None
@@ -78,6 +79,26 @@ class World:
                     [j if isinstance(j, int) else self.sim.joint_index(self.body, j) for j in key]
                 )
         return self._read[0][idx], self._read[1][idx]
+
+    def joint_position(self, joint: str | int) -> float:
+        """One joint's position from the same shared read as :meth:`joint_states` (a
+        termination's test: no arrays made).
+
+        Args:
+            joint: a joint name or index of the action robot.
+
+        Returns:
+            Its position (rad or m).
+        """
+        i = self._one.get(joint)
+        if i is None:
+            i = self._one[joint] = (
+                joint if isinstance(joint, int) else self.sim.joint_index(self.body, joint)
+            )
+        if self._read is None:
+            s = self.sim.joint_states(self.body)
+            self._read = (np.asarray(s.positions), np.asarray(s.velocities))
+        return float(self._read[0][i])
 
     def stale(self) -> None:
         """Forget the joint read: the world has moved (a step, a reset)."""
@@ -192,7 +213,7 @@ def _tilt(w: World) -> float:
 
 
 def _joint_value(w: World, p: Mapping[str, Any]) -> float:
-    return float(w.joint_states([p["joint"]])[0][0])
+    return w.joint_position(p["joint"])
 
 
 REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {

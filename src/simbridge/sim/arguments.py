@@ -22,6 +22,7 @@ __all__ = [
     "MAX_STATE_VALUE",
     "JointsArg",
     "LinkArg",
+    "LinksArg",
     "checked_state",
     "command_values",
     "flag",
@@ -39,6 +40,8 @@ _F64 = np.dtype(np.float64)  # native float64: ``arr.dtype is _F64`` is the hot 
 JointsArg = int | str | Sequence[int | str] | np.ndarray
 # A link argument: an index (-1 = base) or a name.
 LinkArg = int | str
+# A links argument: a link argument, or an ordered sequence (or array) of them.
+LinksArg = int | str | Sequence[int | str] | np.ndarray
 
 
 _TOO_LARGE = "values must be finite floats, got an integer past float's range (over 1.8e308)"

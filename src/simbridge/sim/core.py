@@ -54,9 +54,9 @@ from simbridge.exceptions import (
 from simbridge.profiles import Profile, get_profile
 from simbridge.registry import available_backends, load_backend
 from simbridge.sim import control, loading, multi_dof, native, pictures, world
-from simbridge.sim.arguments import _F64, JointsArg, LinkArg, command_values, flag, vec
+from simbridge.sim.arguments import _F64, JointsArg, LinkArg, LinksArg, command_values, flag, vec
 from simbridge.sim.keywords import Missing, keyword_error
-from simbridge.sim.lookups import body_table, joint_index, joint_indices, link_index
+from simbridge.sim.lookups import body_table, joint_index, joint_indices, link_index, link_indices
 from simbridge.sim.native import NotGiven
 from simbridge.sim.shared import EngineRecipe, Shared
 from simbridge.types import (
@@ -68,6 +68,7 @@ from simbridge.types import (
     JointStateMultiDof,
     JointStates,
     LinkState,
+    LinkStates,
     MotorMode,
     SiteState,
     WorldState,
@@ -822,6 +823,31 @@ class Sim:
         """
         s = self._s
         return s.backend.link_state(body, link_index(s, body, link))
+
+    def link_states(self, body: int, links: LinksArg | None = None) -> LinkStates:
+        """Poses and velocities of several links at once: :meth:`link_state` of each, read in
+        one pass (PyBullet's ``getLinkStates``; MuJoCo's and PhysX's links in one loop).
+
+        Row k holds the very floats ``link_state(body, links[k])`` returns.
+
+        Args:
+            body: a body id.
+            links: an index or a link name (-1 or the root's name: the base), an ordered
+                sequence of them or an integer array; None: every link, the base first
+                (rows -1, 0, ..., n - 1: row k is link k - 1).
+
+        Returns:
+            A :class:`~simbridge.types.LinkStates`: ``(n, 3)`` positions (m) and velocities
+            (m/s, rad/s) and ``(n, 4)`` quaternions (x, y, z, w), float64, world frame (the
+            local inertial frames in the link frame), one row per link in the order given.
+
+        Raises:
+            UnknownBodyError, UnknownLinkError: no such body or link.
+            InvalidArgumentError: a link given twice, or an unordered ``links``.
+            SimulationDivergedError: the state is not finite.
+        """
+        s = self._s
+        return s.backend.link_states(body, link_indices(s, body, links))
 
     def base_state(self, body: int) -> BaseState:
         """The base's centre-of-mass pose and velocity (``getBasePositionAndOrientation``,

@@ -15,11 +15,11 @@ from simbridge.exceptions import (
     UnknownJointError,
     UnknownLinkError,
 )
-from simbridge.sim.arguments import JointsArg, LinkArg
+from simbridge.sim.arguments import JointsArg, LinkArg, LinksArg
 from simbridge.sim.shared import BodyTable, Shared
 from simbridge.types import JointType
 
-__all__ = ["body_table", "joint_index", "joint_indices", "link_index"]
+__all__ = ["body_table", "joint_index", "joint_indices", "link_index", "link_indices"]
 
 
 def body_table(s: Shared, body: int, argument: str = "body") -> BodyTable:
@@ -113,15 +113,15 @@ def link_index(s: Shared, body: int, link: LinkArg) -> int:
     raise UnknownLinkError(b.name, link, b.link_names, body=int(body), source=b.load.get("source"))
 
 
-def _key(joints: JointsArg) -> Any:
-    """A joints argument's cache key (an ordered, hashable form of it)."""
+def _key(joints: JointsArg | LinksArg, argument: str = "joints") -> Any:
+    """A joints (or links) argument's cache key (an ordered, hashable form of it)."""
     if isinstance(joints, (int, str, np.integer)):
         return joints
     if isinstance(joints, np.ndarray):
         return (joints.dtype.char, joints.tobytes())
     if isinstance(joints, (set, frozenset, dict)):  # no order: which target is whose?
         raise InvalidArgumentError(
-            "joints",
+            argument,
             f"expected an index, a name or an ordered sequence of them (list, tuple, "
             f"array), got a {type(joints).__name__}: {joints!r}",
         )
@@ -130,7 +130,7 @@ def _key(joints: JointsArg) -> Any:
         hash(key)
     except TypeError:
         raise InvalidArgumentError(
-            "joints", f"expected an index, a name or a sequence of them, got {joints!r}"
+            argument, f"expected an index, a name or a sequence of them, got {joints!r}"
         ) from None
     return key
 
@@ -189,4 +189,47 @@ def joint_indices(s: Shared, body: int, joints: JointsArg | None, movable: bool)
     if movable and any(b.joint_types[i] == JointType.SPHERICAL for i in idx):
         s.multi_idx[id(arr)] = arr
     cache[key] = arr
+    return arr
+
+
+def link_indices(s: Shared, body: int, links: LinksArg | None) -> np.ndarray:
+    """Resolve a links argument to an index array (cached per body and argument).
+
+    Args:
+        s: the Sim's shared state.
+        body: a body id.
+        links: an index, a name, an ordered sequence of them, an integer array (-1 or the
+            root's name: the base), or None (every link, the base first: -1, 0, ..., n - 1).
+
+    Returns:
+        ``(n,)`` ``np.intp``, read-only, in the order given; the same array object for the
+        same argument.
+
+    Raises:
+        InvalidArgumentError: an unordered or malformed argument, a link given twice.
+        UnknownLinkError, UnknownBodyError, SimClosedError: as :func:`link_index`.
+    """
+    b = body_table(s, body)
+    if links is None:
+        key: Any = None
+    elif type(links) is np.ndarray:
+        key = (links.dtype.char, links.tobytes())
+    else:
+        key = _key(links, "links")
+    try:
+        return b.link_cache[key]
+    except KeyError:
+        pass
+    if links is None:
+        idx = list(range(-1, len(b.link_names)))
+    elif isinstance(links, (int, str, np.integer)):
+        idx = [link_index(s, body, links)]
+    else:
+        items = links.tolist() if isinstance(links, np.ndarray) else list(links)
+        idx = [link_index(s, body, k) for k in items]
+        if len(set(idx)) != len(idx):
+            raise InvalidArgumentError("links", f"a link is given twice in {links!r}")
+    arr = np.asarray(idx, dtype=np.intp)
+    arr.setflags(write=False)
+    b.link_cache[key] = arr
     return arr

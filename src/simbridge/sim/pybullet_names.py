@@ -19,7 +19,7 @@ EQUIVALENTS: dict[str, str] = {
     "getJointInfo": "sim.joint_info (the whole table: sim.joints)",
     "getDynamicsInfo": "sim.dynamics_info",
     "getLinkState": "sim.link_state",
-    "getLinkStates": "sim.link_state, one link at a time",
+    "getLinkStates": "sim.link_states",
     "getBasePositionAndOrientation": "sim.base_state",
     "getBaseVelocity": "sim.base_state",
     "getJointState": "sim.joint_states",

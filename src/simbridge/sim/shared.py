@@ -43,6 +43,7 @@ class BodyTable:
         link_index: link name -> index, the base's name -> -1.
         cache: a joints argument (its key) -> its index array, for reads.
         movable_cache: the same for commands (movable joints only).
+        link_cache: a links argument (its key) -> its link-index array (``Sim.link_states``).
         load: how the body was loaded (its entry in ``Sim.manifest()["bodies"]``).
     """
 
@@ -54,6 +55,7 @@ class BodyTable:
     link_index: dict[str, int]
     cache: dict[Any, np.ndarray] = field(default_factory=dict)  # joints arg -> indices
     movable_cache: dict[Any, np.ndarray] = field(default_factory=dict)
+    link_cache: dict[Any, np.ndarray] = field(default_factory=dict)  # links arg -> indices
     load: dict[str, Any] = field(default_factory=dict)  # how it was loaded (the manifest's)
 
     @property
