@@ -41,9 +41,9 @@ ROBOT_DRAWN = 2000
 
 
 # Ant-tan pixels (ant_pixels) that mean Gymnasium's ant is drawn (mode "ant", 0.5 s of steps),
-# measured: 4338-4774 (PyBullet, 4 runs), 8939-54076 (MuJoCo, 2 runs; its window resizes as it
-# opens), 25170 (PhysX, 2 runs); an empty window of each, 8 s of screenshots: 0. 1000 lies 4.3x
-# under the least drawn.
+# measured: 4338-4990 (PyBullet, 7 runs), 8939-54076 (MuJoCo, 6 runs: the count depends on when
+# its window reaches its full size), 25170 (PhysX, 6 runs); an empty window of each, 8 s of
+# screenshots: 0. 1000 lies 4.3x under the least drawn.
 ANT_DRAWN = 1000
 
 

@@ -22,8 +22,10 @@ import warnings
 from pathlib import Path
 
 import pytest
-from _gui_window import ANT_DRAWN  # ant-tan pixels that mean the ant was drawn (measured there)
-from _gui_window import ROBOT_DRAWN  # robot pixels that mean r2d2 was drawn (measured there)
+from _gui_window import (
+    ANT_DRAWN,  # ant-tan pixels that mean the ant was drawn (measured there)
+    ROBOT_DRAWN,  # robot pixels that mean r2d2 was drawn (measured there)
+)
 
 import simbridge
 from simbridge.exceptions import BackendUnsupportedError

@@ -345,7 +345,7 @@ def _visual(
     if s.kind == "plane":
         half = [float(v) if v > 0 else INFINITE_PLANE for v in m.geom_size[g][:2]]
         down = quat_rotate(s.orientation, (0.0, 0.0, -0.5 * PLANE_THICKNESS))
-        position = tuple(a + b for a, b in zip(s.position, down, strict=True))
+        position = (s.position[0] + down[0], s.position[1] + down[1], s.position[2] + down[2])
         s = replace(
             s, kind="box", position=position, size=(2 * half[0], 2 * half[1], PLANE_THICKNESS)
         )
