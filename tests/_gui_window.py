@@ -7,8 +7,10 @@ one JSON line with the robot-blue pixel counts, then closes the Sim.
 ``close()``; prints
 ``closing <time>`` just before it.
 ``python _gui_window.py BACKEND ant``: Gymnasium's ant.xml read as MuJoCo reads it
-(``load_mjcf(..., semantics="mujoco")``) in the window, stepped, drawn (its tan pixels, printed
-as ``drawn <count> <scene> <time>``), then ``close()`` as in ``close``.
+(``load_mjcf(..., semantics="mujoco")``) in the window, stepped under constant controls, drawn
+(its tan pixels, printed as ``drawn <count> <scene> <time>``), then ``close()`` as in
+``close``; before the window opens, the same run headless, and ``same <gap>`` printed: the
+largest difference of the two runs' ``qpos``/``qvel``.
 Either way the process then ends as Python ends it.
 Where the backend cannot open a window on this machine (BackendUnsupportedError: PhysX without
 a Vulkan device SAPIEN accepts), the process prints ``unsupported: <why>`` and ends with
@@ -102,16 +104,28 @@ def grab(
         time.sleep(0.25)
 
 
+def ant_run(sim: simbridge.Sim) -> np.ndarray:
+    """ant.xml under MuJoCo's reading, 0.5 s under a constant 0.3 on every actuator (the ant
+    falls onto its legs); its ``qpos`` and ``qvel``."""
+    sim.load_mjcf(ant_xml(), semantics="mujoco")
+    sim.set_actuator_controls(np.full(8, 0.3))
+    sim.step(50)
+    return np.concatenate([sim.qpos(), sim.qvel()])
+
+
 def main() -> None:
     backend, mode = sys.argv[1], sys.argv[2]
+    if mode == "ant":
+        with simbridge.Sim(backend) as headless:
+            alone = ant_run(headless)
     try:
         sim = simbridge.Sim(backend, gui=True)
     except BackendUnsupportedError as exc:
         print(f"unsupported: {exc}", flush=True)
         sys.exit(UNSUPPORTED)
     if mode == "ant":
-        sim.load_mjcf(ant_xml(), semantics="mujoco")
-        sim.step(50)  # 0.5 s: the ant falls onto its legs
+        shown = ant_run(sim)
+        print(f"same {float(np.abs(shown - alone).max())!r}", flush=True)
         robot, scene = grab(lambda n, _: n > ANT_DRAWN, robot=ant_pixels)
         print(f"drawn {robot} {scene} {time.time()}", flush=True)
         print(f"closing {time.time()}", flush=True)

@@ -144,7 +144,10 @@ def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):
 def test_the_mujoco_reading_shows_the_ant_and_closes_cleanly(display, backend):
     """ant.xml under ``semantics="mujoco"`` in the engine's own window: its tan on the screen
     after 0.5 s of steps (the model built in the window, not a blank one), then close(): exit
-    status 0 within EXIT_S. One run: the ten-run lifecycle is the tests above'."""
+    status 0 within EXIT_S. The window changes nothing simulated: the same run headless in
+    the same process ends in the same ``qpos``/``qvel`` (PyBullet's GUI connection is reset,
+    to PyBullet's default engine parameters, when the model takes it over). One run: the ten-run
+    lifecycle is the tests above'."""
     done, ended = _run(display, backend, "ant")
     _skip_if_unsupported(done)
     for _ in range(OPEN_RETRIES):
@@ -156,6 +159,8 @@ def test_the_mujoco_reading_shows_the_ant_and_closes_cleanly(display, backend):
     closing = [line for line in done.stdout.splitlines() if line.startswith("closing ")]
     assert drawn and closing, done.stdout[-2000:]
     assert int(drawn[-1][1]) > ANT_DRAWN, drawn[-1]  # the ant was on the screen
+    same = [line.split() for line in done.stdout.splitlines() if line.startswith("same ")]
+    assert same and float(same[-1][1]) == 0.0, same  # measured 0.0 on every engine
     assert ended - float(closing[-1].split()[1]) < EXIT_S
 
 

@@ -361,10 +361,16 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         """See MjcfOnEngine.engine_departures.
 
         Returns:
-            PhysX's own: float32 state, its contact offsets.
+            PhysX's own: float32 state, its contact offsets; with a window, what it draws.
         """
-        return {
+        out = {
             "precision": "PhysX keeps poses and velocities in float32",
             "contact_margin": "a geom's margin and gap are PhysX's contact offset (0.01 m) and "
             "rest offset (0.0005 m)",
         }
+        if self._window is not None:
+            out["window"] = (
+                "SAPIEN's window draws MuJoCo's visible geoms (groups 0-2) in their colours, "
+                "flat-shaded as for a URDF: no textures, skybox or MuJoCo lights; no ellipsoid"
+            )
+        return out

@@ -444,7 +444,14 @@ class NativePyBullet(MjcfOnEngine):
 
     def engine_departures(self) -> dict[str, str]:
         """See MjcfOnEngine.engine_departures."""
-        return {
+        out = {
             "contact_margin": "a geom's margin and gap are PyBullet's collision margin "
             "(0.04 m on primitives in its collision detection, contacts from distance 0)",
         }
+        if self._window is not None:
+            out["window"] = (
+                "PyBullet's window draws MuJoCo's visible geoms (groups 0-2) in one colour per "
+                "link (its first geom's); a link mixing a mesh with primitives shows its meshes "
+                "alone; no textures, skybox or MuJoCo lights; no ellipsoid"
+            )
+        return out
