@@ -232,9 +232,10 @@ class MjcfOnEngine(MjcfReads, Backend):
         ball = np.where(self.ball_dofs, damping, 0.0)  # the ball joints' damping
         f = qfrc + self.implicit_damping(damping - ball, full)
         fc = np.zeros_like(f)
+        q = self.d.qpos
         if self._last is not None:  # the engine's constraint forces of the step before
-            v0, mass0, c0, applied0 = self._last
-            fc = mass0 @ ((v - v0) / self.dt) - applied0 + c0
+            q0, v0, mass0, c0, applied0 = self._last
+            fc = mass0 @ (self.velocity_change(q0, v0, q, v) / self.dt) - applied0 + c0
         # a ball joint's damping is implicit in every force, as MuJoCo's Euler makes it: the
         # acceleration (M + A + dt D)^-1 (f - c + fc - D v), given through the engine's M
         # (a spinning thin body's axis has dt D / I near 10: an explicit force there is off)
@@ -245,8 +246,27 @@ class MjcfOnEngine(MjcfReads, Backend):
             out = mass @ np.linalg.solve(implicit, f - c + fc - ball * v) + c - fc
         else:
             out = forces.armature_force(arm, full, f, c - fc) if arm.any() else f
-        self._last = (v.copy(), mass.copy(), c.copy(), out)
+        self._last = (q.copy(), v.copy(), mass.copy(), c.copy(), out)
         return out
+
+    def velocity_change(
+        self, q0: np.ndarray, v0: np.ndarray, q1: np.ndarray, v1: np.ndarray
+    ) -> np.ndarray:
+        """The step's change of velocity as MuJoCo's ``qacc * dt`` at the step's start, for
+        the constraint forces of :meth:`with_armature`.
+
+        Args:
+            q0: (nq,) the start's positions (MuJoCo's conventions).
+            v0: (nv,) the start's velocities.
+            q1: (nq,) the end's positions.
+            v1: (nv,) the end's velocities.
+
+        Returns:
+            (nv,) by default ``v1 - v0``; an engine that steps a free body's centre-of-mass
+            velocity and world angular velocity gives that change in MuJoCo's coordinates of
+            the start (:func:`~.mjcf_forces.free_velocity_change`).
+        """
+        return v1 - v0
 
     def limit_recovery(self, mass: np.ndarray, free: np.ndarray) -> np.ndarray:
         """MuJoCo's soft joint limit as a force (:func:`~.mjcf_forces.soft_limit_force`). With

@@ -28,7 +28,7 @@ and PyBullet's one-step depenetration (see :data:`MAX_DEPENETRATION`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -44,7 +44,15 @@ from simbridge.types import Quat, Vec3
 
 from .combine import set_product_combine
 
-__all__ = ["BuiltRobot", "build_robot", "pose", "MIN_MASS", "MIN_INERTIA"]
+__all__ = [
+    "BuiltRobot",
+    "build_robot",
+    "ignore_bits",
+    "needed_pairs",
+    "pose",
+    "MIN_MASS",
+    "MIN_INERTIA",
+]
 
 MIN_MASS = 1e-6  # kg, for a moving link of mass 0 (PhysX refuses zero)
 MIN_INERTIA = 1e-10  # kg m^2, likewise
@@ -218,10 +226,16 @@ class _LinkShapes:
     """Makes each link's collision shapes, one material per (friction, restitution), and
     records which link each shape belongs to and which shapes were left out."""
 
-    def __init__(self, plan: BuildPlan, body: int, offsets: tuple[float, float]) -> None:
+    def __init__(
+        self,
+        plan: BuildPlan,
+        body: int,
+        offsets: tuple[float, float],
+        ignore: Mapping[int, int] | None = None,
+    ) -> None:
         self.body = body
         self.offsets = offsets
-        self.ignore = _ignore_bits(plan)
+        self.ignore = _ignore_bits(plan) if ignore is None else dict(ignore)
         self.materials: dict[tuple[float, float], Any] = {}
         self.skipped: list[str] = []
         self.shape_links: dict[int, int] = {}
@@ -354,6 +368,7 @@ def build_robot(
     solver_iterations: int,
     body: int,
     settings: Mapping[str, Any] | None = None,
+    ignore: Mapping[int, int] | None = None,
 ) -> BuiltRobot:
     """Add the robot of ``plan`` to ``scene``: one static actor when it is welded to the world
     and nothing of it moves, else one articulation.
@@ -363,9 +378,11 @@ def build_robot(
         plan: the engine-neutral build plan of the robot.
         solver_iterations: the articulation's solver position iterations (the profile's).
         body: the robot's body id, which tags its shapes for the contact filter
-            (:func:`_filter`).
+            (:func:`_filter`'s g3: bodies given the same id may leave pairs out between them).
         settings: the engine settings a profile sets (backends/settings_physx.py); each one
             not given is at the backend's default.
+        ignore: each link's ignore bits (g2), where the caller works them out over several
+            bodies tagged with one ``body``; None: the plan's own (:func:`_ignore_bits`).
 
     Returns:
         The :class:`BuiltRobot`: its SAPIEN entities and components, and what was bounded or
@@ -383,12 +400,15 @@ def build_robot(
     static_body = plan.fixed_base and not moving
     if not static_body:
         _check_size(plan)
-    shapes = _LinkShapes(plan, body, offsets)
+    shapes = _LinkShapes(plan, body, offsets, ignore)
     if static_body:
-        return _static_robot(scene, plan, shapes)
-    return _articulation(
-        scene, plan, shapes, depenetration, (solver_iterations, velocity_iterations)
-    )
+        built = _static_robot(scene, plan, shapes)
+    else:
+        built = _articulation(
+            scene, plan, shapes, depenetration, (solver_iterations, velocity_iterations)
+        )
+    built.filtered_exactly = shapes.ignore is not None
+    return built
 
 
 # a spherical joint is three revolute joints about the child's inertial x, y and z axes at the
@@ -485,21 +505,83 @@ def _link_frame_in_base(plan: BuildPlan, index: int) -> tuple[Vec3, Quat]:
     return frame
 
 
+def ignore_bits(
+    excluded: Iterable[tuple[Hashable, Hashable]], needed: Iterable[tuple[Hashable, Hashable]]
+) -> dict[Hashable, int] | None:
+    """ "Ignore" bits (SAPIEN's g2) that leave out each ``needed`` pair: a greedy cover of the
+    needed pairs by cliques of the ``excluded`` graph, one bit per clique set on its members, so
+    that two links share a bit only where their pair is excluded (a parent and its children
+    excluded pairwise share one bit, not one per pair).
+
+    Args:
+        excluded: Every pair that must not touch (links as any hashable key).
+        needed: The pairs that need a bit (a subset of ``excluded``: those PhysX does not
+            already leave out, between two links that both have shapes).
+
+    Returns:
+        key -> bits for every key of a needed pair (the others: 0), or None where the cover
+        needs more than 32 bits.
+    """
+    adj: dict[Hashable, set[Hashable]] = {}
+    for a, b in excluded:
+        adj.setdefault(a, set()).add(b)
+        adj.setdefault(b, set()).add(a)
+    left = {frozenset(pair) for pair in needed if pair[0] != pair[1]}
+    bits: dict[Hashable, int] = {}
+    k = 0
+    while left:
+        pair = min(left, key=lambda e: sorted(map(repr, e)))
+        if k == 32:
+            return None
+        clique = sorted(pair, key=repr)
+        # grown by every node excluded with each member (in a fixed order)
+        for c in sorted(set.intersection(*(adj[x] for x in clique)), key=repr):
+            if all(c in adj[x] for x in clique):
+                clique.append(c)
+        for x in clique:
+            bits[x] = bits.get(x, 0) | (1 << k)
+        left -= {frozenset((x, y)) for x in clique for y in clique if x != y}
+        k += 1
+    return bits
+
+
 def _ignore_bits(plan: BuildPlan) -> dict[int, int] | None:
     """Each link's "ignore" bits (SAPIEN's g2) that leave out exactly the plan's pairs: all
-    links one bit with self-collision off; else one bit per excluded pair (at most 32), set on
-    both its links, so two links share a bit only where their pair is excluded. None where
-    there are more pairs than bits (PhysX's own rule then: a departure)."""
+    links one bit with self-collision off; else :func:`ignore_bits` of the excluded pairs that
+    PhysX does not leave out itself (a joint's parent and child never touch in PhysX) and whose
+    two links both have shapes. None where that needs more than 32 bits (PhysX's own rule
+    then: the body's ``filtered_exactly`` is False)."""
     if plan.self_collision == "off":
         return {link.index: 1 for link in plan.links}
-    pairs = sorted(plan.excluded_pairs)
-    if len(pairs) > 32:
+    bits = ignore_bits(plan.excluded_pairs, needed_pairs(plan))
+    if bits is None:
         return None
-    bits = {link.index: 0 for link in plan.links}
-    for k, (a, b) in enumerate(pairs):
-        bits[a] |= 1 << k
-        bits[b] |= 1 << k
-    return bits
+    return {link.index: int(bits.get(link.index, 0)) for link in plan.links}
+
+
+def needed_pairs(plan: BuildPlan) -> list[tuple[int, int]]:
+    """The plan's excluded pairs that need an ignore bit in PhysX: both links have collision
+    shapes, and they are not a joint's parent and child in the articulation (PhysX never lets
+    those touch; a spherical joint's child is two links below its parent here, ball.py).
+
+    Args:
+        plan: The body's plan.
+
+    Returns:
+        ``(i, j)`` pairs, i < j, -1 = the base.
+    """
+    out = []
+    for a, b in sorted(plan.excluded_pairs):
+        la, lb = plan.link(a), plan.link(b)
+        if not (la.collisions and lb.collisions):
+            continue
+        if any(
+            x.parent == y and x.joint is not None and x.joint.type != "spherical"
+            for x, y in ((la, b), (lb, a))
+        ):
+            continue
+        out.append((a, b))
+    return out
 
 
 def _filter(shape: Any, link: LinkPlan, bits: dict[int, int] | None, body: int) -> None:

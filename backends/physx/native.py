@@ -34,6 +34,7 @@ from sapien import physx
 from simbridge.exceptions import MjcfFeatureUnsupportedError
 from simbridge.model.mjcf_native import NativeMjcf
 from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
+from simbridge.model.plan_records import BuildPlan
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_rotate
 from simbridge.types import ContactPoint, JointType, Quat, Vec3
@@ -41,12 +42,74 @@ from simbridge.types import ContactPoint, JointType, Quat, Vec3
 from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
 from .ball import angles_to_quat, quat_to_angles, rate_matrix
 from .contacts import ContactReads
-from .model import build_robot
+from .model import build_robot, ignore_bits, needed_pairs
 from .window import Window
 
 __all__ = ["NativePhysx"]
 
 SOLVER_ITERATIONS = 50  # position iterations of each articulation (PyBullet's count)
+
+
+def _shared_filters(
+    native: NativeMjcf, plans: tuple[BuildPlan, ...], ground: BuildPlan | None
+) -> tuple[dict[int, int], dict[int, dict[int, int]]]:
+    """The contact-filter tags (SAPIEN's g3) and ignore bits (g2) that leave out the
+    ``<contact><exclude>`` pairs between top-level bodies: the bodies an exclude joins share one
+    tag, and their links' ignore bits are worked out together
+    (:func:`~.model.ignore_bits`), each body's own excluded pairs and the cross pairs.
+
+    Args:
+        native: The compiled model.
+        plans: Its plans (:func:`native_plans`), body k the plan k.
+        ground: The world body's plan (body -1), or None.
+
+    Returns:
+        ``(tags, ignore)``: the tag of each body (-1: the ground), and the links' bits of each
+        body whose filter is shared (the others: their plan's own).
+
+    Raises:
+        MjcfFeatureUnsupportedError: The pairs of one group of bodies need more than 32 bits.
+    """
+    tags = {k: k + 1 for k in range(len(plans))}
+    tags[-1] = len(plans) + 1
+    of = {k: plan for k, plan in enumerate(plans)}
+    if ground is not None:
+        of[-1] = ground
+    cross = [c for c in cross_excludes(native) if c[0] in of and c[2] in of]
+    root = {k: k for k in of}
+
+    def find(k: int) -> int:
+        while root[k] != k:
+            k = root[k]
+        return k
+
+    for ka, _, kb, _, _ in cross:
+        root[find(ka)] = find(kb)
+    ignore: dict[int, dict[int, int]] = {}
+    for top in {find(k) for k, _, _, _, _ in cross}:
+        members = sorted(k for k in of if find(k) == top)
+        excluded = [((k, a), (k, b)) for k in members for a, b in of[k].excluded_pairs]
+        needed = [((k, a), (k, b)) for k in members for a, b in needed_pairs(of[k])]
+        for ka, ra, kb, rb, _ in cross:
+            if find(ka) == top:
+                excluded.append(((ka, ra), (kb, rb)))
+                if of[ka].link(ra).collisions and of[kb].link(rb).collisions:
+                    needed.append(((ka, ra), (kb, rb)))
+        bits = ignore_bits(excluded, needed)
+        if bits is None:
+            pair = next(c[4] for c in cross if find(c[0]) == top)
+            raise MjcfFeatureUnsupportedError(
+                native.display_name,
+                "physx",
+                "<contact><exclude> between two top-level bodies",
+                pair,
+                "its bodies' excluded pairs need more than SAPIEN's 32 ignore bits",
+            )
+        tag = min(tags[k] for k in members)
+        for k in members:
+            tags[k] = tag
+            ignore[k] = {link.index: int(bits.get((k, link.index), 0)) for link in of[k].links}
+    return tags, ignore
 
 
 def _matrix(q: Quat) -> np.ndarray:
@@ -95,14 +158,6 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         super().__init__(profile, native, gravity, timestep, gui=window is not None)
         self._window: Window | None = None  # set once the model is built
         m = self.m
-        for _, _, _, _, pair in cross_excludes(native):
-            raise MjcfFeatureUnsupportedError(
-                native.display_name,
-                self.name,
-                "<contact><exclude> between two top-level bodies",
-                pair,
-                "not yet: PhysX's collision groups here filter within one articulation",
-            )
         cfg = physx.PhysxSceneConfig()
         cfg.gravity = np.asarray(m.opt.gravity, dtype=np.float32)
         cfg.enable_tgs = False
@@ -111,14 +166,17 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         self._scene.timestep = self.dt
         drawn = window is not None
         self.plans = native_plans(native, limits=not self.soft_limits, visuals=drawn)
+        ground = ground_plan(native, visuals=drawn)
+        tags, ignore = _shared_filters(native, self.plans, ground)
         self._built = [
-            build_robot(self._scene, plan, SOLVER_ITERATIONS, k + 1)
+            build_robot(self._scene, plan, SOLVER_ITERATIONS, tags[k], ignore=ignore.get(k))
             for k, plan in enumerate(self.plans)
         ]
-        ground = ground_plan(native, visuals=drawn)
         self._ground = None
         if ground is not None:
-            self._ground = build_robot(self._scene, ground, SOLVER_ITERATIONS, len(self.plans) + 1)
+            self._ground = build_robot(
+                self._scene, ground, SOLVER_ITERATIONS, tags[-1], ignore=ignore.get(-1)
+            )
         if window is not None:  # the window's parts: the built plans' visual shapes
             for b, plan in zip(self._built, self.plans, strict=True):
                 b.plan = plan
@@ -368,6 +426,12 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             "contact_margin": "a geom's margin and gap are PhysX's contact offset (0.01 m) and "
             "rest offset (0.0005 m)",
         }
+        loose = [self.plans[k].name for k, b in enumerate(self._built) if not b.filtered_exactly]
+        if loose:
+            out["excluded_pairs"] = (
+                "the excluded pairs (parent and child, <contact><exclude>) of these bodies need "
+                f"more than SAPIEN's 32 ignore bits; only PhysX's own rule applies: {loose}"
+            )
         if self._window is not None:
             out["window"] = (
                 "SAPIEN's window draws MuJoCo's visible geoms (groups 0-2) in their colours, "

@@ -35,6 +35,7 @@ from simbridge.transforms import quat_multiply, quat_rotate, quat_to_matrix
 from simbridge.types import ContactPoint, JointType, Quat, Vec3
 
 from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
+from ..mjcf_forces import free_velocity_change
 from .contacts import contact_point
 from .output import (
     _pybullet_gui_output,
@@ -400,6 +401,24 @@ class NativePyBullet(MjcfOnEngine):
                 )
                 torque = quat_rotate(frame, tuple(f[3:]))
                 p.applyExternalTorque(body, -1, list(torque), p.WORLD_FRAME, physicsClientId=c)
+
+    def velocity_change(
+        self, q0: np.ndarray, v0: np.ndarray, q1: np.ndarray, v1: np.ndarray
+    ) -> np.ndarray:
+        """See MjcfOnEngine.velocity_change: a free base's by
+        :func:`~..mjcf_forces.free_velocity_change` (PyBullet steps its centre of mass's
+        velocity and its world angular velocity)."""
+        out = v1 - v0
+        m = self.m
+        for k, nb in enumerate(self.native.bodies):
+            if nb.free_joint < 0:
+                continue
+            qa, va = int(m.jnt_qposadr[nb.free_joint]), int(m.jnt_dofadr[nb.free_joint])
+            com = np.asarray(self.plans[k].links[0].inertial.position, dtype=np.float64)
+            out[va : va + 6] = free_velocity_change(
+                q0[qa : qa + 7], v0[va : va + 6], q1[qa : qa + 7], v1[va : va + 6], com, self.dt
+            )
+        return out
 
     def engine_contacts(self) -> list[ContactPoint]:
         """See MjcfOnEngine.engine_contacts: ``p.getContactPoints()``, PyBullet's rows with

@@ -148,7 +148,16 @@ def _markdown_html(text: str, folder: Path) -> str:
     return re.sub(r'src="([^"]+)"', inline, body)
 
 
-def _replay_section(engines: list[Any], viewer: str, duration: float) -> str:
+REPLAY_NOTE = (
+    "Every engine's recorded nominal run in one scene, each robot tinted in its engine's colour "
+    "(drag to turn, scroll to zoom)."
+)
+"""What the replay shows, the first words under it (``render_html(replay_note=...)``)."""
+
+
+def _replay_section(
+    engines: list[Any], viewer: str, duration: float, note: str = REPLAY_NOTE
+) -> str:
     from .replay import _name, event_marks
 
     marks = event_marks(engines)
@@ -189,8 +198,7 @@ def _replay_section(engines: list[Any], viewer: str, duration: float) -> str:
         f'<span class="engines">{boxes}</span>'
         f'<iframe id="replay" title="3D replay" srcdoc="{html.escape(viewer, quote=True)}">'
         "</iframe>"
-        '<p class="note">Every engine\'s recorded nominal run in one scene, each robot tinted '
-        "in its engine's colour (drag to turn, scroll to zoom). Under the view: play and pause, "
+        f'<p class="note">{html.escape(note, quote=False)} Under the view: play and pause, '
         "the time scrubber and the speed; the tree icon lists the scene's nodes. Spheres mark "
         "the events below from the instant they happen; click an event to move the scrubber "
         f"there.</p>{events}</section>"
@@ -206,9 +214,12 @@ def render_html(
     viewer: str | None = None,
     note: str = "",
     summary: dict[str, Any] | None = None,
+    lead: str = "",
+    replay_note: str = REPLAY_NOTE,
 ) -> str:
     """The page, in the order a reader wants it: report.md's title; with ``summary`` the
-    verdict of every pair in a line each (:func:`~.html_top.verdict_lines_html`); with
+    verdict of every pair in a line each (:func:`~.html_top.verdict_lines_html`); ``lead``
+    (another command's headline, as HTML: ``simbridge sim2sim``'s); with
     ``viewer`` (:func:`~.replay.replay_html`) and ``engines`` the replay section (else ``note``
     there, if any); then report.md's opening statements and its sections, each a ``<details>``
     to fold (:func:`~.html_top.fold_sections`), with the figures of ``folder`` inlined.
@@ -221,6 +232,8 @@ def render_html(
         viewer: the replay's viewer document; None: no replay.
         note: said where the replay would be, when there is none.
         summary: ``summary.json``'s dict; None: no verdict lines.
+        lead: HTML put after the verdict lines, before the replay.
+        replay_note: what the replay shows, in words, under it.
 
     Returns:
         The page's HTML.
@@ -234,10 +247,11 @@ def render_html(
         labels = summary["labels"]
         colours = {x: ENGINE_COLOURS[k % len(ENGINE_COLOURS)] for k, x in enumerate(labels)}
         top = verdict_lines_html(summary, colours)
+    top += lead
     script = ""
     if viewer is not None and engines:
         tr = engines[0].trajectory
-        top += _replay_section(engines, viewer, float(tr.time[-1] - tr.time[0]))
+        top += _replay_section(engines, viewer, float(tr.time[-1] - tr.time[0]), replay_note)
         script = f"<script>{_JS}</script>"
     elif note:
         top += f'<p class="note">{html.escape(note)}</p>'

@@ -63,9 +63,6 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # 0.6052 against 0.6117, its feet held by PhysX's static friction where MuJoCo's creep).
     "mjcf_ant_height_rk4": {"pybullet": 0.025},
     "mjcf_ant_height_euler": {"physx": 0.01},
-    # PhysX refuses an <exclude> between two top-level bodies (its collision groups here filter
-    # within one articulation): not yet built, refused by name (size: none, a refusal).
-    "mjcf_exclude_across_bodies": {"physx": 0.0},
     # Ball joints under MuJoCo's reading (test_mjcf_ball_joints.py; the MuJoCo backend: raw
     # MuJoCo's bits). The ball chain from qpos0 under gravity for 0.5 s (a spring, damping,
     # armature and a 60-degree cone on it): the largest rotation angle between an engine's ball

@@ -294,16 +294,12 @@ EXCLUDE = '<contact><exclude body1="low" body2="high"/></contact>'
 def test_contype_conaffinity_and_exclude_filter_contacts(backend: str, exclude: bool) -> None:
     """After 1 s: a sphere of contype/conaffinity 0 has fallen through the floor; the upper of
     two stacked spheres rests on the lower (centre near 0.3 m), or, with an ``<exclude>`` of
-    the pair, sinks into it (centre near 0.1 m). PhysX refuses an exclude between two
-    top-level bodies by name (not yet)."""
+    the pair (two top-level bodies: on PhysX one contact-filter tag and ignore bits shared by
+    both), sinks into it (centre near 0.1 m)."""
     if not _reads_mujoco(backend):
         pytest.skip(f"{backend!r} does not declare MuJoCo's reading of MJCF")
     text = STACK.format(contact=EXCLUDE if exclude else "")
     with simbridge.Sim(backend) as sim:
-        if exclude and gap(backend, "mjcf_exclude_across_bodies") is not None:
-            with pytest.raises(MjcfFeatureUnsupportedError, match=r"'low/high'"):
-                sim.load_mjcf(text, semantics="mujoco")
-            return
         sim.load_mjcf(text, semantics="mujoco")
         sim.step(500)
         q = sim.qpos()

@@ -1,6 +1,8 @@
 """``simbridge sim2sim POLICY --task T --trained-on ENGINE``: a policy trained on one engine, run
-on paired seeds on every engine (:func:`simbridge.envs.sim2sim.sim2sim`), into report.md and
-summary.json, with a headline on stdout."""
+on paired seeds on every engine (:func:`simbridge.envs.sim2sim.sim2sim`), into report.md,
+summary.json, report.html (the 3D replay of a chosen seed) and the survival figure, with a
+headline on stdout. With ``--fail-on-drop`` it exits :data:`DROP_EXIT` when an engine's success
+drops significantly against the training engine."""
 
 from __future__ import annotations
 
@@ -11,13 +13,21 @@ from typing import Any
 
 from simbridge.cli.args import nonnegative_int, positive_int
 
-__all__ = ["add_command"]
+__all__ = ["DROP_EXIT", "add_command"]
+
+DROP_EXIT = 3
+"""The exit status under ``--fail-on-drop`` when an engine dropped (1 stays an error, 2 bad
+usage)."""
 
 DESCRIPTION = """\
 Run POLICY on the task's paired seeds on every engine, the training engine first, and write
-report.md and summary.json: success per engine with a 95%% Wilson interval and N, McNemar's
-exact test against the training engine, returns with bootstrap intervals, survival, clipped
-actions, sign changes, and the contract engine beside engine.
+report.md, summary.json and report.html: success per engine with a 95%% Wilson interval and N,
+McNemar's exact test against the training engine, returns with bootstrap intervals, survival
+curves, clipped actions, sign changes, torque saturation and joint-limit hits, the contract
+engine beside engine, and a 3D replay of the first seed where the engines part.
+
+Exit status: 0, also when an engine drops; with --fail-on-drop, 3 when an engine's success
+drops significantly (McNemar p < 0.05); 1 on an error, 2 on bad usage.
 
 POLICY: 'reference' (the task's reference controller), module:callable (a function obs ->
 action, or a class made with the env: simbridge.envs.controllers:DriveToGoal), or a file:
@@ -88,6 +98,16 @@ def add_command(
         metavar="N",
         help="runs per engine and seed of the open-loop replays, all but one perturbed (default 8)",
     )
+    p.add_argument(
+        "--no-replay",
+        action="store_true",
+        help="no 3D replay in report.html (the chosen seed is not run again)",
+    )
+    p.add_argument(
+        "--fail-on-drop",
+        action="store_true",
+        help=f"exit {DROP_EXIT} when an engine's success drops significantly",
+    )
     verbose(p)
     p.set_defaults(handler=_sim2sim)
 
@@ -130,6 +150,10 @@ def _sim2sim(args: argparse.Namespace) -> int:
         from simbridge.envs.sim2sim_explain import explain_drops
 
         explain_drops(args.task, result)
+    if not args.no_replay:
+        from simbridge.envs.sim2sim_replay import record_replay
+
+        record_replay(args.task, result)
     out = args.out or Path("reports") / f"sim2sim-{result.task}"
     files = write(result, out)
     for line in headline(result):
@@ -148,4 +172,12 @@ def _sim2sim(args: argparse.Namespace) -> int:
         if e.get("note"):
             print(f"explain {e['engine']}: {e['note']}")
     print(f"wrote {', '.join(str(f) for f in files)}")
+    dropped = [f.label for f in result.figures[1:] if f.verdict == "drop"]
+    if args.fail_on_drop and dropped:
+        print(
+            f"simbridge: sim2sim: success dropped significantly on {', '.join(dropped)} "
+            f"(--fail-on-drop: exit {DROP_EXIT})",
+            file=sys.stderr,
+        )
+        return DROP_EXIT
     return 0

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import os
 from collections import deque
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -115,6 +116,11 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self.action_space = gym.spaces.Box(-c, c, (n,), np.float32)
         self._steps = 0
         self._queue: deque[np.ndarray] = deque([np.zeros(n)] * t.action.latency)
+        self.physics_hook: Callable[[np.ndarray | None], None] | None = None
+        """Called after every physics step when set (``simbridge sim2sim``'s effort probe,
+        :mod:`simbridge.envs.sim2sim_effort`), with the ``(n,)`` torques the env commanded for
+        that step (the torque and PD modes) or None (the position and velocity modes, whose
+        motors the engine runs: these then run their ``decimation`` steps one at a time)."""
 
     # ---------------------------------------------------------------- the world
 
@@ -338,23 +344,34 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                 kp=np.asarray(a.kp),
                 kd=np.asarray(a.kd),
             )
-            sim.step(n)
+            self._physics(n)
         elif a.mode == "velocity":
             sim.set_joint_velocity(w.body, w.joints, target, max_force=np.asarray(a.max_force))
-            sim.step(n)
+            self._physics(n)
         elif a.mode == "torque":  # the same torque each physics step: clipped once
             tau = np.minimum(np.maximum(target, -self._limit), self._limit)
             for _ in range(n):
                 sim.set_joint_torque(w.body, w.joints, tau)
-                sim.step()
+                self._physics(1, tau)
         else:
             limit = np.asarray(a.max_force)
             kp, kd = np.asarray(a.kp), np.asarray(a.kd)
             for _ in range(n):
                 s = sim.joint_states(w.body, w.joints)
-                tau = kp * (target - s.positions) - kd * s.velocities
-                sim.set_joint_torque(w.body, w.joints, np.clip(tau, -limit, limit))
-                sim.step()
+                tau = np.clip(kp * (target - s.positions) - kd * s.velocities, -limit, limit)
+                sim.set_joint_torque(w.body, w.joints, tau)
+                self._physics(1, tau)
+
+    def _physics(self, n: int, torque: np.ndarray | None = None) -> None:
+        """``n`` physics steps, :attr:`physics_hook` called after each when set (with
+        ``torque``, the torques commanded for them, or None)."""
+        hook = self.physics_hook
+        if hook is None:
+            self.sim.step(n)
+            return
+        for _ in range(n):
+            self.sim.step()
+            hook(torque)
 
     def _reward(self) -> tuple[float, dict[str, float]]:
         terms = {

@@ -15,6 +15,7 @@ import numpy as np
 
 from simbridge.envs.env import SimEnv
 from simbridge.envs.policies import check_output, load_policy
+from simbridge.envs.sim2sim_effort import EffortProbe
 from simbridge.envs.task import Task
 from simbridge.exceptions import InvalidArgumentError, UnknownBackendError
 from simbridge.profiles import _literal
@@ -62,6 +63,11 @@ class Record(NamedTuple):
     """The share of its steps with at least one action entry clipped."""
     sign_changes: float
     """Action sign changes per step, summed over the entries (0 before the second step)."""
+    saturated_share: float = 0.0
+    """The share of its physics steps with an action joint at its effort limit
+    (:class:`~simbridge.envs.sim2sim_effort.EffortProbe`)."""
+    limit_share: float = 0.0
+    """The share of its control steps after which a joint is at or past its position limit."""
 
 
 @dataclass
@@ -120,8 +126,9 @@ def parse_engines(
     return out
 
 
-def _episode(env: SimEnv, policy: Any, spec: str, seed: int) -> Record:
+def _episode(env: SimEnv, policy: Any, spec: str, seed: int, probe: EffortProbe) -> Record:
     obs, _ = env.reset(seed=seed)
+    probe.start()
     clip = env.task.action.clip
     total, steps, clipped, flips = 0.0, 0, 0, 0
     prev: np.ndarray | None = None
@@ -136,6 +143,7 @@ def _episode(env: SimEnv, policy: Any, spec: str, seed: int) -> Record:
                 NAN_ACTION,
                 clipped / max(steps, 1),
                 flips / max(steps, 1),
+                *probe.shares(),
             )
         sign = np.sign(a)
         if prev is not None:
@@ -143,6 +151,7 @@ def _episode(env: SimEnv, policy: Any, spec: str, seed: int) -> Record:
         prev = sign
         clipped += bool(np.any(np.abs(a) > clip))
         obs, reward, terminated, truncated, info = env.step(a)
+        probe.after_control_step()
         total += float(reward)
         steps += 1
         if terminated or truncated:
@@ -154,6 +163,7 @@ def _episode(env: SimEnv, policy: Any, spec: str, seed: int) -> Record:
                 info.get("failure"),
                 clipped / steps,
                 flips / steps,
+                *probe.shares(),
             )
 
 
@@ -199,7 +209,8 @@ def run_engine(task: Task, engine: Engine, policy: str, seeds: Sequence[int]) ->
     try:
         start = time.perf_counter()
         pol = load_policy(policy, env)
-        records = [_episode(env, pol, policy, s) for s in seeds]
+        probe = EffortProbe(env).install()
+        records = [_episode(env, pol, policy, s, probe) for s in seeds]
         contract = env.contract()
         contract["profile"] = engine.profile
         contract["simulated"] = simulated(engine)

@@ -16,6 +16,8 @@ the training engine first: the same seed gives the same initial state and comman
   median time to failure;
 - the share of steps with a clipped action entry and the action's sign changes per step (summed
   over its entries): a policy that saturates or chatters on one engine only;
+- the share of physics steps with an action joint at its effort limit, and of control steps
+  with a joint at its position limit (:mod:`simbridge.envs.sim2sim_effort`);
 - a NaN or infinite action ends its episode as a failure (``failure = "nan_action"``), counted
   and said in the report, never passed to the engine.
 
@@ -110,6 +112,8 @@ class EngineFigures:
     clipped_share: float
     sign_changes: float
     nan_actions: int
+    saturated_share: float = 0.0  # physics steps with an action joint at its effort limit
+    limit_share: float = 0.0  # control steps with a joint at or past its position limit
 
     @property
     def verdict(self) -> str:
@@ -132,6 +136,7 @@ class Sim2SimResult:
     figures: list[EngineFigures]
     explain: list[dict[str, Any]] = field(default_factory=list)  # sim2sim_explain's, if run
     openloop: Any = None  # sim2sim_openloop.OpenLoop, if run
+    replay: Any = None  # sim2sim_replay.record_replay's EpisodeReplay, if run
 
     @property
     def points_at_contract(self) -> bool:
@@ -164,18 +169,19 @@ def _bootstrap_mean(values: Sequence[float], seed: int) -> Interval:
 
 def _survival(records: Sequence[Record], episode_steps: int) -> list[float]:
     """Kaplan-Meier: the share not failed at 1/4, 1/2, 3/4 and all of ``episode_steps``; an
-    episode that ended without a failure is censored at its length."""
-    out = []
-    for quarter in (1, 2, 3, 4):
-        horizon = episode_steps * quarter / 4
-        s = 1.0
-        times = sorted({r.steps for r in records if r.failure and r.steps <= horizon})
-        for t in times:
-            at_risk = sum(r.steps >= t for r in records)
-            died = sum(r.steps == t and r.failure is not None for r in records)
-            s *= 1 - died / at_risk
-        out.append(s)
-    return out
+    episode that ended without a failure is censored at its length
+    (:func:`simbridge.envs.survival.kaplan_meier`)."""
+    from simbridge.envs.survival import kaplan_meier
+
+    km = kaplan_meier(records)
+    return [km.at(episode_steps * quarter / 4) for quarter in (1, 2, 3, 4)]
+
+
+def _pooled(shares: Sequence[float], records: Sequence[Record]) -> float:
+    """Episodes' shares of their steps pooled into the share of all of them, each weighted by
+    its control steps (every one of them ``decimation`` physics steps)."""
+    steps = np.array([r.steps for r in records], dtype=np.float64)
+    return float(np.average(shares, weights=steps)) if steps.sum() > 0 else 0.0
 
 
 def figures(runs: Sequence[EngineRun], seed: int = 0) -> list[EngineFigures]:
@@ -217,6 +223,8 @@ def figures(runs: Sequence[EngineRun], seed: int = 0) -> list[EngineFigures]:
                 clipped_share=float(np.mean([r.clipped_share for r in rec])),
                 sign_changes=float(np.mean([r.sign_changes for r in rec])),
                 nan_actions=counts.get(NAN_ACTION, 0),
+                saturated_share=_pooled([r.saturated_share for r in rec], rec),
+                limit_share=_pooled([r.limit_share for r in rec], rec),
             )
         )
     return out

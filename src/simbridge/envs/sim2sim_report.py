@@ -1,13 +1,16 @@
 """The outputs of ``simbridge sim2sim``: the terminal headline (:func:`headline`), report.md
-(:func:`markdown`) and summary.json (:func:`summary`), written by :func:`write`.
+(:func:`markdown`), summary.json (:func:`summary`), the survival figure
+(:mod:`.sim2sim_figures`), report.html (:mod:`.sim2sim_html`) and the replayed episode's
+trajectories (:mod:`.sim2sim_replay`), written by :func:`write`.
 
 report.md holds a headline per engine, the table of rates with Wilson intervals and McNemar
 p-values against the training engine, returns and lengths with bootstrap intervals, survival,
-clipped actions and sign changes, the failures by name (NaN actions among them), the ranking of
-``--explain`` where it ran, and the contract table, engine beside engine, its rows marked where
-an engine departs from the training engine; the open-loop replays where they ran
-(:mod:`.sim2sim_openloop_report`); for a policy trained outside simbridge, every pair of
-engines and the stated contract as the table's first column (:mod:`.sim2sim_external`).
+clipped actions and sign changes, torque saturation and joint-limit hits, the failures by name
+(NaN actions among them), the survival curves, the ranking of ``--explain`` where it ran, and
+the contract table, engine beside engine, its rows marked where an engine departs from the
+training engine; the open-loop replays where they ran (:mod:`.sim2sim_openloop_report`); for
+a policy trained outside simbridge, every pair of engines and the stated contract as the
+table's first column (:mod:`.sim2sim_external`).
 """
 
 from __future__ import annotations
@@ -142,8 +145,8 @@ def _rates_table(result: Sim2SimResult) -> list[str]:
         "| engine | success (95% Wilson) | discordant (lost, won) | McNemar p | verdict | "
         "mean return (95% bootstrap) | return minus training | mean steps | "
         "not failed at 1/4, 1/2, 3/4, end | median time to failure | clipped steps | "
-        "sign changes / step |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "sign changes / step | physics steps at an effort limit | control steps at a joint limit |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for i, f in enumerate(result.figures):
         verdict = "training engine" if i == 0 else f.verdict
@@ -154,7 +157,8 @@ def _rates_table(result: Sim2SimResult) -> list[str]:
             f"{f.ret.high:.1f}) | {f.ret_difference.value:+.1f} ({f.ret_difference.low:+.1f} "
             f"to {f.ret_difference.high:+.1f}) | {f.steps.value:.0f} ({f.steps.low:.0f}-"
             f"{f.steps.high:.0f}) | {', '.join(f'{s:.2f}' for s in f.survival)} | {mtf} | "
-            f"{f.clipped_share:.1%} | {f.sign_changes:.2f} |"
+            f"{f.clipped_share:.1%} | {f.sign_changes:.2f} | {f.saturated_share:.1%} | "
+            f"{f.limit_share:.1%} |"
         )
     return out
 
@@ -189,11 +193,40 @@ def _explain_lines(result: Sim2SimResult) -> list[str]:
     return out
 
 
-def markdown(result: Sim2SimResult) -> str:
+def _survival_lines(result: Sim2SimResult, figure: str | None) -> list[str]:
+    """The time-to-failure section: the figure, and the replayed seed where one was chosen."""
+    out = ["## Time to failure", ""]
+    if figure is not None:
+        out += [
+            f"![Kaplan-Meier survival of every engine]({figure})",
+            "",
+            "Kaplan-Meier: an episode that ends on a termination fails at its length; one that "
+            "succeeds early or reaches the episode's end is censored there. The band is the 95% "
+            "log-log (Greenwood) interval.",
+            "",
+        ]
+    out += [
+        "Physics steps at an effort limit: the share of every physics step with an action "
+        "joint's applied effort within 0.1% of its limit (the task's `max_force`, or the "
+        "file's effort limit where smaller). Control steps at a joint limit: the share of the "
+        "control steps after which a joint of the action robot is within 1 mm or 1 mrad of a "
+        "position limit, or past it.",
+        "",
+    ]
+    if result.replay is not None:
+        out += [
+            f"report.html replays {result.replay.why}. `simbridge replay` on this folder serves "
+            "the same scene live.",
+        ]
+    return out
+
+
+def markdown(result: Sim2SimResult, *, figure: str | None = None) -> str:
     """report.md's text.
 
     Args:
         result: the run.
+        figure: the survival figure's file in the report folder; None: no figure.
 
     Returns:
         The Markdown.
@@ -230,6 +263,7 @@ def markdown(result: Sim2SimResult) -> str:
                     "policy, counted as failures and never passed to the engine"
                 )
     lines += sim2sim_external.pairs_section(result)
+    lines += [""] * (lines[-1] != "") + _survival_lines(result, figure)
     if not ext and (result.explain or any(f.verdict == "drop" for f in result.figures[1:])):
         lines += _explain_lines(result)
     lines += sim2sim_openloop_report.section(result.openloop)
@@ -293,6 +327,9 @@ def summary(result: Sim2SimResult) -> dict[str, Any]:
                 "nan_actions": f.nan_actions,
                 "clipped_share": f.clipped_share,
                 "sign_changes_per_step": f.sign_changes,
+                "saturated_share": f.saturated_share,
+                "limit_share": f.limit_share,
+                "survival_curve": _curve(run),
                 "wall_s": run.wall_s,
                 "episodes": [r._asdict() for r in run.records],
                 "contract": run.contract,
@@ -313,21 +350,66 @@ def summary(result: Sim2SimResult) -> dict[str, Any]:
         "explain": result.explain,
         "openloop": sim2sim_openloop_report.summary(result.openloop),
         "external": sim2sim_external.summary(result, contract_rows(result)),
+        "replay": _replay_dict(result),
     }
 
 
-def write(result: Sim2SimResult, out: Path) -> list[Path]:
-    """Write report.md and summary.json into ``out`` (made if missing).
+def _curve(run: Any) -> dict[str, list[float]]:
+    """An engine's Kaplan-Meier curve, JSON-ready (control steps and their survival)."""
+    from simbridge.envs.survival import kaplan_meier
+
+    km = kaplan_meier(run.records)
+    return {
+        "steps": km.times.tolist(),
+        "survival": km.survival.tolist(),
+        "low": km.low.tolist(),
+        "high": km.high.tolist(),
+    }
+
+
+def _replay_dict(result: Sim2SimResult) -> dict[str, Any] | None:
+    r = result.replay
+    if r is None:
+        return None
+    from simbridge.compare.report.fmt import file_stem
+
+    return {
+        "seed": r.seed,
+        "why": r.why,
+        "matches_evaluation": dict(zip([f.label for f in result.figures], r.matches, strict=True)),
+        "trajectories": [f"trajectories/{file_stem(f.label)}.npz" for f in result.figures],
+    }
+
+
+def write(result: Sim2SimResult, out: Path, *, html: bool = True) -> list[Path]:
+    """Write report.md, summary.json, the survival figure and, with ``html``, report.html into
+    ``out`` (made if missing); with ``result.replay`` (:mod:`.sim2sim_replay`) also its
+    trajectories (``trajectories/<engine>.npz``), which report.html's 3D replay draws.
 
     Args:
         result: the run.
         out: the folder.
+        html: False: no report.html.
 
     Returns:
-        The files written.
+        The files written: report.md, summary.json, then the figure, report.html and the
+        trajectories.
     """
+    from simbridge.envs.sim2sim_figures import FIGURE, survival_figure
+
     out.mkdir(parents=True, exist_ok=True)
     md, js = out / "report.md", out / "summary.json"
-    md.write_text(markdown(result), encoding="utf-8")
+    figure = survival_figure(result, out / FIGURE)
+    text = markdown(result, figure=FIGURE)
+    md.write_text(text, encoding="utf-8")
     js.write_text(json.dumps(summary(result), indent=2) + "\n", encoding="utf-8")
-    return [md, js]
+    files = [md, js, figure]
+    if html:
+        from simbridge.envs.sim2sim_html import write_html
+
+        files.append(write_html(result, text, out))
+    if result.replay is not None:
+        from simbridge.envs.sim2sim_replay import save
+
+        files += save(result.replay, [f.label for f in result.figures], out)
+    return files

@@ -424,14 +424,17 @@ def _joint_plan(m: Any, nb: NativeBody, row: int, fr: _Frames, limits: bool) -> 
 
 
 def _excluded(m: Any, nb: NativeBody, owner: dict[int, int]) -> frozenset[tuple[int, int]]:
-    """Link pairs MuJoCo never lets touch: parent and child bodies (``filterparent``) and the
-    file's ``<contact><exclude>`` pairs, as rows (-1 = the base)."""
+    """Link pairs MuJoCo never lets touch: parent and child bodies (``filterparent``; not where
+    either is welded to the world, as MuJoCo's rule has it: a fixed-base root touches its
+    children) and the file's ``<contact><exclude>`` pairs, as rows (-1 = the base)."""
     pairs: set[tuple[int, int]] = set()
     parent_filter = not (m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_FILTERPARENT))
     for b, row in owner.items():
         if b == nb.body_id or not parent_filter:
             continue
         p = int(m.body_weldid[m.body_parentid[b]])
+        if p == 0 or int(m.body_weldid[b]) == 0:  # the world's weld: MuJoCo does not filter
+            continue
         prow = owner.get(p, -1)
         if prow != row:
             pairs.add((min(row, prow), max(row, prow)))
@@ -619,6 +622,20 @@ def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
             "joint frictionloss is a PhysX drive with a force limit" if engine == "physx"
             else "joint frictionloss is a velocity motor with target 0 and force frictionloss"
         )  # fmt: skip
+    touching = [
+        f"{plan.link(lk.parent).name}/{lk.name}"
+        for plan in native_plans(native)
+        for lk in plan.links[1:]
+        if lk.parent is not None
+        and (min(lk.parent, lk.index), max(lk.parent, lk.index)) not in plan.excluded_pairs
+        and lk.collisions
+        and plan.link(lk.parent).collisions
+    ]
+    if touching:
+        out["parent_child_contacts"] = (
+            "a joint's parent and child links never touch in the engine, where MuJoCo lets a "
+            f"body welded to the world touch its child: {touching}"
+        )
     mixed = mixed_links(native)
     if mixed:
         out["link_contact_values"] = (

@@ -72,3 +72,29 @@ def test_physxs_frames_are_mujocos(name: str) -> None:
             if nb.free_joint >= 0:
                 com = np.sum(np.array(masses)[:, None] * np.array(coms), axis=0) / sum(masses)
                 np.testing.assert_allclose(com, d.subtree_com[nb.body_id], atol=1e-6)
+
+
+def test_ignore_bits_leave_out_exactly_the_needed_pairs() -> None:
+    """SAPIEN's g2 bits by a clique cover of the excluded pairs: two links share a bit only
+    where their pair is excluded, every needed pair shares one, and a parent with two children
+    excluded pairwise (a clique of three) takes one bit, not three."""
+    from itertools import combinations
+
+    from simbridge.backends.physx.model import ignore_bits
+
+    rng = np.random.default_rng(3)
+    nodes = list(range(12))
+    excluded = {p for p in combinations(nodes, 2) if rng.random() < 0.3}
+    needed = sorted(p for p in excluded if rng.random() < 0.7)
+    bits = ignore_bits(excluded, needed)
+    assert bits is not None
+    for a, b in combinations(nodes, 2):
+        shares = bool(bits.get(a, 0) & bits.get(b, 0))
+        if (a, b) in needed:
+            assert shares, (a, b)
+        if shares:
+            assert (a, b) in excluded, (a, b)
+    tri = ignore_bits([(0, 1), (0, 2), (1, 2)], [(0, 1), (0, 2), (1, 2)])
+    assert tri == {0: 1, 1: 1, 2: 1}
+    star = [(0, k) for k in range(1, 34)]  # 33 pairs no two of which share a clique
+    assert ignore_bits(star, star) is None
