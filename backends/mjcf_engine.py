@@ -111,6 +111,8 @@ class MjcfOnEngine(MjcfReads, Backend):
         native: The compiled model.
         gravity: The gravity the caller gave the Sim (m/s², world), or None for the file's.
         timestep: The time step the caller gave the Sim (s), or None for the file's.
+        gui: Whether the engine's own window shows the model (the engine opens or takes it
+            over; :meth:`show_state` gives it each new state).
 
     Raises:
         MjcfFeatureUnsupportedError: A feature only MuJoCo simulates (tendons, equality
@@ -129,6 +131,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         native: NativeMjcf,
         gravity: Vec3 | None = None,
         timestep: float | None = None,
+        gui: bool = False,
     ) -> None:
         refuse_unsimulated(native, self.name)
         m = native.model
@@ -137,7 +140,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         if timestep is not None:
             m.opt.timestep = timestep
         super().__init__(
-            profile.with_(gravity=_v(m.opt.gravity), timestep=float(m.opt.timestep)), False
+            profile.with_(gravity=_v(m.opt.gravity), timestep=float(m.opt.timestep)), gui
         )
         self.native = native
         self.m = m
@@ -298,6 +301,10 @@ class MjcfOnEngine(MjcfReads, Backend):
     def close_engine(self) -> None:
         """Release the engine's world."""
 
+    def show_state(self) -> None:
+        """Show the engine's state in its window, if it has one (after a ``step`` call or a
+        write): nothing by default."""
+
     def engine_departures(self) -> dict[str, str]:
         """The engine's own departures beyond :func:`plan_departures`.
 
@@ -382,6 +389,7 @@ class MjcfOnEngine(MjcfReads, Backend):
                         self.name, self._time, "the engine's state (non-finite)"
                     )
                     raise self._diverged
+                self.show_state()
         finally:
             self._in_step = False
             lock.release()
@@ -420,6 +428,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         self.mirror.set_state(qpos, qvel)
         self._synced = True
         self._last = None
+        self.show_state()
         adr = self.m.jnt_qposadr
         self._recovering = (
             set(self._limited)

@@ -5,7 +5,13 @@ display with the robot and after it is removed (OUTDIR/with.png, OUTDIR/without.
 one JSON line with the robot-blue pixel counts, then closes the Sim.
 ``python _gui_window.py BACKEND close``: r2d2 alone in a window, stepped, drawn, then
 ``close()``; prints
-``closing <time>`` just before it. Either way the process then ends as Python ends it.
+``closing <time>`` just before it.
+``python _gui_window.py BACKEND ant``: Gymnasium's ant.xml read as MuJoCo reads it
+(``load_mjcf(..., semantics="mujoco")``) in the window, stepped under constant controls, drawn
+(its tan pixels, printed as ``drawn <count> <scene> <time>``), then ``close()`` as in
+``close``; before the window opens, the same run headless, and ``same <gap>`` printed: the
+largest difference of the two runs' ``qpos``/``qvel``.
+Either way the process then ends as Python ends it.
 Where the backend cannot open a window on this machine (BackendUnsupportedError: PhysX without
 a Vulkan device SAPIEN accepts), the process prints ``unsupported: <why>`` and ends with
 status :data:`UNSUPPORTED`.
@@ -13,11 +19,13 @@ status :data:`UNSUPPORTED`.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageGrab
@@ -34,6 +42,20 @@ WAIT_S = 20.0  # the most a window gets to draw a new state (llvmpipe on loaded 
 ROBOT_DRAWN = 2000
 
 
+# Ant-tan pixels (ant_pixels) that mean Gymnasium's ant is drawn (mode "ant", 0.5 s of steps),
+# measured: 4338-4990 (PyBullet, 7 runs), 8939-54076 (MuJoCo, 6 runs: the count depends on when
+# its window reaches its full size), 25170 (PhysX, 6 runs); an empty window of each, 8 s of
+# screenshots: 0. 1000 lies 4.3x under the least drawn.
+ANT_DRAWN = 1000
+
+
+def ant_xml() -> str:
+    """Gymnasium's ant.xml (the package's own file)."""
+    spec = importlib.util.find_spec("gymnasium")
+    assert spec is not None and spec.origin is not None
+    return str(Path(spec.origin).parent / "envs" / "mujoco" / "assets" / "ant.xml")
+
+
 def _channels(img: Image.Image) -> list[np.ndarray]:
     a = np.asarray(img.convert("RGB"), dtype=np.int16)
     return [a[..., 0], a[..., 1], a[..., 2]]
@@ -46,6 +68,14 @@ def robot_pixels(img: Image.Image) -> int:
     return int(((b >= 70) & (r < 40) & (g < 40)).sum())
 
 
+def ant_pixels(img: Image.Image) -> int:
+    """Pixels of the ant's tan (every geom of ant.xml: rgba 0.8 0.6 0.4), shaded: red over
+    green over blue, red clearly above blue; grey floors and skies, PyBullet's blue-grey
+    background and the viewers' panels have none."""
+    r, g, b = _channels(img)
+    return int(((r > g) & (g > b) & (r - b >= 40) & (r >= 60)).sum())
+
+
 def scene_pixels(img: Image.Image) -> int:
     """Grey pixels (the ground plane: PyBullet's light grey, MuJoCo's dark grey), which a
     window that has not drawn its scene yet (black, or MuJoCo's "LOADING...") lacks. Counted
@@ -56,13 +86,17 @@ def scene_pixels(img: Image.Image) -> int:
     return int(((r >= 50) & (r <= 235) & (spread < 12)).sum())
 
 
-def grab(until: Callable[[int, int], bool], out: str | None = None) -> tuple[int, int]:
-    """Screenshots of the whole display until ``until(robot, scene)`` holds (pixel counts) or
-    WAIT_S pass; the last one's counts."""
+def grab(
+    until: Callable[[int, int], bool],
+    out: str | None = None,
+    robot: Callable[[Image.Image], int] = robot_pixels,
+) -> tuple[int, int]:
+    """Screenshots of the whole display until ``until(robot, scene)`` holds (pixel counts,
+    the robot's by ``robot``) or WAIT_S pass; the last one's counts."""
     deadline = time.monotonic() + WAIT_S
     while True:
         img = ImageGrab.grab(xdisplay=os.environ["DISPLAY"])
-        counts = robot_pixels(img), scene_pixels(img)
+        counts = robot(img), scene_pixels(img)
         if until(*counts) or time.monotonic() > deadline:
             if out is not None:
                 img.save(out)
@@ -70,13 +104,33 @@ def grab(until: Callable[[int, int], bool], out: str | None = None) -> tuple[int
         time.sleep(0.25)
 
 
+def ant_run(sim: simbridge.Sim) -> np.ndarray:
+    """ant.xml under MuJoCo's reading, 0.5 s under a constant 0.3 on every actuator (the ant
+    falls onto its legs); its ``qpos`` and ``qvel``."""
+    sim.load_mjcf(ant_xml(), semantics="mujoco")
+    sim.set_actuator_controls(np.full(8, 0.3))
+    sim.step(50)
+    return np.concatenate([sim.qpos(), sim.qvel()])
+
+
 def main() -> None:
     backend, mode = sys.argv[1], sys.argv[2]
+    if mode == "ant":
+        with simbridge.Sim(backend) as headless:
+            alone = ant_run(headless)
     try:
         sim = simbridge.Sim(backend, gui=True)
     except BackendUnsupportedError as exc:
         print(f"unsupported: {exc}", flush=True)
         sys.exit(UNSUPPORTED)
+    if mode == "ant":
+        shown = ant_run(sim)
+        print(f"same {float(np.abs(shown - alone).max())!r}", flush=True)
+        robot, scene = grab(lambda n, _: n > ANT_DRAWN, robot=ant_pixels)
+        print(f"drawn {robot} {scene} {time.time()}", flush=True)
+        print(f"closing {time.time()}", flush=True)
+        sim.close()
+        return
     if mode == "show":
         sim.load_urdf("plane.urdf")
     body = sim.load_urdf("r2d2.urdf", base_position=(0.0, 0.0, 0.5))

@@ -1,5 +1,7 @@
 """``Sim(gui=True)`` under a real X server (Xvfb, started here): each backend's own window shows
-the robot, and the process exits cleanly soon after ``close()``, ten runs in a row.
+the robot, and the process exits cleanly soon after ``close()``, ten runs in a row; and
+Gymnasium's ant read as MuJoCo reads it (``load_mjcf(..., semantics="mujoco")``) shows in each
+engine's own window and closes as cleanly, one run per engine.
 
 Each run is a process of its own (tests/_gui_window.py). Skipped, saying why, where Xvfb is not
 installed (Debian: ``apt-get install xvfb``; .ci/run installs it when it runs as root). The
@@ -20,7 +22,10 @@ import warnings
 from pathlib import Path
 
 import pytest
-from _gui_window import ROBOT_DRAWN  # robot pixels that mean r2d2 was drawn (measured there)
+from _gui_window import (
+    ANT_DRAWN,  # ant-tan pixels that mean the ant was drawn (measured there)
+    ROBOT_DRAWN,  # robot pixels that mean r2d2 was drawn (measured there)
+)
 
 import simbridge
 from simbridge.exceptions import BackendUnsupportedError
@@ -133,6 +138,30 @@ def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):
             f"{backend}: {unopened} of the runs ended before any window opened and were run again",
             stacklevel=1,
         )
+
+
+@pytest.mark.parametrize("backend", WINDOWED)
+def test_the_mujoco_reading_shows_the_ant_and_closes_cleanly(display, backend):
+    """ant.xml under ``semantics="mujoco"`` in the engine's own window: its tan on the screen
+    after 0.5 s of steps (the model built in the window, not a blank one), then close(): exit
+    status 0 within EXIT_S. The window changes nothing simulated: the same run headless in
+    the same process ends in the same ``qpos``/``qvel`` (PyBullet's GUI connection is reset,
+    to PyBullet's default engine parameters, when the model takes it over). One run: the ten-run
+    lifecycle is the tests above'."""
+    done, ended = _run(display, backend, "ant")
+    _skip_if_unsupported(done)
+    for _ in range(OPEN_RETRIES):
+        if not _unopened(backend, done):
+            break
+        done, ended = _run(display, backend, "ant")  # see _unopened
+    assert done.returncode == 0, (done.returncode, done.stdout[-500:], done.stderr[-2000:])
+    drawn = [line.split() for line in done.stdout.splitlines() if line.startswith("drawn ")]
+    closing = [line for line in done.stdout.splitlines() if line.startswith("closing ")]
+    assert drawn and closing, done.stdout[-2000:]
+    assert int(drawn[-1][1]) > ANT_DRAWN, drawn[-1]  # the ant was on the screen
+    same = [line.split() for line in done.stdout.splitlines() if line.startswith("same ")]
+    assert same and float(same[-1][1]) == 0.0, same  # measured 0.0 on every engine
+    assert ended - float(closing[-1].split()[1]) < EXIT_S
 
 
 def _unopened(backend: str, done: subprocess.CompletedProcess[str]) -> bool:

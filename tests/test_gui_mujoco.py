@@ -19,3 +19,8 @@ def test_the_window_shows_the_robot(display, backend, tmp_path):  # noqa: F811
 @pytest.mark.parametrize("backend", ["mujoco"])
 def test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend):  # noqa: F811
     gui.test_close_ends_the_process_cleanly_ten_runs_in_a_row(display, backend)
+
+
+@pytest.mark.parametrize("backend", ["mujoco"])
+def test_the_mujoco_reading_shows_the_ant_and_closes_cleanly(display, backend):  # noqa: F811
+    gui.test_the_mujoco_reading_shows_the_ant_and_closes_cleanly(display, backend)

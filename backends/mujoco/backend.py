@@ -167,18 +167,23 @@ class MujocoBackend(StateReads, MotorCommands, ContactReads, Snapshots, Backend)
     ) -> Backend:
         """See Backend.mjcf_world.
 
-        MuJoCo: :class:`~.native.NativeMujoco`, raw ``mj_step`` on the compiled model.
+        MuJoCo: :class:`~.native.NativeMujoco`, raw ``mj_step`` on the compiled model. With
+        ``gui`` this world's viewer closes first and the model's opens (one window at a time);
+        if the model's cannot open, this world's opens again.
 
         Raises:
-            BackendUnsupportedError: With ``gui`` (no viewer for it yet).
+            DisplayError: With ``gui``, the model's viewer did not open.
         """
-        if self.gui:
-            raise BackendUnsupportedError(
-                self.name, "gui=True with semantics='mujoco'", "not yet: run without the viewer"
-            )
         from .native import NativeMujoco
 
-        return NativeMujoco(self.profile, native, gravity, timestep)
+        if not self.gui:
+            return NativeMujoco(self.profile, native, gravity, timestep)
+        self._close_viewer()
+        try:
+            return NativeMujoco(self.profile, native, gravity, timestep, gui=True)
+        except BaseException:
+            self._open_viewer()
+            raise
 
     # ---------------------------------------------------------------- set-up
 

@@ -8,6 +8,10 @@ controls. No profile entry applies (no link damping, no default motors); the fil
 simbridge's (centre-of-mass frames, quaternions x, y, z, w) computed from MuJoCo's data with
 ``mj_kinematics``/``mj_comPos``/``mj_comVel`` (and ``mj_forward`` for sensors), which write no
 quantity ``mj_step`` reads: reading never changes a trajectory.
+
+With ``gui`` MuJoCo's passive viewer shows the compiled model (:class:`~.window.Viewer`, the
+window in a process of its own as for ``Sim("mujoco", gui=True)``): it takes each new state
+after a ``step`` call or a write, and ``close()`` ends it.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from .. import locking
 from ..locking import exclusive, wait_for_lock
 from ..mjcf_reads import MjcfReads
 from .contacts import contact_points_of
+from .window import Viewer, check_display
 
 __all__ = ["NativeMujoco"]
 
@@ -61,6 +66,10 @@ class NativeMujoco(MjcfReads, Backend):
         native: The compiled model; this backend takes its ``MjModel`` over.
         gravity: The gravity the caller gave the Sim (m/s², world), or None for the file's.
         timestep: The time step the caller gave the Sim (s), or None for the file's.
+        gui: Whether to show the model in MuJoCo's passive viewer (a process of its own).
+
+    Raises:
+        DisplayError: With ``gui`` where no window can open.
     """
 
     name = "mujoco"
@@ -71,18 +80,23 @@ class NativeMujoco(MjcfReads, Backend):
         native: NativeMjcf,
         gravity: Vec3 | None = None,
         timestep: float | None = None,
+        gui: bool = False,
     ) -> None:
+        if gui:
+            check_display(self.name)
         m = native.model
         if gravity is not None:
             m.opt.gravity[:] = gravity
         if timestep is not None:
             m.opt.timestep = timestep
         super().__init__(
-            profile.with_(gravity=_v(m.opt.gravity), timestep=float(m.opt.timestep)), False
+            profile.with_(gravity=_v(m.opt.gravity), timestep=float(m.opt.timestep)), gui
         )
         self.native = native
         self.m = m
         self.d = mujoco.MjData(m)
+        # the window on the compiled model (its own process), shown each new state
+        self._viewer: Viewer | None = Viewer(self.name, m, self.d) if gui else None
         self._bodies: dict[int, NativeBody] = dict(enumerate(native.bodies))
         self._stepping = threading.RLock()
         self._in_step = False
@@ -135,6 +149,7 @@ class NativeMujoco(MjcfReads, Backend):
         """See Backend.reset. Never reached: the Sim replaces this backend at ``reset()``."""
         mujoco.mj_resetData(self.m, self.d)
         self._stale = True
+        self._show()
         self._diverged = None
 
     def step(self, n: int) -> None:
@@ -160,6 +175,7 @@ class NativeMujoco(MjcfReads, Backend):
             warned = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
             mujoco.mj_step(self.m, d, nstep=n)
             self._stale = True
+            self._show()
             if (
                 int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) != warned
                 or not np.isfinite(d.qpos).all()
@@ -174,8 +190,16 @@ class NativeMujoco(MjcfReads, Backend):
             lock.release()
 
     def close(self) -> None:
-        """See Backend.close."""
+        """See Backend.close: the viewer, if any, ends (killed after ``CLOSE_WAIT_S``)."""
         self._closed = True
+        viewer, self._viewer = self._viewer, None
+        if viewer is not None:
+            viewer.close()
+
+    def _show(self) -> None:
+        """Give the viewer, if any, the state as it stands (``d.qpos``)."""
+        if self._viewer is not None:
+            self._viewer.sync()
 
     def _sync(self) -> None:
         """Poses and velocities of the state as it stands (writes nothing mj_step reads)."""
@@ -257,6 +281,7 @@ class NativeMujoco(MjcfReads, Backend):
             d.qpos[row.q_index] = q
             d.qvel[row.u_index] = v
         self._stale = True
+        self._show()
 
     @exclusive
     def reset_base_state(
@@ -295,12 +320,14 @@ class NativeMujoco(MjcfReads, Backend):
         mujoco.mju_rotVecQuat(local, w, np.array((qframe[0], *(-qframe[1:]))))
         d.qvel[va + 3 : va + 6] = local
         self._stale = True
+        self._show()
 
     def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
         """Put ``d.qpos``/``d.qvel`` as given (MjcfReads' writes of a ball joint's state)."""
         self.d.qpos[:] = qpos
         self.d.qvel[:] = qvel
         self._stale = True
+        self._show()
 
     # ---------------------------------------------------------------- whole state
 
@@ -321,6 +348,7 @@ class NativeMujoco(MjcfReads, Backend):
             return False
         mujoco.mj_setState(self.m, self.d, native[1], _STATE)
         self._stale = True
+        self._show()
         return True
 
     @exclusive
@@ -375,6 +403,7 @@ class NativeMujoco(MjcfReads, Backend):
         if qvel is not None:
             self.d.qvel[:] = qvel
         self._stale = True
+        self._show()
 
     @exclusive
     def reset_keyframe(self, key: int) -> None:
@@ -382,6 +411,7 @@ class NativeMujoco(MjcfReads, Backend):
         ctrl, mocap of the key)."""
         mujoco.mj_resetDataKeyframe(self.m, self.d, key)
         self._stale = True
+        self._show()
         self._diverged = None
 
     @exclusive

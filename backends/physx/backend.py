@@ -20,7 +20,6 @@ from sapien import physx
 
 from simbridge.backend import Backend
 from simbridge.exceptions import (
-    BackendUnsupportedError,
     SimBusyError,
     SimulationDivergedError,
 )
@@ -162,17 +161,22 @@ class PhysxBackend(
         MuJoCo's armature and damping on the joints, its actuator and spring forces as joint
         forces.
 
+        With ``gui`` this world's window is handed over: it draws the model from then on
+        (this world, closed next, no longer owns it); if the model is refused, the window
+        stays this world's and draws it again.
+
         Raises:
-            BackendUnsupportedError: With ``gui`` (no window for it yet).
             MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
         """
-        if self.gui:
-            raise BackendUnsupportedError(
-                self.name, "gui=True with semantics='mujoco'", "not yet: run without the window"
-            )
         from .native import NativePhysx
 
-        return NativePhysx(self.profile, native, gravity, timestep)
+        window, self._window = self._window, None
+        try:
+            return NativePhysx(self.profile, native, gravity, timestep, window=window)
+        except BaseException:
+            self._window = window
+            self._show()
+            raise
 
     # ---------------------------------------------------------------- world
 

@@ -14,11 +14,17 @@ inertial axes, SAPIEN 3.0.3 building no spherical articulation joint), read and 
 MuJoCo's ball coordinates; its damping is a force each step, implicit in every force as
 MuJoCo's Euler makes it, its armature the three revolutes' armature plus the force that makes
 it MuJoCo's (:meth:`NativePhysx._armature_correction`).
+
+With a window (``Sim("physx", gui=True)``) the plans carry MuJoCo's visible geoms as visual
+shapes and the Sim's SAPIEN window (:class:`~.window.Window`, handed over by the backend the
+model replaces) draws them; it takes the poses after each ``step`` call or write, and
+``close()`` ends it.
 """
 
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -37,6 +43,7 @@ from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
 from .ball import angles_to_quat, quat_to_angles, rate_matrix
 from .contacts import ContactReads
 from .model import build_robot, ignore_bits, needed_pairs
+from .window import Window
 
 __all__ = ["NativePhysx"]
 
@@ -129,6 +136,7 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         native: The compiled model.
         gravity: The gravity the caller gave (m/s², world), or None for the file's.
         timestep: The time step the caller gave (s), or None for the file's.
+        window: The SAPIEN window to draw the model in, now this world's (None: headless).
 
     Raises:
         MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
@@ -145,8 +153,10 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         native: NativeMjcf,
         gravity: Vec3 | None = None,
         timestep: float | None = None,
+        window: Window | None = None,
     ) -> None:
-        super().__init__(profile, native, gravity, timestep)
+        super().__init__(profile, native, gravity, timestep, gui=window is not None)
+        self._window: Window | None = None  # set once the model is built
         m = self.m
         cfg = physx.PhysxSceneConfig()
         cfg.gravity = np.asarray(m.opt.gravity, dtype=np.float32)
@@ -154,8 +164,9 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         physx.set_scene_config(cfg)
         self._scene = sapien.Scene([physx.PhysxCpuSystem()])
         self._scene.timestep = self.dt
-        self.plans = native_plans(native, limits=not self.soft_limits)
-        ground = ground_plan(native)
+        drawn = window is not None
+        self.plans = native_plans(native, limits=not self.soft_limits, visuals=drawn)
+        ground = ground_plan(native, visuals=drawn)
         tags, ignore = _shared_filters(native, self.plans, ground)
         self._built = [
             build_robot(self._scene, plan, SOLVER_ITERATIONS, tags[k], ignore=ignore.get(k))
@@ -166,6 +177,14 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             self._ground = build_robot(
                 self._scene, ground, SOLVER_ITERATIONS, tags[-1], ignore=ignore.get(-1)
             )
+        if window is not None:  # the window's parts: the built plans' visual shapes
+            for b, plan in zip(self._built, self.plans, strict=True):
+                b.plan = plan
+            if self._ground is not None:
+                self._ground.plan = ground
+            shown = [*self._built, *([self._ground] if self._ground is not None else [])]
+            window.show(SimpleNamespace(built=b) for b in shown)
+            self._window = window
         self._dt = self.dt
         self._contacts_cache: list[ContactPoint] | None = None
         self._contacts_kept: list[ContactPoint] | None = None  # no body is ever removed
@@ -383,8 +402,16 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         out = self._contacts_cache = self._last_contacts()
         return out
 
+    def show_state(self) -> None:
+        """See MjcfOnEngine.show_state: the window, if any, takes every part's pose."""
+        if self._window is not None:
+            self._window.sync()
+
     def close_engine(self) -> None:
-        """See MjcfOnEngine.close_engine: the scene is dropped."""
+        """See MjcfOnEngine.close_engine: the window, if any, closes; the scene is dropped."""
+        window, self._window = self._window, None
+        if window is not None:
+            window.close()
         self._scene = None
         self._built = []
 
@@ -392,7 +419,7 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         """See MjcfOnEngine.engine_departures.
 
         Returns:
-            PhysX's own: float32 state, its contact offsets.
+            PhysX's own: float32 state, its contact offsets; with a window, what it draws.
         """
         out = {
             "precision": "PhysX keeps poses and velocities in float32",
@@ -404,5 +431,10 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             out["excluded_pairs"] = (
                 "the excluded pairs (parent and child, <contact><exclude>) of these bodies need "
                 f"more than SAPIEN's 32 ignore bits; only PhysX's own rule applies: {loose}"
+            )
+        if self._window is not None:
+            out["window"] = (
+                "SAPIEN's window draws MuJoCo's visible geoms (groups 0-2) in their colours, "
+                "flat-shaded as for a URDF: no textures, skybox or MuJoCo lights; no ellipsoid"
             )
         return out

@@ -200,17 +200,36 @@ class PyBulletBackend(
         PyBullet: :class:`~.native.NativePyBullet`, the compiled model built with
         ``p.createMultiBody``, MuJoCo's actuator, spring and damping forces as joint torques.
 
+        With ``gui`` this world's GUI connection is handed over (PyBullet allows one GUI per
+        process): the model is built in it, and this world, closed next, no longer owns it.
+        If the model is refused, the connection stays this world's: refused by
+        :func:`~simbridge.model.mjcf_native_plan.refuse_unsimulated`, untouched; refused while
+        being built (a mesh among several geoms of one link), reset and configured again,
+        the world's time kept (it held no body; its ``p.saveState`` states are gone with the
+        reset).
+
         Raises:
-            BackendUnsupportedError: With ``gui`` (no window for it yet).
             MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
         """
-        if self.gui:
-            raise BackendUnsupportedError(
-                self.name, "gui=True with semantics='mujoco'", "not yet: run without the window"
-            )
         from .native import NativePyBullet
 
-        return NativePyBullet(self.profile, native, gravity, timestep)
+        if not self.gui:
+            return NativePyBullet(self.profile, native, gravity, timestep)
+        from simbridge.model.mjcf_native_plan import refuse_unsimulated
+
+        refuse_unsimulated(native, self.name)  # before the connection is touched
+        with self._idle():
+            try:
+                new = NativePyBullet(self.profile, native, gravity, timestep, gui_client=self._c)
+            except BaseException:
+                steps = self._steps
+                self._reset()  # the id pool, the records and the profile as after a reset
+                self._steps, self._next_check = steps, steps + self._check_every
+                if self._window is not None:
+                    self._window = Window(self._c)
+                raise
+            self._c = -1  # the model's now: close() leaves it open
+            return new
 
     def _configure(self) -> None:
         c = self._c

@@ -9,6 +9,13 @@ velocity motor of target 0 and that force: Coulomb friction as PyBullet's motors
 Each step applies MuJoCo's actuator and spring forces as joint torques, the joint damping
 implicitly in the joint-space inertia, the armature as a force and MuJoCo's soft joint limits
 (the joints have no PyBullet limit; the shared part, ``backends/mjcf_engine.py``).
+
+With ``gui`` the model is built in the Sim's GUI connection, handed over by the backend it
+replaces (PyBullet allows one GUI per process) and reset first (``p.resetSimulation``: its
+engine parameters PyBullet's defaults, as a new DIRECT connection's). The plans then carry
+MuJoCo's visible geoms as visual shapes, drawn in one colour per link (the link's first
+geom's: PyBullet colours a link whole); a link whose drawn geoms mix a mesh with other shapes
+shows its meshes alone. The camera aims at the model and follows it, as for a URDF.
 """
 
 from __future__ import annotations
@@ -18,18 +25,23 @@ from typing import Any
 
 import numpy as np
 
+from simbridge.engine_output import captured
 from simbridge.exceptions import SimulationDivergedError
 from simbridge.model.mjcf_native import NativeMjcf
 from simbridge.model.mjcf_native_plan import cross_excludes, ground_plan, native_plans
 from simbridge.model.plan_records import BuildPlan, LinkPlan, ShapePlan
 from simbridge.profiles import Profile
-from simbridge.transforms import quat_multiply, quat_rotate
+from simbridge.transforms import quat_multiply, quat_rotate, quat_to_matrix
 from simbridge.types import ContactPoint, JointType, Quat, Vec3
 
 from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
 from ..mjcf_forces import free_velocity_change
 from .contacts import contact_point
-from .output import p  # pybullet, imported with its banner captured
+from .output import (
+    _pybullet_gui_output,
+    p,  # pybullet, imported with its banner captured
+)
+from .window import Window
 
 __all__ = ["NativePyBullet"]
 
@@ -105,6 +117,37 @@ def _collision(c: int, link: LinkPlan) -> int:
     )
 
 
+def _visual(c: int, link: LinkPlan) -> int:
+    """The link's visual shape (-1: none), in its first visual's colour."""
+    shown = link.visuals
+    if not shown:
+        return -1
+    rgba = list(shown[0].rgba or (1.0, 1.0, 1.0, 1.0))
+    meshes = [s for s in shown if s.kind == "mesh"]
+    if meshes:  # one mesh of them all, in the link frame
+        vertices: list[list[float]] = []
+        indices: list[int] = []
+        for s in meshes:
+            assert s.mesh is not None
+            base = len(vertices)
+            moved = np.asarray(s.mesh.vertices) @ quat_to_matrix(s.orientation).T + s.position
+            vertices += moved.tolist()
+            indices += [base + int(i) for i in np.asarray(s.mesh.faces).ravel()]
+        return p.createVisualShape(
+            p.GEOM_MESH, vertices=vertices, indices=indices, rgbaColor=rgba, physicsClientId=c
+        )
+    args = [_shape_args(s) for s in shown]
+    return p.createVisualShapeArray(
+        shapeTypes=[a["shapeType"] for a in args],
+        radii=[a.get("radius", 0.5) for a in args],
+        halfExtents=[a.get("halfExtents", [1.0, 1.0, 1.0]) for a in args],
+        lengths=[a.get("height", 1.0) for a in args],
+        visualFramePositions=[s.position for s in shown],
+        visualFrameOrientations=[s.orientation for s in shown],
+        physicsClientId=c,
+    )
+
+
 class NativePyBullet(MjcfOnEngine):
     """The world of one MJCF model as MuJoCo compiles it, stepped by PyBullet.
 
@@ -113,6 +156,8 @@ class NativePyBullet(MjcfOnEngine):
         native: The compiled model.
         gravity: The gravity the caller gave (m/s², world), or None for the file's.
         timestep: The time step the caller gave (s), or None for the file's.
+        gui_client: The Sim's GUI connection to build the model in, now this world's (reset
+            here); None: a DIRECT connection of its own.
 
     Raises:
         MjcfFeatureUnsupportedError: A feature only MuJoCo simulates.
@@ -128,16 +173,29 @@ class NativePyBullet(MjcfOnEngine):
         native: NativeMjcf,
         gravity: Vec3 | None = None,
         timestep: float | None = None,
+        gui_client: int | None = None,
     ) -> None:
-        super().__init__(profile, native, gravity, timestep)
-        c = self._c = p.connect(p.DIRECT)
+        super().__init__(profile, native, gravity, timestep, gui=gui_client is not None)
+        self._window: Window | None = None
+        if gui_client is None:
+            c = self._c = p.connect(p.DIRECT)
+        else:
+            c = self._c = gui_client
+            p.resetSimulation(physicsClientId=c)
+            self._window = Window(c)
         m = self.m
         p.setGravity(*map(float, m.opt.gravity), physicsClientId=c)
         p.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=0, physicsClientId=c)
-        self.plans = native_plans(native, limits=not self.soft_limits)
-        self._ids = [self._build(plan) for plan in self.plans]
-        ground = ground_plan(native)
-        self._ground = None if ground is None else self._build(ground)
+        drawn = self._window is not None
+        self.plans = native_plans(native, limits=not self.soft_limits, visuals=drawn)
+        ground = ground_plan(native, visuals=drawn)
+        if self._window is None:
+            self._ids = [self._build(plan) for plan in self.plans]
+            self._ground = None if ground is None else self._build(ground)
+        else:
+            with self._window.paused():  # no redraw after each shape made
+                self._ids = [self._build(plan) for plan in self.plans]
+                self._ground = None if ground is None else self._build(ground)
         ids = {**dict(enumerate(self._ids)), -1: self._ground}
         for ka, ra, kb, rb, _ in cross_excludes(native):  # <exclude> across bodies
             if ids[ka] is not None and ids[kb] is not None:
@@ -145,6 +203,13 @@ class NativePyBullet(MjcfOnEngine):
         self._filters()
         self._layout()
         self._write(m.qpos0.copy(), np.zeros(m.nv))
+        if self._window is not None:
+            self._window.aim(self._shown())
+
+    def _shown(self) -> list[tuple[int, bool]]:
+        """``(PyBullet id, free base)`` of every body, for the window's camera."""
+        out = [(b, not plan.fixed_base) for b, plan in zip(self._ids, self.plans, strict=True)]
+        return out + ([(self._ground, False)] if self._ground is not None else [])
 
     def _build(self, plan: BuildPlan) -> int:
         """``p.createMultiBody`` of one plan; PyBullet's defaults undone."""
@@ -160,7 +225,8 @@ class NativePyBullet(MjcfOnEngine):
             baseInertialFrameOrientation=ine.orientation,
             linkMasses=[lk.inertial.mass for lk in links],
             linkCollisionShapeIndices=[_collision(c, lk) for lk in links],
-            linkVisualShapeIndices=[-1] * len(links),
+            baseVisualShapeIndex=_visual(c, base),
+            linkVisualShapeIndices=[_visual(c, lk) for lk in links],
             linkPositions=[lk.joint.position for lk in links],  # type: ignore[union-attr]
             linkOrientations=[lk.joint.orientation for lk in links],  # type: ignore[union-attr]
             linkInertialFramePositions=[lk.inertial.position for lk in links],
@@ -172,6 +238,9 @@ class NativePyBullet(MjcfOnEngine):
             physicsClientId=c,
         )
         for lk in plan.links:
+            if lk.visuals:  # the link's colour (createVisualShapeArray takes none)
+                rgba = list(lk.visuals[0].rgba or (1.0, 1.0, 1.0, 1.0))
+                p.changeVisualShape(body, lk.index, rgbaColor=rgba, physicsClientId=c)
             p.changeDynamics(
                 body,
                 lk.index,
@@ -375,16 +444,33 @@ class NativePyBullet(MjcfOnEngine):
         """See MjcfOnEngine.step_engine: ``p.stepSimulation``."""
         p.stepSimulation(physicsClientId=self._c)
 
+    def show_state(self) -> None:
+        """See MjcfOnEngine.show_state: the window's camera follows the model (PyBullet's
+        window draws the engine's state itself)."""
+        if self._window is not None:
+            self._window.follow(self._shown())
+
     def close_engine(self) -> None:
-        """See MjcfOnEngine.close_engine: ``p.disconnect``."""
+        """See MjcfOnEngine.close_engine: ``p.disconnect`` (the window with it)."""
         try:
-            p.disconnect(physicsClientId=self._c)
+            if self._window is not None:
+                with captured(self.name, "closing the GUI", _pybullet_gui_output):
+                    p.disconnect(physicsClientId=self._c)
+            else:
+                p.disconnect(physicsClientId=self._c)
         except p.error:
             pass
 
     def engine_departures(self) -> dict[str, str]:
         """See MjcfOnEngine.engine_departures."""
-        return {
+        out = {
             "contact_margin": "a geom's margin and gap are PyBullet's collision margin "
             "(0.04 m on primitives in its collision detection, contacts from distance 0)",
         }
+        if self._window is not None:
+            out["window"] = (
+                "PyBullet's window draws MuJoCo's visible geoms (groups 0-2) in one colour per "
+                "link (its first geom's); a link mixing a mesh with primitives shows its meshes "
+                "alone; no textures, skybox or MuJoCo lights; no ellipsoid"
+            )
+        return out

@@ -780,7 +780,10 @@ class Backend(ABC):
         """A new backend whose world is ``native``, the model as MuJoCo compiled it.
 
         The Sim calls it on an empty world and uses the backend it returns in place of this
-        one (it closes this one) until ``reset()``.
+        one (it closes this one) until ``reset()``. With ``gui`` the returned backend shows
+        the model in the engine's own window (this one's window may be handed over to it, or
+        closed first: one window at a time); a model refused here leaves this one with a
+        window drawing its own world.
 
         Args:
             native: The compiled model (:func:`simbridge.model.mjcf_native.compile_mjcf`).

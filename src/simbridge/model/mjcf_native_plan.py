@@ -30,6 +30,11 @@ MuJoCo's joint order:
   ``conaffinity`` (mask), MuJoCo's rule being the plan's OR rule; the parent-child pairs
   MuJoCo filters (``filterparent``) and every ``<contact><exclude>`` within one body are
   ``excluded_pairs``; one between two top-level bodies is :func:`cross_excludes`';
+* **visuals** (only when asked: a window draws them, nothing simulates them): every geom
+  MuJoCo's viewer shows by default (``geom_group`` 0-2, alpha above 0), visual-only geoms
+  included, in its colour (its material's ``rgba`` where it has one, else the geom's); a plane
+  is a box 2 mm thick under it, as wide as the plane (100 m where MuJoCo's is infinite); an
+  ellipsoid is not drawn;
 * **refused** (:func:`refuse_unsimulated`): what no engine but MuJoCo simulates: tendons,
   equality constraints, flex (composite) bodies, explicit ``<contact><pair>``, actuators that
   are not on a joint or that carry activation dynamics, height fields, and a body that hangs
@@ -40,6 +45,7 @@ Every departure the build makes is named in :func:`plan_departures`.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -59,6 +65,7 @@ from simbridge.model.plan_records import (
     MeshPlan,
     ShapePlan,
 )
+from simbridge.transforms import quat_rotate
 from simbridge.types import JointType, Quat, Vec3
 
 __all__ = [
@@ -304,6 +311,47 @@ def _colliding(m: Any, bodies: list[int]) -> list[int]:
     ]
 
 
+VISIBLE_GROUPS = 3  # MuJoCo's viewer shows geom groups 0, 1 and 2 by default
+PLANE_THICKNESS = 0.002  # m: a drawn plane's box
+INFINITE_PLANE = 50.0  # m: the half size drawn for a plane MuJoCo makes infinite (size 0)
+
+
+def _visible(m: Any, bodies: list[int]) -> list[int]:
+    """The bodies' geoms MuJoCo's viewer draws by default (groups 0-2, alpha above 0), but
+    ellipsoids (no drawn shape here)."""
+    return [
+        g
+        for b in bodies
+        for g in range(int(m.body_geomadr[b]), int(m.body_geomadr[b] + m.body_geomnum[b]))
+        if int(m.geom_group[g]) < VISIBLE_GROUPS
+        and _rgba(m, g)[3] > 0.0
+        and int(m.geom_type[g]) != int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)
+    ]
+
+
+def _rgba(m: Any, g: int) -> tuple[float, float, float, float]:
+    """Geom ``g``'s colour as MuJoCo's viewer takes it: its material's, else its own."""
+    mat = int(m.geom_matid[g])
+    c = m.mat_rgba[mat] if mat >= 0 else m.geom_rgba[g]
+    return (float(c[0]), float(c[1]), float(c[2]), float(c[3]))
+
+
+def _visual(
+    native: NativeMjcf, fr: _Frames, g: int, frame: tuple[np.ndarray, np.ndarray], k: int
+) -> ShapePlan:
+    """Geom ``g`` as a visual shape in a link frame (a plane: a thin box under it)."""
+    m = native.model
+    s = _shape(native, fr, g, frame, k)
+    if s.kind == "plane":
+        half = [float(v) if v > 0 else INFINITE_PLANE for v in m.geom_size[g][:2]]
+        down = quat_rotate(s.orientation, (0.0, 0.0, -0.5 * PLANE_THICKNESS))
+        position = (s.position[0] + down[0], s.position[1] + down[1], s.position[2] + down[2])
+        s = replace(
+            s, kind="box", position=position, size=(2 * half[0], 2 * half[1], PLANE_THICKNESS)
+        )
+    return replace(s, ground=None, rgba=_rgba(m, g))
+
+
 def _key(m: Any, g: int) -> tuple[Any, ...]:
     """What a link takes of one geom: friction, condim, contype, conaffinity."""
     return (tuple(m.geom_friction[g]), int(m.geom_condim[g]), int(m.geom_contype[g]),
@@ -429,13 +477,16 @@ def cross_excludes(native: NativeMjcf) -> tuple[tuple[int, int, int, int, str], 
     return tuple(out)
 
 
-def native_plans(native: NativeMjcf, limits: bool = True) -> tuple[BuildPlan, ...]:
+def native_plans(
+    native: NativeMjcf, limits: bool = True, visuals: bool = False
+) -> tuple[BuildPlan, ...]:
     """One build plan per top-level body of the compiled model (the module docstring).
 
     Args:
         native: The compiled model.
         limits: Whether the joints carry MuJoCo's ranges as the engine's own limits (False:
             no joint is limited in the plan; the backend applies MuJoCo's soft limit itself).
+        visuals: Whether the links carry visual shapes (for a window; none otherwise).
 
     Returns:
         The plans, in MuJoCo's order of the top-level bodies; link i of plan k is row i of
@@ -466,7 +517,7 @@ def native_plans(native: NativeMjcf, limits: bool = True) -> tuple[BuildPlan, ..
                     inertial,
                     fixed,
                     tuple(s for s in shapes if s.kind != "plane" or row < 0),
-                    (),
+                    _visuals(native, fr, carried, frame) if visuals else (),
                     contact,
                     filt,
                 )
@@ -489,26 +540,37 @@ def native_plans(native: NativeMjcf, limits: bool = True) -> tuple[BuildPlan, ..
     return tuple(out)
 
 
-def ground_plan(native: NativeMjcf) -> BuildPlan | None:
+def _visuals(
+    native: NativeMjcf, fr: _Frames, bodies: list[int], frame: tuple[np.ndarray, np.ndarray]
+) -> tuple[ShapePlan, ...]:
+    """The visual shapes of the geoms of ``bodies`` drawn in the link ``frame``."""
+    return tuple(
+        _visual(native, fr, g, frame, k) for k, g in enumerate(_visible(native.model, bodies))
+    )
+
+
+def ground_plan(native: NativeMjcf, visuals: bool = False) -> BuildPlan | None:
     """The world body's geoms (the ground and any fixed scenery) as one static plan.
 
     Args:
         native: The compiled model.
+        visuals: Whether the link carries visual shapes (for a window; none otherwise).
 
     Returns:
         A fixed-base plan of one link at the world origin, or None when the world body has
-        no colliding geom.
+        no colliding geom (and, with ``visuals``, none drawn).
     """
     m = native.model
     geoms = _colliding(m, [0])
-    if not geoms:
+    if not geoms and not (visuals and _visible(m, [0])):
         return None
     fr = _Frames(m)
     frame = (np.zeros(3), np.eye(3))
     contact, filt = _contact(m, geoms)
     shapes = tuple(_shape(native, fr, g, frame, k) for k, g in enumerate(geoms))
+    drawn = _visuals(native, fr, [0], frame) if visuals else ()
     zero = LinkInertial(0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
-    link = LinkPlan(-1, "world", None, None, zero, True, shapes, (), contact, filt)
+    link = LinkPlan(-1, "world", None, None, zero, True, shapes, drawn, contact, filt)
     return BuildPlan(
         "world", native.display_name, True, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0), True,
         "file", (link,), "off",

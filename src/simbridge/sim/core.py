@@ -403,7 +403,9 @@ class Sim:
         gravity and time step win over the Sim's unless the Sim was given them; no profile
         entry applies (no link damping, no default motors): the model's actuators drive it
         (:meth:`set_actuator_controls`). The model is the whole world: nothing loads with it
-        or after it until :meth:`reset`.
+        or after it until :meth:`reset`. A Sim made with ``gui=True`` shows it in the engine's
+        own window (MuJoCo's viewer on the compiled model; PyBullet and PhysX draw MuJoCo's
+        visible geoms in their colours: docs/mjcf_mujoco_reading.md, "The window").
 
         Args:
             source: a file path, a name on the search path (``"mjcf/ant.xml"`` is found in
@@ -427,6 +429,8 @@ class Sim:
             MjcfCompileError: under "mujoco", MuJoCo's own message with the file and line.
             BackendUnsupportedError: "mujoco" on a backend without that reading, into a world
                 that holds bodies, or any load after such a model.
+            DisplayError: under "mujoco" with ``gui=True`` on MuJoCo, its viewer did not open
+                on the model (the Sim's world keeps its own).
             MjcfFeatureUnsupportedError: under "mujoco" on PyBullet or PhysX, a feature only
                 MuJoCo simulates (``<tendon>``, ``<equality>``, flex, ``<pair>``...), named
                 with its element.

@@ -188,17 +188,22 @@ def load_native(
 def leave(s: Shared) -> None:
     """Drop the model read with semantics='mujoco' (``reset()``): the backend becomes a new
     engine of the Sim's recipe, with the Sim's own gravity and time step, and the old one is
-    closed. The caller ends the bound commands and clears the bodies.
+    closed. The caller ends the bound commands and clears the bodies. With ``gui`` the old
+    engine closes first, its window with it (one window at a time: PyBullet allows one GUI per
+    process), and the new engine opens its own.
 
     Args:
         s: the Sim's shared state, holding such a model.
 
     Raises:
-        Whatever making the engine raises (the model is kept then).
+        Whatever making the engine raises (the model is kept then; with ``gui`` it is
+        closed, and so is the Sim).
     """
     recipe = s.recipe
     assert recipe is not None  # made with the engine
     old = s.backend
+    if old.gui:
+        old.close()
     s.backend = recipe.make()
     s.native = None
     s.dt = s.backend.profile.timestep
