@@ -27,7 +27,7 @@ import numpy as np
 
 from simbridge.envs.errors import ActionError
 from simbridge.envs.task import Task
-from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World
+from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World, heading
 from simbridge.exceptions import (
     BackendUnsupportedError,
     InvalidArgumentError,
@@ -144,6 +144,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         commands = np.zeros(0 if t.commands is None else len(t.commands.names))
         w = World(sim, body, bodies, joints, t.action.joints, default, np.zeros(n), commands)
         w.pose = dict(spec.joint_positions)
+        w.previous_action, w.torques = np.zeros(n), np.zeros(n)
         self.world = w
         spread = t.randomisation.joints or t.action.joints
         self._spread = [sim.joint_index(body, j) for j in spread]
@@ -246,8 +247,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                     "options['commands']", f"expected {w.commands.size} values, got {c.shape}"
                 )
             w.commands = c
-        w.last_action = np.zeros(n)
+        w.last_action, w.previous_action, w.torques = np.zeros(n), np.zeros(n), np.zeros(n)
         w.time = 0.0
+        s = self.sim.base_state(w.body)
+        w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
         self._queue = deque([np.zeros(n)] * t.action.latency)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
@@ -281,7 +284,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             obs = self._observation()
             return obs, 0.0, True, False, info
         w.stale()
-        w.last_action = a
+        w.previous_action, w.last_action = w.last_action, a
         w.time += t.control_dt
         self._steps += 1
         self._history.append(self._frame())
@@ -344,6 +347,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             sim.step(n)
         elif a.mode == "torque":  # the same torque each physics step: clipped once
             tau = np.minimum(np.maximum(target, -self._limit), self._limit)
+            w.torques = tau
             for _ in range(n):
                 sim.set_joint_torque(w.body, w.joints, tau)
                 sim.step()
@@ -352,9 +356,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             kp, kd = np.asarray(a.kp), np.asarray(a.kd)
             for _ in range(n):
                 s = sim.joint_states(w.body, w.joints)
-                tau = kp * (target - s.positions) - kd * s.velocities
-                sim.set_joint_torque(w.body, w.joints, np.clip(tau, -limit, limit))
+                tau = np.clip(kp * (target - s.positions) - kd * s.velocities, -limit, limit)
+                sim.set_joint_torque(w.body, w.joints, tau)
                 sim.step()
+            w.torques = tau
 
     def _reward(self) -> tuple[float, dict[str, float]]:
         terms = {
