@@ -43,8 +43,8 @@ def test_the_trot_walks_at_the_command(backend, seed):
         env.close()
     assert episode.failure is None and episode.steps == 150, episode
     assert episode.success, (episode, error)
-    # measured over 3 s, seeds 0-4: 0.030-0.076 m/s of error on the three engines, seeds 0 and 1
-    # at most 0.059 (mujoco), against the task's 0.1 (docs/envs.md, "The legged walk")
+    # measured over 3 s, seeds 0-4: 0.036-0.064 m/s of error on the three engines, seeds 0 and 1
+    # at most 0.056 (mujoco), against the task's 0.1 (docs/envs.md, "The legged walk")
     assert error < WITHIN, error
 
 

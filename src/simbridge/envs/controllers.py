@@ -301,7 +301,7 @@ class Trot:
         shift: float = 0.005,
         smooth: float = 0.5341,
         gain: float = 1.3232,
-        k_head: float = 1.0601,
+        k_head: float = 2.0,
         lead: float = 0.1766,
         load: float = 0.1151,
         bias: float = 0.1,
