@@ -11,6 +11,7 @@ IDS = {
     "simbridge/KukaReach-v0": "kuka_reach",
     "simbridge/HuskyGoTo-v0": "husky_goto",
     "simbridge/A1Stand-v0": "a1_stand",
+    "simbridge/A1Walk-v0": "a1_walk",
 }
 """Gymnasium id -> shipped task name."""
 

@@ -19,7 +19,7 @@ import numpy as np
 from simbridge.sim import Sim
 from simbridge.transforms import quat_to_matrix
 
-__all__ = ["OBSERVATIONS", "REWARDS", "SUCCESSES", "TERMINATIONS", "World", "term_names"]
+__all__ = ["OBSERVATIONS", "REWARDS", "SUCCESSES", "TERMINATIONS", "World", "heading", "term_names"]
 
 
 @dataclass
@@ -37,6 +37,10 @@ class World:
         commands: the episode's command vector, ``(m,)``.
         time: seconds since the episode's reset.
         pose: the action robot's default pose, joint name -> position (others at 0).
+        previous_action: the action before ``last_action``, ``(n,)`` (zeros at reset).
+        torques: the action joints' torques of the last physics step (N m, ``(n,)``): the
+            commanded ones under ``pd`` and ``torque``, zeros under the motor modes.
+        start: the base's ``(x, y, yaw)`` at the episode's reset (m, m, rad; world).
     """
 
     sim: Sim
@@ -49,6 +53,9 @@ class World:
     commands: np.ndarray
     time: float = 0.0
     pose: Mapping[str, float] = field(default_factory=dict)
+    previous_action: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    torques: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    start: np.ndarray = field(default_factory=lambda: np.zeros(3))
     _read: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     _index: dict[tuple[str | int, ...], np.ndarray] = field(default_factory=dict, repr=False)
     _one: dict[str | int, int] = field(default_factory=dict, repr=False)  # joint -> index
@@ -152,6 +159,19 @@ def _ang(w: World, p: Mapping[str, Any]) -> np.ndarray:
     return w.rotation().T @ np.asarray(w.sim.base_state(w.body).angular_velocity)
 
 
+def heading(orientation: Sequence[float]) -> float:
+    """The heading of an orientation: its yaw about world z.
+
+    Args:
+        orientation: a quaternion ``[x, y, z, w]``.
+
+    Returns:
+        The yaw (rad, in [-pi, pi]).
+    """
+    x, y, z, qw = orientation
+    return math.atan2(2 * (qw * z + x * y), 1 - 2 * (y * y + z * z))
+
+
 def _phase(w: World, p: Mapping[str, Any]) -> np.ndarray:
     a = 2 * math.pi * w.time / float(p.get("period", 1.0))
     return np.array([math.sin(a), math.cos(a)])
@@ -169,8 +189,7 @@ def _link_to_command(w: World, p: Mapping[str, Any]) -> np.ndarray:
 def _command_in_base(w: World, p: Mapping[str, Any]) -> np.ndarray:
     """The command's first two entries (a goal x, y in the world) in the base's heading frame."""
     s = w.sim.base_state(w.body)
-    x, y, z, qw = s.orientation
-    yaw = math.atan2(2 * (qw * z + x * y), 1 - 2 * (y * y + z * z))
+    yaw = heading(s.orientation)
     dx, dy = w.commands[0] - s.position[0], w.commands[1] - s.position[1]
     c, n = math.cos(yaw), math.sin(yaw)
     return np.array([c * dx + n * dy, -n * dx + c * dy])
@@ -216,6 +235,31 @@ def _joint_value(w: World, p: Mapping[str, Any]) -> float:
     return w.joint_position(p["joint"])
 
 
+def _tracking_lin_vel(w: World, p: Mapping[str, Any]) -> float:
+    """legged_gym's: exp(-|command[:2] - v_xy|^2 / sigma), v in the base frame."""
+    err = float(np.sum((w.commands[:2] - _lin(w, p)[:2]) ** 2))
+    return math.exp(-err / float(p.get("sigma", 0.25)))
+
+
+def _tracking_ang_vel(w: World, p: Mapping[str, Any]) -> float:
+    """legged_gym's: exp(-(command[2] - w_z)^2 / sigma), w in the base frame."""
+    err = float((w.commands[2] - _ang(w, p)[2]) ** 2)
+    return math.exp(-err / float(p.get("sigma", 0.25)))
+
+
+def _mean_velocity_error(w: World) -> float:
+    """|mean planar velocity since the reset - command[:2]| (m/s), the mean velocity in the
+    heading frame the base had at its reset (inf before the first step)."""
+    if w.time <= 0.0:
+        return math.inf
+    x0, y0, yaw0 = w.start
+    s = w.sim.base_state(w.body)
+    dx, dy = s.position[0] - x0, s.position[1] - y0
+    c, n = math.cos(yaw0), math.sin(yaw0)
+    mean = np.array([c * dx + n * dy, -n * dx + c * dy]) / w.time
+    return float(np.linalg.norm(mean - w.commands[:2]))
+
+
 REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
     "alive": lambda w, p: 1.0,
     "link_distance": lambda w, p: -_link_distance(w, p),  # params: link
@@ -225,6 +269,13 @@ REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
     "joint_pos_error": lambda w, p: -float(np.sum(_q(w, {"relative": True}) ** 2)),
     "upright": lambda w, p: -float(np.sum(_gravity(w, p)[:2] ** 2)),
     "height_error": lambda w, p: -((w.sim.base_state(w.body).position[2] - p["target"]) ** 2),
+    # legged_gym's locomotion terms (base frame; commands: vx, vy (m/s), yaw rate (rad/s))
+    "tracking_lin_vel": _tracking_lin_vel,  # params: sigma (m^2/s^2, 0.25)
+    "tracking_ang_vel": _tracking_ang_vel,  # params: sigma (rad^2/s^2, 0.25)
+    "lin_vel_z": lambda w, p: -float(_lin(w, p)[2] ** 2),
+    "ang_vel_xy": lambda w, p: -float(np.sum(_ang(w, p)[:2] ** 2)),
+    "torques": lambda w, p: -float(np.sum(w.torques**2)),
+    "action_rate": lambda w, p: -float(np.sum((w.last_action - w.previous_action) ** 2)),
 }
 """Reward term -> function (world, params) -> value (weighted by the task)."""
 
@@ -245,6 +296,9 @@ SUCCESSES: dict[str, Callable[[World, Mapping[str, Any]], bool]] = {
     "link_near_command": lambda w, p: _link_distance(w, p) < p["within"],
     # params: within (m): the base's x, y that near command[:2]
     "base_near_command": lambda w, p: _goal_distance(w, p) < p["within"],
+    # params: within (m/s): the base's mean planar velocity since the reset (in its heading
+    # at the reset) that near command[:2] (the travelled distance over the elapsed time)
+    "mean_velocity_near_command": lambda w, p: _mean_velocity_error(w) < p["within"],
 }
 """Success -> test (world, params); the episode succeeds when every test holds (a ``terminate``
 parameter ends it there; otherwise it is tested at the episode's last step)."""
@@ -259,11 +313,14 @@ PARAMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "link_to_command": (("link",), ()),
     "link_distance": (("link",), ()),
     "height_error": (("target",), ()),
+    "tracking_lin_vel": ((), ("sigma",)),
+    "tracking_ang_vel": ((), ("sigma",)),
     "joint_pos_outside": (("joint", "limit"), ()),
     "base_height_below": (("limit",), ()),
     "tilt_above": (("limit",), ()),
     "link_near_command": (("link", "within"), ("terminate",)),
     "base_near_command": (("within",), ("terminate",)),
+    "mean_velocity_near_command": (("within",), ("terminate",)),
     "survive": ((), ()),
 }
 """A term's parameters: those it needs and those it may take (others are refused)."""
