@@ -39,6 +39,7 @@ __all__ = [
     "PAIRED_COLUMNS",
     "PAIRED_FIELDS",
     "Pair",
+    "apart",
     "blank_paired_columns",
     "headline",
     "pairs",
@@ -98,6 +99,19 @@ def pairs(result: Sim2SimResult) -> list[Pair]:
     return out
 
 
+def apart(result: Sim2SimResult) -> list[Pair]:
+    """The pairs of engines whose successes differ significantly (:func:`pairs` whose verdict
+    is not ``same``).
+
+    Args:
+        result: the run.
+
+    Returns:
+        Those pairs, in :func:`pairs`' order.
+    """
+    return [p for p in pairs(result) if p.verdict != "same"]
+
+
 def _rate(result: Sim2SimResult, i: int) -> str:
     r = result.figures[i].rate
     return f"{r.successes}/{r.n} ({r.low:.2f}-{r.high:.2f})"
@@ -121,15 +135,15 @@ def headline(result: Sim2SimResult) -> list[str]:
         + (f", {f.nan_actions} NaN action(s)" if f.nan_actions else "")
         for i, f in enumerate(result.figures)
     ]
-    apart = [p for p in pairs(result) if p.verdict != "same"]
+    parted = apart(result)
     lines.append(
         f"trained outside simbridge ({name}): no training engine; every pair of engines by "
         "McNemar's exact test: "
         + (
             "; ".join(
-                f"{p.second} {p.verdict} against {p.first} (p = {p.p_value:.3g})" for p in apart
+                f"{p.second} {p.verdict} against {p.first} (p = {p.p_value:.3g})" for p in parted
             )
-            if apart
+            if parted
             else "no pair differs significantly"
         )
     )
