@@ -175,7 +175,9 @@ def _sim2sim(args: argparse.Namespace) -> int:
         if e.get("note"):
             print(f"explain {e['engine']}: {e['note']}")
     print(f"wrote {', '.join(str(f) for f in files)}")
-    dropped = result.dropped
+    from simbridge.envs.sim2sim_external import dropped as drops
+
+    dropped = drops(result)
     if args.fail_on_drop and dropped:
         where = "between engines: " if outside(args.trained_on) else "on "
         print(

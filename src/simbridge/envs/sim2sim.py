@@ -147,27 +147,6 @@ class Sim2SimResult:
         rates = [f.rate for f in (self.figures if outside(self.trained_on) else self.figures[:1])]
         return max(r.successes / r.n for r in rates) < TRAINED_FLOOR
 
-    @property
-    def dropped(self) -> list[str]:
-        """What ``--fail-on-drop`` fails on, in words: each engine whose success drops
-        significantly against the training engine (its label); for a policy trained outside
-        simbridge, no engine being the training engine, each pair of engines whose successes
-        differ significantly (McNemar p < :data:`ALPHA`), as ``LOWER below HIGHER``.
-
-        The stated contract names no expected success rate, so an outside policy's drop is
-        one engine against another, not against a number.
-        """
-        from simbridge.envs.trained_on import outside
-
-        if outside(self.trained_on) is None:
-            return [f.label for f in self.figures[1:] if f.verdict == "drop"]
-        from simbridge.envs.sim2sim_external import apart
-
-        return [
-            f"{p.second} below {p.first}" if p.verdict == "drop" else f"{p.first} below {p.second}"
-            for p in apart(self)
-        ]
-
 
 def _bootstrap_mean(values: Sequence[float], seed: int) -> Interval:
     """The mean with a 95% percentile bootstrap interval (a point where every value is equal)."""
