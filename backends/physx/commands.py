@@ -271,8 +271,10 @@ class MotorCommands:
         if robot.balls:
             self._ball_before_step(robot, art.qpos, art.qvel, qf)
         if qf is not None:
-            art.qf = qf.astype(np.float32)
+            qf = qf.astype(np.float32)
+            art.qf = qf
             robot.qf_set = True
+        robot.step_qf = qf
         if robot.past_limit:  # after the motors and damping: they read the step's start
             self._limit_rows(robot)
 

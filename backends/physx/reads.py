@@ -246,8 +246,9 @@ class StateReads:
     def joint_states(self, body: int, joints: np.ndarray) -> JointStates:
         """See Backend.joint_states.
 
-        PhysX: the torque is the joint's incoming force along its axis (PhysX reports no drive
-        force); a static body's joints read zeros.
+        PhysX: the torque is the joint's incoming force along its axis less the joint forces
+        the last step was given (a torque command, URDF damping): PhysX reports no drive force;
+        a static body's joints read zeros.
         """
         lock = self._stepping
         if not lock.acquire(False):
@@ -269,17 +270,16 @@ class StateReads:
                 self._readable(np.concatenate([q, v]), body)
             # the motor force of the last step: PhysX reports no drive force, so the joint's
             # incoming force along its axis (in the child's joint frame, whose x axis is the
-            # joint's; force first, then torque)
+            # joint's; force first, then torque), less the joint forces the step was given (a
+            # torque command, <dynamics damping>): PyBullet's appliedJointMotorTorque is the
+            # motor's alone and reads 0 under a torque command
             forces = art.get_link_incoming_joint_forces()
+            qf = robot.step_qf
             if moving is None and not robot.balls:  # every joint asked moves, none spherical
-                return _new_tuple(
-                    JointStates,
-                    (
-                        q[dofs].astype(float),
-                        v[dofs].astype(float),
-                        forces.take(flat).astype(float),
-                    ),
-                )
+                tau = forces.take(flat).astype(float)
+                if qf is not None:
+                    tau -= qf[dofs]
+                return _new_tuple(JointStates, (q[dofs].astype(float), v[dofs].astype(float), tau))
             if moving is None:
                 moving = np.ones(n, dtype=bool)
             pos = np.zeros(n)
@@ -288,6 +288,8 @@ class StateReads:
             pos[moving] = q[dofs]
             vel[moving] = v[dofs]
             tau[moving] = forces[links, cols]
+            if qf is not None:
+                tau[moving] -= qf[dofs]
             for k, j in enumerate(joints.tolist()):
                 if j in robot.balls:  # the first coordinate, as p.getJointState
                     quat, w = self._ball_state(robot, j, q, v)

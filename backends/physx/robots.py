@@ -42,6 +42,10 @@ class Robot:
     slot: dict[int, int] = field(default_factory=dict)  # joint -> index in the motor arrays
     damping: np.ndarray | None = None  # <dynamics damping> per dof where the profile applies it
     qf_set: bool = False  # joint forces were handed to PhysX for the coming step
+    # the joint forces (per dof, float32 as PhysX took them) of the last step: the torque
+    # commands and <dynamics damping>, which joint_states takes off the joint's incoming force,
+    # so that it reads the motor's force alone (PyBullet's appliedJointMotorTorque); None: none
+    step_qf: np.ndarray | None = None
     drive_force: list[float] = field(default_factory=list)  # per slot, as set (NaN: not yet)
     has_position: bool = False  # a position motor needs its velocity target every step
     # the slots array of the last velocity command while nothing else has changed a motor's

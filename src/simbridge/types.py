@@ -211,9 +211,13 @@ class JointStates(NamedTuple):
     x, the angular velocity's x, the motor torque about x (all of them:
     :class:`JointStateMultiDof`).
 
-    ``applied_torques`` is the joint motor force of the last step (N·m or N): the velocity or
-    position motor's force, or the torque command; PyBullet's ``appliedJointMotorTorque``.
-    Fixed joints report 0.
+    ``applied_torques`` is the joint motor's force of the last step (N·m or N), PyBullet's
+    ``appliedJointMotorTorque``: the velocity or position motor's force (a motor braking the
+    joint, the default velocity motor at 0, included). A torque command is not a motor force:
+    it is not included, so a torque alone (the motor released with ``max_force=0``) reads 0,
+    and a torque held by the default brake reads the brake's force, minus the command. Joint
+    damping and limit forces are not included either. Fixed joints report 0 (every backend:
+    tests/conformance/test_applied_torques.py).
     """
 
     positions: np.ndarray  # (n,)
@@ -221,7 +225,7 @@ class JointStates(NamedTuple):
     velocities: np.ndarray  # (n,)
     """(n,) rad/s or m/s."""
     applied_torques: np.ndarray  # (n,)
-    """(n,) N·m or N, the motor force of the last step."""
+    """(n,) N·m or N, the motor's force of the last step (a torque command excluded)."""
 
 
 class JointStateMultiDof(NamedTuple):

@@ -116,7 +116,13 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # link's inertial reaction, the motor impulse does not); limit 2e-2. Exact rule: 1e-6
     # relative (1e-5 N m on the pendulum). Also wheel.urdf held at 10 rad/s by a 0.5 N m motor
     # (test_dynamics.py): 0.0622130 N m read for PyBullet's damping torque 0.0622395 (5.3e-5 of
-    # max_force), 1.07e-5 N m for 0 without link damping.
+    # max_force), 1.07e-5 N m for 0 without link damping. The backend takes the joint forces
+    # it gave the step (a torque command, <dynamics damping>) off that force, so that a torque
+    # command reads as no motor force, as PyBullet and MuJoCo read it
+    # (test_applied_torques.py, kuka_iiwa joint 0, 50 N m, no gravity): the motor released,
+    # 1.4e-4 N m on the first step, 1.3e-3 after five (2.7e-5 of the command; it read the
+    # command, 49.9999, before); held by the default brake, -50.000 (the brake's force; it
+    # read 2.7e-7, the command and the brake summed, before). Relative to the command there.
     "applied_torque_from_joint_force": {"physx": 2e-2},
     # PyBullet's position law as a PhysX velocity drive (test_cross_engine.py, the double
     # pendulum's two coupled position motors, kp 0.05, kd 0.5, 2 s): the drive's target is set

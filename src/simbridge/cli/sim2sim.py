@@ -2,7 +2,8 @@
 on paired seeds on every engine (:func:`simbridge.envs.sim2sim.sim2sim`), into report.md,
 summary.json, report.html (the 3D replay of a chosen seed) and the survival figure, with a
 headline on stdout. With ``--fail-on-drop`` it exits :data:`DROP_EXIT` when an engine's success
-drops significantly against the training engine."""
+drops significantly against the training engine, or, for a policy trained outside simbridge
+(``external:NAME``), when any two engines' successes differ significantly."""
 
 from __future__ import annotations
 
@@ -27,7 +28,8 @@ curves, clipped actions, sign changes, torque saturation and joint-limit hits, t
 engine beside engine, and a 3D replay of the first seed where the engines part.
 
 Exit status: 0, also when an engine drops; with --fail-on-drop, 3 when an engine's success
-drops significantly (McNemar p < 0.05); 1 on an error, 2 on bad usage.
+drops significantly (McNemar p < 0.05) against the training engine, or, trained outside
+simbridge, when any two engines differ significantly; 1 on an error, 2 on bad usage.
 
 POLICY: 'reference' (the task's reference controller), module:callable (a function obs ->
 action, or a class made with the env: simbridge.envs.controllers:DriveToGoal), or a file:
@@ -106,7 +108,8 @@ def add_command(
     p.add_argument(
         "--fail-on-drop",
         action="store_true",
-        help=f"exit {DROP_EXIT} when an engine's success drops significantly",
+        help=f"exit {DROP_EXIT} when an engine's success drops significantly (external:NAME: "
+        "when any two engines differ)",
     )
     verbose(p)
     p.set_defaults(handler=_sim2sim)
@@ -172,10 +175,13 @@ def _sim2sim(args: argparse.Namespace) -> int:
         if e.get("note"):
             print(f"explain {e['engine']}: {e['note']}")
     print(f"wrote {', '.join(str(f) for f in files)}")
-    dropped = [f.label for f in result.figures[1:] if f.verdict == "drop"]
+    from simbridge.envs.sim2sim_external import dropped as drops
+
+    dropped = drops(result)
     if args.fail_on_drop and dropped:
+        where = "between engines: " if outside(args.trained_on) else "on "
         print(
-            f"simbridge: sim2sim: success dropped significantly on {', '.join(dropped)} "
+            f"simbridge: sim2sim: success dropped significantly {where}{', '.join(dropped)} "
             f"(--fail-on-drop: exit {DROP_EXIT})",
             file=sys.stderr,
         )

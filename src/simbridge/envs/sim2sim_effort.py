@@ -6,9 +6,9 @@ hits over its control steps.
   effort limit, within compare's :data:`~simbridge.compare.run.events.SATURATION_TOLERANCE`
   (relative). The applied effort is the motor force of that step as the engine reads it
   (``Sim.joint_states(...).applied_torques``) in the position and velocity modes, and the torque
-  the env commanded in the torque and PD modes: that is what the engine applies, and PyBullet
-  and MuJoCo read 0 there (PyBullet's ``appliedJointMotorTorque`` is the velocity or position
-  motor's alone), where PhysX reads the joint force its solver left.
+  the env commanded in the torque and PD modes: that is what the engine applies, and every
+  engine reads 0 there (``applied_torques`` is the motor's force alone, as PyBullet's
+  ``appliedJointMotorTorque``: tests/conformance/test_applied_torques.py).
   A joint's effort limit is the task's ``max_force`` (the position and velocity motors' force
   bound, the torque and PD modes' clip), or the joint table's ``max_force`` (the file's effort
   limit) where that is positive and smaller.

@@ -16,6 +16,8 @@ contract:
   not marked;
 - a policy that succeeds on fewer than half of the seeds on every engine points at the stated
   contract.
+- ``--fail-on-drop`` fails on any pair that differs significantly (:func:`dropped`); report.html's
+  headline lists every pair, and the replayed seed is the first where any two engines part.
 
 An unknown name is taken only in the form ``external:NAME``: a misspelt engine
 (``--trained-on pybulet``) is still an error naming the engines
@@ -39,7 +41,9 @@ __all__ = [
     "PAIRED_COLUMNS",
     "PAIRED_FIELDS",
     "Pair",
+    "apart",
     "blank_paired_columns",
+    "dropped",
     "headline",
     "pairs",
     "pairs_section",
@@ -98,6 +102,42 @@ def pairs(result: Sim2SimResult) -> list[Pair]:
     return out
 
 
+def apart(result: Sim2SimResult) -> list[Pair]:
+    """The pairs of engines whose successes differ significantly (:func:`pairs` whose verdict
+    is not ``same``).
+
+    Args:
+        result: the run.
+
+    Returns:
+        Those pairs, in :func:`pairs`' order.
+    """
+    return [p for p in pairs(result) if p.verdict != "same"]
+
+
+def dropped(result: Sim2SimResult) -> list[str]:
+    """What ``--fail-on-drop`` fails on, in words: each engine whose success drops
+    significantly against the training engine (its label); for a policy trained outside
+    simbridge, no engine being the training engine, each pair of engines whose successes
+    differ significantly (McNemar p < alpha, :func:`apart`), as ``LOWER below HIGHER``.
+
+    The stated contract names no expected success rate, so an outside policy's drop is one
+    engine against another, not against a number.
+
+    Args:
+        result: the run.
+
+    Returns:
+        The drops (empty: none).
+    """
+    if outside(result.trained_on) is None:
+        return [f.label for f in result.figures[1:] if f.verdict == "drop"]
+    return [
+        f"{p.second} below {p.first}" if p.verdict == "drop" else f"{p.first} below {p.second}"
+        for p in apart(result)
+    ]
+
+
 def _rate(result: Sim2SimResult, i: int) -> str:
     r = result.figures[i].rate
     return f"{r.successes}/{r.n} ({r.low:.2f}-{r.high:.2f})"
@@ -121,15 +161,15 @@ def headline(result: Sim2SimResult) -> list[str]:
         + (f", {f.nan_actions} NaN action(s)" if f.nan_actions else "")
         for i, f in enumerate(result.figures)
     ]
-    apart = [p for p in pairs(result) if p.verdict != "same"]
+    parted = apart(result)
     lines.append(
         f"trained outside simbridge ({name}): no training engine; every pair of engines by "
         "McNemar's exact test: "
         + (
             "; ".join(
-                f"{p.second} {p.verdict} against {p.first} (p = {p.p_value:.3g})" for p in apart
+                f"{p.second} {p.verdict} against {p.first} (p = {p.p_value:.3g})" for p in parted
             )
-            if apart
+            if parted
             else "no pair differs significantly"
         )
     )

@@ -2,7 +2,9 @@
 (:func:`simbridge.compare.report.html.render_html`).
 
 The page opens on the headline, one line per engine (:func:`headline_html`): its success k/N
-with the 95% Wilson interval and, against the training engine, the verdict with McNemar's p.
+with the 95% Wilson interval and, against the training engine, the verdict with McNemar's p
+(for a policy trained outside simbridge, no engine being the training engine: each engine's
+success, then every pair of engines with its verdict and p).
 Then the 3D replay of the chosen seed (:mod:`simbridge.envs.sim2sim_replay`) on every engine in
 one scene, each robot tinted in its engine's legend colour, as compare's replay draws a
 comparison. Then report.md's figures and sections, each folded as in compare's report.html.
@@ -39,17 +41,22 @@ def _line(f: EngineFigures, colour: str, training: str | None) -> str:
 
 
 def headline_html(result: Sim2SimResult) -> str:
-    """The headline, one line per engine, the training engine's first.
+    """The headline, one line per engine, the training engine's first (for a policy trained
+    outside simbridge: one line per engine, then one per pair of engines).
 
     Args:
         result: the run.
 
     Returns:
         A ``<section id="headline">`` of one ``<li>`` per engine (``data-verdict``:
-        ``training``, ``same``, ``drop`` or ``rise``), each with its legend swatch.
+        ``training``, ``same``, ``drop`` or ``rise``; ``stated`` for an outside policy, whose
+        pairs follow in ``<ul id="pairs">``), each with its legend swatch.
     """
     from simbridge.compare.report.replay import ENGINE_COLOURS
+    from simbridge.envs.trained_on import outside
 
+    if outside(result.trained_on) is not None:
+        return _external_headline(result)
     training = result.figures[0].label
     rows = "".join(
         _line(f, ENGINE_COLOURS[k % len(ENGINE_COLOURS)], None if k == 0 else training)
@@ -67,6 +74,53 @@ def headline_html(result: Sim2SimResult) -> str:
         f'<section id="verdicts" class="headline"><ul id="headline">{rows}</ul>{contract}'
         f'<p class="note">{len(result.seeds)} paired episodes per engine; a verdict is '
         "McNemar's exact test on the seeds that succeed on one engine only.</p></section>"
+    )
+
+
+def _external_headline(result: Sim2SimResult) -> str:
+    """The headline of a policy trained outside simbridge: each engine's success against the
+    stated contract (``data-verdict="stated"``), then every pair of engines by McNemar's exact
+    test (:func:`~simbridge.envs.sim2sim_external.pairs`; ``data-verdict`` ``same``, ``drop``
+    or ``rise`` of the second against the first)."""
+    from simbridge.compare.report.replay import ENGINE_COLOURS
+    from simbridge.envs.sim2sim_external import pairs
+    from simbridge.envs.trained_on import outside
+
+    name = html.escape(outside(result.trained_on) or "")
+    rows = []
+    for k, f in enumerate(result.figures):
+        r = f.rate
+        swatch = (
+            f'<span class="swatch" style="background:{ENGINE_COLOURS[k % len(ENGINE_COLOURS)]}">'
+            "</span>"
+        )
+        nan = f", {f.nan_actions} NaN action(s)" if f.nan_actions else ""
+        rows.append(
+            f'<li data-verdict="stated">{swatch}<b>{html.escape(f.label)}</b>: success '
+            f"{r.successes}/{r.n} ({r.low:.2f}-{r.high:.2f}, 95% Wilson), against the contract "
+            f"stated for {name}{nan}</li>"
+        )
+    pair_rows = "".join(
+        f'<li data-verdict="{p.verdict}"><b>{html.escape(p.second)}</b> '
+        f'<span class="word">{p.verdict}</span> against <b>{html.escape(p.first)}</b> '
+        f"(McNemar p = {p.p_value:.3g}; lost {p.lost}, won {p.won})</li>"
+        for p in pairs(result)
+    )
+    contract = ""
+    if result.points_at_contract:
+        contract = (
+            f'<p class="note">The policy succeeds on less than {TRAINED_FLOOR:.0%} of the '
+            f"seeds on every engine: look at the contract stated for {name} (joint order, "
+            "observation layout and scales, action meaning, gains, dt and decimation) before "
+            "the engines.</p>"
+        )
+    return (
+        f'<section id="verdicts" class="headline"><p>Trained outside simbridge ({name}): no '
+        "engine is the training engine.</p>"
+        f'<ul id="headline">{"".join(rows)}</ul><ul id="pairs">{pair_rows}</ul>{contract}'
+        f'<p class="note">{len(result.seeds)} paired episodes per engine; every pair of '
+        "engines is judged by McNemar's exact test on the seeds that succeed on one of the two "
+        "only.</p></section>"
     )
 
 

@@ -2,9 +2,10 @@
 
 The evaluation records no poses: it stays fast. Once every engine has run, one seed is chosen
 (:func:`choose_seed`): the first where the engines part, the policy succeeding on the training
-engine and failing on another; else the first seed. That seed is run again on every engine with
-every robot's state recorded after each control step, through compare's recorder (base pose,
-joint positions, link positions, contacts), into compare's
+engine and failing on another (for a policy trained outside simbridge, with no training engine:
+succeeding on one engine and failing on another); else the first seed. That seed is run again
+on every engine with every robot's state recorded after each control step, through compare's
+recorder (base pose, joint positions, link positions, contacts), into compare's
 :class:`~simbridge.compare.run.trajectory.Trajectory`: compare's replay
 (:mod:`simbridge.compare.report.replay`) draws it, and ``simbridge replay`` serves it from the
 report folder. ``reset(seed=...)`` gives the same episode again on the same engine and machine;
@@ -67,7 +68,8 @@ class EpisodeReplay:
 
 def choose_seed(result: Sim2SimResult) -> tuple[int, str]:
     """The seed to replay: the first that succeeds on the training engine and fails on another;
-    else the first seed.
+    for a policy trained outside simbridge (``external:NAME``, no training engine), the first
+    that succeeds on one engine and fails on another; else the first seed.
 
     Args:
         result: the run.
@@ -75,6 +77,10 @@ def choose_seed(result: Sim2SimResult) -> tuple[int, str]:
     Returns:
         ``(seed, why)``, ``why`` in words.
     """
+    from simbridge.envs.trained_on import outside
+
+    if outside(result.trained_on) is not None:
+        return _first_disagreement(result)
     train = result.runs[0]
     for i, seed in enumerate(result.seeds):
         if not train.records[i].success:
@@ -88,6 +94,22 @@ def choose_seed(result: Sim2SimResult) -> tuple[int, str]:
     return result.seeds[0], (
         f"seed {result.seeds[0]}, the first seed: no seed succeeds on the training engine and "
         "fails on another"
+    )
+
+
+def _first_disagreement(result: Sim2SimResult) -> tuple[int, str]:
+    """A policy trained outside simbridge has no training engine: the first seed that succeeds
+    on one engine and fails on another, else the first seed."""
+    for i, seed in enumerate(result.seeds):
+        won = [run.engine.label for run in result.runs if run.records[i].success]
+        lost = [run.engine.label for run in result.runs if not run.records[i].success]
+        if won and lost:
+            return seed, (
+                f"seed {seed}, the first where the engines part: the policy succeeds on "
+                f"{', '.join(won)} and fails on {', '.join(lost)}"
+            )
+    return result.seeds[0], (
+        f"seed {result.seeds[0]}, the first seed: the engines agree on every seed's success"
     )
 
 

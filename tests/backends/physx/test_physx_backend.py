@@ -638,5 +638,8 @@ def test_reads_are_sapiens_arrays_and_pybullets_frame_maths_bit_for_bit():
                 assert js.positions.dtype == js.applied_torques.dtype == np.float64
                 np.testing.assert_array_equal(js.positions, art.qpos[dofs[order]])
                 np.testing.assert_array_equal(js.velocities, art.qvel[dofs[order]])
-                torques = [forces[rows[i], axis[i]] for i in order]
+                # the incoming joint force less the joint forces the step was given (here the
+                # arm's <dynamics damping>): the motor's force alone
+                qf = r.step_qf if r.step_qf is not None else np.zeros(r.ndof, dtype=np.float32)
+                torques = [float(forces[rows[i], axis[i]]) - float(qf[dofs[i]]) for i in order]
                 np.testing.assert_array_equal(js.applied_torques, torques)
