@@ -15,6 +15,7 @@ so it is a policy like any trained one.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -26,10 +27,14 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CONTROLLERS",
+    "Gait",
+    "GAITS",
     "CartPoleLQR",
     "DriveToGoal",
     "HoldDefault",
     "KukaReachDLS",
+    "ant_gait",
+    "half_cheetah_gait",
     "reference_controller",
 ]
 
@@ -204,11 +209,80 @@ class HoldDefault:
         return np.zeros(self.n, dtype=np.float32)
 
 
+class Gait:
+    """An open-loop pattern for a task over an MJCF read as MuJoCo reads it: actuator ``i``'s
+    control is ``amplitude[i] * sin(2 pi frequency t + phase[i])``, ``t`` the episode's time
+    (``env.world.time``, 0 at each reset); the observation is not read. The ant's and the
+    half cheetah's reference controllers (:data:`GAITS`).
+
+    Args:
+        env: an env whose action is ``actuator`` (one entry per actuator).
+        frequency: Hz.
+        amplitude: one per action entry (the action's units).
+        phase: one per action entry (rad).
+
+    Raises:
+        InvalidArgumentError: ``amplitude`` or ``phase`` of another length than the action.
+    """
+
+    def __init__(
+        self,
+        env: SimEnv,
+        frequency: float,
+        amplitude: Sequence[float],
+        phase: Sequence[float],
+    ) -> None:
+        from simbridge.exceptions import InvalidArgumentError
+
+        n = len(env.task.action.joints)
+        for name, v in (("amplitude", amplitude), ("phase", phase)):
+            if len(v) != n:
+                raise InvalidArgumentError(
+                    name, f"expected one value per action entry ({n}), got {len(v)}"
+                )
+        self.env = env
+        self.frequency = frequency
+        self.amplitude = np.asarray(amplitude, dtype=float)
+        self.phase = np.asarray(phase, dtype=float)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The action at the episode's current time.
+
+        Args:
+            obs: the env's observation (not read).
+
+        Returns:
+            ``(n,)`` float64 within [-1, 1].
+        """
+        w = 2.0 * np.pi * self.frequency * self.env.world.time
+        return np.clip(self.amplitude * np.sin(w + self.phase), -1.0, 1.0)
+
+
+GAITS: dict[str, dict[str, Any]] = {
+    "ant": {"frequency": 1.0, "amplitude": [0.5] * 8, "phase": [0.0] * 8},
+    "half_cheetah": {"frequency": 2.0, "amplitude": [0.5] * 6, "phase": [0.0] * 6},
+}
+"""A task's :class:`Gait` parameters (frequency, amplitude, phase per actuator in MuJoCo's
+order), chosen by the search docs/envs.md gives."""
+
+
+def ant_gait(env: SimEnv) -> Gait:
+    """The ``ant`` task's reference controller (:data:`GAITS`)."""
+    return Gait(env, **GAITS["ant"])
+
+
+def half_cheetah_gait(env: SimEnv) -> Gait:
+    """The ``half_cheetah`` task's reference controller (:data:`GAITS`)."""
+    return Gait(env, **GAITS["half_cheetah"])
+
+
 CONTROLLERS: dict[str, Any] = {
     "cartpole": CartPoleLQR,
     "kuka_reach": KukaReachDLS,
     "husky_goto": DriveToGoal,
     "a1_stand": HoldDefault,
+    "ant": ant_gait,
+    "half_cheetah": half_cheetah_gait,
 }
 """Shipped task name -> its reference controller's class."""
 

@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from simbridge.envs.errors import ActionError
-from simbridge.envs.task import Task
+from simbridge.envs.task import RobotSpec, Task
 from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World
 from simbridge.exceptions import (
     BackendUnsupportedError,
@@ -102,6 +102,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self._scale = np.broadcast_to(np.asarray(t.action.scale, float), (n,)).copy()
         self._limit = np.asarray(t.action.max_force, float)  # the torque modes' clip
         self._snapshot: Any = None
+        self._actuators: list[int] = []  # the actuator action's indices in MuJoCo's ctrl
         self._shadow: Sim | None = None  # PyBullet's pictures of an engine that draws none
         self._diverged = False
         self._build()
@@ -126,6 +127,9 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _build(self) -> None:
         """Load the robots, set the default pose and the action joints' motors."""
+        if self.task.native is not None:
+            self._build_native(self.task.native)
+            return
         sim, t = self.sim, self.task
         bodies = {}
         for r in t.robots:
@@ -159,11 +163,41 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         if t.reset == "restore":
             self._snapshot = sim.get_state(exact=True)
 
+    def _build_native(self, r: RobotSpec) -> None:
+        """Load the MJCF read as MuJoCo reads it (the whole world), controls at 0."""
+        sim, t = self.sim, self.task
+        body = sim.load_mjcf(r.mjcf, semantics="mujoco")[r.body]
+        table = {a.name: a for a in sim.actuators()}
+        self._actuators = [table[name].index for name in t.action.joints]
+        joints = [sim.joint_index(body, table[name].target) for name in t.action.joints]
+        n = len(joints)
+        commands = np.zeros(0 if t.commands is None else len(t.commands.names))
+        w = World(
+            sim,
+            body,
+            {r.name: body},
+            np.array(joints, dtype=np.int64),
+            t.action.joints,
+            np.zeros(n),
+            np.zeros(n),
+            commands,
+            control_dt=t.control_dt,
+        )
+        self.world = w
+        self._spread, self._spread_default = [], np.zeros(0)
+        self._spawn = sim.base_state(body)
+        self._qpos0, self._qvel0 = sim.qpos(), sim.qvel()
+        self._hold(np.zeros(n))
+        if t.reset == "restore":
+            self._snapshot = sim.get_state(exact=True)
+
     def _hold(self, q: np.ndarray) -> None:
         """The action joints' motors at rest: position held at ``q``, velocity 0, or released
         (torque and pd)."""
         a, w = self.task.action, self.world
-        if a.mode == "position":
+        if a.mode == "actuator":
+            self.sim.set_actuator_controls(np.zeros(len(self._actuators)), self._actuators)
+        elif a.mode == "position":
             self.sim.set_joint_position(
                 w.body,
                 w.joints,
@@ -229,6 +263,9 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         """Draw the initial state and the commands, always in the same order."""
         t, w, rng = self.task, self.world, self.np_random
         r = t.randomisation
+        if t.native is not None:
+            self._randomise_native(options)
+            return
         n, k = len(w.joints), len(self._spread)
         q0 = self._spread_default + rng.uniform(-1.0, 1.0, k) * r.joint_position
         qd0 = rng.uniform(-1.0, 1.0, k) * r.joint_velocity
@@ -256,6 +293,33 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         w.time = 0.0
         self._queue = deque([np.zeros(n)] * t.action.latency)
 
+    def _randomise_native(self, options: dict[str, Any]) -> None:
+        """An MJCF task's initial state, drawn as Gymnasium's MuJoCo ``reset_model`` draws it:
+        ``qpos0 + uniform(-h, h, nq)``, then ``qvel0 + s * standard_normal(nv)``, both drawn
+        even when zero; then the commands."""
+        t, w, rng = self.task, self.world, self.np_random
+        r = t.randomisation
+        h = r.qpos_uniform
+        qpos = self._qpos0 + rng.uniform(low=-h, high=h, size=self._qpos0.size)
+        qvel = self._qvel0 + r.qvel_normal * rng.standard_normal(self._qvel0.size)
+        self.sim.set_qpos_qvel(qpos, qvel)
+        self._hold(np.zeros(len(self._actuators)))
+        if t.commands is not None:
+            lo, hi = np.asarray(t.commands.low), np.asarray(t.commands.high)
+            w.commands = lo + (hi - lo) * rng.uniform(0.0, 1.0, len(lo))
+        if "commands" in options:
+            c = np.asarray(options["commands"], dtype=float)
+            if c.shape != w.commands.shape:
+                raise InvalidArgumentError(
+                    "options['commands']", f"expected {w.commands.size} values, got {c.shape}"
+                )
+            w.commands = c
+        n = len(t.action.joints)
+        w.last_action = np.zeros(n)
+        w.time = 0.0
+        w.qpos_start = w.qpos_before = self.sim.qpos()
+        self._queue = deque([np.zeros(n)] * t.action.latency)
+
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One control step: the action held over ``decimation`` physics steps.
 
@@ -279,6 +343,8 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self._queue.append(a)
         applied = self._queue.popleft()
         info: dict[str, Any] = {"action_clipped": clipped}
+        if t.native is not None:
+            w.qpos_before = self.sim.qpos()
         try:
             self._actuate(applied)
         except SimulationDivergedError:
@@ -340,7 +406,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             base = 0.0
         target = base + self._scale * applied
         n = self.task.decimation
-        if a.mode == "position":
+        if a.mode == "actuator":  # held over the control period; ctrlrange clamps (the model's)
+            sim.set_actuator_controls(target, self._actuators)
+            sim.step(n)
+        elif a.mode == "position":
             sim.set_joint_position(
                 w.body,
                 w.joints,
@@ -431,7 +500,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         """A PyBullet Sim of the same robots set to this world's state, for pictures."""
         if self._shadow is None:
             self._shadow = Sim("pybullet", timestep=self.task.timestep)
-            for r in self.task.robots:
+            native = self.task.native
+            if native is not None:
+                self._shadow.load_mjcf(native.mjcf, semantics="mujoco")
+            for r in () if native is not None else self.task.robots:
                 self._shadow.load_urdf(
                     r.urdf,
                     base_position=r.position,
