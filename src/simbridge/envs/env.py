@@ -104,6 +104,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self._snapshot: Any = None
         self._actuators: list[int] = []  # the actuator action's indices in MuJoCo's ctrl
         self._shadow: Sim | None = None  # PyBullet's pictures of an engine that draws none
+        self._shadow_body = 0
         self._diverged = False
         self._build()
         self._history: deque[np.ndarray] = deque(maxlen=t.history)
@@ -498,12 +499,11 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _painter(self) -> Sim:
         """A PyBullet Sim of the same robots set to this world's state, for pictures."""
+        if self.task.native is not None:
+            return self._native_painter(self.task.native)
         if self._shadow is None:
             self._shadow = Sim("pybullet", timestep=self.task.timestep)
-            native = self.task.native
-            if native is not None:
-                self._shadow.load_mjcf(native.mjcf, semantics="mujoco")
-            for r in () if native is not None else self.task.robots:
+            for r in self.task.robots:
                 self._shadow.load_urdf(
                     r.urdf,
                     base_position=r.position,
@@ -512,6 +512,31 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                 )
         self._shadow.set_state(self.sim.get_state(exact=False))
         return self._shadow
+
+    def _native_painter(self, r: RobotSpec) -> Sim:
+        """PyBullet's reading of the same MJCF (which PyBullet draws), its joints set by name
+        to this world's and, for a free-floating robot, its base to this world's base pose."""
+        sim, w = self.sim, self.world
+        if self._shadow is None:
+            self._shadow = Sim("pybullet", timestep=self.task.timestep)
+            ids = self._shadow.load_mjcf(r.mjcf)
+            own = {sim.joint_info(w.body, j).name for j in range(sim.num_joints(w.body))}
+
+            def shared(b: int) -> int:
+                n = self._shadow.num_joints(b)  # type: ignore[union-attr]
+                return sum(self._shadow.joint_info(b, j).name in own for j in range(n))  # type: ignore[union-attr]
+
+            self._shadow_body = max(ids, key=shared)
+        shadow, body = self._shadow, self._shadow_body
+        names = [shadow.joint_info(body, j).name for j in range(shadow.num_joints(body))]
+        mine = {sim.joint_info(w.body, j).name: j for j in range(sim.num_joints(w.body))}
+        pairs = [(i, mine[n]) for i, n in enumerate(names) if n in mine]
+        q = sim.joint_states(w.body, [j for _, j in pairs]).positions
+        shadow.reset_joint_state(body, [i for i, _ in pairs], q)
+        if sim.qpos().size == 7 + len(mine):  # a free joint, then one coordinate per joint
+            base = sim.base_state(w.body)
+            shadow.reset_base_state(body, base.position, base.orientation)
+        return shadow
 
     def contract(self) -> dict[str, Any]:
         """What a policy trained on this task depends on, as plain data (JSON-ready).
