@@ -298,7 +298,7 @@ class _Reader(TableReader):
         semantics = t.get("semantics")
         if semantics != "mujoco":
             raise self.error(
-                [*path, "semantics"] if "semantics" in t else path,
+                [*path, "semantics" if "semantics" in t else "mjcf"],
                 f"an environment reads an MJCF as MuJoCo reads it: expected semantics = "
                 f"'mujoco', got {semantics!r}",
             )
