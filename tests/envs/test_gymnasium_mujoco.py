@@ -92,3 +92,35 @@ def test_the_ids_make_the_tasks():
         assert names[0] == "qpos[2]" and len(names) == 13
     finally:
         env.close()
+
+
+def test_sim2sim_takes_a_gymnasium_policy_as_a_callable(tmp_path):
+    """``simbridge sim2sim module:callable --task ant --trained-on external:gymnasium``: the
+    ant's reference gait as the policy, on two engines; MuJoCo's episode is the env's own."""
+    import json
+
+    from simbridge.cli import main
+    from simbridge.envs.controllers import AntGait
+
+    policy = "simbridge.envs.controllers:AntGait"
+    args = ["sim2sim", policy, "--task", "ant", "--trained-on", "external:gymnasium"]
+    code = main([*args, "--backends", "mujoco", "physx", "--episodes", "1", "--out", str(tmp_path)])
+    assert code == 0
+    summary = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
+    assert [e["label"] for e in summary["engines"]] == ["mujoco", "physx"]
+    assert (tmp_path / "report.md").is_file()
+    env = SimEnv("ant", backend="mujoco")
+    try:
+        gait = AntGait(env)
+        obs, _ = env.reset(seed=0)
+        total, steps = 0.0, 0
+        while True:
+            obs, reward, terminated, truncated, info = env.step(gait(obs))
+            total, steps = total + reward, steps + 1
+            if terminated or truncated:
+                break
+    finally:
+        env.close()
+    first = summary["engines"][0]
+    assert first["successes"] == int(info["is_success"]) and first["n"] == 1
+    assert first["steps"]["value"] == steps and first["return"]["value"] == total

@@ -28,13 +28,13 @@ if TYPE_CHECKING:
 __all__ = [
     "CONTROLLERS",
     "Gait",
+    "HalfCheetahGait",
     "GAITS",
+    "AntGait",
     "CartPoleLQR",
     "DriveToGoal",
     "HoldDefault",
     "KukaReachDLS",
-    "ant_gait",
-    "half_cheetah_gait",
     "reference_controller",
 ]
 
@@ -259,21 +259,43 @@ class Gait:
 
 
 GAITS: dict[str, dict[str, Any]] = {
-    "ant": {"frequency": 1.0, "amplitude": [0.5] * 8, "phase": [0.0] * 8},
-    "half_cheetah": {"frequency": 2.0, "amplitude": [0.5] * 6, "phase": [0.0] * 6},
+    "ant": {
+        "frequency": 0.749,
+        "amplitude": [0.325, 0.344] * 4,
+        "phase": [3.142, 7.039, 3.142, 7.039, 1.571, 5.468, 4.712, 8.61],
+    },
+    "half_cheetah": {
+        "frequency": 3.0,
+        "amplitude": [0.315, 0.63, 0.905, 0.242, 0.671, 0.339],
+        "phase": [4.824, 5.891, 3.382, 0.056, 0.404, 2.612],
+    },
 }
 """A task's :class:`Gait` parameters (frequency, amplitude, phase per actuator in MuJoCo's
 order), chosen by the search docs/envs.md gives."""
 
 
-def ant_gait(env: SimEnv) -> Gait:
-    """The ``ant`` task's reference controller (:data:`GAITS`)."""
-    return Gait(env, **GAITS["ant"])
+class AntGait(Gait):
+    """The ``ant`` task's reference controller: :class:`Gait` with :data:`GAITS` ``["ant"]``
+    (a class, so that ``simbridge.envs.controllers:AntGait`` is a ``module:callable`` policy).
+
+    Args:
+        env: an ``ant`` env.
+    """
+
+    def __init__(self, env: SimEnv) -> None:
+        super().__init__(env, **GAITS["ant"])
 
 
-def half_cheetah_gait(env: SimEnv) -> Gait:
-    """The ``half_cheetah`` task's reference controller (:data:`GAITS`)."""
-    return Gait(env, **GAITS["half_cheetah"])
+class HalfCheetahGait(Gait):
+    """The ``half_cheetah`` task's reference controller: :class:`Gait` with :data:`GAITS`
+    ``["half_cheetah"]``.
+
+    Args:
+        env: a ``half_cheetah`` env.
+    """
+
+    def __init__(self, env: SimEnv) -> None:
+        super().__init__(env, **GAITS["half_cheetah"])
 
 
 CONTROLLERS: dict[str, Any] = {
@@ -281,8 +303,8 @@ CONTROLLERS: dict[str, Any] = {
     "kuka_reach": KukaReachDLS,
     "husky_goto": DriveToGoal,
     "a1_stand": HoldDefault,
-    "ant": ant_gait,
-    "half_cheetah": half_cheetah_gait,
+    "ant": AntGait,
+    "half_cheetah": HalfCheetahGait,
 }
 """Shipped task name -> its reference controller's class."""
 
