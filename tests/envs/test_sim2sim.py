@@ -224,7 +224,10 @@ def test_an_onnx_policy_runs(tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--task", "cartpol", "--trained-on", "pybullet"], "shipped: \\['a1_stand', 'ant', 'cartpole'"),
+        (
+            ["--task", "cartpol", "--trained-on", "pybullet"],
+            "shipped: \\['a1_stand', 'ant', 'cartpole'",
+        ),
         (["--task", "cartpole", "--trained-on", "bullet"], "unknown backend 'bullet'"),
         (
             ["--task", "cartpole", "--trained-on", "pybullet", "--backends", "pybullet+frction=1"],

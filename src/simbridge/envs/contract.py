@@ -119,7 +119,11 @@ def _action(env: SimEnv) -> dict[str, Any]:
     out["default"] = w.default.tolist()
     out["meaning"] = (
         f"target = {a.offset} + scale * clip(action, -{a.clip}, {a.clip}); mode {a.mode}"
-        + ("; the actuators' controls, clamped to ctrl_range by the model" if a.mode == "actuator" else "")
+        + (
+            "; the actuators' controls, clamped to ctrl_range by the model"
+            if a.mode == "actuator"
+            else ""
+        )
     )
     out["joint_table"] = joints
     return out

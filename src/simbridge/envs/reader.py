@@ -188,7 +188,11 @@ class _Reader(TableReader):
             option = self.native.model.opt
             dt = dt if "timestep" in data else float(option.timestep)
             if "gravity" not in data:
-                gravity = (float(option.gravity[0]), float(option.gravity[1]), float(option.gravity[2]))
+                gravity = (
+                    float(option.gravity[0]),
+                    float(option.gravity[1]),
+                    float(option.gravity[2]),
+                )
         return Task(
             name=self.string(data.get("name", Path(self.file).stem), ["name"]),
             description=str(data.get("description", "")),
@@ -302,8 +306,15 @@ class _Reader(TableReader):
                 f"an environment reads an MJCF as MuJoCo reads it: expected semantics = "
                 f"'mujoco', got {semantics!r}",
             )
-        for key in ("urdf", "position", "orientation", "rpy", "fixed_base", "joint_positions",
-                    "released"):
+        for key in (
+            "urdf",
+            "position",
+            "orientation",
+            "rpy",
+            "fixed_base",
+            "joint_positions",
+            "released",
+        ):
             if key in t:
                 raise self.error(
                     [*path, key],
@@ -426,9 +437,7 @@ class _Reader(TableReader):
             **per,
         )
 
-    def actuator_action(
-        self, t: dict[str, Any], path: list[str | int], robot: str
-    ) -> ActionSpec:
+    def actuator_action(self, t: dict[str, Any], path: list[str | int], robot: str) -> ActionSpec:
         """``mode = "actuator"``: the model's actuator controls, by name or in MuJoCo's order."""
         if self.native is None:
             raise self.error(
@@ -456,7 +465,8 @@ class _Reader(TableReader):
         for i, name in enumerate(names):
             if name not in valid:
                 raise self.error(
-                    [*path, "actuators", i], f"the model has no actuator {name!r}; actuators: {valid}"
+                    [*path, "actuators", i],
+                    f"the model has no actuator {name!r}; actuators: {valid}",
                 )
         if not names:
             raise self.error([*path, "actuators"], "the model has no actuators to drive")
@@ -500,7 +510,9 @@ class _Reader(TableReader):
                 raise self.error(where, f"expected a name or an index, got {value!r}")
             elif kind == "names":
                 out[key] = self.names(value, where)
-            elif kind == "count" and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
+            elif kind == "count" and (
+                isinstance(value, bool) or not isinstance(value, int) or value < 0
+            ):
                 raise self.error(where, f"expected an integer >= 0, got {value!r}")
         if name in NATIVE_TERMS and self.native is None:
             raise self.error(
