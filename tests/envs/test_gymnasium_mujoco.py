@@ -59,6 +59,27 @@ def test_half_cheetah_is_gymnasiums_half_cheetah_bit_for_bit(seed):
         assert info["reward_terms"]["action_l2"] == ref_info["reward_ctrl"]
 
 
+def test_later_episodes_are_gymnasiums_too():
+    """The env's reset (its world restored, then the noise drawn) gives Gymnasium's
+    ``mj_resetData`` state episode after episode."""
+    env = SimEnv("half_cheetah", backend="mujoco")
+    ref = gymnasium.make("HalfCheetah-v5").unwrapped
+    try:
+        for episode in range(3):
+            env.reset(seed=10 + episode)
+            ref.reset(seed=10 + episode)
+            action = np.full(6, 0.4 - 0.3 * episode)
+            for _ in range(20):
+                _, reward, *_ = env.step(action)
+                _, ref_reward, *_ = ref.step(action)
+            np.testing.assert_array_equal(env.sim.qpos(), ref.data.qpos)
+            np.testing.assert_array_equal(env.sim.qvel(), ref.data.qvel)
+            assert reward == ref_reward
+    finally:
+        env.close()
+        ref.close()
+
+
 def test_ant_is_gymnasiums_ant_bit_for_bit_but_for_the_torso_read():
     rows, dt = _lockstep("ant", "Ant-v5", 3, 0.6)
     assert len(rows) >= 20
