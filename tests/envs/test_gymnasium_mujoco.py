@@ -145,6 +145,8 @@ def test_sim2sim_takes_a_gymnasium_policy_as_a_callable(tmp_path):
     first = summary["engines"][0]
     assert first["successes"] == int(info["is_success"]) and first["n"] == 1
     assert first["steps"]["value"] == steps and first["return"]["value"] == total
+    # the gait's controls stay within 0.35 of ctrlrange's bound 1: never saturated
+    assert [e["saturated_share"] for e in summary["engines"]] == [0.0, 0.0]
 
 
 @pytest.mark.slow  # 2 tasks x 10 episodes of 1000 steps: 45 s on 2 cores at load 10
@@ -163,3 +165,19 @@ def test_the_gait_goes_forward_and_doing_nothing_does_not(task):
         env.close()
     assert gait.successes >= 3
     assert idle.successes == 0
+
+
+def test_an_actuator_at_its_ctrlrange_bound_counts_as_saturated():
+    from simbridge.envs.sim2sim_effort import EffortProbe
+
+    env = SimEnv("half_cheetah", backend="mujoco")
+    try:
+        probe = EffortProbe(env).install()
+        env.reset(seed=0)
+        for value, share in ((1.0, 1.0), (0.5, 0.0)):
+            probe.start()
+            for _ in range(3):
+                env.step(np.full(6, value))
+            assert probe.steps == 15 and probe.shares()[0] == share
+    finally:
+        env.close()

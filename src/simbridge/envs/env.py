@@ -121,8 +121,9 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self.physics_hook: Callable[[np.ndarray | None], None] | None = None
         """Called after every physics step when set (``simbridge sim2sim``'s effort probe,
         :mod:`simbridge.envs.sim2sim_effort`), with the ``(n,)`` torques the env commanded for
-        that step (the torque and PD modes) or None (the position and velocity modes, whose
-        motors the engine runs: these then run their ``decimation`` steps one at a time)."""
+        that step (the torque and PD modes), the controls it wrote (the actuator mode) or None
+        (the position and velocity modes, whose motors the engine runs: these then run their
+        ``decimation`` steps one at a time)."""
 
     # ---------------------------------------------------------------- the world
 
@@ -409,7 +410,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         n = self.task.decimation
         if a.mode == "actuator":  # held over the control period; ctrlrange clamps (the model's)
             sim.set_actuator_controls(target, self._actuators)
-            sim.step(n)
+            self._physics(n, target)  # the hook's effort: the controls as written
         elif a.mode == "position":
             sim.set_joint_position(
                 w.body,
@@ -439,7 +440,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _physics(self, n: int, torque: np.ndarray | None = None) -> None:
         """``n`` physics steps, :attr:`physics_hook` called after each when set (with
-        ``torque``, the torques commanded for them, or None)."""
+        ``torque``, the torques commanded for them, the actuator mode's controls, or None)."""
         hook = self.physics_hook
         if hook is None:
             self.sim.step(n)
