@@ -26,7 +26,7 @@ def _episode(env: SimEnv, ctrl, seed: int, steps: int) -> tuple[np.ndarray, list
     return np.stack(frames), ends
 
 
-@pytest.mark.parametrize("task", ["cartpole", "kuka_reach", "husky_goto", "a1_stand"])
+@pytest.mark.parametrize("task", ["cartpole", "kuka_reach", "husky_goto", "a1_stand", "a1_walk"])
 def test_same_seed_same_episode_bit_for_bit(task, backend):
     env = SimEnv(task, backend=backend)
     ctrl = reference_controller(env)

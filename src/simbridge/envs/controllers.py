@@ -27,14 +27,15 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CONTROLLERS",
-    "Gait",
-    "HalfCheetahGait",
     "GAITS",
     "AntGait",
+    "Gait",
+    "HalfCheetahGait",
     "CartPoleLQR",
     "DriveToGoal",
     "HoldDefault",
     "KukaReachDLS",
+    "Trot",
     "reference_controller",
 ]
 
@@ -209,6 +210,191 @@ class HoldDefault:
         return np.zeros(self.n, dtype=np.float32)
 
 
+def _leg_ik(x: np.ndarray, z: np.ndarray, l1: float, l2: float) -> tuple[np.ndarray, np.ndarray]:
+    """A two-link leg's inverse kinematics in its sagittal plane, knee bent backward.
+
+    The foot, from the thigh joint, is ``x = -l1 sin q1 - l2 sin(q1 + q2)``,
+    ``z = -l1 cos q1 - l2 cos(q1 + q2)`` (both joints about +y, the links along -z at 0, as
+    the A1's and legged_gym's legs are).
+
+    Args:
+        x: the feet's forward offsets (m), ``(k,)``.
+        z: their heights below the thigh joint (m, negative), ``(k,)``.
+        l1: the thigh's length (m).
+        l2: the calf's length (m).
+
+    Returns:
+        ``(q1, q2)``: thigh and calf angles (rad), ``(k,)`` each; q2 <= 0. A foot out of reach
+        is pulled onto the reachable annulus.
+    """
+    r2 = x * x + z * z
+    c2 = np.clip((r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2), -1.0, 1.0)
+    q2 = -np.arccos(c2)
+    q1 = np.arctan2(-x, -z) - np.arctan2(l2 * np.sin(q2), l1 + l2 * np.cos(q2))
+    return q1, q2
+
+
+class Trot:
+    """A scripted trot for the A1 under legged RL's soft PD (``a1_walk``): each foot follows a
+    periodic path, turned into thigh and calf targets by the leg's analytic inverse kinematics
+    (:func:`_leg_ik`) and into a hip target by the foot's sideways offset.
+
+    The clock is the observation's ``gait_phase`` (sin, cos), so the trot runs in step with the
+    task's period. Diagonal pairs move together (FR with RL, FL with RR, half a period apart);
+    each foot is on the ground for half the period and in the air for the other half, on a
+    raised cosine of height ``step_height``. Under kp 20 the joints lag their targets and sag
+    under the body's weight, so the path is not enough on its own; what it needed, each term
+    measured on all three engines (docs/envs.md):
+
+    - Foot placement (Raibert's): a foot lands at ``v T / 4 + k_v (v - v_cmd)`` ahead of its
+      default place, ``v`` the observed base velocity; sideways the same with ``k_y``.
+    - The stance foot sweeps back by the stride ``gain (v_cmd + bias + k_i e) T / 2``, ``e``
+      the integral of the speed error since the reset (without it the trot settles 0.1 m/s
+      below the command on every engine).
+    - Heading: the yaw rate is integrated since the reset; the rate wanted,
+      ``yaw_cmd - k_head heading``, lengthens one side's stride and shortens the other's by
+      ``k_yaw`` per rad/s of error. Sideways drift in the base frame is steered back by
+      ``k_lat``.
+    - Load: a stance foot's targets are moved by the torques that carry half the robot's
+      weight, ``J^T (0, -load m g / 2) / kp``, faded in and out by ``sin(pi s)^smooth`` over
+      the stance; ``k_att`` shortens the legs on the body's high side (projected gravity).
+    - Timing: the path runs ``lead`` periods ahead of the clock (the PD's lag); the feet's
+      neutral places are ``shift`` behind the default pose and ``push`` lower in stance.
+
+    It keeps three integrals (speed error, heading, sideways travel), reset when it sees an
+    episode's first observation (phase exactly (0, 1) and a last action of zeros): a policy
+    with memory, as a recurrent one is. It reads the A1's hip places and leg lengths.
+
+    Args:
+        env: an env whose action is legged RL's PD (offset ``default``) on twelve joints
+            ordered hip, thigh, calf for FR, FL, RR, RL, and whose observation holds
+            ``gait_phase``, ``commands`` (vx, vy, yaw rate), ``base_lin_vel``,
+            ``base_ang_vel``, ``projected_gravity`` and ``last_action``.
+        step_height: the swing foot's lift (m).
+        push: how much lower than the default the stance foot is placed (m).
+        k_v: forward foot placement per m/s of speed error (s).
+        k_y: sideways foot placement per m/s of sideways speed (s).
+        k_yaw: stride speed difference between the sides per rad/s of yaw-rate error (m/rad).
+        k_att: leg shortening per unit of projected gravity's x, y times the hip's place.
+        shift: the feet's neutral places behind the default (m).
+        smooth: the exponent of the stance load's ``sin(pi s)`` fade.
+        gain: stride over the commanded one.
+        k_head: yaw rate wanted per rad of heading error (1/s).
+        lead: the path's lead over the clock (periods).
+        load: the fraction of half the weight each stance foot's targets carry.
+        bias: added to the commanded speed (m/s).
+        k_i: stride speed per m of integrated speed error (1/s).
+        k_lat: sideways speed wanted per m of sideways travel (1/s).
+        mass: the robot's mass (kg; a1.urdf's links sum to 12.458).
+        thigh: the thigh's length (m; a1.urdf's 0.2).
+        calf: the calf's length (m; a1.urdf's 0.2).
+    """
+
+    HIPS = np.array([[0.183, -0.132], [0.183, 0.132], [-0.183, -0.132], [-0.183, 0.132]])
+    """(4, 2): the thigh joints' x, y in the base frame (m; a1.urdf), FR, FL, RR, RL."""
+
+    def __init__(
+        self,
+        env: SimEnv,
+        *,
+        step_height: float = 0.0698,
+        push: float = 0.0215,
+        k_v: float = 0.0926,
+        k_y: float = -0.1706,
+        k_yaw: float = 0.0781,
+        k_att: float = 1.3457,
+        shift: float = 0.005,
+        smooth: float = 0.5341,
+        gain: float = 1.3232,
+        k_head: float = 2.0,
+        lead: float = 0.1766,
+        load: float = 0.1151,
+        bias: float = 0.1,
+        k_i: float = 1.5,
+        k_lat: float = 0.0,
+        mass: float = 12.458,
+        thigh: float = 0.2,
+        calf: float = 0.2,
+    ) -> None:
+        t = env.task
+        self.scale = np.broadcast_to(np.asarray(t.action.scale, float), (12,)).copy()
+        pose = t.robot(t.action.robot).joint_positions
+        self.default = np.array([pose.get(j, 0.0) for j in t.action.joints])  # (12,)
+        self.l1, self.l2 = thigh, calf
+        q1, q2 = self.default[1::3], self.default[2::3]  # (4,) thigh and calf, FR FL RR RL
+        self.x0 = -thigh * np.sin(q1) - calf * np.sin(q1 + q2)  # the feet's default places
+        self.z0 = -thigh * np.cos(q1) - calf * np.cos(q1 + q2)
+        self.offset = np.array([0.0, 0.5, 0.5, 0.0])  # FR, FL, RR, RL: diagonal pairs
+        self.side = np.array([-1.0, 1.0, -1.0, 1.0])  # right legs -1
+        self.step_height, self.push, self.k_v, self.k_y = step_height, push, k_v, k_y
+        self.k_yaw, self.k_att, self.shift, self.smooth = k_yaw, k_att, shift, smooth
+        self.gain, self.k_head, self.lead, self.bias = gain, k_head, lead, bias
+        self.k_i, self.k_lat = k_i, k_lat
+        self.weight = load * mass * 9.81 / 2  # (N) on each stance foot of a diagonal pair
+        kp = np.broadcast_to(np.asarray(t.action.kp, float), (12,))
+        self.kp1, self.kp2 = kp[1::3], kp[2::3]
+        self.dt = t.control_dt
+        self.slow = 0.0  # (m) the command's lead over the observed forward travel
+        self.heading = 0.0  # (rad) the observed yaw rate's integral
+        self.drift = 0.0  # (m) the observed sideways speed's integral (base frame)
+        obs = env.contract()["observation"]
+        terms = {term["name"]: term for term in obs["terms"]}
+        self.period = float(terms["gait_phase"]["params"].get("period", 1.0))
+        s = _slices(env)
+        self.phase, self.cmd, self.grav = s["gait_phase"], s["commands"], s["projected_gravity"]
+        self.lin, self.ang, self.last = s["base_lin_vel"], s["base_ang_vel"], s["last_action"]
+        self.cmd_scale = np.broadcast_to(np.asarray(terms["commands"]["scale"], float), (3,))
+        self.lin_scale = np.broadcast_to(np.asarray(terms["base_lin_vel"]["scale"], float), (3,))
+        self.ang_scale = np.broadcast_to(np.asarray(terms["base_ang_vel"]["scale"], float), (3,))
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The action for ``obs``.
+
+        Args:
+            obs: the env's observation.
+
+        Returns:
+            ``(12,)`` float32: joint offsets from the default pose over the action's scale.
+        """
+        sin, cos = (float(v) for v in obs[self.phase])
+        cmd = obs[self.cmd].astype(np.float64) / self.cmd_scale  # vx, vy, yaw rate
+        v = obs[self.lin].astype(np.float64) / self.lin_scale  # (3,) m/s, base frame
+        w = obs[self.ang].astype(np.float64) / self.ang_scale  # (3,) rad/s, base frame
+        if cos == 1.0 and sin == 0.0 and not obs[self.last].any():  # an episode's start
+            self.slow = self.heading = self.drift = 0.0
+        self.slow += (cmd[0] - v[0]) * self.dt
+        self.heading += w[2] * self.dt
+        self.drift += v[1] * self.dt
+        rate = cmd[2] - self.k_head * self.heading
+        turn = self.side * self.k_yaw * (rate - w[2])  # (4,) right legs faster to turn left
+        speed = cmd[0] + self.bias + self.k_i * self.slow - turn  # (4,) m/s
+        stride = self.gain * speed * self.period / 2  # (4,) the ground's travel under a foot
+        land = v[0] * self.period / 4 + self.k_v * (v[0] - cmd[0])
+        want_y = cmd[1] - self.k_lat * self.drift  # (m/s) back toward the straight line
+        sweep = want_y * self.period / 2
+        land_y = sweep / 2 + v[1] * self.period / 4 + self.k_y * (v[1] - want_y)
+        phase = (np.arctan2(sin, cos) / (2 * np.pi) + self.lead) % 1.0
+        p = (phase + self.offset) % 1.0  # (4,) each leg's phase: stance, then swing
+        stance = p < 0.5
+        s = np.where(stance, p / 0.5, (p - 0.5) / 0.5)  # (4,) 0 -> 1 within each half
+        rise = (1 - np.cos(np.pi * s)) / 2
+        x = np.where(stance, land - stride * s, land - stride + stride * rise)
+        y = np.where(stance, land_y - sweep * s, land_y - sweep + sweep * rise)
+        z = np.where(stance, -self.push, self.step_height * np.sin(np.pi * s))
+        g = obs[self.grav].astype(np.float64)
+        z = z - self.k_att * (self.HIPS @ g[:2])  # shorten the legs on the body's high side
+        fx, fz = self.x0 - self.shift + x, self.z0 + z
+        q1, q2 = _leg_ik(fx, fz, self.l1, self.l2)
+        # a stance foot carries its share of the weight: the PD's targets moved by the
+        # torques J^T (0, -W) over kp, so that the joints hold their place under the load
+        f = np.where(stance, self.weight * np.sin(np.pi * s) ** self.smooth, 0.0)  # (4,) N
+        q1, q2 = q1 + fx * f / self.kp1, q2 - self.l2 * np.sin(q1 + q2) * f / self.kp2
+        q = self.default.copy()
+        q[0::3] += y / -fz  # the hip turns the foot sideways by y
+        q[1::3], q[2::3] = q1, q2
+        return ((q - self.default) / self.scale).astype(np.float32)
+
+
 class Gait:
     """An open-loop pattern for a task over an MJCF read as MuJoCo reads it: actuator ``i``'s
     control is ``amplitude[i] * sin(2 pi frequency t + phase[i])``, ``t`` the episode's time
@@ -303,6 +489,7 @@ CONTROLLERS: dict[str, Any] = {
     "kuka_reach": KukaReachDLS,
     "husky_goto": DriveToGoal,
     "a1_stand": HoldDefault,
+    "a1_walk": Trot,
     "ant": AntGait,
     "half_cheetah": HalfCheetahGait,
 }

@@ -28,7 +28,7 @@ import numpy as np
 
 from simbridge.envs.errors import ActionError
 from simbridge.envs.task import RobotSpec, Task
-from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World
+from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World, heading
 from simbridge.exceptions import (
     BackendUnsupportedError,
     InvalidArgumentError,
@@ -156,6 +156,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         commands = np.zeros(0 if t.commands is None else len(t.commands.names))
         w = World(sim, body, bodies, joints, t.action.joints, default, np.zeros(n), commands)
         w.pose = dict(spec.joint_positions)
+        w.previous_action, w.torques = np.zeros(n), np.zeros(n)
         self.world = w
         spread = t.randomisation.joints or t.action.joints
         self._spread = [sim.joint_index(body, j) for j in spread]
@@ -185,6 +186,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             commands,
             control_dt=t.control_dt,
         )
+        w.previous_action, w.torques = np.zeros(n), np.zeros(n)
         self.world = w
         self._spread, self._spread_default = [], np.zeros(0)
         self._spawn = sim.base_state(body)
@@ -291,8 +293,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                     "options['commands']", f"expected {w.commands.size} values, got {c.shape}"
                 )
             w.commands = c
-        w.last_action = np.zeros(n)
+        w.last_action, w.previous_action, w.torques = np.zeros(n), np.zeros(n), np.zeros(n)
         w.time = 0.0
+        s = self.sim.base_state(w.body)
+        w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
         self._queue = deque([np.zeros(n)] * t.action.latency)
 
     def _randomise_native(self, options: dict[str, Any]) -> None:
@@ -317,8 +321,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                 )
             w.commands = c
         n = len(t.action.joints)
-        w.last_action = np.zeros(n)
+        w.last_action, w.previous_action, w.torques = np.zeros(n), np.zeros(n), np.zeros(n)
         w.time = 0.0
+        s = self.sim.base_state(w.body)
+        w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
         w.qpos_start = w.qpos_before = self.sim.qpos()
         self._queue = deque([np.zeros(n)] * t.action.latency)
 
@@ -355,7 +361,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             obs = self._observation()
             return obs, 0.0, True, False, info
         w.stale()
-        w.last_action = a
+        w.previous_action, w.last_action = w.last_action, a
         w.time += t.control_dt
         self._steps += 1
         self._history.append(self._frame())
@@ -426,6 +432,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             self._physics(n)
         elif a.mode == "torque":  # the same torque each physics step: clipped once
             tau = np.minimum(np.maximum(target, -self._limit), self._limit)
+            w.torques = tau
             for _ in range(n):
                 sim.set_joint_torque(w.body, w.joints, tau)
                 self._physics(1, tau)
@@ -437,6 +444,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                 tau = np.clip(kp * (target - s.positions) - kd * s.velocities, -limit, limit)
                 sim.set_joint_torque(w.body, w.joints, tau)
                 self._physics(1, tau)
+            w.torques = tau
 
     def _physics(self, n: int, torque: np.ndarray | None = None) -> None:
         """``n`` physics steps, :attr:`physics_hook` called after each when set (with

@@ -81,6 +81,7 @@ _TERMS: dict[str, Mapping[str, Any]] = {
 
 _PARAM_KINDS = {
     "limit": "number", "within": "number", "period": "number", "target": "number",
+    "sigma": "number",
     "relative": "bool", "terminate": "bool", "link": "name", "joint": "name",
     "links": "names", "joints": "names", "exclude": "count", "z_min": "number",
     "z_max": "number", "min": "number",

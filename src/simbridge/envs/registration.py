@@ -13,6 +13,7 @@ IDS = {
     "simbridge/A1Stand-v0": "a1_stand",
     "simbridge/Ant-v0": "ant",
     "simbridge/HalfCheetah-v0": "half_cheetah",
+    "simbridge/A1Walk-v0": "a1_walk",
 }
 """Gymnasium id -> shipped task name."""
 

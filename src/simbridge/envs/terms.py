@@ -26,6 +26,7 @@ __all__ = [
     "SUCCESSES",
     "TERMINATIONS",
     "World",
+    "heading",
     "term_names",
 ]
 
@@ -48,6 +49,10 @@ class World:
         control_dt: seconds per control step.
         qpos_start: an MJCF task's MuJoCo ``qpos`` at the episode's reset, ``(nq,)``.
         qpos_before: its ``qpos`` when the control step began (the forward velocity's start).
+        previous_action: the action before ``last_action``, ``(n,)`` (zeros at reset).
+        torques: the action joints' torques of the last physics step (N m, ``(n,)``): the
+            commanded ones under ``pd`` and ``torque``, zeros under the motor modes.
+        start: the base's ``(x, y, yaw)`` at the episode's reset (m, m, rad; world).
     """
 
     sim: Sim
@@ -63,6 +68,9 @@ class World:
     control_dt: float = 0.0
     qpos_start: np.ndarray = field(default_factory=lambda: np.zeros(0))
     qpos_before: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    previous_action: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    torques: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    start: np.ndarray = field(default_factory=lambda: np.zeros(3))
     _read: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     _index: dict[tuple[str | int, ...], np.ndarray] = field(default_factory=dict, repr=False)
     _one: dict[str | int, int] = field(default_factory=dict, repr=False)  # joint -> index
@@ -166,6 +174,19 @@ def _ang(w: World, p: Mapping[str, Any]) -> np.ndarray:
     return w.rotation().T @ np.asarray(w.sim.base_state(w.body).angular_velocity)
 
 
+def heading(orientation: Sequence[float]) -> float:
+    """The heading of an orientation: its yaw about world z.
+
+    Args:
+        orientation: a quaternion ``[x, y, z, w]``.
+
+    Returns:
+        The yaw (rad, in [-pi, pi]).
+    """
+    x, y, z, qw = orientation
+    return math.atan2(2 * (qw * z + x * y), 1 - 2 * (y * y + z * z))
+
+
 def _phase(w: World, p: Mapping[str, Any]) -> np.ndarray:
     a = 2 * math.pi * w.time / float(p.get("period", 1.0))
     return np.array([math.sin(a), math.cos(a)])
@@ -183,8 +204,7 @@ def _link_to_command(w: World, p: Mapping[str, Any]) -> np.ndarray:
 def _command_in_base(w: World, p: Mapping[str, Any]) -> np.ndarray:
     """The command's first two entries (a goal x, y in the world) in the base's heading frame."""
     s = w.sim.base_state(w.body)
-    x, y, z, qw = s.orientation
-    yaw = math.atan2(2 * (qw * z + x * y), 1 - 2 * (y * y + z * z))
+    yaw = heading(s.orientation)
     dx, dy = w.commands[0] - s.position[0], w.commands[1] - s.position[1]
     c, n = math.cos(yaw), math.sin(yaw)
     return np.array([c * dx + n * dy, -n * dx + c * dy])
@@ -249,6 +269,31 @@ def _joint_value(w: World, p: Mapping[str, Any]) -> float:
     return w.joint_position(p["joint"])
 
 
+def _tracking_lin_vel(w: World, p: Mapping[str, Any]) -> float:
+    """legged_gym's: exp(-|command[:2] - v_xy|^2 / sigma), v in the base frame."""
+    err = float(np.sum((w.commands[:2] - _lin(w, p)[:2]) ** 2))
+    return math.exp(-err / float(p.get("sigma", 0.25)))
+
+
+def _tracking_ang_vel(w: World, p: Mapping[str, Any]) -> float:
+    """legged_gym's: exp(-(command[2] - w_z)^2 / sigma), w in the base frame."""
+    err = float((w.commands[2] - _ang(w, p)[2]) ** 2)
+    return math.exp(-err / float(p.get("sigma", 0.25)))
+
+
+def _mean_velocity_error(w: World) -> float:
+    """|mean planar velocity since the reset - command[:2]| (m/s), the mean velocity in the
+    heading frame the base had at its reset (inf before the first step)."""
+    if w.time <= 0.0:
+        return math.inf
+    x0, y0, yaw0 = w.start
+    s = w.sim.base_state(w.body)
+    dx, dy = s.position[0] - x0, s.position[1] - y0
+    c, n = math.cos(yaw0), math.sin(yaw0)
+    mean = np.array([c * dx + n * dy, -n * dx + c * dy]) / w.time
+    return float(np.linalg.norm(mean - w.commands[:2]))
+
+
 REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
     "alive": lambda w, p: 1.0,
     "link_distance": lambda w, p: -_link_distance(w, p),  # params: link
@@ -262,6 +307,13 @@ REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
     "forward_velocity": _forward_velocity,
     # MJCF tasks: 1 while healthy (params z_min, z_max on qpos[2]), else 0
     "healthy": lambda w, p: 1.0 if _healthy(w, p) else 0.0,
+    # legged_gym's locomotion terms (base frame; commands: vx, vy (m/s), yaw rate (rad/s))
+    "tracking_lin_vel": _tracking_lin_vel,  # params: sigma (m^2/s^2, 0.25)
+    "tracking_ang_vel": _tracking_ang_vel,  # params: sigma (rad^2/s^2, 0.25)
+    "lin_vel_z": lambda w, p: -float(_lin(w, p)[2] ** 2),
+    "ang_vel_xy": lambda w, p: -float(np.sum(_ang(w, p)[:2] ** 2)),
+    "torques": lambda w, p: -float(np.sum(w.torques**2)),
+    "action_rate": lambda w, p: -float(np.sum((w.last_action - w.previous_action) ** 2)),
 }
 """Reward term -> function (world, params) -> value (weighted by the task)."""
 
@@ -286,6 +338,9 @@ SUCCESSES: dict[str, Callable[[World, Mapping[str, Any]], bool]] = {
     "base_near_command": lambda w, p: _goal_distance(w, p) < p["within"],
     # MJCF tasks, params min (m): the root moved at least that far along +x since the reset
     "forward_distance": lambda w, p: float(w.sim.qpos()[0] - w.qpos_start[0]) >= p["min"],
+    # params: within (m/s): the base's mean planar velocity since the reset (in its heading
+    # at the reset) that near command[:2] (the travelled distance over the elapsed time)
+    "mean_velocity_near_command": lambda w, p: _mean_velocity_error(w) < p["within"],
 }
 """Success -> test (world, params); the episode succeeds when every test holds (a ``terminate``
 parameter ends it there; otherwise it is tested at the episode's last step)."""
@@ -300,11 +355,14 @@ PARAMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "link_to_command": (("link",), ()),
     "link_distance": (("link",), ()),
     "height_error": (("target",), ()),
+    "tracking_lin_vel": ((), ("sigma",)),
+    "tracking_ang_vel": ((), ("sigma",)),
     "joint_pos_outside": (("joint", "limit"), ()),
     "base_height_below": (("limit",), ()),
     "tilt_above": (("limit",), ()),
     "link_near_command": (("link", "within"), ("terminate",)),
     "base_near_command": (("within",), ("terminate",)),
+    "mean_velocity_near_command": (("within",), ("terminate",)),
     "survive": ((), ()),
     "qpos": ((), ("exclude",)),
     "healthy": (("z_min", "z_max"), ()),
