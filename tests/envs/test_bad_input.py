@@ -95,7 +95,7 @@ def test_an_unknown_task_lists_the_shipped_ones():
     with pytest.raises(
         TaskFileError,
         match=r"no such task file or shipped task; shipped: "
-        r"\['a1_stand', 'a1_walk', 'cartpole', 'husky_goto', 'kuka_reach'\]",
+        r"\['a1_stand', 'a1_walk', 'ant', 'cartpole', 'half_cheetah', 'husky_goto', 'kuka_reach'\]",
     ):
         SimEnv("carpole")
 

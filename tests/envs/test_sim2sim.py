@@ -226,7 +226,7 @@ def test_an_onnx_policy_runs(tmp_path):
     [
         (
             ["--task", "cartpol", "--trained-on", "pybullet"],
-            "shipped: \\['a1_stand', 'a1_walk', 'cartpole'",
+            "shipped: \\['a1_stand', 'a1_walk', 'ant', 'cartpole'",
         ),
         (["--task", "cartpole", "--trained-on", "bullet"], "unknown backend 'bullet'"),
         (

@@ -38,6 +38,9 @@ def entry_names(env: SimEnv, term: ObsTerm, size: int) -> list[str]:
         parts = ["sin", "cos"]
     elif term.name == "contacts":
         parts = [str(k) for k in term.params.get("links", ())]
+    elif term.name in ("qpos", "qvel"):
+        first = int(term.params.get("exclude", 0))
+        parts = [str(i) for i in range(first, first + size)]
     elif term.name == "command_in_base":
         parts = ["x", "y"]
     elif size == 3:
@@ -100,10 +103,27 @@ def _action(env: SimEnv) -> dict[str, Any]:
                 "friction": info.friction,
             }
         )
+    if a.mode == "actuator":
+        table = {u.name: u for u in sim.actuators()}
+        for row, name in zip(joints, a.joints, strict=True):
+            u = table[name]
+            row.update(
+                name=sim.joint_info(w.body, row["index"]).name,
+                actuator=name,
+                actuator_index=u.index,
+                gear=u.gear[0],
+                ctrl_range=u.ctrl_range,
+                force_range=u.force_range,
+            )
     out = dataclasses.asdict(a)
     out["default"] = w.default.tolist()
     out["meaning"] = (
         f"target = {a.offset} + scale * clip(action, -{a.clip}, {a.clip}); mode {a.mode}"
+        + (
+            "; the actuators' controls, clamped to ctrl_range by the model"
+            if a.mode == "actuator"
+            else ""
+        )
     )
     out["joint_table"] = joints
     return out

@@ -15,6 +15,7 @@ so it is a policy like any trained one.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -26,6 +27,10 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CONTROLLERS",
+    "GAITS",
+    "AntGait",
+    "Gait",
+    "HalfCheetahGait",
     "CartPoleLQR",
     "DriveToGoal",
     "HoldDefault",
@@ -390,12 +395,103 @@ class Trot:
         return ((q - self.default) / self.scale).astype(np.float32)
 
 
+class Gait:
+    """An open-loop pattern for a task over an MJCF read as MuJoCo reads it: actuator ``i``'s
+    control is ``amplitude[i] * sin(2 pi frequency t + phase[i])``, ``t`` the episode's time
+    (``env.world.time``, 0 at each reset); the observation is not read. The ant's and the
+    half cheetah's reference controllers (:data:`GAITS`).
+
+    Args:
+        env: an env whose action is ``actuator`` (one entry per actuator).
+        frequency: Hz.
+        amplitude: one per action entry (the action's units).
+        phase: one per action entry (rad).
+
+    Raises:
+        InvalidArgumentError: ``amplitude`` or ``phase`` of another length than the action.
+    """
+
+    def __init__(
+        self,
+        env: SimEnv,
+        frequency: float,
+        amplitude: Sequence[float],
+        phase: Sequence[float],
+    ) -> None:
+        from simbridge.exceptions import InvalidArgumentError
+
+        n = len(env.task.action.joints)
+        for name, v in (("amplitude", amplitude), ("phase", phase)):
+            if len(v) != n:
+                raise InvalidArgumentError(
+                    name, f"expected one value per action entry ({n}), got {len(v)}"
+                )
+        self.env = env
+        self.frequency = frequency
+        self.amplitude = np.asarray(amplitude, dtype=float)
+        self.phase = np.asarray(phase, dtype=float)
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The action at the episode's current time.
+
+        Args:
+            obs: the env's observation (not read).
+
+        Returns:
+            ``(n,)`` float64 within [-1, 1].
+        """
+        w = 2.0 * np.pi * self.frequency * self.env.world.time
+        return np.clip(self.amplitude * np.sin(w + self.phase), -1.0, 1.0)
+
+
+GAITS: dict[str, dict[str, Any]] = {
+    "ant": {
+        "frequency": 0.749,
+        "amplitude": [0.325, 0.344] * 4,
+        "phase": [3.142, 7.039, 3.142, 7.039, 1.571, 5.468, 4.712, 8.61],
+    },
+    "half_cheetah": {
+        "frequency": 3.0,
+        "amplitude": [0.315, 0.63, 0.905, 0.242, 0.671, 0.339],
+        "phase": [4.824, 5.891, 3.382, 0.056, 0.404, 2.612],
+    },
+}
+"""A task's :class:`Gait` parameters (frequency, amplitude, phase per actuator in MuJoCo's
+order), chosen by the search docs/envs.md gives."""
+
+
+class AntGait(Gait):
+    """The ``ant`` task's reference controller: :class:`Gait` with :data:`GAITS` ``["ant"]``
+    (a class, so that ``simbridge.envs.controllers:AntGait`` is a ``module:callable`` policy).
+
+    Args:
+        env: an ``ant`` env.
+    """
+
+    def __init__(self, env: SimEnv) -> None:
+        super().__init__(env, **GAITS["ant"])
+
+
+class HalfCheetahGait(Gait):
+    """The ``half_cheetah`` task's reference controller: :class:`Gait` with :data:`GAITS`
+    ``["half_cheetah"]``.
+
+    Args:
+        env: a ``half_cheetah`` env.
+    """
+
+    def __init__(self, env: SimEnv) -> None:
+        super().__init__(env, **GAITS["half_cheetah"])
+
+
 CONTROLLERS: dict[str, Any] = {
     "cartpole": CartPoleLQR,
     "kuka_reach": KukaReachDLS,
     "husky_goto": DriveToGoal,
     "a1_stand": HoldDefault,
     "a1_walk": Trot,
+    "ant": AntGait,
+    "half_cheetah": HalfCheetahGait,
 }
 """Shipped task name -> its reference controller's class."""
 

@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from simbridge.envs.errors import ActionError
-from simbridge.envs.task import Task
+from simbridge.envs.task import RobotSpec, Task
 from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World, heading
 from simbridge.exceptions import (
     BackendUnsupportedError,
@@ -102,7 +102,9 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self._scale = np.broadcast_to(np.asarray(t.action.scale, float), (n,)).copy()
         self._limit = np.asarray(t.action.max_force, float)  # the torque modes' clip
         self._snapshot: Any = None
+        self._actuators: list[int] = []  # the actuator action's indices in MuJoCo's ctrl
         self._shadow: Sim | None = None  # PyBullet's pictures of an engine that draws none
+        self._shadow_body = 0
         self._diverged = False
         self._build()
         self._history: deque[np.ndarray] = deque(maxlen=t.history)
@@ -119,13 +121,17 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self.physics_hook: Callable[[np.ndarray | None], None] | None = None
         """Called after every physics step when set (``simbridge sim2sim``'s effort probe,
         :mod:`simbridge.envs.sim2sim_effort`), with the ``(n,)`` torques the env commanded for
-        that step (the torque and PD modes) or None (the position and velocity modes, whose
-        motors the engine runs: these then run their ``decimation`` steps one at a time)."""
+        that step (the torque and PD modes), the controls it wrote (the actuator mode) or None
+        (the position and velocity modes, whose motors the engine runs: these then run their
+        ``decimation`` steps one at a time)."""
 
     # ---------------------------------------------------------------- the world
 
     def _build(self) -> None:
         """Load the robots, set the default pose and the action joints' motors."""
+        if self.task.native is not None:
+            self._build_native(self.task.native)
+            return
         sim, t = self.sim, self.task
         bodies = {}
         for r in t.robots:
@@ -160,11 +166,42 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         if t.reset == "restore":
             self._snapshot = sim.get_state(exact=True)
 
+    def _build_native(self, r: RobotSpec) -> None:
+        """Load the MJCF read as MuJoCo reads it (the whole world), controls at 0."""
+        sim, t = self.sim, self.task
+        body = sim.load_mjcf(r.mjcf, semantics="mujoco")[r.body]
+        table = {a.name: a for a in sim.actuators()}
+        self._actuators = [table[name].index for name in t.action.joints]
+        joints = [sim.joint_index(body, table[name].target) for name in t.action.joints]
+        n = len(joints)
+        commands = np.zeros(0 if t.commands is None else len(t.commands.names))
+        w = World(
+            sim,
+            body,
+            {r.name: body},
+            np.array(joints, dtype=np.int64),
+            t.action.joints,
+            np.zeros(n),
+            np.zeros(n),
+            commands,
+            control_dt=t.control_dt,
+        )
+        w.previous_action, w.torques = np.zeros(n), np.zeros(n)
+        self.world = w
+        self._spread, self._spread_default = [], np.zeros(0)
+        self._spawn = sim.base_state(body)
+        self._qpos0, self._qvel0 = sim.qpos(), sim.qvel()
+        self._hold(np.zeros(n))
+        if t.reset == "restore":
+            self._snapshot = sim.get_state(exact=True)
+
     def _hold(self, q: np.ndarray) -> None:
         """The action joints' motors at rest: position held at ``q``, velocity 0, or released
         (torque and pd)."""
         a, w = self.task.action, self.world
-        if a.mode == "position":
+        if a.mode == "actuator":
+            self.sim.set_actuator_controls(np.zeros(len(self._actuators)), self._actuators)
+        elif a.mode == "position":
             self.sim.set_joint_position(
                 w.body,
                 w.joints,
@@ -230,6 +267,9 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         """Draw the initial state and the commands, always in the same order."""
         t, w, rng = self.task, self.world, self.np_random
         r = t.randomisation
+        if t.native is not None:
+            self._randomise_native(options)
+            return
         n, k = len(w.joints), len(self._spread)
         q0 = self._spread_default + rng.uniform(-1.0, 1.0, k) * r.joint_position
         qd0 = rng.uniform(-1.0, 1.0, k) * r.joint_velocity
@@ -259,6 +299,35 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
         self._queue = deque([np.zeros(n)] * t.action.latency)
 
+    def _randomise_native(self, options: dict[str, Any]) -> None:
+        """An MJCF task's initial state, drawn as Gymnasium's MuJoCo ``reset_model`` draws it:
+        ``qpos0 + uniform(-h, h, nq)``, then ``qvel0 + s * standard_normal(nv)``, both drawn
+        even when zero; then the commands."""
+        t, w, rng = self.task, self.world, self.np_random
+        r = t.randomisation
+        h = r.qpos_uniform
+        qpos = self._qpos0 + rng.uniform(low=-h, high=h, size=self._qpos0.size)
+        qvel = self._qvel0 + r.qvel_normal * rng.standard_normal(self._qvel0.size)
+        self.sim.set_qpos_qvel(qpos, qvel)
+        self._hold(np.zeros(len(self._actuators)))
+        if t.commands is not None:
+            lo, hi = np.asarray(t.commands.low), np.asarray(t.commands.high)
+            w.commands = lo + (hi - lo) * rng.uniform(0.0, 1.0, len(lo))
+        if "commands" in options:
+            c = np.asarray(options["commands"], dtype=float)
+            if c.shape != w.commands.shape:
+                raise InvalidArgumentError(
+                    "options['commands']", f"expected {w.commands.size} values, got {c.shape}"
+                )
+            w.commands = c
+        n = len(t.action.joints)
+        w.last_action, w.previous_action, w.torques = np.zeros(n), np.zeros(n), np.zeros(n)
+        w.time = 0.0
+        s = self.sim.base_state(w.body)
+        w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
+        w.qpos_start = w.qpos_before = self.sim.qpos()
+        self._queue = deque([np.zeros(n)] * t.action.latency)
+
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One control step: the action held over ``decimation`` physics steps.
 
@@ -282,6 +351,8 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self._queue.append(a)
         applied = self._queue.popleft()
         info: dict[str, Any] = {"action_clipped": clipped}
+        if t.native is not None:
+            w.qpos_before = self.sim.qpos()
         try:
             self._actuate(applied)
         except SimulationDivergedError:
@@ -343,7 +414,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             base = 0.0
         target = base + self._scale * applied
         n = self.task.decimation
-        if a.mode == "position":
+        if a.mode == "actuator":  # held over the control period; ctrlrange clamps (the model's)
+            sim.set_actuator_controls(target, self._actuators)
+            self._physics(n, target)  # the hook's effort: the controls as written
+        elif a.mode == "position":
             sim.set_joint_position(
                 w.body,
                 w.joints,
@@ -374,7 +448,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _physics(self, n: int, torque: np.ndarray | None = None) -> None:
         """``n`` physics steps, :attr:`physics_hook` called after each when set (with
-        ``torque``, the torques commanded for them, or None)."""
+        ``torque``, the torques commanded for them, the actuator mode's controls, or None)."""
         hook = self.physics_hook
         if hook is None:
             self.sim.step(n)
@@ -434,6 +508,8 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _painter(self) -> Sim:
         """A PyBullet Sim of the same robots set to this world's state, for pictures."""
+        if self.task.native is not None:
+            return self._native_painter(self.task.native)
         if self._shadow is None:
             self._shadow = Sim("pybullet", timestep=self.task.timestep)
             for r in self.task.robots:
@@ -445,6 +521,31 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                 )
         self._shadow.set_state(self.sim.get_state(exact=False))
         return self._shadow
+
+    def _native_painter(self, r: RobotSpec) -> Sim:
+        """PyBullet's reading of the same MJCF (which PyBullet draws), its joints set by name
+        to this world's and, for a free-floating robot, its base to this world's base pose."""
+        sim, w = self.sim, self.world
+        if self._shadow is None:
+            self._shadow = Sim("pybullet", timestep=self.task.timestep)
+            ids = self._shadow.load_mjcf(r.mjcf)
+            own = {sim.joint_info(w.body, j).name for j in range(sim.num_joints(w.body))}
+
+            def shared(b: int) -> int:
+                n = self._shadow.num_joints(b)  # type: ignore[union-attr]
+                return sum(self._shadow.joint_info(b, j).name in own for j in range(n))  # type: ignore[union-attr]
+
+            self._shadow_body = max(ids, key=shared)
+        shadow, body = self._shadow, self._shadow_body
+        names = [shadow.joint_info(body, j).name for j in range(shadow.num_joints(body))]
+        mine = {sim.joint_info(w.body, j).name: j for j in range(sim.num_joints(w.body))}
+        pairs = [(i, mine[n]) for i, n in enumerate(names) if n in mine]
+        q = sim.joint_states(w.body, [j for _, j in pairs]).positions
+        shadow.reset_joint_state(body, [i for i, _ in pairs], q)
+        if sim.qpos().size == 7 + len(mine):  # a free joint, then one coordinate per joint
+            base = sim.base_state(w.body)
+            shadow.reset_base_state(body, base.position, base.orientation)
+        return shadow
 
     def contract(self) -> dict[str, Any]:
         """What a policy trained on this task depends on, as plain data (JSON-ready).

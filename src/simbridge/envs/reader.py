@@ -33,7 +33,14 @@ from simbridge.envs.task import (
     Task,
     TrainedSpec,
 )
-from simbridge.envs.terms import OBSERVATIONS, PARAMS, REWARDS, SUCCESSES, TERMINATIONS
+from simbridge.envs.terms import (
+    NATIVE_TERMS,
+    OBSERVATIONS,
+    PARAMS,
+    REWARDS,
+    SUCCESSES,
+    TERMINATIONS,
+)
 from simbridge.transforms import quat_from_rpy
 
 __all__ = ["TASK_KEYS", "TRAINED_KEYS", "load_task", "loads_task", "shipped_tasks"]
@@ -76,7 +83,8 @@ _PARAM_KINDS = {
     "limit": "number", "within": "number", "period": "number", "target": "number",
     "sigma": "number",
     "relative": "bool", "terminate": "bool", "link": "name", "joint": "name",
-    "links": "names", "joints": "names",
+    "links": "names", "joints": "names", "exclude": "count", "z_min": "number",
+    "z_max": "number", "min": "number",
 }  # fmt: skip
 
 
@@ -174,6 +182,18 @@ class _Reader(TableReader):
         except ValueError as exc:
             raise self.error(["timestep"], str(exc)) from None
         robots = self.robots(data)
+        gravity = self.vector(data.get("gravity", [0, 0, -9.8]), ["gravity"], 3)
+        self.native = None
+        if any(r.mjcf for r in robots):
+            self.native = self.native_world(data, robots)
+            option = self.native.model.opt
+            dt = dt if "timestep" in data else float(option.timestep)
+            if "gravity" not in data:
+                gravity = (
+                    float(option.gravity[0]),
+                    float(option.gravity[1]),
+                    float(option.gravity[2]),
+                )
         return Task(
             name=self.string(data.get("name", Path(self.file).stem), ["name"]),
             description=str(data.get("description", "")),
@@ -199,11 +219,11 @@ class _Reader(TableReader):
             commands=self.commands(data),
             randomisation=self.randomisation(data),
             profile=self.string(data.get("profile", "pybullet"), ["profile"]),
-            gravity=self.vector(data.get("gravity", [0, 0, -9.8]), ["gravity"], 3),
+            gravity=gravity,
             reset=self.choice(data, [], "reset", "restore", RESET_MODES),
             camera=self.camera(data),
             source=None if self.file.startswith("<") else self.file,
-            trained=self.trained(data, len(data["action"]["joints"])),  # after the action's checks
+            trained=self.trained(data, self.action_size),  # after the action's checks
         )
 
     def trained(self, data: dict[str, Any], n: int) -> TrainedSpec | None:
@@ -233,6 +253,9 @@ class _Reader(TableReader):
             keys = (
                 "name",
                 "urdf",
+                "mjcf",
+                "semantics",
+                "body",
                 "position",
                 "orientation",
                 "rpy",
@@ -241,6 +264,12 @@ class _Reader(TableReader):
                 "released",
             )
             self.keys(t, path, keys)
+            if "mjcf" in t:
+                out.append(self.mjcf_robot(t, path))
+                continue
+            if "semantics" in t or "body" in t:
+                key = "semantics" if "semantics" in t else "body"
+                raise self.error([*path, key], "only for a robot from an MJCF file (mjcf = ...)")
             urdf = self.string(self.require(t, path, "urdf"), [*path, "urdf"])
             orientation = self.vector(t.get("orientation", [0, 0, 0, 1]), [*path, "orientation"], 4)
             if "rpy" in t:
@@ -268,6 +297,68 @@ class _Reader(TableReader):
             )
         return tuple(out)
 
+    def mjcf_robot(self, t: dict[str, Any], path: list[str | int]) -> RobotSpec:
+        """An ``mjcf = ...`` robot: read as MuJoCo reads it, the file placing everything."""
+        mjcf = self.string(t["mjcf"], [*path, "mjcf"])
+        semantics = t.get("semantics")
+        if semantics != "mujoco":
+            raise self.error(
+                [*path, "semantics" if "semantics" in t else "mjcf"],
+                f"an environment reads an MJCF as MuJoCo reads it: expected semantics = "
+                f"'mujoco', got {semantics!r}",
+            )
+        for key in (
+            "urdf",
+            "position",
+            "orientation",
+            "rpy",
+            "fixed_base",
+            "joint_positions",
+            "released",
+        ):
+            if key in t:
+                raise self.error(
+                    [*path, key],
+                    "not with mjcf: the file read as MuJoCo reads it places its bodies and "
+                    "holds its own initial state",
+                )
+        body = t.get("body", 0)
+        if isinstance(body, bool) or not isinstance(body, int) or body < 0:
+            raise self.error([*path, "body"], f"expected an integer >= 0, got {body!r}")
+        name = self.string(t.get("name", Path(mjcf).stem), [*path, "name"])
+        near = Path(self.file).parent / mjcf
+        if not self.file.startswith("<") and not mjcf.startswith("package://") and near.is_file():
+            mjcf = str(near)  # a path relative to the task file
+        return RobotSpec(name=name, urdf="", mjcf=mjcf, body=body)
+
+    def native_world(self, data: dict[str, Any], robots: tuple[RobotSpec, ...]) -> Any:
+        """The MJCF read as MuJoCo reads it, compiled by MuJoCo (its refusal is the task's
+        error): it must be the task's only robot, and hold the body ``body`` names."""
+        from simbridge.exceptions import MjcfCompileError, UrdfNotFoundError
+        from simbridge.model.mjcf_native import compile_mjcf
+
+        i = next(k for k, r in enumerate(robots) if r.mjcf)
+        at: list[str | int] = ["robots", i]
+        if len(robots) > 1:
+            others = sorted(r.name for r in robots if not r.mjcf)
+            raise self.error(
+                [*at, "mjcf"],
+                f"an MJCF read as MuJoCo reads it is the whole world (its own floor and "
+                f"<option>): it cannot share the task with {others}",
+            )
+        path = robots[i].mjcf
+        try:
+            native = compile_mjcf(path)
+        except (UrdfNotFoundError, MjcfCompileError) as exc:
+            raise self.error([*at, "mjcf"], str(exc)) from None
+        if robots[i].body >= len(native.bodies):
+            raise self.error(
+                [*at, "body"],
+                f"the file has {len(native.bodies)} top-level bodies "
+                f"({[b.name for b in native.bodies]}), got body = {robots[i].body}",
+            )
+        return native
+
     def names(self, raw: Any, path: list[str | int]) -> tuple[str, ...]:
         if not isinstance(raw, list):
             raise self.error(path, f"expected a list of joint names, got {raw!r}")
@@ -284,6 +375,7 @@ class _Reader(TableReader):
         keys = (
             "robot",
             "joints",
+            "actuators",
             "mode",
             "scale",
             "offset",
@@ -298,12 +390,16 @@ class _Reader(TableReader):
         robot = self.string(t.get("robot", names[0]), [*path, "robot"])
         if robot not in names:
             raise self.error([*path, "robot"], f"no robot {robot!r}; robots: {names}")
+        if t.get("mode") == "actuator" or (self.native is not None and "joints" not in t):
+            return self.actuator_action(t, path, robot)
+        if "actuators" in t:
+            raise self.error([*path, "actuators"], "only with mode = 'actuator'")
         joints = self.names(self.require(t, path, "joints"), [*path, "joints"])
         if not joints:
             raise self.error([*path, "joints"], "expected at least one joint name")
         self.require(t, path, "mode")
         mode = self.choice(t, path, "mode", "", ACTION_MODES)
-        n = len(joints)
+        n = self.action_size = len(joints)
         needs = {
             "position": ("max_force",),
             "velocity": ("max_force",),
@@ -342,6 +438,59 @@ class _Reader(TableReader):
             **per,
         )
 
+    def actuator_action(self, t: dict[str, Any], path: list[str | int], robot: str) -> ActionSpec:
+        """``mode = "actuator"``: the model's actuator controls, by name or in MuJoCo's order."""
+        if self.native is None:
+            raise self.error(
+                [*path, "mode"],
+                "an actuator action needs a robot read from an MJCF as MuJoCo reads it "
+                "(mjcf = ..., semantics = 'mujoco')",
+            )
+        if t.get("mode") != "actuator":
+            raise self.error(
+                [*path, "mode"] if "mode" in t else path,
+                f"a task over an MJCF read as MuJoCo reads it drives its actuators: expected "
+                f"mode = 'actuator', got {t.get('mode')!r}",
+            )
+        for key in ("joints", "kp", "kd", "max_force"):
+            if key in t:
+                raise self.error(
+                    [*path, key],
+                    "not with mode = 'actuator': the model's actuators hold their own joints, "
+                    "gains and force ranges (name them with actuators = [...])",
+                )
+        valid = [a.name for a in self.native.actuators]
+        names = (
+            self.names(t["actuators"], [*path, "actuators"]) if "actuators" in t else tuple(valid)
+        )
+        for i, name in enumerate(names):
+            if name not in valid:
+                raise self.error(
+                    [*path, "actuators", i],
+                    f"the model has no actuator {name!r}; actuators: {valid}",
+                )
+        if not names:
+            raise self.error([*path, "actuators"], "the model has no actuators to drive")
+        offset = self.choice(t, path, "offset", "zero", ("zero",))
+        clip = self.number(t.get("clip", 1.0), [*path, "clip"])
+        if clip <= 0:
+            raise self.error([*path, "clip"], f"must be > 0, got {clip!r}")
+        latency = t.get("latency", 0)
+        if isinstance(latency, bool) or not isinstance(latency, int) or latency < 0:
+            raise self.error(
+                [*path, "latency"], f"expected an integer >= 0 (control steps), got {latency!r}"
+            )
+        self.action_size = len(names)
+        return ActionSpec(
+            robot=robot,
+            joints=names,
+            mode="actuator",
+            scale=self.per_joint(t.get("scale", 1.0), [*path, "scale"], len(names)),
+            offset=offset,
+            clip=clip,
+            latency=latency,
+        )
+
     def params(self, t: dict[str, Any], path: list[str | int], name: str) -> dict[str, Any]:
         raw = t.get("params", {})
         if not isinstance(raw, dict):
@@ -362,6 +511,16 @@ class _Reader(TableReader):
                 raise self.error(where, f"expected a name or an index, got {value!r}")
             elif kind == "names":
                 out[key] = self.names(value, where)
+            elif kind == "count" and (
+                isinstance(value, bool) or not isinstance(value, int) or value < 0
+            ):
+                raise self.error(where, f"expected an integer >= 0, got {value!r}")
+        if name in NATIVE_TERMS and self.native is None:
+            raise self.error(
+                [*path, "term"],
+                f"{name!r} reads MuJoCo's generalized coordinates: only for a task over an MJCF "
+                f"read as MuJoCo reads it (mjcf = ..., semantics = 'mujoco')",
+            )
         return out
 
     def term(self, t: dict[str, Any], path: list[str | int], kind: str) -> str:
@@ -432,15 +591,26 @@ class _Reader(TableReader):
     def randomisation(self, data: dict[str, Any]) -> Randomisation:
         t = data.get("randomisation", {})
         path: list[str | int] = ["randomisation"]
-        self.keys(
-            t, path, ("joint_position", "joint_velocity", "base_position", "base_yaw", "joints")
-        )
+        keys = ("joint_position", "joint_velocity", "base_position", "base_yaw", "joints")
+        native = ("qpos_uniform", "qvel_normal")
+        self.keys(t, path, keys + native)
+        for key in keys if self.native is not None else native:
+            if key in t:
+                raise self.error(
+                    [*path, key],
+                    "not with an MJCF read as MuJoCo reads it: its spread is qpos_uniform and "
+                    "qvel_normal"
+                    if self.native is not None
+                    else "only for a task over an MJCF read as MuJoCo reads it",
+                )
         return Randomisation(
             self.number(t.get("joint_position", 0.0), [*path, "joint_position"], nonneg=True),
             self.number(t.get("joint_velocity", 0.0), [*path, "joint_velocity"], nonneg=True),
             self.vector(t.get("base_position", [0, 0, 0]), [*path, "base_position"], 3),
             self.number(t.get("base_yaw", 0.0), [*path, "base_yaw"], nonneg=True),
             self.names(t.get("joints", []), [*path, "joints"]),
+            self.number(t.get("qpos_uniform", 0.0), [*path, "qpos_uniform"], nonneg=True),
+            self.number(t.get("qvel_normal", 0.0), [*path, "qvel_normal"], nonneg=True),
         )
 
     def camera(self, data: dict[str, Any]) -> dict[str, tuple[float, ...]]:

@@ -11,6 +11,8 @@ IDS = {
     "simbridge/KukaReach-v0": "kuka_reach",
     "simbridge/HuskyGoTo-v0": "husky_goto",
     "simbridge/A1Stand-v0": "a1_stand",
+    "simbridge/Ant-v0": "ant",
+    "simbridge/HalfCheetah-v0": "half_cheetah",
     "simbridge/A1Walk-v0": "a1_walk",
 }
 """Gymnasium id -> shipped task name."""

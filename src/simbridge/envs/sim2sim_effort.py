@@ -11,7 +11,9 @@ hits over its control steps.
   ``appliedJointMotorTorque``: tests/conformance/test_applied_torques.py).
   A joint's effort limit is the task's ``max_force`` (the position and velocity motors' force
   bound, the torque and PD modes' clip), or the joint table's ``max_force`` (the file's effort
-  limit) where that is positive and smaller.
+  limit) where that is positive and smaller. Under the ``actuator`` mode (an MJCF read as
+  MuJoCo reads it) the effort is the actuator's control as the env wrote it and its limit the
+  larger bound of the actuator's ``ctrlrange`` (none where the control is not limited).
 - **At a limit**: a control step after which at least one movable joint of the action robot
   with a position limit (lower < upper; not a continuous joint) is within compare's
   :data:`~simbridge.compare.run.events.LIMIT_TOLERANCE` of it or past it, as compare's
@@ -40,7 +42,8 @@ class EffortProbe:
         env: the env; :meth:`install` sets its ``physics_hook``.
 
     Attributes:
-        effort_limit: ``(n,)`` N·m or N, each action joint's effort limit (task's order).
+        effort_limit: ``(n,)`` N·m or N, each action joint's effort limit (task's order); the
+            actuator mode: each actuator's control bound.
         limited: the engine's joint indices of the action robot's position-limited joints.
         lower: ``(k,)`` their lower limits (rad or m).
         upper: ``(k,)`` their upper limits.
@@ -51,14 +54,22 @@ class EffortProbe:
 
         self.env = env
         sim, w = env.sim, env.world
-        task_limit = np.broadcast_to(
-            np.asarray(env.task.action.max_force, dtype=np.float64), (len(w.joints),)
-        )
         table = {j.index: j for j in sim.joints(w.body)}
-        file_limit = np.array([table[int(i)].max_force for i in w.joints], dtype=np.float64)
-        self.effort_limit = np.where(
-            (file_limit > 0) & (file_limit < task_limit), file_limit, task_limit
-        )
+        if env.task.action.mode == "actuator":  # the control against its ctrlrange's bound
+            ranges = {u.name: u.ctrl_range for u in sim.actuators()}
+            bounds = [ranges[a] for a in env.task.action.joints]
+            self.effort_limit = np.array(
+                [np.inf if r is None else max(abs(r[0]), abs(r[1])) for r in bounds],
+                dtype=np.float64,
+            )
+        else:
+            task_limit = np.broadcast_to(
+                np.asarray(env.task.action.max_force, dtype=np.float64), (len(w.joints),)
+            )
+            file_limit = np.array([table[int(i)].max_force for i in w.joints], dtype=np.float64)
+            self.effort_limit = np.where(
+                (file_limit > 0) & (file_limit < task_limit), file_limit, task_limit
+            )
         self._threshold = self.effort_limit * (1.0 - SATURATION_TOLERANCE)
         limited = [
             j for j in table.values() if j.type != JointType.FIXED and j.lower_limit < j.upper_limit

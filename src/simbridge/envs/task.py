@@ -29,11 +29,14 @@ __all__ = [
     "TrainedSpec",
 ]
 
-ACTION_MODES = ("position", "velocity", "torque", "pd")
+ACTION_MODES = ("position", "velocity", "torque", "pd", "actuator")
 """How an action drives its joints: ``position`` and ``velocity`` set the Sim's motors (PyBullet's
 law, ``max_force``), held over the control period; ``torque`` applies the target as a torque
 every physics step; ``pd`` computes ``kp * (target - q) - kd * qd`` every physics step and
-applies it as a torque (legged RL's PD)."""
+applies it as a torque (legged RL's PD); ``actuator`` writes the scaled action as the controls
+of the actuators an MJCF read as MuJoCo reads it names (``Sim.set_actuator_controls``, held
+over the control period, as a Gymnasium MuJoCo task's action is); the model's ``ctrlrange``
+then limits them where the model says so (MuJoCo's ``ctrllimited``), on every engine."""
 
 ACTION_OFFSETS = ("default", "current", "zero")
 """What the scaled action is added to: the task's default joint pose, the joints' positions when
@@ -51,7 +54,14 @@ class RobotSpec:
 
     Attributes:
         name: the task's name for it (terms and the action name robots by it).
-        urdf: a URDF path or a name on simbridge's search path (pybullet_data included).
+        urdf: a URDF path or a name on simbridge's search path (pybullet_data included);
+            empty for an MJCF robot.
+        mjcf: an MJCF file read as MuJoCo reads it (``Sim.load_mjcf(..., semantics=
+            "mujoco")``): a path or ``package://gymnasium/envs/mujoco/assets/ant.xml``; the
+            file is the whole world (its floor, ``<option>``, actuators), the robot its
+            ``body``-th top-level body, placed by the file (no ``position``, ``orientation``,
+            ``fixed_base``, ``joint_positions`` or ``released``). Empty for a URDF robot.
+        body: which top-level body of ``mjcf`` is the robot (MuJoCo's order).
         position: where its base goes (m, world).
         orientation: its base orientation (x, y, z, w).
         fixed_base: weld the base to the world.
@@ -68,13 +78,16 @@ class RobotSpec:
     fixed_base: bool = False
     joint_positions: Mapping[str, float] = field(default_factory=dict)
     released: tuple[str, ...] = ()
+    mjcf: str = ""
+    body: int = 0
 
 
 @dataclass(frozen=True)
 class ActionSpec:
     """What the action vector means. Entry i drives ``joints[i]``:
     ``target[i] = base[i] + scale[i] * clip(action[i], -clip, clip)``, ``base`` as ``offset``
-    says.
+    says. Under the ``actuator`` mode ``joints`` are the model's actuator names and the target
+    is the actuator's control (offset ``zero``).
 
     Attributes:
         robot: the robot (a :class:`RobotSpec` name) whose joints these are.
@@ -122,7 +135,7 @@ class ActionSpec:
         if self.mode == "position":  # PyBullet's default gains
             object.__setattr__(self, "kp", self.kp or (0.1,))
             object.__setattr__(self, "kd", self.kd or (1.0,))
-        needed = {"pd": ("kp", "kd", "max_force")}
+        needed = {"pd": ("kp", "kd", "max_force"), "actuator": ()}
         for name in ("scale", "kp", "kd", "max_force"):
             raw = getattr(self, name)
             values = (float(raw),) if isinstance(raw, (int, float)) else tuple(map(float, raw))
@@ -233,6 +246,12 @@ class Randomisation:
         base_yaw: half-width (rad) of a turn of the base about world z.
         joints: the joints ``joint_position`` and ``joint_velocity`` spread, on the action's
             robot (empty: the action's joints); each starts at its default position.
+        qpos_uniform: an MJCF task's: half-width of a uniform offset on every entry of
+            MuJoCo's initial ``qpos`` (a free joint's quaternion included, as Gymnasium's
+            ``reset_model`` does), drawn first.
+        qvel_normal: an MJCF task's: standard deviation of a normal draw on every entry of
+            the initial ``qvel``, drawn after (Gymnasium's ``reset_noise_scale *
+            standard_normal(nv)``).
     """
 
     joint_position: float = 0.0
@@ -240,6 +259,8 @@ class Randomisation:
     base_position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     base_yaw: float = 0.0
     joints: tuple[str, ...] = ()
+    qpos_uniform: float = 0.0
+    qvel_normal: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -320,6 +341,11 @@ class Task:
     camera: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     source: str | None = None
     trained: TrainedSpec | None = None
+
+    @property
+    def native(self) -> RobotSpec | None:
+        """The robot whose MJCF is read as MuJoCo reads it (the whole world), or None."""
+        return next((r for r in self.robots if r.mjcf), None)
 
     @property
     def control_dt(self) -> float:

@@ -19,7 +19,16 @@ import numpy as np
 from simbridge.sim import Sim
 from simbridge.transforms import quat_to_matrix
 
-__all__ = ["OBSERVATIONS", "REWARDS", "SUCCESSES", "TERMINATIONS", "World", "heading", "term_names"]
+__all__ = [
+    "NATIVE_TERMS",
+    "OBSERVATIONS",
+    "REWARDS",
+    "SUCCESSES",
+    "TERMINATIONS",
+    "World",
+    "heading",
+    "term_names",
+]
 
 
 @dataclass
@@ -37,6 +46,9 @@ class World:
         commands: the episode's command vector, ``(m,)``.
         time: seconds since the episode's reset.
         pose: the action robot's default pose, joint name -> position (others at 0).
+        control_dt: seconds per control step.
+        qpos_start: an MJCF task's MuJoCo ``qpos`` at the episode's reset, ``(nq,)``.
+        qpos_before: its ``qpos`` when the control step began (the forward velocity's start).
         previous_action: the action before ``last_action``, ``(n,)`` (zeros at reset).
         torques: the action joints' torques of the last physics step (N m, ``(n,)``): the
             commanded ones under ``pd`` and ``torque``, zeros under the motor modes.
@@ -53,6 +65,9 @@ class World:
     commands: np.ndarray
     time: float = 0.0
     pose: Mapping[str, float] = field(default_factory=dict)
+    control_dt: float = 0.0
+    qpos_start: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    qpos_before: np.ndarray = field(default_factory=lambda: np.zeros(0))
     previous_action: np.ndarray = field(default_factory=lambda: np.zeros(0))
     torques: np.ndarray = field(default_factory=lambda: np.zeros(0))
     start: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -195,6 +210,21 @@ def _command_in_base(w: World, p: Mapping[str, Any]) -> np.ndarray:
     return np.array([c * dx + n * dy, -n * dx + c * dy])
 
 
+def _healthy(w: World, p: Mapping[str, Any]) -> bool:
+    """Gymnasium's ``is_healthy``: qpos and qvel finite, the root's z (``qpos[2]``) within
+    ``[z_min, z_max]``."""
+    q, v = w.sim.qpos(), w.sim.qvel()
+    finite = bool(np.isfinite(q).all() and np.isfinite(v).all())
+    return finite and p.get("z_min", -math.inf) <= q[2] <= p.get("z_max", math.inf)
+
+
+def _forward_velocity(w: World, p: Mapping[str, Any]) -> float:
+    """The root's x velocity over the control step: ``(qpos[0] - qpos_before[0]) /
+    control_dt`` (HalfCheetah-v5's, and Ant-v5's but for the torso's position being read at
+    the step's end: see docs/envs.md)."""
+    return float((w.sim.qpos()[0] - w.qpos_before[0]) / w.control_dt)
+
+
 OBSERVATIONS: dict[str, Callable[[World, Mapping[str, Any]], np.ndarray]] = {
     # (n,) rad or m; params: joints (names; default: the action's), relative (bool): minus
     # the default pose
@@ -211,6 +241,10 @@ OBSERVATIONS: dict[str, Callable[[World, Mapping[str, Any]], np.ndarray]] = {
     "link_pos": lambda w, p: w.link_position(p["link"]),  # (3,) m, world; params: link
     "link_to_command": _link_to_command,  # (3,) command[:3] - link (m, world); params: link
     "command_in_base": _command_in_base,  # (2,) goal x, y in the base's heading frame (m)
+    # MJCF tasks: MuJoCo's qpos (nq - exclude,) without its first `exclude` entries
+    # (Gymnasium's exclude_current_positions_from_observation: 2 for Ant, 1 for HalfCheetah)
+    "qpos": lambda w, p: w.sim.qpos()[int(p.get("exclude", 0)) :],
+    "qvel": lambda w, p: w.sim.qvel(),  # MJCF tasks: MuJoCo's qvel (nv,)
 }
 """Observation term -> function (world, params) -> float64 array."""
 
@@ -269,6 +303,10 @@ REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
     "joint_pos_error": lambda w, p: -float(np.sum(_q(w, {"relative": True}) ** 2)),
     "upright": lambda w, p: -float(np.sum(_gravity(w, p)[:2] ** 2)),
     "height_error": lambda w, p: -((w.sim.base_state(w.body).position[2] - p["target"]) ** 2),
+    # MJCF tasks: the root's x velocity (m/s) over the control step
+    "forward_velocity": _forward_velocity,
+    # MJCF tasks: 1 while healthy (params z_min, z_max on qpos[2]), else 0
+    "healthy": lambda w, p: 1.0 if _healthy(w, p) else 0.0,
     # legged_gym's locomotion terms (base frame; commands: vx, vy (m/s), yaw rate (rad/s))
     "tracking_lin_vel": _tracking_lin_vel,  # params: sigma (m^2/s^2, 0.25)
     "tracking_ang_vel": _tracking_ang_vel,  # params: sigma (rad^2/s^2, 0.25)
@@ -286,6 +324,8 @@ TERMINATIONS: dict[str, Callable[[World, Mapping[str, Any]], bool]] = {
     "base_height_below": lambda w, p: w.sim.base_state(w.body).position[2] < p["limit"],
     # params: limit (rad): the base's z axis that far from world up
     "tilt_above": lambda w, p: _tilt(w) > p["limit"],
+    # MJCF tasks, params z_min, z_max: qpos[2] outside them, or the state not finite
+    "unhealthy": lambda w, p: not _healthy(w, p),
 }
 """Failure -> test (world, params) -> True when the episode ends as a failure."""
 
@@ -296,6 +336,8 @@ SUCCESSES: dict[str, Callable[[World, Mapping[str, Any]], bool]] = {
     "link_near_command": lambda w, p: _link_distance(w, p) < p["within"],
     # params: within (m): the base's x, y that near command[:2]
     "base_near_command": lambda w, p: _goal_distance(w, p) < p["within"],
+    # MJCF tasks, params min (m): the root moved at least that far along +x since the reset
+    "forward_distance": lambda w, p: float(w.sim.qpos()[0] - w.qpos_start[0]) >= p["min"],
     # params: within (m/s): the base's mean planar velocity since the reset (in its heading
     # at the reset) that near command[:2] (the travelled distance over the elapsed time)
     "mean_velocity_near_command": lambda w, p: _mean_velocity_error(w) < p["within"],
@@ -322,8 +364,17 @@ PARAMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "base_near_command": (("within",), ("terminate",)),
     "mean_velocity_near_command": (("within",), ("terminate",)),
     "survive": ((), ()),
+    "qpos": ((), ("exclude",)),
+    "healthy": (("z_min", "z_max"), ()),
+    "unhealthy": (("z_min", "z_max"), ()),
+    "forward_distance": (("min",), ("terminate",)),
 }
 """A term's parameters: those it needs and those it may take (others are refused)."""
+
+
+NATIVE_TERMS = ("qpos", "qvel", "forward_velocity", "healthy", "unhealthy", "forward_distance")
+"""The terms that read MuJoCo's generalized coordinates (``Sim.qpos``): only in a task over an
+MJCF read as MuJoCo reads it."""
 
 
 def term_names(kind: str) -> tuple[str, ...]:
