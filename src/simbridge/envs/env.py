@@ -283,9 +283,20 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                 w.body, np.asarray(s.position) + dp, quat_multiply(turn, s.orientation)
             )
         self._hold(self.sim.joint_states(w.body, w.joints).positions)
+        self._draw_commands(options)
+        w.last_action, w.previous_action, w.torques = np.zeros(n), np.zeros(n), np.zeros(n)
+        w.time = 0.0
+        s = self.sim.base_state(w.body)
+        w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
+        self._queue = deque([np.zeros(n)] * t.action.latency)
+
+    def _draw_commands(self, options: dict[str, Any]) -> None:
+        """The episode's commands: drawn from the task's range with the episode's generator
+        (after the initial state, in that order), or ``options["commands"]`` in their place."""
+        t, w = self.task, self.world
         if t.commands is not None:
             lo, hi = np.asarray(t.commands.low), np.asarray(t.commands.high)
-            w.commands = lo + (hi - lo) * rng.uniform(0.0, 1.0, len(lo))
+            w.commands = lo + (hi - lo) * self.np_random.uniform(0.0, 1.0, len(lo))
         if "commands" in options:
             c = np.asarray(options["commands"], dtype=float)
             if c.shape != w.commands.shape:
@@ -293,11 +304,6 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
                     "options['commands']", f"expected {w.commands.size} values, got {c.shape}"
                 )
             w.commands = c
-        w.last_action, w.previous_action, w.torques = np.zeros(n), np.zeros(n), np.zeros(n)
-        w.time = 0.0
-        s = self.sim.base_state(w.body)
-        w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
-        self._queue = deque([np.zeros(n)] * t.action.latency)
 
     def _randomise_native(self, options: dict[str, Any]) -> None:
         """An MJCF task's initial state, drawn as Gymnasium's MuJoCo ``reset_model`` draws it:
@@ -310,16 +316,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         qvel = self._qvel0 + r.qvel_normal * rng.standard_normal(self._qvel0.size)
         self.sim.set_qpos_qvel(qpos, qvel)
         self._hold(np.zeros(len(self._actuators)))
-        if t.commands is not None:
-            lo, hi = np.asarray(t.commands.low), np.asarray(t.commands.high)
-            w.commands = lo + (hi - lo) * rng.uniform(0.0, 1.0, len(lo))
-        if "commands" in options:
-            c = np.asarray(options["commands"], dtype=float)
-            if c.shape != w.commands.shape:
-                raise InvalidArgumentError(
-                    "options['commands']", f"expected {w.commands.size} values, got {c.shape}"
-                )
-            w.commands = c
+        self._draw_commands(options)
         n = len(t.action.joints)
         w.last_action, w.previous_action, w.torques = np.zeros(n), np.zeros(n), np.zeros(n)
         w.time = 0.0
