@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import threading
 from abc import abstractmethod
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -43,25 +43,9 @@ from simbridge.types import (
 from . import locking
 from . import mjcf_forces as forces
 from .locking import exclusive, wait_for_lock
-from .mjcf_reads import MjcfReads
+from .mjcf_reads import MjcfReads, _conj, _v, _wxyz, _xyzw
 
 __all__ = ["MjcfOnEngine", "ball_from_inertial", "ball_to_inertial"]
-
-
-def _xyzw(q: np.ndarray) -> Quat:
-    return (float(q[1]), float(q[2]), float(q[3]), float(q[0]))
-
-
-def _wxyz(q: Quat) -> np.ndarray:
-    return np.array((q[3], q[0], q[1], q[2]), dtype=np.float64)
-
-
-def _v(a: Any) -> Vec3:
-    return (float(a[0]), float(a[1]), float(a[2]))
-
-
-def _conj(q: Quat) -> Quat:
-    return (-q[0], -q[1], -q[2], q[3])
 
 
 def ball_from_inertial(inertial: Quat, quat: Quat, angular: Vec3) -> tuple[np.ndarray, np.ndarray]:
@@ -305,6 +289,11 @@ class MjcfOnEngine(MjcfReads, Backend):
         """Show the engine's state in its window, if it has one (after a ``step`` call or a
         write): nothing by default."""
 
+    departure_texts: ClassVar[dict[str, str]] = {}
+    """What the engine does instead of MuJoCo's armature, joint damping, frictionloss and ball
+    joints (keys ``"armature"``, ``"joint_damping"``, ``"frictionloss"``, ``"ball_joints"``):
+    :func:`plan_departures` names those the model exercises in these words."""
+
     def engine_departures(self) -> dict[str, str]:
         """The engine's own departures beyond :func:`plan_departures`.
 
@@ -328,31 +317,6 @@ class MjcfOnEngine(MjcfReads, Backend):
         if self._closed:
             raise SimClosedError()
         return self._time
-
-    def load(self, *args: Any, **kwargs: Any) -> int:
-        """See Backend.load.
-
-        Raises:
-            BackendUnsupportedError: Always: a model read with semantics='mujoco' is the whole
-                world.
-        """
-        raise BackendUnsupportedError(
-            self.name,
-            "loading into a world that holds a model read with semantics='mujoco'",
-            "that model is the whole world; reset() the Sim or use another Sim",
-        )
-
-    def remove(self, body: int) -> None:
-        """See Backend.remove.
-
-        Raises:
-            BackendUnsupportedError: Always: the model's bodies are one compiled world.
-        """
-        raise BackendUnsupportedError(
-            self.name,
-            "removing one body of a model read with semantics='mujoco'",
-            "the model is one compiled world: reset() removes it whole",
-        )
 
     @exclusive
     def reset(self) -> None:
@@ -484,7 +448,7 @@ class MjcfOnEngine(MjcfReads, Backend):
             "departures": {
                 "profile": "no profile entry applies under semantics='mujoco' but gravity "
                 "and the time step the Sim was given: the model is MuJoCo's",
-                **plan_departures(self.native, self.name),
+                **plan_departures(self.native, self.name, self.departure_texts),
                 **self.engine_departures(),
             },
         }

@@ -416,3 +416,29 @@ class MjcfReads:
         """
         if np.asarray(commands.max_force).any() or np.asarray(commands.pending_torque).any():
             raise BackendUnsupportedError(self.name, *_COMMANDS)
+
+    def load(self, *args: Any, **kwargs: Any) -> int:
+        """See Backend.load.
+
+        Raises:
+            BackendUnsupportedError: Always: a model read with semantics='mujoco' is the whole
+                world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "loading into a world that holds a model read with semantics='mujoco'",
+            "that model is the whole world (its <option>, contacts and ground are MuJoCo's); "
+            "reset() the Sim or use another Sim",
+        )
+
+    def remove(self, body: int) -> None:
+        """See Backend.remove.
+
+        Raises:
+            BackendUnsupportedError: Always: the model's bodies are one compiled world.
+        """
+        raise BackendUnsupportedError(
+            self.name,
+            "removing one body of a model read with semantics='mujoco'",
+            "the model is one compiled world: reset() removes it whole",
+        )

@@ -23,7 +23,7 @@ import mujoco
 import numpy as np
 
 from simbridge.backend import Backend
-from simbridge.exceptions import BackendUnsupportedError, SimBusyError, SimulationDivergedError
+from simbridge.exceptions import SimBusyError, SimulationDivergedError
 from simbridge.model.mjcf_native import NativeBody, NativeMjcf
 from simbridge.profiles import Profile
 from simbridge.types import (
@@ -117,32 +117,6 @@ class NativeMujoco(MjcfReads, Backend):
 
             raise SimClosedError()
         return float(self.d.time)
-
-    def load(self, *args: Any, **kwargs: Any) -> int:
-        """See Backend.load.
-
-        Raises:
-            BackendUnsupportedError: Always: a model read with semantics='mujoco' is the whole
-                world.
-        """
-        raise BackendUnsupportedError(
-            self.name,
-            "loading into a world that holds a model read with semantics='mujoco'",
-            "that model is the whole world (its <option>, contacts and ground are MuJoCo's); "
-            "reset() the Sim or use another Sim",
-        )
-
-    def remove(self, body: int) -> None:
-        """See Backend.remove.
-
-        Raises:
-            BackendUnsupportedError: Always: the model's bodies are one compiled world.
-        """
-        raise BackendUnsupportedError(
-            self.name,
-            "removing one body of a model read with semantics='mujoco'",
-            "the model is one compiled world: reset() removes it whole",
-        )
 
     @exclusive
     def reset(self) -> None:

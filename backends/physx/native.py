@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import sapien
@@ -146,6 +146,17 @@ class NativePhysx(MjcfOnEngine, ContactReads):
     state_dtype = "float32"
     soft_limits = True  # MuJoCo's soft limit (docs/mjcf_mujoco_reading.md: measured closer)
     engine_version = sapien.__version__
+    departure_texts: ClassVar[dict[str, str]] = {
+        "armature": "joint armature is PhysX's joint armature",
+        "joint_damping": "joint damping is a PhysX drive's damping (implicit, target velocity 0)",
+        "frictionloss": "joint frictionloss is a PhysX drive with a force limit",
+        "ball_joints": "a ball joint is three revolute joints about the child's inertial axes "
+        "(SAPIEN 3.0.3 builds no spherical articulation joint), read and written as MuJoCo's "
+        "quaternion and body-frame angular velocity: gimbal lock where the middle angle "
+        "reaches +-90 degrees; its armature is the three revolutes' plus a force that makes "
+        "it MuJoCo's (left out within 6 degrees of the lock), its damping implicit in "
+        "every force as MuJoCo's Euler makes it, its range MuJoCo's cone computed here",
+    }
 
     def __init__(
         self,

@@ -21,7 +21,7 @@ shows its meshes alone. The camera aims at the model and follows it, as for a UR
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -165,6 +165,18 @@ class NativePyBullet(MjcfOnEngine):
 
     name = "pybullet"
     engine_version = "3.2.7"
+    departure_texts: ClassVar[dict[str, str]] = {
+        "armature": "joint armature is a force each step, -A (M + A)^-1 (f - c + fc), fc the "
+        "contact forces of the step before: exact without contact, one step late with it",
+        "joint_damping": "joint damping is a torque each step, -D (I + dt M^-1 D)^-1 qdot: "
+        "implicit in the joint-space inertia, explicit against contacts and limits",
+        "frictionloss": "joint frictionloss is a velocity motor with target 0 and force "
+        "frictionloss",
+        "ball_joints": "a ball joint is PyBullet's spherical joint (it turns the child's "
+        "inertial frame), read and written as MuJoCo's quaternion and body-frame angular "
+        "velocity; its range is MuJoCo's cone computed here, its damping implicit in every "
+        "force as MuJoCo's Euler makes it, its armature a force as on the hinges",
+    }
     soft_limits = True  # MuJoCo's limit on M + A (PyBullet's hard limit stops M alone)
 
     def __init__(

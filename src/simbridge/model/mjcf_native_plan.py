@@ -45,6 +45,7 @@ Every departure the build makes is named in :func:`plan_departures`.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -577,13 +578,16 @@ def ground_plan(native: NativeMjcf, visuals: bool = False) -> BuildPlan | None:
     )  # fmt: skip
 
 
-def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
+def plan_departures(native: NativeMjcf, engine: str, texts: Mapping[str, str]) -> dict[str, str]:
     """The MuJoCo features of this model an engine does not reproduce, each named with what is
     done instead (the manifest's ``departures``; docs/mjcf_mujoco_reading.md measures them).
 
     Args:
         native: The compiled model.
-        engine: ``"pybullet"`` or ``"physx"``.
+        engine: The engine's name, as the texts say it.
+        texts: What the engine does instead of MuJoCo's ``"armature"``, ``"joint_damping"``,
+            ``"frictionloss"`` and ``"ball_joints"`` (its backend's own words: each engine
+            simulates them its own way); each used where the model exercises it.
 
     Returns:
         Departure name -> what is done instead; only those this model exercises.
@@ -604,24 +608,11 @@ def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
             "engine's own limits are off"
         )
     if m.dof_armature.any():
-        out["armature"] = (
-            "joint armature is PhysX's joint armature"
-            if engine == "physx"
-            else "joint armature is a force each step, -A (M + A)^-1 (f - c + fc), fc the "
-            "contact forces of the step before: exact without contact, one step late with it"
-        )
+        out["armature"] = texts["armature"]
     if m.dof_damping.any():
-        out["joint_damping"] = (
-            "joint damping is a PhysX drive's damping (implicit, target velocity 0)"
-            if engine == "physx"
-            else "joint damping is a torque each step, -D (I + dt M^-1 D)^-1 qdot: implicit "
-            "in the joint-space inertia, explicit against contacts and limits"
-        )
+        out["joint_damping"] = texts["joint_damping"]
     if m.dof_frictionloss.any():
-        out["frictionloss"] = (
-            "joint frictionloss is a PhysX drive with a force limit" if engine == "physx"
-            else "joint frictionloss is a velocity motor with target 0 and force frictionloss"
-        )  # fmt: skip
+        out["frictionloss"] = texts["frictionloss"]
     touching = [
         f"{plan.link(lk.parent).name}/{lk.name}"
         for plan in native_plans(native)
@@ -645,19 +636,7 @@ def plan_departures(native: NativeMjcf, engine: str) -> dict[str, str]:
     if (m.geom_type == int(_G.mjGEOM_ELLIPSOID)).any():
         out["ellipsoid"] = f"an ellipsoid is the convex hull of {ELLIPSOID_POINTS} points on it"
     if (m.jnt_type == int(mujoco.mjtJoint.mjJNT_BALL)).any():
-        out["ball_joints"] = (
-            "a ball joint is three revolute joints about the child's inertial axes (SAPIEN "
-            "3.0.3 builds no spherical articulation joint), read and written as MuJoCo's "
-            "quaternion and body-frame angular velocity: gimbal lock where the middle angle "
-            "reaches +-90 degrees; its armature is the three revolutes' plus a force that makes "
-            "it MuJoCo's (left out within 6 degrees of the lock), its damping implicit in "
-            "every force as MuJoCo's Euler makes it, its range MuJoCo's cone computed here"
-            if engine == "physx"
-            else "a ball joint is PyBullet's spherical joint (it turns the child's inertial "
-            "frame), read and written as MuJoCo's quaternion and body-frame angular velocity; "
-            "its range is MuJoCo's cone computed here, its damping implicit in every force as "
-            "MuJoCo's Euler makes it, its armature a force as on the hinges"
-        )
+        out["ball_joints"] = texts["ball_joints"]
     if m.nu:
         out["actuators"] = (
             "actuator forces are MuJoCo's formulas (gain, bias, gear, ctrlrange, forcerange) "
