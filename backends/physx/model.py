@@ -46,12 +46,14 @@ from .combine import set_product_combine
 
 __all__ = [
     "BuiltRobot",
+    "bits_needed",
     "build_robot",
     "ignore_bits",
     "needed_pairs",
     "pose",
     "MIN_MASS",
     "MIN_INERTIA",
+    "IGNORE_BITS",
 ]
 
 MIN_MASS = 1e-6  # kg, for a moving link of mass 0 (PhysX refuses zero)
@@ -67,6 +69,7 @@ MAX_DEPENETRATION = 1e32
 # the most links one PhysX articulation takes here (root included): measured with chains and
 # with one-link arms, 255 links step, 256 crash the process at the first step (SAPIEN 3.0.3, CPU)
 MAX_ARTICULATION_LINKS = 255
+IGNORE_BITS = 32  # SAPIEN's "ignore" bits (a shape's collision group g2, one uint32)
 CYLINDER_SIDES = 32  # PyBullet's cylinder hull from a URDF (URDF2Bullet.cpp)
 # PhysX's own cylinder instead of PyBullet's hull: no steadier on r2d2's wheels (measured)
 TRUE_CYLINDER = False
@@ -506,7 +509,9 @@ def _link_frame_in_base(plan: BuildPlan, index: int) -> tuple[Vec3, Quat]:
 
 
 def ignore_bits(
-    excluded: Iterable[tuple[Hashable, Hashable]], needed: Iterable[tuple[Hashable, Hashable]]
+    excluded: Iterable[tuple[Hashable, Hashable]],
+    needed: Iterable[tuple[Hashable, Hashable]],
+    width: int = IGNORE_BITS,
 ) -> dict[Hashable, int] | None:
     """ "Ignore" bits (SAPIEN's g2) that leave out each ``needed`` pair: a greedy cover of the
     needed pairs by cliques of the ``excluded`` graph, one bit per clique set on its members, so
@@ -517,10 +522,12 @@ def ignore_bits(
         excluded: Every pair that must not touch (links as any hashable key).
         needed: The pairs that need a bit (a subset of ``excluded``: those PhysX does not
             already leave out, between two links that both have shapes).
+        width: How many bits there are (SAPIEN's 32; a larger one counts the bits a cover
+            needs, as :func:`bits_needed` does).
 
     Returns:
         key -> bits for every key of a needed pair (the others: 0), or None where the cover
-        needs more than 32 bits.
+        needs more than ``width`` bits.
     """
     adj: dict[Hashable, set[Hashable]] = {}
     for a, b in excluded:
@@ -531,7 +538,7 @@ def ignore_bits(
     k = 0
     while left:
         pair = min(left, key=lambda e: sorted(map(repr, e)))
-        if k == 32:
+        if k == width:
             return None
         clique = sorted(pair, key=repr)
         # grown by every node excluded with each member (in a fixed order)
@@ -543,6 +550,24 @@ def ignore_bits(
         left -= {frozenset((x, y)) for x in clique for y in clique if x != y}
         k += 1
     return bits
+
+
+def bits_needed(
+    excluded: Iterable[tuple[Hashable, Hashable]], needed: Iterable[tuple[Hashable, Hashable]]
+) -> int:
+    """How many ignore bits :func:`ignore_bits`' cover of ``needed`` takes, uncapped.
+
+    Args:
+        excluded: As :func:`ignore_bits`.
+        needed: As :func:`ignore_bits`.
+
+    Returns:
+        The number of bits (0: no pair needs one).
+    """
+    needed = list(needed)
+    bits = ignore_bits(excluded, needed, width=len(needed) + 1)
+    assert bits is not None  # one bit per pair at most
+    return max(bits.values(), default=0).bit_length()
 
 
 def _ignore_bits(plan: BuildPlan) -> dict[int, int] | None:

@@ -42,7 +42,7 @@ from simbridge.types import ContactPoint, JointType, Quat, Vec3
 from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
 from .ball import angles_to_quat, quat_to_angles, rate_matrix
 from .contacts import ContactReads
-from .model import build_robot, ignore_bits, needed_pairs
+from .model import IGNORE_BITS, bits_needed, build_robot, ignore_bits, needed_pairs
 from .window import Window
 
 __all__ = ["NativePhysx"]
@@ -98,18 +98,53 @@ def _shared_filters(
         bits = ignore_bits(excluded, needed)
         if bits is None:
             pair = next(c[4] for c in cross if find(c[0]) == top)
-            raise MjcfFeatureUnsupportedError(
-                native.display_name,
-                "physx",
-                "<contact><exclude> between two top-level bodies",
-                pair,
-                "its bodies' excluded pairs need more than SAPIEN's 32 ignore bits",
-            )
+            raise _too_many_bits(native, bits_needed(excluded, needed), pair, len(needed))
         tag = min(tags[k] for k in members)
         for k in members:
             tags[k] = tag
             ignore[k] = {link.index: int(bits.get((k, link.index), 0)) for link in of[k].links}
     return tags, ignore
+
+
+def _check_filters(native: NativeMjcf, plans: tuple[BuildPlan, ...], shared: set[int]) -> None:
+    """Refuse a body whose filtered pairs SAPIEN's ignore bits cannot all leave out (the
+    bodies of ``shared`` were checked with their cross pairs, :func:`_shared_filters`).
+
+    Args:
+        native: The compiled model.
+        plans: Its plans, body k the plan k.
+        shared: The bodies whose filter is worked out with others.
+
+    Raises:
+        MjcfFeatureUnsupportedError: A body's pairs need more than 32 ignore bits (PhysX's
+            own parent-child rule alone would let the rest touch: ``drosophila_fused.xml``'s
+            meshes, overlapping at ``qpos0``, went non-finite in the first step).
+    """
+    for k, plan in enumerate(plans):
+        if k in shared or plan.self_collision == "off":
+            continue
+        needed = needed_pairs(plan)
+        if len(needed) <= IGNORE_BITS:
+            continue
+        n = bits_needed(plan.excluded_pairs, needed)
+        if n > IGNORE_BITS:
+            a, b = needed[0]
+            raise _too_many_bits(native, n, f"{plan.link(a).name}-{plan.link(b).name}", len(needed))
+
+
+def _too_many_bits(native: NativeMjcf, n: int, pair: str, pairs: int) -> Exception:
+    """The refusal of a contact filter SAPIEN cannot hold: ``n`` bits for ``pairs`` pairs."""
+    return MjcfFeatureUnsupportedError(
+        native.display_name,
+        "physx",
+        f"contact exclusions needing {n} groups; SAPIEN has {IGNORE_BITS} bits",
+        pair,
+        f"{pairs} pairs MuJoCo never lets touch (parent and child, <contact><exclude>) that "
+        "PhysX's own parent-child rule does not leave out, one ignore bit for each group of "
+        "pairwise-excluded links; left out, they would touch where MuJoCo's do not. "
+        "Sim('pybullet') filters each pair itself; or give the geoms contype/conaffinity "
+        "that keep them apart",
+    )
 
 
 def _matrix(q: Quat) -> np.ndarray:
@@ -179,6 +214,7 @@ class NativePhysx(MjcfOnEngine, ContactReads):
         self.plans = native_plans(native, limits=not self.soft_limits, visuals=drawn)
         ground = ground_plan(native, visuals=drawn)
         tags, ignore = _shared_filters(native, self.plans, ground)
+        _check_filters(native, self.plans, set(ignore))
         self._built = [
             build_robot(self._scene, plan, SOLVER_ITERATIONS, tags[k], ignore=ignore.get(k))
             for k, plan in enumerate(self.plans)
@@ -437,12 +473,6 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             "contact_margin": "a geom's margin and gap are PhysX's contact offset (0.01 m) and "
             "rest offset (0.0005 m)",
         }
-        loose = [self.plans[k].name for k, b in enumerate(self._built) if not b.filtered_exactly]
-        if loose:
-            out["excluded_pairs"] = (
-                "the excluded pairs (parent and child, <contact><exclude>) of these bodies need "
-                f"more than SAPIEN's 32 ignore bits; only PhysX's own rule applies: {loose}"
-            )
         if self._window is not None:
             out["window"] = (
                 "SAPIEN's window draws MuJoCo's visible geoms (groups 0-2) in their colours, "

@@ -98,3 +98,15 @@ def test_ignore_bits_leave_out_exactly_the_needed_pairs() -> None:
     assert tri == {0: 1, 1: 1, 2: 1}
     star = [(0, k) for k in range(1, 34)]  # 33 pairs no two of which share a clique
     assert ignore_bits(star, star) is None
+
+
+def test_bits_needed_counts_the_cover_past_32() -> None:
+    """The refusal's count (``contact exclusions needing N groups``): the cover's bits,
+    uncapped; a clique of three is one."""
+    from simbridge.backends.physx.model import bits_needed
+
+    star = [(0, k) for k in range(1, 34)]
+    assert bits_needed(star, star) == 33
+    assert bits_needed(star, star[:5]) == 5
+    assert bits_needed([(0, 1), (0, 2), (1, 2)], [(0, 1), (0, 2), (1, 2)]) == 1
+    assert bits_needed(star, []) == 0
