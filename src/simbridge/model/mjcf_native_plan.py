@@ -23,7 +23,8 @@ MuJoCo's joint order:
   compiled vertices, in the geom frame) are the plan's shapes, placed from MuJoCo's geom
   frames at ``qpos0``; an ``ellipsoid`` becomes the convex hull of
   :data:`ELLIPSOID_POINTS` points on its surface (a named departure); a height field is refused;
-* **contacts**: a geom with ``contype`` and ``conaffinity`` 0 is no collision shape; a link's
+* **contacts**: a geom with ``contype`` and ``conaffinity`` 0 is no collision shape, nor is
+  any geom where ``<option><flag contact="disable"/>`` turns MuJoCo's contacts off; a link's
   friction is its first colliding geom's: sliding always, torsional
   when its ``condim`` >= 4, rolling when 6 (:class:`~simbridge.model.plan_records.
   ContactValues`, restitution 0); its filter is that geom's ``contype`` (group) and
@@ -301,9 +302,17 @@ def _shape(
     return ShapePlan(k, kind, _v(pos), _xyzw(_quat(rot)), out_size, mesh, False, ground, None, name)
 
 
+# <option><flag contact="disable"/> (or constraint="disable"): MuJoCo makes no contact at all
+_NO_CONTACT = int(mujoco.mjtDisableBit.mjDSBL_CONTACT) | int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+
+
 def _colliding(m: Any, bodies: list[int]) -> list[int]:
     """The bodies' geoms that can touch anything (``contype`` or ``conaffinity`` not 0): a
-    geom with both 0 is MuJoCo's visual-only geom and is no collision shape here."""
+    geom with both 0 is MuJoCo's visual-only geom and is no collision shape here; none where
+    the file's ``<option><flag contact="disable"/>`` (or ``constraint="disable"``) turns
+    MuJoCo's contacts off."""
+    if m.opt.disableflags & _NO_CONTACT:
+        return []
     return [
         g
         for b in bodies
