@@ -17,6 +17,7 @@ gravity and the time step unless the Sim was given them.
 from __future__ import annotations
 
 import threading
+import warnings
 from abc import abstractmethod
 from typing import Any, ClassVar
 
@@ -25,12 +26,13 @@ import numpy as np
 from simbridge.backend import Backend
 from simbridge.exceptions import (
     BackendUnsupportedError,
+    InitialPenetrationWarning,
     SimBusyError,
     SimClosedError,
     SimulationDivergedError,
 )
-from simbridge.model.mjcf_mirror import Mirror
-from simbridge.model.mjcf_native import NativeBody, NativeMjcf
+from simbridge.model.mjcf_mirror import Mirror, body_name, own_overlaps
+from simbridge.model.mjcf_native import NativeBody, NativeMjcf, bad_coordinate
 from simbridge.model.mjcf_native_plan import plan_departures, refuse_unsimulated
 from simbridge.profiles import Profile
 from simbridge.transforms import quat_multiply, quat_rotate
@@ -45,7 +47,11 @@ from . import mjcf_forces as forces
 from .locking import exclusive, wait_for_lock
 from .mjcf_reads import MjcfReads, _conj, _v, _wxyz, _xyzw
 
-__all__ = ["MjcfOnEngine", "ball_from_inertial", "ball_to_inertial"]
+__all__ = ["PENETRATION", "MjcfOnEngine", "ball_from_inertial", "ball_to_inertial"]
+
+# m: the overlap at load below which a pair is not named in ``initial_penetration`` (one
+# number for every model: the corpus's overlaps at qpos0 are below 1e-5 m or above 0.02 m)
+PENETRATION = 1e-3
 
 
 def ball_from_inertial(inertial: Quat, quat: Quat, angular: Vec3) -> tuple[np.ndarray, np.ndarray]:
@@ -149,6 +155,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         self._synced = False  # the mirror holds the engine's state
         self._time = 0.0
         self._diverged: SimulationDivergedError | None = None
+        self._penetration = ""  # the departure initial_penetration (note_penetration)
 
     reading = locking.reading
 
@@ -302,6 +309,66 @@ class MjcfOnEngine(MjcfReads, Backend):
         """
         return {}
 
+    def engine_overlaps(self) -> list[ContactPoint] | None:
+        """The engine's own contact points of the state as it stands, found without a step
+        (its collision detection alone), bodies numbered as :meth:`contact_points` numbers
+        them; None where the engine has no such call (no ``initial_penetration`` is then
+        measured).
+
+        Returns:
+            The points (``distance`` < 0: overlapping), or None.
+        """
+        return None
+
+    def note_penetration(self, engine: str) -> None:
+        """Measure, at the state just written (``qpos0`` at load), the pairs the engine's own
+        collision detection finds overlapping deeper than :data:`PENETRATION` (m), with
+        MuJoCo's own contact depth of the same pair at that state; where there are any, the
+        departure ``initial_penetration`` names them and an
+        :class:`~simbridge.exceptions.InitialPenetrationWarning` says so before the run.
+
+        Args:
+            engine: What the engine's contacts are, for the message (``"PyBullet's rigid
+                contacts"``).
+        """
+        points = self.engine_overlaps()
+        if not points:
+            return
+        m = self.m
+        deepest: dict[tuple[int, int], float] = {}
+        for c in points:
+            if c.distance < -PENETRATION:
+                ab = (self._mujoco_body(c.body_a, c.link_a), self._mujoco_body(c.body_b, c.link_b))
+                key = (min(ab), max(ab))
+                deepest[key] = min(deepest.get(key, 0.0), c.distance)
+        if not deepest:
+            return
+        own = own_overlaps(m, self.engine_state()[0])  # MuJoCo's own at this state
+        weld = m.body_weldid
+        pairs = []
+        for (a, b), depth in sorted(deepest.items(), key=lambda kv: kv[1]):
+            theirs = own.get(frozenset((int(weld[a]), int(weld[b]))))
+            mj = "no contact" if theirs is None else f"{-theirs:.4f} m"
+            pairs.append(f"{body_name(m, a)!r}-{body_name(m, b)!r} {-depth:.4f} m (MuJoCo: {mj})")
+        text = (
+            f"at qpos0 {len(pairs)} pair{'s' * (len(pairs) > 1)} of bodies overlap in {engine}"
+            ", deepest first: "
+            f"{', '.join(pairs)}; the engine pushes them apart within a step where MuJoCo's soft "
+            "contacts ease them out over many: the run may diverge (SimulationDivergedError)"
+        )
+        self._penetration = text
+        warnings.warn(
+            InitialPenetrationWarning(f"{self.native.display_name} on {self.name}: {text}"),
+            stacklevel=2,
+        )
+
+    def _mujoco_body(self, body: int, link: int) -> int:
+        """The MuJoCo body id of a contact's body and link (the world: 0)."""
+        if body < 0:
+            return 0
+        nb = self._bodies[body]
+        return nb.body_id if link < 0 else int(nb.link_bodies[link])
+
     # ---------------------------------------------------------------- world
 
     def _sync(self) -> None:
@@ -328,7 +395,9 @@ class MjcfOnEngine(MjcfReads, Backend):
 
     def step(self, n: int) -> None:
         """See Backend.step: each engine step applies MuJoCo's actuator, spring and damping
-        forces of the state at its start; a non-finite state raises SimulationDivergedError."""
+        forces of the state at its start; a state MuJoCo would call bad (not finite, or
+        beyond 1e10: :meth:`_check`), read before each engine step and after the last, raises
+        SimulationDivergedError naming the joint."""
         lock = self._stepping
         if not lock.acquire(False):
             wait_for_lock(self)
@@ -341,22 +410,35 @@ class MjcfOnEngine(MjcfReads, Backend):
                 raise self._diverged
             mirror = self.mirror
             for _ in range(max(n, 0)):
-                mirror.set_state(*self.engine_state())
+                q, v = self.engine_state()
+                self._check(q, v)
+                mirror.set_state(q, v)
                 self.apply_forces(*mirror.forces(self.ctrl))
                 self.step_engine()
                 self._time += self.dt
             self._synced = False
             if n > 0:
-                q, v = self.engine_state()
-                if not (np.isfinite(q).all() and np.isfinite(v).all()):
-                    self._diverged = SimulationDivergedError(
-                        self.name, self._time, "the engine's state (non-finite)"
-                    )
-                    raise self._diverged
+                self._check(*self.engine_state())
                 self.show_state()
         finally:
             self._in_step = False
             lock.release()
+
+    def _check(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Raise SimulationDivergedError (kept: every later step raises it) where the
+        engine's state is bad as MuJoCo's own ``mj_step`` judges it
+        (:func:`~simbridge.model.mjcf_native.bad_coordinate`: not finite, or beyond 1e10),
+        naming the first such coordinate's joint and body."""
+        bad = bad_coordinate(self.m, qpos, qvel)
+        if bad is not None:
+            self._synced = False
+            self._diverged = SimulationDivergedError(
+                self.name,
+                self._time,
+                f"the engine's {bad}",
+                why="is not finite or beyond MuJoCo's 1e10 (mjMAXVAL)",
+            )
+            raise self._diverged
 
     @exclusive
     def contact_points(self) -> list[ContactPoint]:
@@ -450,6 +532,7 @@ class MjcfOnEngine(MjcfReads, Backend):
                 "and the time step the Sim was given: the model is MuJoCo's",
                 **plan_departures(self.native, self.name, self.departure_texts),
                 **self.engine_departures(),
+                **({"initial_penetration": self._penetration} if self._penetration else {}),
             },
         }
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from simbridge.backend import Backend
 from simbridge.exceptions import SimBusyError, SimulationDivergedError
-from simbridge.model.mjcf_native import NativeBody, NativeMjcf
+from simbridge.model.mjcf_native import NativeBody, NativeMjcf, bad_coordinate, coordinate_name
 from simbridge.profiles import Profile
 from simbridge.types import (
     ContactPoint,
@@ -43,6 +43,13 @@ from .window import Viewer, check_display
 __all__ = ["NativeMujoco"]
 
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+# MuJoCo's warnings after which mj_step resets the data, and the vector whose address each
+# one's lastinfo is (mj_checkPos, mj_checkVel, mj_checkAcc)
+_BAD = (
+    (mujoco.mjtWarning.mjWARN_BADQPOS, "qpos"),
+    (mujoco.mjtWarning.mjWARN_BADQVEL, "qvel"),
+    (mujoco.mjtWarning.mjWARN_BADQACC, "qacc"),
+)
 
 
 def _xyzw(q: np.ndarray) -> Quat:
@@ -129,9 +136,10 @@ class NativeMujoco(MjcfReads, Backend):
     def step(self, n: int) -> None:
         """See Backend.step.
 
-        MuJoCo: ``mujoco.mj_step(m, d, nstep=n)``, the model's own integrator; a state that
-        turned non-finite, or MuJoCo's bad-acceleration warning (after which it resets the
-        data), raises SimulationDivergedError.
+        MuJoCo: ``mujoco.mj_step(m, d, nstep=n)``, the model's own integrator; MuJoCo's
+        bad-position, bad-velocity or bad-acceleration warning (a value not finite or beyond
+        1e10, after which it resets the data), or a state that turned non-finite, raises
+        SimulationDivergedError naming the coordinate's joint and body.
         """
         lock = self._stepping
         if not lock.acquire(False):
@@ -146,17 +154,28 @@ class NativeMujoco(MjcfReads, Backend):
             if n <= 0:
                 return
             d = self.d
-            warned = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+            warned = [int(d.warning[w].number) for w, _ in _BAD]
+            end = float(d.time) + n * float(self.m.opt.timestep)
             mujoco.mj_step(self.m, d, nstep=n)
             self._stale = True
             self._show()
-            if (
-                int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) != warned
-                or not np.isfinite(d.qpos).all()
-                or not np.isfinite(d.qvel).all()
-            ):
+            for (w, vector), before in zip(_BAD, warned, strict=True):
+                if int(d.warning[w].number) != before:  # MuJoCo reset the data after it
+                    where = coordinate_name(self.m, vector, int(d.warning[w].lastinfo))
+                    # the reset put time at 0 and the steps after it went on from there: the
+                    # (last) bad step ended at the end's time less theirs
+                    dt = float(self.m.opt.timestep)
+                    self._diverged = SimulationDivergedError(
+                        self.name,
+                        end - float(d.time) + dt,
+                        f"MuJoCo's {where}",
+                        why="was not finite or beyond 1e10 (mjMAXVAL): MuJoCo reset its data",
+                    )
+                    raise self._diverged
+            bad = bad_coordinate(self.m, d.qpos, d.qvel)
+            if bad is not None:
                 self._diverged = SimulationDivergedError(
-                    self.name, float(d.time), "MuJoCo's state (bad acceleration or non-finite)"
+                    self.name, float(d.time), f"MuJoCo's {bad}", why="is not finite"
                 )
                 raise self._diverged
         finally:

@@ -148,6 +148,11 @@ def _visual(c: int, link: LinkPlan) -> int:
     )
 
 
+# PyBullet's joint speed clamp, above MuJoCo's bad value (1e10, mjMAXVAL): a runaway reaches
+# it and raises SimulationDivergedError (MjcfOnEngine._check), where a clamp at 1e10 held it
+SPEED_CAP = 1e20
+
+
 class NativePyBullet(MjcfOnEngine):
     """The world of one MJCF model as MuJoCo compiles it, stepped by PyBullet.
 
@@ -215,6 +220,7 @@ class NativePyBullet(MjcfOnEngine):
         self._filters()
         self._layout()
         self._write(m.qpos0.copy(), np.zeros(m.nv))
+        self.note_penetration("PyBullet's rigid contacts")
         if self._window is not None:
             self._window.aim(self._shown())
 
@@ -263,7 +269,7 @@ class NativePyBullet(MjcfOnEngine):
                 linearDamping=0.0,
                 angularDamping=0.0,
                 jointDamping=0.0,
-                maxJointVelocity=1e10,
+                maxJointVelocity=SPEED_CAP,
                 physicsClientId=c,
             )
             if lk.inertial.mass > 0.0 and lk.index >= 0:
@@ -451,6 +457,12 @@ class NativePyBullet(MjcfOnEngine):
                 raise self._diverged
             out.append(contact_point((r[0], a, b, *r[3:])))
         return out
+
+    def engine_overlaps(self) -> list[ContactPoint] | None:
+        """See MjcfOnEngine.engine_overlaps: ``p.performCollisionDetection`` (no step), then
+        :meth:`engine_contacts`."""
+        p.performCollisionDetection(physicsClientId=self._c)
+        return self.engine_contacts()
 
     def step_engine(self) -> None:
         """See MjcfOnEngine.step_engine: ``p.stepSimulation``."""

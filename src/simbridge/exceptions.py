@@ -46,6 +46,7 @@ __all__ = [
     "PyBulletKeywordError",
     "StaleCommandError",
     "SlowStepWarning",
+    "InitialPenetrationWarning",
 ]
 
 
@@ -485,17 +486,20 @@ class InvalidEngineSettingError(InvalidProfileError):
 
 
 class SimulationDivergedError(SimbridgeError, FloatingPointError):
-    """The world's state turned non-finite.
+    """The world's state turned non-finite (or, for a model read with semantics='mujoco',
+    bad as MuJoCo's own ``mj_step`` judges it: beyond 1e10 in magnitude).
 
     Args:
         backend: The backend's name.
         time: The simulated time when it was noticed (s).
         where: What is not finite (``"body 0 joint velocities"``).
+        why: What is wrong with it (default ``"is not finite"``).
     """
 
-    def __init__(self, backend: str, time: float, where: str):
+    def __init__(self, backend: str, time: float, where: str, *, why: str = "is not finite"):
+        self.where = where
         super().__init__(
-            f"simulation on backend {backend!r} diverged at t={time:.6f} s: {where} is not finite"
+            f"simulation on backend {backend!r} diverged at t={time:.6f} s: {where} {why}"
         )
 
 
@@ -611,6 +615,13 @@ class StaleCommandError(SimbridgeError, RuntimeError):
 class SlowStepWarning(UserWarning):
     """A backend runs a slower path than it was installed for (the MuJoCo backend's compiled
     step loop is missing or was built against another MuJoCo): same results, more time."""
+
+
+class InitialPenetrationWarning(UserWarning):
+    """A model read with semantics='mujoco' whose geoms overlap at ``qpos0`` in an engine with
+    rigid contacts: the engine pushes them apart within a step where MuJoCo's soft contacts
+    ease them out over many, and the run may diverge (the pairs and depths are the manifest's
+    departure ``initial_penetration``)."""
 
 
 _MOVED_TO_COMPARE = frozenset(

@@ -25,7 +25,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-__all__ = ["Mirror"]
+__all__ = ["Mirror", "body_name", "own_overlaps"]
 
 
 class Mirror:
@@ -134,3 +134,42 @@ class Mirror:
         self.stale = False
         a, n = int(m.sensor_adr[sensor]), int(m.sensor_dim[sensor])
         return d.sensordata[a : a + n].copy()
+
+
+def own_overlaps(model: Any, qpos: np.ndarray) -> dict[frozenset[int], float]:
+    """MuJoCo's own contacts at a state, as the depth of each pair of rigid groups: what its
+    collision detection (``mj_forward`` on a fresh ``MjData``, filters included) finds there.
+
+    Args:
+        model: The compiled ``mujoco.MjModel``.
+        qpos: (nq,) the state's generalized positions.
+
+    Returns:
+        ``{frozenset of the two bodies' weld roots (body_weldid; the world 0): the smallest
+        contact distance (m; negative: overlapping)}``.
+    """
+    d = mujoco.MjData(model)
+    d.qpos[:] = qpos
+    mujoco.mj_forward(model, d)
+    weld = model.body_weldid
+    out: dict[frozenset[int], float] = {}
+    for i in range(d.ncon):
+        g1, g2 = int(d.contact.geom1[i]), int(d.contact.geom2[i])
+        key = frozenset((int(weld[model.geom_bodyid[g1]]), int(weld[model.geom_bodyid[g2]])))
+        out[key] = min(out.get(key, np.inf), float(d.contact.dist[i]))
+    return out
+
+
+def body_name(model: Any, body: int) -> str:
+    """A MuJoCo body's name.
+
+    Args:
+        model: The compiled ``mujoco.MjModel``.
+        body: The body's id.
+
+    Returns:
+        Its name: ``world`` for body 0, ``body<id>`` when unnamed.
+    """
+    if body == 0:
+        return "world"
+    return mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"

@@ -42,11 +42,14 @@ from simbridge.exceptions import MjcfCompileError
 from simbridge.types import ActuatorInfo, JointInfo, JointType
 
 __all__ = [
+    "BAD_VALUE",
     "SEMANTICS",
     "NativeBody",
     "NativeMjcf",
     "actuator_table",
+    "bad_coordinate",
     "compile_mjcf",
+    "coordinate_name",
     "native_bodies",
 ]
 
@@ -351,3 +354,56 @@ def actuator_table(m: Any) -> tuple[ActuatorInfo, ...]:
             )
         )
     return tuple(out)
+
+
+# MuJoCo's "bad" value (``mju_isBad``: not finite, or beyond ``mjMAXVAL`` in magnitude), after
+# which its own mj_step warns (mjWARN_BADQPOS, mjWARN_BADQVEL) and resets the data
+BAD_VALUE = float(mujoco.mjMAXVAL)
+
+
+def coordinate_name(m: Any, vector: str, index: int) -> str:
+    """One of MuJoCo's generalized coordinates, named by its joint and body.
+
+    Args:
+        m: The compiled ``mujoco.MjModel``.
+        vector: ``"qpos"``, or ``"qvel"`` (``qacc`` and forces share its addresses).
+        index: The coordinate's address in that vector.
+
+    Returns:
+        ``"qvel[7] (joint 'hip_1' of body 'front_left_leg')"``.
+    """
+    if vector == "qpos":
+        joint = int(np.searchsorted(m.jnt_qposadr, index, side="right")) - 1
+    else:
+        joint = int(m.dof_jntid[index])
+    jname = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, joint) or f"joint{joint}"
+    body = int(m.jnt_bodyid[joint])
+    bname = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
+    return f"{vector}[{index}] (joint {jname!r} of body {bname!r})"
+
+
+def bad_coordinate(m: Any, qpos: np.ndarray, qvel: np.ndarray) -> str | None:
+    """The first of ``qpos``, ``qvel`` that MuJoCo would call bad (not finite, or beyond
+    :data:`BAD_VALUE` = ``mjMAXVAL``, 1e10, in magnitude: MuJoCo's own ``mj_step`` resets the
+    data then), named, with its value, and how many others are bad.
+
+    Args:
+        m: The compiled ``mujoco.MjModel``.
+        qpos: (nq,) generalized positions, MuJoCo's conventions.
+        qvel: (nv,) generalized velocities.
+
+    Returns:
+        ``"qvel[7] (joint 'hip_1' of body 'front_left_leg') = nan (and 3 more values)"``, or
+        None when every value is good.
+    """
+    if (np.abs(qpos) <= BAD_VALUE).all() and (np.abs(qvel) <= BAD_VALUE).all():
+        return None  # NaN compares False
+    found = []
+    for vector, values in (("qpos", qpos), ("qvel", qvel)):
+        bad = np.flatnonzero(~(np.abs(values) <= BAD_VALUE))  # NaN compares False
+        found += [(vector, int(i), float(values[i])) for i in bad]
+    if not found:
+        return None
+    vector, i, value = found[0]
+    more = f" (and {len(found) - 1} more values)" if len(found) > 1 else ""
+    return f"{coordinate_name(m, vector, i)} = {value:.6g}{more}"
