@@ -49,6 +49,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import re
 import subprocess
 import sys
 import time
@@ -273,6 +274,13 @@ def mujoco_reading(engine: str, path: Path, m: Any, refs: dict[str, Any]) -> dic
         names = [sim.joint_info(b, j).name for b in bodies for j in range(sim.num_joints(b))]
         row["joints"] = len(names)
         row["names_are_mujocos"] = names == refs["joint_names"]
+        overlap = sim.manifest()["departures"].get("initial_penetration")
+        if overlap:  # "at qpos0 N pairs of bodies overlap ..., deepest first: 'a'-'b' D m"
+            deepest = re.search(r"'-'[^']*' ([\d.]+) m", overlap)
+            row["initial_penetration"] = {
+                "pairs": int(overlap.split()[2]),
+                "deepest": float(deepest.group(1)) if deepest else None,
+            }
         if m.njnt:
             row["fk_qpos0"] = _frames_error(m, _link_frames(engine, sim), refs["fk0"])
             sim.set_qpos_qvel(refs["qrand"], np.zeros(m.nv))
@@ -582,6 +590,9 @@ def _cells(r: dict[str, Any]) -> list[str]:
     if "dynamics_error" in r:
         hold = f"not run: {r['dynamics_error'][:90]}"
     status = "loads"
+    if r.get("initial_penetration"):
+        ip = r["initial_penetration"]
+        status += f" (`initial_penetration`: {ip['pairs']} pairs, {_num(ip['deepest'], '.3f')} m)"
     if r.get("ignored_includes"):
         status += " without its `<include>`s (in the manifest's `ignored`)"
     return [status, f"{r['joints']} ({names})", fk, hold, drop_s, track]
