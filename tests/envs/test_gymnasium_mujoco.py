@@ -125,7 +125,8 @@ def test_sim2sim_takes_a_gymnasium_policy_as_a_callable(tmp_path):
 
     policy = "simbridge.envs.controllers:AntGait"
     args = ["sim2sim", policy, "--task", "ant", "--trained-on", "external:gymnasium"]
-    code = main([*args, "--backends", "mujoco", "physx", "--episodes", "1", "--out", str(tmp_path)])
+    args += ["--backends", "mujoco", "physx", "--episodes", "1", "--openloop", "0"]
+    code = main([*args, "--out", str(tmp_path)])
     assert code == 0
     summary = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
     assert [e["label"] for e in summary["engines"]] == ["mujoco", "physx"]

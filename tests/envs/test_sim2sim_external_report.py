@@ -109,7 +109,7 @@ def test_outside_report_html_fail_on_drop_and_replay(policies, tmp_path, capsys)
     out = tmp_path / "out"
     args = ["sim2sim", f"{policies}:LqrOnPybulletOnly", "--task", "cartpole"]
     args += ["--trained-on", "external:isaaclab", "--backends", "mujoco", "pybullet"]
-    code = main([*args, "--episodes", "6", "--out", str(out), "--fail-on-drop"])
+    code = main([*args, "--episodes", "6", "--out", str(out), "--fail-on-drop", "--openloop", "0"])
     err = capsys.readouterr().err
     assert code == 3, err
     assert "between engines: mujoco below pybullet" in err
@@ -130,13 +130,25 @@ def test_outside_report_html_fail_on_drop_and_replay(policies, tmp_path, capsys)
 
 
 def test_outside_the_same_engine_twice_passes_fail_on_drop(policies, tmp_path, capsys):
+    """...and its open-loop replay takes the first engine's actions (no log of the training
+    run outside simbridge exists), saying so; the same engine twice agrees with itself."""
     args = ["sim2sim", f"{policies}:LqrOnPybulletOnly", "--task", "cartpole", "--no-replay"]
     args += ["--trained-on", "external:gymnasium", "--backends", "pybullet", "pybullet"]
+    args += ["--openloop", "1", "--openloop-ensemble", "4"]
     code = main([*args, "--episodes", "3", "--out", str(tmp_path / "o"), "--fail-on-drop"])
     assert code == 0, capsys.readouterr().err
     page = (tmp_path / "o" / "report.html").read_text(encoding="utf-8")
     engines, pair = _headline(page)
     assert [v for v, _ in pair] == ["same"] and len(engines) == 2
+    md = (tmp_path / "o" / "report.md").read_text(encoding="utf-8")
+    assert "## Where the physics parts: the first engine's actions replayed open loop" in md
+    assert "trained outside simbridge (gymnasium)" in md
+    doc = json.loads((tmp_path / "o" / "summary.json").read_text(encoding="utf-8"))
+    ol = doc["openloop"]
+    assert ol["outside"] == "gymnasium" and ol["trained_on"] == "pybullet"
+    assert ol["seeds"] == [0] and ol["reproduces"]["0"] == 0.0  # its own log, repeated exactly
+    verdicts = [r["verdict"] for r in ol["replays"]]
+    assert verdicts and all(v in ("agree", "chaotic") for v in verdicts), verdicts
 
 
 def test_the_open_loop_replays_are_a_folded_section_of_report_html(tmp_path, capsys):

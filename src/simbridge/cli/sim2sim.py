@@ -42,7 +42,8 @@ against it and every pair of engines is tested.
 
 The training engine's actions of the first K seeds (--openloop K) are replayed open loop on
 every engine and judged by compare's verdicts (agree, chaotic, unresolved, differ): where the
-physics parts.
+physics parts. For a policy trained outside simbridge, the first engine's actions stand in for
+the training run's (simbridge has no log of it).
 """
 
 

@@ -254,8 +254,9 @@ def sim2sim(
         episodes: episodes per engine (seeds ``seed .. seed + episodes - 1``).
         seed: the first seed (and the bootstrap's).
         openloop: replay the training engine's actions of the first ``openloop`` seeds open
-            loop on every engine (0: none; the command line's default is 4; none for an
-            outside policy).
+            loop on every engine (0: none; the command line's default is 4; for an outside
+            policy, the first engine's actions stand in: simbridge has no log of its training
+            run).
         openloop_ensemble: runs per engine and seed of the replays.
 
     Returns:
@@ -287,10 +288,16 @@ def sim2sim(
     seeds = list(range(seed, seed + episodes))
     runs = [run_engine(t, e, policy, seeds) for e in engines]
     result = Sim2SimResult(t.name, policy, trained_on, seeds, runs, figures(runs, seed))
-    if openloop and not external:
+    if openloop:
         from simbridge.envs.sim2sim_openloop import openloop as replay
 
         result.openloop = replay(
-            t, engines, policy, seeds[:openloop], ensemble=openloop_ensemble, seed=seed
+            t,
+            engines,
+            policy,
+            seeds[:openloop],
+            ensemble=openloop_ensemble,
+            seed=seed,
+            outside=outside(trained_on) or "",
         )
     return result

@@ -127,6 +127,10 @@ class OpenLoop:
     """Every other engine's replays, engine by engine, seed by seed."""
     skipped: dict[int, str] = field(default_factory=dict)
     """Seeds not replayed, and why (an episode of fewer than 2 steps)."""
+    outside: str = ""
+    """For a policy trained outside simbridge (``external:NAME``), that NAME: no log of its
+    training run is at hand, so the first engine's actions (:attr:`trained_on`, then that
+    engine's label) stand in for it; empty for a training engine's own log."""
 
 
 # ---------------------------------------------------------------- the runs
@@ -365,6 +369,7 @@ def openloop(
     ensemble: int = DEFAULT_ENSEMBLE,
     perturb: float = DEFAULT_PERTURB,
     seed: int = 0,
+    outside: str = "",
 ) -> OpenLoop:
     """Replay the training engine's actions open loop on every engine and judge where the
     physics parts (see the module's docstring).
@@ -377,6 +382,9 @@ def openloop(
         ensemble: runs per engine and seed (run 0 unperturbed); at least 1.
         perturb: the perturbed runs' offset, rad or m (> 0).
         seed: seeds the offsets' directions, the bootstrap and the permutation test.
+        outside: for a policy trained outside simbridge, the training simulator's name
+            (``external:NAME``'s NAME): the first engine's actions stand in for the training
+            run's, which simbridge has no log of (:attr:`OpenLoop.outside`).
 
     Returns:
         The :class:`OpenLoop`.
@@ -397,7 +405,9 @@ def openloop(
         train = made[0]
         quantities = [q for q in QUANTITIES if q == QUANTITIES[0] or _free_base(train.env)]
         eps = {m.engine.label: _engine_perturbation(task, m.engine.backend, perturb) for m in made}
-        result = OpenLoop(train.engine.label, list(seeds), ensemble, eps, {}, {})
+        result = OpenLoop(
+            train.engine.label, list(seeds), ensemble, eps, {}, {}, outside=outside
+        )
         pol = load_policy(policy, train.env)
         dt = task.control_dt
         for s in seeds:

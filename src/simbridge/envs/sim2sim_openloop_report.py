@@ -66,10 +66,21 @@ def section(ol: OpenLoop | None) -> list[str]:
     from simbridge.compare.report.summary_dicts import verdict_dict
     from simbridge.compare.report.verdict import interval_cell, verdict_word
 
+    whose = "the training engine's" if not ol.outside else "the first engine's"
     out = [
         "",
-        "## Where the physics parts: the training engine's actions replayed open loop",
+        f"## Where the physics parts: {whose} actions replayed open loop",
         "",
+    ]
+    if ol.outside:
+        out += [
+            f"The policy was trained outside simbridge ({ol.outside}), whose run's actions "
+            f"simbridge has no log of: {ol.trained_on}, the first engine evaluated, stands in "
+            "for it. The replays then say where the engines' physics part under the same "
+            f"actions, not where {ol.outside}'s does.",
+            "",
+        ]
+    out += [
         f"The actions {ol.trained_on} sent in seeds {', '.join(map(str, ol.seeds))} are sent "
         f"again, open loop, from the same initial state, on every engine: {ol.ensemble} runs "
         "per engine and seed, each but the first with the robot's joints (and a free base's "
@@ -132,6 +143,7 @@ def summary(ol: OpenLoop | None) -> dict[str, Any] | None:
 
     return {
         "trained_on": ol.trained_on,
+        "outside": ol.outside or None,
         "seeds": ol.seeds,
         "ensemble": ol.ensemble,
         "perturbation": ol.perturbation,
