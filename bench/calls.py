@@ -838,7 +838,7 @@ def calls_table(backends: list[str], reps: int, n: int, only: str | None = None)
     missed = dict.fromkeys(others, 0)
     notes: list[str] = []  # said under the table
     for robot in ROBOTS:
-        if only is not None and robot == "a1" and not any(only in r for r in A1_ROWS):
+        if only is not None and robot == "a1" and not any(only in f"a1: {r}" for r in A1_ROWS):
             continue
         worlds = {b: World(b, robot) for b in backends}
         raw_worlds = {"physx": World("physx", robot)} if "physx" in backends else {}
