@@ -25,6 +25,8 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TypeVar
 
+import numpy as np
+
 from simbridge.exceptions import SimulationDivergedError
 from simbridge.types import ContactPoint
 
@@ -81,7 +83,10 @@ def _point(
         d1 = nz * x - nx * 0.0
         d2 = nx * y - ny * x
         norm = _sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        d0, d1, d2 = d0 / norm, d1 / norm, d2 / norm
+        if norm == 0.0:  # a normal of length 0 (never a unit one): numpy's 0 / 0, as before
+            d0, d1, d2 = (np.array([d0, d1, d2]) / norm).tolist()
+        else:
+            d0, d1, d2 = d0 / norm, d1 / norm, d2 / norm
     dist = separation - rest
     return _new_tuple(
         ContactPoint,

@@ -211,3 +211,14 @@ def test_a_point_pushed_and_sliding():
     assert p.lateral_friction_dir_2 == pytest.approx((0.0, 1.0, 0.0))  # normal x dir 1
     pulled = _point((0, 1, -1, 3), [0.0] * 3, [0.0, 0.0, 1.0], [0.0, 0.0, -1.0], 0.0, 100.0, 0.0)
     assert pulled.normal_force == 0.0 and pulled.lateral_friction_1 == 0.0
+
+
+def test_a_normal_of_length_zero_gives_nan_directions_as_the_array_version():
+    """No unit normal (a degenerate report): the friction directions are numpy's 0 / 0, NaN,
+    as the array version gave them, not a ZeroDivisionError."""
+    from simbridge.backends.physx.contacts import _point
+
+    with pytest.warns(RuntimeWarning):
+        p = _point((0, 1, -1, -1), [0.0] * 3, [0.0, 0.0, 0.0], [0.0] * 3, 0.0, 240.0, 0.0)
+    assert all(np.isnan(p.lateral_friction_dir_1)) and all(np.isnan(p.lateral_friction_dir_2))
+    assert p.normal_force == 0.0 and p.lateral_friction_1 == 0.0
