@@ -9,18 +9,21 @@ engine call.
     python bench/calls.py --only link_state      # the rows whose name holds the text, alone
     python bench/ab.py BEFORE_TREE AFTER_TREE    # two source trees' runs in turn, compared
 
-Two robots: r2d2 resting on plane.urdf (4 wheels commanded, link 2 read) and a fixed-base
-KUKA iiwa (7 joints commanded, link 6 read). Every call is timed per call over a loop of
-``--calls`` calls (a command alternates two targets, so every call is a new command; a step
-row times single ``sim.step()`` calls, contact-free: r2d2 reset into the air before each
-repeat, the KUKA in free space; the ``contact_points`` row reads r2d2 resting on the plane,
-put back and settled before each timing, every call converting the step's points afresh: the
-number of points each engine reports is said under the table). Each repeat times every row
-once, in turn (PyBullet layer, MuJoCo layer, PhysX layer, then the raw calls), and the table
-gives the medians (``--stat min``: the least) over ``--repeats`` repeats, less the loop's own
-cost (a call of an empty lambda, measured the same way). Each ratio is an engine's layer call
-over PyBullet's layer call, the target (../shared/PERFORMANCE.md, issues 11 and 21) at most
-1.5x for every engine.
+Two robots: r2d2 resting on plane.urdf (4 wheels commanded, link 2 read) and a fixed-base KUKA
+iiwa (7 joints commanded, link 6 read); and for the reads a legged observation makes
+(``A1_ROWS``: link and base states, joint states, contacts) a Unitree A1 standing on the plane,
+its 12 joints held in a1_stand's default pose by position motors (33.5 N m), link 5 (the front
+right toe) read. Every call is timed per call over a loop of ``--calls`` calls (a command
+alternates two targets, so every call is a new command; a step row times single ``sim.step()``
+calls, contact-free: r2d2 reset into the air before each repeat, the KUKA in free space; the
+``contact_points`` row reads r2d2 resting on the plane (the A1 standing), put back and settled
+before each timing, every call converting the step's points afresh: the number of points each
+engine reports is said under the table). Each repeat times every row once, in turn (PyBullet
+layer, MuJoCo layer, PhysX layer, then the raw calls), and the table gives the medians
+(``--stat min``: the least) over ``--repeats`` repeats, less the loop's own cost (a call of an
+empty lambda, measured the same way). Each ratio is an engine's layer call over PyBullet's
+layer call, the target (../shared/PERFORMANCE.md, issues 11 and 21) at most 1.5x for every
+engine.
 
 Raw calls: PyBullet's own function on the same client (``setJointMotorControlArray``,
 ``getLinkState(computeLinkVelocity=1, computeForwardKinematics=1)``...); for MuJoCo, what a raw
@@ -72,6 +75,33 @@ import cases  # noqa: E402  (bench/cases.py: the r2d2 world and the raw drives)
 import simbridge  # noqa: E402
 
 KUKA = "kuka_iiwa/model.urdf"
+A1 = "a1/a1.urdf"
+# the A1's default pose (envs/tasks/a1_stand.toml): joint name -> rad; its base's start height
+A1_POSE = {
+    "FR_hip_joint": -0.1,
+    "FR_upper_joint": 0.8,
+    "FR_lower_joint": -1.5,
+    "FL_hip_joint": 0.1,
+    "FL_upper_joint": 0.8,
+    "FL_lower_joint": -1.5,
+    "RR_hip_joint": -0.1,
+    "RR_upper_joint": 1.0,
+    "RR_lower_joint": -1.5,
+    "RL_hip_joint": 0.1,
+    "RL_upper_joint": 1.0,
+    "RL_lower_joint": -1.5,
+}
+A1_Z = 0.32
+A1_FORCE = 33.5  # N m, the stand task's torque limit
+# the rows timed on the standing A1: a legged observation's reads
+A1_ROWS = (
+    "link_state(link)",
+    "link_states(every link)",
+    "base_state",
+    "joint_states(commanded joints)",
+    "contact_points",
+)
+ROBOTS = ("r2d2", "kuka", "a1")
 TARGET = 1.5  # no MuJoCo or PhysX call more than 1.5x the same call on PyBullet
 
 
@@ -99,12 +129,21 @@ class World:
 
     def __init__(self, backend: str, robot: str) -> None:
         self.backend = backend
+        self.robot = robot
         self.sim = simbridge.Sim(backend)
         if robot == "r2d2":
             self.sim.load_urdf("plane.urdf")
             self.body = self.sim.load_urdf("r2d2.urdf", base_position=(0, 0, cases.START_Z))
             self.joints = list(cases.WHEELS)
             self.link = 2
+        elif robot == "a1":
+            self.sim.load_urdf("plane.urdf")
+            self.body = self.sim.load_urdf(A1, base_position=(0, 0, A1_Z))
+            every = range(self.sim.num_joints(self.body))
+            names = [self.sim.joint_info(self.body, j).name for j in every]
+            self.joints = [names.index(name) for name in A1_POSE]
+            self.link = 5
+            _stand(self)
         else:
             self.body = self.sim.load_urdf(KUKA, fixed_base=True)
             self.joints = list(range(7))
@@ -587,16 +626,31 @@ def _fresh_contacts(w: World) -> Callable[[], None]:
 
 
 def _settle(worlds: list[World]) -> None:
-    """r2d2 back on the plane at rest, wheels stopped, and 240 steps: resting on its contacts."""
+    """r2d2 back on the plane at rest, wheels stopped, and 240 steps: resting on its contacts;
+    the A1 stood up again (:func:`_stand`)."""
     for w in worlds:
+        if w.robot == "a1":
+            _stand(w)
+            continue
         w.sim.set_joint_velocity(w.body, w.joints, 0.0, max_force=50.0)
         w.sim.reset_base_state(w.body, (0, 0, cases.START_Z), (0, 0, 0, 1), (0, 0, 0), (0, 0, 0))
         w.sim.step(240)
 
 
+def _stand(w: World) -> None:
+    """The A1 put back at its start height in its default pose at rest, position motors
+    holding the pose, and 480 steps (2 s): standing on its four feet."""
+    pose = list(A1_POSE.values())
+    w.sim.reset_base_state(w.body, (0, 0, A1_Z), (0, 0, 0, 1), (0, 0, 0), (0, 0, 0))
+    w.sim.reset_joint_state(w.body, w.joints, pose)
+    w.sim.set_joint_position(w.body, w.joints, pose, max_force=A1_FORCE)
+    w.sim.step(480)
+
+
 def _points_note(worlds: dict[str, World]) -> str:
-    """How many points each engine reports (r2d2 resting on the plane; none for the KUKA)."""
-    if any(w.link != 2 for w in worlds.values()):  # the KUKA, in free space
+    """How many points each engine reports (r2d2 resting on the plane, the A1 standing; none
+    for the KUKA)."""
+    if any(w.robot == "kuka" for w in worlds.values()):  # in free space
         return "no contact: the call's own cost"
     _settle(list(worlds.values()))
     counts = ", ".join(f"{b} {len(w.sim.contact_points())}" for b, w in worlds.items())
@@ -783,12 +837,16 @@ def calls_table(backends: list[str], reps: int, n: int, only: str | None = None)
     print("|------" * (len(head) + 1) + "|")
     missed = dict.fromkeys(others, 0)
     notes: list[str] = []  # said under the table
-    for robot in ("r2d2", "kuka"):
+    for robot in ROBOTS:
+        if only is not None and robot == "a1" and not any(only in f"a1: {r}" for r in A1_ROWS):
+            continue
         worlds = {b: World(b, robot) for b in backends}
         raw_worlds = {"physx": World("physx", robot)} if "physx" in backends else {}
         rows = rows_for(robot, worlds, raw_worlds)
         for row in rows:
             if only is not None and only not in row.name:
+                continue
+            if robot == "a1" and row.name.split(": ", 1)[1] not in A1_ROWS:
                 continue
             for col in row.columns.values():  # warm up: caches, first compile of a path
                 col(0)
@@ -796,7 +854,7 @@ def calls_table(backends: list[str], reps: int, n: int, only: str | None = None)
             prepare = None
             if row.name == "r2d2: step, contact-free":
                 prepare = _prepare_step([*worlds.values(), *raw_worlds.values()])
-            elif row.name == "r2d2: contact_points":
+            elif row.name in ("r2d2: contact_points", "a1: contact_points"):
                 both = [*worlds.values(), *raw_worlds.values()]
                 prepare = lambda both=both: _settle(both)  # noqa: E731
             time_row(row, n, reps, prepare)
@@ -814,7 +872,7 @@ def calls_table(backends: list[str], reps: int, n: int, only: str | None = None)
             cells = [fmt_us(row.times.get(b)) for b in backends] + ratios
             cells += [fmt_us(row.times.get(f"raw {b}")) for b in backends]
             print(f"| {row.name} | {' | '.join(cells)} |")
-            if row.name == "r2d2: contact_points":
+            if row.name in ("r2d2: contact_points", "a1: contact_points"):
                 notes.append(f"{row.name}: {row.note} (one call reads them all)")
         for w in [*worlds.values(), *raw_worlds.values()]:
             w.sim.close()

@@ -49,9 +49,10 @@ def test_bench_runs_with_a_tiny_repeat_count():
 
 
 def test_calls_table_times_every_call_on_every_engine():
-    """bench/calls.py: every Sim call on r2d2 and a fixed KUKA, every installed engine side by
-    side (a figure in each engine's column, its ratio over PyBullet's), then command + step
-    against the step alone, and the drive raw, plain and through a bound command."""
+    """bench/calls.py: every Sim call on r2d2 and a fixed KUKA, a legged observation's reads
+    on a standing A1, every installed engine side by side (a figure in each engine's column,
+    its ratio over PyBullet's), then command + step against the step alone, and the drive raw,
+    plain and through a bound command."""
     proc = subprocess.run(
         [sys.executable, str(ROOT / "bench" / "calls.py"), "--quick", "--repeats", "1"],
         capture_output=True,
@@ -110,10 +111,25 @@ def test_calls_table_times_every_call_on_every_engine():
         line = next(line for line in calls if line.startswith(f"| r2d2: {call} |"))
         cells = [c.strip() for c in line.strip("|").split("|")]
         assert all(float(cells[k]) > 0 for k in raw), line
-    # r2d2 rests on its contacts in the contact_points row: every engine reports some points
-    said = next(line for line in lines if line.startswith("r2d2: contact_points: points: "))
-    counts = dict(x.split() for x in said.partition(": points: ")[2].split(" (")[0].split(", "))
-    assert set(counts) == {e.lower() for e in engines} and all(int(v) > 0 for v in counts.values())
+    # the A1: the reads a legged observation makes, each with a raw figure on every engine
+    legged = [line for line in lines[top:end] if line.startswith("| a1: ")]
+    assert [line.split("|")[1].strip() for line in legged] == [
+        "a1: link_state(link)",
+        "a1: link_states(every link)",
+        "a1: base_state",
+        "a1: joint_states(commanded joints)",
+        "a1: contact_points",
+    ]
+    for line in legged:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert all(float(cells[k]) > 0 for k in layer + raw), line
+    # r2d2 rests on its contacts in the contact_points row, the A1 stands on its feet: every
+    # engine reports some points
+    for robot in ("r2d2", "a1"):
+        said = next(line for line in lines if line.startswith(f"{robot}: contact_points: points: "))
+        counts = dict(x.split() for x in said.partition(": points: ")[2].split(" (")[0].split(", "))
+        assert set(counts) == {e.lower() for e in engines}, said
+        assert all(int(v) > 0 for v in counts.values()), said
     assert any("position_command targets" in line for line in lines)
     drive = [line for line in lines if line.startswith(tuple(f"| {e.lower()} |" for e in engines))]
     assert len(drive) == len(engines) and all(float(line.split("|")[6]) > 0 for line in drive)
@@ -125,8 +141,8 @@ def test_calls_table_times_every_call_on_every_engine():
 
 
 def test_calls_only_times_the_rows_named():
-    """bench/calls.py --only TEXT: the calls table's rows whose name holds TEXT, on both
-    robots, and no other table."""
+    """bench/calls.py --only TEXT: the calls table's rows whose name holds TEXT, on every
+    robot that has the row, and no other table."""
     proc = subprocess.run(
         [
             sys.executable,
@@ -144,10 +160,13 @@ def test_calls_only_times_the_rows_named():
         timeout=300,
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    rows = [line for line in proc.stdout.splitlines() if line.startswith(("| r2d2", "| kuka"))]
+    rows = [
+        line for line in proc.stdout.splitlines() if line.startswith(("| r2d2", "| kuka", "| a1"))
+    ]
     assert [row.split("|")[1].strip() for row in rows] == [
         "r2d2: link_states(every link)",
         "kuka: link_states(every link)",
+        "a1: link_states(every link)",
     ]
     assert "position_command targets" not in proc.stdout  # the other tables left out
 

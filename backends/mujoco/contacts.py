@@ -18,7 +18,8 @@ and B = geom 2's (the Sim orients them as asked):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, NoReturn
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, NoReturn, TypeVar
 
 import mujoco
 import numpy as np
@@ -30,6 +31,10 @@ from ..locking import exclusive
 from .robots import Compiled, Robot
 
 __all__ = ["ContactReads", "contact_points_of"]
+
+_T = TypeVar("_T", bound=tuple[Any, ...])
+# a NamedTuple from a tuple, without the Python __new__ it is given
+_new_tuple: Callable[[type[_T], tuple[Any, ...]], _T] = tuple.__new__
 
 
 class ContactReads:
@@ -47,11 +52,11 @@ class ContactReads:
         def _py_mark(self) -> None: ...
 
     # (compile, owner body id per geom, link per geom): rebuilt when the world is recompiled
-    _geom_owner_cache: tuple[Compiled, np.ndarray, np.ndarray] | None = None
+    _geom_owner_cache: tuple[Compiled, list[int], list[int]] | None = None
 
-    def _geom_owners(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per MuJoCo geom: the body id and PyBullet link index of its robot (-1, -2 for a
-        geom that is no collision geom of a robot)."""
+    def _geom_owners(self) -> tuple[list[int], list[int]]:
+        """Per MuJoCo geom: the body id and PyBullet link index of its robot (-2, -2 for a
+        geom that is no collision geom of a robot), as lists (looked up per contact)."""
         c = self._w
         cached = self._geom_owner_cache
         if cached is not None and cached[0] is c:
@@ -65,8 +70,8 @@ class ContactReads:
                 if gid >= 0:
                     owner[gid] = robot.id
                     link[gid] = g.link
-        self._geom_owner_cache = (c, owner, link)
-        return owner, link
+        self._geom_owner_cache = (c, owner.tolist(), link.tolist())
+        return self._geom_owner_cache[1], self._geom_owner_cache[2]
 
     @exclusive
     def contact_points(self) -> list[ContactPoint]:
@@ -85,15 +90,17 @@ class ContactReads:
         return contact_points_of(c.m, c.d, owner, link)
 
 
-def contact_points_of(m: Any, d: Any, owner: np.ndarray, link: np.ndarray) -> list[ContactPoint]:
+def contact_points_of(m: Any, d: Any, owner: list[int], link: list[int]) -> list[ContactPoint]:
     """The contact points of MuJoCo's ``d.contact`` (the last step's), as PyBullet gives them.
 
     Args:
         m: The compiled model.
         d: Its data after a step.
-        owner: (ngeom,) the simbridge body of each geom: -1 for the world's own geoms (a
-            model read as MuJoCo reads it: its floor), -2 for a geom of no body (skipped).
-        link: (ngeom,) the PyBullet link index of each geom in its body (-1: the base).
+        owner: per geom (ngeom ints), the simbridge body of each geom: -1 for the world's own
+            geoms (a model read as MuJoCo reads it: its floor), -2 for a geom of no body
+            (skipped).
+        link: per geom (ngeom ints), the PyBullet link index of each geom in its body (-1: the
+            base).
 
     Returns:
         One point per MuJoCo contact between two geoms of bodies: the points on A and B, B's
@@ -104,53 +111,39 @@ def contact_points_of(m: Any, d: Any, owner: np.ndarray, link: np.ndarray) -> li
     if n == 0:
         return []
     con = d.contact
-    geom = con.geom[:n]
-    dist = con.dist[:n] - con.includemargin[:n]
-    pos = con.pos[:n]
-    frame = con.frame[:n]
-    adr = con.efc_address[:n]
+    geoms = con.geom[:n].tolist()  # (n, 2): geom 1, geom 2
+    adr = con.efc_address[:n].tolist()
     force = np.zeros((n, 6))
     for i in range(n):
         if adr[i] >= 0:
             mujoco.mj_contactForce(m, d, i, force[i])
-    geom, pos, frame = geom.copy(), pos.copy(), frame.copy()  # views into d: taken now
-    normal = frame[:, 0:3]
-    on_a = pos - normal * (0.5 * dist)[:, None]
-    on_b = pos + normal * (0.5 * dist)[:, None]
+    # each contact in Python floats (a few contacts: numpy's per-call cost on (n, 3) arrays
+    # was most of the call), the operations of the array version this replaced: the same bits
     rows = zip(
-        owner[geom[:, 0]].tolist(),
-        owner[geom[:, 1]].tolist(),
-        link[geom[:, 0]].tolist(),
-        link[geom[:, 1]].tolist(),
-        on_a.tolist(),
-        on_b.tolist(),
-        (-normal).tolist(),
-        dist.tolist(),
-        force[:, 0:3].tolist(),
-        (-frame[:, 3:6]).tolist(),
-        (-frame[:, 6:9]).tolist(),
+        geoms,
+        con.dist[:n].tolist(),
+        con.includemargin[:n].tolist(),
+        con.pos[:n].tolist(),
+        con.frame[:n].tolist(),
+        force.tolist(),
         strict=True,
     )
     out: list[ContactPoint] = []
-    for body_a, body_b, link_a, link_b, pa, pb, nb, dd, f, t1, t2 in rows:
+    add = out.append
+    for (g1, g2), dist, margin, (px, py, pz), fr, f in rows:
+        body_a, body_b = owner[g1], owner[g2]
         if body_a < -1 or body_b < -1:
             continue  # a geom of no body (-2)
-        out.append(
-            ContactPoint(
-                0,
-                body_a,
-                body_b,
-                link_a,
-                link_b,
-                tuple(pa),
-                tuple(pb),
-                tuple(nb),
-                dd,
-                f[0],
-                f[1],
-                tuple(t1),
-                f[2],
-                tuple(t2),
-            )
-        )
+        link_a, link_b = link[g1], link[g2]
+        dist -= margin
+        half = 0.5 * dist
+        nx, ny, nz = fr[0], fr[1], fr[2]  # MuJoCo's normal, from geom 1 to geom 2
+        hx, hy, hz = nx * half, ny * half, nz * half
+        # fmt: off
+        add(_new_tuple(ContactPoint, (
+            0, body_a, body_b, link_a, link_b,
+            (px - hx, py - hy, pz - hz), (px + hx, py + hy, pz + hz), (-nx, -ny, -nz), dist,
+            f[0], f[1], (-fr[3], -fr[4], -fr[5]), f[2], (-fr[6], -fr[7], -fr[8]),
+        )))
+        # fmt: on
     return out

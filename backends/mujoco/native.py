@@ -110,7 +110,7 @@ class NativeMujoco(MjcfReads, Backend):
         self._closed = False
         self._stale = True
         self._diverged: SimulationDivergedError | None = None
-        self._geom_owners: tuple[np.ndarray, np.ndarray] | None = None
+        self._geom_owners: tuple[list[int], list[int]] | None = None
 
     reading = locking.reading
 
@@ -214,8 +214,9 @@ class NativeMujoco(MjcfReads, Backend):
         owner, link = self._owners()
         return contact_points_of(self.m, self.d, owner, link)
 
-    def _owners(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per geom: its simbridge body (-1: the world's) and link (-1: the base)."""
+    def _owners(self) -> tuple[list[int], list[int]]:
+        """Per geom: its simbridge body (-1: the world's) and link (-1: the base), as lists
+        (:func:`~.contacts.contact_points_of` looks them up per contact)."""
         if self._geom_owners is None:
             m = self.m
             body_of = np.full(m.nbody, -1, np.intp)
@@ -229,7 +230,10 @@ class NativeMujoco(MjcfReads, Backend):
             for mb in range(1, m.nbody):  # a body without a row: its parent's link
                 if link_of[mb] < 0 and m.body_parentid[mb] > 0:
                     link_of[mb] = link_of[m.body_parentid[mb]]
-            self._geom_owners = (body_of[m.geom_bodyid], link_of[m.geom_bodyid])
+            self._geom_owners = (
+                body_of[m.geom_bodyid].tolist(),
+                link_of[m.geom_bodyid].tolist(),
+            )
         return self._geom_owners
 
     # ---------------------------------------------------------------- state

@@ -11,11 +11,19 @@ its two components and points (position, normal, impulse, separation). Each poin
 * the normal force is PhysX's impulse over the step (impulse / dt) along the normal. PhysX
   reports no friction impulse per point (SAPIEN 3.0.3): the friction fields are 0, along an
   arbitrary frame perpendicular to the normal (a departure).
+
+SAPIEN 3.0.3 reads a contact's points one attribute at a time (each vector a new numpy array;
+there is no batched read on the CPU system), so each point is converted where it is read, in
+Python floats (:func:`_point`): for the few points a robot's feet or wheels make, numpy's
+per-call cost over whole arrays cost more than the arithmetic itself (r2d2 resting on a plane,
+16 points: 104 µs a call in arrays, 62 in floats, of which 39 are SAPIEN's own reads).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -32,33 +40,70 @@ __all__ = ["ContactReads"]
 REST = 2.0 * REST_OFFSET
 
 
-def _perpendicular(n: np.ndarray) -> np.ndarray:
-    """A unit vector perpendicular to each row of ``n`` (``(k, 3)`` unit normals -> ``(k, 3)``):
-    ``n`` crossed with x, or with y where ``n`` is within 26 degrees of x (the products of
-    ``np.cross(n, axis)``, written out)."""
-    n0, n1, n2 = n[:, 0], n[:, 1], n[:, 2]
-    near_x = np.abs(n0) >= 0.9
-    y = near_x.astype(float)  # the axis's y (1 where near x), its x is 1 - y, its z 0
-    x = 1.0 - y
-    d = np.empty_like(n)
-    d[:, 0] = n1 * 0.0 - n2 * y
-    d[:, 1] = n2 * x - n0 * 0.0
-    d[:, 2] = n0 * y - n1 * x
-    return d / np.sqrt(_dot(d, d))[:, None]
+_T = TypeVar("_T", bound=tuple[Any, ...])
+# a NamedTuple from a tuple, without the Python __new__ it is given (as reads.py)
+_new_tuple: Callable[[type[_T], tuple[Any, ...]], _T] = tuple.__new__
+_sqrt = math.sqrt
 
 
-def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Row-wise dot products of two ``(k, 3)`` arrays -> ``(k,)``, summed x, y, z in turn."""
-    return u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1] + u[:, 2] * v[:, 2]
+def _point(
+    pair: tuple[int, int, int, int],
+    position: list[float],
+    normal: list[float],
+    impulse: list[float],
+    separation: float,
+    inv_dt: float,
+    rest: float,
+) -> ContactPoint:
+    """One PhysX point as a ContactPoint: ``pair`` (body A, body B, link A, link B), PhysX's
+    position (on B, m), normal (on B, unit) and impulse (N s) as 3 floats each, its separation
+    (m), ``1 / dt`` (1/s) and the rest distance (m, distance 0 there).
 
-
-def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Row-wise cross products of two ``(k, 3)`` arrays -> ``(k, 3)``."""
-    out = np.empty_like(u)
-    out[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
-    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
-    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
-    return out
+    Plain float arithmetic, the operations in the order of the array version it replaced
+    (dot products summed x, y, z in turn; a cross product's terms as ``np.cross``): the same
+    bits (tests/backends/physx/test_physx_contacts.py). Where the impulse has no part across
+    the normal (PhysX gives none: mostly), friction direction 1 is ``normal x axis``
+    normalised, the axis x, or y where the normal is within 26 degrees of x."""
+    px, py, pz = position
+    nx, ny, nz = normal
+    fx = impulse[0] * inv_dt  # N
+    fy = impulse[1] * inv_dt
+    fz = impulse[2] * inv_dt
+    f = fx * nx + fy * ny + fz * nz  # along the normal
+    tx = fx - f * nx  # across it
+    ty = fy - f * ny
+    tz = fz - f * nz
+    size = _sqrt(tx * tx + ty * ty + tz * tz)
+    if size > 0.0:
+        d0, d1, d2 = tx / size, ty / size, tz / size
+    else:  # normal x (1 - y, y, 0), y = 1 near x: the terms of np.cross, zeros included
+        y = 1.0 if abs(nx) >= 0.9 else 0.0
+        x = 1.0 - y
+        d0 = ny * 0.0 - nz * y
+        d1 = nz * x - nx * 0.0
+        d2 = nx * y - ny * x
+        norm = _sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        if norm == 0.0:  # a normal of length 0 (never a unit one): numpy's 0 / 0, as before
+            d0, d1, d2 = (np.array([d0, d1, d2]) / norm).tolist()
+        else:
+            d0, d1, d2 = d0 / norm, d1 / norm, d2 / norm
+    dist = separation - rest
+    return _new_tuple(
+        ContactPoint,
+        (
+            0,
+            *pair,
+            (px + dist * nx, py + dist * ny, pz + dist * nz),
+            (px, py, pz),
+            (nx, ny, nz),
+            dist,
+            0.0 if f < 0.0 else f,  # max(f, 0.0), -0.0 kept
+            size,
+            (d0, d1, d2),
+            0.0,
+            (ny * d2 - nz * d1, nz * d0 - nx * d2, nx * d1 - ny * d0),  # normal x direction 1
+        ),
+    )
 
 
 class ContactReads:
@@ -106,72 +151,29 @@ class ContactReads:
         # the engine setting rest_offset, where the profile sets one (settings_physx.py)
         given = self.profile.engine("physx").get("rest_offset")
         rest = REST if given is None else 2.0 * float(given)
-        pairs: list[tuple[int, int, int, int]] = []  # (body A, body B, link A, link B)
-        fields: list[Any] = []  # per point: position, normal, impulse (3 each), separation
+        inv_dt = 1.0 / self._dt
+        out: list[ContactPoint] = []
+        add = out.append
         for contact in self._scene.get_contacts():
-            a = owners.get(id(contact.bodies[0]))
-            b = owners.get(id(contact.bodies[1]))
+            bodies = contact.bodies
+            a = owners.get(id(bodies[0]))
+            b = owners.get(id(bodies[1]))
             if a is None or b is None:
                 continue
-            for point in contact.points:
-                pairs.append((a[0], b[0], a[1], b[1]))
-                fields.extend((point.position, point.normal, point.impulse))
-                fields.append((point.separation, 0.0, 0.0))
-        if not pairs:
-            return []
-        return self._points(pairs, np.array(fields, dtype=float).reshape(-1, 4, 3), rest)
-
-    def _points(
-        self, pairs: list[tuple[int, int, int, int]], raw: np.ndarray, rest: float
-    ) -> list[ContactPoint]:
-        """The points, all at once: ``pairs`` (body A, body B, link A, link B) per point and
-        ``raw`` ``(k, 4, 3)``: PhysX's position (on B), normal (on B), impulse (N s) and
-        separation (``raw[:, 3, 0]``, m) per point."""
-        on_b = raw[:, 0]  # (k, 3)
-        n = raw[:, 1]  # (k, 3)
-        force = raw[:, 2] * (1.0 / self._dt)  # (k, 3) N
-        normal_force = _dot(force, n)  # (k,)
-        tangential = force - normal_force[:, None] * n  # (k, 3)
-        size = np.sqrt(_dot(tangential, tangential))  # (k,)
-        moving = size > 0.0  # PhysX gives no friction impulse: mostly not
-        d1 = tangential / np.where(moving, size, 1.0)[:, None]
-        if not moving.all():
-            d1 = np.where(moving[:, None], d1, _perpendicular(n))
-        d2 = _cross(n, d1)
-        dist = raw[:, 3, 0] - rest  # (k,)
-        on_a = on_b + dist[:, None] * n
-        pushed = np.where(normal_force < 0.0, 0.0, normal_force)  # max(f, 0.0): -0.0 kept
-        rows = zip(
-            pairs,
-            on_a.tolist(),
-            on_b.tolist(),
-            n.tolist(),
-            dist.tolist(),
-            pushed.tolist(),
-            size.tolist(),
-            d1.tolist(),
-            d2.tolist(),
-            strict=True,
-        )
-        return [
-            ContactPoint(
-                0,
-                ba,
-                bb,
-                la,
-                lb,
-                tuple(pa),
-                tuple(pb),
-                tuple(nb),
-                d,
-                f,
-                fs,
-                tuple(t1),
-                0.0,
-                tuple(t2),
-            )  # fmt: skip
-            for (ba, bb, la, lb), pa, pb, nb, d, f, fs, t1, t2 in rows
-        ]
+            pair = (a[0], b[0], a[1], b[1])
+            for q in contact.points:  # each vector read is a new float32 array: as floats
+                add(
+                    _point(
+                        pair,
+                        q.position.tolist(),
+                        q.normal.tolist(),
+                        q.impulse.tolist(),
+                        q.separation,
+                        inv_dt,
+                        rest,
+                    )
+                )
+        return out
 
     def _keep_contacts_but(self, body: int) -> None:
         """Before ``body`` is removed: the last step's points less its own, read while every
