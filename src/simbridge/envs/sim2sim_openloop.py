@@ -405,9 +405,7 @@ def openloop(
         train = made[0]
         quantities = [q for q in QUANTITIES if q == QUANTITIES[0] or _free_base(train.env)]
         eps = {m.engine.label: _engine_perturbation(task, m.engine.backend, perturb) for m in made}
-        result = OpenLoop(
-            train.engine.label, list(seeds), ensemble, eps, {}, {}, outside=outside
-        )
+        result = OpenLoop(train.engine.label, list(seeds), ensemble, eps, {}, {}, outside=outside)
         pol = load_policy(policy, train.env)
         dt = task.control_dt
         for s in seeds:
