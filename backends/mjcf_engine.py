@@ -149,6 +149,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         self._synced = False  # the mirror holds the engine's state
         self._time = 0.0
         self._diverged: SimulationDivergedError | None = None
+        self._stepped = False  # a step since the last reset or restore (body_external_forces)
 
     reading = locking.reading
 
@@ -325,6 +326,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         self._write(self.m.qpos0.copy(), np.zeros(self.m.nv))
         self._time = 0.0
         self._diverged = None
+        self._stepped = False
 
     def step(self, n: int) -> None:
         """See Backend.step: each engine step applies MuJoCo's actuator, spring and damping
@@ -347,6 +349,7 @@ class MjcfOnEngine(MjcfReads, Backend):
                 self._time += self.dt
             self._synced = False
             if n > 0:
+                self._stepped = True
                 q, v = self.engine_state()
                 if not (np.isfinite(q).all() and np.isfinite(v).all()):
                     self._diverged = SimulationDivergedError(
@@ -367,6 +370,29 @@ class MjcfOnEngine(MjcfReads, Backend):
         if self._diverged is not None:
             raise self._diverged
         return self.engine_contacts()
+
+    @exclusive
+    def body_external_forces(self) -> np.ndarray:
+        """See Backend.body_external_forces: from the engine's contact points of the last step
+        (:mod:`simbridge.wrenches`), each link's wrench on the MuJoCo body its row reads (a body
+        without a joint row of its own shares its parent's link: its contacts are counted on
+        that body, its own row stays zero); the torques about each tree's centre of mass
+        (``subtree_com``) of the state as it stands. No torsional or rolling friction."""
+        from simbridge.wrenches import external_wrenches
+
+        out = np.zeros((self.m.nbody, 6))
+        if not self._stepped:
+            return out
+        points = self.contact_points()
+        self._sync()
+        for body, b in self._bodies.items():
+            rows = (b.body_id, *b.link_bodies)
+
+            def row_of(other: int, link: int, body: int = body, rows: tuple = rows) -> int:
+                return rows[link + 1] if other == body else -1
+
+            out += external_wrenches(points, row_of, self.m.nbody, self.d.subtree_com[b.body_id])
+        return out
 
     def engine_contacts(self) -> list[ContactPoint]:
         """The engine's contact points of the last step (see :meth:`contact_points`).
@@ -425,6 +451,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         self._time = native[1]
         self.ctrl[:] = native[4]
         self._write(native[2], native[3])
+        self._stepped = False
         return True
 
     @exclusive
@@ -489,6 +516,7 @@ class MjcfOnEngine(MjcfReads, Backend):
             self.ctrl[:] = m.key_ctrl[key]
         self._write(m.key_qpos[key].copy(), m.key_qvel[key].copy())
         self._diverged = None
+        self._stepped = False
 
     @exclusive
     def sensor_data(self, sensor: int) -> np.ndarray:

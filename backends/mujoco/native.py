@@ -104,6 +104,12 @@ class NativeMujoco(MjcfReads, Backend):
         self._stale = True
         self._diverged: SimulationDivergedError | None = None
         self._geom_owners: tuple[np.ndarray, np.ndarray] | None = None
+        self._body_rows: tuple[np.ndarray, np.ndarray] | None = None  # per MuJoCo body
+        # d.cfrc_ext: "zero" (no step since a reset or restore), "pending" (a step since,
+        # mj_rnePostConstraint not run yet) or "ready"; _forces_asked: computed before
+        # anything overwrites what the step left (the first body_external_forces sets it)
+        self._forces = "zero"
+        self._forces_asked = False
 
     reading = locking.reading
 
@@ -123,6 +129,7 @@ class NativeMujoco(MjcfReads, Backend):
         """See Backend.reset. Never reached: the Sim replaces this backend at ``reset()``."""
         mujoco.mj_resetData(self.m, self.d)
         self._stale = True
+        self._forces = "zero"
         self._show()
         self._diverged = None
 
@@ -149,6 +156,7 @@ class NativeMujoco(MjcfReads, Backend):
             warned = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
             mujoco.mj_step(self.m, d, nstep=n)
             self._stale = True
+            self._forces = "pending"
             self._show()
             if (
                 int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) != warned
@@ -179,6 +187,8 @@ class NativeMujoco(MjcfReads, Backend):
         """Poses and velocities of the state as it stands (writes nothing mj_step reads)."""
         if self._stale:
             m, d = self.m, self.d
+            if self._forces_asked:
+                self._post_step_forces()  # from the kinematics the step left, as Gymnasium
             mujoco.mj_kinematics(m, d)
             mujoco.mj_comPos(m, d)
             mujoco.mj_comVel(m, d)
@@ -199,6 +209,49 @@ class NativeMujoco(MjcfReads, Backend):
         """Per geom: its simbridge body (-1: the world's) and link (-1: the base)."""
         if self._geom_owners is None:
             m = self.m
+            body_of, link_of = self._rows()
+            self._geom_owners = (body_of[m.geom_bodyid], link_of[m.geom_bodyid])
+        return self._geom_owners
+
+    def _post_step_forces(self) -> None:
+        """``d.cfrc_ext`` of the last step: ``mj_rnePostConstraint`` once after it, on the
+        contacts, constraint forces and kinematics ``mj_step`` left (RK4: its last stage's), as
+        Gymnasium's MuJoCo envs call it after ``mj_step``."""
+        if self._forces == "pending":
+            mujoco.mj_rnePostConstraint(self.m, self.d)
+            self._forces = "ready"
+
+    @exclusive
+    def body_external_forces(self) -> np.ndarray:
+        """See Backend.body_external_forces: a copy of ``d.cfrc_ext`` after
+        ``mj_rnePostConstraint`` (run once per step, before any read refreshes the kinematics
+        once this has been asked; the first call after a read did is computed on the
+        refreshed kinematics: its torques about the tree's centre of mass of the state, not of
+        RK4's last stage)."""
+        if self._diverged is not None:
+            raise self._diverged
+        self._forces_asked = True
+        if self._forces == "zero":
+            return np.zeros((self.m.nbody, 6))
+        self._post_step_forces()
+        return self.d.cfrc_ext.copy()
+
+    def external_forces(self, body: int) -> np.ndarray:
+        """See Backend.external_forces: MuJoCo's ``cfrc_ext`` (:meth:`body_external_forces`),
+        each link's row the sum of its MuJoCo body's and those of the bodies without a joint
+        row of their own that hang from it (their torques about the same point: the tree's
+        centre of mass)."""
+        rows = self.body_external_forces()
+        body_of, link_of = self._rows()
+        out = np.zeros((len(self._bodies[body].table) + 1, 6))
+        mine = np.flatnonzero(body_of == body)
+        np.add.at(out, link_of[mine] + 1, rows[mine])
+        return out
+
+    def _rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per MuJoCo body: its simbridge body (-1: the world's) and link (-1: the base)."""
+        if self._body_rows is None:
+            m = self.m
             body_of = np.full(m.nbody, -1, np.intp)
             link_of = np.full(m.nbody, -1, np.intp)
             for i, b in self._bodies.items():
@@ -210,8 +263,8 @@ class NativeMujoco(MjcfReads, Backend):
             for mb in range(1, m.nbody):  # a body without a row: its parent's link
                 if link_of[mb] < 0 and m.body_parentid[mb] > 0:
                     link_of[mb] = link_of[m.body_parentid[mb]]
-            self._geom_owners = (body_of[m.geom_bodyid], link_of[m.geom_bodyid])
-        return self._geom_owners
+            self._body_rows = (body_of, link_of)
+        return self._body_rows
 
     # ---------------------------------------------------------------- state
     # The joint table, base_state, link_state and dynamics_info are MjcfReads' (the other
@@ -322,6 +375,7 @@ class NativeMujoco(MjcfReads, Backend):
             return False
         mujoco.mj_setState(self.m, self.d, native[1], _STATE)
         self._stale = True
+        self._forces = "zero"
         self._show()
         return True
 
@@ -385,6 +439,7 @@ class NativeMujoco(MjcfReads, Backend):
         ctrl, mocap of the key)."""
         mujoco.mj_resetDataKeyframe(self.m, self.d, key)
         self._stale = True
+        self._forces = "zero"
         self._show()
         self._diverged = None
 
@@ -393,6 +448,8 @@ class NativeMujoco(MjcfReads, Backend):
         """See Backend.sensor_data: ``d.sensordata`` of the state as it stands
         (``mj_forward``, which leaves the next step's result unchanged)."""
         m, d = self.m, self.d
+        if self._forces_asked:
+            self._post_step_forces()  # before mj_forward solves the contacts afresh
         mujoco.mj_forward(m, d)
         self._stale = False
         a, n = int(m.sensor_adr[sensor]), int(m.sensor_dim[sensor])
