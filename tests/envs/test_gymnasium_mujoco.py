@@ -2,8 +2,9 @@
 and ``ant`` tasks (Gymnasium's files read as MuJoCo reads them, stepped by ``mj_step``) reset to
 the same state as ``gymnasium.make("HalfCheetah-v5")`` / ``("Ant-v5")`` from the same seed (the
 same draws from the same generator) and follow it bit for bit under the same actions: MuJoCo's
-qpos and qvel, the observation (float32 here, float64 there: equal once Gymnasium's is cast),
-the control cost, the healthy reward, termination. One departure, measured: Ant-v5 reads the
+qpos and qvel, the observation (float32 here, float64 there: equal once Gymnasium's is cast;
+Ant-v5's default 105 entries, its 78 clipped ``cfrc_ext`` included), the control cost, the
+contact cost, the healthy reward, termination. One departure, measured: Ant-v5 reads the
 torso's x from ``data.xpos``, which after ``mj_step`` with RK4 is the kinematics of the last
 Runge-Kutta stage, not of the final state; the task reads ``qpos[0]`` (HalfCheetah-v5's way),
 which equals Gymnasium's own qpos difference bit for bit."""
@@ -26,6 +27,7 @@ def _lockstep(task: str, gym_id: str, seed: int, amplitude: float):
         obs, _ = env.reset(seed=seed)
         ref_obs, _ = ref.reset(seed=seed)
         n = obs.size
+        assert ref_obs.shape == (n,)  # Gymnasium's default observation, all of it
         np.testing.assert_array_equal(env.sim.qpos(), ref.data.qpos)
         np.testing.assert_array_equal(env.sim.qvel(), ref.data.qvel)
         np.testing.assert_array_equal(obs, ref_obs[:n].astype(np.float32))
@@ -84,13 +86,20 @@ def test_ant_is_gymnasiums_ant_bit_for_bit_but_for_the_torso_read():
     rows, dt = _lockstep("ant", "Ant-v5", 3, 0.6)
     assert len(rows) >= 20
     lag = 0.0
-    for info, reward, ref_info, _, x0, x1 in rows:
+    contact = [ref_info["reward_contact"] for _, _, ref_info, *_ in rows]
+    assert min(contact) < 0.0  # the feet touched: the contact cost was exercised
+    for info, reward, ref_info, ref_reward, x0, x1 in rows:
         terms = info["reward_terms"]
         assert terms["action_l2"] == ref_info["reward_ctrl"]
         assert terms["healthy"] == ref_info["reward_survive"]
+        assert terms["contact_cost"] == ref_info["reward_contact"]  # its cfrc_ext, clipped
         assert terms["forward_velocity"] == (x1 - x0) / dt  # Gymnasium's qpos, its dt
-        assert reward == terms["forward_velocity"] + terms["healthy"] + terms["action_l2"]
+        assert reward == sum(terms.values())
         lag = max(lag, abs(terms["forward_velocity"] - ref_info["x_velocity"]))
+        # the rewards part by the forward term's difference alone
+        assert reward - ref_reward == pytest.approx(
+            terms["forward_velocity"] - ref_info["x_velocity"], abs=1e-12
+        )
     # xpos after RK4 is the last stage's: a few cm/s apart from qpos's difference (0.022 m/s
     # measured over 59 steps of uniform actions in [-1, 1]), never the same bits
     assert 0.0 < lag < 0.1
@@ -100,7 +109,7 @@ def test_the_ids_make_the_tasks():
     env = gymnasium.make("simbridge/Ant-v0", backend="mujoco")
     try:
         obs, _ = env.reset(seed=0)
-        assert obs.shape == (27,) and env.action_space.shape == (8,)
+        assert obs.shape == (105,) and env.action_space.shape == (8,)
         assert env.unwrapped.task.control_dt == pytest.approx(0.05)
         contract = env.unwrapped.contract()
         table = contract["action"]["joint_table"]
@@ -111,6 +120,11 @@ def test_the_ids_make_the_tasks():
         assert table[0]["ctrl_range"] == [-1.0, 1.0]
         names = contract["observation"]["terms"][0]["entries"]
         assert names[0] == "qpos[2]" and len(names) == 13
+        forces = contract["observation"]["terms"][2]["entries"]  # bodies 1..13 of cfrc_ext
+        assert len(forces) == 78 and forces[:4] == [
+            f"cfrc_ext[1.{c}]" for c in ("tx", "ty", "tz", "fx")
+        ]
+        assert forces[-1] == "cfrc_ext[13.fz]"
     finally:
         env.close()
 
