@@ -372,6 +372,13 @@ class MjcfOnEngine(MjcfReads, Backend):
         return self.engine_contacts()
 
     @exclusive
+    def xpos(self) -> np.ndarray:
+        """See Backend.xpos: the MuJoCo bodies' frames of the engine's state (no stages: the
+        state after the step)."""
+        self._sync()
+        return np.array(self.d.xpos)
+
+    @exclusive
     def body_external_forces(self) -> np.ndarray:
         """See Backend.body_external_forces: from the engine's contact points of the last step
         (:mod:`simbridge.wrenches`), each link's wrench on the MuJoCo body its row reads (a body

@@ -102,6 +102,7 @@ class NativeMujoco(MjcfReads, Backend):
         self._in_step = False
         self._closed = False
         self._stale = True
+        self._left_by_step = False
         self._diverged: SimulationDivergedError | None = None
         self._geom_owners: tuple[np.ndarray, np.ndarray] | None = None
         self._body_rows: tuple[np.ndarray, np.ndarray] | None = None  # per MuJoCo body
@@ -110,6 +111,10 @@ class NativeMujoco(MjcfReads, Backend):
         # anything overwrites what the step left (the first body_external_forces sets it)
         self._forces = "zero"
         self._forces_asked = False
+        # d.xpos as mj_step left it (xpos()): kept before a read refreshes the kinematics once
+        # xpos() has been asked; _left_by_step: no write since the last step
+        self._step_xpos: np.ndarray | None = None
+        self._xpos_asked = False
 
     reading = locking.reading
 
@@ -129,6 +134,7 @@ class NativeMujoco(MjcfReads, Backend):
         """See Backend.reset. Never reached: the Sim replaces this backend at ``reset()``."""
         mujoco.mj_resetData(self.m, self.d)
         self._stale = True
+        self._left_by_step = False
         self._forces = "zero"
         self._show()
         self._diverged = None
@@ -157,6 +163,7 @@ class NativeMujoco(MjcfReads, Backend):
             mujoco.mj_step(self.m, d, nstep=n)
             self._stale = True
             self._forces = "pending"
+            self._left_by_step, self._step_xpos = True, None
             self._show()
             if (
                 int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) != warned
@@ -187,8 +194,7 @@ class NativeMujoco(MjcfReads, Backend):
         """Poses and velocities of the state as it stands (writes nothing mj_step reads)."""
         if self._stale:
             m, d = self.m, self.d
-            if self._forces_asked:
-                self._post_step_forces()  # from the kinematics the step left, as Gymnasium
+            self._keep_step_left()
             mujoco.mj_kinematics(m, d)
             mujoco.mj_comPos(m, d)
             mujoco.mj_comVel(m, d)
@@ -212,6 +218,30 @@ class NativeMujoco(MjcfReads, Backend):
             body_of, link_of = self._rows()
             self._geom_owners = (body_of[m.geom_bodyid], link_of[m.geom_bodyid])
         return self._geom_owners
+
+    def _keep_step_left(self) -> None:
+        """Before the kinematics are refreshed: what the last step left that was asked for
+        (``cfrc_ext``, ``xpos``), from the data as ``mj_step`` left it."""
+        if self._forces_asked:
+            self._post_step_forces()
+        if self._xpos_asked and self._left_by_step and self._step_xpos is None:
+            self._step_xpos = self.d.xpos.copy()
+
+    @exclusive
+    def xpos(self) -> np.ndarray:
+        """See Backend.xpos: after a step, ``d.xpos`` as ``mj_step`` left it (kept before any
+        read refreshes the kinematics once this has been asked; the first call after such a
+        read gives the refreshed one); after a write, of the state written."""
+        if self._diverged is not None:
+            raise self._diverged
+        self._xpos_asked = True
+        if self._left_by_step:
+            if self._step_xpos is not None:
+                return self._step_xpos.copy()
+            if self._stale:
+                return self.d.xpos.copy()
+        self._sync()
+        return self.d.xpos.copy()
 
     def _post_step_forces(self) -> None:
         """``d.cfrc_ext`` of the last step: ``mj_rnePostConstraint`` once after it, on the
@@ -308,6 +338,7 @@ class NativeMujoco(MjcfReads, Backend):
             d.qpos[row.q_index] = q
             d.qvel[row.u_index] = v
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     @exclusive
@@ -347,6 +378,7 @@ class NativeMujoco(MjcfReads, Backend):
         mujoco.mju_rotVecQuat(local, w, np.array((qframe[0], *(-qframe[1:]))))
         d.qvel[va + 3 : va + 6] = local
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
@@ -354,6 +386,7 @@ class NativeMujoco(MjcfReads, Backend):
         self.d.qpos[:] = qpos
         self.d.qvel[:] = qvel
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     # ---------------------------------------------------------------- whole state
@@ -375,6 +408,7 @@ class NativeMujoco(MjcfReads, Backend):
             return False
         mujoco.mj_setState(self.m, self.d, native[1], _STATE)
         self._stale = True
+        self._left_by_step = False
         self._forces = "zero"
         self._show()
         return True
@@ -431,6 +465,7 @@ class NativeMujoco(MjcfReads, Backend):
         if qvel is not None:
             self.d.qvel[:] = qvel
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     @exclusive
@@ -439,6 +474,7 @@ class NativeMujoco(MjcfReads, Backend):
         ctrl, mocap of the key)."""
         mujoco.mj_resetDataKeyframe(self.m, self.d, key)
         self._stale = True
+        self._left_by_step = False
         self._forces = "zero"
         self._show()
         self._diverged = None
@@ -448,8 +484,8 @@ class NativeMujoco(MjcfReads, Backend):
         """See Backend.sensor_data: ``d.sensordata`` of the state as it stands
         (``mj_forward``, which leaves the next step's result unchanged)."""
         m, d = self.m, self.d
-        if self._forces_asked:
-            self._post_step_forces()  # before mj_forward solves the contacts afresh
+        if self._stale:
+            self._keep_step_left()  # before mj_forward computes it all afresh
         mujoco.mj_forward(m, d)
         self._stale = False
         a, n = int(m.sensor_adr[sensor]), int(m.sensor_dim[sensor])

@@ -895,6 +895,21 @@ class Backend(ABC):
 
         raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
 
+    def xpos(self) -> np.ndarray:
+        """MuJoCo's ``d.xpos``: each MuJoCo body's frame origin.
+
+        Returns:
+            ``(nbody, 3)`` float64 (m, world), MuJoCo's body order: after a step, as the step
+            left it (MuJoCo under RK4: its last stage's kinematics, which lag the final state);
+            after a write, of the state written.
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
     def body_external_forces(self) -> np.ndarray:
         """MuJoCo's ``cfrc_ext`` after the last step: the contact wrench on each MuJoCo body.
 

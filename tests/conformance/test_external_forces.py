@@ -109,3 +109,20 @@ def test_external_force_errors(make_sim):
         sim.external_forces(7)
     with pytest.raises(exc.BackendUnsupportedError, match="semantics='mujoco'"):
         sim.body_external_forces()
+
+
+def test_xpos_is_mujocos_body_frames(make_sim):
+    """``Sim.xpos``: MuJoCo's ``d.xpos``; after a write, of the state written (the torso's
+    frame origin is its free joint's qpos), after a step within that step's motion of the
+    state (MuJoCo under RK4 keeps its last stage's, which Ant-v5 reads)."""
+    sim = make_sim()
+    sim.load_mjcf(ANT, semantics="mujoco")
+    q = sim.qpos()
+    q[0:3] = (0.2, -0.1, 0.7)
+    sim.set_qpos_qvel(q, None)
+    x = sim.xpos()
+    assert x.shape == (14, 3) and not x[0].any()
+    assert x[1] == pytest.approx((0.2, -0.1, 0.7), abs=tolerance(sim.backend, 1e-12))
+    sim.step(10)  # falling: 0.1 s, about 0.5 m/s at the end
+    q, v = sim.qpos(), sim.qvel()
+    assert np.abs(sim.xpos()[1] - q[0:3]).max() <= np.abs(v[0:3]).max() * 0.01 + 1e-9

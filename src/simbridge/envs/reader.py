@@ -85,6 +85,7 @@ _PARAM_KINDS = {
     "relative": "bool", "terminate": "bool", "link": "name", "joint": "name",
     "links": "names", "joints": "names", "exclude": "count", "z_min": "number",
     "z_max": "number", "min": "number", "range": "interval",
+    "body": "count",
 }  # fmt: skip
 
 

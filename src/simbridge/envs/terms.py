@@ -49,6 +49,8 @@ class World:
         control_dt: seconds per control step.
         qpos_start: an MJCF task's MuJoCo ``qpos`` at the episode's reset, ``(nq,)``.
         qpos_before: its ``qpos`` when the control step began (the forward velocity's start).
+        xpos_before: its MuJoCo bodies' ``xpos`` then, ``(nbody, 3)``, read only for a
+            ``forward_velocity`` term that names a ``body`` (empty otherwise).
         previous_action: the action before ``last_action``, ``(n,)`` (zeros at reset).
         torques: the action joints' torques of the last physics step (N m, ``(n,)``): the
             commanded ones under ``pd`` and ``torque``, zeros under the motor modes.
@@ -68,6 +70,7 @@ class World:
     control_dt: float = 0.0
     qpos_start: np.ndarray = field(default_factory=lambda: np.zeros(0))
     qpos_before: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    xpos_before: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     previous_action: np.ndarray = field(default_factory=lambda: np.zeros(0))
     torques: np.ndarray = field(default_factory=lambda: np.zeros(0))
     start: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -247,8 +250,11 @@ def _contact_cost(w: World, p: Mapping[str, Any]) -> float:
 
 def _forward_velocity(w: World, p: Mapping[str, Any]) -> float:
     """The root's x velocity over the control step: ``(qpos[0] - qpos_before[0]) /
-    control_dt`` (HalfCheetah-v5's, and Ant-v5's but for the torso's position being read at
-    the step's end: see docs/envs.md)."""
+    control_dt`` (HalfCheetah-v5's); with ``body``, that MuJoCo body's ``xpos`` x instead, as
+    :meth:`simbridge.Sim.xpos` gives it (Ant-v5's, ``main_body`` 1: see docs/envs.md)."""
+    if "body" in p:
+        b = int(p["body"])
+        return float((w.sim.xpos()[b, 0] - w.xpos_before[b, 0]) / w.control_dt)
     return float((w.sim.qpos()[0] - w.qpos_before[0]) / w.control_dt)
 
 
@@ -334,7 +340,8 @@ REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
     "joint_pos_error": lambda w, p: -float(np.sum(_q(w, {"relative": True}) ** 2)),
     "upright": lambda w, p: -float(np.sum(_gravity(w, p)[:2] ** 2)),
     "height_error": lambda w, p: -((w.sim.base_state(w.body).position[2] - p["target"]) ** 2),
-    # MJCF tasks: the root's x velocity (m/s) over the control step
+    # MJCF tasks: the root's x velocity (m/s) over the control step; params: body (a MuJoCo
+    # body index: its xpos x, as Ant-v5's main_body; default: qpos[0])
     "forward_velocity": _forward_velocity,
     # MJCF tasks: -sum(clip(cfrc_ext, range)^2) (Ant-v5's contact cost; weight 5e-4 there)
     "contact_cost": _contact_cost,
@@ -400,6 +407,7 @@ PARAMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "qpos": ((), ("exclude",)),
     "cfrc_ext": ((), ("exclude", "range")),
     "contact_cost": ((), ("range",)),
+    "forward_velocity": ((), ("body",)),
     "healthy": (("z_min", "z_max"), ()),
     "unhealthy": (("z_min", "z_max"), ()),
     "forward_distance": (("min",), ("terminate",)),

@@ -595,6 +595,23 @@ class Sim:
         """
         return native.generalized_state(self._s, "qvel()")[1]
 
+    def xpos(self) -> np.ndarray:
+        """MuJoCo's ``d.xpos`` (each MuJoCo body's frame origin) of a model read with
+        semantics='mujoco', as Gymnasium's MuJoCo envs read it.
+
+        MuJoCo: after a step, ``d.xpos`` as ``mj_step`` left it; under RK4 that is the last
+        stage's kinematics, which lag the final state (Ant-v5's forward velocity reads it);
+        after a write, of the state written. PyBullet, PhysX: of the state as it stands.
+
+        Returns:
+            ``(nbody, 3)`` float64 (m, world), MuJoCo's body order (row 0: the world).
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        """
+        native.native_model(self._s, "xpos()")
+        return self._s.backend.xpos()
+
     def body_external_forces(self) -> np.ndarray:
         """MuJoCo's ``cfrc_ext`` after the last step (what Gymnasium's Ant-v5 observes): the
         contact wrench on each MuJoCo body of a model read with semantics='mujoco'.
