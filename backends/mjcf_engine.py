@@ -453,12 +453,12 @@ class MjcfOnEngine(MjcfReads, Backend):
     def restore(self, native: Any) -> bool:
         """See Backend.restore: a snapshot of this world is written back (the engine's
         contact caches start afresh)."""
+        self._stepped = False  # body_external_forces: zeros until the next step
         if not (isinstance(native, tuple) and len(native) == 5 and native[0] == id(self)):
             return False
         self._time = native[1]
         self.ctrl[:] = native[4]
         self._write(native[2], native[3])
-        self._stepped = False
         return True
 
     @exclusive

@@ -403,13 +403,13 @@ class NativeMujoco(MjcfReads, Backend):
     def restore(self, native: Any) -> bool:
         """See Backend.restore: ``mj_setState`` for a snapshot of this model; otherwise a cold
         solver start."""
+        self._forces = "zero"  # until the next step, however the state is set
         if not (isinstance(native, tuple) and len(native) == 2 and native[0] == id(self.m)):
             self.d.qacc_warmstart[:] = 0.0
             return False
         mujoco.mj_setState(self.m, self.d, native[1], _STATE)
         self._stale = True
         self._left_by_step = False
-        self._forces = "zero"
         self._show()
         return True
 
