@@ -156,6 +156,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         self._time = 0.0
         self._diverged: SimulationDivergedError | None = None
         self._penetration = ""  # the departure initial_penetration (note_penetration)
+        self._stepped = False  # a step since the last reset or restore (body_external_forces)
 
     reading = locking.reading
 
@@ -392,6 +393,7 @@ class MjcfOnEngine(MjcfReads, Backend):
         self._write(self.m.qpos0.copy(), np.zeros(self.m.nv))
         self._time = 0.0
         self._diverged = None
+        self._stepped = False
 
     def step(self, n: int) -> None:
         """See Backend.step: each engine step applies MuJoCo's actuator, spring and damping
@@ -418,6 +420,7 @@ class MjcfOnEngine(MjcfReads, Backend):
                 self._time += self.dt
             self._synced = False
             if n > 0:
+                self._stepped = True
                 self._check(*self.engine_state())
                 self.show_state()
         finally:
@@ -449,6 +452,36 @@ class MjcfOnEngine(MjcfReads, Backend):
         if self._diverged is not None:
             raise self._diverged
         return self.engine_contacts()
+
+    @exclusive
+    def xpos(self) -> np.ndarray:
+        """See Backend.xpos: the MuJoCo bodies' frames of the engine's state (no stages: the
+        state after the step)."""
+        self._sync()
+        return np.array(self.d.xpos)
+
+    @exclusive
+    def body_external_forces(self) -> np.ndarray:
+        """See Backend.body_external_forces: from the engine's contact points of the last step
+        (:mod:`simbridge.wrenches`), each link's wrench on the MuJoCo body its row reads (a body
+        without a joint row of its own shares its parent's link: its contacts are counted on
+        that body, its own row stays zero); the torques about each tree's centre of mass
+        (``subtree_com``) of the state as it stands. No torsional or rolling friction."""
+        from simbridge.wrenches import external_wrenches
+
+        out = np.zeros((self.m.nbody, 6))
+        if not self._stepped:
+            return out
+        points = self.contact_points()
+        self._sync()
+        for body, b in self._bodies.items():
+            rows = (b.body_id, *b.link_bodies)
+
+            def row_of(other: int, link: int, body: int = body, rows: tuple = rows) -> int:
+                return rows[link + 1] if other == body else -1
+
+            out += external_wrenches(points, row_of, self.m.nbody, self.d.subtree_com[b.body_id])
+        return out
 
     def engine_contacts(self) -> list[ContactPoint]:
         """The engine's contact points of the last step (see :meth:`contact_points`).
@@ -502,6 +535,7 @@ class MjcfOnEngine(MjcfReads, Backend):
     def restore(self, native: Any) -> bool:
         """See Backend.restore: a snapshot of this world is written back (the engine's
         contact caches start afresh)."""
+        self._stepped = False  # body_external_forces: zeros until the next step
         if not (isinstance(native, tuple) and len(native) == 5 and native[0] == id(self)):
             return False
         self._time = native[1]
@@ -572,6 +606,7 @@ class MjcfOnEngine(MjcfReads, Backend):
             self.ctrl[:] = m.key_ctrl[key]
         self._write(m.key_qpos[key].copy(), m.key_qvel[key].copy())
         self._diverged = None
+        self._stepped = False
 
     @exclusive
     def sensor_data(self, sensor: int) -> np.ndarray:

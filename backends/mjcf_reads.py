@@ -120,6 +120,14 @@ class MjcfReads:
             float(fr[1]),
         )
 
+    @exclusive
+    def body_centre_of_mass(self, body: int) -> np.ndarray:
+        """See Backend.body_centre_of_mass: MuJoCo's ``subtree_com`` of the body's top-level
+        MuJoCo body (bodies without a joint row of their own included), of the engine's
+        state."""
+        self._sync()
+        return np.array(self.d.subtree_com[self._bodies[body].body_id])
+
     # ---------------------------------------------------------------- state (MuJoCo's reads)
 
     def _com(self, bid: int) -> tuple[Vec3, Quat, Vec3, Vec3]:

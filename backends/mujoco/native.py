@@ -109,8 +109,19 @@ class NativeMujoco(MjcfReads, Backend):
         self._in_step = False
         self._closed = False
         self._stale = True
+        self._left_by_step = False
         self._diverged: SimulationDivergedError | None = None
         self._geom_owners: tuple[list[int], list[int]] | None = None
+        self._body_rows: tuple[np.ndarray, np.ndarray] | None = None  # per MuJoCo body
+        # d.cfrc_ext: "zero" (no step since a reset or restore), "pending" (a step since,
+        # mj_rnePostConstraint not run yet) or "ready"; _forces_asked: computed before
+        # anything overwrites what the step left (the first body_external_forces sets it)
+        self._forces = "zero"
+        self._forces_asked = False
+        # d.xpos as mj_step left it (xpos()): kept before a read refreshes the kinematics once
+        # xpos() has been asked; _left_by_step: no write since the last step
+        self._step_xpos: np.ndarray | None = None
+        self._xpos_asked = False
 
     reading = locking.reading
 
@@ -130,6 +141,8 @@ class NativeMujoco(MjcfReads, Backend):
         """See Backend.reset. Never reached: the Sim replaces this backend at ``reset()``."""
         mujoco.mj_resetData(self.m, self.d)
         self._stale = True
+        self._left_by_step = False
+        self._forces = "zero"
         self._show()
         self._diverged = None
 
@@ -158,6 +171,8 @@ class NativeMujoco(MjcfReads, Backend):
             end = float(d.time) + n * float(self.m.opt.timestep)
             mujoco.mj_step(self.m, d, nstep=n)
             self._stale = True
+            self._forces = "pending"
+            self._left_by_step, self._step_xpos = True, None
             self._show()
             for (w, vector), before in zip(_BAD, warned, strict=True):
                 if int(d.warning[w].number) != before:  # MuJoCo reset the data after it
@@ -198,6 +213,7 @@ class NativeMujoco(MjcfReads, Backend):
         """Poses and velocities of the state as it stands (writes nothing mj_step reads)."""
         if self._stale:
             m, d = self.m, self.d
+            self._keep_step_left()
             mujoco.mj_kinematics(m, d)
             mujoco.mj_comPos(m, d)
             mujoco.mj_comVel(m, d)
@@ -219,6 +235,76 @@ class NativeMujoco(MjcfReads, Backend):
         (:func:`~.contacts.contact_points_of` looks them up per contact)."""
         if self._geom_owners is None:
             m = self.m
+            body_of, link_of = self._rows()
+            self._geom_owners = (
+                body_of[m.geom_bodyid].tolist(),
+                link_of[m.geom_bodyid].tolist(),
+            )
+        return self._geom_owners
+
+    def _keep_step_left(self) -> None:
+        """Before the kinematics are refreshed: what the last step left that was asked for
+        (``cfrc_ext``, ``xpos``), from the data as ``mj_step`` left it."""
+        if self._forces_asked:
+            self._post_step_forces()
+        if self._xpos_asked and self._left_by_step and self._step_xpos is None:
+            self._step_xpos = self.d.xpos.copy()
+
+    @exclusive
+    def xpos(self) -> np.ndarray:
+        """See Backend.xpos: after a step, ``d.xpos`` as ``mj_step`` left it (kept before any
+        read refreshes the kinematics once this has been asked; the first call after such a
+        read gives the refreshed one); after a write, of the state written."""
+        if self._diverged is not None:
+            raise self._diverged
+        self._xpos_asked = True
+        if self._left_by_step:
+            if self._step_xpos is not None:
+                return self._step_xpos.copy()
+            if self._stale:
+                return self.d.xpos.copy()
+        self._sync()
+        return self.d.xpos.copy()
+
+    def _post_step_forces(self) -> None:
+        """``d.cfrc_ext`` of the last step: ``mj_rnePostConstraint`` once after it, on the
+        contacts, constraint forces and kinematics ``mj_step`` left (RK4: its last stage's), as
+        Gymnasium's MuJoCo envs call it after ``mj_step``."""
+        if self._forces == "pending":
+            mujoco.mj_rnePostConstraint(self.m, self.d)
+            self._forces = "ready"
+
+    @exclusive
+    def body_external_forces(self) -> np.ndarray:
+        """See Backend.body_external_forces: a copy of ``d.cfrc_ext`` after
+        ``mj_rnePostConstraint`` (run once per step, before any read refreshes the kinematics
+        once this has been asked; the first call after a read did is computed on the
+        refreshed kinematics: its torques about the tree's centre of mass of the state, not of
+        RK4's last stage)."""
+        if self._diverged is not None:
+            raise self._diverged
+        self._forces_asked = True
+        if self._forces == "zero":
+            return np.zeros((self.m.nbody, 6))
+        self._post_step_forces()
+        return self.d.cfrc_ext.copy()
+
+    def external_forces(self, body: int) -> np.ndarray:
+        """See Backend.external_forces: MuJoCo's ``cfrc_ext`` (:meth:`body_external_forces`),
+        each link's row the sum of its MuJoCo body's and those of the bodies without a joint
+        row of their own that hang from it (their torques about the same point: the tree's
+        centre of mass)."""
+        rows = self.body_external_forces()
+        body_of, link_of = self._rows()
+        out = np.zeros((len(self._bodies[body].table) + 1, 6))
+        mine = np.flatnonzero(body_of == body)
+        np.add.at(out, link_of[mine] + 1, rows[mine])
+        return out
+
+    def _rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per MuJoCo body: its simbridge body (-1: the world's) and link (-1: the base)."""
+        if self._body_rows is None:
+            m = self.m
             body_of = np.full(m.nbody, -1, np.intp)
             link_of = np.full(m.nbody, -1, np.intp)
             for i, b in self._bodies.items():
@@ -230,11 +316,8 @@ class NativeMujoco(MjcfReads, Backend):
             for mb in range(1, m.nbody):  # a body without a row: its parent's link
                 if link_of[mb] < 0 and m.body_parentid[mb] > 0:
                     link_of[mb] = link_of[m.body_parentid[mb]]
-            self._geom_owners = (
-                body_of[m.geom_bodyid].tolist(),
-                link_of[m.geom_bodyid].tolist(),
-            )
-        return self._geom_owners
+            self._body_rows = (body_of, link_of)
+        return self._body_rows
 
     # ---------------------------------------------------------------- state
     # The joint table, base_state, link_state and dynamics_info are MjcfReads' (the other
@@ -278,6 +361,7 @@ class NativeMujoco(MjcfReads, Backend):
             d.qpos[row.q_index] = q
             d.qvel[row.u_index] = v
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     @exclusive
@@ -317,6 +401,7 @@ class NativeMujoco(MjcfReads, Backend):
         mujoco.mju_rotVecQuat(local, w, np.array((qframe[0], *(-qframe[1:]))))
         d.qvel[va + 3 : va + 6] = local
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     def _write(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
@@ -324,6 +409,7 @@ class NativeMujoco(MjcfReads, Backend):
         self.d.qpos[:] = qpos
         self.d.qvel[:] = qvel
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     # ---------------------------------------------------------------- whole state
@@ -340,11 +426,13 @@ class NativeMujoco(MjcfReads, Backend):
     def restore(self, native: Any) -> bool:
         """See Backend.restore: ``mj_setState`` for a snapshot of this model; otherwise a cold
         solver start."""
+        self._forces = "zero"  # until the next step, however the state is set
         if not (isinstance(native, tuple) and len(native) == 2 and native[0] == id(self.m)):
             self.d.qacc_warmstart[:] = 0.0
             return False
         mujoco.mj_setState(self.m, self.d, native[1], _STATE)
         self._stale = True
+        self._left_by_step = False
         self._show()
         return True
 
@@ -400,6 +488,7 @@ class NativeMujoco(MjcfReads, Backend):
         if qvel is not None:
             self.d.qvel[:] = qvel
         self._stale = True
+        self._left_by_step = False
         self._show()
 
     @exclusive
@@ -408,6 +497,8 @@ class NativeMujoco(MjcfReads, Backend):
         ctrl, mocap of the key)."""
         mujoco.mj_resetDataKeyframe(self.m, self.d, key)
         self._stale = True
+        self._left_by_step = False
+        self._forces = "zero"
         self._show()
         self._diverged = None
 
@@ -416,6 +507,8 @@ class NativeMujoco(MjcfReads, Backend):
         """See Backend.sensor_data: ``d.sensordata`` of the state as it stands
         (``mj_forward``, which leaves the next step's result unchanged)."""
         m, d = self.m, self.d
+        if self._stale:
+            self._keep_step_left()  # before mj_forward computes it all afresh
         mujoco.mj_forward(m, d)
         self._stale = False
         a, n = int(m.sensor_adr[sensor]), int(m.sensor_dim[sensor])

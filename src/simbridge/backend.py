@@ -693,6 +693,58 @@ class Backend(ABC):
 
         raise BackendUnsupportedError(self.name, "contact points")
 
+    def external_forces(self, body: int) -> np.ndarray:
+        """The contact wrench on each link of ``body`` in the last step (MuJoCo's
+        ``cfrc_ext`` convention, :mod:`simbridge.wrenches`).
+
+        The default derives it from :meth:`contact_points` (normal and friction forces at each
+        point), the torques about :meth:`body_centre_of_mass`: a backend that reads its
+        engine's own wrench (MuJoCo's ``cfrc_ext``) overrides it.
+
+        Args:
+            body: A loaded body's id.
+
+        Returns:
+            ``(links + 1, 6)`` float64, the base's row first, then link ``i`` at row ``i + 1``:
+            torque (N m) then force (N), world frame, the torque about the body's centre of
+            mass.
+
+        Raises:
+            BackendUnsupportedError: A backend without contact points.
+        """
+        from simbridge.wrenches import external_wrenches
+
+        with self.reading():
+            rows = self.num_joints(body) + 1
+            centre = self.body_centre_of_mass(body)
+            points = self.contact_points()
+
+        def row_of(b: int, link: int) -> int:
+            return link + 1 if b == body else -1
+
+        return external_wrenches(points, row_of, rows, centre)
+
+    def body_centre_of_mass(self, body: int) -> np.ndarray:
+        """The centre of mass of the whole body, the point :meth:`external_forces` takes its
+        torques about.
+
+        The default: the mass-weighted mean of the base's and the links' centres of mass
+        (:meth:`base_state`, :meth:`link_state`, :meth:`dynamics_info`).
+
+        Args:
+            body: A loaded body's id.
+
+        Returns:
+            ``(3,)`` (m, world); the base's centre of mass for a body without mass.
+        """
+        from simbridge.wrenches import centre_of_mass
+
+        n = self.num_joints(body)
+        masses = [self.dynamics_info(body, link).mass for link in range(-1, n)]
+        centres = [self.base_state(body).position]
+        centres += [self.link_state(body, link).com_position for link in range(n)]
+        return centre_of_mass(masses, centres)
+
     def joint_commands(self, body: int) -> JointCommands:
         """The motor in force and the torque pending for the next step of every joint.
 
@@ -835,6 +887,37 @@ class Backend(ABC):
             Copies of ``qpos`` (nq,) and ``qvel`` (nv,), MuJoCo's order and conventions (a free
             joint: position, quaternion w, x, y, z; linear velocity, world, of the body frame's
             origin, angular velocity in the body frame).
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def xpos(self) -> np.ndarray:
+        """MuJoCo's ``d.xpos``: each MuJoCo body's frame origin.
+
+        Returns:
+            ``(nbody, 3)`` float64 (m, world), MuJoCo's body order: after a step, as the step
+            left it (MuJoCo under RK4: its last stage's kinematics, which lag the final state);
+            after a write, of the state written.
+
+        Raises:
+            BackendUnsupportedError: The default.
+        """
+        from simbridge.exceptions import BackendUnsupportedError
+
+        raise BackendUnsupportedError(self.name, *NATIVE_ONLY)
+
+    def body_external_forces(self) -> np.ndarray:
+        """MuJoCo's ``cfrc_ext`` after the last step: the contact wrench on each MuJoCo body.
+
+        Returns:
+            ``(nbody, 6)`` float64, MuJoCo's body order (row 0: the world, zeros): torque
+            (N m) then force (N), world frame, the torque about the centre of mass of the
+            body's tree (``subtree_com[rootid]``); zeros before the first step after a reset
+            or a restore.
 
         Raises:
             BackendUnsupportedError: The default.

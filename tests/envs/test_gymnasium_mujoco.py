@@ -2,11 +2,13 @@
 and ``ant`` tasks (Gymnasium's files read as MuJoCo reads them, stepped by ``mj_step``) reset to
 the same state as ``gymnasium.make("HalfCheetah-v5")`` / ``("Ant-v5")`` from the same seed (the
 same draws from the same generator) and follow it bit for bit under the same actions: MuJoCo's
-qpos and qvel, the observation (float32 here, float64 there: equal once Gymnasium's is cast),
-the control cost, the healthy reward, termination. One departure, measured: Ant-v5 reads the
-torso's x from ``data.xpos``, which after ``mj_step`` with RK4 is the kinematics of the last
-Runge-Kutta stage, not of the final state; the task reads ``qpos[0]`` (HalfCheetah-v5's way),
-which equals Gymnasium's own qpos difference bit for bit."""
+qpos and qvel, the observation (float32 here, float64 there: equal once Gymnasium's is cast;
+Ant-v5's default 105 entries, its 78 clipped ``cfrc_ext`` included), the control cost, the
+contact cost, the healthy reward, the forward velocity, termination. Ant-v5 reads the torso's
+x from ``data.xpos``, which after ``mj_step`` with RK4 is the kinematics of the last
+Runge-Kutta stage, not of the final state: the task reads it so too (``Sim.xpos``), however
+the Sim is read between steps. Ant-v5's reward sums its terms in another order: equal to
+rounding."""
 
 from __future__ import annotations
 
@@ -19,13 +21,16 @@ from simbridge.envs import SimEnv
 STEPS = 60
 
 
-def _lockstep(task: str, gym_id: str, seed: int, amplitude: float):
+def _lockstep(task: str, gym_id: str, seed: int, amplitude: float, poke: bool = False):
+    """The two envs side by side; ``poke``: a read that refreshes the Sim's kinematics
+    (``base_state``) after every third step, which must change nothing."""
     env = SimEnv(task, backend="mujoco")
     ref = gymnasium.make(gym_id).unwrapped
     try:
         obs, _ = env.reset(seed=seed)
         ref_obs, _ = ref.reset(seed=seed)
         n = obs.size
+        assert ref_obs.shape == (n,)  # Gymnasium's default observation, all of it
         np.testing.assert_array_equal(env.sim.qpos(), ref.data.qpos)
         np.testing.assert_array_equal(env.sim.qvel(), ref.data.qvel)
         np.testing.assert_array_equal(obs, ref_obs[:n].astype(np.float32))
@@ -40,6 +45,8 @@ def _lockstep(task: str, gym_id: str, seed: int, amplitude: float):
             np.testing.assert_array_equal(env.sim.qvel(), ref.data.qvel, err_msg=f"step {step}")
             np.testing.assert_array_equal(obs, ref_obs[:n].astype(np.float32))
             assert terminated == ref_terminated, step
+            if poke and step % 3 == 1:
+                env.sim.base_state(env.world.body)
             rows.append((info, reward, ref_info, ref_reward, x_before, float(ref.data.qpos[0])))
             if terminated:
                 break
@@ -80,19 +87,25 @@ def test_later_episodes_are_gymnasiums_too():
         ref.close()
 
 
-def test_ant_is_gymnasiums_ant_bit_for_bit_but_for_the_torso_read():
-    rows, dt = _lockstep("ant", "Ant-v5", 3, 0.6)
+def test_ant_is_gymnasiums_default_ant_bit_for_bit():
+    rows, dt = _lockstep("ant", "Ant-v5", 3, 0.6, poke=True)
     assert len(rows) >= 20
     lag = 0.0
-    for info, reward, ref_info, _, x0, x1 in rows:
+    contact = [ref_info["reward_contact"] for _, _, ref_info, *_ in rows]
+    assert min(contact) < 0.0  # the feet touched: the contact cost was exercised
+    for info, reward, ref_info, ref_reward, x0, x1 in rows:
         terms = info["reward_terms"]
         assert terms["action_l2"] == ref_info["reward_ctrl"]
         assert terms["healthy"] == ref_info["reward_survive"]
-        assert terms["forward_velocity"] == (x1 - x0) / dt  # Gymnasium's qpos, its dt
-        assert reward == terms["forward_velocity"] + terms["healthy"] + terms["action_l2"]
-        lag = max(lag, abs(terms["forward_velocity"] - ref_info["x_velocity"]))
+        assert terms["contact_cost"] == ref_info["reward_contact"]  # its cfrc_ext, clipped
+        assert terms["forward_velocity"] == ref_info["x_velocity"]  # the torso's xpos
+        assert reward == sum(terms.values())
+        # Ant-v5 sums (forward + healthy) - (ctrl + contact): equal to rounding
+        assert reward == pytest.approx(ref_reward, rel=0.0, abs=1e-12)
+        lag = max(lag, abs(ref_info["x_velocity"] - (x1 - x0) / dt))
     # xpos after RK4 is the last stage's: a few cm/s apart from qpos's difference (0.022 m/s
-    # measured over 59 steps of uniform actions in [-1, 1]), never the same bits
+    # measured over 59 steps of uniform actions in [-1, 1]), never the same bits: the
+    # xpos read is what makes the forward term Ant-v5's
     assert 0.0 < lag < 0.1
 
 
@@ -100,7 +113,7 @@ def test_the_ids_make_the_tasks():
     env = gymnasium.make("simbridge/Ant-v0", backend="mujoco")
     try:
         obs, _ = env.reset(seed=0)
-        assert obs.shape == (27,) and env.action_space.shape == (8,)
+        assert obs.shape == (105,) and env.action_space.shape == (8,)
         assert env.unwrapped.task.control_dt == pytest.approx(0.05)
         contract = env.unwrapped.contract()
         table = contract["action"]["joint_table"]
@@ -111,6 +124,11 @@ def test_the_ids_make_the_tasks():
         assert table[0]["ctrl_range"] == [-1.0, 1.0]
         names = contract["observation"]["terms"][0]["entries"]
         assert names[0] == "qpos[2]" and len(names) == 13
+        forces = contract["observation"]["terms"][2]["entries"]  # bodies 1..13 of cfrc_ext
+        assert len(forces) == 78 and forces[:4] == [
+            f"cfrc_ext[1.{c}]" for c in ("tx", "ty", "tz", "fx")
+        ]
+        assert forces[-1] == "cfrc_ext[13.fz]"
     finally:
         env.close()
 

@@ -41,6 +41,10 @@ def entry_names(env: SimEnv, term: ObsTerm, size: int) -> list[str]:
     elif term.name in ("qpos", "qvel"):
         first = int(term.params.get("exclude", 0))
         parts = [str(i) for i in range(first, first + size)]
+    elif term.name == "cfrc_ext":  # MuJoCo body index, then torque / force component
+        first = int(term.params.get("exclude", 0))
+        axes = ("tx", "ty", "tz", "fx", "fy", "fz")
+        parts = [f"{first + i // 6}.{axes[i % 6]}" for i in range(size)]
     elif term.name == "command_in_base":
         parts = ["x", "y"]
     elif size == 3:

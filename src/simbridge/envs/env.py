@@ -106,6 +106,10 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         self._shadow: Sim | None = None  # PyBullet's pictures of an engine that draws none
         self._shadow_body = 0
         self._diverged = False
+        # a forward velocity read from a MuJoCo body's xpos (Ant-v5's): xpos kept at each start
+        self._reads_xpos = any(
+            r.name == "forward_velocity" and "body" in r.params for r in t.rewards
+        )
         self._build()
         self._history: deque[np.ndarray] = deque(maxlen=t.history)
         frame = self._frame()
@@ -323,6 +327,8 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         s = self.sim.base_state(w.body)
         w.start = np.array([s.position[0], s.position[1], heading(s.orientation)])
         w.qpos_start = w.qpos_before = self.sim.qpos()
+        if self._reads_xpos:
+            w.xpos_before = self.sim.xpos()
         self._queue = deque([np.zeros(n)] * t.action.latency)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
@@ -350,6 +356,8 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         info: dict[str, Any] = {"action_clipped": clipped}
         if t.native is not None:
             w.qpos_before = self.sim.qpos()
+            if self._reads_xpos:
+                w.xpos_before = self.sim.xpos()
         try:
             self._actuate(applied)
         except SimulationDivergedError:

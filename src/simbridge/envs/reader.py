@@ -84,7 +84,8 @@ _PARAM_KINDS = {
     "sigma": "number",
     "relative": "bool", "terminate": "bool", "link": "name", "joint": "name",
     "links": "names", "joints": "names", "exclude": "count", "z_min": "number",
-    "z_max": "number", "min": "number",
+    "z_max": "number", "min": "number", "range": "interval",
+    "body": "count",
 }  # fmt: skip
 
 
@@ -515,6 +516,8 @@ class _Reader(TableReader):
                 isinstance(value, bool) or not isinstance(value, int) or value < 0
             ):
                 raise self.error(where, f"expected an integer >= 0, got {value!r}")
+            elif kind == "interval":
+                out[key] = self.interval(value, where)
         if name in NATIVE_TERMS and self.native is None:
             raise self.error(
                 [*path, "term"],
@@ -522,6 +525,15 @@ class _Reader(TableReader):
                 f"read as MuJoCo reads it (mjcf = ..., semantics = 'mujoco')",
             )
         return out
+
+    def interval(self, value: Any, where: list[str | int]) -> tuple[float, float]:
+        """``[low, high]``: two numbers, low <= high."""
+        if not isinstance(value, list) or len(value) != 2:
+            raise self.error(where, f"expected [low, high], got {value!r}")
+        low, high = (self.number(v, [*where, i]) for i, v in enumerate(value))
+        if not low <= high:
+            raise self.error(where, f"expected low <= high, got {value!r}")
+        return low, high
 
     def term(self, t: dict[str, Any], path: list[str | int], kind: str) -> str:
         name = self.string(self.require(t, path, "term"), [*path, "term"])

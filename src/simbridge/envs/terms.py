@@ -49,6 +49,8 @@ class World:
         control_dt: seconds per control step.
         qpos_start: an MJCF task's MuJoCo ``qpos`` at the episode's reset, ``(nq,)``.
         qpos_before: its ``qpos`` when the control step began (the forward velocity's start).
+        xpos_before: its MuJoCo bodies' ``xpos`` then, ``(nbody, 3)``, read only for a
+            ``forward_velocity`` term that names a ``body`` (empty otherwise).
         previous_action: the action before ``last_action``, ``(n,)`` (zeros at reset).
         torques: the action joints' torques of the last physics step (N m, ``(n,)``): the
             commanded ones under ``pd`` and ``torque``, zeros under the motor modes.
@@ -68,10 +70,12 @@ class World:
     control_dt: float = 0.0
     qpos_start: np.ndarray = field(default_factory=lambda: np.zeros(0))
     qpos_before: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    xpos_before: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     previous_action: np.ndarray = field(default_factory=lambda: np.zeros(0))
     torques: np.ndarray = field(default_factory=lambda: np.zeros(0))
     start: np.ndarray = field(default_factory=lambda: np.zeros(3))
     _read: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    _forces: np.ndarray | None = field(default=None, repr=False)
     _index: dict[tuple[str | int, ...], np.ndarray] = field(default_factory=dict, repr=False)
     _one: dict[str | int, int] = field(default_factory=dict, repr=False)  # joint -> index
 
@@ -123,8 +127,21 @@ class World:
         return float(self._read[0][i])
 
     def stale(self) -> None:
-        """Forget the joint read: the world has moved (a step, a reset)."""
+        """Forget the joint and force reads: the world has moved (a step, a reset)."""
         self._read = None
+        self._forces = None
+
+    def body_forces(self) -> np.ndarray:
+        """MuJoCo's ``cfrc_ext`` of an MJCF task, read from the engine once per control step
+        (:meth:`simbridge.Sim.body_external_forces`, which every force term shares, until
+        :meth:`stale`).
+
+        Returns:
+            ``(nbody, 6)``: per MuJoCo body, torque (N m) then force (N), world.
+        """
+        if self._forces is None:
+            self._forces = self.sim.body_external_forces()
+        return self._forces
 
     def rotation(self) -> np.ndarray:
         """The base's orientation.
@@ -218,10 +235,26 @@ def _healthy(w: World, p: Mapping[str, Any]) -> bool:
     return finite and p.get("z_min", -math.inf) <= q[2] <= p.get("z_max", math.inf)
 
 
+def _clipped_forces(w: World, p: Mapping[str, Any]) -> np.ndarray:
+    """``cfrc_ext`` clipped to ``p["range"]`` (Ant-v5's ``contact_forces``), all rows."""
+    f = w.body_forces()
+    r = p.get("range")
+    return f if r is None else np.clip(f, float(r[0]), float(r[1]))
+
+
+def _contact_cost(w: World, p: Mapping[str, Any]) -> float:
+    """Ant-v5's contact cost, negated: ``-sum(clip(cfrc_ext, range)^2)`` over every MuJoCo
+    body (the world's row is zeros)."""
+    return -float(np.sum(np.square(_clipped_forces(w, p))))
+
+
 def _forward_velocity(w: World, p: Mapping[str, Any]) -> float:
     """The root's x velocity over the control step: ``(qpos[0] - qpos_before[0]) /
-    control_dt`` (HalfCheetah-v5's, and Ant-v5's but for the torso's position being read at
-    the step's end: see docs/envs.md)."""
+    control_dt`` (HalfCheetah-v5's); with ``body``, that MuJoCo body's ``xpos`` x instead, as
+    :meth:`simbridge.Sim.xpos` gives it (Ant-v5's, ``main_body`` 1: see docs/envs.md)."""
+    if "body" in p:
+        b = int(p["body"])
+        return float((w.sim.xpos()[b, 0] - w.xpos_before[b, 0]) / w.control_dt)
     return float((w.sim.qpos()[0] - w.qpos_before[0]) / w.control_dt)
 
 
@@ -245,6 +278,10 @@ OBSERVATIONS: dict[str, Callable[[World, Mapping[str, Any]], np.ndarray]] = {
     # (Gymnasium's exclude_current_positions_from_observation: 2 for Ant, 1 for HalfCheetah)
     "qpos": lambda w, p: w.sim.qpos()[int(p.get("exclude", 0)) :],
     "qvel": lambda w, p: w.sim.qvel(),  # MJCF tasks: MuJoCo's qvel (nv,)
+    # MJCF tasks: MuJoCo's cfrc_ext without its first `exclude` rows (1: the world's, as
+    # Ant-v5), clipped to `range` ([-1, 1]: Ant-v5's contact_force_range), flattened:
+    # ((nbody - exclude) * 6,), per body torque then force (N m, N; world)
+    "cfrc_ext": lambda w, p: _clipped_forces(w, p)[int(p.get("exclude", 0)) :].ravel(),
 }
 """Observation term -> function (world, params) -> float64 array."""
 
@@ -303,8 +340,11 @@ REWARDS: dict[str, Callable[[World, Mapping[str, Any]], float]] = {
     "joint_pos_error": lambda w, p: -float(np.sum(_q(w, {"relative": True}) ** 2)),
     "upright": lambda w, p: -float(np.sum(_gravity(w, p)[:2] ** 2)),
     "height_error": lambda w, p: -((w.sim.base_state(w.body).position[2] - p["target"]) ** 2),
-    # MJCF tasks: the root's x velocity (m/s) over the control step
+    # MJCF tasks: the root's x velocity (m/s) over the control step; params: body (a MuJoCo
+    # body index: its xpos x, as Ant-v5's main_body; default: qpos[0])
     "forward_velocity": _forward_velocity,
+    # MJCF tasks: -sum(clip(cfrc_ext, range)^2) (Ant-v5's contact cost; weight 5e-4 there)
+    "contact_cost": _contact_cost,
     # MJCF tasks: 1 while healthy (params z_min, z_max on qpos[2]), else 0
     "healthy": lambda w, p: 1.0 if _healthy(w, p) else 0.0,
     # legged_gym's locomotion terms (base frame; commands: vx, vy (m/s), yaw rate (rad/s))
@@ -365,6 +405,9 @@ PARAMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "mean_velocity_near_command": (("within",), ("terminate",)),
     "survive": ((), ()),
     "qpos": ((), ("exclude",)),
+    "cfrc_ext": ((), ("exclude", "range")),
+    "contact_cost": ((), ("range",)),
+    "forward_velocity": ((), ("body",)),
     "healthy": (("z_min", "z_max"), ()),
     "unhealthy": (("z_min", "z_max"), ()),
     "forward_distance": (("min",), ("terminate",)),
@@ -372,9 +415,18 @@ PARAMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 """A term's parameters: those it needs and those it may take (others are refused)."""
 
 
-NATIVE_TERMS = ("qpos", "qvel", "forward_velocity", "healthy", "unhealthy", "forward_distance")
-"""The terms that read MuJoCo's generalized coordinates (``Sim.qpos``): only in a task over an
-MJCF read as MuJoCo reads it."""
+NATIVE_TERMS = (
+    "qpos",
+    "qvel",
+    "cfrc_ext",
+    "forward_velocity",
+    "contact_cost",
+    "healthy",
+    "unhealthy",
+    "forward_distance",
+)
+"""The terms that read MuJoCo's generalized coordinates (``Sim.qpos``) or bodies
+(``Sim.body_external_forces``): only in a task over an MJCF read as MuJoCo reads it."""
 
 
 def term_names(kind: str) -> tuple[str, ...]:

@@ -595,6 +595,45 @@ class Sim:
         """
         return native.generalized_state(self._s, "qvel()")[1]
 
+    def xpos(self) -> np.ndarray:
+        """MuJoCo's ``d.xpos`` (each MuJoCo body's frame origin) of a model read with
+        semantics='mujoco', as Gymnasium's MuJoCo envs read it.
+
+        MuJoCo: after a step, ``d.xpos`` as ``mj_step`` left it; under RK4 that is the last
+        stage's kinematics, which lag the final state (Ant-v5's forward velocity reads it);
+        after a write, of the state written. PyBullet, PhysX: of the state as it stands.
+
+        Returns:
+            ``(nbody, 3)`` float64 (m, world), MuJoCo's body order (row 0: the world).
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        """
+        native.native_model(self._s, "xpos()")
+        return self._s.backend.xpos()
+
+    def body_external_forces(self) -> np.ndarray:
+        """MuJoCo's ``cfrc_ext`` after the last step (what Gymnasium's Ant-v5 observes): the
+        contact wrench on each MuJoCo body of a model read with semantics='mujoco'.
+
+        MuJoCo: ``d.cfrc_ext`` as ``mj_rnePostConstraint`` computes it after ``mj_step`` (as
+        Gymnasium's MuJoCo envs call it; under RK4 on the contacts and kinematics of the last
+        stage). PyBullet, PhysX: from their contact points (:meth:`contact_points`), each on
+        the MuJoCo body its link reads; a MuJoCo body without a joint of its own shares its
+        parent's link, so its contacts count on that body (docs/state_and_contacts.md).
+
+        Returns:
+            ``(nbody, 6)`` float64, MuJoCo's body order (row 0: the world, zeros): torque
+            (N m) then force (N), world frame, the torque about the centre of mass of the
+            body's tree (``subtree_com[rootid]``); zeros before the first step after a reset,
+            a restore (``set_state``) or a keyframe.
+
+        Raises:
+            BackendUnsupportedError: no model read with semantics='mujoco' is loaded.
+        """
+        native.native_model(self._s, "body_external_forces()")
+        return self._s.backend.body_external_forces()
+
     def set_qpos_qvel(
         self,
         qpos: Sequence[float] | np.ndarray | None = None,
@@ -1327,6 +1366,33 @@ class Sim:
                 nothing), or a link without its body.
         """
         return world.contact_points(self._s, body_a, body_b, link_a, link_b)
+
+    def external_forces(self, body: int) -> np.ndarray:
+        """The contact wrench on each link of ``body`` in the last step, as MuJoCo's
+        ``cfrc_ext`` holds it (com-based).
+
+        Per link: the torque then the force the contacts of the last step put on it, world
+        frame, the torque about the centre of mass of the whole body (MuJoCo's
+        ``subtree_com`` of the body's root). A contact between two links of the body counts on
+        both, opposite. MuJoCo (an MJCF read as MuJoCo reads it): ``d.cfrc_ext`` after
+        ``mj_rnePostConstraint`` (its torsional and rolling friction included), each link the
+        sum of its MuJoCo bodies; otherwise (PyBullet, PhysX, MuJoCo under a URDF) from
+        :meth:`contact_points`: each point's normal and friction forces at the middle of its
+        two positions (docs/state_and_contacts.md: how each engine's forces depart). Only
+        computed when asked: nothing is added to ``step``.
+
+        Args:
+            body: a body id.
+
+        Returns:
+            ``(links + 1, 6)`` float64: row 0 the base, row ``i + 1`` link ``i``; columns
+            torque x, y, z (N m), force x, y, z (N).
+
+        Raises:
+            UnknownBodyError: a body that is not there.
+            BackendUnsupportedError: a backend without contact points.
+        """
+        return world.external_forces(self._s, body)
 
     def get_state(self, *, exact: bool = True) -> WorldState:
         """Everything :meth:`set_state` needs to put this world back.

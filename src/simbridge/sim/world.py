@@ -13,7 +13,7 @@ from simbridge.sim.lookups import body_table, joint_indices, link_index
 from simbridge.sim.shared import Shared
 from simbridge.types import BodyState, ContactPoint, MotorMode, WorldState
 
-__all__ = ["contact_points", "get_state", "set_state"]
+__all__ = ["contact_points", "external_forces", "get_state", "set_state"]
 
 
 def contact_points(
@@ -56,6 +56,25 @@ def contact_points(
     from simbridge.sim.contacts import select
 
     return select(s.backend.contact_points(), body_a, la, body_b, lb)
+
+
+def external_forces(s: Shared, body: int) -> np.ndarray:
+    """The contact wrench on each link of ``body`` (:meth:`simbridge.Sim.external_forces`).
+
+    Args:
+        s: the Sim's shared state.
+        body: a body id.
+
+    Returns:
+        ``(links + 1, 6)`` float64, the base's row first: torque (N m) then force (N), world,
+        about the body's centre of mass.
+
+    Raises:
+        UnknownBodyError: a body that is not there.
+        BackendUnsupportedError: a backend without contact points.
+    """
+    body_table(s, body, "body")
+    return s.backend.external_forces(body)
 
 
 def get_state(s: Shared, exact: bool) -> WorldState:
