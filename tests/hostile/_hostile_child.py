@@ -190,6 +190,7 @@ def run_case(case: h.Case, backend: str, work: Path, tmp: Path) -> dict[str, Any
         del gone
     if leaks:
         result["leaks"] = leaks
+    gc.freeze()  # what outlived the case's collection (caches, modules it imported): see main
     return result
 
 
@@ -203,6 +204,13 @@ def main() -> int:
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr)
     os.chdir(base)  # URDF text resolves relative meshes here; nothing is written
     _warm_up(backend, base / "warm-up")
+    # what the imports and the warm-up made lives as long as the process: gc.freeze() keeps
+    # it out of every later collection, and each case freezes what outlived its own
+    # collection, so that a case's gc.collect() (run_case) walks only what that case made
+    # (measured on 188 of MuJoCo's cases: 60 ms a collect, 11.3 of the batch's 14.6 s of
+    # CPU, before)
+    gc.collect()
+    gc.freeze()
     report.write(json.dumps({"ready": os.getpid()}) + "\n")
     for k, name in enumerate(names):
         case = h.lookup(name)
