@@ -13,6 +13,11 @@ A policy is named by one string:
   runtime is imported only when such a file is given; a missing one raises
   :class:`PolicyRuntimeMissingError` naming what to install.
 
+A file's policy is checked against the task when it is loaded, before any engine runs: a
+Stable-Baselines3 model's observation and action spaces against the task's, and every file's
+policy is called once on a zero observation of the task's size, its output's size checked
+against the action's. A policy that does not fit raises :class:`PolicyError` naming both layouts.
+
 Actions are deterministic: ONNX and TorchScript files are pure functions of the observation,
 Stable-Baselines3 models are asked with ``deterministic=True``; a ``module:callable`` is the
 caller's own.
@@ -22,6 +27,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import zipfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -53,6 +59,15 @@ _SB3_ALGORITHMS = ("PPO", "SAC", "TD3", "A2C", "DQN", "DDPG")
 def _one_line(exc: BaseException) -> str:
     text = " ".join(str(exc).split())
     return f"{type(exc).__name__}: {text[:300]}"
+
+
+def _last_line(exc: BaseException) -> str:
+    """An error's last line: torch puts the TorchScript traceback first and the reason last
+    (``RuntimeError: mat1 and mat2 shapes cannot be multiplied (1x4 and 5x1)``)."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    last = lines[-1] if lines else ""
+    text = last if last.startswith(type(exc).__name__) else f"{type(exc).__name__}: {last}"
+    return text[:300]
 
 
 def _from_module(spec: str, env: SimEnv) -> Policy:
@@ -94,7 +109,7 @@ def _onnx(path: Path, env: SimEnv) -> Policy:
     except Exception as exc:  # onnxruntime raises its own classes for a bad file
         raise PolicyError(str(path), f"the ONNX file does not load ({_one_line(exc)})") from None
     inp = session.get_inputs()[0]
-    size = int(np.prod(env.observation_space.shape or (0,)))
+    size = _obs_size(env)
     declared = inp.shape[-1] if inp.shape else None
     if isinstance(declared, int) and declared != size:
         raise PolicyError(
@@ -112,8 +127,10 @@ def _onnx(path: Path, env: SimEnv) -> Policy:
 
 
 def _torchscript(path: Path) -> Policy:
+    """A TorchScript file's module, given the observation as ``(1, size)`` in the dtype of its
+    first floating parameter (float32 when it has none)."""
     try:
-        import torch  # type: ignore[import-not-found]
+        import torch  # type: ignore[import-not-found, unused-ignore]
     except ImportError:
         raise PolicyRuntimeMissingError(
             str(path), "TorchScript", "pip install torch (the CPU build is enough)"
@@ -122,38 +139,123 @@ def _torchscript(path: Path) -> Policy:
         module = torch.jit.load(str(path), map_location="cpu").eval()
     except Exception as exc:  # torch raises RuntimeError or its own for a bad file
         raise PolicyError(
-            str(path), f"the TorchScript file does not load ({_one_line(exc)})"
+            str(path),
+            f"the TorchScript file does not load ({_one_line(exc)}); a TorchScript file is "
+            "what torch.jit.script(module).save(path) or torch.jit.trace(module, example)"
+            ".save(path) writes, not torch.save's pickle of a module or its state_dict",
         ) from None
+    floats = [p.dtype for p in module.parameters() if p.is_floating_point()]
+    dtype = floats[0] if floats else torch.float32
 
     def policy(obs: np.ndarray) -> np.ndarray:
         with torch.no_grad():
-            out = module(torch.as_tensor(np.asarray(obs, np.float32))[None])
+            out = module(torch.as_tensor(np.asarray(obs, np.float32)).to(dtype)[None])
+        if not isinstance(out, torch.Tensor):
+            raise PolicyError(
+                str(path),
+                f"its forward returned a {type(out).__name__}, not one tensor: the action",
+            )
         return np.asarray(out.numpy(), dtype=np.float64).reshape(-1)
 
     return policy
 
 
-def _sb3(path: Path) -> Policy:
+def _sb3_zip(path: Path) -> None:
+    """Refuse a file that is no zip, or a zip without Stable-Baselines3's ``data`` entry."""
+    if not zipfile.is_zipfile(path):
+        raise PolicyError(
+            str(path),
+            "not a zip file; a Stable-Baselines3 model is the zip model.save(path) writes",
+        )
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+    if "data" not in names:
+        raise PolicyError(
+            str(path),
+            "a zip without Stable-Baselines3's 'data' entry, so no model.save(path) wrote it "
+            f"(its entries: {names[:8]}{' ...' if len(names) > 8 else ''})",
+        )
+
+
+def _sb3(path: Path, env: SimEnv) -> Policy:
+    """A Stable-Baselines3 model: the first of :data:`_SB3_ALGORITHMS` that loads the zip, its
+    spaces checked against the task's."""
     try:
-        import stable_baselines3  # type: ignore[import-not-found]
+        import stable_baselines3  # type: ignore[import-not-found, unused-ignore]
     except ImportError:
         raise PolicyRuntimeMissingError(
             str(path), "Stable-Baselines3", 'pip install "simbridge[rl]" (stable-baselines3)'
         ) from None
-    errors = []
+    _sb3_zip(path)
+    errors: dict[str, list[str]] = {}
     for algo in _SB3_ALGORITHMS:
         try:
             model = getattr(stable_baselines3, algo).load(str(path), device="cpu")
         except Exception as exc:  # a zip of another algorithm, or no model at all
-            errors.append(f"{algo}: {_one_line(exc)[:80]}")
+            errors.setdefault(_one_line(exc)[:120], []).append(algo)
             continue
+        _sb3_spaces(path, env, model)
 
         def policy(obs: np.ndarray, model: Any = model) -> np.ndarray:
             action, _ = model.predict(np.asarray(obs, np.float32), deterministic=True)
             return np.asarray(action, dtype=np.float64).reshape(-1)
 
         return policy
-    raise PolicyError(str(path), f"no Stable-Baselines3 algorithm loads it ({'; '.join(errors)})")
+    why = "; ".join(f"{', '.join(algos)}: {text}" for text, algos in errors.items())
+    raise PolicyError(str(path), f"no Stable-Baselines3 algorithm loads it ({why})")
+
+
+def _sb3_spaces(path: Path, env: SimEnv, model: Any) -> None:
+    """A model's observation and action spaces against the task's (both layouts named)."""
+    obs_shape = getattr(model.observation_space, "shape", None)
+    if obs_shape != env.observation_space.shape:
+        raise PolicyError(
+            str(path),
+            f"it was trained on observations {_space(model.observation_space)}; the task's "
+            f"observation has {_obs_size(env)} entries: {_layout(env)}",
+        )
+    act_shape = getattr(model.action_space, "shape", None)
+    if act_shape != env.action_space.shape or not act_shape:
+        raise PolicyError(
+            str(path),
+            f"it returns actions {_space(model.action_space)}; {_action_layout(env)}",
+        )
+
+
+def _space(space: Any) -> str:
+    """A Gymnasium space in words: ``of shape (5,)``, or the space itself when it has none."""
+    shape = getattr(space, "shape", None)
+    return f"of shape {shape}" if shape else f"of {space}"
+
+
+def _obs_size(env: SimEnv) -> int:
+    return int(np.prod(env.observation_space.shape or (0,)))
+
+
+def _action_layout(env: SimEnv) -> str:
+    """The task's action in words: its size, mode and joints in order."""
+    joints = list(env.task.action.joints)
+    return (
+        f"the task {env.task.name!r} takes {len(joints)}, one {env.task.action.mode} entry "
+        f"per joint in this order: {joints}"
+    )
+
+
+def _probe(spec: str, env: SimEnv, policy: Policy) -> None:
+    """Call a file's policy once on a zero observation of the task's size: a policy that does
+    not take it, or returns another size than the action's, is refused before any engine runs."""
+    size = _obs_size(env)
+    try:
+        out = policy(np.zeros(size, np.float32))
+    except PolicyError:
+        raise
+    except Exception as exc:  # the runtime's own error for an input it does not take
+        raise PolicyError(
+            spec,
+            f"it does not take the task's observation of {size} entries ({_last_line(exc)}); "
+            f"the observation: {_layout(env)}",
+        ) from None
+    check_output(spec, env, out)
 
 
 def _layout(env: SimEnv) -> str:
@@ -175,8 +277,11 @@ def load_policy(spec: str, env: SimEnv) -> Policy:
 
     Raises:
         PolicyError: a module or attribute that does not exist, an object that is not
-            callable, a file that does not load or of an unknown kind, an ONNX input of
-            another size than the observation.
+            callable, a file that does not load or of an unknown kind, a file's policy that
+            does not fit the task (an ONNX input or a Stable-Baselines3 observation space of
+            another size than the observation, an action space of another shape than the
+            action, a policy that fails on a zero observation of the task's size or returns
+            another size than the action's: the message names both layouts).
         PolicyRuntimeMissingError: a file whose runtime is not installed.
     """
     if spec == "reference":
@@ -195,8 +300,13 @@ def load_policy(spec: str, env: SimEnv) -> Policy:
             raise PolicyError(spec, "no such file")
         kind = FILE_KINDS[path.suffix.lower()]
         if kind == "ONNX":
-            return _onnx(path, env)
-        return _torchscript(path) if kind == "TorchScript" else _sb3(path)
+            policy = _onnx(path, env)
+        elif kind == "TorchScript":
+            policy = _torchscript(path)
+        else:
+            policy = _sb3(path, env)
+        _probe(spec, env, policy)
+        return policy
     if ":" in spec:
         return _from_module(spec, env)
     raise PolicyError(
@@ -231,9 +341,5 @@ def check_output(spec: str, env: SimEnv, action: Any) -> np.ndarray:
             f"takes {len(joints)} entries, one per joint: {joints}",
         ) from None
     if a.size != len(joints):
-        raise PolicyError(
-            spec,
-            f"returned {a.size} action entries; the task {env.task.name!r} takes {len(joints)}, "
-            f"one {env.task.action.mode} entry per joint in this order: {joints}",
-        )
+        raise PolicyError(spec, f"returned {a.size} action entries; {_action_layout(env)}")
     return a
