@@ -77,9 +77,15 @@ TEXT_ROBOT = (
 # cycles, 3 busy processes beside it): RSS 73.2 MB after the warm-up (the step inside it); in a
 # suite run it came after the warm-up instead (42.6 -> 76.2 MB over 900 cycles: 38.2 kB/cycle,
 # failing --check); with the threshold fixed, 42.9 -> 45.4 MB. A leak grows either way; the
-# rows run with the threshold fixed at glibc's default so that the step cannot land in the
-# measured cycles.
-FIXED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "131072"}
+# rows run with the threshold fixed so that the step cannot land in the measured cycles: at
+# 32 MB, the ceiling glibc's own raising stops at (a long-lived process's state once its large
+# blocks have come and gone), not at its starting 128 kB, where every block above 128 kB (an
+# engine's buffers at each connect, each load) was mapped and unmapped again each cycle, its
+# pages zeroed by the kernel. Measured (--cycles 300, the six create-close and load-remove
+# rows, back to back): 40.6 -> 33.1 s of CPU, system time 11.7 -> 4.1 s; PyBullet's
+# create-close alone 8.1 -> 1.7 s of system time; every row as flat (kB per cycle 47.5 ->
+# 53.5 on PhysX's create-close, -0.7 -> 7.8 on MuJoCo's, 8.7 -> 6.7 on PyBullet's).
+FIXED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "33554432"}
 
 
 def _rss_mb() -> float:
