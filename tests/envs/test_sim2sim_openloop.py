@@ -100,9 +100,12 @@ def test_a_policy_trained_outside_is_judged_against_its_stated_contract(tmp_path
         trained_on="external:isaaclab",
         backends=["pybullet", "mujoco", "mujoco"],
         episodes=2,
-        openloop=2,  # no training engine: nothing to replay
+        openloop=1,  # no training engine's log: the first engine's actions stand in
+        openloop_ensemble=2,
     )
-    assert result.openloop is None
+    ol = result.openloop
+    assert ol is not None and (ol.trained_on, ol.outside, ol.seeds) == ("pybullet", "isaaclab", [0])
+    assert [r.engine for r in ol.replays] == ["mujoco", "mujoco#2"]
     assert [r.engine.label for r in result.runs] == ["pybullet", "mujoco", "mujoco#2"]
     md = markdown(result)
     assert "Trained outside simbridge (**isaaclab**)" in md
@@ -122,7 +125,8 @@ def test_a_policy_trained_outside_is_judged_against_its_stated_contract(tmp_path
     assert s["external"]["stated"]["joint damping"] == "0.5"
     for e in s["engines"]:  # nothing against a training engine
         assert (e["p_value"], e["verdict"], e["discordant"]) == (None, None, None)
-    assert s["openloop"] is None
+    assert s["openloop"]["outside"] == "isaaclab"
+    assert "## Where the physics parts: the first engine's actions replayed open loop" in md
     assert result.points_at_contract is False
 
 
