@@ -181,6 +181,7 @@ class NativePyBullet(MjcfOnEngine):
         "force as MuJoCo's Euler makes it, its armature a force as on the hinges",
     }
     soft_limits = True  # MuJoCo's limit on M + A (PyBullet's hard limit stops M alone)
+    contact_passes = 2  # the armature's force against the step's own contacts
 
     def __init__(
         self,
@@ -385,11 +386,17 @@ class NativePyBullet(MjcfOnEngine):
             quat, w = ball_to_inertial(inertial, qpos[qa : qa + 4], qvel[va : va + 3])
             p.resetJointStateMultiDof(body, i, quat, w, physicsClientId=c)
 
-    def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
+    def apply_forces(
+        self,
+        qfrc: np.ndarray,
+        damping: np.ndarray,
+        mass: np.ndarray,
+        fc: np.ndarray | None = None,
+    ) -> None:
         """See MjcfOnEngine.apply_forces: joint torques (``TORQUE_CONTROL``, one step) of
         :meth:`with_armature`; a free base's force and torque as external forces."""
         c, m = self._c, self.m
-        tau = self.with_armature(qfrc, damping, mass)
+        tau = self.with_armature(qfrc, damping, mass, fc)
         for body, idx, _, vas in self._joints:
             if idx:
                 p.setJointMotorControlArray(

@@ -70,6 +70,11 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # PhysX 0.0044, both on bfoot at its limit (MuJoCo's soft limit computed here, one row at a
     # time); PyBullet 0.13 with the damping implicit in the velocity alone.
     "mjcf_cheetah_air": {"pybullet": 0.01, "physx": 0.01},
+    # Gymnasium's half cheetah under its reference gait, 10 s, seeds 0-3 (test_mjcf_mujoco_
+    # reading.py): the largest gap in distance run from the MuJoCo backend's 14.1-14.6 m, in m.
+    # Measured: PyBullet 1.23 (its armature force against the step's own contacts, 2 passes;
+    # 12.1 with the step before's), PhysX 0.60.
+    "mjcf_cheetah_gait": {"pybullet": 2.0, "physx": 1.0},
     # Ball joints under MuJoCo's reading (test_mjcf_ball_joints.py; the MuJoCo backend: raw
     # MuJoCo's bits). The ball chain from qpos0 under gravity for 0.5 s (a spring, damping,
     # armature and a 60-degree cone on it): the largest rotation angle between an engine's ball
