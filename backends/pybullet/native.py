@@ -7,7 +7,8 @@ static body for the world body's geoms. Nothing of PyBullet's profile applies: l
 no joint-velocity clamp, the default motors released (a joint with ``frictionloss`` keeps a
 velocity motor of target 0 and that force: Coulomb friction as PyBullet's motors make it).
 Each step applies MuJoCo's actuator and spring forces as joint torques, the joint damping
-implicit in every force (MuJoCo's Euler), the armature as a force and MuJoCo's soft joint limits
+implicit in every force (MuJoCo's Euler), the armature as a force (against the contact forces
+of two trial steps of the same step, ``contact_passes``) and MuJoCo's soft joint limits
 (the joints have no PyBullet limit; the shared part, ``backends/mjcf_engine.py``).
 
 With ``gui`` the model is built in the Sim's GUI connection, handed over by the backend it
@@ -167,12 +168,12 @@ class NativePyBullet(MjcfOnEngine):
     engine_version = "3.2.7"
     departure_texts: ClassVar[dict[str, str]] = {
         "armature": "joint armature is a force each step that gives the motion "
-        "(M + A + dt D)^-1 (f - c + fc - D qdot), fc the contact forces of the step before: "
-        "exact without contact, one step late with it (Gymnasium's half cheetah's reference "
-        "gait succeeds on 7 of 20 seeds, 20 of 20 with fc 0: docs/mjcf_mujoco_reading.md)",
+        "(M + A + dt D)^-1 (f - c + fc - D qdot), fc the contact forces of the step's "
+        "second trial (each step is tried twice, written back, then taken): exact without "
+        "contact; with it two passes toward the force consistent with the step's contacts",
         "joint_damping": "joint damping is implicit in every force as MuJoCo's Euler makes it, "
-        "(M + A + dt D)^-1 (f - c + fc - D qdot), given as a torque each step; the contact "
-        "forces in it are the step before's",
+        "(M + A + dt D)^-1 (f - c + fc - D qdot), given as a torque each step (fc as in "
+        "armature's)",
         "frictionloss": "joint frictionloss is a velocity motor with target 0 and force "
         "frictionloss",
         "ball_joints": "a ball joint is PyBullet's spherical joint (it turns the child's "
