@@ -60,9 +60,9 @@ KNOWN_GAPS: dict[str, dict[str, float]] = {
     # integrator and contacts. Gymnasium's ant, zero controls, its torso's height at 5 s
     # (bench/mjcf_mujoco_reading.py), in m, against raw MuJoCo under the file's RK4 (no engine
     # now) or under Euler (PhysX: measured 0.0065 off, 0.6052 against 0.6117, its feet held by
-    # PhysX's static friction where MuJoCo's creep; PyBullet: 0.0041 off, 0.6076, with the
-    # damping implicit in every force; 0.5278, 0.0160 from RK4's 0.5438, with the damping
-    # implicit in the velocity alone).
+    # PhysX's static friction where MuJoCo's creep; PyBullet: 0.0030 off, 0.6087, with the
+    # damping implicit in every force and the contact passes; 0.5278, 0.0160 from RK4's 0.5438,
+    # with the damping implicit in the velocity alone).
     "mjcf_ant_height_rk4": {},
     "mjcf_ant_height_euler": {"pybullet": 0.01, "physx": 0.01},
     # Gymnasium's half cheetah in the air under its gait's controls, 1 s (test_mjcf_mujoco_
