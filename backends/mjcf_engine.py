@@ -150,7 +150,7 @@ class MjcfOnEngine(MjcfReads, Backend):
                 self.ball_dofs[int(m.jnt_dofadr[j]) : int(m.jnt_dofadr[j]) + 3] = True
         # the step before's velocity, inertia, bias and applied force (with_armature)
         self._last: tuple[np.ndarray, ...] | None = None
-        # contact_passes change the force only where armature or damping acts on it
+        # armature or damping: the force depends on the constraint forces (contact_passes)
         self._passes_help = bool(m.dof_armature.any() or m.dof_damping.any())
         self._stepping = threading.RLock()
         self._in_step = False
@@ -240,7 +240,10 @@ class MjcfOnEngine(MjcfReads, Backend):
         implicit = full + self.dt * np.diag(damping)
         if self._recovering:
             f = f + self.limit_recovery(full, np.linalg.solve(implicit, f - c + fc - damping * v))
-        out = mass @ np.linalg.solve(implicit, f - c + fc - damping * v) + c - fc
+        if self._passes_help:
+            out = mass @ np.linalg.solve(implicit, f - c + fc - damping * v) + c - fc
+        else:  # no armature or damping: the forces as they are (the same, less its rounding)
+            out = f
         self._last = (q.copy(), v.copy(), mass.copy(), c.copy(), out)
         return out
 
