@@ -1,6 +1,7 @@
 """MuJoCo's joint forces that an engine without them gets from simbridge, each step, under
-``load_mjcf(source, semantics="mujoco")`` (no engine is imported here): implicit joint damping,
-armature, and MuJoCo's soft joint limits (hinge, slide and ball). Used by
+``load_mjcf(source, semantics="mujoco")`` (no engine is imported here): MuJoCo's soft joint
+limits (hinge, slide and ball) and the velocity change a free body's engine state gives (the
+damping and armature are solved in ``MjcfOnEngine.with_armature``). Used by
 ``backends/mjcf_engine.py``; every array is in MuJoCo's generalized coordinates (nv,), ``mass``
 the joint-space inertia (nv, nv).
 """
@@ -14,58 +15,13 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "armature_force",
     "ball_angle",
     "free_velocity_change",
-    "implicit_damping",
     "soft_limit_force",
     "violation",
 ]
 
 _BALL = 1  # mujoco.mjtJoint.mjJNT_BALL (no engine is imported here)
-
-
-def implicit_damping(
-    damping: np.ndarray, mass: np.ndarray, qvel: np.ndarray, dt: float
-) -> np.ndarray:
-    """The damping force that stops the next step's velocity as implicit Euler does:
-    ``-D (I + dt M^-1 D)^-1 qdot`` (an explicit ``-D qdot`` diverges where a joint's inertia is
-    below ``dt d / 2``: the ant's hips without armature).
-
-    Args:
-        damping: (nv,) MuJoCo's ``dof_damping``.
-        mass: (nv, nv) the joint-space inertia the motion has.
-        qvel: (nv,) the velocities.
-        dt: the time step (s).
-
-    Returns:
-        (nv,) the generalized damping force.
-    """
-    if not damping.any():
-        return np.zeros_like(damping)
-    a = np.eye(len(damping)) + dt * np.linalg.solve(mass, np.diag(damping))
-    return -damping * np.linalg.solve(a, qvel)
-
-
-def armature_force(
-    armature: np.ndarray, mass: np.ndarray, f: np.ndarray, bias: np.ndarray
-) -> np.ndarray:
-    """The force that gives an engine without armature the motion with it:
-    ``f - A (M + A)^-1 (f - c')``. The engine's ``M_e qdd = f - A qdd_a - c'`` then gives
-    ``qdd = qdd_a = (M_e + A)^-1 (f - c')`` exactly, where ``c'`` holds every other force on
-    the engine's joints (MuJoCo's bias forces less the constraint forces the engine applied in
-    the step before: one step late where a contact acts, the departure ``armature``).
-
-    Args:
-        armature: (nv,) MuJoCo's ``dof_armature``.
-        mass: (nv, nv) the joint-space inertia with armature, ``M_e + A``.
-        f: (nv,) the forces simbridge applies (actuators, springs, damping, limits).
-        bias: (nv,) ``c'``.
-
-    Returns:
-        (nv,) the force to apply.
-    """
-    return f - armature * np.linalg.solve(mass, f - bias)
 
 
 def ball_angle(quat: np.ndarray) -> tuple[float, np.ndarray]:

@@ -350,7 +350,13 @@ class NativePhysx(MjcfOnEngine, ContactReads):
             art.qpos = aq
             art.qvel = av
 
-    def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
+    def apply_forces(
+        self,
+        qfrc: np.ndarray,
+        damping: np.ndarray,
+        mass: np.ndarray,
+        fc: np.ndarray | None = None,
+    ) -> None:
         """See MjcfOnEngine.apply_forces: ``set_qf`` per articulation; damping and armature
         are the joints' own (drives, armature) but a ball joint's damping, a force implicit in
         every force (MuJoCo's Euler); frictionloss and MuJoCo's soft limits added here; a ball

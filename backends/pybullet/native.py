@@ -7,7 +7,8 @@ static body for the world body's geoms. Nothing of PyBullet's profile applies: l
 no joint-velocity clamp, the default motors released (a joint with ``frictionloss`` keeps a
 velocity motor of target 0 and that force: Coulomb friction as PyBullet's motors make it).
 Each step applies MuJoCo's actuator and spring forces as joint torques, the joint damping
-implicitly in the joint-space inertia, the armature as a force and MuJoCo's soft joint limits
+implicit in every force (MuJoCo's Euler), the armature as a force (against the contact forces
+of two trial steps of the same step, ``contact_passes``) and MuJoCo's soft joint limits
 (the joints have no PyBullet limit; the shared part, ``backends/mjcf_engine.py``).
 
 With ``gui`` the model is built in the Sim's GUI connection, handed over by the backend it
@@ -171,10 +172,13 @@ class NativePyBullet(MjcfOnEngine):
     name = "pybullet"
     engine_version = "3.2.7"
     departure_texts: ClassVar[dict[str, str]] = {
-        "armature": "joint armature is a force each step, -A (M + A)^-1 (f - c + fc), fc the "
-        "contact forces of the step before: exact without contact, one step late with it",
-        "joint_damping": "joint damping is a torque each step, -D (I + dt M^-1 D)^-1 qdot: "
-        "implicit in the joint-space inertia, explicit against contacts and limits",
+        "armature": "joint armature is a force each step that gives the motion "
+        "(M + A + dt D)^-1 (f - c + fc - D qdot), fc the contact forces of the step's "
+        "second trial (each step is tried twice, written back, then taken): exact without "
+        "contact; with it two passes toward the force consistent with the step's contacts",
+        "joint_damping": "joint damping is implicit in every force as MuJoCo's Euler makes it, "
+        "(M + A + dt D)^-1 (f - c + fc - D qdot), given as a torque each step (fc as in "
+        "armature's)",
         "frictionloss": "joint frictionloss is a velocity motor with target 0 and force "
         "frictionloss",
         "ball_joints": "a ball joint is PyBullet's spherical joint (it turns the child's "
@@ -183,6 +187,7 @@ class NativePyBullet(MjcfOnEngine):
         "force as MuJoCo's Euler makes it, its armature a force as on the hinges",
     }
     soft_limits = True  # MuJoCo's limit on M + A (PyBullet's hard limit stops M alone)
+    contact_passes = 2  # the armature's force against the step's own contacts
 
     def __init__(
         self,
@@ -388,11 +393,17 @@ class NativePyBullet(MjcfOnEngine):
             quat, w = ball_to_inertial(inertial, qpos[qa : qa + 4], qvel[va : va + 3])
             p.resetJointStateMultiDof(body, i, quat, w, physicsClientId=c)
 
-    def apply_forces(self, qfrc: np.ndarray, damping: np.ndarray, mass: np.ndarray) -> None:
+    def apply_forces(
+        self,
+        qfrc: np.ndarray,
+        damping: np.ndarray,
+        mass: np.ndarray,
+        fc: np.ndarray | None = None,
+    ) -> None:
         """See MjcfOnEngine.apply_forces: joint torques (``TORQUE_CONTROL``, one step) of
         :meth:`with_armature`; a free base's force and torque as external forces."""
         c, m = self._c, self.m
-        tau = self.with_armature(qfrc, damping, mass)
+        tau = self.with_armature(qfrc, damping, mass, fc)
         for body, idx, _, vas in self._joints:
             if idx:
                 p.setJointMotorControlArray(
