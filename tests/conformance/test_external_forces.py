@@ -81,18 +81,26 @@ def test_the_rows_of_mujocos_bodies_sum_to_the_links(make_sim):
     ant = sim.load_mjcf(ANT, semantics="mujoco")[0]
     assert sim.body_external_forces().shape == (14, 6)
     assert not sim.body_external_forces().any()
-    sim.step(300)  # 3 s: settled on its feet
+    sim.step(200)  # 2 s: settled on its feet
+    lift = []  # the vertical force on the bodies at each step of the third second
+    for _ in range(100):
+        sim.step()
+        lift.append(sim.body_external_forces()[:, 5].sum())
     rows = sim.body_external_forces()
     assert not rows[0].any()  # the world's row
     n = sim.num_joints(ant)
     links = sim.external_forces(ant)
     assert links.shape == (n + 1, 6)
     assert links.sum(axis=0) == pytest.approx(rows.sum(axis=0), abs=1e-9)
-    # the feet carry it: measured 8.9352 N (mujoco), 8.9359 (pybullet), 8.9338 (physx, on
-    # three feet) for ant.xml's 0.91088 kg (MuJoCo's compiled subtree mass of the torso) times
-    # the file's 9.81 m/s^2; the feet (the ankles' links) alone carry it
+    # the feet carry it, over a second (the impulse: at rest it is the weight's): measured, the
+    # mean over the third second 8.9354 N (mujoco), 8.9368 (pybullet), 8.9357 (physx) for
+    # ant.xml's 0.91088 kg (MuJoCo's compiled subtree mass of the torso) times the file's
+    # 9.81 m/s^2, within 1.2e-4 of it. An instant's force is not the weight on PyBullet: the
+    # armature force's trial passes leave the resting ant a jitter (the force's standard
+    # deviation over that second 0.048 N; 9.032 N at 3 s), MuJoCo's 1.2e-4, PhysX's 0.0079.
+    # The feet (the ankles' links) alone carry it
     g = -float(sim.manifest()["option"]["gravity"][2])
-    assert rows[:, 5].sum() == pytest.approx(0.91088 * g, rel=1e-3)
+    assert np.mean(lift) == pytest.approx(0.91088 * g, rel=1e-3)
     feet = [j + 1 for j in range(n) if sim.joint_info(ant, j).name.startswith("ankle")]
     assert links[feet, 5].sum() == pytest.approx(rows[:, 5].sum(), rel=1e-9)
     # each foot's friction holds it from splaying (measured 0.22-0.28 N sideways on
