@@ -70,7 +70,12 @@ def test_a_joint_the_robot_lacks_names_it_and_the_robots_joints():
     ("good", "bad", "key"),
     [
         ('joints = ["slider_to_cart"]', 'joints = ["slider_to_kart"]', "action.joints"),
-        ('released = ["cart_to_pole"]', 'released = ["cart_to_pol"]', "robots.released"),
+        ('released = ["cart_to_pole"]', 'released = ["cart_to_pol"]', "robots[0].released"),
+        (
+            'params = { joint = "cart_to_pole", limit',
+            'params = { joint = "cart_to_pol", limit',
+            "terminations[0].params",
+        ),
     ],
 )
 def test_a_joint_a_task_file_names_that_the_robot_lacks_gives_file_and_line(

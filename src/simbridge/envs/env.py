@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from simbridge.envs.errors import ActionError, TaskJointError
-from simbridge.envs.task import RobotSpec, Task
+from simbridge.envs.task import Condition, ObsTerm, RewardTerm, RobotSpec, Task
 from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World, heading
 from simbridge.exceptions import (
     BackendUnsupportedError,
@@ -165,6 +165,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         w.pose = dict(spec.joint_positions)
         w.previous_action, w.torques = np.zeros(n), np.zeros(n)
         self.world = w
+        self._check_term_joints(body)
         spread = t.randomisation.joints or t.action.joints
         key = ["randomisation", "joints"] if t.randomisation.joints else ["action", "joints"]
         self._spread = [self._joint(body, j, key) for j in spread]
@@ -183,12 +184,33 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         try:
             return self.sim.joint_index(body, name)
         except UnknownJointError as e:
-            from simbridge.envs.reader import key_line
+            from simbridge.envs.reader import _keystr, key_line
 
             t = self.task
-            key = ".".join(str(p) for p in path if not isinstance(p, int))
             file = t.source if t.source is not None else f"<task {t.name}>"
-            raise TaskJointError(file, key, e, key_line(t.source, path)) from None
+            raise TaskJointError(file, _keystr(list(path)), e, key_line(t.source, path)) from None
+
+    def _check_term_joints(self, body: int) -> None:
+        """Look up, once at load, every joint a term's ``params`` name (``joint``, ``joints``):
+        the terms themselves look them up at the first step, where an error could not say
+        which line of the task named the joint.
+
+        Raises:
+            TaskJointError: the robot lacks one; the term's line in the task file.
+        """
+        t = self.task
+        groups: tuple[tuple[str, Sequence[ObsTerm | RewardTerm | Condition]], ...] = (
+            ("observation", t.observation),
+            ("rewards", t.rewards),
+            ("terminations", t.terminations),
+            ("success", t.success),
+        )
+        for group, terms in groups:
+            for i, term in enumerate(terms):
+                one = term.params.get("joint")
+                for name in (*term.params.get("joints", ()), *([] if one is None else [one])):
+                    if isinstance(name, str):
+                        self._joint(body, name, [group, i, "params"])
 
     def _build_native(self, r: RobotSpec) -> None:
         """Load the MJCF read as MuJoCo reads it (the whole world), controls at 0."""
