@@ -6,12 +6,21 @@ action past the clip is clipped and counted in info, never silently."""
 from __future__ import annotations
 
 import dataclasses
+import pickle
 import re
 
 import numpy as np
 import pytest
 
-from simbridge.envs import ActionError, SimEnv, TaskFileError, load_task, loads_task, shipped_tasks
+from simbridge.envs import (
+    ActionError,
+    SimEnv,
+    TaskFileError,
+    TaskJointError,
+    load_task,
+    loads_task,
+    shipped_tasks,
+)
 from simbridge.exceptions import InvalidArgumentError, UnknownJointError
 
 
@@ -55,6 +64,38 @@ def test_a_joint_the_robot_lacks_names_it_and_the_robots_joints():
     bad = dataclasses.replace(task, action=dataclasses.replace(task.action, joints=joints))
     with pytest.raises(UnknownJointError, match=r"no joint 'elbow'.*'lbr_iiwa_joint_7'"):
         SimEnv(bad, backend="mujoco")
+
+
+@pytest.mark.parametrize(
+    ("good", "bad", "key"),
+    [
+        ('joints = ["slider_to_cart"]', 'joints = ["slider_to_kart"]', "action.joints"),
+        ('released = ["cart_to_pole"]', 'released = ["cart_to_pol"]', "robots[0].released"),
+        (
+            'params = { joint = "cart_to_pole", limit',
+            'params = { joint = "cart_to_pol", limit',
+            "terminations[0].params",
+        ),
+    ],
+)
+def test_a_joint_a_task_file_names_that_the_robot_lacks_gives_file_and_line(
+    tmp_path, good, bad, key
+):
+    text = shipped_tasks()["cartpole"].read_text(encoding="utf-8")
+    assert good in text
+    text = text.replace(good, bad, 1)
+    path = tmp_path / "mine.toml"
+    path.write_text(text, encoding="utf-8")
+    line = next(i for i, s in enumerate(text.splitlines(), 1) if s.startswith(bad))
+    with pytest.raises(TaskJointError) as caught:
+        SimEnv(str(path), backend="pybullet")
+    message = str(caught.value)
+    assert message.startswith(f"{path}:{line}: key {key!r}: "), message
+    assert "did you mean" in message and "['slider_to_cart', 'cart_to_pole']" in message
+    # still the lookup error it was, and a task-file error
+    assert isinstance(caught.value, UnknownJointError) and isinstance(caught.value, TaskFileError)
+    again = pickle.loads(pickle.dumps(caught.value))
+    assert type(again) is TaskJointError and str(again) == message and again.line == line
 
 
 def test_a_wrong_key_in_a_task_file_gives_file_and_line(tmp_path):

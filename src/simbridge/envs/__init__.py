@@ -17,7 +17,7 @@ Gymnasium (``pip install "simbridge[envs]"``) is imported here and nowhere else 
 from __future__ import annotations
 
 from simbridge.envs.env import SimEnv
-from simbridge.envs.errors import ActionError, TaskFileError
+from simbridge.envs.errors import ActionError, TaskFileError, TaskJointError
 from simbridge.envs.reader import load_task, loads_task, shipped_tasks
 from simbridge.envs.registration import IDS, register_envs
 from simbridge.envs.task import (
@@ -46,6 +46,7 @@ __all__ = [
     "SimEnv",
     "Task",
     "TaskFileError",
+    "TaskJointError",
     "load_task",
     "loads_task",
     "register_envs",

@@ -20,19 +20,20 @@ from __future__ import annotations
 
 import os
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from simbridge.envs.errors import ActionError
-from simbridge.envs.task import RobotSpec, Task
+from simbridge.envs.errors import ActionError, TaskJointError
+from simbridge.envs.task import Condition, ObsTerm, RewardTerm, RobotSpec, Task
 from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World, heading
 from simbridge.exceptions import (
     BackendUnsupportedError,
     InvalidArgumentError,
     SimulationDivergedError,
+    UnknownJointError,
 )
 from simbridge.sim import Sim
 from simbridge.transforms import quat_from_rpy, quat_multiply
@@ -138,7 +139,7 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             return
         sim, t = self.sim, self.task
         bodies = {}
-        for r in t.robots:
+        for i, r in enumerate(t.robots):
             bodies[r.name] = body = sim.load_urdf(
                 r.urdf,
                 base_position=r.position,
@@ -147,13 +148,15 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             )
             if r.joint_positions:
                 names = list(r.joint_positions)
-                idx = [sim.joint_index(body, j) for j in names]
+                idx = [self._joint(body, j, ["robots", i, "joint_positions", j]) for j in names]
                 sim.reset_joint_state(body, idx, [r.joint_positions[j] for j in names])
             if r.released:
-                idx = [sim.joint_index(body, j) for j in r.released]
+                idx = [self._joint(body, j, ["robots", i, "released"]) for j in r.released]
                 sim.set_joint_velocity(body, idx, 0.0, max_force=0.0)
         body = bodies[t.action.robot]
-        joints = np.array([sim.joint_index(body, j) for j in t.action.joints], dtype=np.int64)
+        joints = np.array(
+            [self._joint(body, j, ["action", "joints"]) for j in t.action.joints], dtype=np.int64
+        )
         spec = t.robot(t.action.robot)
         default = np.array([spec.joint_positions.get(j, 0.0) for j in t.action.joints])
         n = len(joints)
@@ -162,13 +165,52 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
         w.pose = dict(spec.joint_positions)
         w.previous_action, w.torques = np.zeros(n), np.zeros(n)
         self.world = w
+        self._check_term_joints(body)
         spread = t.randomisation.joints or t.action.joints
-        self._spread = [sim.joint_index(body, j) for j in spread]
+        key = ["randomisation", "joints"] if t.randomisation.joints else ["action", "joints"]
+        self._spread = [self._joint(body, j, key) for j in spread]
         self._spread_default = np.array([w.pose.get(j, 0.0) for j in spread])
         self._spawn = sim.base_state(body)
         self._hold(default)
         if t.reset == "restore":
             self._snapshot = sim.get_state(exact=True)
+
+    def _joint(self, body: int, name: str, path: Sequence[str | int]) -> int:
+        """The index of a joint the task names at ``path``.
+
+        Raises:
+            TaskJointError: the robot lacks it; the task's file, key and line, then its joints.
+        """
+        try:
+            return self.sim.joint_index(body, name)
+        except UnknownJointError as e:
+            from simbridge.envs.reader import _keystr, key_line
+
+            t = self.task
+            file = t.source if t.source is not None else f"<task {t.name}>"
+            raise TaskJointError(file, _keystr(list(path)), e, key_line(t.source, path)) from None
+
+    def _check_term_joints(self, body: int) -> None:
+        """Look up, once at load, every joint a term's ``params`` name (``joint``, ``joints``):
+        the terms themselves look them up at the first step, where an error could not say
+        which line of the task named the joint.
+
+        Raises:
+            TaskJointError: the robot lacks one; the term's line in the task file.
+        """
+        t = self.task
+        groups: tuple[tuple[str, Sequence[ObsTerm | RewardTerm | Condition]], ...] = (
+            ("observation", t.observation),
+            ("rewards", t.rewards),
+            ("terminations", t.terminations),
+            ("success", t.success),
+        )
+        for group, terms in groups:
+            for i, term in enumerate(terms):
+                one = term.params.get("joint")
+                for name in (*term.params.get("joints", ()), *([] if one is None else [one])):
+                    if isinstance(name, str):
+                        self._joint(body, name, [group, i, "params"])
 
     def _build_native(self, r: RobotSpec) -> None:
         """Load the MJCF read as MuJoCo reads it (the whole world), controls at 0."""

@@ -5,13 +5,19 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from simbridge.exceptions import InvalidArgumentError, SimbridgeError, UnknownBackendError
+from simbridge.exceptions import (
+    InvalidArgumentError,
+    SimbridgeError,
+    UnknownBackendError,
+    UnknownJointError,
+)
 
 __all__ = [
     "ActionError",
     "PolicyError",
     "PolicyRuntimeMissingError",
     "TaskFileError",
+    "TaskJointError",
     "UnknownTrainingEngineError",
 ]
 
@@ -33,6 +39,29 @@ class TaskFileError(SimbridgeError, ValueError):
         where = file if line is None else f"{file}:{line}"
         what = f"key {key!r}: " if key else ""
         super().__init__(f"{where}: {what}{detail}")
+
+
+class TaskJointError(TaskFileError, UnknownJointError):
+    """A joint a task names (``action.joints``, a robot's ``released`` or ``joint_positions``,
+    ``randomisation.joints``) that its robot lacks: the task's file, the key and its line where
+    the task was read from a file, then the robot's own message (its joints, a close name).
+
+    Both a :class:`TaskFileError` and an :class:`~simbridge.exceptions.UnknownJointError`.
+
+    Args:
+        file: the task's file, or ``<task NAME>`` for a task made in Python.
+        key: the dotted key path (``action.joints``).
+        cause: the robot's lookup error.
+        line: the key's 1-based line in the file, or None.
+    """
+
+    def __init__(self, file: str, key: str, cause: UnknownJointError, line: int | None = None):
+        self.file = file
+        self.key = key
+        self.line = line
+        where = file if line is None else f"{file}:{line}"
+        # both parents build their message from other arguments: set this one directly
+        SimbridgeError.__init__(self, f"{where}: key {key!r}: {cause}")
 
 
 class ActionError(InvalidArgumentError):

@@ -10,7 +10,7 @@ import math
 import os
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -43,7 +43,14 @@ from simbridge.envs.terms import (
 )
 from simbridge.transforms import quat_from_rpy
 
-__all__ = ["TASK_KEYS", "TRAINED_KEYS", "load_task", "loads_task", "shipped_tasks"]
+__all__ = [
+    "TASK_KEYS",
+    "TRAINED_KEYS",
+    "key_line",
+    "load_task",
+    "loads_task",
+    "shipped_tasks",
+]
 
 TASK_KEYS = (
     "name",
@@ -629,3 +636,23 @@ class _Reader(TableReader):
         t = data.get("camera", {})
         self.keys(t, ["camera"], ("eye", "target"))
         return {k: self.vector(v, ["camera", k], 3) for k, v in t.items()}
+
+
+def key_line(source: str | None, path: Sequence[str | int]) -> int | None:
+    """The 1-based line of the key ``path`` (``["robots", 0, "released"]``) in the task file
+    ``source``, for an error found after reading (a joint the robot lacks).
+
+    Args:
+        source: the task's file (``Task.source``), or None for a task made in Python.
+        path: the key's path, an array of tables' entry by its index.
+
+    Returns:
+        The line, or None when there is no file or it cannot be read any more.
+    """
+    if source is None:
+        return None
+    try:
+        text = Path(source).read_text(encoding="utf-8")
+    except OSError:
+        return None
+    return find_key_line(text, path)

@@ -114,7 +114,8 @@ def _names(m: Any, kind: Any, count: int, prefix: str) -> tuple[str, ...]:
     return tuple(mujoco.mj_id2name(m, kind, i) or f"{prefix}{i}" for i in range(count))
 
 
-_LINE = re.compile(r"line (\d+)")
+# the compiler says "line 5"; its XML parser (TinyXML2) "Line number=4"
+_LINE = re.compile(r"[Ll]ine(?: number=| )(\d+)")
 
 
 def compile_mjcf(source: str | os.PathLike[str]) -> NativeMjcf:

@@ -258,6 +258,19 @@ def test_bad_semantics_and_files_mujoco_refuses(tmp_path: Path) -> None:
         ):
             sim.load_mjcf(bad, semantics="mujoco")
         assert sim.bodies() == []
+        # not well-formed XML: the parser's own "Line number=4" becomes FILE:LINE too
+        broken = tmp_path / "broken.xml"
+        broken.write_text(
+            '<mujoco>\n<worldbody>\n<body>\n<geom type="sphere" size="0.1">\n</body>\n'
+            "</worldbody>\n</mujoco>\n"
+        )
+        with pytest.raises(
+            MjcfCompileError,
+            match=r"broken\.xml:4: MuJoCo's compiler refuses the MJCF: XML parse error .*"
+            r"Line number=4",
+        ):
+            sim.load_mjcf(broken, semantics="mujoco")
+        assert sim.bodies() == []
 
 
 @pytest.mark.skipif(not HAS_GYM, reason=NO_GYM)
