@@ -10,7 +10,8 @@ file (src/simbridge/envs/vecnormalize.py, ``simbridge sim2sim --normalisation``)
   beside it. ``simbridge sim2sim`` finds the file, says so, and balances every seed (the
   replayed seed too, which reloads the task); with ``--normalisation none`` it does not.
 - Bad input, each a :class:`NormalisationFileError` naming the file: not a pickle, a pickle of
-  something else, a hostile pickle (its code does not run), a truncated one, statistics of
+  something else, a hostile pickle (its code does not run), a truncated one, randomly mutated
+  ones (read or refused, nothing else escapes), statistics of
   another size (both layouts named), a Dict observation, a task that states its own
   ``[normalisation]``, two files beside one policy. ``norm_obs=False`` is taken: no
   normalisation, and said.
@@ -233,6 +234,16 @@ def test_the_library_call_takes_the_file(ppo_with_stats, tmp_path):
 # ------------------------------------------------------------------------------- bad input
 
 
+def test_statistics_that_are_not_numbers(tmp_path):
+    vec = _gathered(lambda: SimEnv("cartpole", backend="mujoco"), 5)
+    vec.obs_rms.mean = np.array(["a", "b", "c", "d"])
+    path = tmp_path / "text.pkl"
+    vec.save(str(path))
+    vec.close()
+    with pytest.raises(NormalisationFileError, match=r"holds mean of <U1 and var of float64"):
+        read_vecnormalize(path)
+
+
 def test_not_a_pickle(tmp_path):
     path = tmp_path / "stats.pkl"
     path.write_text("mean = [0, 0]\n")
@@ -278,6 +289,27 @@ def test_a_truncated_file(cartpole_vec, tmp_path):
     path.write_bytes(good.read_bytes()[:200])
     with pytest.raises(NormalisationFileError, match=r"not a pickle of VecNormalize statistics"):
         read_vecnormalize(path)
+
+
+def test_mutated_files_are_read_or_refused(cartpole_vec, tmp_path):
+    """1 to 3 bytes of the real file changed at random, 400 times: each file reads, or is
+    refused with NormalisationFileError; no other exception escapes."""
+    _, good = cartpole_vec
+    data = good.read_bytes()
+    rng = np.random.default_rng(0)
+    path = tmp_path / "mutated.pkl"
+    outcomes = {"read": 0, "refused": 0}
+    for _ in range(400):
+        b = bytearray(data)
+        for _ in range(rng.integers(1, 4)):
+            b[rng.integers(2, len(b))] = rng.integers(0, 256)
+        path.write_bytes(bytes(b))
+        try:
+            read_vecnormalize(path)
+            outcomes["read"] += 1
+        except NormalisationFileError:
+            outcomes["refused"] += 1
+    assert outcomes["read"] > 0 and outcomes["refused"] > 0, outcomes
 
 
 def test_statistics_of_another_size_name_both_layouts(tmp_path):

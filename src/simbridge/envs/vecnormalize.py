@@ -113,7 +113,8 @@ def _frombuffer(buffer: Any, dtype: Any, shape: Any, order: Any) -> np.ndarray:
     dt = np.dtype(dtype)
     if dt.hasobject:
         raise pickle.UnpicklingError("an object array from raw bytes")
-    return np.frombuffer(buffer, dtype=dt).reshape(shape, order=order).copy()
+    # a copy of the bytes first: the array then holds no export of the pickle's own buffer
+    return np.frombuffer(bytes(buffer), dtype=dt).reshape(shape, order=order).copy()
 
 
 def _scalar(dtype: Any, data: Any = None) -> Any:
@@ -121,7 +122,7 @@ def _scalar(dtype: Any, data: Any = None) -> Any:
     dt = np.dtype(dtype)
     if dt.hasobject or not isinstance(data, (bytes, bytearray)) or len(data) != dt.itemsize:
         raise pickle.UnpicklingError(f"a NumPy scalar of {dt} from {type(data).__name__}")
-    return np.frombuffer(data, dtype=dt)[0]
+    return np.frombuffer(bytes(data), dtype=dt)[0]
 
 
 def _dtype(*args: Any) -> np.dtype[Any]:
@@ -275,6 +276,10 @@ def _statistics(rms: Any, shown: str) -> tuple[np.ndarray, np.ndarray, float]:
             shown,
             f"its obs_rms holds mean {type(mean).__name__} and var {type(var).__name__}, "
             "not arrays",
+        )
+    if mean.dtype.kind not in "fiu" or var.dtype.kind not in "fiu":
+        raise NormalisationFileError(
+            shown, f"its obs_rms holds mean of {mean.dtype} and var of {var.dtype}, not numbers"
         )
     if mean.ndim != 1 or mean.shape != var.shape:
         raise NormalisationFileError(
