@@ -9,6 +9,11 @@ actor's layers for :mod:`simbridge.envs.policy`, run in NumPy without torch: the
 against Stable-Baselines3's deterministic ``predict`` on 256 observations, then run for
 --episodes episodes on the training engine (success with a 95% Wilson interval). One thread,
 one process: a few minutes on one core.
+
+With --vecnormalize the training env is wrapped in Stable-Baselines3's ``VecNormalize``
+(observations and rewards) and its statistics are saved beside the zip as
+``vec_normalize.pkl``: the exported actor then acts on normalised observations, and
+``simbridge sim2sim OUT/ppo.zip`` finds and applies the file (docs/sim2sim.md).
 """
 
 from __future__ import annotations
@@ -68,6 +73,11 @@ def main() -> None:
     ap.add_argument("--envs", type=int, default=4, help="worlds stepped together while training")
     ap.add_argument("--episodes", type=int, default=50, help="evaluation episodes (0: none)")
     ap.add_argument("--out", type=Path, default=Path("runs/cartpole"))
+    ap.add_argument(
+        "--vecnormalize",
+        action="store_true",
+        help="train under VecNormalize; its statistics saved as OUT/vec_normalize.pkl",
+    )
     args = ap.parse_args()
 
     import torch
@@ -86,6 +96,10 @@ def main() -> None:
         seed=args.seed,
         env_kwargs={"backend": args.backend},
     )
+    if args.vecnormalize:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        venv = VecNormalize(venv)
     model = PPO(
         "MlpPolicy",
         venv,
@@ -103,8 +117,11 @@ def main() -> None:
     start = time.perf_counter()
     model.learn(total_timesteps=args.timesteps)
     seconds = time.perf_counter() - start
-    venv.close()
     model.save(args.out / "ppo.zip")
+    stats = args.out / "vec_normalize.pkl"
+    if args.vecnormalize:
+        venv.save(str(stats))
+    venv.close()
     print(f"trained {args.timesteps} steps on {args.backend} in {seconds:.0f} s")
 
     weights, biases = actor_layers(model)
@@ -115,11 +132,17 @@ def main() -> None:
         "timesteps": args.timesteps,
         "seed": args.seed,
         "train_seconds": round(seconds, 1),
+        "observation": "normalised by vec_normalize.pkl" if args.vecnormalize else "as the env's",
         "command": "python " + shlex.join(sys.argv),
     }
     policy = save_mlp(args.out / "cartpole_ppo.npz", weights, biases, meta=meta)
 
-    env = simbridge.envs.SimEnv("cartpole", backend=args.backend)
+    task = simbridge.envs.load_task("cartpole")
+    if args.vecnormalize:  # the env normalises as VecNormalize did (simbridge.envs.vecnormalize)
+        from simbridge.envs.vecnormalize import resolve
+
+        task, _ = resolve(task, str(args.out / "ppo.zip"), stats)
+    env = simbridge.envs.SimEnv(task, backend=args.backend)
     obs = np.stack([env.observation_space.sample() * 0.2 for _ in range(256)]).astype(np.float32)
     ref, _ = model.predict(obs, deterministic=True)
     ours = np.stack([policy(o) for o in obs])

@@ -170,9 +170,9 @@ def test_normalisation_is_vecnormalizes_formula():
     plain = SimEnv(base)
     n, p = _run(normed, PUSHES), _run(plain, PUSHES)
     want = np.clip((p.astype(np.float64) - mean) / np.sqrt(np.asarray(var) + 1e-8), -5, 5)
-    # the plain observation was rounded to float32 before this formula; the env applies it to
-    # the float64 terms: the two differ by float32 rounding, relative 1e-6 at most
-    np.testing.assert_allclose(n, want, rtol=2e-6, atol=1e-6)
+    # the env applies VecNormalize's formula to the float32 observation, as VecNormalize does:
+    # the same elementwise float64 operations (each correctly rounded), then float32
+    np.testing.assert_array_equal(n, want.astype(np.float32))
     assert normed.observation_space.high[0] == 5.0
     normed.close(), plain.close()
 

@@ -35,6 +35,13 @@ POLICY: 'reference' (the task's reference controller), module:callable (a functi
 action, or a class made with the env: simbridge.envs.controllers:DriveToGoal), or a file:
 .onnx (onnxruntime), .pt/.ts/.jit (TorchScript), .zip (Stable-Baselines3).
 
+A policy trained under Stable-Baselines3's VecNormalize needs its observation statistics:
+--normalisation FILE reads the pickle VecNormalize.save(path) wrote (without running its code)
+and the env normalises its observation as VecNormalize.normalize_obs does. By default (auto) a
+.zip policy's own file is used when one lies beside it (vec_normalize.pkl, vecnormalize.pkl,
+or RL Zoo's STEM/vecnormalize.pkl), and the run names it; --normalisation none uses none. A
+task that states its own [normalisation] takes no file.
+
 An engine is BACKEND or BACKEND+KEY=VALUE: the task's profile with an entry or engine setting
 changed (mujoco+lateral_friction=0.05). A policy trained outside simbridge: --trained-on
 external:NAME (external:isaaclab); the task states its contract, every engine is evaluated
@@ -80,6 +87,13 @@ def add_command(
     )
     p.add_argument("--episodes", type=positive_int, default=20, metavar="N")
     p.add_argument("--seed", type=nonnegative_int, default=0, metavar="S", help="first seed")
+    p.add_argument(
+        "--normalisation",
+        default="auto",
+        metavar="FILE",
+        help="the policy's VecNormalize statistics (a VecNormalize.save pickle); auto (default): "
+        "the file beside a .zip policy, if any; none: no file",
+    )
     p.add_argument("--out", type=Path, help="report folder (default: reports/sim2sim-<task>/)")
     p.add_argument(
         "--explain",
@@ -149,6 +163,7 @@ def _sim2sim(args: argparse.Namespace) -> int:
         seed=args.seed,
         openloop=args.openloop,
         openloop_ensemble=args.openloop_ensemble,
+        normalisation=args.normalisation,
     )
     if args.explain:
         from simbridge.envs.sim2sim_explain import explain_drops
@@ -160,6 +175,8 @@ def _sim2sim(args: argparse.Namespace) -> int:
         record_replay(args.task, result)
     out = args.out or Path("reports") / f"sim2sim-{result.task}"
     files = write(result, out)
+    if result.statistics is not None:
+        print(result.statistics.describe())
     for line in headline(result):
         print(line)
     from simbridge.envs.sim2sim_openloop_report import lines

@@ -13,7 +13,7 @@ from simbridge.envs.task import ObsTerm
 
 SimEnv = Any  # a simbridge.envs.env.SimEnv (not imported: env.py imports this module)
 
-__all__ = ["contract", "entry_names"]
+__all__ = ["contract", "entry_names", "observation_layout"]
 
 _XYZ = ("x", "y", "z")
 
@@ -87,6 +87,21 @@ def _observation(env: SimEnv) -> dict[str, Any]:
         "noise_then_scale": True,
         "normalisation": None if norm is None else dataclasses.asdict(norm),
     }
+
+
+def observation_layout(env: SimEnv) -> str:
+    """The observation's layout in words, as the errors name it: each term's name and size,
+    then the history (``joint_pos[2], joint_vel[2] (x1 frames)``).
+
+    Args:
+        env: the env.
+
+    Returns:
+        The words.
+    """
+    obs = _observation(env)
+    terms = ", ".join(f"{t['name']}[{t['size']}]" for t in obs["terms"])
+    return f"{terms} (x{obs['history']} frames)"
 
 
 def _action(env: SimEnv) -> dict[str, Any]:

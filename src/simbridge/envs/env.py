@@ -26,7 +26,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from simbridge.envs.errors import ActionError, TaskJointError
+from simbridge.envs.errors import ActionError, NormalisationFileError, TaskJointError
 from simbridge.envs.task import Condition, ObsTerm, RewardTerm, RobotSpec, Task
 from simbridge.envs.terms import OBSERVATIONS, REWARDS, SUCCESSES, TERMINATIONS, World, heading
 from simbridge.exceptions import (
@@ -64,6 +64,8 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
             robot's joints).
         InvalidArgumentError: a bad ``render_mode``, or normalisation statistics of another
             size than the observation.
+        NormalisationFileError: a ``VecNormalize`` file's statistics of another size than the
+            observation (the message names the file and both layouts).
         TaskFileError: a task file that says something invalid (``FILE:LINE``).
     """
 
@@ -264,6 +266,15 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
     def _check_normalisation(self, size: int) -> None:
         norm = self.task.normalisation
         if norm is not None and (len(norm.mean) != size or len(norm.var) != size):
+            if norm.source is not None:  # a VecNormalize file: both layouts named
+                from simbridge.envs.contract import observation_layout
+
+                raise NormalisationFileError(
+                    norm.source,
+                    f"its statistics have {len(norm.mean)} entries (VecNormalize over "
+                    f"observations of shape ({len(norm.mean)},)); the task "
+                    f"{self.task.name!r}'s observation has {size}: {observation_layout(self)}",
+                )
             raise InvalidArgumentError(
                 "normalisation",
                 f"mean and var must have one entry per observation entry ({size}: "
@@ -524,10 +535,15 @@ class SimEnv(gym.Env[np.ndarray, np.ndarray]):
     def _observation(self) -> np.ndarray:
         obs = self._history[0] if len(self._history) == 1 else np.concatenate(self._history)
         norm = self.task.normalisation
-        if norm is not None:
-            obs = (obs - np.asarray(norm.mean)) / np.sqrt(np.asarray(norm.var) + norm.epsilon)
-            obs = np.clip(obs, -norm.clip, norm.clip)
-        return obs.astype(np.float32)
+        if norm is None:
+            return obs.astype(np.float32)
+        # VecNormalize.normalize_obs's own arithmetic on the float32 observation it is given
+        # (float64 statistics), then float32: the same numbers, bit for bit
+        # (tests/envs/test_vecnormalize_file.py)
+        obs32 = obs.astype(np.float32)
+        mean, var = np.asarray(norm.mean), np.asarray(norm.var)
+        out = np.clip((obs32 - mean) / np.sqrt(var + norm.epsilon), -norm.clip, norm.clip)
+        return out.astype(np.float32)
 
     # ---------------------------------------------------------------- pictures, contract
 

@@ -14,6 +14,7 @@ from simbridge.exceptions import (
 
 __all__ = [
     "ActionError",
+    "NormalisationFileError",
     "PolicyError",
     "PolicyRuntimeMissingError",
     "TaskFileError",
@@ -95,6 +96,21 @@ class PolicyError(SimbridgeError, ValueError):
     def __init__(self, policy: str, detail: str):
         self.policy = policy
         super().__init__(f"policy {policy!r}: {detail}")
+
+
+class NormalisationFileError(SimbridgeError, ValueError):
+    """A policy's observation statistics file (Stable-Baselines3's ``VecNormalize.save``
+    pickle, ``simbridge sim2sim --normalisation``) that cannot be read, is no such file, or does
+    not fit the task's observation.
+
+    Args:
+        file: the file as given (or as found beside the policy).
+        detail: what is wrong and what would be right (both layouts where sizes differ).
+    """
+
+    def __init__(self, file: str, detail: str):
+        self.file = file
+        super().__init__(f"normalisation file {file!r}: {detail}")
 
 
 class PolicyRuntimeMissingError(SimbridgeError, ImportError):

@@ -260,9 +260,9 @@ def _probe(spec: str, env: SimEnv, policy: Policy) -> None:
 
 def _layout(env: SimEnv) -> str:
     """The observation's layout in words: each term's name and size, the history."""
-    obs = env.contract()["observation"]
-    terms = ", ".join(f"{t['name']}[{t['size']}]" for t in obs["terms"])
-    return f"{terms} (x{obs['history']} frames)"
+    from simbridge.envs.contract import observation_layout
+
+    return observation_layout(env)
 
 
 def load_policy(spec: str, env: SimEnv) -> Policy:

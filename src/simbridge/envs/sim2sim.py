@@ -39,6 +39,7 @@ the first K seeds open loop on every engine and judges where the physics parts
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -137,6 +138,24 @@ class Sim2SimResult:
     explain: list[dict[str, Any]] = field(default_factory=list)  # sim2sim_explain's, if run
     openloop: Any = None  # sim2sim_openloop.OpenLoop, if run
     replay: Any = None  # sim2sim_replay.record_replay's EpisodeReplay, if run
+    statistics: Any = None  # vecnormalize.VecNormalizeFile: a VecNormalize file read, if any
+
+    def task_run(self, task: Task) -> Task:
+        """``task`` as this run ran it: with the statistics of its ``VecNormalize`` file
+        (:attr:`statistics`), which a task reloaded by name lacks.
+
+        Args:
+            task: the run's task.
+
+        Returns:
+            The task, its ``normalisation`` the file's where the run read one.
+        """
+        norm = None if self.statistics is None else self.statistics.normalisation
+        if norm is None or task.normalisation == norm:
+            return task
+        import dataclasses
+
+        return dataclasses.replace(task, normalisation=norm)
 
     @property
     def points_at_contract(self) -> bool:
@@ -240,6 +259,7 @@ def sim2sim(
     seed: int = 0,
     openloop: int = 0,
     openloop_ensemble: int = 8,
+    normalisation: str | os.PathLike[str] | None = "auto",
 ) -> Sim2SimResult:
     """Run ``policy`` on ``task`` over paired seeds on every engine, the training engine first.
 
@@ -258,6 +278,12 @@ def sim2sim(
             policy, the first engine's actions stand in: simbridge has no log of its training
             run).
         openloop_ensemble: runs per engine and seed of the replays.
+        normalisation: the policy's observation statistics, a Stable-Baselines3
+            ``VecNormalize.save`` pickle (read without running its code:
+            :mod:`simbridge.envs.vecnormalize`); ``"auto"``: the file beside a ``.zip`` policy
+            (``vec_normalize.pkl``, ``vecnormalize.pkl`` or RL Zoo's ``STEM/vecnormalize.pkl``),
+            when there is one; ``"none"`` or None: no file. The result's ``statistics`` says
+            which file was used.
 
     Returns:
         The :class:`Sim2SimResult`.
@@ -268,9 +294,13 @@ def sim2sim(
             (``UnknownTrainingEngineError`` for ``trained_on``, naming the external form).
         TaskFileError: an unknown task.
         PolicyError: a policy that does not load or does not fit the task.
+        NormalisationFileError: a statistics file that does not read, is no
+            ``VecNormalize`` pickle, does not fit the task's observation (both layouts named),
+            or comes with a task that states its own ``[normalisation]``.
     """
     from simbridge.envs.reader import load_task
     from simbridge.envs.trained_on import check_trained_on, outside
+    from simbridge.envs.vecnormalize import resolve
     from simbridge.registry import available_backends
 
     if episodes < 1:
@@ -283,11 +313,13 @@ def sim2sim(
     if external and not backends:
         raise InvalidArgumentError("backends", "an outside policy needs at least one engine")
     t = task if isinstance(task, Task) else load_task(task)
+    t, statistics = resolve(t, policy, normalisation)
     first = backends[0] if external else trained_on  # outside: the engines in their order
     engines = parse_engines(backends, first, t.profile, available)
     seeds = list(range(seed, seed + episodes))
     runs = [run_engine(t, e, policy, seeds) for e in engines]
     result = Sim2SimResult(t.name, policy, trained_on, seeds, runs, figures(runs, seed))
+    result.statistics = statistics
     if openloop:
         from simbridge.envs.sim2sim_openloop import openloop as replay
 

@@ -87,7 +87,7 @@ def explain_drops(task: Task | str, result: Sim2SimResult) -> list[dict[str, Any
             f"trained outside simbridge ({result.trained_on}): no training engine to move "
             "settings toward",
         )
-    task = task if isinstance(task, Task) else load_task(task)
+    task = result.task_run(task if isinstance(task, Task) else load_task(task))
     train = result.runs[0]
     trained_ok = [r.success for r in train.records]
     out = []

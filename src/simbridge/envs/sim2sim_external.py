@@ -246,6 +246,7 @@ def _stated(result: Sim2SimResult, rows: list[tuple[str, list[str]]]) -> dict[st
         "dt x decimation",
         "joint order (action)",
         "observation layout",
+        "observation normalisation",
         "action meaning",
         "gains kp / kd / max_force",
     }

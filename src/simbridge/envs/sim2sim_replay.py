@@ -206,7 +206,7 @@ def record_replay(task: Task | str, result: Sim2SimResult) -> EpisodeReplay:
     """
     from simbridge.envs.reader import load_task
 
-    t = task if isinstance(task, Task) else load_task(task)
+    t = result.task_run(task if isinstance(task, Task) else load_task(task))
     seed, why = choose_seed(result)
     i = result.seeds.index(seed)
     trajectories, matches = [], []

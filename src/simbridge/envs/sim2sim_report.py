@@ -113,6 +113,7 @@ def contract_rows(result: Sim2SimResult) -> list[tuple[str, list[str]]]:
                 + f" x{c['observation']['history']}"
             ),
         ),
+        row("observation normalisation", lambda c: _normalisation(c["observation"])),
         row("action meaning", lambda c: c["action"]["meaning"]),
         row(
             "gains kp / kd / max_force",
@@ -124,6 +125,15 @@ def contract_rows(result: Sim2SimResult) -> list[tuple[str, list[str]]]:
         row("joint friction", lambda c: _joint_values(c, "friction")),
         *_simulated_rows(cs),
     ]
+
+
+def _normalisation(observation: dict[str, Any]) -> str:
+    """The contract's observation statistics in words: none, the task's table or the file."""
+    n = observation.get("normalisation")
+    if not n:
+        return "none"
+    where = f"VecNormalize file {n['source']}" if n.get("source") else "the task's [normalisation]"
+    return f"{where}: clip {n['clip']:g}, epsilon {n['epsilon']:g}"
 
 
 def _simulated_rows(cs: list[dict[str, Any]]) -> list[tuple[str, list[str]]]:
@@ -245,6 +255,7 @@ def markdown(result: Sim2SimResult, *, figure: str | None = None) -> str:
         f"{result.seeds[0]}-{result.seeds[-1]}: the same initial states and commands on every "
         f"engine). Verdicts: McNemar's exact test on the discordant seeds against {against} "
         f"at p < {ALPHA}.",
+        *(["", result.statistics.describe() + "."] if result.statistics is not None else []),
         "",
         *[f"- {line}" for line in headline(result)],
         "",
@@ -348,6 +359,7 @@ def summary(result: Sim2SimResult) -> dict[str, Any]:
         "headline": headline(result),
         "engines": engines,
         "explain": result.explain,
+        "normalisation": None if result.statistics is None else result.statistics.as_dict(),
         "openloop": sim2sim_openloop_report.summary(result.openloop),
         "external": sim2sim_external.summary(result, contract_rows(result)),
         "replay": _replay_dict(result),

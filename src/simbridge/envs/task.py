@@ -176,17 +176,22 @@ class Normalisation:
     stores them (``obs_rms.mean``, ``obs_rms.var``, ``clip_obs``, ``epsilon``):
     ``clip((obs - mean) / sqrt(var + epsilon), -clip, clip)`` over the whole (stacked) vector.
 
+    The env applies it as ``VecNormalize.normalize_obs`` does, to the float32 observation.
+
     Attributes:
         mean: one per entry of the stacked observation.
         var: likewise (>= 0).
         clip: the bound after normalising.
         epsilon: added to ``var``.
+        source: the ``VecNormalize`` file they were read from
+            (:mod:`simbridge.envs.vecnormalize`), or None: the task's own ``[normalisation]``.
     """
 
     mean: tuple[float, ...]
     var: tuple[float, ...]
     clip: float = 10.0
     epsilon: float = 1e-8
+    source: str | None = None
 
 
 @dataclass(frozen=True)
