@@ -191,6 +191,9 @@ def limit_table(m: Any, joints: Sequence[int]) -> LimitTable:
     Args:
         m: the compiled ``MjModel``.
         joints: limited hinge, slide and ball joints.
+
+    Returns:
+        Their ids, ``qpos`` addresses, ranges, margins and which are ball joints.
     """
     ids = np.asarray(joints, dtype=int)
     return LimitTable(
