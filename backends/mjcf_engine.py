@@ -150,6 +150,9 @@ class MjcfOnEngine(MjcfReads, Backend):
             j for j in range(m.njnt) if m.jnt_limited[j] and int(m.jnt_type[j]) in (1, 2, 3)
         ]
         self._recovering: set[int] = set()  # joints placed outside their range
+        self._limit_tables: dict[tuple[int, ...], forces.LimitTable] = {}  # limit_recovery's
+        self._armature = np.diag(m.dof_armature)  # (nv, nv), with_armature's
+        self._diagonal = np.diag_indices(m.nv)
         self.ball_dofs = np.zeros(m.nv, dtype=bool)  # the ball joints' velocities
         for j in range(m.njnt):
             if int(m.jnt_type[j]) == 1:  # mjJNT_BALL
@@ -238,20 +241,27 @@ class MjcfOnEngine(MjcfReads, Backend):
             (nv,) the force to apply for the next step.
         """
         v, c = self.d.qvel, self.d.qfrc_bias
-        full = mass + np.diag(self.m.dof_armature)
+        full = mass + self._armature
         f = np.asarray(qfrc, dtype=float)
         q = self.d.qpos
         if fc is None:  # the engine's constraint forces of the step before
             fc = np.zeros_like(f) if self._last is None else self.constraint_forces(q, v)
         # MuJoCo's Euler: (M + A + dt D) qdd = f - c + fc - D v, given through the engine's M
         # (a spinning thin body's axis has dt D / I near 10: an explicit force there is off)
-        implicit = full + self.dt * np.diag(damping)
+        implicit = full.copy()
+        implicit[self._diagonal] += self.dt * damping  # full + dt diag(D)
+        acc = None  # the acceleration, solved once where no limit pushes
         if self._recovering:
-            f = f + self.limit_recovery(full, np.linalg.solve(implicit, f - c + fc - damping * v))
-        if self._passes_help:
-            out = mass @ np.linalg.solve(implicit, f - c + fc - damping * v) + c - fc
-        else:  # no armature or damping: the forces as they are (the same, less its rounding)
-            out = f
+            acc = np.linalg.solve(implicit, f - c + fc - damping * v)
+            limit = self.limit_recovery(full, acc)
+            if limit.any():
+                f, acc = f + limit, None
+        if not self._passes_help:  # no armature or damping: the forces as they are
+            out = f  # (the same as below, less its rounding)
+        else:
+            if acc is None:
+                acc = np.linalg.solve(implicit, f - c + fc - damping * v)
+            out = mass @ acc + c - fc
         self._last = (q.copy(), v.copy(), mass.copy(), c.copy(), out)
         return out
 
@@ -307,8 +317,12 @@ class MjcfOnEngine(MjcfReads, Backend):
         Returns:
             (nv,) the force, 0 on every joint inside its range.
         """
+        joints = tuple(sorted(self._recovering))
+        table = self._limit_tables.get(joints)
+        if table is None:
+            table = self._limit_tables[joints] = forces.limit_table(self.m, joints)
         out, inside = forces.soft_limit_force(
-            self.m, sorted(self._recovering), self.d.qpos, self.d.qvel, mass, free, self.dt
+            self.m, joints, self.d.qpos, self.d.qvel, mass, free, self.dt, table
         )
         if not self.soft_limits:  # back in its range: the engine's limit holds it now
             self._recovering -= inside

@@ -36,7 +36,7 @@ from simbridge.transforms import quat_multiply, quat_rotate, quat_to_matrix
 from simbridge.types import ContactPoint, JointType, Quat, Vec3
 
 from ..mjcf_engine import MjcfOnEngine, ball_from_inertial, ball_to_inertial
-from ..mjcf_forces import free_velocity_change
+from ..mjcf_forces import cross3, free_velocity_change
 from .contacts import contact_point
 from .output import (
     _pybullet_gui_output,
@@ -354,7 +354,7 @@ class NativePyBullet(MjcfOnEngine):
             q[qa : qa + 3] = np.array(pos) - off
             q[qa + 3 : qa + 7] = (frame[3], frame[0], frame[1], frame[2])
             w = np.array(ang)
-            v[va : va + 3] = np.array(lin) - np.cross(w, off)
+            v[va : va + 3] = np.array(lin) - cross3(w, off)
             v[va + 3 : va + 6] = quat_rotate(_conj(frame), ang)
         for body, idx, qas, vas in self._joints:
             if idx:
@@ -382,7 +382,7 @@ class NativePyBullet(MjcfOnEngine):
                 body, (qpos[qa : qa + 3] + off).tolist(), orn, physicsClientId=c
             )
             ang = np.array(quat_rotate(frame, tuple(qvel[va + 3 : va + 6])))
-            lin = qvel[va : va + 3] + np.cross(ang, off)
+            lin = qvel[va : va + 3] + cross3(ang, off)
             p.resetBaseVelocity(body, lin.tolist(), ang.tolist(), physicsClientId=c)
         for body, idx, qas, vas in self._joints:
             for i, a, b in zip(idx, qas.tolist(), vas.tolist(), strict=True):
