@@ -122,6 +122,21 @@ def _compile_the_checkout(config: pytest.Config) -> None:
         compileall.compile_dir(root / folder, quiet=2, workers=1)
 
 
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """What collection made (the modules imported, the engines among them, the 4,000 test
+    items and their parameters: all alive to the end of the session) moved out of the
+    collector's reach (``gc.freeze``), so that each of the automatic full collections during
+    the tests walks only what the tests made since, not the same collection-time objects again.
+    Measured with the whole suite collected and test_joint_table's 511 tests run (``pytest
+    tests -k test_joint_table``): 6.4 -> 4.2 s of the process's CPU in the collector. Nothing
+    a test checks changes: what is frozen was never garbage, and the tests' own objects are
+    collected as before."""
+    import gc
+
+    gc.collect()
+    gc.freeze()
+
+
 def pytest_runtest_setup(item: pytest.Item) -> None:
     """A test marked ``needs_backend(name)``: skipped or failed, by tests/_engines.py's one
     rule, where that backend's engine is missing."""
