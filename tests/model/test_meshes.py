@@ -64,6 +64,29 @@ def test_cached_per_path_and_read_only(tmp_path):
             array[0, 0] = 7
 
 
+def test_cache_holds_the_most_recent_files_within_its_bytes(tmp_path, monkeypatch):
+    """The cache is bounded by the bytes of its arrays, least recently used first out; a file
+    rewritten since it was read is read again."""
+    from simbridge.model import meshes
+
+    paths = [tmp_path / f"m{i}.obj" for i in range(3)]
+    for path in paths:
+        path.write_text(OBJ, encoding="utf-8")
+    meshes.clear_cache()
+    first = read_mesh(paths[0])
+    each = first.vertices.nbytes + first.faces.nbytes
+    monkeypatch.setattr(meshes, "CACHE_BYTES", 2 * each)  # room for two of them
+    second = read_mesh(paths[1])
+    assert read_mesh(paths[0]) is first  # paths[0] now the most recent
+    read_mesh(paths[2])  # over the bound: paths[1], the least recent, goes
+    assert read_mesh(paths[0]) is first
+    assert read_mesh(paths[1]) is not second
+    assert meshes._HELD[0] <= 2 * each
+    paths[0].write_text(OBJ + "v 9 9 9\n", encoding="utf-8")
+    assert len(read_mesh(paths[0]).vertices) == len(first.vertices) + 1
+    meshes.clear_cache()
+
+
 def test_shipped_obj():
     mesh = read_mesh(DATA / "cube.obj")
     assert mesh.vertices.shape == (8, 3) and mesh.faces.shape == (12, 3)

@@ -4,7 +4,8 @@ Every user of a mesh (PyBullet's inertia rules, the URDF's COLLADA check, the Mu
 builder) reads it through :func:`read_mesh`, which returns the vertex positions (n, 3) float64,
 in the file's own units and frame, unscaled, and the triangles (m, 3) int64 as indices into
 them. Both arrays are read-only: the result is cached per file (its path, modification time
-and size: a file rewritten in the meantime is read again), up to 256 files.
+and size: a file rewritten in the meantime is read again), the least recently used files
+forgotten once the cached arrays pass :data:`CACHE_BYTES`.
 
 * ``.obj``: ``v`` lines (x y z; any further number is ignored) and ``f`` lines, each polygon a
   fan of triangles around its first corner; ``i/t/n`` corners use ``i``; a negative index
@@ -31,9 +32,10 @@ from __future__ import annotations
 import math
 import os
 import re
+import threading
 import warnings
+from collections import OrderedDict
 from collections.abc import Callable
-from functools import lru_cache
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -47,6 +49,13 @@ __all__ = [
     "clear_cache",
     "pybullet_reads_stl",
 ]
+
+
+CACHE_BYTES = 256 << 20
+"""The most bytes of vertex and triangle arrays the cache holds (256 MiB). It was 256 files:
+a sweep over more files than that, once per backend (the conformance suite's 1,000
+random_urdfs of pybullet_data, 16 MiB of arrays, on each of three engines), read every
+file again for every engine."""
 
 
 class MeshReadError(ValueError):
@@ -111,12 +120,39 @@ def mesh_vertices(path: str | Path) -> np.ndarray:
 
 def clear_cache() -> None:
     """Forget every mesh read so far (the next read of each file reads it again)."""
-    _read_cached.cache_clear()
+    with _LOCK:
+        _CACHE.clear()
+        _HELD[0] = 0
 
 
-@lru_cache(maxsize=256)
+_CACHE: OrderedDict[tuple[str, int, int], MeshData] = OrderedDict()  # least recent first
+_HELD = [0]  # bytes of the arrays in _CACHE
+_LOCK = threading.Lock()
+
+
 def _read_cached(path: str, mtime_ns: int, size: int) -> MeshData:
-    """One version of a file (``mtime_ns`` and ``size``, in bytes, are the cache's key)."""
+    """One version of a file (``mtime_ns`` and ``size``, in bytes, are the cache's key), from
+    the cache or read (a file that fails to read is not cached: it fails again)."""
+    key = (path, mtime_ns, size)
+    with _LOCK:
+        mesh = _CACHE.get(key)
+        if mesh is not None:
+            _CACHE.move_to_end(key)
+            return mesh
+    mesh = _read(path, size)
+    nbytes = mesh.vertices.nbytes + mesh.faces.nbytes
+    with _LOCK:
+        if key not in _CACHE and nbytes <= CACHE_BYTES:
+            _CACHE[key] = mesh
+            _HELD[0] += nbytes
+            while _HELD[0] > CACHE_BYTES:
+                _, old = _CACHE.popitem(last=False)
+                _HELD[0] -= old.vertices.nbytes + old.faces.nbytes
+    return mesh
+
+
+def _read(path: str, size: int) -> MeshData:
+    """The file read (``size``: its size in bytes, for the message on an empty one)."""
     suffix = Path(path).suffix.lower()
     if suffix == ".obj":
         mesh, rows = _read_obj(path)
