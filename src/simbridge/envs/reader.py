@@ -170,6 +170,19 @@ class _Reader(TableReader):
             raise self.error([key], f"expected an integer >= {low}, got {v!r}")
         return v
 
+    def _clip_and_latency(self, t: dict[str, Any], path: list[str | int]) -> tuple[float, int]:
+        """An ``[action]`` table's ``clip`` (> 0, default 1) and ``latency`` (control steps,
+        an integer >= 0, default 0), whatever the action's mode."""
+        clip = self.number(t.get("clip", 1.0), [*path, "clip"])
+        if clip <= 0:
+            raise self.error([*path, "clip"], f"must be > 0, got {clip!r}")
+        latency = t.get("latency", 0)
+        if isinstance(latency, bool) or not isinstance(latency, int) or latency < 0:
+            raise self.error(
+                [*path, "latency"], f"expected an integer >= 0 (control steps), got {latency!r}"
+            )
+        return clip, latency
+
     def choice(
         self,
         t: dict[str, Any],
@@ -427,14 +440,7 @@ class _Reader(TableReader):
         if mode == "position":
             per.setdefault("kp", (0.1,) * n)
             per.setdefault("kd", (1.0,) * n)
-        clip = self.number(t.get("clip", 1.0), [*path, "clip"])
-        if clip <= 0:
-            raise self.error([*path, "clip"], f"must be > 0, got {clip!r}")
-        latency = t.get("latency", 0)
-        if isinstance(latency, bool) or not isinstance(latency, int) or latency < 0:
-            raise self.error(
-                [*path, "latency"], f"expected an integer >= 0 (control steps), got {latency!r}"
-            )
+        clip, latency = self._clip_and_latency(t, path)
         return ActionSpec(
             robot=robot,
             joints=joints,
@@ -480,14 +486,7 @@ class _Reader(TableReader):
         if not names:
             raise self.error([*path, "actuators"], "the model has no actuators to drive")
         offset = self.choice(t, path, "offset", "zero", ("zero",))
-        clip = self.number(t.get("clip", 1.0), [*path, "clip"])
-        if clip <= 0:
-            raise self.error([*path, "clip"], f"must be > 0, got {clip!r}")
-        latency = t.get("latency", 0)
-        if isinstance(latency, bool) or not isinstance(latency, int) or latency < 0:
-            raise self.error(
-                [*path, "latency"], f"expected an integer >= 0 (control steps), got {latency!r}"
-            )
+        clip, latency = self._clip_and_latency(t, path)
         self.action_size = len(names)
         return ActionSpec(
             robot=robot,
